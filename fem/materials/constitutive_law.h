@@ -1,0 +1,66 @@
+#ifndef SPINESIM_FEM_MATERIALS_CONSTITUTIVE_LAW_H
+#define SPINESIM_FEM_MATERIALS_CONSTITUTIVE_LAW_H
+
+// Point-wise constitutive laws shared by FEM quadrature points and particles.
+// Everything is 3-D: a 2-D plane-strain caller embeds its strain/F with zero out-of-plane
+// components; plane stress is handled by the law's plane_stress_* helpers (see each law).
+
+#include <deal.II/base/symmetric_tensor.h>
+#include <deal.II/base/tensor.h>
+
+#include <memory>
+#include <string>
+
+namespace spinesim::materials {
+
+using SymTensor2 = dealii::SymmetricTensor<2, 3>;
+using SymTensor4 = dealii::SymmetricTensor<4, 3>;
+using Tensor2 = dealii::Tensor<2, 3>;
+using Tensor4 = dealii::Tensor<4, 3>;
+
+// History of one material point. One plain struct for every law keeps particles'
+// structure-of-arrays and FEM quadrature storage simple; each law uses what it needs.
+struct MaterialState {
+  SymTensor2 plastic_strain;            // small-strain J2: plastic strain ε_p [-]
+  SymTensor2 elastic_left_cauchy_green = dealii::unit_symmetric_tensor<3>(); // finite-strain J2: b^e [-]
+  double equivalent_plastic_strain = 0; // accumulated ε̄_p [-]
+  double plastic_work = 0;              // dissipated plastic work per unit volume [J/m^3]
+};
+
+// What a law returns at a point. Tangents are consistent (algorithmic) tangents.
+struct SmallStrainResponse {
+  SymTensor2 stress;  // Cauchy stress [Pa]
+  SymTensor4 tangent; // dσ/dε [Pa]
+  MaterialState state;
+};
+
+struct FiniteStrainResponse {
+  Tensor2 first_piola; // P [Pa]
+  Tensor4 dP_dF;       // ∂P/∂F [Pa], index order (i,J,k,L): dP_iJ / dF_kL
+  MaterialState state;
+};
+
+class ConstitutiveLaw {
+public:
+  virtual ~ConstitutiveLaw() = default;
+  virtual std::string name() const = 0;
+
+  // Linearised kinematics: total strain ε and temperature change ΔT [K] from the reference.
+  virtual SmallStrainResponse small_strain(const SymTensor2& strain, double temperature_change,
+                                           const MaterialState& old_state) const = 0;
+
+  // Finite deformation: deformation gradient F (det F > 0, else NumericalFailure).
+  virtual FiniteStrainResponse finite_strain(const Tensor2& F, double temperature_change,
+                                             const MaterialState& old_state) const = 0;
+
+  // Elastic constants for stable-step estimates, stabilisation and AMG scaling.
+  virtual double youngs_modulus() const = 0; // [Pa]
+  virtual double poisson_ratio() const = 0;  // [-]
+  virtual double density() const = 0;       // [kg/m^3]
+  // Longitudinal (P-) wave speed sqrt((λ+2μ)/ρ) [m/s].
+  double p_wave_speed() const;
+};
+
+} // namespace spinesim::materials
+
+#endif
