@@ -1,0 +1,61 @@
+#!/usr/bin/env bash
+# spinesim set-up on Debian 12 (run as root): installs the missing Debian packages,
+# configures and builds, then either runs the default scene (`run`) or the default test
+# suite (`test`). Idempotent: a second call installs nothing and rebuilds only what changed.
+set -euo pipefail
+
+usage() {
+  echo "usage: bash cmake/bootstrap.sh run|test [extra ctest or spinesim-run arguments]" >&2
+  exit 2
+}
+[[ $# -ge 1 ]] || usage
+action=$1
+shift
+
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+build=${SPINESIM_BUILD_DIR:-$root/build}
+jobs=${SPINESIM_JOBS:-$(nproc)}
+
+# Debian packages the build, the tests and the plots need (by name, nothing downloaded).
+packages=(
+  cmake make g++ ccache pkg-config
+  libdeal.ii-dev          # deal.II 9.4 with Trilinos, p4est, PETSc, HDF5, MPI, TBB
+  openmpi-bin             # mpirun for the 2-rank tests
+  libeigen3-dev libcli11-dev nlohmann-json3-dev libgtest-dev
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "== installing Debian packages: ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  apt-get update -qq
+  apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+# OpenMPI refuses to start as root without these; the 2-core machines need oversubscribe.
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
+export CCACHE_DIR=${CCACHE_DIR:-$root/.ccache}
+
+mkdir -p "$build"
+echo "== configuring ($build)"
+cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release >"$build/configure.log" 2>&1 ||
+  { cat "$build/configure.log"; exit 1; }
+echo "== building with $jobs jobs"
+cmake --build "$build" -j "$jobs"
+
+case "$action" in
+  run)
+    out="$root/runs/default-$(date +%Y%m%d-%H%M%S)"
+    echo "== running the default scene"
+    "$build/bin/spinesim" run --output "$out" "$@"
+    echo "== results: $out (summary.json, history.csv, log.txt, VTU/PVTU for ParaView)"
+    ;;
+  test)
+    echo "== running the default test suite (benchmarks excluded)"
+    ctest --test-dir "$build" -LE benchmark --output-on-failure -j "$jobs" "$@"
+    ;;
+  *) usage ;;
+esac

@@ -1,0 +1,216 @@
+#ifndef SPINESIM_FEM_HEAT_HEAT_SOLVER_H
+#define SPINESIM_FEM_HEAT_HEAT_SOLVER_H
+
+// Transient heat conduction  rho c dT/dt = div(k grad T) + q  on a distributed mesh owned by the
+// caller, discretised with FE_Q(p) and the theta-scheme (steps 26 and 40 of deal.II).
+// In 2-D the model is a slice of unit depth: powers are per metre of depth [W/m], energies [J/m].
+// Nothing is allocated before setup(), so a scene without heat pays nothing.
+
+#include <deal.II/base/function.h>
+#include <deal.II/base/parameter_handler.h>
+#include <deal.II/base/point.h>
+#include <deal.II/base/quadrature.h>
+#include <deal.II/distributed/tria.h>
+#include <deal.II/dofs/dof_handler.h>
+#include <deal.II/fe/fe_q.h>
+#include <deal.II/lac/affine_constraints.h>
+#include <deal.II/lac/trilinos_precondition.h>
+#include <deal.II/lac/trilinos_sparse_matrix.h>
+#include <deal.II/lac/trilinos_vector.h>
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace spinesim::fem {
+
+template <int dim>
+class SpaceTimeExpression;
+template <int dim>
+class MovingHeatSource;
+
+template <int dim>
+class HeatSolver {
+public:
+  struct ThermalMaterial {
+    double conductivity = 0.45;   // k [W/(m K)]
+    double density = 1900.0;      // rho [kg/m^3]
+    double specific_heat = 1300.0; // c [J/(kg K)]
+  };
+
+  struct Parameters {
+    static constexpr unsigned int n_material_slots = 4;
+    static constexpr unsigned int n_boundary_slots = 4;
+    static constexpr unsigned int n_moving_source_slots = 2;
+
+    struct MaterialOverride {
+      int material_id = -1; // -1 = unused slot
+      ThermalMaterial material;
+    };
+    struct FixedTemperature {
+      int boundary_id = -1;
+      std::string temperature = "310.15"; // [K], expression in x,y,z,t
+    };
+    struct HeatFlux {
+      int boundary_id = -1;
+      std::string flux = "0"; // [W/m^2] into the body, expression in x,y,z,t
+    };
+    struct Convection {
+      int boundary_id = -1;
+      double heat_transfer_coefficient = 10.0; // h [W/(m^2 K)]
+      double ambient_temperature = 293.15;     // T_inf [K]
+    };
+    struct MovingSource {
+      double power = 0;           // [W] ([W/m] in 2-D); 0 = unused slot
+      double radius = 1e-3;       // [m]
+      double speed = 0;           // [m/s]
+      std::string path = "";      // "x,y[,z]; x,y[,z]; ..."
+      double start_time = 0;      // [s]
+      double end_time = -1;       // [s], negative = never off
+    };
+
+    unsigned int degree = 1;
+    double theta = 1.0;
+    double time_step = 1e-2;                     // [s]
+    std::string initial_temperature = "310.15";  // [K], expression in x,y,z
+    ThermalMaterial default_material;
+    std::vector<MaterialOverride> material_overrides;
+    std::string volumetric_source = "0"; // q [W/m^3], expression in x,y,z,t
+    std::vector<MovingSource> moving_sources;
+    std::vector<FixedTemperature> fixed_temperatures;
+    std::vector<HeatFlux> heat_fluxes;
+    std::vector<Convection> convections;
+    std::string preconditioner = "AMG"; // AMG | SSOR
+    double solver_tolerance = 1e-10;    // relative to the right-hand side
+    unsigned int max_iterations = 1000;
+
+    static void declare(dealii::ParameterHandler& prm);
+    void parse(const dealii::ParameterHandler& prm);
+    // Throws InvalidInput naming the parameter; parse() calls it, setup() calls it again so
+    // values set in code are checked too.
+    void validate() const;
+  };
+
+  // Extra source evaluated at the quadrature points of each locally owned cell, added to the
+  // volumetric source [W/m^3]. Called once per step with the new time; the value is taken as
+  // constant over the step. `values` arrives zeroed with one entry per point.
+  using CellSourceCallback = std::function<void(
+      const typename dealii::Triangulation<dim>::active_cell_iterator& cell,
+      const std::vector<dealii::Point<dim>>& points, double time, std::vector<double>& values)>;
+
+  HeatSolver(dealii::parallel::distributed::Triangulation<dim>& triangulation,
+             const Parameters& parameters);
+  ~HeatSolver();
+
+  // Distributes DoFs, builds constraints and the matrix pattern, sets T to the initial field.
+  void setup();
+  bool is_set_up() const { return fe_ != nullptr; }
+  // Replaces the initial field (after setup()); hanging-node and boundary constraints applied.
+  void set_initial_temperature(const dealii::Function<dim>& temperature);
+
+  // One theta-step of length dt (default: the Parameters time step) from time() to time()+dt.
+  void advance();
+  void advance(double dt);
+
+  // Sources from the coupling layer for the NEXT step only: nodal powers [W] (the integral of a
+  // source against each shape function, e.g. particle heat), in the locally owned partition
+  // (vector built with locally_owned_dofs()). Accumulates; cleared after advance().
+  void add_source_vector(const dealii::TrilinosWrappers::MPI::Vector& nodal_power);
+  // Persistent per-quadrature-point source (e.g. plastic-work heating); empty = none.
+  void set_cell_source(CellSourceCallback callback) { cell_source_ = std::move(callback); }
+
+  // Temperature at `unit_points` of `cell` (locally owned or ghost). For thermal expansion at
+  // the mechanics' quadrature points: pass quadrature.get_points().
+  void temperature_at_unit_points(
+      const typename dealii::Triangulation<dim>::active_cell_iterator& cell,
+      const std::vector<dealii::Point<dim>>& unit_points, std::vector<double>& values) const;
+  // Temperature at arbitrary points held by this rank (collective: every rank calls it, with its
+  // own points). Points outside the mesh: found[i] = false and value NaN if `found` is given,
+  // otherwise NumericalFailure.
+  std::vector<double> temperature_at_points(const std::vector<dealii::Point<dim>>& points,
+                                            std::vector<bool>* found = nullptr) const;
+
+  const dealii::DoFHandler<dim>& dof_handler() const { return dof_handler_; }
+  const dealii::FiniteElement<dim>& fe() const { return *fe_; }
+  const dealii::AffineConstraints<double>& constraints() const { return constraints_; }
+  const dealii::IndexSet& locally_owned_dofs() const { return locally_owned_dofs_; }
+  const dealii::IndexSet& locally_relevant_dofs() const { return locally_relevant_dofs_; }
+  // Ghosted nodal temperatures [K].
+  const dealii::TrilinosWrappers::MPI::Vector& solution() const { return solution_; }
+  const Parameters& parameters() const { return prm_; }
+  const ThermalMaterial& material(dealii::types::material_id id) const;
+
+  double time() const { return time_; }
+  unsigned int step_number() const { return step_; }
+  // Restores the clock and the energy counter after a checkpoint load.
+  void set_time(double time, double supplied_energy = 0.0);
+
+  // Integral of rho c T over the body [J] ([J/m] in 2-D). Collective.
+  double heat_content() const;
+  // Energy that entered through sources, prescribed fluxes and convection since setup [J],
+  // integrated with the same theta-rule as the scheme. Heat through fixed-temperature
+  // boundaries is not counted.
+  double supplied_energy() const { return supplied_energy_; }
+  double max_temperature() const; // nodal maximum [K], collective
+  double min_temperature() const;
+  unsigned int last_linear_iterations() const { return last_iterations_; }
+
+  // Writes <directory>/<basename>_<counter>.{N.vtu,pvtu}; returns the pvtu file name (no
+  // directory). Collective.
+  std::string write_output(const std::string& directory, unsigned int counter,
+                           const std::string& basename = "temperature") const;
+
+  // Checkpoint: call prepare_for_serialization() before triangulation.save(); after
+  // triangulation.load() call deserialize() (instead of setup()). With several solvers on one
+  // mesh the calls must come in the same order at save and load.
+  void prepare_for_serialization();
+  void deserialize();
+  // Mesh adaptation driven by someone else: prepare before
+  // triangulation.execute_coarsening_and_refinement(), finish after it.
+  void prepare_for_coarsening_and_refinement();
+  void finish_refinement();
+
+private:
+  void setup_dofs();
+  void make_constraints(double time);
+  void assemble_step(double dt, bool rebuild_matrix);
+  // Scale factors making each active moving source deposit exactly its power on the mesh.
+  std::vector<double> moving_source_scales(double time) const;
+  double convection_loss(const dealii::TrilinosWrappers::MPI::Vector& temperature) const;
+  void solve();
+  void check_finite(const char* what) const;
+
+  dealii::parallel::distributed::Triangulation<dim>& triangulation_;
+  const Parameters prm_;
+  MPI_Comm comm_;
+
+  std::unique_ptr<dealii::FE_Q<dim>> fe_;
+  dealii::DoFHandler<dim> dof_handler_;
+  dealii::IndexSet locally_owned_dofs_, locally_relevant_dofs_;
+  dealii::AffineConstraints<double> constraints_;
+
+  dealii::TrilinosWrappers::SparseMatrix system_matrix_;
+  dealii::TrilinosWrappers::MPI::Vector solution_;     // ghosted T^n
+  dealii::TrilinosWrappers::MPI::Vector system_rhs_;   // owned
+  dealii::TrilinosWrappers::MPI::Vector external_;     // owned, nodal powers for next step
+  bool has_external_ = false;
+  std::unique_ptr<dealii::TrilinosWrappers::PreconditionBase> preconditioner_;
+  double matrix_dt_ = -1; // dt the matrix was built for; < 0 = rebuild
+
+  std::unique_ptr<SpaceTimeExpression<dim>> volumetric_source_;
+  std::vector<std::pair<dealii::types::boundary_id, std::unique_ptr<SpaceTimeExpression<dim>>>>
+      fixed_, fluxes_;
+  std::vector<MovingHeatSource<dim>> moving_;
+  CellSourceCallback cell_source_;
+
+  struct Transfer;
+  std::unique_ptr<Transfer> transfer_;
+
+  double time_ = 0, supplied_energy_ = 0;
+  unsigned int step_ = 0, last_iterations_ = 0;
+};
+
+} // namespace spinesim::fem
+
+#endif

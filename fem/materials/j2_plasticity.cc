@@ -1,0 +1,47 @@
+#include "fem/materials/j2_plasticity.h"
+
+#include "fem/materials/j2_return_mapping.h"
+#include "fem/materials/tensor_tools.h"
+
+namespace spinesim::materials {
+
+J2Plasticity::J2Plasticity(double E, double nu, double rho, double alpha,
+                           const IsotropicHardening& hardening)
+    : E_(E), nu_(nu), rho_(rho), alpha_(alpha), hardening_(hardening) {
+  validate_elastic_constants("j2_plasticity", E, nu, rho, alpha);
+  K_ = bulk_modulus(E, nu);
+  mu_ = shear_modulus(E, nu);
+}
+
+SmallStrainResponse J2Plasticity::small_strain(const SymTensor2& strain, double dT,
+                                               const MaterialState& old_state) const {
+  check_finite(strain, "strain", name());
+  const SymTensor2 eps_tr =
+      strain - old_state.plastic_strain - alpha_ * dT * dealii::unit_symmetric_tensor<3>();
+  const J2ReturnResult rm = j2_radial_return(eps_tr, old_state.equivalent_plastic_strain, K_,
+                                             mu_, hardening_, name());
+  SmallStrainResponse r;
+  r.stress = rm.stress;
+  r.tangent = rm.tangent;
+  r.state = old_state;
+  if (rm.plastic) {
+    r.state.plastic_strain += rm.plastic_strain_increment;
+    r.state.equivalent_plastic_strain += rm.delta_gamma;
+    r.state.plastic_work += rm.delta_gamma * rm.flow_stress;
+  }
+  return r;
+}
+
+FiniteStrainResponse J2Plasticity::finite_strain(const Tensor2& F, double dT,
+                                                 const MaterialState& old_state) const {
+  checked_determinant(F, name());
+  const SymTensor2 eps = dealii::symmetrize(F) - dealii::unit_symmetric_tensor<3>();
+  const SmallStrainResponse s = small_strain(eps, dT, old_state);
+  FiniteStrainResponse r;
+  r.first_piola = Tensor2(s.stress);
+  r.dP_dF = to_full(s.tangent);
+  r.state = s.state;
+  return r;
+}
+
+} // namespace spinesim::materials

@@ -1,0 +1,46 @@
+#ifndef SPINESIM_FEM_MATERIALS_LAW_PARAMETERS_H
+#define SPINESIM_FEM_MATERIALS_LAW_PARAMETERS_H
+
+// Input-file choice of a constitutive law, material presets with sourced values, and the
+// factory create_law(). Entries are declared in the CURRENT subsection of the handler.
+
+#include "fem/materials/constitutive_law.h"
+
+#include <deal.II/base/parameter_handler.h>
+
+#include <memory>
+#include <string>
+
+namespace spinesim::materials {
+
+struct LawParameters {
+  static void declare(dealii::ParameterHandler& prm);
+  // Reads the entries, applies a non-custom preset (overriding the explicit values it
+  // defines) and validates; InvalidInput naming the parameter otherwise.
+  void parse(const dealii::ParameterHandler& prm);
+
+  // Sets the preset's values (no-op for "custom"); InvalidInput for an unknown preset.
+  void apply_preset();
+  // InvalidInput unless every value the chosen model uses is in range.
+  void validate() const;
+  // One line listing model, preset and the values in use, for logs.
+  std::string describe() const;
+
+  std::string model = "linear_elastic"; // linear_elastic|neo_hookean|j2_plasticity|j2_finite_strain
+  std::string preset = "custom"; // custom|cortical_bone|trabecular_bone|ti6al4v|pmma|copper
+  double youngs_modulus = 17e9;  // [Pa]
+  double poisson_ratio = 0.3;    // [-]
+  double density = 1900;         // [kg/m^3]
+  double yield_stress = 115e6;   // [Pa]
+  double hardening_modulus = 0;  // [Pa]
+  double saturation_stress = 0;  // [Pa], 0 = linear hardening
+  double saturation_exponent = 0; // [-]
+  double thermal_expansion = 0;  // [1/K]
+};
+
+// The law described by p (validated first).
+std::unique_ptr<ConstitutiveLaw> create_law(const LawParameters& p);
+
+} // namespace spinesim::materials
+
+#endif

@@ -1,0 +1,113 @@
+#include "fem/materials/tensor_tools.h"
+
+#include "fem/materials/failure.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace spinesim::materials {
+
+double lame_lambda(double E, double nu) { return E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)); }
+double shear_modulus(double E, double nu) { return E / (2.0 * (1.0 + nu)); }
+double bulk_modulus(double E, double nu) { return E / (3.0 * (1.0 - 2.0 * nu)); }
+
+SymTensor4 isotropic_elasticity(double lambda, double mu) {
+  const SymTensor2 I = dealii::unit_symmetric_tensor<3>();
+  return lambda * dealii::outer_product(I, I) + 2.0 * mu * dealii::identity_tensor<3>();
+}
+
+void validate_elastic_constants(const std::string& where, double E, double nu, double rho,
+                                double alpha) {
+  auto number = [](double v) {
+    std::ostringstream s;
+    s << v;
+    return s.str();
+  };
+  if (!std::isfinite(E) || E <= 0)
+    throw InvalidInput(where + "/Young's modulus", "value " + number(E) + " Pa", "E > 0 [Pa]");
+  if (!std::isfinite(nu) || nu <= -1.0 || nu >= 0.5)
+    throw InvalidInput(where + "/Poisson ratio", "value " + number(nu), "-1 < nu < 0.5");
+  if (!std::isfinite(rho) || rho <= 0)
+    throw InvalidInput(where + "/Density", "value " + number(rho) + " kg/m^3",
+                       "rho > 0 [kg/m^3]");
+  if (!std::isfinite(alpha) || std::abs(alpha) > 1e-3)
+    throw InvalidInput(where + "/Thermal expansion", "value " + number(alpha) + " 1/K",
+                       "|alpha| <= 1e-3 [1/K]");
+}
+
+namespace {
+std::string describe_F(const Tensor2& F) {
+  std::ostringstream s;
+  s.precision(6);
+  s << "F = [";
+  for (unsigned int i = 0; i < 3; ++i)
+    for (unsigned int j = 0; j < 3; ++j)
+      s << F[i][j] << (j < 2 ? " " : (i < 2 ? "; " : "]"));
+  return s.str();
+}
+} // namespace
+
+double checked_determinant(const Tensor2& F, const std::string& law) {
+  check_finite(F, "deformation gradient", law);
+  const double J = dealii::determinant(F);
+  if (!(J > 0.0)) {
+    std::ostringstream s;
+    s << "det F = " << J << " <= 0 (inverted material) in " << law;
+    throw NumericalFailure(s.str(), "material point update, " + describe_F(F),
+                           "the element or particle neighbourhood is inverted: reduce the time "
+                           "or load step, or refine where the deformation concentrates");
+  }
+  return J;
+}
+
+void check_finite(const Tensor2& T, const std::string& what, const std::string& law) {
+  for (unsigned int i = 0; i < 3; ++i)
+    for (unsigned int j = 0; j < 3; ++j)
+      if (!std::isfinite(T[i][j]))
+        throw NumericalFailure("non-finite " + what + " in " + law,
+                               "material point update, " + describe_F(T),
+                               "an upstream NaN or overflow: check the time step and loads");
+}
+
+void check_finite(const SymTensor2& T, const std::string& what, const std::string& law) {
+  check_finite(Tensor2(T), what, law);
+}
+
+Tensor4 to_full(const SymTensor4& C) {
+  Tensor4 A;
+  for (unsigned int i = 0; i < 3; ++i)
+    for (unsigned int j = 0; j < 3; ++j)
+      for (unsigned int k = 0; k < 3; ++k)
+        for (unsigned int l = 0; l < 3; ++l)
+          A[i][j][k][l] = C[i][j][k][l];
+  return A;
+}
+
+dealii::SymmetricTensor<4, 2> condense_plane_stress(const SymTensor4& C) {
+  dealii::SymmetricTensor<4, 2> Cps;
+  const double Czzzz = C[2][2][2][2];
+  for (unsigned int a = 0; a < 2; ++a)
+    for (unsigned int b = a; b < 2; ++b)
+      for (unsigned int c = 0; c < 2; ++c)
+        for (unsigned int d = c; d < 2; ++d)
+          Cps[a][b][c][d] = C[a][b][c][d] - C[a][b][2][2] * C[2][2][c][d] / Czzzz;
+  return Cps;
+}
+
+SymTensor2 embed(const dealii::SymmetricTensor<2, 2>& t) {
+  SymTensor2 r;
+  r[0][0] = t[0][0];
+  r[1][1] = t[1][1];
+  r[0][1] = t[0][1];
+  return r;
+}
+
+dealii::SymmetricTensor<2, 2> in_plane(const SymTensor2& t) {
+  dealii::SymmetricTensor<2, 2> r;
+  r[0][0] = t[0][0];
+  r[1][1] = t[1][1];
+  r[0][1] = t[0][1];
+  return r;
+}
+
+} // namespace spinesim::materials

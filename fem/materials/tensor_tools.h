@@ -1,0 +1,50 @@
+#ifndef SPINESIM_FEM_MATERIALS_TENSOR_TOOLS_H
+#define SPINESIM_FEM_MATERIALS_TENSOR_TOOLS_H
+
+// Small tensor helpers shared by the constitutive laws: isotropic elasticity, checks that
+// throw the project's failure types, plane-stress condensation and conversions between the
+// symmetric and full 4th-order tensors used by the two response types.
+
+#include "fem/materials/constitutive_law.h"
+
+#include <string>
+
+namespace spinesim::materials {
+
+// Lamé constants and bulk modulus from E [Pa] and ν [-].
+double lame_lambda(double E, double nu);
+double shear_modulus(double E, double nu);
+double bulk_modulus(double E, double nu);
+
+// C = λ I⊗I + 2μ I^s [Pa].
+SymTensor4 isotropic_elasticity(double lambda, double mu);
+
+// Throws InvalidInput naming `where` unless E > 0, -1 < ν < 0.5, ρ > 0 and |α| <= 1e-3 1/K
+// (all finite). Every law validates its constants through this.
+void validate_elastic_constants(const std::string& where, double E, double nu, double rho,
+                                double alpha);
+
+// det F, after checking F is finite and det F > 0; otherwise NumericalFailure naming the law.
+double checked_determinant(const Tensor2& F, const std::string& law);
+
+// Throws NumericalFailure if any component is NaN or infinite.
+void check_finite(const Tensor2& T, const std::string& what, const std::string& law);
+void check_finite(const SymTensor2& T, const std::string& what, const std::string& law);
+
+// Full (i,j,k,l) form of a symmetric 4th-order tensor, and the small-strain "P = σ" tangent.
+Tensor4 to_full(const SymTensor4& C);
+
+// Plane stress (σ_zz = σ_xz = σ_yz = 0) by static condensation of a 3-D tangent C:
+//   C^ps_abcd = C_abcd - C_abzz C_zzcd / C_zzzz,  a,b,c,d in {x,y}.
+// Exact for any tangent whose in-plane/out-of-plane shear coupling vanishes (all isotropic
+// laws here, including the J2 algorithmic tangent of a plane-stress state).
+dealii::SymmetricTensor<4, 2> condense_plane_stress(const SymTensor4& C);
+
+// Embeds a 2-D symmetric tensor in 3-D with zero out-of-plane components.
+SymTensor2 embed(const dealii::SymmetricTensor<2, 2>& t);
+// The in-plane part of a 3-D symmetric tensor.
+dealii::SymmetricTensor<2, 2> in_plane(const SymTensor2& t);
+
+} // namespace spinesim::materials
+
+#endif

@@ -1,0 +1,176 @@
+#include "fem/mesh.h"
+
+#include "fem/materials/failure.h"
+
+#include <deal.II/grid/grid_generator.h>
+#include <deal.II/grid/grid_in.h>
+#include <deal.II/grid/grid_tools.h>
+
+#include <fstream>
+#include <sstream>
+
+namespace spinesim::fem {
+
+namespace {
+
+std::vector<double> parse_doubles(const std::string& text, const std::string& where) {
+  std::vector<double> out;
+  for (const auto& s : dealii::Utilities::split_string_list(text, ','))
+    out.push_back(dealii::Utilities::string_to_double(s));
+  if (out.empty())
+    throw InvalidInput(where, "empty list", "a comma-separated list of numbers");
+  return out;
+}
+
+std::string list_to_string(const std::vector<double>& v) {
+  std::ostringstream s;
+  for (std::size_t i = 0; i < v.size(); ++i)
+    s << (i ? "," : "") << v[i];
+  return s.str();
+}
+
+template <int dim>
+dealii::Point<dim> to_point(const std::vector<double>& v, const std::string& where) {
+  if (v.size() < dim)
+    throw InvalidInput(where, "needs " + std::to_string(dim) + " components",
+                       "a comma-separated list of at least dim numbers");
+  dealii::Point<dim> p;
+  for (unsigned int d = 0; d < dim; ++d)
+    p[d] = v[d];
+  return p;
+}
+
+} // namespace
+
+void MeshParameters::declare(dealii::ParameterHandler& prm) {
+  using dealii::Patterns::Anything;
+  using dealii::Patterns::Double;
+  using dealii::Patterns::Integer;
+  using dealii::Patterns::Selection;
+  prm.declare_entry("Shape", "hyper_rectangle",
+                    Selection("hyper_rectangle|plate_with_a_hole|hyper_shell|quarter_hyper_shell|file"),
+                    "Generated shape or 'file' to import Mesh file [-]. Boundary ids: rectangle "
+                    "x- 0, x+ 1, y- 2, y+ 3, z- 4, z+ 5; plate with hole x- 0, x+ 1, y- 2, y+ 3, "
+                    "hole 4, z- 5, z+ 6; shells inner 0, outer 1 (quarter: x=0 2, y=0 3, z=0 4).");
+  prm.declare_entry("Origin", "0,0,0", Anything(), "Lower corner of the rectangle [m].");
+  prm.declare_entry("Lengths", "1,1,1", Anything(), "Edge lengths of the rectangle [m].");
+  prm.declare_entry("Subdivisions", "1,1,1", Anything(),
+                    "Coarse cells per direction of the rectangle [-].");
+  prm.declare_entry("Center", "0,0,0", Anything(), "Centre of shells and of the hole [m].");
+  prm.declare_entry("Inner radius", "0.5", Double(0), "Shell inner radius or hole radius [m].");
+  prm.declare_entry("Outer radius", "1", Double(0),
+                    "Shell outer radius or half-width of the block around the hole [m].");
+  prm.declare_entry("Plate padding", "1", Double(0),
+                    "Plate extent beyond the hole block on every side [m].");
+  prm.declare_entry("Thickness", "1", Double(0), "Extrusion length of a 3-D plate [m].");
+  prm.declare_entry("Shell cells", "0", Integer(0),
+                    "Coarse cells around a shell, 0 for the default [-].");
+  prm.declare_entry("Mesh file", "", Anything(), "Mesh file (.msh, .inp, .vtk, .vtu) [-].");
+  prm.declare_entry("Scale", "1", Double(0), "Factor applied to imported coordinates [m/unit].");
+  prm.declare_entry("Global refinements", "0", Integer(0, 12), "Uniform refinements [-].");
+}
+
+void MeshParameters::parse(const dealii::ParameterHandler& prm) {
+  shape = prm.get("Shape");
+  origin = parse_doubles(prm.get("Origin"), "Origin");
+  lengths = parse_doubles(prm.get("Lengths"), "Lengths");
+  for (double l : lengths)
+    if (!(l > 0))
+      throw InvalidInput("Lengths", "non-positive edge length " + prm.get("Lengths"),
+                         "positive lengths [m]");
+  subdivisions.clear();
+  for (double s : parse_doubles(prm.get("Subdivisions"), "Subdivisions")) {
+    if (s < 1 || s != static_cast<unsigned int>(s))
+      throw InvalidInput("Subdivisions", "bad value " + prm.get("Subdivisions"),
+                         "positive integers");
+    subdivisions.push_back(static_cast<unsigned int>(s));
+  }
+  center = parse_doubles(prm.get("Center"), "Center");
+  inner_radius = prm.get_double("Inner radius");
+  outer_radius = prm.get_double("Outer radius");
+  plate_padding = prm.get_double("Plate padding");
+  thickness = prm.get_double("Thickness");
+  shell_cells = prm.get_integer("Shell cells");
+  file_name = prm.get("Mesh file");
+  scale = prm.get_double("Scale");
+  global_refinements = prm.get_integer("Global refinements");
+  if ((shape == "hyper_shell" || shape == "quarter_hyper_shell" || shape == "plate_with_a_hole") &&
+      !(inner_radius > 0 && inner_radius < outer_radius))
+    throw InvalidInput("Inner radius", "inner radius must lie in (0, Outer radius)",
+                       "0 < Inner radius < Outer radius [m]");
+  if (shape == "file" && file_name.empty())
+    throw InvalidInput("Mesh file", "Shape = file but no file given", "a .msh/.inp/.vtk/.vtu path");
+}
+
+template <int dim>
+void build_coarse_mesh(const MeshParameters& p,
+                       dealii::parallel::distributed::Triangulation<dim>& tria) {
+  using namespace dealii;
+  if (p.shape == "hyper_rectangle") {
+    const Point<dim> lo = to_point<dim>(p.origin, "Origin");
+    Point<dim> hi = lo + to_point<dim>(p.lengths, "Lengths");
+    std::vector<unsigned int> reps(dim, 1);
+    for (unsigned int d = 0; d < dim && d < p.subdivisions.size(); ++d)
+      reps[d] = p.subdivisions[d];
+    GridGenerator::subdivided_hyper_rectangle(tria, reps, lo, hi, /*colorize=*/true);
+  } else if (p.shape == "plate_with_a_hole") {
+    const double pad = p.plate_padding;
+    GridGenerator::plate_with_a_hole(tria, p.inner_radius, p.outer_radius, pad, pad, pad, pad,
+                                     to_point<dim>(p.center, "Center"), 0, 1, p.thickness, 2,
+                                     /*colorize=*/true);
+  } else if (p.shape == "hyper_shell") {
+    GridGenerator::hyper_shell(tria, to_point<dim>(p.center, "Center"), p.inner_radius,
+                               p.outer_radius, p.shell_cells, /*colorize=*/true);
+  } else if (p.shape == "quarter_hyper_shell") {
+    GridGenerator::quarter_hyper_shell(tria, to_point<dim>(p.center, "Center"), p.inner_radius,
+                                       p.outer_radius, p.shell_cells, /*colorize=*/true);
+  } else if (p.shape == "file") {
+    const std::string& f = p.file_name;
+    const auto dot = f.rfind('.');
+    const std::string ext = dot == std::string::npos ? "" : f.substr(dot + 1);
+    std::ifstream in(f);
+    if (!in)
+      throw InvalidInput("Mesh file", "cannot open '" + f + "'", "a readable mesh file");
+    GridIn<dim> grid_in;
+    grid_in.attach_triangulation(tria);
+    try {
+      if (ext == "msh")
+        grid_in.read_msh(in);
+      else if (ext == "inp")
+        grid_in.read_abaqus(in);
+      else if (ext == "vtk")
+        grid_in.read_vtk(in);
+      else if (ext == "vtu")
+        grid_in.read_vtu(in);
+      else
+        throw InvalidInput("Mesh file", "unknown extension '." + ext + "' of '" + f + "'",
+                           ".msh, .inp, .vtk or .vtu");
+    } catch (const InvalidInput&) {
+      throw;
+    } catch (const std::exception& e) {
+      throw InvalidInput("Mesh file", "cannot read '" + f + "': " + e.what(),
+                         "a valid " + std::to_string(dim) + "-D hexahedral/quadrilateral mesh");
+    }
+    if (p.scale != 1.0)
+      GridTools::scale(p.scale, tria);
+  } else {
+    throw InvalidInput("Shape", "unknown shape '" + p.shape + "'",
+                       "hyper_rectangle|plate_with_a_hole|hyper_shell|quarter_hyper_shell|file");
+  }
+}
+
+template <int dim>
+void build_mesh(const MeshParameters& p, dealii::parallel::distributed::Triangulation<dim>& tria) {
+  build_coarse_mesh(p, tria);
+  if (p.global_refinements > 0)
+    tria.refine_global(p.global_refinements);
+}
+
+template void build_mesh<2>(const MeshParameters&, dealii::parallel::distributed::Triangulation<2>&);
+template void build_mesh<3>(const MeshParameters&, dealii::parallel::distributed::Triangulation<3>&);
+template void build_coarse_mesh<2>(const MeshParameters&,
+                                   dealii::parallel::distributed::Triangulation<2>&);
+template void build_coarse_mesh<3>(const MeshParameters&,
+                                   dealii::parallel::distributed::Triangulation<3>&);
+
+} // namespace spinesim::fem
