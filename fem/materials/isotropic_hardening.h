@@ -9,7 +9,7 @@
 namespace spinesim::materials {
 
 class IsotropicHardening {
-public:
+ public:
   // σ_y0 [Pa] > 0, H [Pa] >= 0, σ_∞ [Pa] (0 = linear, else >= σ_y0), δ [-] (> 0 if Voce).
   // InvalidInput if out of range.
   IsotropicHardening(double yield_stress, double hardening_modulus, double saturation_stress = 0,
@@ -24,7 +24,7 @@ public:
   double saturation_stress() const { return saturation_stress_; }
   double saturation_exponent() const { return saturation_exponent_; }
 
-private:
+ private:
   double yield_stress_, hardening_modulus_, saturation_stress_, saturation_exponent_;
 };
 

@@ -1,7 +1,6 @@
 #include "fem/materials/j2_finite_strain.h"
 
 #include "fem/materials/failure.h"
-#include "fem/materials/j2_plasticity.h"
 #include "fem/materials/j2_return_mapping.h"
 #include "fem/materials/tensor_tools.h"
 
@@ -23,19 +22,20 @@ double log_divided_difference(double a, double b) {
 
 J2FiniteStrain::J2FiniteStrain(double E, double nu, double rho, double alpha,
                                const IsotropicHardening& hardening)
-    : E_(E), nu_(nu), rho_(rho), alpha_(alpha), hardening_(hardening) {
-  validate_elastic_constants("j2_finite_strain", E, nu, rho, alpha);
+    // Validate first, so errors name this law rather than the embedded small-strain one.
+    : E_((validate_elastic_constants("j2_finite_strain", E, nu, rho, alpha), E)), nu_(nu),
+      rho_(rho), alpha_(alpha), hardening_(hardening),
+      small_strain_law_(E, nu, rho, alpha, hardening) {
   K_ = bulk_modulus(E, nu);
   mu_ = shear_modulus(E, nu);
 }
 
 SmallStrainResponse J2FiniteStrain::small_strain(const SymTensor2& strain, double dT,
                                                  const MaterialState& old_state) const {
-  return J2Plasticity(E_, nu_, rho_, alpha_, hardening_).small_strain(strain, dT, old_state);
+  return small_strain_law_.small_strain(strain, dT, old_state);
 }
 
-SymTensor2 J2FiniteStrain::elastic_left_cauchy_green(const Tensor2& F,
-                                                     const MaterialState& state) {
+SymTensor2 J2FiniteStrain::elastic_left_cauchy_green(const Tensor2& F, const MaterialState& state) {
   return dealii::symmetrize(F * Tensor2(state.elastic_left_cauchy_green) * dealii::transpose(F));
 }
 
@@ -70,8 +70,8 @@ FiniteStrainResponse J2FiniteStrain::finite_strain(const Tensor2& F, double dT,
   const SymTensor2 I = dealii::unit_symmetric_tensor<3>();
   const SymTensor2 eps_tr =
       0.5 * spectral(log_lam) - alpha_ * dT * I; // elastic log strain, thermal part removed
-  const J2ReturnResult rm = j2_radial_return(eps_tr, old_state.equivalent_plastic_strain, K_, mu_,
-                                             hardening_, name());
+  const J2ReturnResult rm =
+      j2_radial_return(eps_tr, old_state.equivalent_plastic_strain, K_, mu_, hardening_, name());
   const SymTensor2& tau = rm.stress;
   const Tensor2 F_inv = dealii::invert(F);
 
@@ -82,8 +82,8 @@ FiniteStrainResponse J2FiniteStrain::finite_strain(const Tensor2& F, double dT,
     // Δε_p is coaxial with ε_tr, so b^e_{n+1} = Σ λ_a exp(−2 Δε_p,a) e_a⊗e_a.
     std::array<double, 3> lam_new;
     for (unsigned int a = 0; a < 3; ++a)
-      lam_new[a] = lam[a] * std::exp(-2.0 * (eig[a].second * (rm.plastic_strain_increment *
-                                                               eig[a].second)));
+      lam_new[a] =
+          lam[a] * std::exp(-2.0 * (eig[a].second * (rm.plastic_strain_increment * eig[a].second)));
     const Tensor2 b_new(spectral(lam_new));
     r.state.elastic_left_cauchy_green =
         dealii::symmetrize(F_inv * b_new * dealii::transpose(F_inv));

@@ -28,11 +28,12 @@
 
 #include "fem/materials/constitutive_law.h"
 #include "fem/materials/isotropic_hardening.h"
+#include "fem/materials/j2_plasticity.h"
 
 namespace spinesim::materials {
 
 class J2FiniteStrain : public ConstitutiveLaw {
-public:
+ public:
   J2FiniteStrain(double youngs_modulus, double poisson_ratio, double density,
                  double thermal_expansion, const IsotropicHardening& hardening);
 
@@ -50,10 +51,11 @@ public:
   // b^e = F C_p⁻¹ Fᵀ from a state written by this law (includes the thermal stretch).
   static SymTensor2 elastic_left_cauchy_green(const Tensor2& F, const MaterialState& state);
 
-private:
+ private:
   double E_, nu_, rho_, alpha_;
   double K_, mu_;
   IsotropicHardening hardening_;
+  J2Plasticity small_strain_law_; // the linearisation used by small_strain()
 };
 
 } // namespace spinesim::materials

@@ -18,8 +18,8 @@ SmallStrainResponse J2Plasticity::small_strain(const SymTensor2& strain, double 
   check_finite(strain, "strain", name());
   const SymTensor2 eps_tr =
       strain - old_state.plastic_strain - alpha_ * dT * dealii::unit_symmetric_tensor<3>();
-  const J2ReturnResult rm = j2_radial_return(eps_tr, old_state.equivalent_plastic_strain, K_,
-                                             mu_, hardening_, name());
+  const J2ReturnResult rm =
+      j2_radial_return(eps_tr, old_state.equivalent_plastic_strain, K_, mu_, hardening_, name());
   SmallStrainResponse r;
   r.stress = rm.stress;
   r.tangent = rm.tangent;

@@ -15,7 +15,7 @@
 namespace spinesim::materials {
 
 class J2Plasticity : public ConstitutiveLaw {
-public:
+ public:
   J2Plasticity(double youngs_modulus, double poisson_ratio, double density,
                double thermal_expansion, const IsotropicHardening& hardening);
 
@@ -30,7 +30,7 @@ public:
   double thermal_expansion() const { return alpha_; }
   const IsotropicHardening& hardening() const { return hardening_; }
 
-private:
+ private:
   double E_, nu_, rho_, alpha_;
   double K_, mu_;
   IsotropicHardening hardening_;

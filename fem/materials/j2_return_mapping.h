@@ -14,11 +14,11 @@
 namespace spinesim::materials {
 
 struct J2ReturnResult {
-  SymTensor2 stress;         // σ (or τ) [Pa]
-  SymTensor4 tangent;        // consistent d stress / d ε_e,trial [Pa]
+  SymTensor2 stress;                   // σ (or τ) [Pa]
+  SymTensor4 tangent;                  // consistent d stress / d ε_e,trial [Pa]
   SymTensor2 plastic_strain_increment; // Δε_p = Δγ √(3/2) n̂ [-]
-  double delta_gamma = 0;    // Δε̄_p [-]
-  double flow_stress = 0;    // σ_y(ε̄_p,n+1) [Pa]
+  double delta_gamma = 0;              // Δε̄_p [-]
+  double flow_stress = 0;              // σ_y(ε̄_p,n+1) [Pa]
   bool plastic = false;
 };
 

@@ -43,8 +43,7 @@ void LawParameters::declare(dealii::ParameterHandler& prm) {
       "copper (Taylor bar benchmark): E 117 GPa, nu 0.35, rho 8930, sigma_y 400 MPa, H 100 MPa, "
       "alpha 1.65e-5 1/K. Presets use linear hardening (Saturation stress 0).");
   prm.declare_entry("Young's modulus", "17e9", Double(0), "Young's modulus [Pa].");
-  prm.declare_entry("Poisson ratio", "0.3", Double(-1, 0.5),
-                    "Poisson ratio [-], -1 < nu < 0.5.");
+  prm.declare_entry("Poisson ratio", "0.3", Double(-1, 0.5), "Poisson ratio [-], -1 < nu < 0.5.");
   prm.declare_entry("Density", "1900", Double(0), "Mass density [kg/m^3].");
   prm.declare_entry("Yield stress", "115e6", Double(0),
                     "Initial uniaxial yield stress sigma_y0 of the J2 models [Pa].");

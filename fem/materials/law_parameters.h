@@ -27,15 +27,15 @@ struct LawParameters {
   std::string describe() const;
 
   std::string model = "linear_elastic"; // linear_elastic|neo_hookean|j2_plasticity|j2_finite_strain
-  std::string preset = "custom"; // custom|cortical_bone|trabecular_bone|ti6al4v|pmma|copper
-  double youngs_modulus = 17e9;  // [Pa]
-  double poisson_ratio = 0.3;    // [-]
-  double density = 1900;         // [kg/m^3]
-  double yield_stress = 115e6;   // [Pa]
-  double hardening_modulus = 0;  // [Pa]
-  double saturation_stress = 0;  // [Pa], 0 = linear hardening
-  double saturation_exponent = 0; // [-]
-  double thermal_expansion = 0;  // [1/K]
+  std::string preset = "custom";        // custom|cortical_bone|trabecular_bone|ti6al4v|pmma|copper
+  double youngs_modulus = 17e9;         // [Pa]
+  double poisson_ratio = 0.3;           // [-]
+  double density = 1900;                // [kg/m^3]
+  double yield_stress = 115e6;          // [Pa]
+  double hardening_modulus = 0;         // [Pa]
+  double saturation_stress = 0;         // [Pa], 0 = linear hardening
+  double saturation_exponent = 0;       // [-]
+  double thermal_expansion = 0;         // [1/K]
 };
 
 // The law described by p (validated first).

@@ -16,7 +16,7 @@
 namespace spinesim::materials {
 
 class LinearElastic : public ConstitutiveLaw {
-public:
+ public:
   // E [Pa], ν [-], ρ [kg/m^3], α [1/K]; InvalidInput if out of range.
   LinearElastic(double youngs_modulus, double poisson_ratio, double density,
                 double thermal_expansion = 0.0);
@@ -46,7 +46,7 @@ public:
   PlaneStressResponse plane_stress(const dealii::SymmetricTensor<2, 2>& strain,
                                    double temperature_change) const;
 
-private:
+ private:
   double E_, nu_, rho_, alpha_;
   double lambda_, mu_;
   SymTensor4 C_;

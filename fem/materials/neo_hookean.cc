@@ -40,9 +40,9 @@ FiniteStrainResponse NeoHookean::finite_strain(const Tensor2& F, double dT,
     for (unsigned int Jc = 0; Jc < 3; ++Jc)
       for (unsigned int k = 0; k < 3; ++k)
         for (unsigned int L = 0; L < 3; ++L)
-          r.dP_dF[i][Jc][k][L] =
-              scale * ((i == k && Jc == L ? mu_ : 0.0) +
-                       (mu_ - lambda_ * lnJ) * Fi[L][i] * Fi[Jc][k] + lambda_ * Fi[Jc][i] * Fi[L][k]);
+          r.dP_dF[i][Jc][k][L] = scale * ((i == k && Jc == L ? mu_ : 0.0) +
+                                          (mu_ - lambda_ * lnJ) * Fi[L][i] * Fi[Jc][k] +
+                                          lambda_ * Fi[Jc][i] * Fi[L][k]);
   r.state = old_state;
   check_finite(r.first_piola, "first Piola stress", name());
   return r;

@@ -15,7 +15,7 @@
 namespace spinesim::materials {
 
 class NeoHookean : public ConstitutiveLaw {
-public:
+ public:
   // E [Pa], ν [-] (λ, μ are the usual Lamé constants), ρ [kg/m^3], α [1/K].
   NeoHookean(double youngs_modulus, double poisson_ratio, double density,
              double thermal_expansion = 0.0);
@@ -30,7 +30,7 @@ public:
   double density() const override { return rho_; }
   double thermal_expansion() const { return alpha_; }
 
-private:
+ private:
   double E_, nu_, rho_, alpha_;
   double lambda_, mu_;
 };

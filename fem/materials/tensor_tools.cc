@@ -7,9 +7,15 @@
 
 namespace spinesim::materials {
 
-double lame_lambda(double E, double nu) { return E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)); }
-double shear_modulus(double E, double nu) { return E / (2.0 * (1.0 + nu)); }
-double bulk_modulus(double E, double nu) { return E / (3.0 * (1.0 - 2.0 * nu)); }
+double lame_lambda(double E, double nu) {
+  return E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+}
+double shear_modulus(double E, double nu) {
+  return E / (2.0 * (1.0 + nu));
+}
+double bulk_modulus(double E, double nu) {
+  return E / (3.0 * (1.0 - 2.0 * nu));
+}
 
 SymTensor4 isotropic_elasticity(double lambda, double mu) {
   const SymTensor2 I = dealii::unit_symmetric_tensor<3>();
@@ -28,8 +34,7 @@ void validate_elastic_constants(const std::string& where, double E, double nu, d
   if (!std::isfinite(nu) || nu <= -1.0 || nu >= 0.5)
     throw InvalidInput(where + "/Poisson ratio", "value " + number(nu), "-1 < nu < 0.5");
   if (!std::isfinite(rho) || rho <= 0)
-    throw InvalidInput(where + "/Density", "value " + number(rho) + " kg/m^3",
-                       "rho > 0 [kg/m^3]");
+    throw InvalidInput(where + "/Density", "value " + number(rho) + " kg/m^3", "rho > 0 [kg/m^3]");
   if (!std::isfinite(alpha) || std::abs(alpha) > 1e-3)
     throw InvalidInput(where + "/Thermal expansion", "value " + number(alpha) + " 1/K",
                        "|alpha| <= 1e-3 [1/K]");

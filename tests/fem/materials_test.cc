@@ -1,0 +1,618 @@
+// Point-wise constitutive laws: closed-form responses, finite-difference tangents,
+// objectivity, a published finite-strain J2 benchmark and input validation.
+
+#include "fem/materials/failure.h"
+#include "fem/materials/isotropic_hardening.h"
+#include "fem/materials/j2_finite_strain.h"
+#include "fem/materials/j2_plasticity.h"
+#include "fem/materials/law_parameters.h"
+#include "fem/materials/linear_elastic.h"
+#include "fem/materials/neo_hookean.h"
+#include "fem/materials/tensor_tools.h"
+
+#include <deal.II/base/parameter_handler.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <iostream>
+#include <memory>
+
+using namespace spinesim;
+using namespace spinesim::materials;
+
+namespace {
+
+const SymTensor2 I2 = dealii::unit_symmetric_tensor<3>();
+
+Tensor2 identity() {
+  return Tensor2(I2);
+}
+
+// Rodrigues: rotation by angle about the (normalised) axis.
+Tensor2 rotation(dealii::Tensor<1, 3> axis, double angle) {
+  axis /= axis.norm();
+  Tensor2 K;
+  K[0][1] = -axis[2];
+  K[0][2] = axis[1];
+  K[1][0] = axis[2];
+  K[1][2] = -axis[0];
+  K[2][0] = -axis[1];
+  K[2][1] = axis[0];
+  return identity() + std::sin(angle) * K + (1.0 - std::cos(angle)) * K * K;
+}
+
+dealii::Tensor<1, 3> vec(double a, double b, double c) {
+  dealii::Tensor<1, 3> v;
+  v[0] = a;
+  v[1] = b;
+  v[2] = c;
+  return v;
+}
+
+Tensor2 diag(double a, double b, double c) {
+  Tensor2 t;
+  t[0][0] = a;
+  t[1][1] = b;
+  t[2][2] = c;
+  return t;
+}
+
+double max_abs(const Tensor4& A) {
+  double m = 0;
+  for (unsigned int i = 0; i < 3; ++i)
+    for (unsigned int j = 0; j < 3; ++j)
+      for (unsigned int k = 0; k < 3; ++k)
+        for (unsigned int l = 0; l < 3; ++l)
+          m = std::max(m, std::abs(A[i][j][k][l]));
+  return m;
+}
+
+double von_mises(const SymTensor2& s) {
+  return std::sqrt(1.5) * dealii::deviator(s).norm();
+}
+
+IsotropicHardening linear_hardening() {
+  return IsotropicHardening(250e6, 2e9);
+}
+IsotropicHardening voce_hardening() {
+  return IsotropicHardening(250e6, 1e9, 400e6, 20.0);
+}
+
+// Largest |analytic − central FD| over all components of dσ/dε (tensorial strain: the
+// perturbation of an off-diagonal ε_kl moves ε_lk too, so the FD gives C_ijkl + C_ijlk = 2C_ijkl).
+double small_strain_tangent_error(const ConstitutiveLaw& law, const SymTensor2& eps, double dT,
+                                  const MaterialState& state, double h, double* scale) {
+  const SmallStrainResponse r = law.small_strain(eps, dT, state);
+  double err = 0;
+  *scale = max_abs(to_full(r.tangent));
+  for (unsigned int k = 0; k < 3; ++k)
+    for (unsigned int l = k; l < 3; ++l) {
+      SymTensor2 d;
+      d[k][l] = h; // symmetric storage: sets ε_kl and ε_lk
+      const SymTensor2 sp = law.small_strain(eps + d, dT, state).stress;
+      const SymTensor2 sm = law.small_strain(eps - d, dT, state).stress;
+      const double factor = (k == l ? 1.0 : 2.0);
+      for (unsigned int i = 0; i < 3; ++i)
+        for (unsigned int j = 0; j < 3; ++j)
+          err = std::max(
+              err, std::abs((sp[i][j] - sm[i][j]) / (2 * h) - factor * r.tangent[i][j][k][l]));
+    }
+  return err;
+}
+
+double finite_strain_tangent_error(const ConstitutiveLaw& law, const Tensor2& F, double dT,
+                                   const MaterialState& state, double h, double* scale) {
+  const FiniteStrainResponse r = law.finite_strain(F, dT, state);
+  *scale = max_abs(r.dP_dF);
+  double err = 0;
+  for (unsigned int k = 0; k < 3; ++k)
+    for (unsigned int l = 0; l < 3; ++l) {
+      Tensor2 d;
+      d[k][l] = h;
+      const Tensor2 Pp = law.finite_strain(F + d, dT, state).first_piola;
+      const Tensor2 Pm = law.finite_strain(F - d, dT, state).first_piola;
+      for (unsigned int i = 0; i < 3; ++i)
+        for (unsigned int j = 0; j < 3; ++j)
+          err = std::max(err, std::abs((Pp[i][j] - Pm[i][j]) / (2 * h) - r.dP_dF[i][j][k][l]));
+    }
+  return err;
+}
+
+// Uniaxial stress along x: Newton on the lateral strains ε_yy, ε_zz until σ_yy = σ_zz = 0.
+SmallStrainResponse uniaxial_stress(const ConstitutiveLaw& law, double eps_xx, double dT,
+                                    const MaterialState& state, double* eps_yy, double* eps_zz) {
+  SymTensor2 eps;
+  eps[0][0] = eps_xx;
+  eps[1][1] = *eps_yy;
+  eps[2][2] = *eps_zz;
+  for (unsigned int it = 0; it < 30; ++it) {
+    const SmallStrainResponse r = law.small_strain(eps, dT, state);
+    const double a = r.tangent[1][1][1][1], b = r.tangent[1][1][2][2];
+    const double c = r.tangent[2][2][1][1], d = r.tangent[2][2][2][2];
+    const double ry = r.stress[1][1], rz = r.stress[2][2];
+    if (std::abs(ry) + std::abs(rz) < 1e-9 * (1.0 + std::abs(r.stress[0][0]))) {
+      *eps_yy = eps[1][1];
+      *eps_zz = eps[2][2];
+      return r;
+    }
+    const double det = a * d - b * c;
+    eps[1][1] -= (d * ry - b * rz) / det;
+    eps[2][2] -= (-c * ry + a * rz) / det;
+  }
+  ADD_FAILURE() << "uniaxial stress driver did not converge";
+  return law.small_strain(eps, dT, state);
+}
+
+} // namespace
+
+// ---------------------------------------------------------------- linear elasticity
+
+TEST(LinearElastic, UniaxialStressRecoversYoungsModulusAndPoissonRatio) {
+  const double E = 17e9, nu = 0.3;
+  const LinearElastic law(E, nu, 1900);
+  double eyy = 0, ezz = 0;
+  const double exx = 1e-3;
+  const SmallStrainResponse r = uniaxial_stress(law, exx, 0, MaterialState(), &eyy, &ezz);
+  // Linear problem: one Newton step is exact, the residual tolerance is 1e-9 relative.
+  EXPECT_NEAR(r.stress[0][0] / exx, E, 1e-8 * E);
+  EXPECT_NEAR(-eyy / exx, nu, 1e-8);
+  EXPECT_NEAR(-ezz / exx, nu, 1e-8);
+  // Shear: σ_xy = 2G ε_xy with G = E / (2(1+ν)).
+  SymTensor2 shear;
+  shear[0][1] = 1e-3;
+  EXPECT_NEAR(law.small_strain(shear, 0, MaterialState()).stress[0][1], E / (1 + nu) * 1e-3,
+              1e-12 * E);
+  // P-wave speed sqrt((λ+2μ)/ρ).
+  EXPECT_NEAR(law.p_wave_speed(), std::sqrt(E * (1 - nu) / ((1 + nu) * (1 - 2 * nu)) / 1900), 1e-9);
+}
+
+TEST(LinearElastic, PlaneStressReductionMatchesUniaxialStressIn2D) {
+  const double E = 3e9, nu = 0.35, alpha = 7e-5;
+  const LinearElastic law(E, nu, 1180, alpha);
+  // Condensation of the 3-D stiffness equals the closed-form plane-stress matrix.
+  const dealii::SymmetricTensor<4, 2> closed = LinearElastic::plane_stress_stiffness(E, nu);
+  const dealii::SymmetricTensor<4, 2> condensed = condense_plane_stress(law.stiffness());
+  EXPECT_NEAR((closed - condensed).norm(), 0.0, 1e-12 * closed.norm()); // round-off only
+  EXPECT_NEAR(closed[0][0][0][0], E / (1 - nu * nu), 1e-12 * E);
+  EXPECT_NEAR(closed[0][0][1][1], nu * E / (1 - nu * nu), 1e-12 * E);
+  // Uniaxial stress in 2-D: ε = diag(ε, −νε) (+ thermal) gives σ = diag(Eε, 0) and
+  // ε_zz = −νε + αΔT.
+  const double e = 2e-3, dT = 10;
+  dealii::SymmetricTensor<2, 2> eps;
+  eps[0][0] = e + alpha * dT;
+  eps[1][1] = -nu * e + alpha * dT;
+  const auto r = law.plane_stress(eps, dT);
+  EXPECT_NEAR(r.stress[0][0], E * e, 1e-10 * E * e);
+  EXPECT_NEAR(r.stress[1][1], 0.0, 1e-10 * E * e);
+  EXPECT_NEAR(r.strain_zz, -nu * e + alpha * dT, 1e-14);
+  // The 3-D law agrees with the recovered ε_zz.
+  SymTensor2 eps3 = embed(eps);
+  eps3[2][2] = r.strain_zz;
+  const SymTensor2 s3 = law.small_strain(eps3, dT, MaterialState()).stress;
+  EXPECT_NEAR(s3[2][2], 0.0, 1e-10 * E * e);
+  EXPECT_NEAR(s3[0][0], E * e, 1e-10 * E * e);
+}
+
+TEST(ThermalStrain, FreeExpansionIsStressFreeInEveryLaw) {
+  const double alpha = 1.65e-5, dT = 300;
+  std::vector<std::unique_ptr<ConstitutiveLaw>> laws;
+  laws.push_back(std::make_unique<LinearElastic>(117e9, 0.35, 8930, alpha));
+  laws.push_back(std::make_unique<NeoHookean>(117e9, 0.35, 8930, alpha));
+  laws.push_back(
+      std::make_unique<J2Plasticity>(117e9, 0.35, 8930, alpha, IsotropicHardening(400e6, 100e6)));
+  laws.push_back(
+      std::make_unique<J2FiniteStrain>(117e9, 0.35, 8930, alpha, IsotropicHardening(400e6, 100e6)));
+  const double K = 117e9 / (3 * (1 - 2 * 0.35));
+  for (const auto& law : laws) {
+    SCOPED_TRACE(law->name());
+    // Stress scale of the constrained case is 3KαΔT ≈ 2e9 Pa; 1e-6 Pa is round-off.
+    const SymTensor2 s = law->small_strain(alpha * dT * I2, dT, MaterialState()).stress;
+    EXPECT_NEAR(s.norm(), 0.0, 1e-6);
+    // Free thermal stretch θ I: θ = exp(αΔT) for the finite-strain kinematics; the small-strain
+    // J2 law's finite_strain linearises (ε = sym F − I), so there θ = 1 + αΔT.
+    const double theta = law->name() == "j2_plasticity" ? 1.0 + alpha * dT : std::exp(alpha * dT);
+    const Tensor2 P = law->finite_strain(theta * identity(), dT, MaterialState()).first_piola;
+    EXPECT_NEAR(P.norm(), 0.0, 1e-3); // round-off of ln/exp on stresses of O(1e9)
+    // Fully constrained heating: σ = −3KαΔT I (all laws stay elastic: the state is hydrostatic).
+    const SymTensor2 c = law->small_strain(SymTensor2(), dT, MaterialState()).stress;
+    EXPECT_NEAR(c[0][0], -3 * K * alpha * dT, 1e-10 * 3 * K * alpha * dT);
+    EXPECT_NEAR(dealii::deviator(c).norm(), 0.0, 1e-10 * 3 * K * alpha * dT);
+  }
+}
+
+TEST(LinearElastic, StVenantKirchhoffTangentMatchesFiniteDifferences) {
+  const LinearElastic law(17e9, 0.3, 1900, 1e-5);
+  const Tensor2 F = rotation(vec(1, 2, 3), 0.4) * (identity() + 0.05 * diag(1, -0.5, 0.3));
+  double scale;
+  // h = 1e-6 on F ~ 1: truncation ~ h² |∂³P| ~ 1e-12 E, round-off ~ 1e-16 |P|/h ~ 1e-1 Pa; both
+  // are far below 1e-7 of the tangent scale.
+  const double err = finite_strain_tangent_error(law, F, 20, MaterialState(), 1e-6, &scale);
+  EXPECT_LT(err, 1e-7 * scale);
+  // Second Piola from P: S = F⁻¹ P = C : E.
+  const Tensor2 P = law.finite_strain(F, 0, MaterialState()).first_piola;
+  const SymTensor2 green = 0.5 * (dealii::symmetrize(dealii::transpose(F) * F) - I2);
+  EXPECT_NEAR((dealii::invert(F) * P - Tensor2(law.stiffness() * green)).norm(), 0.0,
+              1e-9 * 17e9 * green.norm());
+}
+
+// ---------------------------------------------------------------- Neo-Hookean
+
+TEST(NeoHookean, TangentMatchesFiniteDifferences) {
+  const NeoHookean law(1e9, 0.45, 1000, 2e-4);
+  // Large, general deformation (J ≈ 1.2 with shear) and a thermal stretch.
+  Tensor2 F = rotation(vec(0.3, -1, 0.5), 1.1) * (identity() + diag(0.3, -0.2, 0.1));
+  F[0][1] += 0.25;
+  F[2][0] -= 0.15;
+  double scale;
+  // h = 1e-6: see the St. Venant–Kirchhoff test; nonlinearity here is O(1), still < 1e-7.
+  const double err = finite_strain_tangent_error(law, F, 50, MaterialState(), 1e-6, &scale);
+  EXPECT_LT(err, 1e-7 * scale);
+}
+
+TEST(NeoHookean, SmallStrainLimitIsLinearElasticity) {
+  const double E = 2e9, nu = 0.3;
+  const NeoHookean nh(E, nu, 1000);
+  const LinearElastic le(E, nu, 1000);
+  Tensor2 H;
+  H[0][0] = 1e-6;
+  H[0][1] = 2e-6;
+  H[2][1] = -1e-6;
+  H[2][2] = -0.5e-6;
+  const Tensor2 P = nh.finite_strain(identity() + H, 0, MaterialState()).first_piola;
+  const SymTensor2 s = le.small_strain(dealii::symmetrize(H), 0, MaterialState()).stress;
+  // Geometric/material nonlinearity enters at O(|H|²) E ~ 1e-12 E vs stresses ~ 1e-6 E.
+  EXPECT_NEAR((P - Tensor2(s)).norm(), 0.0, 1e-5 * s.norm());
+  // And small_strain itself is the linearisation.
+  EXPECT_NEAR((nh.small_strain(dealii::symmetrize(H), 0, MaterialState()).stress - s).norm(), 0,
+              1e-12 * s.norm());
+}
+
+// ---------------------------------------------------------------- objectivity
+
+TEST(Objectivity, RotationIsStressFreeAndResponseIsFrameIndifferent) {
+  const Tensor2 R = rotation(vec(1, -2, 0.7), 2.3);
+  Tensor2 U = identity() + diag(0.08, -0.03, 0.02);
+  U[0][1] = U[1][0] = 0.04; // symmetric stretch
+  U[1][2] = U[2][1] = -0.02;
+  // A prior plastic state for the finite-strain J2 law (C_p⁻¹ ≠ I, det = 1).
+  MaterialState plastic;
+  plastic.elastic_left_cauchy_green = dealii::symmetrize(diag(1.1, 1.0 / 1.1, 1.0));
+  plastic.equivalent_plastic_strain = 0.05;
+
+  std::vector<std::pair<std::unique_ptr<ConstitutiveLaw>, MaterialState>> cases;
+  cases.emplace_back(std::make_unique<LinearElastic>(30e9, 0.3, 1000), MaterialState());
+  cases.emplace_back(std::make_unique<NeoHookean>(30e9, 0.3, 1000), MaterialState());
+  cases.emplace_back(
+      std::make_unique<J2FiniteStrain>(30e9, 0.3, 1000, 0, IsotropicHardening(500e6, 1e9)),
+      MaterialState());
+  cases.emplace_back(std::make_unique<J2FiniteStrain>(30e9, 0.3, 1000, 0,
+                                                      IsotropicHardening(500e6, 1e9, 800e6, 10)),
+                     plastic);
+  for (const auto& [law, state] : cases) {
+    SCOPED_TRACE(law->name());
+    if (state.equivalent_plastic_strain == 0) {
+      // Pure rotation of virgin material: zero stress (round-off on E = 3e10 Pa).
+      EXPECT_NEAR(law->finite_strain(R, 0, state).first_piola.norm(), 0.0, 1e-4);
+    }
+    // U is large enough to yield the J2 laws, so the return map is exercised too.
+    const FiniteStrainResponse ru = law->finite_strain(U, 0, state);
+    const FiniteStrainResponse rru = law->finite_strain(R * U, 0, state);
+    const double scale = ru.first_piola.norm();
+    EXPECT_GT(scale, 1e8);
+    // P(RU) = R P(U) up to round-off (relative 1e-12 of the stress, generous for 1e-16 ops).
+    EXPECT_NEAR((rru.first_piola - R * ru.first_piola).norm(), 0.0, 1e-11 * scale);
+    EXPECT_NEAR(rru.state.equivalent_plastic_strain, ru.state.equivalent_plastic_strain, 1e-14);
+    // C_p⁻¹ is a reference-configuration tensor: unchanged by R.
+    EXPECT_NEAR((rru.state.elastic_left_cauchy_green - ru.state.elastic_left_cauchy_green).norm(),
+                0.0, 1e-12);
+  }
+}
+
+// ---------------------------------------------------------------- small-strain J2
+
+TEST(J2Plasticity, ConsistentTangentMatchesFiniteDifferences) {
+  const double E = 200e9, nu = 0.3;
+  for (const auto& hardening : {linear_hardening(), voce_hardening()}) {
+    SCOPED_TRACE(hardening.is_linear() ? "linear" : "Voce");
+    const J2Plasticity law(E, nu, 7800, 1.2e-5, hardening);
+    MaterialState prior;
+    prior.plastic_strain = dealii::deviator(dealii::symmetrize(diag(2e-3, -1e-3, 0.5e-3)));
+    prior.equivalent_plastic_strain = 3e-3;
+
+    SymTensor2 dir;
+    dir[0][0] = 1.0;
+    dir[1][1] = -0.4;
+    dir[0][2] = 0.6;
+    dir[2][2] = 0.2;
+    // Elastic step: far inside the yield surface. Plastic step: well outside it.
+    const SymTensor2 elastic = 2e-4 * dir + prior.plastic_strain;
+    const SymTensor2 plastic = 8e-3 * dir + prior.plastic_strain;
+    double scale;
+    // h = 1e-9 on strains ~1e-3: truncation h² σ''' is negligible (radial return is smooth off
+    // the yield surface), round-off 1e-16 |σ| / h ~ 1e-1 Pa; tolerance 1e-6 of ~1e11 Pa.
+    const double e_el = small_strain_tangent_error(law, elastic, 5, prior, 1e-9, &scale);
+    EXPECT_FALSE(law.small_strain(elastic, 5, prior).state.equivalent_plastic_strain >
+                 prior.equivalent_plastic_strain);
+    EXPECT_LT(e_el, 1e-6 * scale);
+    const SmallStrainResponse rp = law.small_strain(plastic, 5, prior);
+    EXPECT_GT(rp.state.equivalent_plastic_strain, prior.equivalent_plastic_strain + 1e-3);
+    const double e_pl = small_strain_tangent_error(law, plastic, 5, prior, 1e-9, &scale);
+    EXPECT_LT(e_pl, 1e-6 * scale);
+    // The algorithmic tangent differs from the elastic one (else the test could not fail).
+    EXPECT_GT((rp.tangent - isotropic_elasticity(lame_lambda(E, nu), shear_modulus(E, nu))).norm(),
+              0.1 * E);
+    // Consistency: the returned stress lies on the yield surface of the new state.
+    EXPECT_NEAR(von_mises(rp.stress), hardening.flow_stress(rp.state.equivalent_plastic_strain),
+                1e-9 * hardening.yield_stress());
+  }
+}
+
+TEST(J2Plasticity, UniaxialBarFollowsClosedFormLinearHardening) {
+  const double E = 200e9, nu = 0.3, sy = 250e6, H = 2e9;
+  const J2Plasticity law(E, nu, 7800, 0, IsotropicHardening(sy, H));
+  const double ey = sy / E;
+  MaterialState state;
+  double eyy = 0, ezz = 0, max_step_ep = 0, max_error = 0;
+  const unsigned int n = 50;
+  for (unsigned int step = 1; step <= n; ++step) {
+    const double e = 5 * ey * step / n;
+    const double ep_old = state.equivalent_plastic_strain;
+    const SmallStrainResponse r = uniaxial_stress(law, e, 0, state, &eyy, &ezz);
+    state = r.state;
+    max_step_ep = std::max(max_step_ep, state.equivalent_plastic_strain - ep_old);
+    const double exact = e <= ey ? E * e : sy + E * H / (E + H) * (e - ey);
+    max_error = std::max(max_error, std::abs(r.stress[0][0] - exact));
+  }
+  // Radial return is exact for proportional loading; error is the driver's 1e-9 tolerance.
+  EXPECT_LT(max_error, 1e-8 * sy);
+  const double e_end = 5 * ey;
+  const double s_end = sy + E * H / (E + H) * (e_end - ey);
+  const double ep_end = e_end - s_end / E; // 1-D: ε = σ/E + ε_p
+  EXPECT_NEAR(state.equivalent_plastic_strain, ep_end, 1e-9 * ep_end);
+  EXPECT_NEAR(state.plastic_strain[0][0], ep_end, 1e-9 * ep_end);
+  EXPECT_NEAR(state.plastic_strain[1][1], -0.5 * ep_end, 1e-9 * ep_end); // isochoric flow
+  // Plastic work ∫σ dε_p = σ_y ε̄ + H ε̄²/2; the backward-Euler sum exceeds it by at most
+  // H/2 Σ Δε̄² <= H/2 ε̄ max Δε̄.
+  const double w_exact = sy * ep_end + 0.5 * H * ep_end * ep_end;
+  EXPECT_GE(state.plastic_work, w_exact * (1 - 1e-12));
+  EXPECT_LE(state.plastic_work - w_exact, 0.5 * H * ep_end * max_step_ep * (1 + 1e-9));
+  std::cout << "[ measured ] uniaxial linear hardening: sigma(5 eps_y) = " << s_end / 1e6
+            << " MPa, max error = " << max_error << " Pa, W_p = " << state.plastic_work
+            << " J/m^3 (exact " << w_exact << ")\n";
+}
+
+TEST(J2Plasticity, UniaxialBarFollowsVoceCurve) {
+  const double E = 70e9, nu = 0.33;
+  const IsotropicHardening h(200e6, 0.5e9, 320e6, 15.0);
+  const J2Plasticity law(E, nu, 2700, 0, h);
+  MaterialState state;
+  double eyy = 0, ezz = 0, max_error = 0;
+  for (unsigned int step = 1; step <= 40; ++step) {
+    const double e = 0.002 * step; // to 8 %
+    const SmallStrainResponse r = uniaxial_stress(law, e, 0, state, &eyy, &ezz);
+    state = r.state;
+    // 1-D closed form: σ = σ_y(ε − σ/E) once yielded, found by bisection independently of
+    // the return map.
+    double exact = E * e;
+    if (exact > h.yield_stress()) {
+      double lo = h.yield_stress(), hi = E * e;
+      for (int i = 0; i < 200; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (mid < h.flow_stress(e - mid / E) ? lo : hi) = mid;
+      }
+      exact = 0.5 * (lo + hi);
+    }
+    max_error = std::max(max_error, std::abs(r.stress[0][0] - exact));
+  }
+  // Proportional loading: the return map is exact; tolerance = driver/Newton tolerances.
+  EXPECT_LT(max_error, 1e-7 * h.yield_stress());
+  std::cout << "[ measured ] uniaxial Voce: max |sigma - closed form| = " << max_error << " Pa\n";
+}
+
+// ---------------------------------------------------------------- finite-strain J2
+
+TEST(J2FiniteStrain, TangentMatchesFiniteDifferences) {
+  for (const auto& hardening : {linear_hardening(), voce_hardening()}) {
+    SCOPED_TRACE(hardening.is_linear() ? "linear" : "Voce");
+    const J2FiniteStrain law(200e9, 0.3, 7800, 1.2e-5, hardening);
+    MaterialState prior; // a previous plastic deformation (isochoric F_p with shear)
+    Tensor2 Fp = diag(1.05, 1.0 / 1.05, 1.0);
+    Fp[0][2] = 0.03;
+    prior.elastic_left_cauchy_green =
+        dealii::symmetrize(dealii::invert(Fp) * dealii::transpose(dealii::invert(Fp)));
+    prior.equivalent_plastic_strain = 0.04;
+
+    const Tensor2 R = rotation(vec(1, 1, -0.5), 0.7);
+    Tensor2 F_plastic = R * Fp * diag(1.02, 0.995, 1.001);
+    F_plastic[1][2] += 0.01;
+    const Tensor2 F_elastic = R * Fp * diag(1.0005, 0.9999, 1.0);
+    const Tensor2 F_degenerate = diag(1.03, 1.0, 1.0); // equal eigenvalues of b_tr
+
+    double scale;
+    // h = 1e-7 on F ~ 1: truncation h² ∂³P ~ 1e-14 E (plastic curvature scales with μ/σ_y),
+    // round-off 1e-16 |P| / h ~ 1 Pa; tolerance 1e-6 of ~1e11 Pa.
+    const double h = 1e-7;
+    const FiniteStrainResponse rp = law.finite_strain(F_plastic, 10, prior);
+    EXPECT_GT(rp.state.equivalent_plastic_strain, prior.equivalent_plastic_strain + 1e-3);
+    const double err_plastic = finite_strain_tangent_error(law, F_plastic, 10, prior, h, &scale);
+    EXPECT_LT(err_plastic, 1e-6 * scale);
+    const FiniteStrainResponse re = law.finite_strain(F_elastic, 10, prior);
+    EXPECT_EQ(re.state.equivalent_plastic_strain, prior.equivalent_plastic_strain);
+    const double err_elastic = finite_strain_tangent_error(law, F_elastic, 10, prior, h, &scale);
+    EXPECT_LT(err_elastic, 1e-6 * scale);
+    const FiniteStrainResponse rd = law.finite_strain(F_degenerate, 0, MaterialState());
+    EXPECT_GT(rd.state.equivalent_plastic_strain, 1e-3);
+    const double err_degenerate =
+        finite_strain_tangent_error(law, F_degenerate, 0, MaterialState(), h, &scale);
+    EXPECT_LT(err_degenerate, 1e-6 * scale);
+    // Plastic flow is isochoric: det C_p⁻¹ stays 1 (exp of a deviatoric tensor).
+    EXPECT_NEAR(dealii::determinant(rp.state.elastic_left_cauchy_green), 1.0, 1e-12);
+    // Kirchhoff Mises stress on the updated yield surface.
+    const Tensor2 tau = rp.first_piola * dealii::transpose(F_plastic);
+    EXPECT_NEAR(von_mises(dealii::symmetrize(tau)),
+                hardening.flow_stress(rp.state.equivalent_plastic_strain),
+                1e-9 * hardening.yield_stress());
+  }
+}
+
+TEST(J2FiniteStrain, SmallStrainLimitMatchesSmallStrainJ2) {
+  const J2FiniteStrain fs(200e9, 0.3, 7800, 0, linear_hardening());
+  const J2Plasticity ss(200e9, 0.3, 7800, 0, linear_hardening());
+  // Uniaxial-ish small strain beyond yield (ε_y = 1.25e-3): both laws yield alike.
+  Tensor2 H = diag(3e-3, -1e-3, -1e-3);
+  H[0][1] = 0.5e-3;
+  H[1][0] = 0.5e-3;
+  const FiniteStrainResponse rf = fs.finite_strain(identity() + H, 0, MaterialState());
+  const SmallStrainResponse rs = ss.small_strain(dealii::symmetrize(H), 0, MaterialState());
+  // Differences are second order in |H| ~ 3e-3: relative ~1e-2 at most.
+  EXPECT_NEAR((rf.first_piola - Tensor2(rs.stress)).norm(), 0.0, 1e-2 * rs.stress.norm());
+  EXPECT_NEAR(rf.state.equivalent_plastic_strain, rs.state.equivalent_plastic_strain,
+              1e-2 * rs.state.equivalent_plastic_strain);
+}
+
+// LSMFM benchmark (Table 1): plane-strain extension of a J2 block, E = 30 GPa, ν = 0.3,
+// σ_Y = 500 MPa, linear hardening K̄ = 0.1 MPa; F = diag(λx, λy, 1) with λy such that the
+// y-traction vanishes. ABAQUS reference (Hencky/log-strain elasticity, Mises yield on Cauchy
+// stress, PEEQ = ∫√(2/3 d_p:d_p) dt): flow stress 500.00355 / 500.00896 MPa and PEEQ
+// 0.035563 / 0.089154 at λx = 1.05 / 1.10.
+TEST(J2FiniteStrain, PlaneStrainExtensionMatchesAbaqusBenchmark) {
+  const IsotropicHardening h(500e6, 0.1e6);
+  const J2FiniteStrain law(30e9, 0.3, 7800, 0, h);
+  MaterialState state;
+  double ly = 1.0;
+  const unsigned int n = 200;
+  const double ref_flow[2] = {500.00355e6, 500.00896e6};
+  const double ref_peeq[2] = {0.035563, 0.089154};
+  for (unsigned int step = 1; step <= n; ++step) {
+    const double lx = 1.0 + 0.10 * step / n;
+    FiniteStrainResponse r;
+    bool converged = false;
+    for (unsigned int it = 0; it < 30 && !converged; ++it) {
+      r = law.finite_strain(diag(lx, ly, 1.0), 0, state);
+      const double res = r.first_piola[1][1];
+      if (std::abs(res) < 1e-6 * h.yield_stress())
+        converged = true;
+      else
+        ly -= res / r.dP_dF[1][1][1][1];
+    }
+    ASSERT_TRUE(converged) << "lambda_x = " << lx;
+    state = r.state;
+    if (step == n / 2 || step == n) {
+      const unsigned int c = step == n ? 1 : 0;
+      const double J = lx * ly;
+      const Tensor2 tau = r.first_piola * dealii::transpose(diag(lx, ly, 1.0));
+      const double q_tau = von_mises(dealii::symmetrize(tau));
+      const double flow = h.flow_stress(state.equivalent_plastic_strain);
+      std::cout.precision(8);
+      std::cout << "[ measured ] lambda_x = " << lx << ": lambda_y = " << ly
+                << ", flow stress = " << flow / 1e6 << " MPa (Mises Kirchhoff " << q_tau / 1e6
+                << ", Mises Cauchy " << q_tau / J / 1e6 << " MPa; ABAQUS " << ref_flow[c] / 1e6
+                << "), eff. plastic strain = " << state.equivalent_plastic_strain << " (ABAQUS "
+                << ref_peeq[c] << ")\n";
+      // Brief's tolerances: flow stress 1 %, effective plastic strain 3 %.
+      EXPECT_NEAR(flow, ref_flow[c], 0.01 * ref_flow[c]);
+      EXPECT_NEAR(q_tau, flow, 1e-6 * flow); // on the yield surface
+      EXPECT_NEAR(state.equivalent_plastic_strain, ref_peeq[c], 0.03 * ref_peeq[c]);
+    }
+  }
+}
+
+// ---------------------------------------------------------------- failures and input
+
+TEST(Failures, InvertedDeformationGradientRaisesNumericalFailure) {
+  std::vector<std::unique_ptr<ConstitutiveLaw>> laws;
+  laws.push_back(std::make_unique<LinearElastic>(1e9, 0.3, 1000));
+  laws.push_back(std::make_unique<NeoHookean>(1e9, 0.3, 1000));
+  laws.push_back(std::make_unique<J2Plasticity>(1e9, 0.3, 1000, 0, IsotropicHardening(1e6, 0)));
+  laws.push_back(std::make_unique<J2FiniteStrain>(1e9, 0.3, 1000, 0, IsotropicHardening(1e6, 0)));
+  for (const auto& law : laws) {
+    SCOPED_TRACE(law->name());
+    EXPECT_THROW(law->finite_strain(diag(1, 1, -1), 0, MaterialState()), NumericalFailure);
+    EXPECT_THROW(law->finite_strain(diag(1, 0, 1), 0, MaterialState()), NumericalFailure);
+    EXPECT_THROW(law->finite_strain(diag(1, std::nan(""), 1), 0, MaterialState()),
+                 NumericalFailure);
+    EXPECT_NO_THROW(law->finite_strain(diag(1.01, 1, 1), 0, MaterialState()));
+  }
+}
+
+TEST(Failures, BadParametersRaiseInvalidInput) {
+  EXPECT_THROW(LinearElastic(-1, 0.3, 1000), InvalidInput);
+  EXPECT_THROW(LinearElastic(1e9, 0.5, 1000), InvalidInput);
+  EXPECT_THROW(NeoHookean(1e9, -1.0, 1000), InvalidInput);
+  EXPECT_THROW(NeoHookean(1e9, 0.3, 0), InvalidInput);
+  EXPECT_THROW(LinearElastic(1e9, 0.3, 1000, 0.1), InvalidInput);
+  EXPECT_THROW(IsotropicHardening(0, 1e6), InvalidInput);
+  EXPECT_THROW(IsotropicHardening(1e6, -1), InvalidInput);
+  EXPECT_THROW(IsotropicHardening(1e6, 0, 0.5e6, 1), InvalidInput); // σ_∞ < σ_y0
+  EXPECT_THROW(IsotropicHardening(1e6, 0, 2e6, 0), InvalidInput);   // Voce needs δ > 0
+  EXPECT_NO_THROW(LinearElastic(1e9, -0.5, 1000));                  // auxetic is allowed
+
+  LawParameters p;
+  p.model = "j2_plasticity";
+  p.yield_stress = 0;
+  EXPECT_THROW(create_law(p), InvalidInput);
+  p.model = "linear_elastic"; // yield stress is not used by elasticity
+  EXPECT_NO_THROW(create_law(p));
+  p.model = "plasticine";
+  EXPECT_THROW(create_law(p), InvalidInput);
+}
+
+TEST(LawParameters, ParsesSelectsModelAndPresetsOverrideExplicitValues) {
+  dealii::ParameterHandler prm;
+  prm.enter_subsection("Material");
+  LawParameters::declare(prm);
+  prm.leave_subsection();
+  prm.parse_input_from_string("subsection Material\n"
+                              "  set Model = j2_finite_strain\n"
+                              "  set Preset = ti6al4v\n"
+                              "  set Young's modulus = 1e9\n"
+                              "  set Saturation stress = 2e9\n"
+                              "  set Saturation exponent = 5\n"
+                              "end\n");
+  LawParameters p;
+  prm.enter_subsection("Material");
+  p.parse(prm);
+  prm.leave_subsection();
+  EXPECT_EQ(p.youngs_modulus, 113.8e9); // the preset wins over the explicit 1e9
+  EXPECT_EQ(p.poisson_ratio, 0.342);
+  EXPECT_EQ(p.density, 4430);
+  EXPECT_EQ(p.yield_stress, 880e6);
+  EXPECT_EQ(p.saturation_stress, 0); // presets use linear hardening
+  const auto law = create_law(p);
+  EXPECT_EQ(law->name(), "j2_finite_strain");
+  EXPECT_EQ(law->youngs_modulus(), 113.8e9);
+  // Ti-6Al-4V P-wave speed sqrt((λ+2μ)/ρ) = 6313 m/s by hand from E, ν, ρ (1 m/s rounding).
+  EXPECT_NEAR(law->p_wave_speed(), 6313, 1.0);
+  const std::string d = p.describe();
+  EXPECT_NE(d.find("preset=ti6al4v"), std::string::npos) << d;
+  EXPECT_NE(d.find("1.138e+11"), std::string::npos) << d;
+
+  // Custom Voce parameters pass through; a bad combination is rejected by parse().
+  dealii::ParameterHandler prm2;
+  LawParameters::declare(prm2);
+  prm2.parse_input_from_string("set Model = j2_plasticity\nset Yield stress = 3e8\n"
+                               "set Saturation stress = 2e8\nset Saturation exponent = 5\n");
+  LawParameters q;
+  EXPECT_THROW(q.parse(prm2), InvalidInput); // σ_∞ < σ_y0
+  prm2.set("Saturation stress", "5e8");
+  q.parse(prm2);
+  const auto voce = create_law(q);
+  EXPECT_EQ(voce->name(), "j2_plasticity");
+  const auto* j2 = dynamic_cast<const J2Plasticity*>(voce.get());
+  ASSERT_NE(j2, nullptr);
+  EXPECT_FALSE(j2->hardening().is_linear());
+  EXPECT_EQ(j2->hardening().saturation_stress(), 5e8);
+
+  // Every preset yields a valid law of every model.
+  for (const char* preset : {"cortical_bone", "trabecular_bone", "ti6al4v", "pmma", "copper"})
+    for (const char* model :
+         {"linear_elastic", "neo_hookean", "j2_plasticity", "j2_finite_strain"}) {
+      LawParameters r;
+      r.preset = preset;
+      r.model = model;
+      r.apply_preset();
+      EXPECT_NO_THROW(create_law(r)) << preset << " " << model;
+    }
+}
