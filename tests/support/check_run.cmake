@@ -2,8 +2,8 @@
 # Variables (from spinesim_add_scene_test):
 #   SPINESIM MPIEXEC RANKS SCENE OUT  - what to run and where
 #   SET      "Section/Param=value|..." overrides
-#   ARGS     "arg|arg" extra CLI arguments (replaces `run SCENE --output OUT --force` when it
-#            starts with a subcommand other than run)
+#   ARGS     "arg|arg" the whole CLI argument list (instead of `run SCENE --output OUT --force
+#            --progress lines --set ...`); OUT then only says where summary.json is
 #   EXIT     expected exit code
 #   MATCH    regular expression the combined output must contain
 #   EXPECT   "figure<=value|figure>=value|figure~value:reltol|status==ok" checks on summary.json
@@ -17,8 +17,8 @@ set(_cmd)
 if(RANKS GREATER 1)
   set(_cmd ${MPIEXEC} -np ${RANKS})
 endif()
-list(GET _args 0 _first)
-if(_args AND NOT _first STREQUAL "run")
+if(_args)
+  # Verbatim command line; OUT only says where summary.json is.
   list(APPEND _cmd ${SPINESIM} ${_args})
 else()
   list(APPEND _cmd ${SPINESIM} run)
@@ -29,10 +29,6 @@ else()
   foreach(_s ${_sets})
     list(APPEND _cmd --set "${_s}")
   endforeach()
-  if(_args)
-    list(REMOVE_AT _args 0)
-    list(APPEND _cmd ${_args})
-  endif()
 endif()
 
 message(STATUS "command: ${_cmd}")

@@ -1,0 +1,445 @@
+#include "coupling/simulation.h"
+
+#include "coupling/run_context.h"
+#include "fem/heat/heat_solver.h"
+#include "fem/materials/failure.h"
+#include "fem/materials/law_parameters.h"
+#include "fem/mechanics_solver.h"
+#include "fem/mesh.h"
+
+#include <deal.II/base/data_out_base.h>
+#include <deal.II/distributed/tria.h>
+#include <deal.II/numerics/fe_field_function.h>
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+namespace spinesim::coupling {
+
+namespace fs = std::filesystem;
+
+void SimulationParameters::declare(dealii::ParameterHandler& prm) {
+  using namespace dealii::Patterns;
+  prm.declare_entry("End time", "1", Double(0), "Simulated time at the end of the run [s].");
+  prm.declare_entry("Steps", "10", Integer(1),
+                    "Number of steps to the end time; each step records one history row. "
+                    "Quasi-static mechanics reaches equilibrium at every step; explicit "
+                    "mechanics and heat sub-step within it as their stability asks [-].");
+  prm.declare_entry("Output interval", "1", Integer(0),
+                    "Write VTU/PVTU output every this many steps; 0 = last step only [steps].");
+  prm.declare_entry("Checkpoint interval", "0", Integer(0),
+                    "Write a checkpoint every this many steps; 0 = last step only [steps].");
+  prm.declare_entry("Write VTU", "true", Bool(), "Write field output for ParaView [-].");
+  prm.declare_entry("Reaction boundary id", "-1", Integer(-1),
+                    "Boundary id whose reaction force is recorded; -1 = none [-].");
+  prm.declare_entry("Reference temperature", "310.15", Double(0),
+                    "Stress-free temperature for thermal expansion [K].");
+  prm.declare_entry("Stop after step", "0", Integer(0),
+                    "End the run after this step with a checkpoint, for staged runs that "
+                    "continue with `spinesim run --restart`; 0 = run to the end [-].");
+}
+
+void SimulationParameters::parse(const dealii::ParameterHandler& prm) {
+  end_time = prm.get_double("End time");
+  steps = prm.get_integer("Steps");
+  output_interval = prm.get_integer("Output interval");
+  checkpoint_interval = prm.get_integer("Checkpoint interval");
+  write_vtu = prm.get_bool("Write VTU");
+  reaction_boundary_id = prm.get_integer("Reaction boundary id");
+  reference_temperature = prm.get_double("Reference temperature");
+  stop_after_step = prm.get_integer("Stop after step");
+  if (end_time <= 0)
+    throw InvalidInput("Simulation/End time", "must be positive", "a time > 0 [s]");
+}
+
+namespace {
+
+// Temperature change T − T_ref from the heat solver's field, at points of locally owned
+// (or ghost) cells; the mechanics evaluates it at its quadrature points.
+template <int dim>
+class TemperatureChange : public dealii::Function<dim> {
+public:
+  TemperatureChange(const fem::HeatSolver<dim>& heat, double reference)
+      : heat_(heat), reference_(reference) {}
+  double value(const dealii::Point<dim>& p, unsigned int = 0) const override {
+    if (!field_ || field_stamp_ != heat_.step_number()) {
+      field_ = std::make_unique<dealii::Functions::FEFieldFunction<dim, dealii::TrilinosWrappers::MPI::Vector>>(
+          heat_.dof_handler(), heat_.solution());
+      field_stamp_ = heat_.step_number();
+    }
+    return field_->value(p) - reference_;
+  }
+
+private:
+  const fem::HeatSolver<dim>& heat_;
+  double reference_;
+  mutable std::unique_ptr<dealii::Functions::FEFieldFunction<dim, dealii::TrilinosWrappers::MPI::Vector>> field_;
+  mutable unsigned int field_stamp_ = static_cast<unsigned int>(-1);
+};
+
+// A ParaView .pvd time series, rewritten atomically at every output.
+class PvdRecord {
+public:
+  explicit PvdRecord(std::string name) : name_(std::move(name)) {}
+  void add(double time, const std::string& file) { entries_.emplace_back(time, file); }
+  void truncate_after(double time) {
+    while (!entries_.empty() && entries_.back().first > time * (1 + 1e-12))
+      entries_.pop_back();
+  }
+  void write(const RunContext& ctx) const {
+    if (!ctx.is_root() || entries_.empty())
+      return;
+    std::ostringstream out;
+    dealii::DataOutBase::write_pvd_record(out, entries_);
+    ctx.output().write_atomic(name_, out.str());
+  }
+  nlohmann::json to_json() const { return entries_; }
+  void from_json(const nlohmann::json& j) {
+    entries_ = j.get<std::vector<std::pair<double, std::string>>>();
+  }
+
+private:
+  std::string name_;
+  std::vector<std::pair<double, std::string>> entries_;
+};
+
+template <int dim>
+class Simulation : public Scenario {
+public:
+  explicit Simulation(const ScenarioFactoryArgs& args);
+  void run(RunContext& ctx) override;
+
+private:
+  void build(RunContext& ctx);
+  void advance(unsigned int step, double time, double dt, RunContext& ctx);
+  void record(unsigned int step, double time, RunContext& ctx);
+  void write_output(unsigned int step, double time, RunContext& ctx);
+  void write_checkpoint(unsigned int step, double time, RunContext& ctx);
+  // Returns the step to continue after.
+  unsigned int load_checkpoint(RunContext& ctx);
+  void report_figures(RunContext& ctx);
+
+  const Effects& effects_;
+  SimulationParameters sim_;
+  fem::MeshParameters mesh_prm_;
+  materials::LawParameters law_prm_;
+  typename fem::MechanicsSolver<dim>::Parameters mech_prm_;
+  typename fem::HeatSolver<dim>::Parameters heat_prm_;
+
+  std::unique_ptr<dealii::parallel::distributed::Triangulation<dim>> triangulation_;
+  std::shared_ptr<const materials::ConstitutiveLaw> law_;
+  std::unique_ptr<fem::MechanicsSolver<dim>> mechanics_;
+  std::unique_ptr<fem::HeatSolver<dim>> heat_;
+  PvdRecord solution_pvd_{"solution.pvd"}, temperature_pvd_{"temperature.pvd"};
+  unsigned int output_cycle_ = 0;
+  unsigned int newton_iterations_ = 0, linear_iterations_ = 0;
+};
+
+template <int dim>
+Simulation<dim>::Simulation(const ScenarioFactoryArgs& args) : effects_(args.effects) {
+  auto& prm = const_cast<dealii::ParameterHandler&>(args.prm);
+  prm.enter_subsection("Simulation");
+  sim_.parse(prm);
+  prm.leave_subsection();
+  if (effects_.mechanics || effects_.heat) {
+    prm.enter_subsection("Geometry");
+    mesh_prm_.parse(prm);
+    prm.leave_subsection();
+  }
+  if (effects_.mechanics) {
+    prm.enter_subsection("Material");
+    law_prm_.parse(prm);
+    prm.leave_subsection();
+    prm.enter_subsection("Mechanics");
+    mech_prm_.parse(prm);
+    prm.leave_subsection();
+  }
+  if (effects_.heat) {
+    prm.enter_subsection("Heat");
+    heat_prm_.parse(prm);
+    prm.leave_subsection();
+  }
+  if (effects_.particles() || effects_.conversion || effects_.coupling || effects_.contact)
+    throw InvalidInput("Effects", "the simulation scenario does not yet run particles, conversion, "
+                                  "coupling or contact",
+                       "Mechanics, Heat, Thermal expansion, Damage (FEM indicators)");
+}
+
+template <int dim>
+void Simulation<dim>::build(RunContext& ctx) {
+  dealii::TimerOutput::Scope scope(ctx.timer(), "setup");
+  triangulation_ = std::make_unique<dealii::parallel::distributed::Triangulation<dim>>(
+      ctx.comm(), dealii::Triangulation<dim>::maximum_smoothing);
+  if (ctx.restarting())
+    fem::build_coarse_mesh(mesh_prm_, *triangulation_);
+  else
+    fem::build_mesh(mesh_prm_, *triangulation_);
+
+  if (effects_.heat) {
+    heat_ = std::make_unique<fem::HeatSolver<dim>>(*triangulation_, heat_prm_);
+    if (!ctx.restarting())
+      heat_->setup();
+  }
+  if (effects_.mechanics) {
+    law_ = materials::create_law(law_prm_);
+    ctx.log() << "  material: " << law_prm_.describe() << "\n";
+    mechanics_ = std::make_unique<fem::MechanicsSolver<dim>>(*triangulation_, mech_prm_);
+    // One law for every material id present (per-id materials come with the CT issue).
+    std::set<dealii::types::material_id> ids;
+    for (const auto& cell : triangulation_->active_cell_iterators())
+      if (cell->is_locally_owned())
+        ids.insert(cell->material_id());
+    const auto all_ids = dealii::Utilities::MPI::compute_set_union(
+        std::vector<dealii::types::material_id>(ids.begin(), ids.end()), ctx.comm());
+    for (const auto id : all_ids)
+      mechanics_->set_material(id, law_);
+    if (effects_.thermal_expansion)
+      mechanics_->set_temperature_change(
+          std::make_shared<TemperatureChange<dim>>(*heat_, sim_.reference_temperature));
+    if (!ctx.restarting())
+      mechanics_->setup();
+  }
+  ctx.log() << "  mesh: " << triangulation_->n_global_active_cells() << " cells";
+  if (mechanics_)
+    ctx.log() << ", mechanics " << mechanics_->dof_handler().n_dofs() << " DoFs";
+  if (heat_)
+    ctx.log() << ", heat " << heat_->dof_handler().n_dofs() << " DoFs";
+  ctx.log() << "\n";
+}
+
+template <int dim>
+void Simulation<dim>::advance(unsigned int step, double time, double dt, RunContext& ctx) {
+  if (heat_) {
+    dealii::TimerOutput::Scope scope(ctx.timer(), "heat");
+    // The heat solver's own step bounds accuracy; sub-step to land exactly on `time`.
+    const unsigned int n = std::max(1u, static_cast<unsigned int>(
+                                            std::ceil(dt / heat_prm_.time_step - 1e-9)));
+    for (unsigned int i = 0; i < n; ++i)
+      heat_->advance(dt / n);
+  }
+  if (mechanics_) {
+    dealii::TimerOutput::Scope scope(ctx.timer(), "mechanics");
+    if (mech_prm_.time_integration == "explicit") {
+      double t = mechanics_->time();
+      while (t < time - 1e-12 * time) {
+        const double h = std::min(mechanics_->stable_time_step(), time - t);
+        mechanics_->explicit_step(h);
+        t = mechanics_->time();
+      }
+    } else {
+      for (const auto& report : mechanics_->solve_quasi_static(time)) {
+        newton_iterations_ += report.newton_iterations;
+        for (const auto n : report.linear_iterations)
+          linear_iterations_ += n;
+      }
+    }
+  }
+  (void)step;
+}
+
+template <int dim>
+void Simulation<dim>::record(unsigned int step, double time, RunContext& ctx) {
+  History::Row row{{"step", step}, {"time", time}, {"load_factor", time / sim_.end_time}};
+  if (mechanics_) {
+    if (sim_.reaction_boundary_id >= 0) {
+      const auto r = mechanics_->reaction_force(sim_.reaction_boundary_id);
+      const char* names[] = {"reaction_x", "reaction_y", "reaction_z"};
+      for (unsigned int d = 0; d < dim; ++d)
+        row.emplace_back(names[d], r[d]);
+    }
+    row.emplace_back("strain_energy", mechanics_->strain_energy());
+    row.emplace_back("max_von_mises", mechanics_->max_von_mises());
+    row.emplace_back("max_displacement", mechanics_->displacement().linfty_norm());
+  }
+  if (heat_) {
+    row.emplace_back("max_temperature", heat_->max_temperature());
+    row.emplace_back("heat_content", heat_->heat_content());
+  }
+  ctx.history().add(row);
+}
+
+template <int dim>
+void Simulation<dim>::write_output(unsigned int step, double time, RunContext& ctx) {
+  if (!sim_.write_vtu)
+    return;
+  dealii::TimerOutput::Scope scope(ctx.timer(), "output");
+  const std::string dir = ctx.output().path().string();
+  if (mechanics_) {
+    solution_pvd_.add(time, mechanics_->write_output(dir, "solution", output_cycle_));
+    solution_pvd_.write(ctx);
+  }
+  if (heat_) {
+    temperature_pvd_.add(time, heat_->write_output(dir, output_cycle_, "temperature"));
+    temperature_pvd_.write(ctx);
+  }
+  ++output_cycle_;
+  (void)step;
+}
+
+template <int dim>
+void Simulation<dim>::write_checkpoint(unsigned int step, double time, RunContext& ctx) {
+  dealii::TimerOutput::Scope scope(ctx.timer(), "checkpoint");
+  // Written into a fresh directory and swapped in, so the previous checkpoint survives a
+  // crash during writing.
+  const fs::path final_dir = ctx.checkpoint_dir();
+  const fs::path tmp_dir = final_dir.string() + ".new";
+  if (ctx.is_root()) {
+    fs::remove_all(tmp_dir);
+    fs::create_directories(tmp_dir);
+  }
+  MPI_Barrier(ctx.comm());
+  const std::string mesh_file = (tmp_dir / "mesh").string();
+  if (heat_)
+    heat_->prepare_for_serialization();
+  if (mechanics_)
+    mechanics_->save_checkpoint(mesh_file);
+  else
+    triangulation_->save(mesh_file);
+  if (ctx.is_root()) {
+    nlohmann::json state;
+    state["step"] = step;
+    state["time"] = time;
+    state["output_cycle"] = output_cycle_;
+    state["newton_iterations"] = newton_iterations_;
+    state["linear_iterations"] = linear_iterations_;
+    state["solution_pvd"] = solution_pvd_.to_json();
+    state["temperature_pvd"] = temperature_pvd_.to_json();
+    if (heat_)
+      state["heat_supplied_energy"] = heat_->supplied_energy();
+    write_file_atomic(tmp_dir / "state.json", state.dump(2));
+    ctx.flush_history();
+    fs::copy_file(ctx.output().path() / "history.csv", tmp_dir / "history.csv",
+                  fs::copy_options::overwrite_existing);
+    const fs::path old_dir = final_dir.string() + ".old";
+    fs::remove_all(old_dir);
+    if (fs::exists(final_dir))
+      fs::rename(final_dir, old_dir);
+    fs::rename(tmp_dir, final_dir);
+    fs::remove_all(old_dir);
+  }
+  MPI_Barrier(ctx.comm());
+}
+
+template <int dim>
+unsigned int Simulation<dim>::load_checkpoint(RunContext& ctx) {
+  const fs::path dir = ctx.checkpoint_dir();
+  std::ifstream in(dir / "state.json");
+  if (!in)
+    throw InvalidInput("--restart " + ctx.output().path().string(), "no checkpoint in this run",
+                       "a run directory with checkpoint/state.json");
+  nlohmann::json state = nlohmann::json::parse(in);
+  const std::string mesh_file = (dir / "mesh").string();
+  if (mechanics_)
+    mechanics_->load_checkpoint(mesh_file);
+  else
+    triangulation_->load(mesh_file);
+  if (heat_) {
+    heat_->deserialize();
+    heat_->set_time(state["time"].get<double>(), state.value("heat_supplied_energy", 0.0));
+  }
+  output_cycle_ = state["output_cycle"];
+  newton_iterations_ = state["newton_iterations"];
+  linear_iterations_ = state["linear_iterations"];
+  solution_pvd_.from_json(state["solution_pvd"]);
+  temperature_pvd_.from_json(state["temperature_pvd"]);
+  const double time = state["time"];
+  // Rows written after the checkpoint came from a segment that did not survive.
+  if (ctx.is_root()) {
+    ctx.history().load(dir / "history.csv");
+    ctx.history().truncate_after("time", time * (1 + 1e-12));
+  }
+  ctx.log() << "  restarting after step " << state["step"].get<unsigned int>() << ", t = " << time
+            << " s\n";
+  return state["step"];
+}
+
+template <int dim>
+void Simulation<dim>::report_figures(RunContext& ctx) {
+  Summary& s = ctx.summary();
+  s.set_figure("steps", sim_.steps, "-");
+  s.set_figure("cells", triangulation_->n_global_active_cells(), "-");
+  if (mechanics_) {
+    s.set_figure("mechanics_dofs", mechanics_->dof_handler().n_dofs(), "-");
+    s.set_figure("strain_energy", mechanics_->strain_energy(), dim == 2 ? "J/m" : "J");
+    s.set_figure("max_von_mises", mechanics_->max_von_mises(), "Pa");
+    s.set_figure("max_displacement", mechanics_->displacement().linfty_norm(), "m");
+    if (sim_.reaction_boundary_id >= 0) {
+      const auto r = mechanics_->reaction_force(sim_.reaction_boundary_id);
+      s.set_figure("reaction_force_norm", r.norm(), dim == 2 ? "N/m" : "N");
+    }
+    s.set_figure("newton_iterations", newton_iterations_, "iterations");
+    s.set_figure("linear_iterations", linear_iterations_, "iterations");
+  }
+  if (heat_) {
+    s.set_figure("heat_dofs", heat_->dof_handler().n_dofs(), "-");
+    s.set_figure("max_temperature", heat_->max_temperature(), "K");
+    s.set_figure("heat_content", heat_->heat_content(), dim == 2 ? "J/m" : "J");
+    s.set_figure("heat_supplied_energy", heat_->supplied_energy(), dim == 2 ? "J/m" : "J");
+  }
+}
+
+template <int dim>
+void Simulation<dim>::run(RunContext& ctx) {
+  build(ctx);
+  unsigned int first_step = 1;
+  if (ctx.restarting())
+    first_step = load_checkpoint(ctx) + 1;
+  else
+    record(0, 0.0, ctx);
+  if (!ctx.restarting())
+    write_output(0, 0.0, ctx);
+
+  const double dt = sim_.end_time / sim_.steps;
+  unsigned int last_step = sim_.steps;
+  if (sim_.stop_after_step > 0 && sim_.stop_after_step < last_step)
+    last_step = sim_.stop_after_step;
+  ctx.progress().start("simulation", sim_.steps, sim_.end_time);
+  for (unsigned int step = first_step; step <= last_step; ++step) {
+    const double time = step * dt;
+    try {
+      advance(step, time, dt, ctx);
+    } catch (NumericalFailure& failure) {
+      failure.set_step(step, time);
+      throw;
+    }
+    record(step, time, ctx);
+    const bool last = step == last_step;
+    if (last || (sim_.output_interval > 0 && step % sim_.output_interval == 0))
+      write_output(step, time, ctx);
+    if (last || (sim_.checkpoint_interval > 0 && step % sim_.checkpoint_interval == 0))
+      write_checkpoint(step, time, ctx);
+    else
+      ctx.flush_history();
+    ctx.progress().update(step, time);
+  }
+  ctx.progress().finish();
+  report_figures(ctx);
+  ctx.summary().set_figure("last_step", last_step, "-");
+}
+
+void declare_simulation(SectionDeclarer& sections) {
+  sections.declare("Simulation", SimulationParameters::declare);
+  sections.declare("Geometry", fem::MeshParameters::declare);
+  sections.declare("Material", materials::LawParameters::declare);
+  sections.declare("Mechanics", fem::MechanicsSolver<2>::Parameters::declare);
+  sections.declare("Heat", fem::HeatSolver<2>::Parameters::declare);
+}
+
+std::unique_ptr<Scenario> create_simulation(const ScenarioFactoryArgs& args) {
+  if (args.dim == 2)
+    return std::make_unique<Simulation<2>>(args);
+  return std::make_unique<Simulation<3>>(args);
+}
+
+} // namespace
+
+SPINESIM_REGISTER_SCENARIO(simulation, "simulation",
+                           "the effects-driven step loop: FEM mechanics and heat as switched on.",
+                           declare_simulation, create_simulation)
+
+} // namespace spinesim::coupling

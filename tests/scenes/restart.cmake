@@ -1,0 +1,19 @@
+# Checkpoint and restart: the default scene stopped after step 5 and continued with
+# --restart ends with the same figures as the uninterrupted run (cli.default_scene).
+set(_runs ${CMAKE_CURRENT_BINARY_DIR}/runs)
+spinesim_add_scene_test(scene.restart_first_half SET "Simulation/Stop after step=5"
+                        EXPECT "status==ok;last_step~5:0")
+set_tests_properties(scene.restart_first_half PROPERTIES FIXTURES_SETUP restart_half)
+spinesim_add_scene_test(scene.restart_second_half
+  ARGS "run;--restart;${_runs}/scene.restart_first_half;--set;Simulation/Stop after step=0;--progress;lines"
+  OUT ${_runs}/scene.restart_first_half EXPECT "status==ok;last_step~10:0")
+set_tests_properties(scene.restart_second_half PROPERTIES FIXTURES_REQUIRED restart_half
+                     FIXTURES_SETUP restart_done)
+# Same figures as the run without interruption, to 1e-8 relative: the restart reloads the
+# exact vectors and history, so only solver round-off separates the two.
+add_test(NAME scene.restart_matches_uninterrupted
+         COMMAND ${CMAKE_COMMAND} -DA=${_runs}/scene.restart_first_half/summary.json
+                 -DB=${PROJECT_BINARY_DIR}/tests/cli/runs/cli.default_scene/summary.json
+                 -DTOL=1e-8 -DFLOOR=1e-12 -P ${PROJECT_SOURCE_DIR}/tests/support/compare_summaries.cmake)
+set_tests_properties(scene.restart_matches_uninterrupted PROPERTIES LABELS "scene"
+                     FIXTURES_REQUIRED "restart_done;default_run")
