@@ -22,13 +22,6 @@ std::vector<double> parse_doubles(const std::string& text, const std::string& wh
   return out;
 }
 
-std::string list_to_string(const std::vector<double>& v) {
-  std::ostringstream s;
-  for (std::size_t i = 0; i < v.size(); ++i)
-    s << (i ? "," : "") << v[i];
-  return s.str();
-}
-
 template <int dim>
 dealii::Point<dim> to_point(const std::vector<double>& v, const std::string& where) {
   if (v.size() < dim)
@@ -47,11 +40,12 @@ void MeshParameters::declare(dealii::ParameterHandler& prm) {
   using dealii::Patterns::Double;
   using dealii::Patterns::Integer;
   using dealii::Patterns::Selection;
-  prm.declare_entry("Shape", "hyper_rectangle",
-                    Selection("hyper_rectangle|plate_with_a_hole|hyper_shell|quarter_hyper_shell|file"),
-                    "Generated shape or 'file' to import Mesh file [-]. Boundary ids: rectangle "
-                    "x- 0, x+ 1, y- 2, y+ 3, z- 4, z+ 5; plate with hole x- 0, x+ 1, y- 2, y+ 3, "
-                    "hole 4, z- 5, z+ 6; shells inner 0, outer 1 (quarter: x=0 2, y=0 3, z=0 4).");
+  prm.declare_entry(
+      "Shape", "hyper_rectangle",
+      Selection("hyper_rectangle|plate_with_a_hole|hyper_shell|quarter_hyper_shell|file"),
+      "Generated shape or 'file' to import Mesh file [-]. Boundary ids: rectangle "
+      "x- 0, x+ 1, y- 2, y+ 3, z- 4, z+ 5; plate with hole x- 0, x+ 1, y- 2, y+ 3, "
+      "hole 4, z- 5, z+ 6; shells inner 0, outer 1 (quarter: x=0 2, y=0 3, z=0 4).");
   prm.declare_entry("Origin", "0,0,0", Anything(), "Lower corner of the rectangle [m].");
   prm.declare_entry("Lengths", "1,1,1", Anything(), "Edge lengths of the rectangle [m].");
   prm.declare_entry("Subdivisions", "1,1,1", Anything(),
@@ -113,6 +107,9 @@ void build_coarse_mesh(const MeshParameters& p,
     for (unsigned int d = 0; d < dim && d < p.subdivisions.size(); ++d)
       reps[d] = p.subdivisions[d];
     GridGenerator::subdivided_hyper_rectangle(tria, reps, lo, hi, /*colorize=*/true);
+    // colorize also numbers material ids by octant; one material is the documented default.
+    for (const auto& cell : tria.active_cell_iterators())
+      cell->set_material_id(0);
   } else if (p.shape == "plate_with_a_hole") {
     const double pad = p.plate_padding;
     GridGenerator::plate_with_a_hole(tria, p.inner_radius, p.outer_radius, pad, pad, pad, pad,
@@ -166,8 +163,10 @@ void build_mesh(const MeshParameters& p, dealii::parallel::distributed::Triangul
     tria.refine_global(p.global_refinements);
 }
 
-template void build_mesh<2>(const MeshParameters&, dealii::parallel::distributed::Triangulation<2>&);
-template void build_mesh<3>(const MeshParameters&, dealii::parallel::distributed::Triangulation<3>&);
+template void build_mesh<2>(const MeshParameters&,
+                            dealii::parallel::distributed::Triangulation<2>&);
+template void build_mesh<3>(const MeshParameters&,
+                            dealii::parallel::distributed::Triangulation<3>&);
 template void build_coarse_mesh<2>(const MeshParameters&,
                                    dealii::parallel::distributed::Triangulation<2>&);
 template void build_coarse_mesh<3>(const MeshParameters&,

@@ -1,0 +1,195 @@
+#ifndef SPINESIM_FEM_MECHANICS_SOLVER_H
+#define SPINESIM_FEM_MECHANICS_SOLVER_H
+
+// Displacement-based solid mechanics on a distributed mesh (deal.II + Trilinos + p4est).
+//  - FESystem(FE_Q(p), dim), p = 1 or 2, mapping of the same degree (curved boundaries).
+//  - Kinematics: small strain (ConstitutiveLaw::small_strain) or total-Lagrangian finite
+//    strain (finite_strain, F = I + ∇u). 2-D is plane strain (ε_zz = 0, F_zz = 1); plane stress
+//    (small strain only) condenses σ_zz = 0 point-wise with a local Newton on ε_zz.
+//  - Quasi-static: load factor λ 0→1 in `Load steps` steps, blending the loads of the previous
+//    solve into those at the new time; Newton with backtracking line search; a failed step is
+//    halved up to `Max load step cuts` times, then NumericalFailure.
+//  - Explicit: central differences with row-sum lumped mass, optional mass-proportional damping.
+// History lives per quadrature point in flat arrays indexed active_cell_index * n_q + q:
+// `committed` (last converged state) and `trial` (state at the current iterate).
+
+#include "fem/boundary_conditions.h"
+#include "fem/materials/constitutive_law.h"
+
+#include <deal.II/base/array_view.h>
+#include <deal.II/base/function.h>
+#include <deal.II/base/parameter_handler.h>
+#include <deal.II/base/quadrature_lib.h>
+#include <deal.II/distributed/tria.h>
+#include <deal.II/dofs/dof_handler.h>
+#include <deal.II/fe/fe_system.h>
+#include <deal.II/fe/mapping_q.h>
+#include <deal.II/lac/affine_constraints.h>
+#include <deal.II/lac/trilinos_sparse_matrix.h>
+#include <deal.II/lac/trilinos_vector.h>
+#include <deal.II/lac/vector.h>
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace spinesim::fem {
+
+// What one quadrature point remembers.
+struct QuadraturePointData {
+  materials::MaterialState state;
+  materials::SymTensor2 cauchy_stress; // σ [Pa]
+  materials::SymTensor2 strain;        // ε (small) or Green-Lagrange E (finite) [-]
+  materials::Tensor2 work_stress;      // σ (small) or P (finite) [Pa], conjugate to:
+  materials::Tensor2 deformation;      // ε (small) or F (finite) [-]
+  double work_density = 0;             // ∫ stress power dt per reference volume [J/m^3]
+};
+
+template <int dim>
+class MechanicsSolver {
+ public:
+  using VectorType = dealii::TrilinosWrappers::MPI::Vector;
+  using MatrixType = dealii::TrilinosWrappers::SparseMatrix;
+  using CellIterator = typename dealii::DoFHandler<dim>::active_cell_iterator;
+
+  struct Parameters {
+    unsigned int fe_degree = 1;
+    std::string kinematics = "small_strain";       // small_strain | finite_strain
+    std::string time_integration = "quasi_static"; // quasi_static | explicit
+    bool plane_stress = false;                     // 2-D small strain only
+    unsigned int load_steps = 1;
+    double newton_tolerance = 1e-8;
+    unsigned int max_newton_iterations = 25;
+    unsigned int max_load_step_cuts = 6;
+    std::string linear_solver = "cg"; // cg | gmres | direct
+    double linear_tolerance = 1e-10;
+    unsigned int max_linear_iterations = 1000;
+    double cfl_safety_factor = 0.5;
+    double mass_damping = 0.0; // [1/s]
+    typename BoundaryConditions<dim>::Parameters boundary_conditions;
+
+    static void declare(dealii::ParameterHandler& prm);
+    void parse(const dealii::ParameterHandler& prm);
+  };
+
+  struct Timings { // accumulated wall-clock seconds
+    double setup = 0, assembly = 0, linear_solve = 0, output = 0, checkpoint = 0;
+  };
+
+  struct LoadStepReport {
+    double load_factor = 0;
+    unsigned int newton_iterations = 0;
+    std::vector<unsigned int> linear_iterations; // one per linear solve
+    double relative_residual = 0;
+  };
+
+  MechanicsSolver(dealii::parallel::distributed::Triangulation<dim>& triangulation,
+                  const Parameters& parameters);
+  ~MechanicsSolver();
+
+  // Setup inputs. Boundary conditions from the parameters are added in the constructor.
+  void set_material(dealii::types::material_id id,
+                    std::shared_ptr<const materials::ConstitutiveLaw> law);
+  BoundaryConditions<dim>& boundary_conditions() { return bcs_; }
+  void set_body_force(std::shared_ptr<dealii::Function<dim>> f);          // dim comps, x,t [N/m^3]
+  void set_temperature_change(std::shared_ptr<dealii::Function<dim>> dT); // scalar [K]
+
+  // Distributes dofs, builds sparsity, history, lumped mass. Called lazily if needed; call
+  // again after changing the mesh (history is reset then).
+  void setup();
+
+  // Quasi-static: equilibrium at `time` [s], ramping from the last converged state.
+  // Returns one report per accepted load step. NumericalFailure after too many cuts.
+  std::vector<LoadStepReport> solve_quasi_static(double time = 1.0);
+
+  // Explicit: the CFL-limited stable step [s] and one central-difference step of size dt.
+  double stable_time_step() const;
+  void explicit_step(double dt);
+
+  // Results.
+  double time() const { return time_; }
+  const VectorType& displacement() const { return u_ghost_; } // ghosted
+  const VectorType& velocity() const { return v_ghost_; }     // ghosted, at t - dt/2
+  // Force the supports exert on the body on boundary `id` (sum of f_int − f_ext over the
+  // dofs there, all ranks) [N] (2-D plane: N per unit thickness).
+  dealii::Tensor<1, dim> reaction_force(dealii::types::boundary_id id) const;
+  double strain_energy() const;                 // ∫ (stress work − plastic work) dV [J]
+  double max_von_mises() const;                 // over all quadrature points [Pa]
+  double kinetic_energy() const;                // ½ vᵀ M v with the lumped mass [J]
+  dealii::Vector<float> cell_von_mises() const; // cell averages [Pa]
+  dealii::Vector<float> cell_equivalent_plastic_strain() const; // cell averages [-]
+  // Writes <directory>/<basename>_<cycle>.<rank>.vtu + .pvtu; returns the pvtu file name.
+  std::string write_output(const std::string& directory, const std::string& basename,
+                           unsigned int cycle) const;
+
+  // Checkpoint: mesh, displacement, velocity, committed history, time. load_checkpoint needs
+  // the triangulation to hold the same coarse mesh only (build_coarse_mesh) and the same
+  // materials and parameters.
+  void save_checkpoint(const std::string& filename) const;
+  void load_checkpoint(const std::string& filename);
+
+  // Access for indicators and tests.
+  const dealii::DoFHandler<dim>& dof_handler() const { return dof_handler_; }
+  const dealii::Mapping<dim>& mapping() const { return *mapping_; }
+  const dealii::FESystem<dim>& fe() const { return fe_; }
+  const dealii::Quadrature<dim>& quadrature() const { return quadrature_; }
+  const Parameters& parameters() const { return prm_; }
+  const materials::ConstitutiveLaw& material(dealii::types::material_id id) const;
+  dealii::ArrayView<const QuadraturePointData>
+  quadrature_point_data(const CellIterator& cell) const;
+  const Timings& timings() const { return timings_; }
+  const std::vector<unsigned int>& linear_iterations() const { return linear_iterations_; }
+  MPI_Comm mpi_communicator() const { return comm_; }
+
+ private:
+  struct AssemblyNorms {
+    double free_residual = 0; // ‖f_ext − f_int‖ over unconstrained dofs
+    double reference = 0;     // max(‖f_int‖, ‖f_ext‖) over all dofs
+  };
+  // Assembles f_ext − f_int (condensed with `constraints`) into rhs_ and, if with_matrix, the
+  // tangent; the raw f_int − f_ext over all dofs goes to raw_residual_. Evaluates at u_ghost_.
+  AssemblyNorms assemble(bool with_matrix, double load_factor,
+                         const dealii::AffineConstraints<double>& constraints);
+  void make_constraints(dealii::AffineConstraints<double>& c, bool homogeneous, double load_factor);
+  unsigned int solve_linear(VectorType& du);
+  bool newton(double load_factor, LoadStepReport& report);
+  void commit_history();
+  void update_ghosts();
+  double load_blend(dealii::Function<dim>& f, const dealii::Point<dim>& x, unsigned int c,
+                    double load_factor) const;
+  void build_rigid_body_modes();
+
+  MPI_Comm comm_;
+  dealii::parallel::distributed::Triangulation<dim>& tria_;
+  Parameters prm_;
+  dealii::FESystem<dim> fe_;
+  std::unique_ptr<dealii::MappingQ<dim>> mapping_;
+  dealii::QGauss<dim> quadrature_;
+  dealii::QGauss<dim - 1> face_quadrature_;
+  dealii::DoFHandler<dim> dof_handler_;
+  dealii::IndexSet owned_, relevant_;
+  dealii::AffineConstraints<double> hanging_, homogeneous_, newton_constraints_;
+  MatrixType matrix_;
+  VectorType u_, u_ghost_, v_, v_ghost_, rhs_, raw_residual_, lumped_mass_;
+  std::vector<dealii::IndexSet> component_dofs_; // owned dofs of each component
+  std::vector<std::vector<double>> rigid_modes_; // per mode, per owned dof (local order)
+
+  BoundaryConditions<dim> bcs_;
+  std::shared_ptr<dealii::Function<dim>> body_force_, temperature_change_;
+  std::map<dealii::types::material_id, std::shared_ptr<const materials::ConstitutiveLaw>> laws_;
+  std::vector<QuadraturePointData> committed_, trial_;
+
+  // Quasi-static load path: boundary values at the start of the solve and targets at the end.
+  std::map<dealii::types::global_dof_index, double> dirichlet_start_, dirichlet_target_;
+  double time_ = 0, previous_time_ = 0, target_time_ = 0;
+  bool loaded_ = false; // loads of previous_time_ are active (false before the first solve)
+  bool is_setup_ = false;
+
+  mutable Timings timings_;
+  std::vector<unsigned int> linear_iterations_;
+};
+
+} // namespace spinesim::fem
+
+#endif
