@@ -1,0 +1,51 @@
+#ifndef SPINESIM_MESHFREE_BOND_LOOP_H
+#define SPINESIM_MESHFREE_BOND_LOOP_H
+
+// The one neighbour loop: the "how" (OpenMP over particles, each walking its own CSR row),
+// separate from the bond-level "what" passed as a functor. Every particle writes only its own
+// results and sums its bonds in a fixed order, so results are bitwise repeatable, independent
+// of the thread count. Templates, so the functor inlines: no call per bond.
+
+#include "meshfree/bond_list.h"
+
+namespace spinesim::meshfree {
+
+// Below this many bonds a loop runs on one thread: a parallel region costs microseconds (and
+// far more on a loaded machine, where spinning threads wait for descheduled ones), more than a
+// small loop itself.
+constexpr std::size_t parallel_bond_threshold = 20000;
+constexpr long parallel_particle_threshold = 5000;
+
+// body(i, k, j) for every bond k = (i → j).
+template <int dim, class Body>
+void for_each_bond(const BondList<dim>& bonds, Body&& body) {
+  const long n = static_cast<long>(bonds.n_particles());
+  const std::size_t* off = bonds.offsets.data();
+  const unsigned int* nb = bonds.neighbor.data();
+#pragma omp parallel for schedule(static) if (bonds.n_bonds() > parallel_bond_threshold)
+  for (long ii = 0; ii < n; ++ii) {
+    const unsigned int i = static_cast<unsigned int>(ii);
+    for (std::size_t k = off[i]; k < off[i + 1]; ++k)
+      body(i, k, nb[k]);
+  }
+}
+
+// Per-particle accumulation: acc = init(i); body(i, k, j, acc) for each bond; finish(i, acc).
+template <int dim, class Init, class Body, class Finish>
+void accumulate_over_bonds(const BondList<dim>& bonds, Init&& init, Body&& body, Finish&& finish) {
+  const long n = static_cast<long>(bonds.n_particles());
+  const std::size_t* off = bonds.offsets.data();
+  const unsigned int* nb = bonds.neighbor.data();
+#pragma omp parallel for schedule(static) if (bonds.n_bonds() > parallel_bond_threshold)
+  for (long ii = 0; ii < n; ++ii) {
+    const unsigned int i = static_cast<unsigned int>(ii);
+    auto acc = init(i);
+    for (std::size_t k = off[i]; k < off[i + 1]; ++k)
+      body(i, k, nb[k], acc);
+    finish(i, acc);
+  }
+}
+
+} // namespace spinesim::meshfree
+
+#endif
