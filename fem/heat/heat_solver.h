@@ -32,10 +32,10 @@ class MovingHeatSource;
 
 template <int dim>
 class HeatSolver {
-public:
+ public:
   struct ThermalMaterial {
-    double conductivity = 0.45;   // k [W/(m K)]
-    double density = 1900.0;      // rho [kg/m^3]
+    double conductivity = 0.45;    // k [W/(m K)]
+    double density = 1900.0;       // rho [kg/m^3]
     double specific_heat = 1300.0; // c [J/(kg K)]
   };
 
@@ -62,18 +62,18 @@ public:
       double ambient_temperature = 293.15;     // T_inf [K]
     };
     struct MovingSource {
-      double power = 0;           // [W] ([W/m] in 2-D); 0 = unused slot
-      double radius = 1e-3;       // [m]
-      double speed = 0;           // [m/s]
-      std::string path = "";      // "x,y[,z]; x,y[,z]; ..."
-      double start_time = 0;      // [s]
-      double end_time = -1;       // [s], negative = never off
+      double power = 0;      // [W] ([W/m] in 2-D); 0 = unused slot
+      double radius = 1e-3;  // [m]
+      double speed = 0;      // [m/s]
+      std::string path = ""; // "x,y[,z]; x,y[,z]; ..."
+      double start_time = 0; // [s]
+      double end_time = -1;  // [s], negative = never off
     };
 
     unsigned int degree = 1;
     double theta = 1.0;
-    double time_step = 1e-2;                     // [s]
-    std::string initial_temperature = "310.15";  // [K], expression in x,y,z
+    double time_step = 1e-2;                    // [s]
+    std::string initial_temperature = "310.15"; // [K], expression in x,y,z
     ThermalMaterial default_material;
     std::vector<MaterialOverride> material_overrides;
     std::string volumetric_source = "0"; // q [W/m^3], expression in x,y,z,t
@@ -122,9 +122,10 @@ public:
 
   // Temperature at `unit_points` of `cell` (locally owned or ghost). For thermal expansion at
   // the mechanics' quadrature points: pass quadrature.get_points().
-  void temperature_at_unit_points(
-      const typename dealii::Triangulation<dim>::active_cell_iterator& cell,
-      const std::vector<dealii::Point<dim>>& unit_points, std::vector<double>& values) const;
+  void
+  temperature_at_unit_points(const typename dealii::Triangulation<dim>::active_cell_iterator& cell,
+                             const std::vector<dealii::Point<dim>>& unit_points,
+                             std::vector<double>& values) const;
   // Temperature at arbitrary points held by this rank (collective: every rank calls it, with its
   // own points). Points outside the mesh: found[i] = false and value NaN if `found` is given,
   // otherwise NumericalFailure.
@@ -171,7 +172,7 @@ public:
   void prepare_for_coarsening_and_refinement();
   void finish_refinement();
 
-private:
+ private:
   void setup_dofs();
   void make_constraints(double time);
   void assemble_step(double dt, bool rebuild_matrix);
@@ -187,13 +188,14 @@ private:
 
   std::unique_ptr<dealii::FE_Q<dim>> fe_;
   dealii::DoFHandler<dim> dof_handler_;
+  bool dof_handler_attached_ = false;
   dealii::IndexSet locally_owned_dofs_, locally_relevant_dofs_;
   dealii::AffineConstraints<double> constraints_;
 
   dealii::TrilinosWrappers::SparseMatrix system_matrix_;
-  dealii::TrilinosWrappers::MPI::Vector solution_;     // ghosted T^n
-  dealii::TrilinosWrappers::MPI::Vector system_rhs_;   // owned
-  dealii::TrilinosWrappers::MPI::Vector external_;     // owned, nodal powers for next step
+  dealii::TrilinosWrappers::MPI::Vector solution_;   // ghosted T^n
+  dealii::TrilinosWrappers::MPI::Vector system_rhs_; // owned
+  dealii::TrilinosWrappers::MPI::Vector external_;   // owned, nodal powers for next step
   bool has_external_ = false;
   std::unique_ptr<dealii::TrilinosWrappers::PreconditionBase> preconditioner_;
   double matrix_dt_ = -1; // dt the matrix was built for; < 0 = rebuild
@@ -202,6 +204,8 @@ private:
   std::vector<std::pair<dealii::types::boundary_id, std::unique_ptr<SpaceTimeExpression<dim>>>>
       fixed_, fluxes_;
   std::vector<MovingHeatSource<dim>> moving_;
+  mutable std::vector<double> scale_cache_;
+  mutable double scale_cache_time_ = -1;
   CellSourceCallback cell_source_;
 
   struct Transfer;

@@ -14,8 +14,8 @@ MovingHeatSource<dim>::MovingHeatSource(std::vector<dealii::Point<dim>> path, do
                                         double power, double radius, double start_time,
                                         double end_time, const std::string& where)
     : path_(std::move(path)), speed_(speed), power_(power), radius_(radius),
-      start_time_(start_time), end_time_(end_time < 0 ? std::numeric_limits<double>::max()
-                                                      : end_time) {
+      start_time_(start_time),
+      end_time_(end_time < 0 ? std::numeric_limits<double>::max() : end_time) {
   if (path_.empty())
     throw InvalidInput(where + "/Path", "the path has no points", "at least one point");
   if (!(radius_ > 0) || !std::isfinite(radius_))
@@ -54,9 +54,14 @@ dealii::Point<dim> MovingHeatSource<dim>::position(double time) const {
 
 template <int dim>
 double MovingHeatSource<dim>::density(const dealii::Point<dim>& x, double time) const {
+  return density_about(x, position(time));
+}
+
+template <int dim>
+double MovingHeatSource<dim>::density_about(const dealii::Point<dim>& x,
+                                            const dealii::Point<dim>& centre) const {
   const double r2 = radius_ * radius_;
-  return std::exp(-x.distance_square(position(time)) / r2) /
-         std::pow(M_PI * r2, 0.5 * dim);
+  return std::exp(-x.distance_square(centre) / r2) / std::pow(M_PI * r2, 0.5 * dim);
 }
 
 template <int dim>
@@ -66,9 +71,9 @@ std::vector<dealii::Point<dim>> MovingHeatSource<dim>::parse_path(const std::str
   for (const std::string& item : dealii::Utilities::split_string_list(text, ';')) {
     const auto coords = dealii::Utilities::split_string_list(item, ',');
     if (coords.size() != dim)
-      throw InvalidInput(where, "point '" + item + "' has " + std::to_string(coords.size()) +
-                                    " coordinates",
-                         std::to_string(dim) + " coordinates per point, points separated by ';'");
+      throw InvalidInput(
+          where, "point '" + item + "' has " + std::to_string(coords.size()) + " coordinates",
+          std::to_string(dim) + " coordinates per point, points separated by ';'");
     dealii::Point<dim> p;
     for (unsigned int d = 0; d < dim; ++d) {
       try {

@@ -13,7 +13,7 @@ namespace spinesim::fem {
 
 template <int dim>
 class SpaceTimeExpression : public dealii::Function<dim> {
-public:
+ public:
   // Parses `expression`; throws InvalidInput naming `where` if muparser rejects it.
   // Constant `pi` is predefined.
   SpaceTimeExpression(const std::string& expression, const std::string& where);
@@ -27,7 +27,7 @@ public:
   // Checks that `expression` parses, without keeping the parser.
   static void validate(const std::string& expression, const std::string& where);
 
-private:
+ private:
   std::string expression_;
   dealii::FunctionParser<3> parser_;
 };

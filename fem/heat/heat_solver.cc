@@ -1,0 +1,882 @@
+#include "fem/heat/heat_solver.h"
+
+#include "fem/heat/moving_heat_source.h"
+#include "fem/heat/space_time_expression.h"
+#include "fem/materials/failure.h"
+
+#include <deal.II/base/mpi.h>
+#include <deal.II/base/mpi_remote_point_evaluation.h>
+#include <deal.II/base/quadrature_lib.h>
+#include <deal.II/distributed/solution_transfer.h>
+#include <deal.II/dofs/dof_tools.h>
+#include <deal.II/fe/fe_values.h>
+#include <deal.II/fe/mapping_q1.h>
+#include <deal.II/lac/dynamic_sparsity_pattern.h>
+#include <deal.II/lac/full_matrix.h>
+#include <deal.II/lac/solver_cg.h>
+#include <deal.II/lac/solver_control.h>
+#include <deal.II/lac/sparsity_tools.h>
+#include <deal.II/lac/vector.h>
+#include <deal.II/numerics/data_out.h>
+#include <deal.II/numerics/vector_tools_boundary.h>
+#include <deal.II/numerics/vector_tools_evaluate.h>
+#include <deal.II/numerics/vector_tools_interpolate.h>
+
+#include <cmath>
+#include <limits>
+#include <set>
+#include <sstream>
+
+namespace spinesim::fem {
+
+using namespace dealii;
+
+namespace {
+std::string slot_name(const std::string& kind, unsigned int i) {
+  return kind + " " + std::to_string(i + 1);
+}
+std::string num(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+void require_positive(double v, const std::string& where, const std::string& unit) {
+  if (!(v > 0) || !std::isfinite(v))
+    throw InvalidInput(where, "value " + num(v), "a finite positive number " + unit);
+}
+} // namespace
+
+// ---------------------------------------------------------------- Parameters
+
+template <int dim>
+void HeatSolver<dim>::Parameters::declare(ParameterHandler& prm) {
+  prm.declare_entry("Finite element degree", "1", Patterns::Integer(1, 4),
+                    "Polynomial degree p of the FE_Q temperature element [-].");
+  prm.declare_entry("Theta", "1", Patterns::Double(0.5, 1.0),
+                    "Time-integration weight [-]: 1 = backward Euler (first order, robust after "
+                    "sudden changes), 0.5 = Crank-Nicolson (second order, may oscillate after a "
+                    "sudden change of boundary temperature).");
+  prm.declare_entry("Time step", "0.01", Patterns::Double(0.0),
+                    "Default time step of the heat solver [s]; the driver may pass its own.");
+  prm.declare_entry("Initial temperature", "310.15", Patterns::Anything(),
+                    "Initial temperature [K]: a muparser expression in x, y, z [m] (z = 0 in 2-D); "
+                    "310.15 K is body temperature.");
+  prm.declare_entry("Thermal conductivity", "0.54", Patterns::Double(0.0),
+                    "Default thermal conductivity k [W/(m K)]. Cortical bone: 0.3-0.6 reported; "
+                    "Davidson & James, Med. Eng. Phys. 22 (2000) 741-747 measured about 0.53-0.58 "
+                    "for bovine cortical bone.");
+  prm.declare_entry("Density", "1900", Patterns::Double(0.0),
+                    "Default density rho [kg/m^3] (cortical bone about 1900, as used in "
+                    "bone-drilling models, e.g. Davidson & James, J. Biomech. Eng. 125 (2003)).");
+  prm.declare_entry("Specific heat", "1300", Patterns::Double(0.0),
+                    "Default specific heat capacity c [J/(kg K)] (cortical bone about 1150-1300; "
+                    "same sources as Thermal conductivity).");
+  for (unsigned int i = 0; i < n_material_slots; ++i) {
+    prm.enter_subsection(slot_name("Material", i));
+    prm.declare_entry("Material id", "-1", Patterns::Integer(-1),
+                      "Cells with this material id use the values below; -1 = unused slot [-].");
+    prm.declare_entry("Thermal conductivity", "0.54", Patterns::Double(0.0),
+                      "Thermal conductivity k [W/(m K)].");
+    prm.declare_entry("Density", "1900", Patterns::Double(0.0), "Density rho [kg/m^3].");
+    prm.declare_entry("Specific heat", "1300", Patterns::Double(0.0),
+                      "Specific heat capacity c [J/(kg K)].");
+    prm.leave_subsection();
+  }
+
+  prm.enter_subsection("Linear solver");
+  prm.declare_entry("Preconditioner", "AMG", Patterns::Selection("AMG|SSOR"),
+                    "Preconditioner of the CG solver [-]: AMG (Trilinos ML) or SSOR.");
+  prm.declare_entry("Tolerance", "1e-10", Patterns::Double(0.0, 1.0),
+                    "CG stops when the residual falls below this fraction of the right-hand "
+                    "side norm [-].");
+  prm.declare_entry("Maximum iterations", "1000", Patterns::Integer(1),
+                    "CG iteration limit; exceeding it is a numerical failure [-].");
+  prm.leave_subsection();
+
+  prm.enter_subsection("Sources");
+  prm.declare_entry("Volumetric source", "0", Patterns::Anything(),
+                    "Heat source q [W/m^3]: a muparser expression in x, y, z [m] and t [s].");
+  for (unsigned int i = 0; i < n_moving_source_slots; ++i) {
+    prm.enter_subsection(slot_name("Moving source", i));
+    prm.declare_entry(
+        "Power", "0", Patterns::Double(0.0),
+        "Total heat input of the moving Gaussian source (drill bit) [W] ([W/m] of depth "
+        "in 2-D); 0 = unused slot. All of it enters the body while at least a "
+        "quarter of the Gaussian is inside (centre on the surface is fine).");
+    prm.declare_entry("Radius", "0.001", Patterns::Double(0.0),
+                      "Gaussian radius r [m]: q ~ exp(-|x-c|^2/r^2).");
+    prm.declare_entry("Speed", "0", Patterns::Double(0.0),
+                      "Speed of the centre along the path [m/s].");
+    prm.declare_entry("Path", "0,0", Patterns::Anything(),
+                      "Polyline of the centre [m]: points 'x,y' (2-D) or 'x,y,z' (3-D) separated "
+                      "by ';'. The centre stays at the last point once it gets there.");
+    prm.declare_entry("Start time", "0", Patterns::Double(),
+                      "Time the source switches on and starts moving [s].");
+    prm.declare_entry("End time", "-1", Patterns::Double(),
+                      "Time the source switches off [s]; negative = never.");
+    prm.leave_subsection();
+  }
+  prm.leave_subsection();
+
+  prm.enter_subsection("Boundary conditions");
+  for (unsigned int i = 0; i < n_boundary_slots; ++i) {
+    prm.enter_subsection(slot_name("Fixed temperature", i));
+    prm.declare_entry("Boundary id", "-1", Patterns::Integer(-1),
+                      "Boundary with a prescribed temperature; -1 = unused slot [-].");
+    prm.declare_entry("Temperature", "310.15", Patterns::Anything(),
+                      "Prescribed temperature [K]: expression in x, y, z [m] and t [s].");
+    prm.leave_subsection();
+  }
+  for (unsigned int i = 0; i < n_boundary_slots; ++i) {
+    prm.enter_subsection(slot_name("Heat flux", i));
+    prm.declare_entry("Boundary id", "-1", Patterns::Integer(-1),
+                      "Boundary with a prescribed heat flux; -1 = unused slot [-].");
+    prm.declare_entry("Heat flux", "0", Patterns::Anything(),
+                      "Heat flux INTO the body [W/m^2]: expression in x, y, z [m] and t [s].");
+    prm.leave_subsection();
+  }
+  for (unsigned int i = 0; i < n_boundary_slots; ++i) {
+    prm.enter_subsection(slot_name("Convection", i));
+    prm.declare_entry("Boundary id", "-1", Patterns::Integer(-1),
+                      "Boundary losing heat h (T - T_inf); -1 = unused slot [-].");
+    prm.declare_entry("Heat transfer coefficient", "10", Patterns::Double(0.0),
+                      "Heat transfer coefficient h [W/(m^2 K)].");
+    prm.declare_entry("Ambient temperature", "293.15", Patterns::Double(0.0),
+                      "Ambient temperature T_inf [K].");
+    prm.leave_subsection();
+  }
+  prm.leave_subsection();
+  // Unmentioned boundaries are insulated (zero flux).
+}
+
+template <int dim>
+void HeatSolver<dim>::Parameters::parse(const ParameterHandler& prm_in) {
+  // get() is const but enter_subsection() is not; the handler is restored on return.
+  auto& prm = const_cast<ParameterHandler&>(prm_in);
+  degree = prm.get_integer("Finite element degree");
+  theta = prm.get_double("Theta");
+  time_step = prm.get_double("Time step");
+  initial_temperature = prm.get("Initial temperature");
+  default_material.conductivity = prm.get_double("Thermal conductivity");
+  default_material.density = prm.get_double("Density");
+  default_material.specific_heat = prm.get_double("Specific heat");
+  material_overrides.clear();
+  for (unsigned int i = 0; i < n_material_slots; ++i) {
+    prm.enter_subsection(slot_name("Material", i));
+    MaterialOverride m;
+    m.material_id = prm.get_integer("Material id");
+    m.material.conductivity = prm.get_double("Thermal conductivity");
+    m.material.density = prm.get_double("Density");
+    m.material.specific_heat = prm.get_double("Specific heat");
+    prm.leave_subsection();
+    if (m.material_id >= 0)
+      material_overrides.push_back(m);
+  }
+
+  prm.enter_subsection("Linear solver");
+  preconditioner = prm.get("Preconditioner");
+  solver_tolerance = prm.get_double("Tolerance");
+  max_iterations = prm.get_integer("Maximum iterations");
+  prm.leave_subsection();
+
+  prm.enter_subsection("Sources");
+  volumetric_source = prm.get("Volumetric source");
+  moving_sources.clear();
+  for (unsigned int i = 0; i < n_moving_source_slots; ++i) {
+    prm.enter_subsection(slot_name("Moving source", i));
+    MovingSource s;
+    s.power = prm.get_double("Power");
+    s.radius = prm.get_double("Radius");
+    s.speed = prm.get_double("Speed");
+    s.path = prm.get("Path");
+    s.start_time = prm.get_double("Start time");
+    s.end_time = prm.get_double("End time");
+    prm.leave_subsection();
+    if (s.power > 0)
+      moving_sources.push_back(s);
+  }
+  prm.leave_subsection();
+
+  prm.enter_subsection("Boundary conditions");
+  fixed_temperatures.clear();
+  heat_fluxes.clear();
+  convections.clear();
+  for (unsigned int i = 0; i < n_boundary_slots; ++i) {
+    prm.enter_subsection(slot_name("Fixed temperature", i));
+    FixedTemperature f{static_cast<int>(prm.get_integer("Boundary id")), prm.get("Temperature")};
+    prm.leave_subsection();
+    if (f.boundary_id >= 0)
+      fixed_temperatures.push_back(f);
+  }
+  for (unsigned int i = 0; i < n_boundary_slots; ++i) {
+    prm.enter_subsection(slot_name("Heat flux", i));
+    HeatFlux f{static_cast<int>(prm.get_integer("Boundary id")), prm.get("Heat flux")};
+    prm.leave_subsection();
+    if (f.boundary_id >= 0)
+      heat_fluxes.push_back(f);
+  }
+  for (unsigned int i = 0; i < n_boundary_slots; ++i) {
+    prm.enter_subsection(slot_name("Convection", i));
+    Convection c{static_cast<int>(prm.get_integer("Boundary id")),
+                 prm.get_double("Heat transfer coefficient"),
+                 prm.get_double("Ambient temperature")};
+    prm.leave_subsection();
+    if (c.boundary_id >= 0)
+      convections.push_back(c);
+  }
+  prm.leave_subsection();
+  validate();
+}
+
+template <int dim>
+void HeatSolver<dim>::Parameters::validate() const {
+  if (degree < 1 || degree > 4)
+    throw InvalidInput("Finite element degree", "degree " + std::to_string(degree),
+                       "an integer from 1 to 4");
+  if (!(theta >= 0.5 && theta <= 1.0))
+    throw InvalidInput("Theta", "value " + num(theta),
+                       "0.5 <= Theta <= 1 (the unconditionally stable range)");
+  require_positive(time_step, "Time step", "[s]");
+  SpaceTimeExpression<dim>::validate(initial_temperature, "Initial temperature");
+  require_positive(default_material.conductivity, "Thermal conductivity", "[W/(m K)]");
+  require_positive(default_material.density, "Density", "[kg/m^3]");
+  require_positive(default_material.specific_heat, "Specific heat", "[J/(kg K)]");
+  std::set<int> ids;
+  for (unsigned int i = 0; i < material_overrides.size(); ++i) {
+    const auto& m = material_overrides[i];
+    const std::string where = slot_name("Material", i);
+    if (m.material_id < 0 || !ids.insert(m.material_id).second)
+      throw InvalidInput(where + "/Material id",
+                         "material id " + std::to_string(m.material_id) +
+                             (m.material_id < 0 ? " in a used slot" : " given twice"),
+                         "each material id >= 0 in at most one slot");
+    require_positive(m.material.conductivity, where + "/Thermal conductivity", "[W/(m K)]");
+    require_positive(m.material.density, where + "/Density", "[kg/m^3]");
+    require_positive(m.material.specific_heat, where + "/Specific heat", "[J/(kg K)]");
+  }
+  if (preconditioner != "AMG" && preconditioner != "SSOR")
+    throw InvalidInput("Linear solver/Preconditioner", "'" + preconditioner + "'", "AMG or SSOR");
+  if (!(solver_tolerance > 0 && solver_tolerance < 1))
+    throw InvalidInput("Linear solver/Tolerance", "value " + num(solver_tolerance),
+                       "a relative tolerance in (0, 1)");
+  if (max_iterations < 1)
+    throw InvalidInput("Linear solver/Maximum iterations", "0", "at least 1");
+
+  SpaceTimeExpression<dim>::validate(volumetric_source, "Sources/Volumetric source");
+  for (unsigned int i = 0; i < moving_sources.size(); ++i) {
+    const auto& s = moving_sources[i];
+    const std::string where = "Sources/" + slot_name("Moving source", i);
+    // Constructing the source runs all of its checks.
+    MovingHeatSource<dim>(MovingHeatSource<dim>::parse_path(s.path, where + "/Path"), s.speed,
+                          s.power, s.radius, s.start_time, s.end_time, where);
+  }
+
+  std::set<int> fixed_ids;
+  for (unsigned int i = 0; i < fixed_temperatures.size(); ++i) {
+    const std::string where = "Boundary conditions/" + slot_name("Fixed temperature", i);
+    const int id = fixed_temperatures[i].boundary_id;
+    if (id < 0 || !fixed_ids.insert(id).second)
+      throw InvalidInput(where + "/Boundary id",
+                         "boundary id " + std::to_string(id) +
+                             (id < 0 ? " in a used slot" : " has two fixed temperatures"),
+                         "each boundary id >= 0 in at most one Fixed temperature slot");
+    SpaceTimeExpression<dim>::validate(fixed_temperatures[i].temperature, where + "/Temperature");
+  }
+  auto check_not_fixed = [&](int id, const std::string& where) {
+    if (id < 0)
+      throw InvalidInput(where, "boundary id " + std::to_string(id) + " in a used slot",
+                         "a boundary id >= 0");
+    if (fixed_ids.count(id))
+      throw InvalidInput(where,
+                         "boundary id " + std::to_string(id) + " also has a fixed temperature",
+                         "a boundary that is not in a Fixed temperature slot");
+  };
+  for (unsigned int i = 0; i < heat_fluxes.size(); ++i) {
+    const std::string where = "Boundary conditions/" + slot_name("Heat flux", i);
+    check_not_fixed(heat_fluxes[i].boundary_id, where + "/Boundary id");
+    SpaceTimeExpression<dim>::validate(heat_fluxes[i].flux, where + "/Heat flux");
+  }
+  for (unsigned int i = 0; i < convections.size(); ++i) {
+    const std::string where = "Boundary conditions/" + slot_name("Convection", i);
+    const auto& c = convections[i];
+    check_not_fixed(c.boundary_id, where + "/Boundary id");
+    if (!(c.heat_transfer_coefficient >= 0) || !std::isfinite(c.heat_transfer_coefficient))
+      throw InvalidInput(where + "/Heat transfer coefficient",
+                         "value " + num(c.heat_transfer_coefficient), "h >= 0 [W/(m^2 K)]");
+    require_positive(c.ambient_temperature, where + "/Ambient temperature", "[K]");
+  }
+}
+
+// ---------------------------------------------------------------- solver
+
+template <int dim>
+struct HeatSolver<dim>::Transfer {
+  std::unique_ptr<parallel::distributed::SolutionTransfer<dim, TrilinosWrappers::MPI::Vector>>
+      transfer;
+};
+
+template <int dim>
+HeatSolver<dim>::HeatSolver(parallel::distributed::Triangulation<dim>& triangulation,
+                            const Parameters& parameters)
+    : triangulation_(triangulation), prm_(parameters), comm_(triangulation.get_communicator()) {}
+
+template <int dim>
+HeatSolver<dim>::~HeatSolver() = default;
+
+template <int dim>
+const typename HeatSolver<dim>::ThermalMaterial&
+HeatSolver<dim>::material(types::material_id id) const {
+  for (const auto& m : prm_.material_overrides)
+    if (static_cast<types::material_id>(m.material_id) == id)
+      return m.material;
+  return prm_.default_material;
+}
+
+template <int dim>
+void HeatSolver<dim>::setup() {
+  prm_.validate();
+  volumetric_source_ =
+      std::make_unique<SpaceTimeExpression<dim>>(prm_.volumetric_source, "Volumetric source");
+  fixed_.clear();
+  for (const auto& f : prm_.fixed_temperatures)
+    fixed_.emplace_back(f.boundary_id,
+                        std::make_unique<SpaceTimeExpression<dim>>(f.temperature, "Temperature"));
+  fluxes_.clear();
+  for (const auto& f : prm_.heat_fluxes)
+    fluxes_.emplace_back(f.boundary_id,
+                         std::make_unique<SpaceTimeExpression<dim>>(f.flux, "Heat flux"));
+  moving_.clear();
+  for (unsigned int i = 0; i < prm_.moving_sources.size(); ++i) {
+    const auto& s = prm_.moving_sources[i];
+    const std::string where = "Sources/" + slot_name("Moving source", i);
+    moving_.emplace_back(MovingHeatSource<dim>::parse_path(s.path, where + "/Path"), s.speed,
+                         s.power, s.radius, s.start_time, s.end_time, where);
+  }
+  fe_ = std::make_unique<FE_Q<dim>>(prm_.degree);
+  setup_dofs();
+  SpaceTimeExpression<dim> initial(prm_.initial_temperature, "Initial temperature");
+  initial.set_time(time_);
+  set_initial_temperature(initial);
+}
+
+template <int dim>
+void HeatSolver<dim>::setup_dofs() {
+  if (!dof_handler_attached_)
+    dof_handler_.reinit(triangulation_);
+  dof_handler_attached_ = true;
+  dof_handler_.distribute_dofs(*fe_);
+  locally_owned_dofs_ = dof_handler_.locally_owned_dofs();
+  DoFTools::extract_locally_relevant_dofs(dof_handler_, locally_relevant_dofs_);
+  make_constraints(time_);
+
+  DynamicSparsityPattern dsp(locally_relevant_dofs_);
+  DoFTools::make_sparsity_pattern(dof_handler_, dsp, constraints_, false);
+  SparsityTools::distribute_sparsity_pattern(dsp, locally_owned_dofs_, comm_,
+                                             locally_relevant_dofs_);
+  system_matrix_.reinit(locally_owned_dofs_, locally_owned_dofs_, dsp, comm_);
+  solution_.reinit(locally_owned_dofs_, locally_relevant_dofs_, comm_);
+  system_rhs_.reinit(locally_owned_dofs_, comm_);
+  external_.reinit(locally_owned_dofs_, comm_);
+  has_external_ = false;
+  preconditioner_.reset();
+  matrix_dt_ = -1;
+  scale_cache_.clear(); // the mesh changed
+}
+
+template <int dim>
+void HeatSolver<dim>::make_constraints(double time) {
+  constraints_.clear();
+  constraints_.reinit(locally_relevant_dofs_);
+  DoFTools::make_hanging_node_constraints(dof_handler_, constraints_);
+  for (auto& [id, f] : fixed_) {
+    f->set_time(time);
+    VectorTools::interpolate_boundary_values(dof_handler_, id, *f, constraints_);
+  }
+  constraints_.close();
+}
+
+template <int dim>
+void HeatSolver<dim>::set_initial_temperature(const Function<dim>& temperature) {
+  AssertThrow(is_set_up(), ExcMessage("HeatSolver::setup() must come first"));
+  TrilinosWrappers::MPI::Vector owned(locally_owned_dofs_, comm_);
+  VectorTools::interpolate(dof_handler_, temperature, owned);
+  constraints_.distribute(owned);
+  solution_ = owned;
+  check_finite("initial temperature");
+}
+
+template <int dim>
+void HeatSolver<dim>::add_source_vector(const TrilinosWrappers::MPI::Vector& nodal_power) {
+  AssertThrow(is_set_up(), ExcMessage("HeatSolver::setup() must come first"));
+  if (!has_external_)
+    external_ = 0;
+  external_ += nodal_power;
+  has_external_ = true;
+}
+
+template <int dim>
+std::vector<double> HeatSolver<dim>::moving_source_scales(double time) const {
+  std::vector<double> local(moving_.size(), 0.0);
+  if (moving_.empty())
+    return local;
+  // The new time of one step is the old time of the next: reuse its integral.
+  if (scale_cache_time_ == time && scale_cache_.size() == moving_.size())
+    return scale_cache_;
+  QGauss<dim> quadrature(fe_->degree + 1);
+  FEValues<dim> fe_values(*fe_, quadrature, update_quadrature_points | update_JxW_values);
+  std::vector<Point<dim>> centres;
+  for (const auto& src : moving_)
+    centres.push_back(src.position(time));
+  for (const auto& cell : dof_handler_.active_cell_iterators()) {
+    if (!cell->is_locally_owned())
+      continue;
+    bool reinitialised = false;
+    for (unsigned int s = 0; s < moving_.size(); ++s) {
+      if (!moving_[s].active(time) ||
+          cell->center().distance(centres[s]) > moving_[s].cutoff_distance() + cell->diameter())
+        continue;
+      if (!reinitialised) {
+        fe_values.reinit(cell);
+        reinitialised = true;
+      }
+      for (unsigned int q = 0; q < quadrature.size(); ++q)
+        local[s] +=
+            moving_[s].density_about(fe_values.quadrature_point(q), centres[s]) * fe_values.JxW(q);
+    }
+  }
+  std::vector<double> integral(local.size());
+  Utilities::MPI::sum(local, comm_, integral);
+  std::vector<double> scale(moving_.size(), 0.0);
+  for (unsigned int s = 0; s < moving_.size(); ++s)
+    // Full power while at least a quarter of the Gaussian is inside (centre inside, on a face
+    // or on a 2-D corner / 3-D edge), fading with the overlap as the centre leaves, so the
+    // power never concentrates in a sliver of the mesh.
+    if (moving_[s].active(time))
+      scale[s] = moving_[s].power() / std::max(integral[s], 0.25);
+  scale_cache_time_ = time;
+  scale_cache_ = scale;
+  return scale;
+}
+
+template <int dim>
+double HeatSolver<dim>::convection_loss(const TrilinosWrappers::MPI::Vector& temperature) const {
+  if (prm_.convections.empty())
+    return 0.0;
+  QGauss<dim - 1> face_quadrature(fe_->degree + 1);
+  FEFaceValues<dim> fe_face(*fe_, face_quadrature, update_values | update_JxW_values);
+  std::vector<double> values(face_quadrature.size());
+  double loss = 0;
+  for (const auto& cell : dof_handler_.active_cell_iterators()) {
+    if (!cell->is_locally_owned() || !cell->at_boundary())
+      continue;
+    for (const unsigned int f : cell->face_indices()) {
+      if (!cell->face(f)->at_boundary())
+        continue;
+      for (const auto& c : prm_.convections) {
+        if (cell->face(f)->boundary_id() != static_cast<types::boundary_id>(c.boundary_id))
+          continue;
+        fe_face.reinit(cell, f);
+        fe_face.get_function_values(temperature, values);
+        for (unsigned int q = 0; q < face_quadrature.size(); ++q)
+          loss += c.heat_transfer_coefficient * values[q] * fe_face.JxW(q);
+      }
+    }
+  }
+  return Utilities::MPI::sum(loss, comm_);
+}
+
+template <int dim>
+void HeatSolver<dim>::assemble_step(double dt, bool rebuild_matrix) {
+  const double theta = prm_.theta;
+  const double t_old = time_, t_new = time_ + dt;
+  const unsigned int n_dofs = fe_->n_dofs_per_cell();
+  const QGauss<dim> quadrature(fe_->degree + 1);
+  const QGauss<dim - 1> face_quadrature(fe_->degree + 1);
+  const unsigned int n_q = quadrature.size(), n_face_q = face_quadrature.size();
+  FEValues<dim> fe_values(*fe_, quadrature,
+                          update_values | update_gradients | update_quadrature_points |
+                              update_JxW_values);
+  FEFaceValues<dim> fe_face(*fe_, face_quadrature,
+                            update_values | update_quadrature_points | update_JxW_values);
+
+  const std::vector<double> scale_old = moving_source_scales(t_old);
+  const std::vector<double> scale_new = moving_source_scales(t_new);
+  std::vector<Point<dim>> centres_old, centres_new;
+  for (const auto& src : moving_) {
+    centres_old.push_back(src.position(t_old));
+    centres_new.push_back(src.position(t_new));
+  }
+
+  FullMatrix<double> cell_mass(n_dofs, n_dofs), cell_stiffness(n_dofs, n_dofs),
+      cell_matrix(n_dofs, n_dofs);
+  Vector<double> cell_source(n_dofs), cell_rhs(n_dofs), old_values(n_dofs), tmp(n_dofs);
+  std::vector<types::global_dof_index> dofs(n_dofs);
+  std::vector<double> q_old(n_q), q_new(n_q), q_cell(n_q), g_old(n_face_q), g_new(n_face_q);
+  std::vector<bool> external_claimed(has_external_ ? locally_owned_dofs_.n_elements() : 0, false);
+
+  if (rebuild_matrix)
+    system_matrix_ = 0;
+  system_rhs_ = 0;
+  double local_supplied = 0;
+
+  for (const auto& cell : dof_handler_.active_cell_iterators()) {
+    if (!cell->is_locally_owned())
+      continue;
+    fe_values.reinit(cell);
+    cell->get_dof_indices(dofs);
+    const ThermalMaterial& mat = material(cell->material_id());
+    const double rho_c = mat.density * mat.specific_heat;
+    cell_mass = 0;
+    cell_stiffness = 0;
+    cell_source = 0;
+
+    // Source at the quadrature points, theta-weighted between the old and the new time.
+    volumetric_source_->set_time(t_old);
+    volumetric_source_->value_list(fe_values.get_quadrature_points(), q_old);
+    volumetric_source_->set_time(t_new);
+    volumetric_source_->value_list(fe_values.get_quadrature_points(), q_new);
+    std::fill(q_cell.begin(), q_cell.end(), 0.0);
+    if (cell_source_)
+      cell_source_(typename Triangulation<dim>::active_cell_iterator(cell),
+                   fe_values.get_quadrature_points(), t_new, q_cell);
+    for (unsigned int s = 0; s < moving_.size(); ++s)
+      for (unsigned int k = 0; k < 2; ++k) {
+        const double w = k == 1 ? theta * scale_new[s] : (1.0 - theta) * scale_old[s];
+        const Point<dim>& centre = k == 1 ? centres_new[s] : centres_old[s];
+        if (w == 0 ||
+            cell->center().distance(centre) > moving_[s].cutoff_distance() + cell->diameter())
+          continue;
+        for (unsigned int q = 0; q < n_q; ++q)
+          q_cell[q] += w * moving_[s].density_about(fe_values.quadrature_point(q), centre);
+      }
+
+    for (unsigned int q = 0; q < n_q; ++q) {
+      const double JxW = fe_values.JxW(q);
+      const double source = theta * q_new[q] + (1.0 - theta) * q_old[q] + q_cell[q];
+      for (unsigned int i = 0; i < n_dofs; ++i) {
+        const double phi_i = fe_values.shape_value(i, q);
+        const Tensor<1, dim> grad_i = fe_values.shape_grad(i, q);
+        for (unsigned int j = 0; j < n_dofs; ++j) {
+          cell_mass(i, j) += rho_c * phi_i * fe_values.shape_value(j, q) * JxW;
+          cell_stiffness(i, j) += mat.conductivity * grad_i * fe_values.shape_grad(j, q) * JxW;
+        }
+        cell_source(i) += source * phi_i * JxW;
+      }
+    }
+
+    if (cell->at_boundary())
+      for (const unsigned int f : cell->face_indices()) {
+        if (!cell->face(f)->at_boundary())
+          continue;
+        const types::boundary_id id = cell->face(f)->boundary_id();
+        bool reinitialised = false;
+        auto reinit = [&]() {
+          if (!reinitialised)
+            fe_face.reinit(cell, f);
+          reinitialised = true;
+        };
+        for (auto& [flux_id, flux] : fluxes_) {
+          if (flux_id != id)
+            continue;
+          reinit();
+          flux->set_time(t_old);
+          flux->value_list(fe_face.get_quadrature_points(), g_old);
+          flux->set_time(t_new);
+          flux->value_list(fe_face.get_quadrature_points(), g_new);
+          for (unsigned int q = 0; q < n_face_q; ++q)
+            for (unsigned int i = 0; i < n_dofs; ++i)
+              cell_source(i) += (theta * g_new[q] + (1.0 - theta) * g_old[q]) *
+                                fe_face.shape_value(i, q) * fe_face.JxW(q);
+        }
+        for (const auto& c : prm_.convections) {
+          if (static_cast<types::boundary_id>(c.boundary_id) != id)
+            continue;
+          reinit();
+          for (unsigned int q = 0; q < n_face_q; ++q)
+            for (unsigned int i = 0; i < n_dofs; ++i) {
+              const double hphi =
+                  c.heat_transfer_coefficient * fe_face.shape_value(i, q) * fe_face.JxW(q);
+              cell_source(i) += hphi * c.ambient_temperature;
+              for (unsigned int j = 0; j < n_dofs; ++j)
+                cell_stiffness(i, j) += hphi * fe_face.shape_value(j, q);
+            }
+        }
+      }
+
+    // Nodal powers from the coupling layer: each owned DoF enters through exactly one cell,
+    // so the constraints distribute it like any other load.
+    if (has_external_)
+      for (unsigned int i = 0; i < n_dofs; ++i)
+        if (locally_owned_dofs_.is_element(dofs[i])) {
+          const auto k = locally_owned_dofs_.index_within_set(dofs[i]);
+          if (!external_claimed[k]) {
+            external_claimed[k] = true;
+            cell_source(i) += external_(dofs[i]);
+          }
+        }
+
+    // (M + theta dt K) T^{n+1} = (M - (1-theta) dt K) T^n + dt F_theta
+    cell->get_dof_values(solution_, old_values);
+    for (unsigned int i = 0; i < n_dofs; ++i)
+      for (unsigned int j = 0; j < n_dofs; ++j)
+        cell_matrix(i, j) = cell_mass(i, j) + theta * dt * cell_stiffness(i, j);
+    cell_mass.vmult(cell_rhs, old_values);
+    cell_stiffness.vmult(tmp, old_values);
+    for (unsigned int i = 0; i < n_dofs; ++i) {
+      cell_rhs(i) += -(1.0 - theta) * dt * tmp(i) + dt * cell_source(i);
+      local_supplied += dt * cell_source(i);
+    }
+    if (rebuild_matrix)
+      constraints_.distribute_local_to_global(cell_matrix, cell_rhs, dofs, system_matrix_,
+                                              system_rhs_);
+    else
+      constraints_.distribute_local_to_global(cell_rhs, dofs, system_rhs_, cell_matrix);
+  }
+  if (rebuild_matrix)
+    system_matrix_.compress(VectorOperation::add);
+  system_rhs_.compress(VectorOperation::add);
+  supplied_energy_ += Utilities::MPI::sum(local_supplied, comm_);
+}
+
+template <int dim>
+void HeatSolver<dim>::solve() {
+  TrilinosWrappers::MPI::Vector x(locally_owned_dofs_, comm_);
+  for (const auto i : locally_owned_dofs_)
+    x(i) = solution_(i); // the old field is a good first guess
+  x.compress(VectorOperation::insert);
+  if (!preconditioner_) {
+    if (prm_.preconditioner == "AMG") {
+      auto amg = std::make_unique<TrilinosWrappers::PreconditionAMG>();
+      TrilinosWrappers::PreconditionAMG::AdditionalData data;
+      data.elliptic = true;
+      data.higher_order_elements = fe_->degree > 1;
+      data.smoother_sweeps = 2;
+      data.aggregation_threshold = 0.02;
+      amg->initialize(system_matrix_, data);
+      preconditioner_ = std::move(amg);
+    } else {
+      auto ssor = std::make_unique<TrilinosWrappers::PreconditionSSOR>();
+      ssor->initialize(system_matrix_, TrilinosWrappers::PreconditionSSOR::AdditionalData(1.2));
+      preconditioner_ = std::move(ssor);
+    }
+  }
+  const double rhs_norm = system_rhs_.l2_norm();
+  if (!std::isfinite(rhs_norm))
+    throw NumericalFailure("heat equation right-hand side is not finite", "time " + num(time_),
+                           "check source expressions and materials");
+  SolverControl control(prm_.max_iterations, prm_.solver_tolerance * rhs_norm);
+  SolverCG<TrilinosWrappers::MPI::Vector> cg(control);
+  try {
+    cg.solve(system_matrix_, x, system_rhs_, *preconditioner_);
+  } catch (const SolverControl::NoConvergence& e) {
+    throw NumericalFailure("heat CG solver did not converge",
+                           "time " + num(time_) + ", residual " + num(e.last_residual) + " after " +
+                               std::to_string(e.last_step) + " iterations",
+                           "raise Linear solver/Maximum iterations, try the other preconditioner "
+                           "or reduce the time step");
+  }
+  last_iterations_ = control.last_step();
+  constraints_.distribute(x);
+  solution_ = x;
+}
+
+template <int dim>
+void HeatSolver<dim>::check_finite(const char* what) const {
+  types::global_dof_index bad = numbers::invalid_dof_index;
+  for (const auto i : locally_owned_dofs_)
+    if (!std::isfinite(solution_(i))) {
+      bad = i;
+      break;
+    }
+  const bool any = Utilities::MPI::max(bad != numbers::invalid_dof_index ? 1 : 0, comm_) > 0;
+  if (any)
+    throw NumericalFailure(std::string("non-finite temperature in the ") + what,
+                           bad != numbers::invalid_dof_index
+                               ? "DoF " + std::to_string(bad) + " at time " + num(time_)
+                               : "on another rank, time " + num(time_),
+                           "check source expressions, material values and the time step");
+}
+
+template <int dim>
+void HeatSolver<dim>::advance() {
+  advance(prm_.time_step);
+}
+
+template <int dim>
+void HeatSolver<dim>::advance(double dt) {
+  AssertThrow(is_set_up(), ExcMessage("HeatSolver::setup() must come first"));
+  if (!(dt > 0) || !std::isfinite(dt))
+    throw InvalidInput("heat time step", "dt = " + num(dt), "a positive finite step [s]");
+  const double loss_old = convection_loss(solution_);
+  if (!fixed_.empty())
+    make_constraints(time_ + dt); // same structure, new boundary values
+  const bool rebuild = (dt != matrix_dt_);
+  assemble_step(dt, rebuild);
+  if (rebuild) {
+    preconditioner_.reset();
+    matrix_dt_ = dt;
+  }
+  solve();
+  time_ += dt;
+  ++step_;
+  has_external_ = false;
+  check_finite("heat solution");
+  const double loss_new = convection_loss(solution_);
+  supplied_energy_ -= dt * (prm_.theta * loss_new + (1.0 - prm_.theta) * loss_old);
+}
+
+template <int dim>
+void HeatSolver<dim>::set_time(double time, double supplied_energy) {
+  time_ = time;
+  supplied_energy_ = supplied_energy;
+  if (is_set_up() && !fixed_.empty())
+    make_constraints(time_);
+}
+
+template <int dim>
+void HeatSolver<dim>::temperature_at_unit_points(
+    const typename Triangulation<dim>::active_cell_iterator& cell,
+    const std::vector<Point<dim>>& unit_points, std::vector<double>& values) const {
+  AssertThrow(is_set_up(), ExcMessage("HeatSolver::setup() must come first"));
+  AssertThrow(!cell->is_artificial(),
+              ExcMessage("temperature requested on an artificial cell (neither owned nor ghost)"));
+  const typename DoFHandler<dim>::active_cell_iterator dof_cell(&triangulation_, cell->level(),
+                                                                cell->index(), &dof_handler_);
+  Vector<double> nodal(fe_->n_dofs_per_cell());
+  dof_cell->get_dof_values(solution_, nodal);
+  values.assign(unit_points.size(), 0.0);
+  for (unsigned int q = 0; q < unit_points.size(); ++q)
+    for (unsigned int i = 0; i < nodal.size(); ++i)
+      values[q] += nodal(i) * fe_->shape_value(i, unit_points[q]);
+}
+
+template <int dim>
+std::vector<double> HeatSolver<dim>::temperature_at_points(const std::vector<Point<dim>>& points,
+                                                           std::vector<bool>* found) const {
+  AssertThrow(is_set_up(), ExcMessage("HeatSolver::setup() must come first"));
+  Utilities::MPI::RemotePointEvaluation<dim> cache;
+  cache.reinit(points, triangulation_, StaticMappingQ1<dim>::mapping);
+  std::vector<double> values = VectorTools::point_values<1>(cache, dof_handler_, solution_);
+  if (found)
+    found->assign(points.size(), true);
+  for (unsigned int i = 0; i < points.size(); ++i)
+    if (!cache.point_found(i)) {
+      if (!found) {
+        std::ostringstream where;
+        where << "point " << i << " at (" << points[i] << ")";
+        throw NumericalFailure("temperature requested outside the mesh", where.str(),
+                               "the point (particle) has left the body; pass `found` to "
+                               "handle such points");
+      }
+      (*found)[i] = false;
+      values[i] = std::numeric_limits<double>::quiet_NaN();
+    }
+  return values;
+}
+
+template <int dim>
+double HeatSolver<dim>::heat_content() const {
+  const QGauss<dim> quadrature(fe_->degree + 1);
+  FEValues<dim> fe_values(*fe_, quadrature, update_values | update_JxW_values);
+  std::vector<double> values(quadrature.size());
+  double local = 0;
+  for (const auto& cell : dof_handler_.active_cell_iterators()) {
+    if (!cell->is_locally_owned())
+      continue;
+    fe_values.reinit(cell);
+    fe_values.get_function_values(solution_, values);
+    const ThermalMaterial& mat = material(cell->material_id());
+    for (unsigned int q = 0; q < quadrature.size(); ++q)
+      local += mat.density * mat.specific_heat * values[q] * fe_values.JxW(q);
+  }
+  return Utilities::MPI::sum(local, comm_);
+}
+
+template <int dim>
+double HeatSolver<dim>::max_temperature() const {
+  double local = -std::numeric_limits<double>::max();
+  for (const auto i : locally_owned_dofs_)
+    local = std::max(local, solution_(i));
+  return Utilities::MPI::max(local, comm_);
+}
+
+template <int dim>
+double HeatSolver<dim>::min_temperature() const {
+  double local = std::numeric_limits<double>::max();
+  for (const auto i : locally_owned_dofs_)
+    local = std::min(local, solution_(i));
+  return Utilities::MPI::min(local, comm_);
+}
+
+template <int dim>
+std::string HeatSolver<dim>::write_output(const std::string& directory, unsigned int counter,
+                                          const std::string& basename) const {
+  DataOut<dim> data_out;
+  data_out.attach_dof_handler(dof_handler_);
+  data_out.add_data_vector(solution_, "temperature");
+  Vector<float> subdomain(triangulation_.n_active_cells()), material_id(subdomain.size());
+  for (const auto& cell : triangulation_.active_cell_iterators())
+    if (cell->is_locally_owned()) {
+      subdomain(cell->active_cell_index()) = triangulation_.locally_owned_subdomain();
+      material_id(cell->active_cell_index()) = cell->material_id();
+    }
+  data_out.add_data_vector(subdomain, "subdomain");
+  data_out.add_data_vector(material_id, "material_id");
+  data_out.build_patches(fe_->degree);
+  const std::string dir =
+      directory.empty() ? "./" : (directory.back() == '/' ? directory : directory + "/");
+  return data_out.write_vtu_with_pvtu_record(dir, basename, counter, comm_, 4);
+}
+
+template <int dim>
+void HeatSolver<dim>::prepare_for_serialization() {
+  AssertThrow(is_set_up(), ExcMessage("HeatSolver::setup() must come first"));
+  transfer_ = std::make_unique<Transfer>();
+  transfer_->transfer =
+      std::make_unique<parallel::distributed::SolutionTransfer<dim, TrilinosWrappers::MPI::Vector>>(
+          dof_handler_);
+  transfer_->transfer->prepare_for_serialization(solution_);
+}
+
+template <int dim>
+void HeatSolver<dim>::deserialize() {
+  if (!is_set_up())
+    setup(); // builds functions and DoFs on the loaded mesh; the field is replaced below
+  else
+    setup_dofs();
+  parallel::distributed::SolutionTransfer<dim, TrilinosWrappers::MPI::Vector> transfer(
+      dof_handler_);
+  TrilinosWrappers::MPI::Vector owned(locally_owned_dofs_, comm_);
+  transfer.deserialize(owned);
+  constraints_.distribute(owned);
+  solution_ = owned;
+  transfer_.reset();
+  check_finite("restored temperature");
+}
+
+template <int dim>
+void HeatSolver<dim>::prepare_for_coarsening_and_refinement() {
+  AssertThrow(is_set_up(), ExcMessage("HeatSolver::setup() must come first"));
+  transfer_ = std::make_unique<Transfer>();
+  transfer_->transfer =
+      std::make_unique<parallel::distributed::SolutionTransfer<dim, TrilinosWrappers::MPI::Vector>>(
+          dof_handler_);
+  transfer_->transfer->prepare_for_coarsening_and_refinement(solution_);
+}
+
+template <int dim>
+void HeatSolver<dim>::finish_refinement() {
+  AssertThrow(transfer_ && transfer_->transfer,
+              ExcMessage("call prepare_for_coarsening_and_refinement() first"));
+  setup_dofs();
+  TrilinosWrappers::MPI::Vector owned(locally_owned_dofs_, comm_);
+  transfer_->transfer->interpolate(owned);
+  constraints_.distribute(owned);
+  solution_ = owned;
+  transfer_.reset();
+}
+
+template class HeatSolver<2>;
+template class HeatSolver<3>;
+
+} // namespace spinesim::fem
