@@ -22,6 +22,8 @@ packages=(
   libdeal.ii-dev          # deal.II 9.4 with Trilinos, p4est, PETSc, HDF5, MPI, TBB
   openmpi-bin             # mpirun for the 2-rank tests
   libeigen3-dev libcli11-dev nlohmann-json3-dev libgtest-dev
+  libinsighttoolkit5-dev  # CT volumes: NIfTI, NRRD, MetaImage readers
+  gnuplot-nox             # PNG plots of studies and benchmarks
 )
 
 missing=()

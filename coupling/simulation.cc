@@ -1,5 +1,6 @@
 #include "coupling/simulation.h"
 
+#include "coupling/particle_zone.h"
 #include "coupling/run_context.h"
 #include "fem/heat/heat_solver.h"
 #include "fem/materials/failure.h"
@@ -124,6 +125,7 @@ private:
   unsigned int load_checkpoint(RunContext& ctx);
   void report_figures(RunContext& ctx);
 
+  const dealii::ParameterHandler& prm_;
   const Effects& effects_;
   SimulationParameters sim_;
   fem::MeshParameters mesh_prm_;
@@ -135,13 +137,16 @@ private:
   std::shared_ptr<const materials::ConstitutiveLaw> law_;
   std::unique_ptr<fem::MechanicsSolver<dim>> mechanics_;
   std::unique_ptr<fem::HeatSolver<dim>> heat_;
-  PvdRecord solution_pvd_{"solution.pvd"}, temperature_pvd_{"temperature.pvd"};
+  std::unique_ptr<ParticleZone<dim>> particles_;
+  PvdRecord solution_pvd_{"solution.pvd"}, temperature_pvd_{"temperature.pvd"},
+      particles_pvd_{"particles.pvd"};
   unsigned int output_cycle_ = 0;
   unsigned int newton_iterations_ = 0, linear_iterations_ = 0;
 };
 
 template <int dim>
-Simulation<dim>::Simulation(const ScenarioFactoryArgs& args) : effects_(args.effects) {
+Simulation<dim>::Simulation(const ScenarioFactoryArgs& args)
+    : prm_(args.prm), effects_(args.effects) {
   auto& prm = const_cast<dealii::ParameterHandler&>(args.prm);
   prm.enter_subsection("Simulation");
   sim_.parse(prm);
@@ -164,15 +169,25 @@ Simulation<dim>::Simulation(const ScenarioFactoryArgs& args) : effects_(args.eff
     heat_prm_.parse(prm);
     prm.leave_subsection();
   }
-  if (effects_.particles() || effects_.conversion || effects_.coupling || effects_.contact)
-    throw InvalidInput("Effects", "the simulation scenario does not yet run particles, conversion, "
+  if (effects_.particles() && effects_.particles_method != "bond_based")
+    throw InvalidInput("Effects/Particles method",
+                       "the simulation scenario runs bond_based particle zones so far",
+                       "none|bond_based");
+  if (effects_.conversion || effects_.coupling || effects_.contact)
+    throw InvalidInput("Effects", "the simulation scenario does not yet run conversion, "
                                   "coupling or contact",
-                       "Mechanics, Heat, Thermal expansion, Damage (FEM indicators)");
+                       "Mechanics, Heat, Thermal expansion, Damage, Particles method");
 }
 
 template <int dim>
 void Simulation<dim>::build(RunContext& ctx) {
   dealii::TimerOutput::Scope scope(ctx.timer(), "setup");
+  if (effects_.particles()) {
+    particles_ = std::make_unique<ParticleZone<dim>>(prm_, effects_.damage);
+    particles_->setup(ctx);
+  }
+  if (!effects_.mechanics && !effects_.heat)
+    return;
   triangulation_ = std::make_unique<dealii::parallel::distributed::Triangulation<dim>>(
       ctx.comm(), dealii::Triangulation<dim>::maximum_smoothing);
   if (ctx.restarting())
@@ -239,6 +254,10 @@ void Simulation<dim>::advance(unsigned int step, double time, double dt, RunCont
       }
     }
   }
+  if (particles_) {
+    dealii::TimerOutput::Scope scope(ctx.timer(), "particles");
+    particles_->advance_to(time);
+  }
   (void)step;
 }
 
@@ -260,6 +279,8 @@ void Simulation<dim>::record(unsigned int step, double time, RunContext& ctx) {
     row.emplace_back("max_temperature", heat_->max_temperature());
     row.emplace_back("heat_content", heat_->heat_content());
   }
+  if (particles_)
+    particles_->add_history(row);
   ctx.history().add(row);
 }
 
@@ -276,6 +297,13 @@ void Simulation<dim>::write_output(unsigned int step, double time, RunContext& c
   if (heat_) {
     temperature_pvd_.add(time, heat_->write_output(dir, output_cycle_, "temperature"));
     temperature_pvd_.write(ctx);
+  }
+  if (particles_) {
+    std::string name;
+    if (ctx.is_root())
+      name = particles_->write_output(dir, output_cycle_);
+    particles_pvd_.add(time, name);
+    particles_pvd_.write(ctx);
   }
   ++output_cycle_;
   (void)step;
@@ -294,12 +322,15 @@ void Simulation<dim>::write_checkpoint(unsigned int step, double time, RunContex
   }
   MPI_Barrier(ctx.comm());
   const std::string mesh_file = (tmp_dir / "mesh").string();
+  // Order matters: deserialisation below must follow the same order.
   if (heat_)
     heat_->prepare_for_serialization();
   if (mechanics_)
-    mechanics_->save_checkpoint(mesh_file);
-  else
+    mechanics_->prepare_for_serialization(mesh_file);
+  if (triangulation_)
     triangulation_->save(mesh_file);
+  if (particles_ && ctx.is_root())
+    particles_->save((tmp_dir / "particles.bin").string());
   if (ctx.is_root()) {
     nlohmann::json state;
     state["step"] = step;
@@ -309,6 +340,7 @@ void Simulation<dim>::write_checkpoint(unsigned int step, double time, RunContex
     state["linear_iterations"] = linear_iterations_;
     state["solution_pvd"] = solution_pvd_.to_json();
     state["temperature_pvd"] = temperature_pvd_.to_json();
+    state["particles_pvd"] = particles_pvd_.to_json();
     if (heat_)
       state["heat_supplied_energy"] = heat_->supplied_energy();
     write_file_atomic(tmp_dir / "state.json", state.dump(2));
@@ -334,19 +366,22 @@ unsigned int Simulation<dim>::load_checkpoint(RunContext& ctx) {
                        "a run directory with checkpoint/state.json");
   nlohmann::json state = nlohmann::json::parse(in);
   const std::string mesh_file = (dir / "mesh").string();
-  if (mechanics_)
-    mechanics_->load_checkpoint(mesh_file);
-  else
+  if (triangulation_)
     triangulation_->load(mesh_file);
+  if (particles_)
+    particles_->load((dir / "particles.bin").string());
   if (heat_) {
     heat_->deserialize();
     heat_->set_time(state["time"].get<double>(), state.value("heat_supplied_energy", 0.0));
   }
+  if (mechanics_)
+    mechanics_->deserialize(mesh_file);
   output_cycle_ = state["output_cycle"];
   newton_iterations_ = state["newton_iterations"];
   linear_iterations_ = state["linear_iterations"];
   solution_pvd_.from_json(state["solution_pvd"]);
   temperature_pvd_.from_json(state["temperature_pvd"]);
+  particles_pvd_.from_json(state["particles_pvd"]);
   const double time = state["time"];
   // Rows written after the checkpoint came from a segment that did not survive.
   if (ctx.is_root()) {
@@ -362,7 +397,10 @@ template <int dim>
 void Simulation<dim>::report_figures(RunContext& ctx) {
   Summary& s = ctx.summary();
   s.set_figure("steps", sim_.steps, "-");
-  s.set_figure("cells", triangulation_->n_global_active_cells(), "-");
+  if (triangulation_)
+    s.set_figure("cells", triangulation_->n_global_active_cells(), "-");
+  if (particles_)
+    particles_->add_figures(ctx);
   if (mechanics_) {
     s.set_figure("mechanics_dofs", mechanics_->dof_handler().n_dofs(), "-");
     s.set_figure("strain_energy", mechanics_->strain_energy(), dim == 2 ? "J/m" : "J");
@@ -428,6 +466,7 @@ void declare_simulation(SectionDeclarer& sections) {
   sections.declare("Material", materials::LawParameters::declare);
   sections.declare("Mechanics", fem::MechanicsSolver<2>::Parameters::declare);
   sections.declare("Heat", fem::HeatSolver<2>::Parameters::declare);
+  sections.declare("Particles", ParticleZoneParameters::declare);
 }
 
 std::unique_ptr<Scenario> create_simulation(const ScenarioFactoryArgs& args) {
@@ -439,7 +478,7 @@ std::unique_ptr<Scenario> create_simulation(const ScenarioFactoryArgs& args) {
 } // namespace
 
 SPINESIM_REGISTER_SCENARIO(simulation, "simulation",
-                           "the effects-driven step loop: FEM mechanics and heat as switched on.",
+                           "the effects-driven step loop: FEM mechanics, heat and a particle zone as switched on.",
                            declare_simulation, create_simulation)
 
 } // namespace spinesim::coupling

@@ -972,11 +972,14 @@ std::string MechanicsSolver<dim>::write_output(const std::string& directory,
 // ---------------------------------------------------------------- checkpoints
 
 template <int dim>
-void MechanicsSolver<dim>::save_checkpoint(const std::string& filename) const {
+void MechanicsSolver<dim>::prepare_for_serialization(const std::string& filename) const {
   ScopedTime timer(timings_.checkpoint);
   auto& tria = const_cast<parallel::distributed::Triangulation<dim>&>(tria_);
-  parallel::distributed::SolutionTransfer<dim, VectorType> transfer(dof_handler_);
-  transfer.prepare_for_serialization(std::vector<const VectorType*>{&u_ghost_, &v_ghost_});
+  // The transfer must live until the triangulation is saved.
+  serialization_transfer_ =
+      std::make_unique<parallel::distributed::SolutionTransfer<dim, VectorType>>(dof_handler_);
+  serialization_transfer_->prepare_for_serialization(
+      std::vector<const VectorType*>{&u_ghost_, &v_ghost_});
   const unsigned int nq = quadrature_.size();
   tria.register_data_attach(
       [this, nq](const typename Triangulation<dim>::cell_iterator& cell,
@@ -989,7 +992,6 @@ void MechanicsSolver<dim>::save_checkpoint(const std::string& filename) const {
         return bytes;
       },
       /*returns_variable_size_data=*/false);
-  tria.save(filename);
   if (Utilities::MPI::this_mpi_process(comm_) == 0) {
     std::ofstream out(filename + ".solver");
     out.precision(17);
@@ -998,8 +1000,17 @@ void MechanicsSolver<dim>::save_checkpoint(const std::string& filename) const {
 }
 
 template <int dim>
-void MechanicsSolver<dim>::load_checkpoint(const std::string& filename) {
+void MechanicsSolver<dim>::save_checkpoint(const std::string& filename) const {
+  prepare_for_serialization(filename);
   ScopedTime timer(timings_.checkpoint);
+  const_cast<parallel::distributed::Triangulation<dim>&>(tria_).save(filename);
+  serialization_transfer_.reset();
+}
+
+template <int dim>
+void MechanicsSolver<dim>::deserialize(const std::string& filename) {
+  ScopedTime timer(timings_.checkpoint);
+  serialization_transfer_.reset();
   std::ifstream in(filename + ".solver");
   std::string tag;
   int version = 0;
@@ -1011,7 +1022,6 @@ void MechanicsSolver<dim>::load_checkpoint(const std::string& filename) {
     throw InvalidInput("Finite element degree", "checkpoint has degree " + std::to_string(degree),
                        "the degree the checkpoint was written with");
   previous_time_ = target_time_ = time_;
-  tria_.load(filename);
   setup();
   parallel::distributed::SolutionTransfer<dim, VectorType> transfer(dof_handler_);
   std::vector<VectorType*> vectors{&u_, &v_};
@@ -1035,6 +1045,12 @@ void MechanicsSolver<dim>::load_checkpoint(const std::string& filename) {
   // Reactions need the residual at the restored state.
   assemble(false, 1.0, homogeneous_);
   trial_ = committed_;
+}
+
+template <int dim>
+void MechanicsSolver<dim>::load_checkpoint(const std::string& filename) {
+  tria_.load(filename);
+  deserialize(filename);
 }
 
 template class MechanicsSolver<2>;

@@ -20,6 +20,7 @@
 #include <deal.II/base/function.h>
 #include <deal.II/base/parameter_handler.h>
 #include <deal.II/base/quadrature_lib.h>
+#include <deal.II/distributed/solution_transfer.h>
 #include <deal.II/distributed/tria.h>
 #include <deal.II/dofs/dof_handler.h>
 #include <deal.II/fe/fe_system.h>
@@ -128,6 +129,11 @@ class MechanicsSolver {
   // materials and parameters.
   void save_checkpoint(const std::string& filename) const;
   void load_checkpoint(const std::string& filename);
+  // The same in two halves, for several solvers on one mesh: prepare_for_serialization()
+  // before triangulation.save(filename), deserialize() after triangulation.load(filename).
+  // With several solvers the calls must come in the same order at save and at load.
+  void prepare_for_serialization(const std::string& filename) const;
+  void deserialize(const std::string& filename);
 
   // Access for indicators and tests.
   const dealii::DoFHandler<dim>& dof_handler() const { return dof_handler_; }
@@ -187,6 +193,8 @@ class MechanicsSolver {
   bool is_setup_ = false;
 
   mutable Timings timings_;
+  mutable std::unique_ptr<dealii::parallel::distributed::SolutionTransfer<dim, VectorType>>
+      serialization_transfer_;
   std::vector<unsigned int> linear_iterations_;
 };
 
