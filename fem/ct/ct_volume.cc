@@ -1,0 +1,231 @@
+#include "fem/ct/ct_volume.h"
+
+#include "fem/materials/failure.h"
+
+#include <itkImage.h>
+#include <itkImageFileReader.h>
+#include <itkImageFileWriter.h>
+#include <itkMetaImageIO.h>
+#include <itkNiftiImageIO.h>
+#include <itkNrrdImageIO.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+namespace spinesim::fem {
+
+namespace {
+
+constexpr double metres_per_mm = 1e-3;
+
+bool ends_with(const std::string& s, const std::string& tail) {
+  return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
+}
+
+// The ImageIO for a file name, chosen by extension: explicit objects rather than ITK's factory
+// registry, which needs generated registration code and would accept formats we do not test.
+itk::ImageIOBase::Pointer image_io_for(const std::string& file_name) {
+  std::string lower = file_name;
+  std::transform(lower.begin(), lower.end(), lower.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (ends_with(lower, ".nii") || ends_with(lower, ".nii.gz"))
+    return itk::NiftiImageIO::New().GetPointer();
+  if (ends_with(lower, ".nrrd") || ends_with(lower, ".nhdr"))
+    return itk::NrrdImageIO::New().GetPointer();
+  if (ends_with(lower, ".mha") || ends_with(lower, ".mhd"))
+    return itk::MetaImageIO::New().GetPointer();
+  throw InvalidInput(file_name, "unknown image file extension", accepted_image_formats());
+}
+
+using DoubleImage = itk::Image<double, 3>;
+
+// Reads any scalar 3-D image as double, with its geometry converted to metres.
+template <class Volume>
+DoubleImage::Pointer read_double_image(const std::string& file_name, Volume& geometry) {
+  if (!std::filesystem::is_regular_file(file_name))
+    throw InvalidInput(file_name, "image file not found", accepted_image_formats());
+  auto io = image_io_for(file_name);
+  try {
+    io->SetFileName(file_name);
+    if (!io->CanReadFile(file_name.c_str()))
+      throw InvalidInput(file_name,
+                         "ITK cannot read this file as " + std::string(io->GetNameOfClass()),
+                         accepted_image_formats());
+    io->ReadImageInformation();
+  } catch (const itk::ExceptionObject& e) {
+    throw InvalidInput(file_name, std::string("unreadable image header: ") + e.GetDescription(),
+                       accepted_image_formats());
+  }
+  if (io->GetNumberOfDimensions() != 3)
+    throw InvalidInput(file_name,
+                       "image has " + std::to_string(io->GetNumberOfDimensions()) + " dimensions",
+                       "a 3-D scalar volume");
+  if (io->GetNumberOfComponents() != 1)
+    throw InvalidInput(file_name,
+                       "image has " + std::to_string(io->GetNumberOfComponents()) +
+                           " components per voxel",
+                       "a 3-D scalar volume (one value per voxel)");
+
+  auto reader = itk::ImageFileReader<DoubleImage>::New();
+  reader->SetImageIO(io);
+  reader->SetFileName(file_name);
+  try {
+    reader->Update();
+  } catch (const itk::ExceptionObject& e) {
+    throw InvalidInput(file_name, std::string("cannot read voxel data: ") + e.GetDescription(),
+                       accepted_image_formats());
+  }
+  DoubleImage::Pointer image = reader->GetOutput();
+  const auto region = image->GetLargestPossibleRegion();
+  for (unsigned int d = 0; d < 3; ++d) {
+    geometry.size[d] = static_cast<unsigned int>(region.GetSize()[d]);
+    geometry.spacing[d] = image->GetSpacing()[d] * metres_per_mm;
+    geometry.origin[d] = image->GetOrigin()[d] * metres_per_mm;
+    for (unsigned int c = 0; c < 3; ++c)
+      geometry.direction[d][c] = image->GetDirection()(d, c);
+  }
+  if (geometry.n_voxels() == 0)
+    throw InvalidInput(file_name, "image has no voxels", "a non-empty 3-D scalar volume");
+  for (unsigned int d = 0; d < 3; ++d)
+    if (!(geometry.spacing[d] > 0) || !std::isfinite(geometry.spacing[d]))
+      throw InvalidInput(file_name, "non-positive voxel spacing along axis " + std::to_string(d),
+                         "positive spacings");
+  geometry.file_name = file_name;
+  return image;
+}
+
+template <class Pixel>
+void write_image(const VolumeGeometry& g, const std::vector<Pixel>& data,
+                 const std::string& file_name) {
+  using Image = itk::Image<Pixel, 3>;
+  if (data.size() != g.n_voxels())
+    throw InvalidInput(file_name, "voxel array does not match the grid size",
+                       "one value per voxel");
+  auto io = image_io_for(file_name);
+  auto image = Image::New();
+  typename Image::RegionType region;
+  typename Image::SizeType size;
+  typename Image::SpacingType spacing;
+  typename Image::PointType origin;
+  typename Image::DirectionType direction;
+  for (unsigned int d = 0; d < 3; ++d) {
+    size[d] = g.size[d];
+    spacing[d] = g.spacing[d] / metres_per_mm;
+    origin[d] = g.origin[d] / metres_per_mm;
+    for (unsigned int c = 0; c < 3; ++c)
+      direction(d, c) = g.direction[d][c];
+  }
+  region.SetSize(size);
+  image->SetRegions(region);
+  image->SetSpacing(spacing);
+  image->SetOrigin(origin);
+  image->SetDirection(direction);
+  image->Allocate();
+  std::copy(data.begin(), data.end(), image->GetBufferPointer());
+
+  auto writer = itk::ImageFileWriter<Image>::New();
+  writer->SetImageIO(io);
+  writer->SetFileName(file_name);
+  writer->SetInput(image);
+  writer->SetUseCompression(true);
+  try {
+    writer->Update();
+  } catch (const itk::ExceptionObject& e) {
+    throw InvalidInput(file_name, std::string("cannot write image: ") + e.GetDescription(),
+                       "a writable path with extension " + accepted_image_formats());
+  }
+}
+
+} // namespace
+
+dealii::Point<3> VolumeGeometry::point(double i, double j, double k) const {
+  const double idx[3] = {i * spacing[0], j * spacing[1], k * spacing[2]};
+  dealii::Point<3> p;
+  for (unsigned int r = 0; r < 3; ++r) {
+    p[r] = origin[r];
+    for (unsigned int c = 0; c < 3; ++c)
+      p[r] += direction[r][c] * idx[c];
+  }
+  return p;
+}
+
+double VolumeGeometry::handedness() const {
+  const auto& a = direction;
+  const double det = a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) -
+                     a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
+                     a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
+  return det < 0 ? -1.0 : 1.0;
+}
+
+bool VolumeGeometry::same_grid(const VolumeGeometry& o, double tol) const {
+  if (size != o.size)
+    return false;
+  const double h = std::min({spacing[0], spacing[1], spacing[2]});
+  for (unsigned int d = 0; d < 3; ++d) {
+    if (std::abs(spacing[d] - o.spacing[d]) > tol * h ||
+        std::abs(origin[d] - o.origin[d]) > tol * h)
+      return false;
+    for (unsigned int c = 0; c < 3; ++c)
+      if (std::abs(direction[d][c] - o.direction[d][c]) > tol)
+        return false;
+  }
+  return true;
+}
+
+std::size_t LabelVolume::count(int label) const {
+  return static_cast<std::size_t>(std::count(labels.begin(), labels.end(), label));
+}
+
+std::string accepted_image_formats() {
+  return "a 3-D scalar image: NIfTI (.nii, .nii.gz), NRRD (.nrrd, .nhdr) or MetaImage (.mha, "
+         ".mhd)";
+}
+
+CtVolume read_ct_volume(const std::string& file_name) {
+  CtVolume volume;
+  auto image = read_double_image(file_name, volume);
+  const double* data = image->GetBufferPointer();
+  volume.values.assign(data, data + volume.n_voxels());
+  for (std::size_t n = 0; n < volume.values.size(); ++n)
+    if (!std::isfinite(volume.values[n]))
+      throw InvalidInput(file_name, "voxel " + std::to_string(n) + " is not a finite number",
+                         "finite voxel values");
+  return volume;
+}
+
+LabelVolume read_label_volume(const std::string& file_name) {
+  LabelVolume volume;
+  auto image = read_double_image(file_name, volume);
+  const double* data = image->GetBufferPointer();
+  volume.labels.resize(volume.n_voxels());
+  for (std::size_t n = 0; n < volume.labels.size(); ++n) {
+    const double v = data[n];
+    if (!(std::abs(v - std::round(v)) <= 1e-6) || std::abs(v) > 2e9) {
+      std::ostringstream msg;
+      msg << "voxel " << n << " holds the non-integral label " << v;
+      throw InvalidInput(file_name, msg.str(), "integer labels (a segmentation, not a grey image)");
+    }
+    volume.labels[n] = static_cast<int>(std::lround(v));
+  }
+  return volume;
+}
+
+void write_ct_volume(const CtVolume& volume, const std::string& file_name) {
+  write_image<double>(volume, volume.values, file_name);
+}
+
+void write_label_volume(const LabelVolume& volume, const std::string& file_name) {
+  std::vector<short> data(volume.labels.size());
+  for (std::size_t n = 0; n < data.size(); ++n) {
+    if (volume.labels[n] < -32768 || volume.labels[n] > 32767)
+      throw InvalidInput(file_name, "label " + std::to_string(volume.labels[n]) + " too large",
+                         "labels in [-32768, 32767]");
+    data[n] = static_cast<short>(volume.labels[n]);
+  }
+  write_image<short>(volume, data, file_name);
+}
+
+} // namespace spinesim::fem
