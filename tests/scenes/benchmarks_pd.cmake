@@ -1,0 +1,32 @@
+# Explicit bond-based PD (PMB) throughput benchmark, the LAMMPS peri/pmb comparison of
+# docs/benchmarks.md. The LAMMPS side is applications/benchmarks/lammps/run_lammps_comparison.sh
+# (LAMMPS is not a build dependency).
+set(_bench ${PROJECT_SOURCE_DIR}/applications/benchmarks)
+
+# The full benchmark (30^3 particles, 1 464 584 bonds, 200 steps). n_bonds is the exact count
+# of lattice pairs within 3.0001 h (sum over the 122 offsets of the overlap of two shifted
+# cubes, halved), so the tolerance only absorbs the float formatting. The throughput floor is
+# deliberately modest, a tenth of the 1-core figure measured on a loaded 2-core machine: it
+# catches an accidental debug build or a quadratic loop, not a few-percent regression.
+spinesim_add_scene_test(benchmark.pd_explicit_throughput SCENE ${_bench}/pd_explicit_throughput.prm
+  EXPECT "status==ok;n_particles~27000:1e-12;n_bonds~1464584:1e-12;particle_steps_per_s>=1e4;momentum_drift<=1e-10"
+  LABELS "benchmark" TIMEOUT 1800)
+
+# Default-run check of the scenario on a 10^3 cube (42 144 bonds, same count formula).
+# The expansion rate is raised so bonds break (2140 of them; the PMB path is exercised). Pair forces are
+# equal and opposite up to the rounding of k_ij V_i vs k_ji V_j (relative 1e-16 per bond), so
+# the total momentum, measured against sum m|v|, drifts only by accumulated round-off:
+# 1e-12 leaves three orders of margin over the observed 1.9e-16 (5e-16 at 2 threads).
+spinesim_add_scene_test(meshfree.pd_explicit_throughput_small SCENE ${_bench}/pd_explicit_throughput.prm
+  SET "Benchmark/Lattice points per side=10" "Benchmark/Steps=100" "Benchmark/Expansion rate=600"
+  EXPECT "status==ok;n_particles~1000:1e-12;n_bonds~42144:1e-12;bonds_broken>=1;momentum_drift<=1e-12"
+  LABELS "scene;meshfree")
+
+# Same cube without breaking: velocity Verlet conserves the total energy up to its O(dt^2)
+# error. At half the Silling-Askari step the observed relative change is 3.0e-3 (7.1e-4 at a
+# quarter step: the dt^2 scaling), so 1e-2 allows for platform rounding while a bond-force /
+# energy mismatch (a factor in k_ij, a sign) would show at order one.
+spinesim_add_scene_test(meshfree.pd_explicit_throughput_energy SCENE ${_bench}/pd_explicit_throughput.prm
+  SET "Benchmark/Lattice points per side=10" "Benchmark/Steps=200" "Benchmark/Critical stretch=0"
+  EXPECT "status==ok;bonds_broken<=0;momentum_drift<=1e-12;energy_relative_change<=1e-2;energy_relative_change>=-1e-2"
+  LABELS "scene;meshfree")
