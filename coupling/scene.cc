@@ -126,7 +126,7 @@ void Scene::load_text(const std::string& text, const std::string& name) {
 void Scene::rethrow_parse_error(const std::string& deal_message, const std::string& text) const {
   const std::string message = collapse_whitespace(deal_message);
   std::smatch m;
-  const std::regex line_re(R"(Line <(\d+)> of file <([^>]*)>:?\s*(.*))");
+  const std::regex line_re(R"(Line <(\d+)> of file <(.*?)>?:\s*(.*))");
   if (!std::regex_search(message, m, line_re))
     throw InvalidInput(source_name_, message, "");
   const unsigned int line = std::stoul(m[1]);
@@ -138,7 +138,7 @@ void Scene::rethrow_parse_error(const std::string& deal_message, const std::stri
   // pattern, which is what is allowed.
   if (detail.find("No entry with name") != std::string::npos ||
       detail.find("There is no subsection") != std::string::npos ||
-      detail.find("no subsection") != std::string::npos)
+      detail.find("no such subsection") != std::string::npos)
     throw InvalidInput(where, detail, allowed_names(path));
   throw InvalidInput(where, detail, "");
 }

@@ -18,7 +18,7 @@ spinesim_add_scene_test(cli.bad_value ARGS "check;${_cli}/bad_value.prm" EXIT 2
                         MATCH "bad_value.prm:4.*Bool" LABELS "cli")
 spinesim_add_scene_test(cli.inconsistent_effects ARGS "check;${_cli}/bad_effects.prm" EXIT 2
                         MATCH "Effects/Thermal expansion" LABELS "cli")
-spinesim_add_scene_test(cli.unknown_override ARGS "check;${_cli}/bad_value.prm;--set;Effects/Heatt=true"
+spinesim_add_scene_test(cli.unknown_override ARGS "check;${_cli}/minimal.prm;--set;Effects/Heatt=true"
                         EXIT 2 MATCH "no parameter 'Heatt'.*allowed: entries:" LABELS "cli")
 spinesim_add_scene_test(cli.missing_file ARGS "run;${_cli}/no_such_scene.prm;--output;${CMAKE_CURRENT_BINARY_DIR}/runs/missing"
                         EXIT 2 MATCH "cannot open the scene file" LABELS "cli")
