@@ -141,6 +141,7 @@ private:
   PvdRecord solution_pvd_{"solution.pvd"}, temperature_pvd_{"temperature.pvd"},
       particles_pvd_{"particles.pvd"};
   unsigned int output_cycle_ = 0;
+  double initial_heat_content_ = 0;
   unsigned int newton_iterations_ = 0, linear_iterations_ = 0;
 };
 
@@ -197,8 +198,10 @@ void Simulation<dim>::build(RunContext& ctx) {
 
   if (effects_.heat) {
     heat_ = std::make_unique<fem::HeatSolver<dim>>(*triangulation_, heat_prm_);
-    if (!ctx.restarting())
+    if (!ctx.restarting()) {
       heat_->setup();
+      initial_heat_content_ = heat_->heat_content();
+    }
   }
   if (effects_.mechanics) {
     law_ = materials::create_law(law_prm_);
@@ -341,8 +344,10 @@ void Simulation<dim>::write_checkpoint(unsigned int step, double time, RunContex
     state["solution_pvd"] = solution_pvd_.to_json();
     state["temperature_pvd"] = temperature_pvd_.to_json();
     state["particles_pvd"] = particles_pvd_.to_json();
-    if (heat_)
+    if (heat_) {
       state["heat_supplied_energy"] = heat_->supplied_energy();
+      state["initial_heat_content"] = initial_heat_content_;
+    }
     write_file_atomic(tmp_dir / "state.json", state.dump(2));
     ctx.flush_history();
     fs::copy_file(ctx.output().path() / "history.csv", tmp_dir / "history.csv",
@@ -373,6 +378,7 @@ unsigned int Simulation<dim>::load_checkpoint(RunContext& ctx) {
   if (heat_) {
     heat_->deserialize();
     heat_->set_time(state["time"].get<double>(), state.value("heat_supplied_energy", 0.0));
+    initial_heat_content_ = state.value("initial_heat_content", 0.0);
   }
   if (mechanics_)
     mechanics_->deserialize(mesh_file);
@@ -418,6 +424,14 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
     s.set_figure("max_temperature", heat_->max_temperature(), "K");
     s.set_figure("heat_content", heat_->heat_content(), dim == 2 ? "J/m" : "J");
     s.set_figure("heat_supplied_energy", heat_->supplied_energy(), dim == 2 ? "J/m" : "J");
+    // Energy conservation: what the sources supplied is what the body gained (heat through
+    // fixed-temperature boundaries is not counted by the solver, so scenes with such
+    // boundaries do not balance).
+    const double gained = heat_->heat_content() - initial_heat_content_;
+    if (heat_->supplied_energy() != 0)
+      s.set_figure("heat_energy_balance_relative",
+                   std::abs(gained - heat_->supplied_energy()) / std::abs(heat_->supplied_energy()),
+                   "-");
   }
 }
 

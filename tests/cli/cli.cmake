@@ -25,7 +25,10 @@ spinesim_add_scene_test(cli.missing_file ARGS "run;${_cli}/no_such_scene.prm;--o
 
 # The default scene runs and says ok; a second run into the same directory is refused
 # without --force and leaves the first run's summary in place.
-spinesim_add_scene_test(cli.default_scene EXPECT "status==ok" LABELS "cli;scene")
+# The drill heat is conserved: heat gained equals energy supplied to the CG tolerance
+# (1e-10 relative per step, 40 steps: 1e-6 leaves ample room).
+spinesim_add_scene_test(cli.default_scene EXPECT "status==ok;heat_energy_balance_relative<=1e-6"
+                        LABELS "cli;scene")
 set_tests_properties(cli.default_scene PROPERTIES FIXTURES_SETUP default_run)
 spinesim_add_scene_test(cli.no_overwrite
   ARGS "run;--output;${CMAKE_CURRENT_BINARY_DIR}/runs/cli.default_scene"
