@@ -1,0 +1,576 @@
+#include "meshfree/nosb/nosb_pd.h"
+
+#include "fem/materials/failure.h"
+#include "meshfree/bond_based_pd.h"
+#include "meshfree/bond_loop.h"
+
+#include <deal.II/lac/dynamic_sparsity_pattern.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace spinesim::meshfree {
+
+namespace {
+const char* const stabilization_names = "none|penalty|bond_associated";
+
+template <int dim>
+std::string where(const ParticleSet<dim>& p, unsigned int i) {
+  std::ostringstream s;
+  s << "particle " << i << " at (" << p.reference_position(i) << ")";
+  return s.str();
+}
+} // namespace
+
+template <int dim>
+void NosbPD<dim>::Parameters::declare(dealii::ParameterHandler& prm) {
+  using namespace dealii::Patterns;
+  prm.declare_entry("Horizon ratio", "3.015", Double(0.0),
+                    "Horizon over particle spacing, delta/h [-]. Must exceed 1.");
+  prm.declare_entry("Influence function", "constant", Selection(InfluenceFunction<dim>::names()),
+                    "Weight omega of the bonds in the shape tensor and force state [-]: constant, "
+                    "fractional, gaussian, cubic spline (see the bond-based section).");
+  prm.declare_entry("Alpha", "0", Double(), "Order alpha of the fractional kernel [-]; alpha < 2.");
+  prm.declare_entry("Stabilization", "bond_associated", Selection(stabilization_names),
+                    "Zero-energy-mode control [-]: none; penalty (hourglass force on the "
+                    "non-uniform deformation state, Silling 2017, scaled by the Stabilization "
+                    "coefficient); bond_associated (bond-associated deformation gradients, "
+                    "Chen 2018 / Breitzman & Dayal 2018, no coefficient).");
+  prm.declare_entry("Stabilization coefficient", "0.1", Double(0.0),
+                    "Penalty coefficient G_s [-] times the bond-based micromodulus; only for "
+                    "Stabilization = penalty.");
+  prm.declare_entry("Critical stretch", "0", Double(0.0),
+                    "Critical bond stretch s0 [-]; 0 = computed from the fracture energy.");
+  prm.declare_entry("Fracture energy", "0", Double(0.0),
+                    "Critical energy release rate Gc used when the critical stretch is 0 "
+                    "[J/m^2]; both 0 = bonds never break.");
+  prm.declare_entry("Maximum shape tensor condition number", "1e4", Double(1.0),
+                    "A particle whose shape tensor K has a larger condition number (or fewer "
+                    "than dim intact bonds) is flagged failed: no stress, damage 1 [-].");
+  prm.declare_entry("Partial volume correction", "true", Bool(),
+                    "Count only the share of a neighbour's volume inside the horizon [-].");
+  prm.declare_entry("Thickness", "1", Double(0.0), "Out-of-plane thickness of a 2-D body [m].");
+}
+
+template <int dim>
+typename NosbPD<dim>::Stabilization
+NosbPD<dim>::Parameters::stabilization_from_name(const std::string& name) {
+  if (name == "none")
+    return Stabilization::none;
+  if (name == "penalty")
+    return Stabilization::penalty;
+  if (name == "bond_associated")
+    return Stabilization::bond_associated;
+  throw InvalidInput("Stabilization", "unknown value '" + name + "'", stabilization_names);
+}
+
+template <int dim>
+std::string NosbPD<dim>::Parameters::name(Stabilization s) {
+  switch (s) {
+  case Stabilization::none:
+    return "none";
+  case Stabilization::penalty:
+    return "penalty";
+  default:
+    return "bond_associated";
+  }
+}
+
+template <int dim>
+void NosbPD<dim>::Parameters::parse(const dealii::ParameterHandler& prm) {
+  horizon_ratio = prm.get_double("Horizon ratio");
+  influence_function = prm.get("Influence function");
+  alpha = prm.get_double("Alpha");
+  stabilization = stabilization_from_name(prm.get("Stabilization"));
+  stabilization_coefficient = prm.get_double("Stabilization coefficient");
+  critical_stretch = prm.get_double("Critical stretch");
+  fracture_energy = prm.get_double("Fracture energy");
+  max_condition_number = prm.get_double("Maximum shape tensor condition number");
+  partial_volume_correction = prm.get_bool("Partial volume correction");
+  thickness = prm.get_double("Thickness");
+  if (!(horizon_ratio > 1.0))
+    throw InvalidInput("Horizon ratio", "= " + std::to_string(horizon_ratio),
+                       "> 1 (the horizon must reach the nearest neighbours)");
+  if (!(thickness > 0.0))
+    throw InvalidInput("Thickness", "= " + std::to_string(thickness), "> 0 [m]");
+  if (!(max_condition_number >= 1.0))
+    throw InvalidInput("Maximum shape tensor condition number",
+                       "= " + std::to_string(max_condition_number), ">= 1");
+  if (influence_function == "fractional" && !(alpha < 2.0))
+    throw InvalidInput("Alpha", "= " + std::to_string(alpha), "alpha < 2");
+}
+
+template <int dim>
+NosbPD<dim>::NosbPD(const Parameters& parameters,
+                    std::shared_ptr<const materials::ConstitutiveLaw> law)
+    : prm_(parameters), law_(std::move(law)),
+      influence_(
+          InfluenceFunction<dim>::from_name(parameters.influence_function, parameters.alpha)) {
+  if (!law_)
+    throw InvalidInput("NOSB-PD", "no constitutive law", "a law from materials::create_law");
+  if (!(prm_.horizon_ratio > 1.0) || !(prm_.thickness > 0.0) || prm_.critical_stretch < 0.0 ||
+      prm_.fracture_energy < 0.0 || prm_.stabilization_coefficient < 0.0 ||
+      !(prm_.max_condition_number >= 1.0))
+    throw InvalidInput("NOSB-PD parameters", "a value out of range",
+                       "horizon ratio > 1, thickness > 0, critical stretch, Gc, stabilization "
+                       "coefficient >= 0, condition number limit >= 1");
+  const double E = law_->youngs_modulus(), nu = law_->poisson_ratio();
+  modulus_ = dim == 3 ? E / (3.0 * (1.0 - 2.0 * nu)) : E / (2.0 * (1.0 - nu - 2.0 * nu * nu));
+}
+
+template <int dim>
+typename NeighborSearch<dim>::Options NosbPD<dim>::neighbor_options(double spacing) const {
+  typename NeighborSearch<dim>::Options o;
+  o.horizon = prm_.horizon_ratio * spacing;
+  o.influence = influence_;
+  o.partial_volume = prm_.partial_volume_correction;
+  o.surface_correction = false; // K_i already accounts for truncated families
+  return o;
+}
+
+template <int dim>
+void NosbPD<dim>::initialise(const ParticleSet<dim>& particles, const BondList<dim>& bonds) {
+  if (dim == 2 && std::abs(particles.thickness() - prm_.thickness) > 1e-12 * prm_.thickness)
+    throw InvalidInput("NOSB-PD: Thickness",
+                       "particles were made with thickness " +
+                           std::to_string(particles.thickness()) + " m, the model has " +
+                           std::to_string(prm_.thickness) + " m",
+                       "the same thickness for particles and model");
+  if (bonds.n_particles() != particles.size() || !(bonds.horizon > 0.0))
+    throw InvalidInput("NOSB-PD", "bond list built for another particle set",
+                       "bonds from NeighborSearch::build on these particles");
+  c_ = BondBasedPD<dim>::micromodulus(influence_, bonds.horizon, modulus_, prm_.thickness);
+  if (prm_.critical_stretch > 0.0)
+    s0_ = prm_.critical_stretch;
+  else if (prm_.fracture_energy > 0.0)
+    s0_ = BondBasedPD<dim>::critical_stretch_from_fracture_energy(influence_, bonds.horizon,
+                                                                  modulus_, prm_.fracture_energy);
+  else
+    s0_ = std::numeric_limits<double>::infinity();
+  const std::size_t n_history =
+      prm_.stabilization == Stabilization::bond_associated ? bonds.n_bonds() : particles.size();
+  committed_.assign(n_history, materials::MaterialState());
+  trial_ = committed_;
+  F_particle_.assign(particles.size(), dealii::unit_symmetric_tensor<dim>());
+  update_families(particles, bonds);
+}
+
+template <int dim>
+void NosbPD<dim>::update_families(const ParticleSet<dim>& particles, const BondList<dim>& bonds) {
+  typename CorrespondenceFamilies<dim>::Options o;
+  o.max_condition_number = prm_.max_condition_number;
+  o.kind = CorrespondenceFamilies<dim>::Kind::particle;
+  const auto newly = particle_families_.build(particles, bonds, o);
+  if (prm_.stabilization == Stabilization::bond_associated) {
+    o.kind = CorrespondenceFamilies<dim>::Kind::bond_associated;
+    bond_families_.build(particles, bonds, o);
+  }
+  log_failed(particles, newly);
+  ++families_version_;
+}
+
+template <int dim>
+void NosbPD<dim>::log_failed(const ParticleSet<dim>& particles,
+                             const std::vector<unsigned int>& newly) {
+  for (const unsigned int i : newly) {
+    std::ostringstream s;
+    s << "NOSB-PD: " << where(particles, i) << " flagged failed: shape tensor K singular or "
+      << "ill-conditioned (condition number " << particle_families_.condition_numbers()[i] << " > "
+      << prm_.max_condition_number << ", too few non-coplanar intact bonds); "
+      << "no stress, damage 1";
+    messages_.push_back(s.str());
+  }
+}
+
+template <int dim>
+std::vector<std::string> NosbPD<dim>::take_messages() {
+  std::vector<std::string> m;
+  m.swap(messages_);
+  return m;
+}
+
+template <int dim>
+const CorrespondenceFamilies<dim>& NosbPD<dim>::families() const {
+  return prm_.stabilization == Stabilization::bond_associated ? bond_families_ : particle_families_;
+}
+
+template <int dim>
+typename NosbPD<dim>::Response
+NosbPD<dim>::evaluate(unsigned int e, const dealii::Tensor<2, dim>& F,
+                      const ParticleSet<dim>& particles, materials::MaterialState* trial) const {
+  const auto& fam = families();
+  const unsigned int i = fam.centre(e);
+  materials::Tensor2 F3 = dealii::unit_symmetric_tensor<3>();
+  for (unsigned int a = 0; a < dim; ++a)
+    for (unsigned int b = 0; b < dim; ++b)
+      F3[a][b] = F[a][b];
+  materials::FiniteStrainResponse r;
+  try {
+    r = law_->finite_strain(F3, particles.temperature(i), committed_[fam.history_index(e)]);
+  } catch (const NumericalFailure& f) {
+    throw NumericalFailure(f.what_failed(), where(particles, i) + " (NOSB-PD family)",
+                           "det F <= 0: the load step is too large or particles interpenetrate; "
+                           "use more load steps or a smaller time step");
+  }
+  Response out;
+  for (unsigned int a = 0; a < dim; ++a)
+    for (unsigned int J = 0; J < dim; ++J) {
+      out.P[a][J] = r.first_piola[a][J];
+      for (unsigned int b = 0; b < dim; ++b)
+        for (unsigned int L = 0; L < dim; ++L)
+          out.A[a][J][b][L] = r.dP_dF[a][J][b][L];
+    }
+  if (trial)
+    *trial = r.state;
+  return out;
+}
+
+template <int dim>
+void NosbPD<dim>::compute_particle_gradients(const ParticleSet<dim>& particles) {
+  const auto& u = particles.displacements();
+  F_particle_.assign(particles.size(), dealii::unit_symmetric_tensor<dim>());
+  for (unsigned int e = 0; e < particle_families_.n_families(); ++e)
+    F_particle_[particle_families_.centre(e)] = particle_families_.deformation_gradient(e, u);
+}
+
+template <int dim>
+void NosbPD<dim>::compute_forces(ParticleSet<dim>& particles, const BondList<dim>& bonds) {
+  using Vec = dealii::Tensor<1, dim>;
+  if (F_particle_.size() != particles.size())
+    throw InvalidInput("NOSB-PD", "compute_forces before initialise",
+                       "initialise(particles, bonds) first");
+  const auto& u = particles.displacements();
+  auto& f = particles.forces();
+  for (auto& fi : f)
+    fi = Vec();
+  compute_particle_gradients(particles);
+
+  const auto& fam = families();
+  const long n_fam = fam.n_families();
+  std::vector<dealii::Tensor<2, dim>> P(n_fam);
+  bool failed_eval = false;
+  std::string failure_what, failure_where, failure_hint;
+#pragma omp parallel for schedule(static) if (n_fam > parallel_particle_threshold)
+  for (long e = 0; e < n_fam; ++e) {
+    try {
+      const auto F = fam.deformation_gradient(e, u);
+      P[e] = evaluate(e, F, particles, &trial_[fam.history_index(e)]).P;
+    } catch (const NumericalFailure& x) {
+#pragma omp critical
+      {
+        if (!failed_eval) {
+          failed_eval = true;
+          failure_what = x.what_failed();
+          failure_where = x.location();
+          failure_hint = x.hint();
+        }
+      }
+    }
+  }
+  if (failed_eval)
+    throw NumericalFailure(failure_what, failure_where, failure_hint);
+  // f_m = −Σ_e w_e P_e G_m: each family's forces sum to zero (Σ_m G_m = 0).
+  for (long e = 0; e < n_fam; ++e) {
+    const double w = fam.weight(e);
+    for (std::size_t q = fam.begin(e); q < fam.end(e); ++q)
+      f[fam.node(q)] -= w * (P[e] * fam.gradient(q));
+  }
+
+  if (prm_.stabilization == Stabilization::penalty && prm_.stabilization_coefficient > 0) {
+    const auto& V = particles.volumes();
+    const double Gc = prm_.stabilization_coefficient * c_;
+    for (unsigned int i = 0; i < particles.size(); ++i) {
+      if (failed(i))
+        continue;
+      for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
+        const unsigned int j = bonds.neighbor[k];
+        if (bonds.broken[k] || failed(j))
+          continue;
+        const Vec& xi = bonds.xi[k];
+        const Vec eta = u[j] - u[i];
+        // z_ij − z_ji = 2η − (F_i − I)ξ − (F_j − I)ξ
+        const Vec dz = 2.0 * eta - (F_particle_[i] * xi - xi) - (F_particle_[j] * xi - xi);
+        const double kappa =
+            0.5 * Gc * bonds.influence[k] * bonds.volume_factor(k) / bonds.length[k];
+        f[i] += (kappa * V[i] * V[j]) * dz;
+      }
+    }
+  }
+  for (unsigned int i = 0; i < particles.size(); ++i)
+    for (unsigned int d = 0; d < dim; ++d)
+      if (!std::isfinite(f[i][d]))
+        throw NumericalFailure("non-finite NOSB-PD force", where(particles, i),
+                               "check the displacements (NaN input) and the load step");
+}
+
+template <int dim>
+void NosbPD<dim>::commit_state() {
+  committed_ = trial_;
+}
+
+template <int dim>
+std::size_t NosbPD<dim>::break_bonds(ParticleSet<dim>& particles, BondList<dim>& bonds) {
+  if (!std::isfinite(s0_))
+    return 0;
+  const auto& u = particles.displacements();
+  std::size_t n_broken = 0;
+  for (unsigned int i = 0; i < particles.size(); ++i)
+    for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
+      if (bonds.broken[k])
+        continue;
+      const auto y = bonds.xi[k] + (u[bonds.neighbor[k]] - u[i]);
+      if (y.norm() > (1.0 + s0_) * bonds.length[k]) {
+        bonds.broken[k] = 1;
+        ++n_broken;
+      }
+    }
+  if (n_broken > 0) {
+    update_families(particles, bonds);
+    update_damage(particles, bonds);
+  }
+  return n_broken;
+}
+
+template <int dim>
+std::function<void(ParticleSet<dim>&)> NosbPD<dim>::force_function(BondList<dim>& bonds) {
+  return [this, &bonds](ParticleSet<dim>& p) {
+    break_bonds(p, bonds);
+    compute_forces(p, bonds);
+    commit_state();
+  };
+}
+
+template <int dim>
+void NosbPD<dim>::assemble_tangent(const ParticleSet<dim>& particles, const BondList<dim>& bonds,
+                                   dealii::SparsityPattern& pattern,
+                                   dealii::SparseMatrix<double>& matrix) {
+  using Vec = dealii::Tensor<1, dim>;
+  const unsigned int n = particles.size();
+  const auto& fam = families();
+  const auto& pfam = particle_families_;
+  const bool penalty =
+      prm_.stabilization == Stabilization::penalty && prm_.stabilization_coefficient > 0;
+  std::vector<int> pfam_of(n, -1);
+  for (unsigned int e = 0; e < pfam.n_families(); ++e)
+    pfam_of[pfam.centre(e)] = static_cast<int>(e);
+
+  if (pattern.empty() || pattern_version_ != families_version_ || pattern.n_rows() != n * dim) {
+    dealii::DynamicSparsityPattern nodes(n, n);
+    std::vector<dealii::types::global_dof_index> list;
+    auto add_family = [&](const CorrespondenceFamilies<dim>& F, unsigned int e) {
+      list.clear();
+      for (std::size_t q = F.begin(e); q < F.end(e); ++q)
+        list.push_back(F.node(q));
+      std::sort(list.begin(), list.end());
+      for (const auto m : list)
+        nodes.add_entries(m, list.begin(), list.end(), true);
+    };
+    for (unsigned int e = 0; e < fam.n_families(); ++e)
+      add_family(fam, e);
+    for (unsigned int i = 0; i < n; ++i) {
+      nodes.add(i, i); // every particle keeps a diagonal (failed ones get an identity row)
+      if (penalty && pfam_of[i] >= 0)
+        for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
+          const int ej = pfam_of[bonds.neighbor[k]];
+          if (ej < 0)
+            continue;
+          for (std::size_t q = pfam.begin(ej); q < pfam.end(ej); ++q)
+            nodes.add(i, pfam.node(q));
+          for (std::size_t q = pfam.begin(pfam_of[i]); q < pfam.end(pfam_of[i]); ++q)
+            nodes.add(i, pfam.node(q));
+        }
+    }
+    dealii::DynamicSparsityPattern dofs(n * dim, n * dim);
+    for (unsigned int m = 0; m < n; ++m)
+      for (auto it = nodes.begin(m); it != nodes.end(m); ++it)
+        for (unsigned int a = 0; a < dim; ++a)
+          for (unsigned int b = 0; b < dim; ++b)
+            dofs.add(m * dim + a, it->column() * dim + b);
+    matrix.clear();
+    pattern.copy_from(dofs);
+    matrix.reinit(pattern);
+    pattern_version_ = families_version_;
+  } else
+    matrix = 0;
+
+  const auto& u = particles.displacements();
+  std::vector<dealii::types::global_dof_index> cols(dim);
+  double vals[dim];
+  for (unsigned int e = 0; e < fam.n_families(); ++e) {
+    const Response r = evaluate(e, fam.deformation_gradient(e, u), particles, nullptr);
+    const double w = fam.weight(e);
+    for (std::size_t qm = fam.begin(e); qm < fam.end(e); ++qm) {
+      // T[a][b][L] = w Σ_J A_aJbL G_m[J]
+      dealii::Tensor<3, dim> T;
+      const Vec& Gm = fam.gradient(qm);
+      for (unsigned int a = 0; a < dim; ++a)
+        for (unsigned int J = 0; J < dim; ++J)
+          for (unsigned int b = 0; b < dim; ++b)
+            for (unsigned int L = 0; L < dim; ++L)
+              T[a][b][L] += w * r.A[a][J][b][L] * Gm[J];
+      const unsigned int m = fam.node(qm);
+      for (std::size_t qp = fam.begin(e); qp < fam.end(e); ++qp) {
+        const unsigned int p = fam.node(qp);
+        const Vec& Gp = fam.gradient(qp);
+        for (unsigned int b = 0; b < dim; ++b)
+          cols[b] = p * dim + b;
+        for (unsigned int a = 0; a < dim; ++a) {
+          for (unsigned int b = 0; b < dim; ++b)
+            vals[b] = T[a][b] * Gp;
+          matrix.add(m * dim + a, dim, cols.data(), vals, false, true);
+        }
+      }
+    }
+  }
+
+  if (penalty) {
+    // f_i += κ' (z_ij − z_ji), κ' = ½ G_s c ω β V_i V_j/|ξ|; stiffness −∂f_i/∂u_m =
+    // −κ' [2(δ_mj − δ_mi) − G^i_m·ξ − G^j_m·ξ] I.
+    const auto& V = particles.volumes();
+    const double Gc = prm_.stabilization_coefficient * c_;
+    auto add_scalar = [&](unsigned int i, unsigned int m, double s) {
+      for (unsigned int d = 0; d < dim; ++d)
+        matrix.add(i * dim + d, m * dim + d, s);
+    };
+    for (unsigned int i = 0; i < n; ++i) {
+      if (pfam_of[i] < 0)
+        continue;
+      for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
+        const unsigned int j = bonds.neighbor[k];
+        if (bonds.broken[k] || pfam_of[j] < 0)
+          continue;
+        const Vec& xi = bonds.xi[k];
+        const double kappa =
+            0.5 * Gc * bonds.influence[k] * bonds.volume_factor(k) / bonds.length[k] * V[i] * V[j];
+        add_scalar(i, j, -2.0 * kappa);
+        add_scalar(i, i, 2.0 * kappa);
+        for (const int e : {pfam_of[i], pfam_of[j]})
+          for (std::size_t q = pfam.begin(e); q < pfam.end(e); ++q)
+            add_scalar(i, pfam.node(q), kappa * (pfam.gradient(q) * xi));
+      }
+    }
+  }
+}
+
+template <int dim>
+std::vector<double> NosbPD<dim>::stiffness_row_sums(const ParticleSet<dim>& particles,
+                                                    const BondList<dim>& bonds) {
+  dealii::SparsityPattern pattern;
+  dealii::SparseMatrix<double> K;
+  assemble_tangent(particles, bonds, pattern, K);
+  std::vector<double> R(particles.size(), 0.0);
+  for (unsigned int row = 0; row < K.m(); ++row) {
+    double s = 0;
+    for (auto it = K.begin(row); it != K.end(row); ++it)
+      s += std::abs(it->value());
+    R[row / dim] = std::max(R[row / dim], s);
+  }
+  return R;
+}
+
+template <int dim>
+std::vector<double> NosbPD<dim>::relaxation_stiffness_bound(const ParticleSet<dim>& particles,
+                                                            const BondList<dim>& bonds,
+                                                            double safety) {
+  std::vector<double> S = stiffness_row_sums(particles, bonds);
+  for (unsigned int i = 0; i < S.size(); ++i)
+    S[i] = safety * S[i] / (2.0 * std::sqrt(double(dim)) * particles.volume(i));
+  return S;
+}
+
+template <int dim>
+double NosbPD<dim>::stable_time_step(const ParticleSet<dim>& particles, const BondList<dim>& bonds,
+                                     double safety) {
+  const std::vector<double> R = stiffness_row_sums(particles, bonds);
+  double dt = std::numeric_limits<double>::infinity();
+  for (unsigned int i = 0; i < particles.size(); ++i) {
+    if (particles.mass(i) <= 0.0)
+      throw NumericalFailure("non-positive particle mass", where(particles, i),
+                             "set a positive density before the stable step");
+    if (R[i] > 0.0)
+      dt = std::min(dt, 2.0 * std::sqrt(particles.mass(i) / R[i]));
+  }
+  return safety * dt;
+}
+
+template <int dim>
+double NosbPD<dim>::strain_energy(const ParticleSet<dim>& particles) const {
+  // 4-point Gauss–Legendre on [0, 1].
+  const double a = std::sqrt(3.0 / 7.0 - 2.0 / 7.0 * std::sqrt(6.0 / 5.0));
+  const double b = std::sqrt(3.0 / 7.0 + 2.0 / 7.0 * std::sqrt(6.0 / 5.0));
+  const double wa = (18.0 + std::sqrt(30.0)) / 36.0, wb = (18.0 - std::sqrt(30.0)) / 36.0;
+  const double t[4] = {0.5 * (1 - b), 0.5 * (1 - a), 0.5 * (1 + a), 0.5 * (1 + b)};
+  const double w[4] = {0.5 * wb, 0.5 * wa, 0.5 * wa, 0.5 * wb};
+  const auto& fam = families();
+  const auto& u = particles.displacements();
+  double E = 0;
+  for (unsigned int e = 0; e < fam.n_families(); ++e) {
+    const auto F = fam.deformation_gradient(e, u);
+    const dealii::Tensor<2, dim> H =
+        F - dealii::Tensor<2, dim>(dealii::unit_symmetric_tensor<dim>());
+    double W = 0;
+    for (unsigned int q = 0; q < 4; ++q) {
+      const dealii::Tensor<2, dim> Ft =
+          dealii::Tensor<2, dim>(dealii::unit_symmetric_tensor<dim>()) + t[q] * H;
+      W += w[q] * dealii::scalar_product(evaluate(e, Ft, particles, nullptr).P, H);
+    }
+    E += fam.weight(e) * W;
+  }
+  return E;
+}
+
+template <int dim>
+typename NosbPD<dim>::HourglassMeasure NosbPD<dim>::hourglass(const ParticleSet<dim>& particles,
+                                                              const BondList<dim>& bonds) const {
+  using Vec = dealii::Tensor<1, dim>;
+  const auto& u = particles.displacements();
+  const auto& V = particles.volumes();
+  const auto& pfam = particle_families_;
+  std::vector<dealii::Tensor<2, dim>> F(particles.size(), dealii::unit_symmetric_tensor<dim>());
+  for (unsigned int e = 0; e < pfam.n_families(); ++e)
+    F[pfam.centre(e)] = pfam.deformation_gradient(e, u);
+  HourglassMeasure h;
+  double z2 = 0, eta2 = 0;
+  for (unsigned int i = 0; i < particles.size(); ++i) {
+    if (failed(i))
+      continue;
+    for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
+      const unsigned int j = bonds.neighbor[k];
+      if (bonds.broken[k] || failed(j))
+        continue;
+      const Vec& xi = bonds.xi[k];
+      const Vec eta = u[j] - u[i];
+      const Vec z = eta - (F[i] * xi - xi);
+      const double wb = bonds.influence[k] * bonds.volume_factor(k) * V[i] * V[j];
+      const double L = bonds.length[k];
+      h.energy += 0.25 * c_ * wb * z.norm_square() / L;
+      z2 += wb * z.norm_square() / (L * L);
+      eta2 += wb * eta.norm_square() / (L * L);
+      h.max_nonuniform = std::max(h.max_nonuniform, z.norm());
+    }
+  }
+  h.relative_norm = eta2 > 0 ? std::sqrt(z2 / eta2) : 0.0;
+  return h;
+}
+
+template <int dim>
+void NosbPD<dim>::update_damage(ParticleSet<dim>& particles, const BondList<dim>& bonds) const {
+  const auto& V = particles.volumes();
+  for (unsigned int i = 0; i < particles.size(); ++i) {
+    double intact = 0, all = 0;
+    for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
+      const double w = bonds.influence[k] * bonds.volume_factor(k) * V[bonds.neighbor[k]];
+      all += w;
+      if (!bonds.broken[k])
+        intact += w;
+    }
+    particles.damage(i) = failed(i) ? 1.0 : (all > 0.0 ? 1.0 - intact / all : 0.0);
+  }
+}
+
+template class NosbPD<2>;
+template class NosbPD<3>;
+
+} // namespace spinesim::meshfree

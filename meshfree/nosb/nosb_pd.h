@@ -1,0 +1,169 @@
+#ifndef SPINESIM_MESHFREE_NOSB_NOSB_PD_H
+#define SPINESIM_MESHFREE_NOSB_NOSB_PD_H
+
+// Non-ordinary state-based peridynamics (correspondence model, Silling et al. 2007) with the
+// point-wise laws of fem/materials. Kinematics and forces: see correspondence_families.h.
+//
+// Units and sign: particles.force(i) is the internal FORCE on particle i [N] (force density
+// times V_i): f_i = V_i Σ_j ω (P_i K_i⁻¹ + P_j K_j⁻¹) ξ_ij V_j, ξ_ij = x_j − x_i. It is minus
+// the gradient of the stored energy Σ_i V_i W(F_i), so it conserves momentum (Newton's third
+// law) and, for hyperelastic laws, energy. (t_ij + t_ji would give P_i − P_j: wrong.)
+//
+// 2-D is plane strain: F is embedded in 3×3 with F_zz = 1 and the in-plane block of P and
+// dP/dF is used. Volumes already carry the thickness.
+//
+// Zero-energy-mode control (Parameters::stabilization):
+//  * none            the plain particle families: modes with F_i = I everywhere (e.g. the
+//                    checkerboard on a lattice) cost no energy.
+//  * penalty         Silling (2017) / Peridigm-style hourglass force on the non-uniform part
+//                    z_ij = (y_j − y_i) − F_i ξ_ij of the deformation state:
+//                        f_i += ½ G_s c ω β (z_ij − z_ji)/|ξ| V_i V_j
+//                    (pulls i along z_ij when the bond is longer than F_i predicts). c is the
+//                    bond-based (PMB) micromodulus matched to the bulk modulus (3-D: K, 2-D:
+//                    plane-strain k' = E/(2(1−ν−2ν²))), BondBasedPD::micromodulus: with G_s = 1
+//                    the penalty alone is a full PMB material on z. Antisymmetric in i↔j
+//                    (momentum conserved), not variational (energy not conserved exactly).
+//  * bond_associated bond-associated deformation gradients (Chen 2018; Breitzman & Dayal
+//                    2018): one family per bond, no coefficient.
+//
+// Damage: bonds break irreversibly when the stretch |y_j − y_i|/|ξ| − 1 exceeds s0 (the
+// Critical stretch, else from the Fracture energy with BondBasedPD's Gc formula for the same
+// calibration modulus). Broken bonds leave K and F. Failed particles (singular or badly
+// conditioned K) carry no stress and have damage 1; each is logged once.
+
+#include "fem/materials/constitutive_law.h"
+#include "meshfree/bond_list.h"
+#include "meshfree/influence_function.h"
+#include "meshfree/neighbor_search.h"
+#include "meshfree/nosb/correspondence_families.h"
+#include "meshfree/particle_set.h"
+
+#include <deal.II/base/parameter_handler.h>
+#include <deal.II/lac/sparse_matrix.h>
+#include <deal.II/lac/sparsity_pattern.h>
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace spinesim::meshfree {
+
+template <int dim>
+class NosbPD {
+ public:
+  enum class Stabilization { none, penalty, bond_associated };
+
+  struct Parameters {
+    double horizon_ratio = 3.015; // δ/h [-]
+    std::string influence_function = "constant";
+    double alpha = 0.0; // fractional kernel order [-]
+    Stabilization stabilization = Stabilization::bond_associated;
+    double stabilization_coefficient = 0.1; // G_s [-], penalty only
+    double critical_stretch = 0.0;          // [-], 0 = from the fracture energy
+    double fracture_energy = 0.0;           // G_c [J/m^2]; both 0 = bonds never break
+    double max_condition_number = 1e4;      // of K_i [-]
+    bool partial_volume_correction = true;
+    double thickness = 1.0; // 2-D out-of-plane thickness [m]
+
+    static void declare(dealii::ParameterHandler& prm);
+    void parse(const dealii::ParameterHandler& prm);
+    static Stabilization stabilization_from_name(const std::string& name);
+    static std::string name(Stabilization s);
+  };
+
+  // What the hourglass (zero-energy-mode) diagnostics measure, over intact bonds between
+  // non-failed particles, with z_ij = (y_j − y_i) − F_i ξ_ij (F_i of the particle family):
+  struct HourglassMeasure {
+    double energy = 0;        // Σ_i Σ_j ¼ c ω β |z_ij|²/|ξ| V_i V_j [J]: a G_s = 1 penalty
+    double relative_norm = 0; // sqrt(Σ ωβ V V |z|²/|ξ|²) / sqrt(Σ ωβ V V |η|²/|ξ|²) [-]
+    double max_nonuniform = 0; // max |z_ij| [m]
+  };
+
+  NosbPD(const Parameters& parameters, std::shared_ptr<const materials::ConstitutiveLaw> law);
+
+  const Parameters& parameters() const { return prm_; }
+  const materials::ConstitutiveLaw& law() const { return *law_; }
+  const InfluenceFunction<dim>& influence() const { return influence_; }
+  // Search options for a particle spacing h: δ = (horizon ratio)·h, partial volumes.
+  typename NeighborSearch<dim>::Options neighbor_options(double spacing) const;
+  // Bulk modulus K (3-D) or plane-strain k' (2-D) [Pa]: calibrates c and s0.
+  double calibration_modulus() const { return modulus_; }
+  double micromodulus() const { return c_; }      // c (after initialise)
+  double critical_stretch() const { return s0_; } // s0 (after initialise), inf = no breaking
+
+  // Families, constants and history for these particles and bonds. InvalidInput if the
+  // particle thickness differs from the parameter (2-D) or the bonds belong elsewhere.
+  void initialise(const ParticleSet<dim>& particles, const BondList<dim>& bonds);
+  // Rebuilds the families after bonds changed from outside; logs newly failed particles.
+  void update_families(const ParticleSet<dim>& particles, const BondList<dim>& bonds);
+
+  // Internal forces into particles.force() [N] at the current displacements, using the
+  // committed material history (the trial history is kept for commit_state()).
+  // NumericalFailure naming the particle on det F <= 0 or a non-finite force.
+  void compute_forces(ParticleSet<dim>& particles, const BondList<dim>& bonds);
+  // Breaks over-stretched bonds, rebuilds the families and updates damage if any broke;
+  // returns the number of bond ends broken (each pair counts twice).
+  std::size_t break_bonds(ParticleSet<dim>& particles, BondList<dim>& bonds);
+  // For explicit dynamics: break_bonds, compute_forces, commit_state.
+  std::function<void(ParticleSet<dim>&)> force_function(BondList<dim>& bonds);
+  void commit_state();
+
+  // Stiffness −∂f/∂u [N/m] at the current displacements (consistent tangent of the forces
+  // above, stabilisation included); dof i·dim + d. `pattern` is (re)built when empty or when
+  // the families changed since it was made.
+  void assemble_tangent(const ParticleSet<dim>& particles, const BondList<dim>& bonds,
+                        dealii::SparsityPattern& pattern, dealii::SparseMatrix<double>& matrix);
+  // R_i = max_d Σ_col |K_(i,d),col| of the tangent at the current state [N/m].
+  std::vector<double> stiffness_row_sums(const ParticleSet<dim>& particles,
+                                         const BondList<dim>& bonds);
+  // For AdaptiveDynamicRelaxation::solve: S_i with ½√dim S_i = ¼ R_i/V_i·safety (its fictitious
+  // density) [N/m^4]; safety 1 is the Gershgorin limit of Kilic & Madenci (2010).
+  std::vector<double> relaxation_stiffness_bound(const ParticleSet<dim>& particles,
+                                                 const BondList<dim>& bonds, double safety = 1.0);
+  // Central differences are stable for Δt <= 2/ω_max; Gershgorin on M⁻¹K gives
+  // Δt = safety · 2 min_i sqrt(m_i/R_i) [s].
+  double stable_time_step(const ParticleSet<dim>& particles, const BondList<dim>& bonds,
+                          double safety);
+
+  // Stored energy Σ_e w_e W(F_e) [J]; W(F) = ∫_0^1 P(I + t(F−I)) : (F − I) dt (4-point Gauss;
+  // exact for St. Venant–Kirchhoff, the stored energy for any hyperelastic law).
+  double strain_energy(const ParticleSet<dim>& particles) const;
+  HourglassMeasure hourglass(const ParticleSet<dim>& particles, const BondList<dim>& bonds) const;
+
+  // φ_i = 1 − Σ_intact ωβV_j / Σ_all ωβV_j, 1 for failed particles, into particles.damage().
+  void update_damage(ParticleSet<dim>& particles, const BondList<dim>& bonds) const;
+
+  // Particle deformation gradients F_i (identity for failed particles) at the last
+  // compute_forces.
+  const std::vector<dealii::Tensor<2, dim>>& deformation_gradients() const { return F_particle_; }
+  const CorrespondenceFamilies<dim>& particle_families() const { return particle_families_; }
+  const CorrespondenceFamilies<dim>& families() const;
+  bool failed(unsigned int i) const { return particle_families_.failed(i); }
+  // Messages about failed particles since the last call (for the run log).
+  std::vector<std::string> take_messages();
+
+ private:
+  struct Response {
+    dealii::Tensor<2, dim> P;
+    dealii::Tensor<4, dim> A;
+  };
+  Response evaluate(unsigned int e, const dealii::Tensor<2, dim>& F,
+                    const ParticleSet<dim>& particles, materials::MaterialState* trial) const;
+  void compute_particle_gradients(const ParticleSet<dim>& particles);
+  void log_failed(const ParticleSet<dim>& particles, const std::vector<unsigned int>& newly);
+
+  Parameters prm_;
+  std::shared_ptr<const materials::ConstitutiveLaw> law_;
+  InfluenceFunction<dim> influence_;
+  double modulus_ = 0, c_ = 0, s0_ = 0;
+  CorrespondenceFamilies<dim> particle_families_, bond_families_;
+  std::vector<dealii::Tensor<2, dim>> F_particle_;
+  std::vector<materials::MaterialState> committed_, trial_;
+  std::vector<std::string> messages_;
+  unsigned long families_version_ = 0, pattern_version_ = ~0ul;
+};
+
+} // namespace spinesim::meshfree
+
+#endif
