@@ -1,0 +1,185 @@
+#ifndef SPINESIM_MESHFREE_SPG_SPG_SOLVER_H
+#define SPINESIM_MESHFREE_SPG_SPG_SOLVER_H
+
+// Smoothed Particle Galerkin (SPG; seed 000, Wu, Park & Chen 2015): the force model for
+// explicit dynamics (meshfree/velocity_verlet.h) and dynamic relaxation.
+//
+// Unknowns. ParticleSet::displacement holds the RK COEFFICIENTS d_J (generalised
+// displacements ũ_J of seed §1); the physical displacement of particle I is
+// u_I = u^h(X_I) = Σ_J Ψ_J(X_I) d_J (physical_displacements()). Lumped mass M_II = ρ V_I (§10).
+//
+// Internal force by direct nodal integration (§9, total Lagrangian form):
+//   F_N = I + Σ_J d_J ⊗ ∇Ψ_J(X_N),   P_N = law(F_N),   f_int,I = Σ_N V_N P_N ∇Ψ_I(X_N).
+// Σ_I ∇Ψ_I(X_N) = 0 (partition of unity), so Σ_I f_int,I = 0: linear momentum is conserved to
+// round-off, also after bond failure. 2-D is plane strain (F_33 = 1).
+//
+// Stabilisation (displacement smoothing, seed §2/§6, WPC 2015). With the smoothed value
+// ū_I = Σ_J Ψ_J(X_I) d_J (the kernel-smoothed field at particle I, Ψ̃ = Ψ) we add the energy
+//   W_stab = ½ Σ_I κ_I |d_I − ū_I|²,   κ_I = η (λ + 2μ) V_I / a²,
+// and its exact gradient as the stabilisation force f_K = −Σ_I κ_I (δ_IK − Ψ_K(X_I))(d_I − ū_I).
+// d_I − ū_I ≈ −½ Σ_J Ψ_J (X_J − X_I)⊗(X_J − X_I) : ∇∇u = O(a² ∇ε), so W_stab ≈ ½ η Σ_I V_I
+// (λ+2μ) |O(a ∇ε)|² is the strain-gradient penalty of §6, η (∇ε_smooth − ∇ε)ᵀ C (…) V with the
+// smoothed-minus-standard difference written through displacements (no second derivatives).
+// It vanishes for linear fields (patch test unaffected), penalises the DNI zero-energy
+// (checkerboard) modes, and conserves momentum (Σ_K (δ_IK − Ψ_K(X_I)) = 0).
+// `Smoothing interval` n: the stabilisation force is re-evaluated every n-th force call and
+// held in between (n = 1, the default, is the energy-consistent choice).
+//
+// Kernel update (support and gradients):
+//  * total_lagrangian: Ψ and ∇_XΨ at the reference positions, computed once.
+//  * updated_lagrangian: every `Reset interval` steps the reference configuration is reset to
+//    the current one: X^r ← x, d^r ← d, F^r ← F; neighbours are searched again (broken pairs
+//    stay broken) and Ψ, ∇Ψ recomputed at X^r. Between resets
+//        F = F_rel F^r,  F_rel = I + Σ_J (d_J − d^r_J) ⊗ ∇_{X^r}Ψ_J,
+//    the law is called with the TOTAL F and its own history (the J2 state stores C_p⁻¹ w.r.t.
+//    the original configuration, so nothing is mapped at a reset), and
+//        f_int,I = Σ_N V_N (P_N F^rᵀ_N) ∇_{X^r}Ψ_I(X^r_N)   (= the first Piola stress of the
+//    reset configuration times its volume J^r V). The stabilisation acts on d − d^r.
+//  * adaptive_lagrangian (§11): the material kernel is kept and its derivatives are pushed
+//    forward by the chain rule Ψ_I,i = ∂Ψ_I/∂X^r_j (F_rel⁻¹)_ji; the force is the Cauchy
+//    form f_int,I = Σ_N v_N σ_N ∇_xΨ_I (v = J V), evaluated as the per-particle matrix
+//    v σ F_rel⁻ᵀ so the bond loop stays one mat-vec. The reference is reset adaptively, when
+//    max_N |F_rel − I| exceeds `Adaptive threshold`.
+//
+// Bond failure (§12): bonds are the neighbour pairs within the support. A bond breaks when
+// ½(ε̄_p,I + ε̄_p,J) > ε_crit or (|x_J − x_I| − |X_J − X_I|)/|X_J − X_I| > s_crit (physical
+// positions, original reference). The pair is removed from BOTH shape-function rows, which
+// are recomputed; mass is untouched and momentum conserved (see above). particles.damage()
+// is the broken fraction of a particle's bonds.
+//
+// Contact with RigidObstacle (frictionless penalty): a particle I at x_I with gap
+// g = gap(x_I) − offset < 0 gets f = −k_c g n, k_c = factor · ρ c_p² h^(dim−2) (the particle's
+// own stiffness; h^(dim−2) = thickness in 2-D), distributed to the coefficients as
+// Σ_I Ψ_K(X_I) f_I. offset = `Contact offset` × h (0: contact at the particle centre).
+//
+// Essential boundaries: mixed transformation method (essential_boundary.h). Stable step:
+// Δt = CFL · h σ_min / c_p, σ_min a lower bound 1/|F⁻¹|_Frobenius of the smallest stretch.
+//
+// Loops are over particles (OpenMP, static schedule), each gathering over its own CSR row with
+// the reverse-bond index, so the results do not depend on the thread count.
+
+#include "fem/materials/constitutive_law.h"
+#include "meshfree/bond_list.h"
+#include "meshfree/particle_set.h"
+#include "meshfree/spg/essential_boundary.h"
+#include "meshfree/spg/rigid_obstacle.h"
+#include "meshfree/spg/rk_kernel.h"
+#include "meshfree/spg/rk_shape_functions.h"
+
+#include <deal.II/base/parameter_handler.h>
+#include <deal.II/base/tensor.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace spinesim::meshfree {
+
+template <int dim>
+class SPGSolver {
+ public:
+  enum class KernelUpdate { total_lagrangian, updated_lagrangian, adaptive_lagrangian };
+
+  struct Parameters {
+    std::string kernel = "cubic_bspline";    // cubic_bspline|quartic
+    std::string support_shape = "spherical"; // spherical|cubic
+    double dilation = 1.5;                   // a / h [-], 1.1 .. 2.5
+    double max_condition_number = 1e10;      // RK moment matrix guard [-]
+    double stabilisation = 0.1;              // η [-], 0 = plain DNI
+    unsigned int smoothing_interval = 1;     // [steps]
+    std::string kernel_update = "total_lagrangian";
+    unsigned int reset_interval = 50;    // [steps] (updated_lagrangian)
+    double adaptive_threshold = 0.2;     // max |F_rel − I| before a reset (adaptive) [-]
+    double cfl = 0.4;                    // [-]
+    double critical_plastic_strain = 0;  // ε_crit [-], 0 = off
+    double critical_stretch = 0;         // s_crit [-], 0 = off
+    double contact_penalty_factor = 1.0; // k_c / (ρ c_p² h^(dim−2)) [-]
+    double contact_offset = 0.0;         // contact distance / h [-]
+
+    static void declare(dealii::ParameterHandler& prm);
+    void parse(const dealii::ParameterHandler& prm);
+    // InvalidInput naming the entry.
+    void validate() const;
+    KernelUpdate update_mode() const;
+  };
+
+  // `spacing` h [m] is the nominal particle spacing: support a = dilation·h. The law must
+  // outlive the solver. Builds bonds and shape functions at the reference positions.
+  SPGSolver(const Parameters& parameters, const materials::ConstitutiveLaw& law,
+            const ParticleSet<dim>& particles, double spacing);
+
+  // --- setup
+  EssentialBoundary<dim>& essential_boundary() { return constraints_; }
+  // Constrains the physical displacement component (marks the coefficient fixed).
+  void constrain(ParticleSet<dim>& particles, unsigned int i, unsigned int component, double value);
+  void add_obstacle(const RigidObstacle<dim>& obstacle) { obstacles_.push_back(obstacle); }
+  void set_time(double t) { time_ = t; }
+
+  // --- the force model: particles.force() [N] (internal + stabilisation + contact, condensed
+  // for the constraints). One call = one step (the material history is committed).
+  void compute_forces(ParticleSet<dim>& particles);
+
+  // Stable step from the last force evaluation [s].
+  double stable_time_step() const;
+  // Gershgorin-type bound of the stiffness rows per volume [N/m^4] for AdaptiveDynamicRelaxation.
+  std::vector<double> stiffness_bound(const ParticleSet<dim>& particles) const;
+
+  // --- results
+  const std::vector<dealii::Tensor<1, dim>>& physical_displacements() const { return uh_; }
+  dealii::Point<dim> current_position(unsigned int i) const { return X0_[i] + uh_[i]; }
+  const std::vector<dealii::Tensor<2, dim>>& deformation_gradients() const { return F_; }
+  const std::vector<dealii::Tensor<2, dim>>& first_piola_stresses() const { return P_; }
+  const std::vector<materials::MaterialState>& states() const { return state_; }
+  double internal_work() const { return internal_work_; }      // ∫ Σ V P:Ḟ dt [J]
+  double plastic_work() const;                                 // Σ V w_p [J]
+  double stabilisation_energy() const { return stab_energy_; } // W_stab [J]
+  double contact_energy() const { return contact_energy_; }    // ½ Σ k g² [J]
+  dealii::Tensor<1, dim> contact_force(unsigned int obstacle) const { return reaction_[obstacle]; }
+  // max |d_I − ū_I| over particles [m]: the amplitude of the non-smooth (checkerboard) part.
+  double max_smoothing_residual() const { return max_residual_; }
+  std::size_t n_broken_bonds() const { return bonds_.n_broken(); }
+  unsigned int n_resets() const { return n_resets_; }
+  const BondList<dim>& bonds() const { return bonds_; }
+  const RKShapeFunctions<dim>& shape_functions() const { return *rk_; }
+  double support_size() const { return a_; }
+  double spacing() const { return h_; }
+  double p_wave_speed() const { return cp_; }
+  double contact_stiffness() const { return kc_; }
+  const Parameters& parameters() const { return prm_; }
+
+ private:
+  using Vector = dealii::Tensor<1, dim>;
+  using Matrix = dealii::Tensor<2, dim>;
+  Parameters prm_;
+  KernelUpdate mode_;
+  const materials::ConstitutiveLaw& law_;
+  double h_, a_, cp_, modulus_, kc_;
+  RKKernel<dim> kernel_;
+  std::unique_ptr<RKShapeFunctions<dim>> rk_;
+  BondList<dim> bonds_;
+  std::vector<dealii::Point<dim>> X0_; // original reference positions
+  std::vector<dealii::Point<dim>> Xr_; // kernel reference (= X0_ in total Lagrangian)
+  std::vector<double> volume_;         // V_N (original)
+  std::vector<double> rk_volume_;      // RK weights' volumes (J^r V after a reset)
+  std::vector<Vector> dref_, shift_, uh_, stab_force_, residual_, contact_, d_last_;
+  std::vector<Matrix> F_, P_, Fr_, stress_;
+  std::vector<materials::MaterialState> state_;
+  std::vector<double> kappa_;
+  EssentialBoundary<dim> constraints_;
+  bool constraints_ready_ = false;
+  std::vector<RigidObstacle<dim>> obstacles_;
+  std::vector<Vector> reaction_;
+  double time_ = 0, internal_work_ = 0, stab_energy_ = 0, contact_energy_ = 0, max_residual_ = 0;
+  double min_stretch_ = 1, max_rel_ = 0;
+  unsigned long calls_ = 0;
+  unsigned int n_resets_ = 0;
+  std::vector<unsigned long long> broken_pairs_; // (i << 32 | j), i < j, sorted
+
+  void reset_reference(const ParticleSet<dim>& particles);
+  void rebuild_kernel(const std::vector<dealii::Point<dim>>& centres);
+  void break_bonds(ParticleSet<dim>& particles);
+};
+
+} // namespace spinesim::meshfree
+
+#endif
