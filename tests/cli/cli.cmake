@@ -42,7 +42,7 @@ spinesim_add_scene_test(cli.default_scene_2ranks RANKS 2 EXPECT "status==ok" LAB
 add_test(NAME cli.ranks_agree
          COMMAND ${CMAKE_COMMAND} -DA=${CMAKE_CURRENT_BINARY_DIR}/runs/cli.default_scene/summary.json
                  -DB=${CMAKE_CURRENT_BINARY_DIR}/runs/cli.default_scene_2ranks/summary.json
-                 -DTOL=1e-6 -DFLOOR=1e-12 -P ${PROJECT_SOURCE_DIR}/tests/support/compare_summaries.cmake)
+                 -DTOL=1e-6 -DFLOOR=1e-9 -P ${PROJECT_SOURCE_DIR}/tests/support/compare_summaries.cmake)
 set_tests_properties(cli.default_scene_2ranks PROPERTIES FIXTURES_SETUP default_run_2)
 set_tests_properties(cli.ranks_agree PROPERTIES LABELS "cli;mpi"
                      FIXTURES_REQUIRED "default_run;default_run_2")

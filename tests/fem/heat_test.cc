@@ -488,6 +488,8 @@ void check_evaluation_and_checkpoint() {
     EXPECT_NEAR(heat.max_temperature(), 302.0 + (dim == 3 ? 0.5 : 0.0), 1e-12);
 
     const std::string pvtu = heat.write_output(dir, 3, "T" + std::to_string(dim));
+    // Rank 0 writes the record; everyone looks only after it has.
+    MPI_Barrier(MPI_COMM_WORLD);
     EXPECT_TRUE(std::filesystem::exists(dir + "/" + pvtu));
   }
   {

@@ -14,6 +14,6 @@ set_tests_properties(scene.restart_second_half PROPERTIES FIXTURES_REQUIRED rest
 add_test(NAME scene.restart_matches_uninterrupted
          COMMAND ${CMAKE_COMMAND} -DA=${_runs}/scene.restart_first_half/summary.json
                  -DB=${PROJECT_BINARY_DIR}/tests/cli/runs/cli.default_scene/summary.json
-                 -DTOL=1e-8 -DFLOOR=1e-12 -P ${PROJECT_SOURCE_DIR}/tests/support/compare_summaries.cmake)
+                 -DTOL=1e-8 -DFLOOR=1e-9 -P ${PROJECT_SOURCE_DIR}/tests/support/compare_summaries.cmake)
 set_tests_properties(scene.restart_matches_uninterrupted PROPERTIES LABELS "scene"
                      FIXTURES_REQUIRED "restart_done;default_run")

@@ -1,15 +1,36 @@
 // GoogleTest main that brings up MPI through deal.II, so every test binary can also run
-// under mpiexec. Only rank 0 prints GoogleTest's report.
+// under mpiexec. Rank 0 prints GoogleTest's report; the other ranks print only their
+// failures (prefixed with the rank), so a failure on one rank is never hidden.
 #include <deal.II/base/mpi.h>
 
 #include <gtest/gtest.h>
 
+#include <iostream>
+
+namespace {
+class RankFailurePrinter : public ::testing::EmptyTestEventListener {
+public:
+  explicit RankFailurePrinter(unsigned int rank) : rank_(rank) {}
+  void OnTestPartResult(const ::testing::TestPartResult& result) override {
+    if (result.failed())
+      std::cerr << "[rank " << rank_ << "] failure in " << result.file_name() << ":"
+                << result.line_number() << "\n"
+                << result.summary() << std::endl;
+  }
+
+private:
+  unsigned int rank_;
+};
+} // namespace
+
 int main(int argc, char** argv) {
   dealii::Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
   ::testing::InitGoogleTest(&argc, argv);
-  if (dealii::Utilities::MPI::this_mpi_process(MPI_COMM_WORLD) != 0) {
+  const unsigned int rank = dealii::Utilities::MPI::this_mpi_process(MPI_COMM_WORLD);
+  if (rank != 0) {
     auto& listeners = ::testing::UnitTest::GetInstance()->listeners();
     delete listeners.Release(listeners.default_result_printer());
+    listeners.Append(new RankFailurePrinter(rank));
   }
   return RUN_ALL_TESTS();
 }
