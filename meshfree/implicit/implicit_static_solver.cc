@@ -1,0 +1,198 @@
+#include "meshfree/implicit/implicit_static_solver.h"
+
+#include "fem/materials/failure.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace spinesim::meshfree {
+
+template <int dim>
+void ImplicitStaticSolver<dim>::Parameters::declare(dealii::ParameterHandler& prm) {
+  using namespace dealii::Patterns;
+  prm.declare_entry("Load steps", "1", Integer(1), "Equal load increments to the full load [-].");
+  prm.declare_entry("Max Newton iterations", "25", Integer(1),
+                    "Newton iterations per load step before a cut-back [-].");
+  prm.declare_entry("Displacement tolerance", "1e-8", Double(0.0),
+                    "Newton stops when ||du|| <= this * ||u|| [-].");
+  prm.declare_entry("Residual tolerance", "1e-8", Double(0.0),
+                    "Newton stops when the free residual <= this * max(||f_ext||, "
+                    "||reactions||) [-].");
+  prm.declare_entry("Max cutbacks", "6", Integer(0),
+                    "Halvings of a load increment after Newton failures [-].");
+  prm.declare_entry("Max breaking passes", "100", Integer(1),
+                    "Re-solves of one load step while bonds keep breaking [-].");
+  prm.declare_entry("Geometric stiffness", "true", Bool(),
+                    "Include the (e/l)(I - n n) part of the tangent (exact Newton) [-].");
+  PDLinearSolver<dim>::Parameters::declare(prm);
+}
+
+template <int dim>
+void ImplicitStaticSolver<dim>::Parameters::parse(const dealii::ParameterHandler& prm) {
+  load_steps = prm.get_integer("Load steps");
+  max_newton_iterations = prm.get_integer("Max Newton iterations");
+  displacement_tolerance = prm.get_double("Displacement tolerance");
+  residual_tolerance = prm.get_double("Residual tolerance");
+  max_cutbacks = prm.get_integer("Max cutbacks");
+  max_breaking_passes = prm.get_integer("Max breaking passes");
+  geometric_stiffness = prm.get_bool("Geometric stiffness");
+  linear.parse(prm);
+  if (!(displacement_tolerance > 0.0) && !(residual_tolerance > 0.0))
+    throw InvalidInput("Displacement tolerance", "both Newton tolerances are 0",
+                       "at least one of Displacement/Residual tolerance > 0");
+}
+
+template <int dim>
+ImplicitStaticSolver<dim>::ImplicitStaticSolver(const Parameters& parameters,
+                                                const BondBasedPD<dim>& model)
+    : prm_(parameters), model_(model), linear_(parameters.linear) {}
+
+template <int dim>
+typename ImplicitStaticSolver<dim>::NewtonResult
+ImplicitStaticSolver<dim>::newton(ParticleSet<dim>& particles, BondList<dim>& bonds) {
+  using VectorType = typename BondBasedTangent<dim>::VectorType;
+  if (pattern_bonds_ != &bonds || tangent_.n_dofs() != particles.size() * dim) {
+    tangent_.reinit(particles, bonds);
+    pattern_bonds_ = &bonds;
+    linear_.reset();
+  }
+  NewtonResult result;
+  VectorType rhs, du;
+  tangent_.initialize_vector(rhs);
+  tangent_.initialize_vector(du);
+  const unsigned int n = particles.size();
+  for (unsigned int it = 0;; ++it) {
+    model_.compute_forces(particles, bonds, false);
+    double r2 = 0, f2 = 0, reaction2 = 0;
+    for (unsigned int i = 0; i < n; ++i)
+      for (unsigned int d = 0; d < dim; ++d) {
+        const double F = particles.force(i)[d], f = particles.external_force(i)[d];
+        if (particles.is_fixed(i, d)) {
+          reaction2 += (F + f) * (F + f);
+        } else {
+          r2 += (F + f) * (F + f);
+          f2 += f * f;
+        }
+      }
+    const double r = std::sqrt(r2), scale = std::sqrt(std::max(f2, reaction2));
+    if (!std::isfinite(r))
+      throw NumericalFailure("non-finite residual",
+                             "implicit peridynamics, Newton iteration " + std::to_string(it),
+                             "check the load and the material; try more load steps");
+    result.residual_history.push_back(r);
+    result.relative_residual = scale > 0 ? r / scale : 0.0;
+    if (r == 0.0 || (prm_.residual_tolerance > 0 && r <= prm_.residual_tolerance * scale)) {
+      result.converged = true;
+      return result;
+    }
+    if (it == prm_.max_newton_iterations)
+      return result;
+
+    tangent_.assemble(particles, bonds, model_, prm_.geometric_stiffness);
+    for (unsigned int i = 0; i < n; ++i)
+      for (unsigned int d = 0; d < dim; ++d) {
+        const unsigned int q = BondBasedTangent<dim>::dof(i, d);
+        rhs[q] = tangent_.is_constrained(q)
+                     ? 0.0
+                     : particles.force(i)[d] + particles.external_force(i)[d];
+      }
+    rhs.compress(dealii::VectorOperation::insert);
+    const auto lin = linear_.solve(tangent_, particles, du, rhs);
+    result.linear_iterations += lin.iterations;
+    ++result.iterations;
+    double du2 = 0, u2 = 0;
+    for (unsigned int i = 0; i < n; ++i)
+      for (unsigned int d = 0; d < dim; ++d) {
+        const unsigned int q = BondBasedTangent<dim>::dof(i, d);
+        if (tangent_.is_constrained(q))
+          continue;
+        particles.displacement(i)[d] += du[q];
+        du2 += du[q] * du[q];
+      }
+    for (unsigned int i = 0; i < n; ++i)
+      u2 += particles.displacement(i).norm_square();
+    result.relative_update = u2 > 0 ? std::sqrt(du2 / u2) : 0.0;
+    if (prm_.displacement_tolerance > 0 && result.relative_update <= prm_.displacement_tolerance) {
+      model_.compute_forces(particles, bonds, false);
+      result.converged = true;
+      return result;
+    }
+  }
+}
+
+template <int dim>
+std::vector<typename ImplicitStaticSolver<dim>::StepReport>
+ImplicitStaticSolver<dim>::solve(ParticleSet<dim>& particles, BondList<dim>& bonds) {
+  using Vec = dealii::Tensor<1, dim>;
+  const unsigned int n = particles.size();
+  const std::vector<Vec> f_full = particles.external_forces();
+  const std::vector<Vec> u_full = particles.displacements(); // prescribed on fixed components
+  // u⁰ = 0 on the free components.
+  for (unsigned int i = 0; i < n; ++i)
+    for (unsigned int d = 0; d < dim; ++d)
+      if (!particles.is_fixed(i, d))
+        particles.displacement(i)[d] = 0.0;
+
+  auto apply_load = [&](double lambda) {
+    for (unsigned int i = 0; i < n; ++i) {
+      particles.external_force(i) = lambda * f_full[i];
+      for (unsigned int d = 0; d < dim; ++d)
+        if (particles.is_fixed(i, d))
+          particles.displacement(i)[d] = lambda * u_full[i][d];
+    }
+  };
+
+  std::vector<StepReport> reports;
+  double lambda = 0, increment = 1.0 / prm_.load_steps;
+  unsigned int cutbacks = 0;
+  while (lambda < 1.0 - 1e-12) {
+    const double target = std::min(1.0, lambda + increment);
+    const std::vector<Vec> u_start = particles.displacements();
+    const std::vector<std::uint8_t> broken_start = bonds.broken;
+    apply_load(target);
+    StepReport report;
+    report.load_factor = target;
+    bool ok = true;
+    for (;;) {
+      const NewtonResult nr = newton(particles, bonds);
+      report.newton_iterations += nr.iterations;
+      report.linear_iterations += nr.linear_iterations;
+      report.relative_residual = nr.relative_residual;
+      if (!nr.converged) {
+        ok = false;
+        break;
+      }
+      const std::size_t broke = model_.compute_forces(particles, bonds, true);
+      if (broke == 0)
+        break;
+      report.bonds_broken += broke;
+      if (++report.breaking_passes > prm_.max_breaking_passes) {
+        ok = false;
+        break;
+      }
+    }
+    if (!ok) {
+      particles.displacements() = u_start;
+      bonds.broken = broken_start;
+      increment *= 0.5;
+      if (++cutbacks > prm_.max_cutbacks) {
+        std::ostringstream where;
+        where << "load factor " << target << " (from " << lambda << ")";
+        throw NumericalFailure("implicit peridynamics: Newton did not converge after " +
+                                   std::to_string(prm_.max_cutbacks) + " cut-backs",
+                               where.str(),
+                               "unstable crack growth makes the static problem ill-posed; "
+                               "use more load steps or displacement control");
+      }
+      continue;
+    }
+    lambda = target;
+    reports.push_back(report);
+  }
+  return reports;
+}
+
+template class ImplicitStaticSolver<2>;
+template class ImplicitStaticSolver<3>;
+
+} // namespace spinesim::meshfree

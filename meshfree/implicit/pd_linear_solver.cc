@@ -1,0 +1,187 @@
+#include "meshfree/implicit/pd_linear_solver.h"
+
+#include "fem/materials/failure.h"
+
+#include <deal.II/lac/precondition.h>
+#include <deal.II/lac/solver_cg.h>
+#include <deal.II/lac/solver_control.h>
+#include <deal.II/lac/trilinos_precondition.h>
+
+#include <Epetra_Map.h>
+#include <Teuchos_ParameterList.hpp>
+
+#include <chrono>
+#include <cmath>
+
+namespace spinesim::meshfree {
+
+namespace {
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+} // namespace
+
+template <int dim>
+void PDLinearSolver<dim>::Parameters::declare(dealii::ParameterHandler& prm) {
+  prm.declare_entry("Linear solver", "amg", dealii::Patterns::Selection(names()),
+                    "Solver for the tangent systems [-]: cg (no preconditioner), jacobi "
+                    "(diagonal PCG), amg (CG + ML smoothed aggregation with rigid-body modes), "
+                    "mg (CG + lattice multigrid; lattice particle sets only).");
+  prm.declare_entry("Linear tolerance", "1e-6", dealii::Patterns::Double(0.0),
+                    "Relative residual ||b - Kx||/||b|| at which a linear solve stops [-].");
+  prm.declare_entry("Max linear iterations", "20000", dealii::Patterns::Integer(1),
+                    "Iteration limit of one linear solve [-].");
+  prm.declare_entry("AMG smoother sweeps", "2", dealii::Patterns::Integer(1),
+                    "Chebyshev smoother sweeps per AMG level [-].");
+  prm.declare_entry("AMG aggregation threshold", "1e-4", dealii::Patterns::Double(0.0),
+                    "ML strength-of-connection threshold for aggregation [-]. Keep it below "
+                    "1/(bonds per particle): a PD row spreads its diagonal over ~100-800 "
+                    "entries, and a larger threshold drops every connection (no coarsening).");
+  prm.declare_entry("MG smoother degree", "3", dealii::Patterns::Integer(1),
+                    "Chebyshev-Jacobi degree of the lattice multigrid smoother [-].");
+  prm.declare_entry("MG min horizon ratio", "2", dealii::Patterns::Double(1.0),
+                    "Lattice multigrid coarsens while delta/h on the coarser level stays at "
+                    "least this [-].");
+}
+
+template <int dim>
+void PDLinearSolver<dim>::Parameters::parse(const dealii::ParameterHandler& prm) {
+  solver = prm.get("Linear solver");
+  tolerance = prm.get_double("Linear tolerance");
+  max_iterations = prm.get_integer("Max linear iterations");
+  amg_smoother_sweeps = prm.get_integer("AMG smoother sweeps");
+  amg_aggregation_threshold = prm.get_double("AMG aggregation threshold");
+  mg_smoother_degree = prm.get_integer("MG smoother degree");
+  mg_min_horizon_ratio = prm.get_double("MG min horizon ratio");
+  if (!(tolerance > 0.0 && tolerance < 1.0))
+    throw InvalidInput("Linear tolerance", "= " + std::to_string(tolerance), "0 < tolerance < 1");
+}
+
+template <int dim>
+PDLinearSolver<dim>::PDLinearSolver(const Parameters& parameters) : prm_(parameters) {
+  const std::string all = "|" + names() + "|";
+  if (all.find("|" + prm_.solver + "|") == std::string::npos)
+    throw InvalidInput("Linear solver", "unknown solver '" + prm_.solver + "'", names());
+}
+
+template <int dim>
+PDLinearSolver<dim>::~PDLinearSolver() = default;
+
+template <int dim>
+void PDLinearSolver<dim>::set_lattice(const typename LatticeMultigrid<dim>::Geometry& geometry) {
+  lattice_ = std::make_unique<typename LatticeMultigrid<dim>::Geometry>(geometry);
+  mg_.reset();
+}
+
+template <int dim>
+void PDLinearSolver<dim>::reset() {
+  mg_.reset();
+}
+
+template <int dim>
+typename PDLinearSolver<dim>::Result
+PDLinearSolver<dim>::solve(const BondBasedTangent<dim>& tangent, const ParticleSet<dim>& particles,
+                           VectorType& x, const VectorType& b, bool estimate_condition) {
+  using namespace dealii;
+  Result result;
+  x = 0.0;
+  const double bnorm = b.l2_norm();
+  if (!std::isfinite(bnorm))
+    throw NumericalFailure("non-finite right-hand side", "tangent system",
+                           "the residual forces contain NaN; check the particle state");
+  if (bnorm == 0.0)
+    return result;
+  SolverControl control(prm_.max_iterations, prm_.tolerance * bnorm, false, false);
+  SolverCG<VectorType> cg(control);
+  if (estimate_condition)
+    cg.connect_condition_number_slot([&](double k) { result.condition_estimate = k; }, false);
+  const TrilinosWrappers::SparseMatrix& K = tangent.matrix();
+
+  auto run = [&](const auto& preconditioner) {
+    const auto t0 = std::chrono::steady_clock::now();
+    try {
+      cg.solve(K, x, b, preconditioner);
+    } catch (const SolverControl::NoConvergence& e) {
+      throw NumericalFailure("linear solver '" + prm_.solver + "' did not converge in " +
+                                 std::to_string(e.last_step) + " iterations (residual " +
+                                 std::to_string(e.last_residual / bnorm) + " of the initial)",
+                             "peridynamic tangent system (" + std::to_string(tangent.n_dofs()) +
+                                 " dofs)",
+                             "raise Max linear iterations, or use amg/mg; a singular system "
+                             "means a body part without Dirichlet support");
+    }
+    result.solve_seconds = seconds_since(t0);
+  };
+
+  const auto t0 = std::chrono::steady_clock::now();
+  if (prm_.solver == "cg") {
+    run(PreconditionIdentity());
+  } else if (prm_.solver == "jacobi") {
+    TrilinosWrappers::PreconditionJacobi jacobi;
+    jacobi.initialize(K);
+    result.setup_seconds = seconds_since(t0);
+    run(jacobi);
+  } else if (prm_.solver == "amg") {
+    TrilinosWrappers::PreconditionAMG amg;
+    TrilinosWrappers::PreconditionAMG::AdditionalData data;
+    data.elliptic = true;
+    data.smoother_sweeps = prm_.amg_smoother_sweeps;
+    data.aggregation_threshold = prm_.amg_aggregation_threshold;
+    Teuchos::ParameterList list;
+    std::unique_ptr<Epetra_MultiVector> unused;
+    data.set_parameters(list, unused, K);
+    // deal.II 9.4 passes only boolean (translation) modes; give ML the rigid-body space:
+    // translations and the in-plane rotation (2-D) or three rotations (3-D) about the
+    // centroid. Column-major, leading dimension = local rows.
+    const unsigned int n_modes = dim == 2 ? 3 : 6;
+    const Epetra_Map& map = K.trilinos_matrix().DomainMap();
+    const std::size_t n_local = map.NumMyElements();
+    dealii::Point<dim> centre;
+    for (unsigned int i = 0; i < particles.size(); ++i)
+      centre += particles.reference_position(i) / particles.size();
+    std::vector<double> modes(std::max<std::size_t>(1, n_local * n_modes), 0.0);
+    for (std::size_t lid = 0; lid < n_local; ++lid) {
+      const std::size_t q = static_cast<std::size_t>(map.GID(static_cast<int>(lid)));
+      const unsigned int i = static_cast<unsigned int>(q / dim), c = q % dim;
+      const Tensor<1, dim> r = particles.reference_position(i) - centre;
+      modes[c * n_local + lid] = 1.0; // translation c
+      if (dim == 2) {
+        modes[2 * n_local + lid] = c == 0 ? -r[1] : r[0];
+      } else {
+        // rotations about x, y, z: e_a × r
+        const double rx = r[0], ry = r[1], rz = r[dim - 1];
+        const double rot[3][3] = {{0, -rz, ry}, {rz, 0, -rx}, {-ry, rx, 0}};
+        for (unsigned int a = 0; a < 3; ++a)
+          modes[(3 + a) * n_local + lid] = rot[a][c];
+      }
+    }
+    list.set("PDE equations", dim);
+    list.set("null space: type", "pre-computed");
+    list.set("null space: dimension", static_cast<int>(n_modes));
+    list.set("null space: vectors", modes.data());
+    amg.initialize(K, list);
+    result.setup_seconds = seconds_since(t0);
+    run(amg);
+  } else {
+    if (!lattice_)
+      throw InvalidInput("Linear solver", "mg needs the particle lattice",
+                         "cg, jacobi or amg for particle sets not made by ParticleSet::lattice");
+    if (!mg_) {
+      typename LatticeMultigrid<dim>::Options o;
+      o.smoother_degree = prm_.mg_smoother_degree;
+      o.min_horizon_ratio = prm_.mg_min_horizon_ratio;
+      mg_ = std::make_unique<LatticeMultigrid<dim>>(*lattice_, o);
+    }
+    mg_->initialize(tangent, particles);
+    result.setup_seconds = seconds_since(t0);
+    run(*mg_);
+  }
+  result.iterations = control.last_step();
+  result.relative_residual = control.last_value() / bnorm;
+  return result;
+}
+
+template class PDLinearSolver<2>;
+template class PDLinearSolver<3>;
+
+} // namespace spinesim::meshfree

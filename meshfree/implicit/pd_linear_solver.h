@@ -1,0 +1,74 @@
+#ifndef SPINESIM_MESHFREE_IMPLICIT_PD_LINEAR_SOLVER_H
+#define SPINESIM_MESHFREE_IMPLICIT_PD_LINEAR_SOLVER_H
+
+// Linear solvers for the bond-based tangent, selected by name (the seed's CG, D-PCG and
+// MG-PCG, plus ML's smoothed-aggregation AMG):
+//   cg      conjugate gradients, no preconditioner
+//   jacobi  diagonal-preconditioned CG (D-PCG)
+//   amg     CG + Trilinos ML AMG (elliptic, rigid-body near-null space)
+//   mg      CG + the lattice multigrid V-cycle (lattice_multigrid.h; needs set_lattice)
+// Stops at ‖b − K x‖ ≤ tolerance · ‖b‖ from x = 0 (the seed: relative residual 1e-6).
+// The condition estimate is the ratio of the extreme Ritz values of CG's Lanczos matrix: of
+// K itself for `cg` (the seed's κ(A_α)), of the preconditioned operator otherwise.
+
+#include "meshfree/implicit/bond_based_tangent.h"
+#include "meshfree/implicit/lattice_multigrid.h"
+
+#include <deal.II/base/parameter_handler.h>
+
+#include <limits>
+#include <memory>
+#include <string>
+
+namespace spinesim::meshfree {
+
+template <int dim>
+class PDLinearSolver {
+ public:
+  using VectorType = dealii::TrilinosWrappers::MPI::Vector;
+
+  struct Parameters {
+    std::string solver = "amg";
+    double tolerance = 1e-6; // relative residual [-]
+    unsigned int max_iterations = 20000;
+    unsigned int amg_smoother_sweeps = 2;
+    double amg_aggregation_threshold = 1e-4;
+    unsigned int mg_smoother_degree = 3;
+    double mg_min_horizon_ratio = 2;
+
+    static void declare(dealii::ParameterHandler& prm);
+    void parse(const dealii::ParameterHandler& prm);
+  };
+
+  struct Result {
+    unsigned int iterations = 0;
+    double setup_seconds = 0, solve_seconds = 0;
+    double condition_estimate = std::numeric_limits<double>::quiet_NaN();
+    double relative_residual = 0;
+  };
+
+  static std::string names() { return "cg|jacobi|amg|mg"; }
+
+  explicit PDLinearSolver(const Parameters& parameters);
+  ~PDLinearSolver();
+
+  // The lattice for `mg` (InvalidInput at solve time without it).
+  void set_lattice(const typename LatticeMultigrid<dim>::Geometry& geometry);
+  // Drops the multigrid hierarchy (call when the Dirichlet flags change).
+  void reset();
+
+  // Solves K x = b from x = 0; NumericalFailure if the tolerance is not reached.
+  Result solve(const BondBasedTangent<dim>& tangent, const ParticleSet<dim>& particles,
+               VectorType& x, const VectorType& b, bool estimate_condition = false);
+
+  const Parameters& parameters() const { return prm_; }
+
+ private:
+  Parameters prm_;
+  std::unique_ptr<typename LatticeMultigrid<dim>::Geometry> lattice_;
+  std::unique_ptr<LatticeMultigrid<dim>> mg_;
+};
+
+} // namespace spinesim::meshfree
+
+#endif
