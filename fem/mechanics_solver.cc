@@ -231,6 +231,40 @@ void MechanicsSolver<dim>::set_temperature_change(std::shared_ptr<Function<dim>>
 }
 
 template <int dim>
+void MechanicsSolver<dim>::set_cell_laws(CellLawFunction f) {
+  cell_law_function_ = std::move(f);
+  if (is_setup_)
+    setup();
+}
+
+template <int dim>
+void MechanicsSolver<dim>::set_active_cells(const std::vector<bool>& active) {
+  if (!active.empty() && active.size() != tria_.n_active_cells())
+    throw InvalidInput("active cells", "got " + std::to_string(active.size()) + " flags",
+                       "one flag per active cell (" + std::to_string(tria_.n_active_cells()) +
+                           ")");
+  active_ = active;
+  if (is_setup_) {
+    compute_lumped_mass();
+    mark_orphan_dofs();
+    make_constraints(homogeneous_, true, 1.0);
+  }
+}
+
+template <int dim>
+void MechanicsSolver<dim>::set_driven_dofs(const std::map<types::global_dof_index, double>& values) {
+  driven_ = values;
+}
+
+template <int dim>
+const materials::ConstitutiveLaw& MechanicsSolver<dim>::cell_material(const CellIterator& cell) const {
+  const unsigned int index = cell->active_cell_index();
+  if (index < cell_laws_.size() && cell_laws_[index])
+    return *cell_laws_[index];
+  return material(cell->material_id());
+}
+
+template <int dim>
 const materials::ConstitutiveLaw& MechanicsSolver<dim>::material(types::material_id id) const {
   const auto it = laws_.find(id);
   if (it == laws_.end() || !it->second)
@@ -258,6 +292,12 @@ void MechanicsSolver<dim>::setup() {
   hanging_.reinit(relevant_);
   DoFTools::make_hanging_node_constraints(dof_handler_, hanging_);
   hanging_.close();
+  cell_laws_.assign(tria_.n_active_cells(), nullptr);
+  if (cell_law_function_)
+    for (const auto& cell : tria_.active_cell_iterators())
+      if (cell->is_locally_owned() || cell->is_ghost())
+        cell_laws_[cell->active_cell_index()] = cell_law_function_(cell);
+  mark_orphan_dofs();
   make_constraints(homogeneous_, true, 1.0);
 
   DynamicSparsityPattern dsp(relevant_);
@@ -287,16 +327,29 @@ void MechanicsSolver<dim>::setup() {
   committed_.assign(tria_.n_active_cells() * nq, initial);
   trial_ = committed_;
 
+  compute_lumped_mass();
+  build_rigid_body_modes();
+  update_ghosts();
+  is_setup_ = true;
+}
+
+template <int dim>
+void MechanicsSolver<dim>::compute_lumped_mass() {
   // Row-sum lumped mass: Σ_j ∫ρ N_i N_j = ∫ρ N_i (partition of unity), condensed onto masters.
+  lumped_mass_ = 0;
+  const unsigned int nq = quadrature_.size();
   FEValues<dim> fe_values(*mapping_, fe_, quadrature_, update_values | update_JxW_values);
   Vector<double> cell_mass(fe_.n_dofs_per_cell());
   std::vector<types::global_dof_index> dofs(fe_.n_dofs_per_cell());
   for (const auto& cell : dof_handler_.active_cell_iterators()) {
-    if (!cell->is_locally_owned())
+    if (!cell->is_locally_owned() || !is_active(cell))
       continue;
     fe_values.reinit(cell);
     const auto lit = laws_.find(cell->material_id());
-    const double rho = (lit != laws_.end() && lit->second) ? lit->second->density() : 0.0;
+    const unsigned int index = cell->active_cell_index();
+    const double rho = index < cell_laws_.size() && cell_laws_[index]
+                           ? cell_laws_[index]->density()
+                           : (lit != laws_.end() && lit->second) ? lit->second->density() : 0.0;
     cell_mass = 0;
     for (unsigned int q = 0; q < nq; ++q)
       for (unsigned int i = 0; i < fe_.n_dofs_per_cell(); ++i)
@@ -305,10 +358,23 @@ void MechanicsSolver<dim>::setup() {
     hanging_.distribute_local_to_global(cell_mass, dofs, lumped_mass_);
   }
   lumped_mass_.compress(VectorOperation::add);
+}
 
-  build_rigid_body_modes();
-  update_ghosts();
-  is_setup_ = true;
+template <int dim>
+void MechanicsSolver<dim>::mark_orphan_dofs() {
+  orphan_.assign(relevant_.n_elements(), false);
+  if (active_.empty())
+    return;
+  std::vector<bool> touched(relevant_.n_elements(), false);
+  std::vector<types::global_dof_index> dofs(fe_.n_dofs_per_cell());
+  for (const auto& cell : dof_handler_.active_cell_iterators())
+    if ((cell->is_locally_owned() || cell->is_ghost()) && is_active(cell)) {
+      cell->get_dof_indices(dofs);
+      for (const auto d : dofs)
+        touched[relevant_.index_within_set(d)] = true;
+    }
+  for (std::size_t i = 0; i < touched.size(); ++i)
+    orphan_[i] = !touched[i];
 }
 
 template <int dim>
@@ -377,6 +443,20 @@ void MechanicsSolver<dim>::make_constraints(AffineConstraints<double>& c, bool h
   c.clear();
   c.reinit(relevant_);
   DoFTools::make_hanging_node_constraints(dof_handler_, c);
+  // Orphaned DoFs (only inactive cells around them) stay where they are; driven DoFs follow
+  // their imposed values.
+  for (const auto& [dof, value] : driven_)
+    if (relevant_.is_element(dof) && !c.is_constrained(dof) && !dirichlet_target_.count(dof)) {
+      c.add_line(dof);
+      if (!homogeneous)
+        c.set_inhomogeneity(dof, value - u_ghost_(dof));
+    }
+  for (std::size_t i = 0; i < orphan_.size(); ++i)
+    if (orphan_[i]) {
+      const auto dof = relevant_.nth_index_in_set(i);
+      if (!c.is_constrained(dof))
+        c.add_line(dof);
+    }
   if (homogeneous) {
     for (const auto& d : bcs_.dirichlet())
       VectorTools::interpolate_boundary_values(*mapping_, dof_handler_, d.boundary_id,
@@ -425,10 +505,10 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
   double A[3][3][3][3];
 
   for (const auto& cell : dof_handler_.active_cell_iterators()) {
-    if (!cell->is_locally_owned())
+    if (!cell->is_locally_owned() || !is_active(cell))
       continue;
     fe_values.reinit(cell);
-    const materials::ConstitutiveLaw& law = material(cell->material_id());
+    const materials::ConstitutiveLaw& law = cell_material(cell);
     cell_matrix = 0;
     cell_fint = 0;
     cell_fext = 0;
@@ -812,11 +892,11 @@ template <int dim>
 double MechanicsSolver<dim>::stable_time_step() const {
   double dt = std::numeric_limits<double>::max();
   for (const auto& cell : dof_handler_.active_cell_iterators())
-    if (cell->is_locally_owned()) {
+    if (cell->is_locally_owned() && is_active(cell)) {
       // The shortest edge (not the diameter) bounds the highest mode of distorted cells;
       // degree p splits the edge into p node spacings.
       const double h = cell->minimum_vertex_distance() / prm_.fe_degree;
-      dt = std::min(dt, h / material(cell->material_id()).p_wave_speed());
+      dt = std::min(dt, h / cell_material(cell).p_wave_speed());
     }
   return prm_.cfl_safety_factor * Utilities::MPI::min(dt, comm_);
 }
@@ -831,7 +911,7 @@ void MechanicsSolver<dim>::explicit_step(double dt) {
 
   const double a = prm_.mass_damping;
   for (const auto i : owned_) {
-    if (hanging_.is_constrained(i))
+    if (hanging_.is_constrained(i) || orphan_[relevant_.index_within_set(i)])
       continue;
     const double m = lumped_mass_(i);
     if (!(m > 0))
@@ -847,6 +927,8 @@ void MechanicsSolver<dim>::explicit_step(double dt) {
     VectorTools::interpolate_boundary_values(*mapping_, dof_handler_, d.boundary_id, *d.function, g,
                                              d.mask);
   }
+  for (const auto& [dof, value] : driven_)
+    g.emplace(dof, value); // boundary values take precedence over driven values
   for (const auto& [dof, value] : g)
     if (owned_.is_element(dof) && !hanging_.is_constrained(dof)) {
       v_(dof) = (value - u_ghost_(dof)) / dt;
@@ -886,7 +968,7 @@ double MechanicsSolver<dim>::strain_energy() const {
   FEValues<dim> fe_values(*mapping_, fe_, quadrature_, update_JxW_values);
   double e = 0;
   for (const auto& cell : dof_handler_.active_cell_iterators())
-    if (cell->is_locally_owned()) {
+    if (cell->is_locally_owned() && is_active(cell)) {
       fe_values.reinit(cell);
       const auto data = quadrature_point_data(cell);
       for (unsigned int q = 0; q < quadrature_.size(); ++q)
@@ -899,7 +981,7 @@ template <int dim>
 double MechanicsSolver<dim>::max_von_mises() const {
   double m = 0;
   for (const auto& cell : dof_handler_.active_cell_iterators())
-    if (cell->is_locally_owned())
+    if (cell->is_locally_owned() && is_active(cell))
       for (const auto& d : quadrature_point_data(cell))
         m = std::max(m, von_mises(d.cauchy_stress));
   return Utilities::MPI::max(m, comm_);
@@ -953,16 +1035,20 @@ std::string MechanicsSolver<dim>::write_output(const std::string& directory,
       dim, DataComponentInterpretation::component_is_part_of_vector);
   data_out.add_data_vector(u_ghost_, names, DataOut<dim>::type_dof_data, interpretation);
   const Vector<float> vm = cell_von_mises(), ep = cell_equivalent_plastic_strain();
-  Vector<float> material_id(tria_.n_active_cells()), subdomain(tria_.n_active_cells());
-  for (const auto& cell : tria_.active_cell_iterators())
+  Vector<float> material_id(tria_.n_active_cells()), subdomain(tria_.n_active_cells()),
+      active(tria_.n_active_cells());
+  for (const auto& cell : dof_handler_.active_cell_iterators())
     if (cell->is_locally_owned()) {
       material_id(cell->active_cell_index()) = cell->material_id();
       subdomain(cell->active_cell_index()) = tria_.locally_owned_subdomain();
+      active(cell->active_cell_index()) = is_active(cell) ? 1.f : 0.f;
     }
   data_out.add_data_vector(vm, "von_mises");
   data_out.add_data_vector(ep, "equivalent_plastic_strain");
   data_out.add_data_vector(material_id, "material_id");
   data_out.add_data_vector(subdomain, "subdomain");
+  if (!active_.empty())
+    data_out.add_data_vector(active, "fem_active");
   data_out.build_patches(*mapping_, prm_.fe_degree);
   const std::string dir =
       directory.empty() || directory.back() == '/' ? directory : directory + "/";

@@ -30,6 +30,7 @@
 #include <deal.II/lac/trilinos_vector.h>
 #include <deal.II/lac/vector.h>
 
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -98,6 +99,26 @@ class MechanicsSolver {
 
   // Distributes dofs, builds sparsity, history, lumped mass. Called lazily if needed; call
   // again after changing the mesh (history is reset then).
+  // Per-cell laws (e.g. CT density-mapped moduli): evaluated in setup() for every locally
+  // owned and ghost cell; a null return falls back to the law of the cell's material id.
+  using CellLawFunction = std::function<std::shared_ptr<const materials::ConstitutiveLaw>(
+      const typename dealii::Triangulation<dim>::active_cell_iterator&)>;
+  void set_cell_laws(CellLawFunction f);
+
+  // Cell deactivation (element-to-particle conversion without remeshing): flags by
+  // active_cell_index, to be set consistently for locally owned and ghost cells. Inactive
+  // cells contribute neither stiffness nor mass; DoFs touched by no active cell are held
+  // fixed (or driven). An empty vector means every cell is active.
+  void set_active_cells(const std::vector<bool>& active);
+  bool is_active(const CellIterator& cell) const {
+    return active_.empty() || active_[cell->active_cell_index()];
+  }
+  const std::vector<bool>& active_cells() const { return active_; }
+  // Driven DoFs: displacement values [m] imposed on these (locally relevant) DoFs, e.g. the
+  // interface nodes of the coupling. Explicit steps set u and v = Δu/Δt; quasi-static solves
+  // treat them as inhomogeneous constraints. Replaces the previous set.
+  void set_driven_dofs(const std::map<dealii::types::global_dof_index, double>& values);
+
   void setup();
 
   // Quasi-static: equilibrium at `time` [s], ramping from the last converged state.
@@ -142,6 +163,8 @@ class MechanicsSolver {
   const dealii::Quadrature<dim>& quadrature() const { return quadrature_; }
   const Parameters& parameters() const { return prm_; }
   const materials::ConstitutiveLaw& material(dealii::types::material_id id) const;
+  const materials::ConstitutiveLaw& cell_material(const CellIterator& cell) const;
+  const VectorType& lumped_mass() const { return lumped_mass_; } // owned [kg]
   dealii::ArrayView<const QuadraturePointData>
   quadrature_point_data(const CellIterator& cell) const;
   const Timings& timings() const { return timings_; }
@@ -165,6 +188,8 @@ class MechanicsSolver {
   double load_blend(dealii::Function<dim>& f, const dealii::Point<dim>& x, unsigned int c,
                     double load_factor) const;
   void build_rigid_body_modes();
+  void compute_lumped_mass();
+  void mark_orphan_dofs();
 
   MPI_Comm comm_;
   dealii::parallel::distributed::Triangulation<dim>& tria_;
@@ -187,6 +212,12 @@ class MechanicsSolver {
   std::vector<QuadraturePointData> committed_, trial_;
 
   // Quasi-static load path: boundary values at the start of the solve and targets at the end.
+  CellLawFunction cell_law_function_;
+  std::vector<std::shared_ptr<const materials::ConstitutiveLaw>> cell_laws_; // by cell index
+  std::vector<bool> active_;
+  std::vector<bool> orphan_; // relevant DoFs touched by no active cell (by local index)
+  std::map<dealii::types::global_dof_index, double> driven_;
+
   std::map<dealii::types::global_dof_index, double> dirichlet_start_, dirichlet_target_;
   double time_ = 0, previous_time_ = 0, target_time_ = 0;
   bool loaded_ = false; // loads of previous_time_ are active (false before the first solve)
