@@ -95,7 +95,7 @@ void CellIndicators<dim>::compute(const MechanicsSolver<dim>& solver) {
       emax = std::max(emax, len);
     }
     aspect_ratio(c) = emin > 0 ? emax / emin : std::numeric_limits<float>::max();
-    const double wave = solver.material(cell->material_id()).p_wave_speed();
+    const double wave = solver.cell_material(cell).p_wave_speed();
     stable_time_step(c) = prm_.cfl_safety_factor * emin / (degree * wave);
 
     double ep = 0, e1 = -std::numeric_limits<double>::max(), s1 = e1;

@@ -150,6 +150,11 @@ void MechanicsSolver<dim>::Parameters::declare(ParameterHandler& prm) {
                     "Fraction of the CFL stable step used by the explicit integrator [-].");
   prm.declare_entry("Mass damping", "0", Patterns::Double(0),
                     "Mass-proportional damping coefficient alpha [1/s].");
+  prm.declare_entry("Taylor-Quinney coefficient", "0.9", Patterns::Double(0, 1),
+                    "Fraction beta of the plastic work turned into heat when Heat and Mechanics "
+                    "are both on (plastic-work heating; 0 switches it off) [-]. 0.9 is the "
+                    "classical value for metals (Taylor & Quinney, Proc. R. Soc. A 143 (1934) "
+                    "307); measured 0.6-1 depending on strain and rate.");
   prm.enter_subsection("Boundary conditions");
   BoundaryConditions<dim>::Parameters::declare(prm);
   prm.leave_subsection();
@@ -170,6 +175,9 @@ void MechanicsSolver<dim>::Parameters::parse(const ParameterHandler& prm) {
   max_linear_iterations = prm.get_integer("Max linear iterations");
   cfl_safety_factor = prm.get_double("CFL safety factor");
   mass_damping = prm.get_double("Mass damping");
+  taylor_quinney = prm.get_double("Taylor-Quinney coefficient");
+  if (!(taylor_quinney >= 0 && taylor_quinney <= 1))
+    throw InvalidInput("Taylor-Quinney coefficient", "must lie in [0, 1]", "0 <= beta <= 1");
   if (!(newton_tolerance > 0))
     throw InvalidInput("Newton tolerance", "must be positive", "a value in (0, 1)");
   if (!(linear_tolerance > 0))
@@ -228,6 +236,46 @@ void MechanicsSolver<dim>::set_temperature_change(std::shared_ptr<Function<dim>>
   if (dT && dT->n_components != 1)
     throw InvalidInput("temperature change", "needs one component", "a scalar function [K]");
   temperature_change_ = std::move(dT);
+}
+
+template <int dim>
+void MechanicsSolver<dim>::set_temperature_field(const DoFHandler<dim>& temperature_dofs,
+                                                 const VectorType& temperature_ghosted,
+                                                 double reference_temperature) {
+  if (&temperature_dofs.get_triangulation() != &tria_)
+    throw InvalidInput("temperature field", "lives on another triangulation",
+                       "a DoFHandler on the mechanics' own triangulation");
+  temperature_dofs_ = &temperature_dofs;
+  temperature_field_ = &temperature_ghosted;
+  reference_temperature_ = reference_temperature;
+  dT_start_.clear();
+  dT_target_.clear();
+  if (is_setup_ && temperature_dofs.has_active_dofs())
+    evaluate_temperature_field(dT_target_);
+}
+
+template <int dim>
+void MechanicsSolver<dim>::evaluate_temperature_field(std::vector<double>& dT) const {
+  if (!temperature_dofs_->has_active_dofs() ||
+      temperature_dofs_->get_fe().n_components() != 1)
+    throw InvalidInput("temperature field", "DoFHandler without a scalar element",
+                       "call set_temperature_field() with a set-up scalar (heat) DoFHandler");
+  // Same triangulation, so cell (level, index) pairs coincide; only values at the unit
+  // quadrature points are needed (no mapping).
+  const unsigned int nq = quadrature_.size();
+  dT.assign(tria_.n_active_cells() * nq, 0.0);
+  FEValues<dim> fe_values(temperature_dofs_->get_fe(), quadrature_, update_values);
+  std::vector<double> T(nq);
+  for (const auto& cell : tria_.active_cell_iterators()) {
+    if (!cell->is_locally_owned())
+      continue;
+    const typename DoFHandler<dim>::active_cell_iterator heat_cell(&tria_, cell->level(),
+                                                                   cell->index(), temperature_dofs_);
+    fe_values.reinit(heat_cell);
+    fe_values.get_function_values(*temperature_field_, T);
+    for (unsigned int q = 0; q < nq; ++q)
+      dT[cell->active_cell_index() * nq + q] = T[q] - reference_temperature_;
+  }
 }
 
 template <int dim>
@@ -330,6 +378,11 @@ void MechanicsSolver<dim>::setup() {
   compute_lumped_mass();
   build_rigid_body_modes();
   update_ghosts();
+  dT_start_.clear();
+  dT_target_.clear();
+  if (temperature_field_ && temperature_dofs_->has_active_dofs())
+    evaluate_temperature_field(dT_target_); // the field at the current time
+  plastic_work_mark_.clear();
   is_setup_ = true;
 }
 
@@ -458,9 +511,14 @@ void MechanicsSolver<dim>::make_constraints(AffineConstraints<double>& c, bool h
         c.add_line(dof);
     }
   if (homogeneous) {
+    // By boundary id or region (BoundaryConditions::interpolate); first constraint wins.
+    std::map<types::global_dof_index, double> fixed;
     for (const auto& d : bcs_.dirichlet())
-      VectorTools::interpolate_boundary_values(*mapping_, dof_handler_, d.boundary_id,
-                                               Functions::ZeroFunction<dim>(dim), c, d.mask);
+      BoundaryConditions<dim>::interpolate(d, *mapping_, dof_handler_,
+                                           Functions::ZeroFunction<dim>(dim), fixed);
+    for (const auto& [dof, zero] : fixed)
+      if (!c.is_constrained(dof))
+        c.add_line(dof);
   } else {
     for (const auto& [dof, target_end] : dirichlet_target_) {
       if (c.is_constrained(dof))
@@ -519,8 +577,12 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
       const QuadraturePointData& old = committed_[idx];
       QuadraturePointData& tr = trial_[idx];
       const Point<dim>& xq = fe_values.quadrature_point(q);
-      const double dT =
-          temperature_change_ ? load_blend(*temperature_change_, xq, 0, load_factor) : 0.0;
+      double dT = 0.0;
+      if (temperature_field_) // blended like load_blend(): from the previous solve's field
+        dT = load_factor * dT_target_[idx] +
+             (loaded_ && load_factor < 1.0 ? (1.0 - load_factor) * dT_start_[idx] : 0.0);
+      else if (temperature_change_)
+        dT = load_blend(*temperature_change_, xq, 0, load_factor);
       Tensor2 H;
       for (unsigned int i = 0; i < dim; ++i)
         for (unsigned int j = 0; j < dim; ++j)
@@ -634,11 +696,12 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
         if (!cell->face(f)->at_boundary())
           continue;
         const types::boundary_id bid = cell->face(f)->boundary_id();
+        const Point<dim> centre = cell->face(f)->center(); // by boundary id or region
         bool loaded = false;
         for (const auto& t : bcs_.traction())
-          loaded |= t.boundary_id == bid;
+          loaded |= t.acts_on(bid, centre);
         for (const auto& p : bcs_.pressure())
-          loaded |= p.boundary_id == bid;
+          loaded |= p.acts_on(bid, centre);
         if (!loaded)
           continue;
         fe_face.reinit(cell, f);
@@ -646,11 +709,11 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
           const Point<dim>& xq = fe_face.quadrature_point(q);
           Tensor<1, dim> t;
           for (const auto& tr : bcs_.traction())
-            if (tr.boundary_id == bid)
+            if (tr.acts_on(bid, centre))
               for (unsigned int c = 0; c < dim; ++c)
                 t[c] += load_blend(*tr.function, xq, c, load_factor);
           for (const auto& p : bcs_.pressure())
-            if (p.boundary_id == bid)
+            if (p.acts_on(bid, centre))
               t -= load_blend(*p.function, xq, 0, load_factor) * fe_face.normal_vector(q);
           for (unsigned int i = 0; i < n; ++i)
             cell_fext(i) += t[comp[i]] * fe_face.shape_value(i, q) * fe_face.JxW(q);
@@ -832,13 +895,20 @@ MechanicsSolver<dim>::solve_quasi_static(double time) {
     setup();
   previous_time_ = time_;
   target_time_ = time;
+  mark_plastic_work();
+  if (temperature_field_) { // the field now belongs to `time`; the last one to previous_time_
+    dT_start_.swap(dT_target_);
+    evaluate_temperature_field(dT_target_);
+    if (dT_start_.size() != dT_target_.size())
+      dT_start_ = dT_target_;
+  }
   // Boundary values now and at the target time.
   dirichlet_start_.clear();
   dirichlet_target_.clear();
   for (const auto& d : bcs_.dirichlet()) {
     d.function->set_time(time);
-    VectorTools::interpolate_boundary_values(*mapping_, dof_handler_, d.boundary_id, *d.function,
-                                             dirichlet_target_, d.mask);
+    BoundaryConditions<dim>::interpolate(d, *mapping_, dof_handler_, *d.function,
+                                         dirichlet_target_);
   }
   for (const auto& [dof, value] : dirichlet_target_)
     dirichlet_start_[dof] = u_ghost_(dof);
@@ -907,6 +977,8 @@ void MechanicsSolver<dim>::explicit_step(double dt) {
     setup();
   target_time_ = time_;
   loaded_ = false; // loads are evaluated at the current time only
+  if (temperature_field_)
+    evaluate_temperature_field(dT_target_);
   assemble(false, 1.0, hanging_);
 
   const double a = prm_.mass_damping;
@@ -924,8 +996,7 @@ void MechanicsSolver<dim>::explicit_step(double dt) {
   std::map<types::global_dof_index, double> g;
   for (const auto& d : bcs_.dirichlet()) {
     d.function->set_time(time_ + dt);
-    VectorTools::interpolate_boundary_values(*mapping_, dof_handler_, d.boundary_id, *d.function, g,
-                                             d.mask);
+    BoundaryConditions<dim>::interpolate(d, *mapping_, dof_handler_, *d.function, g);
   }
   for (const auto& [dof, value] : driven_)
     g.emplace(dof, value); // boundary values take precedence over driven values
@@ -948,6 +1019,30 @@ void MechanicsSolver<dim>::explicit_step(double dt) {
   update_ghosts();
 }
 
+template <int dim>
+void MechanicsSolver<dim>::set_state(const VectorType& displacement, const VectorType& velocity) {
+  if (!is_setup_)
+    setup();
+  u_ = displacement;
+  v_ = velocity;
+  hanging_.distribute(u_);
+  hanging_.distribute(v_);
+  update_ghosts();
+}
+
+template <int dim>
+const typename MechanicsSolver<dim>::VectorType& MechanicsSolver<dim>::evaluate_residual() {
+  if (!is_setup_)
+    setup();
+  target_time_ = time_;
+  loaded_ = false;
+  if (temperature_field_)
+    evaluate_temperature_field(dT_target_);
+  assemble(false, 1.0, hanging_);
+  trial_ = committed_;
+  return raw_residual_;
+}
+
 // ---------------------------------------------------------------- results
 
 template <int dim>
@@ -961,6 +1056,60 @@ Tensor<1, dim> MechanicsSolver<dim>::reaction_force(types::boundary_id id) const
     r[c] = Utilities::MPI::sum(r[c], comm_);
   }
   return r;
+}
+
+template <int dim>
+void MechanicsSolver<dim>::mark_plastic_work() {
+  if (!is_setup_)
+    setup();
+  FEValues<dim> fe_values(*mapping_, fe_, quadrature_, update_JxW_values);
+  plastic_work_mark_.assign(tria_.n_active_cells(), 0.0);
+  for (const auto& cell : dof_handler_.active_cell_iterators())
+    if (cell->is_locally_owned()) {
+      fe_values.reinit(cell);
+      const auto data = quadrature_point_data(cell);
+      double w = 0;
+      for (unsigned int q = 0; q < quadrature_.size(); ++q)
+        w += data[q].state.plastic_work * fe_values.JxW(q);
+      plastic_work_mark_[cell->active_cell_index()] = w;
+    }
+  plastic_work_mark_time_ = time_;
+}
+
+template <int dim>
+Vector<double> MechanicsSolver<dim>::cell_plastic_dissipation_rate() const {
+  Vector<double> rate(tria_.n_active_cells());
+  const double elapsed = time_ - plastic_work_mark_time_;
+  if (!is_setup_ || plastic_work_mark_.size() != tria_.n_active_cells() || !(elapsed > 0))
+    return rate;
+  FEValues<dim> fe_values(*mapping_, fe_, quadrature_, update_JxW_values);
+  for (const auto& cell : dof_handler_.active_cell_iterators())
+    if (cell->is_locally_owned()) {
+      fe_values.reinit(cell);
+      const auto data = quadrature_point_data(cell);
+      double w = 0, volume = 0;
+      for (unsigned int q = 0; q < quadrature_.size(); ++q) {
+        w += data[q].state.plastic_work * fe_values.JxW(q);
+        volume += fe_values.JxW(q);
+      }
+      rate(cell->active_cell_index()) =
+          (w - plastic_work_mark_[cell->active_cell_index()]) / (volume * elapsed);
+    }
+  return rate;
+}
+
+template <int dim>
+double MechanicsSolver<dim>::plastic_work() const {
+  FEValues<dim> fe_values(*mapping_, fe_, quadrature_, update_JxW_values);
+  double w = 0;
+  for (const auto& cell : dof_handler_.active_cell_iterators())
+    if (cell->is_locally_owned()) {
+      fe_values.reinit(cell);
+      const auto data = quadrature_point_data(cell);
+      for (unsigned int q = 0; q < quadrature_.size(); ++q)
+        w += data[q].state.plastic_work * fe_values.JxW(q);
+    }
+  return Utilities::MPI::sum(w, comm_);
 }
 
 template <int dim>

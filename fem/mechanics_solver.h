@@ -69,6 +69,7 @@ class MechanicsSolver {
     unsigned int max_linear_iterations = 1000;
     double cfl_safety_factor = 0.5;
     double mass_damping = 0.0; // [1/s]
+    double taylor_quinney = 0.9; // fraction of plastic work turned into heat [-]
     typename BoundaryConditions<dim>::Parameters boundary_conditions;
 
     static void declare(dealii::ParameterHandler& prm);
@@ -96,6 +97,14 @@ class MechanicsSolver {
   BoundaryConditions<dim>& boundary_conditions() { return bcs_; }
   void set_body_force(std::shared_ptr<dealii::Function<dim>> f);          // dim comps, x,t [N/m^3]
   void set_temperature_change(std::shared_ptr<dealii::Function<dim>> dT); // scalar [K]
+  // Thermal expansion from a scalar FE temperature field on the SAME triangulation (the heat
+  // solver's DoFHandler and ghosted solution; both must outlive this solver): T − T_reference
+  // [K] is evaluated with FEValues on the matching heat cell at this solver's quadrature
+  // points, once per quasi-static solve (blended over the load steps from the field of the
+  // previous solve, like every load) and once per explicit step. Takes precedence over
+  // set_temperature_change(); the fast path for staggered heat -> mechanics coupling.
+  void set_temperature_field(const dealii::DoFHandler<dim>& temperature_dofs,
+                             const VectorType& temperature_ghosted, double reference_temperature);
 
   // Distributes dofs, builds sparsity, history, lumped mass. Called lazily if needed; call
   // again after changing the mesh (history is reset then).
@@ -129,7 +138,23 @@ class MechanicsSolver {
   double stable_time_step() const;
   void explicit_step(double dt);
 
+  // Plastic-work heating. The mark (per-cell ∫ w_p dV and the time) is set at the start of
+  // every solve_quasi_static() and by mark_plastic_work() (call it before a series of
+  // explicit steps). cell_plastic_dissipation_rate(): per active cell (active_cell_index,
+  // locally owned entries, others 0), (∫ w_p dV now − at the mark) / (V_cell (t − t_mark))
+  // [W/m^3], from the committed states' plastic_work; zero if no time has passed.
+  void mark_plastic_work();
+  dealii::Vector<double> cell_plastic_dissipation_rate() const;
+  double plastic_work() const; // ∫ w_p dV over the body [J] ([J/m] in 2-D), collective
+
   // Results.
+  // Replaces the displacement and velocity (owned vectors; hanging constraints applied), e.g.
+  // to start a patch test from an exact affine field.
+  void set_state(const VectorType& displacement, const VectorType& velocity);
+  // Internal minus external force at the current state (no history update) [N]; also what
+  // reaction_force() sums afterwards.
+  const VectorType& evaluate_residual();
+
   double time() const { return time_; }
   const VectorType& displacement() const { return u_ghost_; } // ghosted
   const VectorType& velocity() const { return v_ghost_; }     // ghosted, at t - dt/2
@@ -219,6 +244,16 @@ class MechanicsSolver {
   std::map<dealii::types::global_dof_index, double> driven_;
 
   std::map<dealii::types::global_dof_index, double> dirichlet_start_, dirichlet_target_;
+  // set_temperature_field(): T − T_ref per quadrature point (active_cell_index * n_q + q) at
+  // the previous solve and at the target time.
+  void evaluate_temperature_field(std::vector<double>& dT) const;
+  const dealii::DoFHandler<dim>* temperature_dofs_ = nullptr;
+  const VectorType* temperature_field_ = nullptr;
+  double reference_temperature_ = 0;
+  std::vector<double> dT_start_, dT_target_;
+  // mark_plastic_work(): per-cell ∫ w_p dV [J] and the time of the mark.
+  std::vector<double> plastic_work_mark_;
+  double plastic_work_mark_time_ = 0;
   double time_ = 0, previous_time_ = 0, target_time_ = 0;
   bool loaded_ = false; // loads of previous_time_ are active (false before the first solve)
   bool is_setup_ = false;

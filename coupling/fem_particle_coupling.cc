@@ -1,0 +1,1154 @@
+#include "coupling/fem_particle_coupling.h"
+
+#include "fem/cell_indicators.h"
+#include "fem/heat/heat_solver.h"
+#include "fem/materials/failure.h"
+#include "meshfree/neighbor_search.h"
+#include "meshfree/particle_output.h"
+
+#include <deal.II/base/mpi.h>
+#include <deal.II/base/quadrature_lib.h>
+#include <deal.II/base/utilities.h>
+#include <deal.II/dofs/dof_tools.h>
+#include <deal.II/fe/fe_values.h>
+#include <deal.II/lac/full_matrix.h>
+#include <deal.II/lac/vector.h>
+#include <deal.II/numerics/vector_tools.h>
+
+#include <boost/serialization/string.hpp>
+#include <boost/serialization/utility.hpp>
+#include <boost/serialization/vector.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <unordered_map>
+
+namespace spinesim::coupling {
+
+using namespace dealii;
+
+namespace {
+
+std::vector<double> parse_doubles(const std::string& list, const std::string& where) {
+  if (list.empty())
+    return {};
+  try {
+    return Utilities::string_to_double(Utilities::split_string_list(list, ','));
+  } catch (...) {
+    throw InvalidInput(where, "cannot read '" + list + "' as numbers", "comma-separated numbers");
+  }
+}
+
+// Uniform bins of the given size over a point set: candidates within one bin distance.
+template <int dim>
+class PointBins {
+public:
+  PointBins(const std::vector<Point<dim>>& points, double size) : points_(points), size_(size) {
+    for (unsigned int i = 0; i < points.size(); ++i)
+      bins_[key(points[i])].push_back(i);
+  }
+  // Indices of points within `radius` (<= bin size) of x.
+  std::vector<unsigned int> within(const Point<dim>& x, double radius) const {
+    std::vector<unsigned int> out;
+    std::array<long, 3> k = coords(x);
+    const int span = static_cast<int>(std::ceil(radius / size_));
+    std::array<long, 3> o{};
+    for (o[0] = -span; o[0] <= span; ++o[0])
+      for (o[1] = -span; o[1] <= span; ++o[1])
+        for (o[2] = (dim == 3 ? -span : 0); o[2] <= (dim == 3 ? span : 0); ++o[2]) {
+          const auto it = bins_.find(pack({k[0] + o[0], k[1] + o[1], k[2] + o[2]}));
+          if (it == bins_.end())
+            continue;
+          for (const unsigned int i : it->second)
+            if (points_[i].distance(x) <= radius)
+              out.push_back(i);
+        }
+    return out;
+  }
+
+private:
+  std::array<long, 3> coords(const Point<dim>& x) const {
+    std::array<long, 3> k{0, 0, 0};
+    for (unsigned int d = 0; d < dim; ++d)
+      k[d] = static_cast<long>(std::floor(x[d] / size_));
+    return k;
+  }
+  static long long pack(const std::array<long, 3>& k) {
+    return ((k[0] + (1L << 20)) << 42) ^ ((k[1] + (1L << 20)) << 21) ^ (k[2] + (1L << 20));
+  }
+  long long key(const Point<dim>& x) const { return pack(coords(x)); }
+  const std::vector<Point<dim>>& points_;
+  double size_;
+  std::unordered_map<long long, std::vector<unsigned int>> bins_;
+};
+
+// Cubic B-spline weight on [0, 1], w(0) = 1.
+double spline_weight(double r) {
+  if (r >= 1)
+    return 0;
+  if (r <= 0.5)
+    return 2.0 / 3.0 - 4 * r * r + 4 * r * r * r;
+  const double s = 1 - r;
+  return 4.0 / 3.0 * s * s * s;
+}
+
+// A particle made by a conversion or a ghost-layer update, as exchanged between ranks.
+using Record = std::pair<std::string, std::vector<double>>;
+// Layout of the doubles: point index, free flag, Dirichlet slot mask, volume, density, T,
+// x[dim], u[dim], v[dim].
+constexpr unsigned int record_header = 6;
+
+} // namespace
+
+// ---------------------------------------------------------------- parameters
+
+template <int dim>
+void FemParticleCoupling<dim>::Parameters::declare(ParameterHandler& prm) {
+  using namespace dealii::Patterns;
+  prm.declare_entry("Particles per cell direction", "1", Integer(1, 3),
+                    "Particles per converted cell and direction (1, 2^dim or 3^dim per cell, at "
+                    "sub-cell centres) [-].");
+  prm.declare_entry("Ghost layer", "2", Double(1),
+                    "Width of the FEM-driven ghost particle layer around the free particles, in "
+                    "horizons; 2 gives every ghost bonded to a free particle a complete horizon "
+                    "for the surface correction [-].");
+  prm.declare_entry("Interface radius", "2.5", Double(1.5),
+                    "Support radius of the moving-least-squares fit that drives interface FEM "
+                    "nodes from the free particles, in particle spacings [-].");
+  prm.declare_entry("Time step safety", "0.8", Double(0, 1),
+                    "Factor on the PD stable time step (Silling & Askari 2005) [-].");
+  prm.declare_entry("All particles", "false", Bool(),
+                    "Convert every cell at t = 0: the same scene run fully in particles [-].");
+  prm.declare_entry("Initial region lower corner", "", Anything(),
+                    "Lower corner of a box whose cells are particles from t = 0; empty = none "
+                    "[m].");
+  prm.declare_entry("Initial region upper corner", "", Anything(),
+                    "Upper corner of that box [m].");
+  prm.declare_entry("Principal strain threshold", "0", Double(0),
+                    "Convert cells whose maximum principal strain reaches this (e.g. a fraction "
+                    "of the PD critical stretch); 0 = off [-].");
+  prm.declare_entry("Plastic strain threshold", "0", Double(0),
+                    "Convert cells whose equivalent plastic strain reaches this; 0 = off [-].");
+  prm.declare_entry("Minimum Jacobian ratio", "0", Double(0, 1),
+                    "Convert cells whose deformed min/max det J falls below this (distorted or "
+                    "inverted elements); 0 = off [-].");
+  prm.declare_entry("Minimum time step", "0", Double(0),
+                    "Convert cells whose stable explicit step falls below this; 0 = off [s].");
+  prm.declare_entry("Buffer", "0", Double(0),
+                    "Cells whose centre lies within this distance of a flagged cell convert "
+                    "with it, so the particle zone runs ahead of a crack [m].");
+  prm.declare_entry("Check interval", "10", Integer(1),
+                    "Explicit steps between conversion checks [-].");
+  prm.enter_subsection("Bond based");
+  meshfree::BondBasedPD<dim>::Parameters::declare(prm);
+  prm.leave_subsection();
+  for (unsigned int k = 1; k <= 4; ++k) {
+    prm.enter_subsection("Crack " + std::to_string(k));
+    prm.declare_entry("Corners", "", Anything(),
+                      "Pre-crack corners 'x,y; x,y' (2-D segment) or four corners (3-D "
+                      "quadrilateral); bonds crossing it start broken; empty = unused [m].");
+    prm.leave_subsection();
+  }
+}
+
+template <int dim>
+void FemParticleCoupling<dim>::Parameters::parse(const ParameterHandler& cprm) {
+  auto& prm = const_cast<ParameterHandler&>(cprm);
+  particles_per_direction = prm.get_integer("Particles per cell direction");
+  ghost_layer = prm.get_double("Ghost layer");
+  interface_radius = prm.get_double("Interface radius");
+  time_step_safety = prm.get_double("Time step safety");
+  all_particles = prm.get_bool("All particles");
+  region_lower = parse_doubles(prm.get("Initial region lower corner"),
+                               "Coupling/Initial region lower corner");
+  region_upper = parse_doubles(prm.get("Initial region upper corner"),
+                               "Coupling/Initial region upper corner");
+  if (region_lower.size() != region_upper.size() ||
+      (!region_lower.empty() && region_lower.size() < dim))
+    throw InvalidInput("Coupling/Initial region lower corner",
+                       "the two corners need " + std::to_string(dim) + " coordinates each",
+                       "both empty, or both 'x,y" + std::string(dim == 3 ? ",z" : "") + "' [m]");
+  principal_strain_threshold = prm.get_double("Principal strain threshold");
+  plastic_strain_threshold = prm.get_double("Plastic strain threshold");
+  min_jacobian_ratio = prm.get_double("Minimum Jacobian ratio");
+  min_time_step = prm.get_double("Minimum time step");
+  buffer = prm.get_double("Buffer");
+  check_interval = prm.get_integer("Check interval");
+  prm.enter_subsection("Bond based");
+  pd.parse(prm);
+  prm.leave_subsection();
+  cracks.clear();
+  for (unsigned int k = 1; k <= 4; ++k) {
+    prm.enter_subsection("Crack " + std::to_string(k));
+    const std::string corners = prm.get("Corners");
+    prm.leave_subsection();
+    if (corners.empty())
+      continue;
+    std::vector<double> flat;
+    for (const auto& point : Utilities::split_string_list(corners, ';'))
+      for (double v : parse_doubles(point, "Coupling/Crack " + std::to_string(k) + "/Corners"))
+        flat.push_back(v);
+    if (flat.size() != (dim == 2 ? 4u : 12u))
+      throw InvalidInput("Coupling/Crack " + std::to_string(k) + "/Corners",
+                         "has " + std::to_string(flat.size()) + " numbers",
+                         dim == 2 ? "two points 'x,y; x,y' [m]"
+                                  : "four points 'x,y,z; x,y,z; x,y,z; x,y,z' [m]");
+    cracks.push_back(flat);
+  }
+}
+
+template <int dim>
+double FemParticleCoupling<dim>::ConversionReport::mass_change_relative() const {
+  return std::abs(mass_after - mass_before) / std::max(mass_before, 1e-300);
+}
+
+template <int dim>
+double FemParticleCoupling<dim>::ConversionReport::momentum_change_relative() const {
+  return (momentum_after - momentum_before).norm() /
+         std::max(momentum_before.norm(), 1e-300);
+}
+
+// ---------------------------------------------------------------- implementation state
+
+template <int dim>
+struct FemParticleCoupling<dim>::Impl {
+  using DoFCell = typename DoFHandler<dim>::active_cell_iterator;
+  struct InterfaceDof {
+    types::global_dof_index dof;
+    unsigned int component;
+    std::vector<std::pair<unsigned int, double>> weights; // free particle, MLS shape value
+  };
+  struct FixedParticle {
+    unsigned int particle;
+    unsigned int slot; // Dirichlet slot of the solver's boundary conditions
+  };
+  QIterated<dim> points;                      // particle points of a cell (unit cell)
+  FullMatrix<double> shape;                   // N_i(ξ_q), [q][i]
+  std::map<std::string, DoFCell> owned_cells; // locally owned cells by CellId
+  // Ghost particles hosted by locally owned cells: cell and its particle per point.
+  std::vector<std::pair<DoFCell, std::vector<int>>> ghost_cells;
+  std::vector<std::pair<DoFCell, std::vector<int>>> free_cells; // for temperatures
+  std::vector<InterfaceDof> interface;
+  std::vector<FixedParticle> fixed;
+  std::vector<std::uint32_t> fixed_slots; // per particle: Dirichlet slots of its cell
+
+  explicit Impl(unsigned int n) : points(QMidpoint<1>(), n) {}
+};
+
+template <int dim>
+FemParticleCoupling<dim>::FemParticleCoupling(const Parameters& parameters,
+                                              fem::MechanicsSolver<dim>& mechanics,
+                                              const fem::HeatSolver<dim>* heat)
+    : prm_(parameters), fem_(mechanics), heat_(heat),
+      impl_(std::make_unique<Impl>(parameters.particles_per_direction)),
+      particles_(parameters.pd.thickness) {
+  if (fem_.parameters().time_integration != "explicit")
+    throw InvalidInput("Mechanics/Time integration", "coupling runs explicit dynamics",
+                       "explicit (set Mechanics/Time integration = explicit)");
+  if (fem_.parameters().kinematics != "small_strain" || fem_.parameters().fe_degree != 1)
+    throw InvalidInput("Mechanics/Kinematics", "coupling needs small strain with Q1 elements",
+                       "Kinematics = small_strain, Finite element degree = 1");
+}
+
+template <int dim>
+FemParticleCoupling<dim>::~FemParticleCoupling() = default;
+
+template <int dim>
+double FemParticleCoupling<dim>::horizon() const {
+  return prm_.pd.horizon_ratio * spacing_;
+}
+
+template <int dim>
+void FemParticleCoupling<dim>::initialise() {
+  prepare();
+  const MPI_Comm comm = fem_.mpi_communicator();
+  std::vector<std::string> initial;
+  for (const auto& [id, cell] : impl_->owned_cells) {
+    bool inside = prm_.all_particles;
+    if (!inside && !prm_.region_lower.empty()) {
+      inside = true;
+      const Point<dim> c = cell->center();
+      for (unsigned int d = 0; d < dim; ++d)
+        inside &= c[d] >= prm_.region_lower[d] && c[d] <= prm_.region_upper[d];
+    }
+    if (inside)
+      initial.push_back(id);
+  }
+  std::vector<CellId> all;
+  for (const auto& part : Utilities::MPI::all_gather(comm, initial))
+    for (const auto& id : part)
+      all.emplace_back(id);
+  if (!all.empty())
+    convert(all);
+}
+
+template <int dim>
+void FemParticleCoupling<dim>::prepare() {
+  if (pd_)
+    return;
+  if (dim == 2 && prm_.pd.thickness != 1.0)
+    throw InvalidInput("Coupling/Bond based/Thickness", "2-D FEM works per unit thickness",
+                       "1 (results are per metre of thickness) [m]");
+  const auto& dh = fem_.dof_handler();
+  const auto& fe = fem_.fe();
+  impl_->owned_cells.clear();
+  double h_min = std::numeric_limits<double>::max(), h_max = 0;
+  bool have_law = false;
+  for (const auto& cell : dh.active_cell_iterators())
+    if (cell->is_locally_owned()) {
+      impl_->owned_cells.emplace(cell->id().to_string(), cell);
+      h_min = std::min(h_min, cell->minimum_vertex_distance());
+      h_max = std::max(h_max, cell->diameter() / std::sqrt(double(dim)));
+      if (!have_law) {
+        const auto& law = fem_.cell_material(cell);
+        youngs_ = law.youngs_modulus();
+        poisson_ = law.poisson_ratio();
+        density_ = law.density();
+        have_law = true;
+      }
+    }
+  const MPI_Comm comm = fem_.mpi_communicator();
+  h_min = Utilities::MPI::min(h_min, comm);
+  // E, ν, ρ from the lowest rank that owns cells.
+  const unsigned int rank = Utilities::MPI::this_mpi_process(comm);
+  const unsigned int source = Utilities::MPI::min(have_law ? rank : 1u << 30, comm);
+  std::vector<double> props{youngs_, poisson_, density_};
+  props = Utilities::MPI::broadcast(comm, props, source);
+  youngs_ = props[0];
+  poisson_ = props[1];
+  density_ = props[2];
+  // The lattice spacing of the particles (uniform meshes: cell edge / n).
+  spacing_ = h_min / prm_.particles_per_direction;
+
+  impl_->shape.reinit(impl_->points.size(), fe.n_dofs_per_cell());
+  for (unsigned int q = 0; q < impl_->points.size(); ++q)
+    for (unsigned int i = 0; i < fe.n_dofs_per_cell(); ++i)
+      impl_->shape(q, i) = fe.shape_value(i, impl_->points.point(q));
+
+  pd_ = std::make_unique<meshfree::BondBasedPD<dim>>(prm_.pd, youngs_, poisson_);
+}
+
+// ---------------------------------------------------------------- totals
+
+template <int dim>
+double FemParticleCoupling<dim>::total_mass() const {
+  double m = 0;
+  for (unsigned int i = 0; i < particles_.size(); ++i)
+    if (free_[i])
+      m += particles_.mass(i);
+  const auto& lumped = fem_.lumped_mass();
+  double mf = 0;
+  for (const auto i : lumped.locally_owned_elements())
+    mf += lumped(i);
+  mf = Utilities::MPI::sum(mf, fem_.mpi_communicator()) / dim; // one mass per component
+  return m + mf;
+}
+
+template <int dim>
+Tensor<1, dim> FemParticleCoupling<dim>::total_momentum() const {
+  Tensor<1, dim> p;
+  for (unsigned int i = 0; i < particles_.size(); ++i)
+    if (free_[i])
+      p += particles_.mass(i) * particles_.velocity(i);
+  const auto& lumped = fem_.lumped_mass();
+  const auto& v = fem_.velocity();
+  const auto& fe = fem_.fe();
+  std::vector<types::global_dof_index> dofs(fe.n_dofs_per_cell());
+  // Component of each owned DoF via the cells (Q1: one component per DoF).
+  Tensor<1, dim> pf;
+  std::vector<bool> seen(lumped.locally_owned_elements().n_elements(), false);
+  for (const auto& cell : fem_.dof_handler().active_cell_iterators())
+    if (cell->is_locally_owned()) {
+      cell->get_dof_indices(dofs);
+      for (unsigned int i = 0; i < dofs.size(); ++i) {
+        if (!lumped.locally_owned_elements().is_element(dofs[i]))
+          continue;
+        const auto local = lumped.locally_owned_elements().index_within_set(dofs[i]);
+        if (seen[local])
+          continue;
+        seen[local] = true;
+        pf[fe.system_to_component_index(i).first] += lumped(dofs[i]) * v(dofs[i]);
+      }
+    }
+  for (unsigned int d = 0; d < dim; ++d)
+    pf[d] = Utilities::MPI::sum(pf[d], fem_.mpi_communicator());
+  return p + pf;
+}
+
+template <int dim>
+double FemParticleCoupling<dim>::kinetic_energy() const {
+  double e = 0;
+  for (unsigned int i = 0; i < particles_.size(); ++i)
+    if (free_[i])
+      e += 0.5 * particles_.mass(i) * particles_.velocity(i).norm_square();
+  return e + fem_.kinetic_energy();
+}
+
+template <int dim>
+double FemParticleCoupling<dim>::strain_energy() const {
+  // Bonds are stored from free particles only: W = ¼ Σ k e² over the free rows.
+  const auto w = pd_ ? pd_->strain_energy_density(particles_, bonds_) : std::vector<double>();
+  double e = 0;
+  for (unsigned int i = 0; i < w.size(); ++i)
+    if (free_[i])
+      e += w[i] * particles_.volume(i);
+  return e + fem_.strain_energy();
+}
+
+// ---------------------------------------------------------------- conversion
+
+template <int dim>
+std::vector<CellId> FemParticleCoupling<dim>::flagged_cells() const {
+  const bool any = prm_.principal_strain_threshold > 0 || prm_.plastic_strain_threshold > 0 ||
+                   prm_.min_jacobian_ratio > 0 || prm_.min_time_step > 0;
+  std::vector<Point<dim>> centres;
+  if (any) {
+    fem::CellIndicators<dim> indicators;
+    indicators.compute(fem_);
+    for (const auto& [id, cell] : impl_->owned_cells) {
+      if (!fem_.is_active(cell))
+        continue;
+      const unsigned int c = cell->active_cell_index();
+      bool flag = false;
+      flag |= prm_.principal_strain_threshold > 0 &&
+              indicators.max_principal_strain(c) >= prm_.principal_strain_threshold;
+      flag |= prm_.plastic_strain_threshold > 0 &&
+              indicators.equivalent_plastic_strain(c) >= prm_.plastic_strain_threshold;
+      flag |= prm_.min_jacobian_ratio > 0 &&
+              indicators.min_jacobian_ratio(c) <= prm_.min_jacobian_ratio;
+      flag |= prm_.min_time_step > 0 && indicators.stable_time_step(c) <= prm_.min_time_step;
+      if (flag)
+        centres.push_back(cell->center());
+    }
+  }
+  const MPI_Comm comm = fem_.mpi_communicator();
+  std::vector<Point<dim>> all_centres;
+  for (const auto& part : Utilities::MPI::all_gather(comm, centres))
+    all_centres.insert(all_centres.end(), part.begin(), part.end());
+  std::vector<std::string> mine;
+  if (!all_centres.empty()) {
+    const double reach = std::max(prm_.buffer, 1e-9 * spacing_);
+    PointBins<dim> bins(all_centres, std::max(prm_.buffer, spacing_));
+    for (const auto& [id, cell] : impl_->owned_cells)
+      if (fem_.is_active(cell) && !bins.within(cell->center(), reach).empty())
+        mine.push_back(id);
+  }
+  std::vector<CellId> out;
+  for (const auto& part : Utilities::MPI::all_gather(comm, mine))
+    for (const auto& id : part)
+      out.emplace_back(id);
+  return out;
+}
+
+template <int dim>
+typename FemParticleCoupling<dim>::ConversionReport FemParticleCoupling<dim>::convert_flagged() {
+  const auto cells = flagged_cells();
+  if (cells.empty())
+    return ConversionReport();
+  return convert(cells);
+}
+
+template <int dim>
+typename FemParticleCoupling<dim>::ConversionReport
+FemParticleCoupling<dim>::convert(const std::vector<CellId>& cells) {
+  ConversionReport report;
+  std::set<std::string> todo;
+  for (const auto& id : cells) {
+    const std::string s = id.to_string();
+    if (!converted_.count(s))
+      todo.insert(s);
+  }
+  report.cells = static_cast<unsigned int>(todo.size());
+  if (todo.empty())
+    return report;
+  const MPI_Comm comm = fem_.mpi_communicator();
+  report.mass_before = total_mass();
+  report.momentum_before = total_momentum();
+  report.kinetic_before = kinetic_energy();
+
+  // Records of the new free particles from the ranks owning their cells.
+  const auto& fe = fem_.fe();
+  const auto& bcs = fem_.boundary_conditions().dirichlet();
+  FEValues<dim> at_points(fem_.mapping(), fe, impl_->points,
+                          update_values | update_quadrature_points | update_JxW_values);
+  FEValues<dim> at_gauss(fem_.mapping(), fe, fem_.quadrature(), update_values | update_JxW_values);
+  const FEValuesExtractors::Vector disp(0);
+  const unsigned int np = impl_->points.size();
+  std::vector<Tensor<1, dim>> u(np), v(np), vg(fem_.quadrature().size());
+  std::vector<double> temperature(np, 0.0);
+  std::vector<Record> mine;
+  for (const auto& id : todo) {
+    const auto it = impl_->owned_cells.find(id);
+    if (it == impl_->owned_cells.end())
+      continue;
+    const auto& cell = it->second;
+    at_points.reinit(cell);
+    at_gauss.reinit(cell);
+    at_points[disp].get_function_values(fem_.displacement(), u);
+    at_points[disp].get_function_values(fem_.velocity(), v);
+    at_gauss[disp].get_function_values(fem_.velocity(), vg);
+    if (heat_)
+      heat_->temperature_at_unit_points(cell, impl_->points.get_points(), temperature);
+    const double rho = fem_.cell_material(cell).density();
+    // The mass and momentum this cell takes out of the lumped FEM mass (same quadrature).
+    double cell_mass = 0;
+    Tensor<1, dim> cell_momentum;
+    for (unsigned int q = 0; q < vg.size(); ++q) {
+      cell_mass += rho * at_gauss.JxW(q);
+      cell_momentum += rho * at_gauss.JxW(q) * vg[q];
+    }
+    double volume = 0;
+    for (unsigned int q = 0; q < np; ++q)
+      volume += at_points.JxW(q);
+    const double scale = cell_mass / (rho * volume); // 1 up to round-off on parallelograms
+    Tensor<1, dim> p_interp;
+    for (unsigned int q = 0; q < np; ++q)
+      p_interp += rho * at_points.JxW(q) * scale * v[q];
+    const Tensor<1, dim> dv = (cell_momentum - p_interp) / cell_mass;
+    std::uint32_t slots = 0;
+    for (unsigned int k = 0; k < bcs.size(); ++k)
+      for (const unsigned int f : cell->face_indices())
+        if (cell->face(f)->at_boundary() && cell->face(f)->boundary_id() == bcs[k].boundary_id)
+          slots |= 1u << k;
+    for (unsigned int q = 0; q < np; ++q) {
+      std::vector<double> r{double(q), 1.0, double(slots), at_points.JxW(q) * scale, rho,
+                            temperature[q]};
+      for (unsigned int d = 0; d < dim; ++d)
+        r.push_back(at_points.quadrature_point(q)[d]);
+      for (unsigned int d = 0; d < dim; ++d)
+        r.push_back(u[q][d]);
+      for (unsigned int d = 0; d < dim; ++d)
+        r.push_back(v[q][d] + dv[d]);
+      mine.emplace_back(id, std::move(r));
+    }
+  }
+  unsigned int added = 0;
+  for (const auto& part : Utilities::MPI::all_gather(comm, mine))
+    for (const auto& [id, r] : part) {
+      const unsigned int q = static_cast<unsigned int>(r[0]);
+      unsigned int i;
+      const auto existing = index_of_.find({id, q});
+      Point<dim> x;
+      for (unsigned int d = 0; d < dim; ++d)
+        x[d] = r[record_header + d];
+      if (existing != index_of_.end()) {
+        i = existing->second;
+      } else {
+        i = particles_.add_particle(x, r[3]);
+        index_of_[{id, q}] = i;
+        free_.push_back(0);
+        host_cell_.push_back(id);
+        host_point_.push_back(q);
+        impl_->fixed_slots.push_back(0);
+      }
+      free_[i] = 1;
+      impl_->fixed_slots[i] = static_cast<std::uint32_t>(r[2]);
+      particles_.volume(i) = r[3];
+      particles_.density(i) = r[4];
+      particles_.temperature(i) = r[5];
+      for (unsigned int d = 0; d < dim; ++d) {
+        particles_.displacement(i)[d] = r[record_header + dim + d];
+        particles_.velocity(i)[d] = r[record_header + 2 * dim + d];
+      }
+      ++added;
+    }
+  report.particles = added;
+  const unsigned int batch = static_cast<unsigned int>(reports_.size());
+  for (const auto& id : todo)
+    converted_.emplace(id, batch);
+
+  // Deactivate the converted cells (owned and ghost cells, by CellId).
+  std::vector<bool> active(fem_.dof_handler().get_triangulation().n_active_cells(), true);
+  for (const auto& cell : fem_.dof_handler().active_cell_iterators())
+    if ((cell->is_locally_owned() || cell->is_ghost()) && converted_.count(cell->id().to_string()))
+      active[cell->active_cell_index()] = false;
+  fem_.set_active_cells(active);
+  rebuild_interface();
+
+  report.mass_after = total_mass();
+  report.momentum_after = total_momentum();
+  report.kinetic_after = kinetic_energy();
+  reports_.push_back(report);
+  return report;
+}
+
+// ---------------------------------------------------------------- interface
+
+template <int dim>
+void FemParticleCoupling<dim>::rebuild_interface() {
+  const MPI_Comm comm = fem_.mpi_communicator();
+  const auto& fe = fem_.fe();
+  const unsigned int np = impl_->points.size();
+
+  // 1. Ghost particles: every point of an active cell near a free particle (whole cells).
+  std::vector<Point<dim>> free_points;
+  for (unsigned int i = 0; i < particles_.size(); ++i)
+    if (free_[i])
+      free_points.push_back(particles_.reference_position(i));
+  // Bonds reach δ + h/2 (partial volumes), so a ghost bonded to a free particle needs ghosts
+  // out to 2(δ + h/2) for a complete horizon of its own.
+  const double reach = prm_.ghost_layer * (horizon() + 0.5 * spacing_) + 0.5 * spacing_;
+  PointBins<dim> free_bins(free_points, reach);
+  std::vector<Record> mine;
+  for (const auto& [id, cell] : impl_->owned_cells) {
+    if (!fem_.is_active(cell))
+      continue;
+    std::vector<Point<dim>> xs(np);
+    bool near = false;
+    for (unsigned int q = 0; q < np; ++q) {
+      xs[q] = fem_.mapping().transform_unit_to_real_cell(cell, impl_->points.point(q));
+      near |= !free_bins.within(xs[q], reach).empty();
+    }
+    if (!near || index_of_.count({id, 0}))
+      continue;
+    FEValues<dim> at_points(fem_.mapping(), fe, impl_->points, update_JxW_values);
+    at_points.reinit(cell);
+    const double rho = fem_.cell_material(cell).density();
+    for (unsigned int q = 0; q < np; ++q) {
+      std::vector<double> r{double(q), 0.0, 0.0, at_points.JxW(q), rho, 0.0};
+      for (unsigned int d = 0; d < dim; ++d)
+        r.push_back(xs[q][d]);
+      for (unsigned int d = 0; d < 2 * dim; ++d)
+        r.push_back(0.0);
+      mine.emplace_back(id, std::move(r));
+    }
+  }
+  for (const auto& part : Utilities::MPI::all_gather(comm, mine))
+    for (const auto& [id, r] : part) {
+      Point<dim> x;
+      for (unsigned int d = 0; d < dim; ++d)
+        x[d] = r[record_header + d];
+      const unsigned int i = particles_.add_particle(x, r[3]);
+      particles_.density(i) = r[4];
+      index_of_[{id, static_cast<unsigned int>(r[0])}] = i;
+      free_.push_back(0);
+      host_cell_.push_back(id);
+      host_point_.push_back(static_cast<unsigned int>(r[0]));
+      impl_->fixed_slots.push_back(0);
+    }
+
+  // 2. Local host-cell tables for ghosts (displacements) and free particles (temperatures).
+  impl_->ghost_cells.clear();
+  impl_->free_cells.clear();
+  std::map<std::string, std::vector<int>> by_cell_ghost, by_cell_free;
+  for (unsigned int i = 0; i < particles_.size(); ++i) {
+    if (!impl_->owned_cells.count(host_cell_[i]))
+      continue;
+    auto& table = free_[i] ? by_cell_free : by_cell_ghost;
+    auto& row = table[host_cell_[i]];
+    row.resize(np, -1);
+    row[host_point_[i]] = static_cast<int>(i);
+  }
+  for (auto& [id, row] : by_cell_ghost)
+    impl_->ghost_cells.emplace_back(impl_->owned_cells.at(id), std::move(row));
+  for (auto& [id, row] : by_cell_free)
+    impl_->free_cells.emplace_back(impl_->owned_cells.at(id), std::move(row));
+
+  // 3. Dirichlet conditions of converted boundary cells act on their particles.
+  impl_->fixed.clear();
+  const auto& bcs = fem_.boundary_conditions().dirichlet();
+  for (unsigned int i = 0; i < particles_.size(); ++i) {
+    particles_.set_fixed(i, false);
+    if (!free_[i])
+      continue;
+    for (unsigned int k = 0; k < bcs.size(); ++k)
+      if ((impl_->fixed_slots[i] >> k) & 1u) {
+        impl_->fixed.push_back({i, k});
+        for (unsigned int c = 0; c < dim; ++c)
+          if (bcs[k].mask[c])
+            particles_.set_fixed(i, c, true);
+      }
+  }
+
+  rebuild_bonds();
+  update_ghosts();
+
+  // 4. Interface DoFs: shared by an active and a converted cell; MLS fit of free particles.
+  impl_->interface.clear();
+  const auto& dh = fem_.dof_handler();
+  std::set<types::global_dof_index> on_active, on_inactive;
+  std::map<types::global_dof_index, std::pair<Point<dim>, unsigned int>> where;
+  std::vector<types::global_dof_index> dofs(fe.n_dofs_per_cell());
+  const auto& unit_support = fe.get_unit_support_points();
+  for (const auto& cell : dh.active_cell_iterators()) {
+    if (!(cell->is_locally_owned() || cell->is_ghost()))
+      continue;
+    cell->get_dof_indices(dofs);
+    const bool active = fem_.is_active(cell);
+    for (unsigned int i = 0; i < dofs.size(); ++i) {
+      (active ? on_active : on_inactive).insert(dofs[i]);
+      if (!active && !where.count(dofs[i]))
+        where[dofs[i]] = {fem_.mapping().transform_unit_to_real_cell(cell, unit_support[i]),
+                          fe.system_to_component_index(i).first};
+    }
+  }
+  PointBins<dim> bins(free_points, prm_.interface_radius * spacing_ * 4);
+  std::vector<unsigned int> free_index;
+  for (unsigned int i = 0; i < particles_.size(); ++i)
+    if (free_[i])
+      free_index.push_back(i);
+  for (const auto& [dof, pc] : where) {
+    if (!on_active.count(dof))
+      continue;
+    const Point<dim>& X = pc.first;
+    typename Impl::InterfaceDof entry{dof, pc.second, {}};
+    bool ok = false;
+    for (unsigned int attempt = 0; attempt < 3 && !ok; ++attempt) {
+      const double r = prm_.interface_radius * spacing_ * (1.0 + 0.5 * attempt);
+      const auto near = bins.within(X, r);
+      FullMatrix<double> A(dim + 1, dim + 1);
+      std::vector<std::array<double, dim + 1>> basis(near.size());
+      std::vector<double> w(near.size());
+      for (unsigned int k = 0; k < near.size(); ++k) {
+        const Point<dim>& x = free_points[near[k]];
+        basis[k][0] = 1;
+        for (unsigned int d = 0; d < dim; ++d)
+          basis[k][d + 1] = (x[d] - X[d]) / spacing_;
+        w[k] = spline_weight(x.distance(X) / r);
+        for (unsigned int a = 0; a <= dim; ++a)
+          for (unsigned int b = 0; b <= dim; ++b)
+            A(a, b) += w[k] * basis[k][a] * basis[k][b];
+      }
+      if (near.size() < dim + 1)
+        continue;
+      // Reject an ill-conditioned moment matrix (too few or collinear particles).
+      FullMatrix<double> Ainv(dim + 1, dim + 1);
+      Vector<double> eig_probe(dim + 1);
+      const double trace = [&] {
+        double t = 0;
+        for (unsigned int a = 0; a <= dim; ++a)
+          t += A(a, a);
+        return t;
+      }();
+      if (!(std::abs(A.determinant()) > 1e-10 * std::pow(trace / (dim + 1), dim + 1)))
+        continue;
+      Ainv.invert(A);
+      entry.weights.clear();
+      for (unsigned int k = 0; k < near.size(); ++k) {
+        if (w[k] == 0)
+          continue;
+        double phi = 0;
+        for (unsigned int b = 0; b <= dim; ++b)
+          phi += Ainv(0, b) * basis[k][b];
+        entry.weights.emplace_back(free_index[near[k]], phi * w[k]);
+      }
+      ok = true;
+    }
+    if (!ok)
+      throw NumericalFailure("singular moving-least-squares fit for an interface node",
+                             "FEM node at (" + [&] {
+                               std::ostringstream s;
+                               s << X;
+                               return s.str();
+                             }() + ")",
+                             "convert larger blocks (Coupling/Buffer), use more particles per "
+                             "cell direction or a larger Coupling/Interface radius");
+    impl_->interface.push_back(std::move(entry));
+  }
+  update_interface_dofs();
+}
+
+template <int dim>
+void FemParticleCoupling<dim>::rebuild_bonds() {
+  // Broken pairs survive a rebuild (particle indices never change).
+  std::set<std::pair<unsigned int, unsigned int>> broken;
+  for (unsigned int i = 0; i < bonds_.n_particles(); ++i)
+    for (std::size_t k = bonds_.begin(i); k < bonds_.end(i); ++k)
+      if (bonds_.broken[k])
+        broken.emplace(std::min(i, bonds_.neighbor[k]), std::max(i, bonds_.neighbor[k]));
+
+  auto options = pd_->neighbor_options(spacing_);
+  for (const auto& c : prm_.cracks) {
+    if constexpr (dim == 2)
+      options.pre_cracks.push_back(
+          meshfree::PreCrack<dim>::segment(Point<dim>(c[0], c[1]), Point<dim>(c[2], c[3])));
+    else
+      options.pre_cracks.push_back(meshfree::PreCrack<dim>::quadrilateral(
+          Point<dim>(c[0], c[1], c[2]), Point<dim>(c[3], c[4], c[5]),
+          Point<dim>(c[6], c[7], c[8]), Point<dim>(c[9], c[10], c[11])));
+  }
+  meshfree::NeighborSearch<dim> search(options);
+  const meshfree::BondList<dim> all = search.build(particles_);
+
+  // Keep the rows of free particles only: ghosts are driven and need no force.
+  meshfree::BondList<dim> kept;
+  kept.horizon = all.horizon;
+  kept.offsets.assign(all.n_particles() + 1, 0);
+  const bool has_volume = !all.volume_fraction.empty(), has_surface = !all.surface_factor.empty();
+  for (unsigned int i = 0; i < all.n_particles(); ++i) {
+    if (free_[i])
+      for (std::size_t k = all.begin(i); k < all.end(i); ++k) {
+        const unsigned int j = all.neighbor[k];
+        kept.neighbor.push_back(j);
+        kept.xi.push_back(all.xi[k]);
+        kept.length.push_back(all.length[k]);
+        kept.influence.push_back(all.influence[k]);
+        kept.broken.push_back(all.broken[k] || broken.count({std::min(i, j), std::max(i, j)}));
+        if (has_volume)
+          kept.volume_fraction.push_back(all.volume_fraction[k]);
+        if (has_surface)
+          kept.surface_factor.push_back(all.surface_factor[k]);
+      }
+    kept.offsets[i + 1] = kept.neighbor.size();
+  }
+  bonds_ = std::move(kept);
+  pd_->initialise(particles_, bonds_);
+}
+
+template <int dim>
+void FemParticleCoupling<dim>::update_ghosts() {
+  // u and v of ghosts = FEM interpolation; summed over the ranks owning the host cells.
+  const auto& fe = fem_.fe();
+  const auto& u = fem_.displacement();
+  const auto& v = fem_.velocity();
+  std::vector<double> buffer(2 * dim * particles_.size(), 0.0);
+  std::vector<types::global_dof_index> dofs(fe.n_dofs_per_cell());
+  for (const auto& [cell, row] : impl_->ghost_cells) {
+    cell->get_dof_indices(dofs);
+    for (unsigned int q = 0; q < row.size(); ++q) {
+      if (row[q] < 0)
+        continue;
+      double* b = &buffer[2 * dim * row[q]];
+      for (unsigned int i = 0; i < dofs.size(); ++i) {
+        const unsigned int c = fe.system_to_component_index(i).first;
+        b[c] += impl_->shape(q, i) * u(dofs[i]);
+        b[dim + c] += impl_->shape(q, i) * v(dofs[i]);
+      }
+    }
+  }
+  if (Utilities::MPI::n_mpi_processes(fem_.mpi_communicator()) > 1)
+    Utilities::MPI::sum(buffer, fem_.mpi_communicator(), buffer);
+  for (unsigned int i = 0; i < particles_.size(); ++i)
+    if (!free_[i])
+      for (unsigned int d = 0; d < dim; ++d) {
+        particles_.displacement(i)[d] = buffer[2 * dim * i + d];
+        particles_.velocity(i)[d] = buffer[2 * dim * i + dim + d];
+      }
+}
+
+template <int dim>
+void FemParticleCoupling<dim>::update_interface_dofs() {
+  std::map<types::global_dof_index, double> values;
+  for (const auto& entry : impl_->interface) {
+    double value = 0;
+    for (const auto& [p, w] : entry.weights)
+      value += w * particles_.displacement(p)[entry.component];
+    values.emplace(entry.dof, value);
+  }
+  fem_.set_driven_dofs(values);
+}
+
+template <int dim>
+void FemParticleCoupling<dim>::apply_particle_dirichlet(double time, double dt) {
+  const auto& bcs = fem_.boundary_conditions().dirichlet();
+  Vector<double> value(dim);
+  for (const auto& f : impl_->fixed) {
+    const auto& bc = bcs[f.slot];
+    bc.function->set_time(time);
+    bc.function->vector_value(particles_.reference_position(f.particle), value);
+    for (unsigned int c = 0; c < dim; ++c)
+      if (bc.mask[c]) {
+        auto& u = particles_.displacement(f.particle)[c];
+        particles_.velocity(f.particle)[c] = dt > 0 ? (value[c] - u) / dt : 0.0;
+        u = value[c];
+      }
+  }
+}
+
+// ---------------------------------------------------------------- time stepping
+
+template <int dim>
+void FemParticleCoupling<dim>::refresh() {
+  update_ghosts();
+  update_interface_dofs();
+}
+
+template <int dim>
+double FemParticleCoupling<dim>::stable_time_step() const {
+  double dt = fem_.stable_time_step();
+  if (n_free_particles() > 0) {
+    const auto S = pd_->stiffness_bound(bonds_);
+    for (unsigned int i = 0; i < particles_.size(); ++i)
+      if (free_[i] && S[i] > 0)
+        dt = std::min(dt, prm_.time_step_safety * std::sqrt(2.0 * particles_.density(i) / S[i]));
+  }
+  return dt;
+}
+
+template <int dim>
+void FemParticleCoupling<dim>::step(double dt) {
+  // Central differences on both sides, all forces from the state at t_n:
+  // 1. PD forces on free particles (ghosts hold the FEM field of t_n); particles to t_{n+1}.
+  // 2. Interface DoFs of t_{n+1} from the particles; FEM step from t_n to t_{n+1}.
+  // 3. Ghosts to the FEM field of t_{n+1}.
+  const double a = fem_.parameters().mass_damping;
+  if (n_free_particles() > 0) {
+    pd_->compute_forces(particles_, bonds_, true);
+    for (unsigned int i = 0; i < particles_.size(); ++i) {
+      if (!free_[i])
+        continue;
+      const double m = particles_.mass(i);
+      for (unsigned int d = 0; d < dim; ++d) {
+        if (particles_.is_fixed(i, d))
+          continue;
+        const double acc = (particles_.force(i)[d] + particles_.external_force(i)[d]) / m;
+        double& vi = particles_.velocity(i)[d];
+        vi = ((1.0 - 0.5 * a * dt) * vi + dt * acc) / (1.0 + 0.5 * a * dt);
+        particles_.displacement(i)[d] += dt * vi;
+      }
+    }
+    apply_particle_dirichlet(time_ + dt, dt);
+    update_interface_dofs();
+  }
+  fem_.explicit_step(dt);
+  time_ += dt;
+  if (n_ghost_particles() > 0)
+    update_ghosts();
+  if (heat_ && n_free_particles() > 0) {
+    // The FEM temperature drives the particles' temperatures.
+    std::vector<double> buffer(particles_.size(), 0.0), values;
+    for (const auto& [cell, row] : impl_->free_cells) {
+      heat_->temperature_at_unit_points(cell, impl_->points.get_points(), values);
+      for (unsigned int q = 0; q < row.size(); ++q)
+        if (row[q] >= 0)
+          buffer[row[q]] = values[q];
+    }
+    if (Utilities::MPI::n_mpi_processes(fem_.mpi_communicator()) > 1)
+      Utilities::MPI::sum(buffer, fem_.mpi_communicator(), buffer);
+    for (unsigned int i = 0; i < particles_.size(); ++i)
+      if (free_[i])
+        particles_.temperature(i) = buffer[i];
+  }
+}
+
+// ---------------------------------------------------------------- patch test support
+
+template <int dim>
+void FemParticleCoupling<dim>::impose_affine(const Tensor<2, dim>& H) {
+  class Affine : public Function<dim> {
+  public:
+    explicit Affine(const Tensor<2, dim>& H) : Function<dim>(dim), H_(H) {}
+    double value(const Point<dim>& x, unsigned int c) const override { return (H_ * x)[c]; }
+
+  private:
+    Tensor<2, dim> H_;
+  };
+  typename fem::MechanicsSolver<dim>::VectorType u(fem_.lumped_mass()), v(fem_.lumped_mass());
+  v = 0;
+  VectorTools::interpolate(fem_.mapping(), fem_.dof_handler(), Affine(H), u);
+  fem_.set_state(u, v);
+  for (unsigned int i = 0; i < particles_.size(); ++i)
+    if (free_[i]) {
+      particles_.displacement(i) = H * particles_.reference_position(i);
+      particles_.velocity(i) = Tensor<1, dim>();
+    }
+  update_ghosts();
+  update_interface_dofs();
+  // Driven DoFs take their values in the FEM vector too.
+  u = fem_.displacement();
+  for (const auto& entry : impl_->interface)
+    if (u.locally_owned_elements().is_element(entry.dof)) {
+      double value = 0;
+      for (const auto& [p, w] : entry.weights)
+        value += w * particles_.displacement(p)[entry.component];
+      u(entry.dof) = value;
+    }
+  u.compress(VectorOperation::insert);
+  fem_.set_state(u, v);
+  update_ghosts();
+}
+
+template <int dim>
+std::pair<double, double> FemParticleCoupling<dim>::max_free_forces() {
+  double fp = 0;
+  if (n_free_particles() > 0) {
+    pd_->compute_forces(particles_, bonds_, false);
+    for (unsigned int i = 0; i < particles_.size(); ++i)
+      if (free_[i])
+        for (unsigned int d = 0; d < dim; ++d)
+          if (!particles_.is_fixed(i, d))
+            fp = std::max(fp, std::abs(particles_.force(i)[d]));
+  }
+  const auto& r = fem_.evaluate_residual();
+  // Free FEM DoFs: neither on a Dirichlet boundary, nor driven, nor orphaned (zero mass).
+  std::set<types::global_dof_index> excluded;
+  for (const auto& d : fem_.boundary_conditions().dirichlet()) {
+    const IndexSet s = DoFTools::extract_boundary_dofs(fem_.dof_handler(), d.mask, {d.boundary_id});
+    for (const auto i : s)
+      excluded.insert(i);
+  }
+  for (const auto& e : impl_->interface)
+    excluded.insert(e.dof);
+  double ff = 0;
+  for (const auto i : r.locally_owned_elements())
+    if (!excluded.count(i) && fem_.lumped_mass()(i) > 0)
+      ff = std::max(ff, std::abs(r(i)));
+  return {fp, Utilities::MPI::max(ff, fem_.mpi_communicator())};
+}
+
+// ---------------------------------------------------------------- results
+
+template <int dim>
+unsigned int FemParticleCoupling<dim>::n_free_particles() const {
+  return static_cast<unsigned int>(std::count(free_.begin(), free_.end(), 1));
+}
+
+template <int dim>
+unsigned int FemParticleCoupling<dim>::n_ghost_particles() const {
+  return static_cast<unsigned int>(free_.size()) - n_free_particles();
+}
+
+template <int dim>
+std::size_t FemParticleCoupling<dim>::n_broken_bonds() const {
+  return bonds_.n_broken();
+}
+
+template <int dim>
+double FemParticleCoupling<dim>::max_damage() const {
+  if (!pd_ || n_free_particles() == 0)
+    return 0;
+  auto& p = const_cast<meshfree::ParticleSet<dim>&>(particles_);
+  pd_->update_damage(p, bonds_);
+  double m = 0;
+  for (unsigned int i = 0; i < particles_.size(); ++i)
+    if (free_[i])
+      m = std::max(m, particles_.damage(i));
+  return m;
+}
+
+template <int dim>
+Tensor<1, dim> FemParticleCoupling<dim>::reaction_force(types::boundary_id id) const {
+  Tensor<1, dim> r = fem_.reaction_force(id);
+  const auto& bcs = fem_.boundary_conditions().dirichlet();
+  std::set<unsigned int> counted;
+  for (const auto& f : impl_->fixed)
+    if (bcs[f.slot].boundary_id == id && counted.insert(f.particle).second)
+      r -= particles_.force(f.particle); // the support balances the internal force
+  return r;
+}
+
+template <int dim>
+std::string FemParticleCoupling<dim>::write_output(const std::string& directory,
+                                                   unsigned int cycle) const {
+  const std::string name = "particles_" + Utilities::int_to_string(cycle, 4) + ".vtu";
+  if (Utilities::MPI::this_mpi_process(fem_.mpi_communicator()) != 0)
+    return name;
+  max_damage(); // refreshes the damage field
+  meshfree::ParticleSet<dim> out(particles_.thickness());
+  for (unsigned int i = 0; i < particles_.size(); ++i)
+    if (free_[i]) {
+      const unsigned int k = out.add_particle(particles_.reference_position(i), particles_.volume(i));
+      out.displacement(k) = particles_.displacement(i);
+      out.velocity(k) = particles_.velocity(i);
+      out.density(k) = particles_.density(i);
+      out.damage(k) = particles_.damage(i);
+      out.temperature(k) = particles_.temperature(i);
+    }
+  const std::string dir =
+      directory.empty() || directory.back() == '/' ? directory : directory + "/";
+  meshfree::write_particles_vtu(out, dir + name + ".tmp");
+  std::rename((dir + name + ".tmp").c_str(), (dir + name).c_str());
+  return name;
+}
+
+template <int dim>
+void FemParticleCoupling<dim>::save(const std::string& file) const {
+  if (Utilities::MPI::this_mpi_process(fem_.mpi_communicator()) != 0)
+    return;
+  std::ofstream out(file, std::ios::binary);
+  out.precision(17);
+  out << "spinesim_coupling 1\n" << time_ << " " << particles_.size() << " " << converted_.size()
+      << " " << bonds_.n_bonds() << "\n";
+  for (const auto& [id, batch] : converted_)
+    out << id << " " << batch << "\n";
+  for (unsigned int i = 0; i < particles_.size(); ++i) {
+    out << host_cell_[i] << " " << host_point_[i] << " " << int(free_[i]) << " "
+        << impl_->fixed_slots[i] << " " << particles_.volume(i) << " " << particles_.density(i)
+        << " " << particles_.temperature(i);
+    for (unsigned int d = 0; d < dim; ++d)
+      out << " " << particles_.reference_position(i)[d];
+    for (unsigned int d = 0; d < dim; ++d)
+      out << " " << particles_.displacement(i)[d] << " " << particles_.velocity(i)[d];
+    out << "\n";
+  }
+  for (unsigned int i = 0; i < bonds_.n_particles(); ++i)
+    for (std::size_t k = bonds_.begin(i); k < bonds_.end(i); ++k)
+      if (bonds_.broken[k])
+        out << i << " " << bonds_.neighbor[k] << "\n";
+}
+
+template <int dim>
+void FemParticleCoupling<dim>::load(const std::string& file) {
+  prepare();
+  std::ifstream in(file, std::ios::binary);
+  std::string tag;
+  int version = 0;
+  std::size_t n = 0, nc = 0, nb = 0;
+  if (!(in >> tag >> version >> time_ >> n >> nc >> nb) || tag != "spinesim_coupling")
+    throw InvalidInput(file, "missing or unreadable coupling checkpoint",
+                       "a file written by FemParticleCoupling::save");
+  converted_.clear();
+  for (std::size_t k = 0; k < nc; ++k) {
+    std::string id;
+    unsigned int batch;
+    in >> id >> batch;
+    converted_[id] = batch;
+  }
+  particles_ = meshfree::ParticleSet<dim>(prm_.pd.thickness);
+  free_.clear();
+  host_cell_.clear();
+  host_point_.clear();
+  index_of_.clear();
+  impl_->fixed_slots.clear();
+  for (std::size_t i = 0; i < n; ++i) {
+    std::string id;
+    unsigned int q, slots;
+    int fr;
+    double V, rho, T;
+    Point<dim> x;
+    Tensor<1, dim> u, v;
+    in >> id >> q >> fr >> slots >> V >> rho >> T;
+    for (unsigned int d = 0; d < dim; ++d)
+      in >> x[d];
+    for (unsigned int d = 0; d < dim; ++d)
+      in >> u[d] >> v[d];
+    const unsigned int k = particles_.add_particle(x, V);
+    particles_.density(k) = rho;
+    particles_.temperature(k) = T;
+    particles_.displacement(k) = u;
+    particles_.velocity(k) = v;
+    free_.push_back(static_cast<std::uint8_t>(fr));
+    host_cell_.push_back(id);
+    host_point_.push_back(q);
+    index_of_[{id, q}] = k;
+    impl_->fixed_slots.push_back(slots);
+  }
+  std::set<std::pair<unsigned int, unsigned int>> broken;
+  for (std::size_t k = 0; k < nb; ++k) {
+    unsigned int i, j;
+    if (!(in >> i >> j))
+      break;
+    broken.emplace(std::min(i, j), std::max(i, j));
+  }
+  if (!in && !in.eof())
+    throw InvalidInput(file, "truncated coupling checkpoint", "a complete checkpoint");
+  std::vector<bool> active(fem_.dof_handler().get_triangulation().n_active_cells(), true);
+  for (const auto& cell : fem_.dof_handler().active_cell_iterators())
+    if ((cell->is_locally_owned() || cell->is_ghost()) && converted_.count(cell->id().to_string()))
+      active[cell->active_cell_index()] = false;
+  fem_.set_active_cells(active);
+  // Rebuild with the saved broken pairs.
+  bonds_ = meshfree::BondList<dim>();
+  rebuild_interface();
+  for (unsigned int i = 0; i < bonds_.n_particles(); ++i)
+    for (std::size_t k = bonds_.begin(i); k < bonds_.end(i); ++k)
+      if (broken.count({std::min(i, bonds_.neighbor[k]), std::max(i, bonds_.neighbor[k])}))
+        bonds_.broken[k] = 1;
+}
+
+template class FemParticleCoupling<2>;
+template class FemParticleCoupling<3>;
+
+} // namespace spinesim::coupling

@@ -1,0 +1,166 @@
+#ifndef SPINESIM_COUPLING_FEM_PARTICLE_COUPLING_H
+#define SPINESIM_COUPLING_FEM_PARTICLE_COUPLING_H
+
+// The FEM bulk and a bond-based PD fracture zone in one explicit run.
+//
+// Conversion: a flagged cell leaves the FEM system (MechanicsSolver::set_active_cells, no
+// remeshing) and becomes n^dim particles at the points of the iterated midpoint rule (sub-cell
+// centres: on a uniform mesh they form the regular lattice PD is calibrated on). Each particle
+// inherits u, v and T interpolated from the cell; the particle masses are scaled so that they
+// add up to the mass the cell removes from the lumped FEM mass, and a uniform velocity
+// correction per cell makes them carry exactly the momentum the cell's nodes lose. Mass and
+// linear momentum are therefore conserved to round-off; kinetic energy changes by the
+// interpolation defect, which is logged.
+//
+// Interface (why this method): an overlapping Dirichlet–Dirichlet splice. Active cells within a
+// ghost layer (at least 2 horizons) of the free particles carry ghost particles on the same
+// lattice, driven by the FEM displacement; FEM DoFs shared by active and converted cells are
+// driven by a linear moving-least-squares fit of the free particles. Every free DoF on either
+// side then sees a complete neighbourhood of its own model (a full horizon, full element
+// patches), so any affine field is reproduced exactly and creates no force: the patch test
+// holds to round-off with no ghost forces, which energy-blended couplings of bond-based PD and
+// FEM cannot offer. The price is that the coupled operator is not symmetric (no exact energy
+// statement); the wave test measures the reflection this costs. Explicit steps use one common
+// stable step (the smaller of the FEM CFL and the PD bound).
+//
+// MPI: the FEM side is distributed by p4est; the particle zone is replicated on every rank
+// (records of new particles are all-gathered in rank order, ghost displacements summed from the
+// ranks owning their host cells), so every rank advances identical particles.
+
+#include "fem/mechanics_solver.h"
+#include "meshfree/bond_based_pd.h"
+#include "meshfree/bond_list.h"
+#include "meshfree/particle_set.h"
+#include "meshfree/pre_crack.h"
+
+#include <deal.II/base/parameter_handler.h>
+#include <deal.II/grid/cell_id.h>
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace spinesim::fem {
+template <int dim>
+class HeatSolver;
+}
+
+namespace spinesim::coupling {
+
+template <int dim>
+class FemParticleCoupling {
+public:
+  struct Parameters {
+    unsigned int particles_per_direction = 1; // particles per cell = this^dim
+    double ghost_layer = 2.0;                 // ghost layer width [horizons]
+    double interface_radius = 2.5;            // MLS support of interface nodes [spacings]
+    double time_step_safety = 0.8;            // PD stable step factor [-]
+    bool all_particles = false;
+    std::vector<double> region_lower, region_upper; // particles from t = 0 (empty = none)
+    double principal_strain_threshold = 0;          // [-], 0 = off
+    double plastic_strain_threshold = 0;            // [-], 0 = off
+    double min_jacobian_ratio = 0;                  // [-], 0 = off
+    double min_time_step = 0;                       // [s], 0 = off
+    double buffer = 0;                              // converted around flagged cells [m]
+    unsigned int check_interval = 10;               // steps between conversion checks
+    typename meshfree::BondBasedPD<dim>::Parameters pd;
+    std::vector<std::vector<double>> cracks; // flattened corners per pre-crack [m]
+
+    static void declare(dealii::ParameterHandler& prm);
+    void parse(const dealii::ParameterHandler& prm);
+  };
+
+  struct ConversionReport {
+    unsigned int cells = 0, particles = 0;
+    double mass_before = 0, mass_after = 0;                      // [kg]
+    dealii::Tensor<1, dim> momentum_before, momentum_after;      // [kg m/s]
+    double kinetic_before = 0, kinetic_after = 0;                // [J]
+    double mass_change_relative() const;
+    double momentum_change_relative() const; // over |p| (or over mass × max speed if p ≈ 0)
+  };
+
+  // The solver must be set up, explicit, small strain, one law (E, ν, ρ from the first active
+  // cell's law: the PD micromodulus is calibrated to it). `heat` is optional.
+  FemParticleCoupling(const Parameters& parameters, fem::MechanicsSolver<dim>& mechanics,
+                      const fem::HeatSolver<dim>* heat = nullptr);
+  ~FemParticleCoupling();
+
+  // Converts the initial region (or every cell with All particles) and builds the interface.
+  void initialise();
+
+  // Cells flagged by the criteria (plus the buffer around them), as CellIds on every rank.
+  std::vector<dealii::CellId> flagged_cells() const;
+  // Converts these cells (ids common to all ranks; already converted ones are skipped).
+  ConversionReport convert(const std::vector<dealii::CellId>& cells);
+  // Checks the criteria and converts; returns the report (cells = 0 if nothing converted).
+  ConversionReport convert_flagged();
+
+  // After the FEM state was replaced (MechanicsSolver::set_state): ghosts and interface DoFs
+  // follow it again.
+  void refresh();
+
+  double stable_time_step() const; // min(FEM CFL step, PD step) [s]
+  // One central-difference step of both models (see the .cc for the order).
+  void step(double dt);
+
+  // Sets every free DoF and free particle to the affine field u = H x (for the patch test).
+  void impose_affine(const dealii::Tensor<2, dim>& H);
+  // Internal forces at the current state without advancing: max |f| over free particles and
+  // over free FEM DoFs (neither Dirichlet nor driven) [N].
+  std::pair<double, double> max_free_forces();
+
+  // Totals over both models (FEM lumped mass, particle masses) [kg], [kg m/s], [J].
+  double total_mass() const;
+  dealii::Tensor<1, dim> total_momentum() const;
+  double kinetic_energy() const;
+  double strain_energy() const; // FEM + PD (bonds of free particles) [J]
+  // Reaction on a boundary id: FEM reaction + fixed particles of converted boundary cells [N].
+  dealii::Tensor<1, dim> reaction_force(dealii::types::boundary_id id) const;
+
+  unsigned int n_free_particles() const;
+  unsigned int n_ghost_particles() const;
+  unsigned int n_converted_cells() const { return static_cast<unsigned int>(converted_.size()); }
+  std::size_t n_broken_bonds() const;
+  double max_damage() const;
+  double particle_spacing() const { return spacing_; }
+  double horizon() const;
+  const meshfree::ParticleSet<dim>& particles() const { return particles_; }
+  bool is_free(unsigned int i) const { return free_[i] != 0; }
+  const std::vector<ConversionReport>& conversions() const { return reports_; }
+
+  // particles_<cycle>.vtu of the free particles (rank 0); returns the file name.
+  std::string write_output(const std::string& directory, unsigned int cycle) const;
+  void save(const std::string& file) const; // rank 0 writes
+  void load(const std::string& file);       // every rank reads; FEM state restored separately
+
+private:
+  struct Impl;
+  Parameters prm_;
+  fem::MechanicsSolver<dim>& fem_;
+  const fem::HeatSolver<dim>* heat_;
+  std::unique_ptr<Impl> impl_;
+
+  meshfree::ParticleSet<dim> particles_;
+  meshfree::BondList<dim> bonds_;
+  std::unique_ptr<meshfree::BondBasedPD<dim>> pd_;
+  std::vector<std::uint8_t> free_;          // 1 free, 0 ghost (driven by the FEM)
+  std::vector<std::string> host_cell_;      // CellId of the cell the particle sits in
+  std::vector<unsigned int> host_point_;    // index of the point within that cell
+  std::map<std::pair<std::string, unsigned int>, unsigned int> index_of_;
+  std::map<std::string, unsigned int> converted_; // CellId -> conversion batch
+  std::vector<ConversionReport> reports_;
+  double spacing_ = 0, youngs_ = 0, poisson_ = 0, density_ = 0;
+  double time_ = 0;
+
+  void prepare(); // material, lattice spacing, shape table, PD model (once)
+  void rebuild_interface();
+  void rebuild_bonds();
+  void update_ghosts();
+  void update_interface_dofs();
+  void apply_particle_dirichlet(double time, double dt);
+};
+
+} // namespace spinesim::coupling
+
+#endif
