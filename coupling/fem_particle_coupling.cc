@@ -141,6 +141,13 @@ void FemParticleCoupling<dim>::Parameters::declare(ParameterHandler& prm) {
                     "with it, so the particle zone runs ahead of a crack [m].");
   prm.declare_entry("Check interval", "10", Integer(1),
                     "Explicit steps between conversion checks [-].");
+  prm.declare_entry("Refinement region lower corner", "", Anything(),
+                    "Lower corner of a box refined before the run, where particles will "
+                    "appear (particles take the spacing of the finest cells); empty = none [m].");
+  prm.declare_entry("Refinement region upper corner", "", Anything(),
+                    "Upper corner of that box [m].");
+  prm.declare_entry("Region refinements", "0", Integer(0, 8),
+                    "Times the cells in the refinement box are bisected [-].");
   prm.enter_subsection("Bond based");
   meshfree::BondBasedPD<dim>::Parameters::declare(prm);
   prm.leave_subsection();
@@ -176,6 +183,16 @@ void FemParticleCoupling<dim>::Parameters::parse(const ParameterHandler& cprm) {
   min_time_step = prm.get_double("Minimum time step");
   buffer = prm.get_double("Buffer");
   check_interval = prm.get_integer("Check interval");
+  refine_lower = parse_doubles(prm.get("Refinement region lower corner"),
+                               "Coupling/Refinement region lower corner");
+  refine_upper = parse_doubles(prm.get("Refinement region upper corner"),
+                               "Coupling/Refinement region upper corner");
+  region_refinements = prm.get_integer("Region refinements");
+  if (refine_lower.size() != refine_upper.size() ||
+      (!refine_lower.empty() && refine_lower.size() < dim))
+    throw InvalidInput("Coupling/Refinement region lower corner",
+                       "the two corners need " + std::to_string(dim) + " coordinates each",
+                       "both empty, or both 'x,y" + std::string(dim == 3 ? ",z" : "") + "' [m]");
   prm.enter_subsection("Bond based");
   pd.parse(prm);
   prm.leave_subsection();
@@ -254,6 +271,43 @@ FemParticleCoupling<dim>::FemParticleCoupling(const Parameters& parameters,
 
 template <int dim>
 FemParticleCoupling<dim>::~FemParticleCoupling() = default;
+
+template <int dim>
+void FemParticleCoupling<dim>::prepare_mesh(const Parameters& p,
+                                            parallel::distributed::Triangulation<dim>& tria) {
+  for (unsigned int r = 0; r < p.region_refinements && !p.refine_lower.empty(); ++r) {
+    for (const auto& cell : tria.active_cell_iterators())
+      if (cell->is_locally_owned()) {
+        // Cells touching the box are refined (vertex test), so the box edge is resolved.
+        bool touches = false;
+        for (const unsigned int v : cell->vertex_indices()) {
+          bool inside = true;
+          for (unsigned int d = 0; d < dim; ++d)
+            inside &= cell->vertex(v)[d] >= p.refine_lower[d] - 1e-12 &&
+                      cell->vertex(v)[d] <= p.refine_upper[d] + 1e-12;
+          touches |= inside;
+        }
+        if (touches)
+          cell->set_refine_flag();
+      }
+    tria.execute_coarsening_and_refinement();
+  }
+  if (!p.all_particles)
+    return;
+  const unsigned int finest = Utilities::MPI::max(
+      static_cast<unsigned int>(tria.n_global_levels() - 1), tria.get_communicator());
+  for (;;) {
+    bool any = false;
+    for (const auto& cell : tria.active_cell_iterators())
+      if (cell->is_locally_owned() && static_cast<unsigned int>(cell->level()) < finest) {
+        cell->set_refine_flag();
+        any = true;
+      }
+    if (!Utilities::MPI::logical_or(any, tria.get_communicator()))
+      break;
+    tria.execute_coarsening_and_refinement();
+  }
+}
 
 template <int dim>
 double FemParticleCoupling<dim>::horizon() const {
@@ -406,9 +460,11 @@ std::vector<CellId> FemParticleCoupling<dim>::flagged_cells() const {
   std::vector<Point<dim>> centres;
   if (any) {
     fem::CellIndicators<dim> indicators;
-    indicators.compute(fem_);
+    indicators.compute(fem_, prm_.plastic_strain_threshold > 0);
     for (const auto& [id, cell] : impl_->owned_cells) {
-      if (!fem_.is_active(cell))
+      // Only cells of the particle lattice's size can convert (the refinement box).
+      if (!fem_.is_active(cell) ||
+          cell->minimum_vertex_distance() > 1.5 * spacing_ * prm_.particles_per_direction)
         continue;
       const unsigned int c = cell->active_cell_index();
       bool flag = false;
@@ -432,7 +488,9 @@ std::vector<CellId> FemParticleCoupling<dim>::flagged_cells() const {
     const double reach = std::max(prm_.buffer, 1e-9 * spacing_);
     PointBins<dim> bins(all_centres, std::max(prm_.buffer, spacing_));
     for (const auto& [id, cell] : impl_->owned_cells)
-      if (fem_.is_active(cell) && !bins.within(cell->center(), reach).empty())
+      if (fem_.is_active(cell) &&
+          cell->minimum_vertex_distance() <= 1.5 * spacing_ * prm_.particles_per_direction &&
+          !bins.within(cell->center(), reach).empty())
         mine.push_back(id);
   }
   std::vector<CellId> out;
@@ -484,6 +542,16 @@ FemParticleCoupling<dim>::convert(const std::vector<CellId>& cells) {
     if (it == impl_->owned_cells.end())
       continue;
     const auto& cell = it->second;
+    // PD is calibrated on one lattice spacing: coarser cells would carry a wrong horizon.
+    if (cell->minimum_vertex_distance() > 1.5 * spacing_ * prm_.particles_per_direction)
+      throw InvalidInput("Coupling/Refinement region lower corner",
+                         "a cell of edge " + std::to_string(cell->minimum_vertex_distance()) +
+                             " m at (" + std::to_string(cell->center()[0]) + ", " +
+                             std::to_string(cell->center()[1]) +
+                             ") is to become particles, but the particle lattice is " +
+                             std::to_string(spacing_) + " m",
+                         "a refinement box (with Region refinements) that covers every cell "
+                         "the conversion can reach");
     at_points.reinit(cell);
     at_gauss.reinit(cell);
     at_points[disp].get_function_values(fem_.displacement(), u);
@@ -885,7 +953,7 @@ void FemParticleCoupling<dim>::step(double dt) {
   // 3. Ghosts to the FEM field of t_{n+1}.
   const double a = fem_.parameters().mass_damping;
   if (n_free_particles() > 0) {
-    pd_->compute_forces(particles_, bonds_, true);
+    pd_->compute_forces(particles_, bonds_, prm_.damage);
     for (unsigned int i = 0; i < particles_.size(); ++i) {
       if (!free_[i])
         continue;

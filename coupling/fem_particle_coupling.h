@@ -64,6 +64,9 @@ public:
     double min_time_step = 0;                       // [s], 0 = off
     double buffer = 0;                              // converted around flagged cells [m]
     unsigned int check_interval = 10;               // steps between conversion checks
+    bool damage = true;                             // bonds may break (Effects/Damage)
+    std::vector<double> refine_lower, refine_upper; // box refined before the run [m]
+    unsigned int region_refinements = 0;
     typename meshfree::BondBasedPD<dim>::Parameters pd;
     std::vector<std::vector<double>> cracks; // flattened corners per pre-crack [m]
 
@@ -79,6 +82,11 @@ public:
     double mass_change_relative() const;
     double momentum_change_relative() const; // over |p| (or over mass × max speed if p ≈ 0)
   };
+
+  // Local refinement of the refinement box; with All particles, uniform refinement to the
+  // finest level so that every particle has the same spacing. Call before any solver setup.
+  static void prepare_mesh(const Parameters& parameters,
+                           dealii::parallel::distributed::Triangulation<dim>& triangulation);
 
   // The solver must be set up, explicit, small strain, one law (E, ν, ρ from the first active
   // cell's law: the PD micromodulus is calibrated to it). `heat` is optional.

@@ -1,5 +1,6 @@
 #include "coupling/simulation.h"
 
+#include "coupling/fem_particle_coupling.h"
 #include "coupling/particle_zone.h"
 #include "coupling/run_context.h"
 #include "fem/heat/heat_solver.h"
@@ -10,10 +11,10 @@
 
 #include <deal.II/base/data_out_base.h>
 #include <deal.II/distributed/tria.h>
-#include <deal.II/numerics/fe_field_function.h>
 
 #include <nlohmann/json.hpp>
 
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -59,29 +60,6 @@ void SimulationParameters::parse(const dealii::ParameterHandler& prm) {
 }
 
 namespace {
-
-// Temperature change T − T_ref from the heat solver's field, at points of locally owned
-// (or ghost) cells; the mechanics evaluates it at its quadrature points.
-template <int dim>
-class TemperatureChange : public dealii::Function<dim> {
-public:
-  TemperatureChange(const fem::HeatSolver<dim>& heat, double reference)
-      : heat_(heat), reference_(reference) {}
-  double value(const dealii::Point<dim>& p, unsigned int = 0) const override {
-    if (!field_ || field_stamp_ != heat_.step_number()) {
-      field_ = std::make_unique<dealii::Functions::FEFieldFunction<dim, dealii::TrilinosWrappers::MPI::Vector>>(
-          heat_.dof_handler(), heat_.solution());
-      field_stamp_ = heat_.step_number();
-    }
-    return field_->value(p) - reference_;
-  }
-
-private:
-  const fem::HeatSolver<dim>& heat_;
-  double reference_;
-  mutable std::unique_ptr<dealii::Functions::FEFieldFunction<dim, dealii::TrilinosWrappers::MPI::Vector>> field_;
-  mutable unsigned int field_stamp_ = static_cast<unsigned int>(-1);
-};
 
 // A ParaView .pvd time series, rewritten atomically at every output.
 class PvdRecord {
@@ -137,7 +115,13 @@ private:
   std::shared_ptr<const materials::ConstitutiveLaw> law_;
   std::unique_ptr<fem::MechanicsSolver<dim>> mechanics_;
   std::unique_ptr<fem::HeatSolver<dim>> heat_;
+  dealii::Vector<double> plastic_heating_; // plastic dissipation rate per cell [W/m^3]
   std::unique_ptr<ParticleZone<dim>> particles_;
+  typename FemParticleCoupling<dim>::Parameters coupling_prm_;
+  std::unique_ptr<FemParticleCoupling<dim>> coupled_;
+  double coupled_dt_ = 0; // stable step of the coupled model, refreshed after conversions
+  unsigned int explicit_steps_ = 0;
+  double peak_load_ = 0;
   PvdRecord solution_pvd_{"solution.pvd"}, temperature_pvd_{"temperature.pvd"},
       particles_pvd_{"particles.pvd"};
   unsigned int output_cycle_ = 0;
@@ -174,16 +158,29 @@ Simulation<dim>::Simulation(const ScenarioFactoryArgs& args)
     throw InvalidInput("Effects/Particles method",
                        "the simulation scenario runs bond_based particle zones so far",
                        "none|bond_based");
-  if (effects_.conversion || effects_.coupling || effects_.contact)
-    throw InvalidInput("Effects", "the simulation scenario does not yet run conversion, "
-                                  "coupling or contact",
-                       "Mechanics, Heat, Thermal expansion, Damage, Particles method");
+  if (effects_.contact)
+    throw InvalidInput("Effects/Contact", "the simulation scenario does not run contact yet",
+                       "false");
+  if (effects_.conversion && !effects_.coupling)
+    throw InvalidInput("Effects/Conversion",
+                       "converted particles must stay coupled to the FEM bulk",
+                       "false, or set Effects/Coupling = true as well");
+  if (effects_.coupling) {
+    prm.enter_subsection("Coupling");
+    coupling_prm_.parse(prm);
+    prm.leave_subsection();
+    coupling_prm_.damage = effects_.damage;
+    if (mech_prm_.time_integration != "explicit")
+      throw InvalidInput("Mechanics/Time integration",
+                         "the coupled FEM / particle run is explicit dynamics",
+                         "explicit (add Mechanics/Mass damping for quasi-static loading)");
+  }
 }
 
 template <int dim>
 void Simulation<dim>::build(RunContext& ctx) {
   dealii::TimerOutput::Scope scope(ctx.timer(), "setup");
-  if (effects_.particles()) {
+  if (effects_.particles() && !effects_.coupling) {
     particles_ = std::make_unique<ParticleZone<dim>>(prm_, effects_.damage);
     particles_->setup(ctx);
   }
@@ -193,8 +190,11 @@ void Simulation<dim>::build(RunContext& ctx) {
       ctx.comm(), dealii::Triangulation<dim>::maximum_smoothing);
   if (ctx.restarting())
     fem::build_coarse_mesh(mesh_prm_, *triangulation_);
-  else
+  else {
     fem::build_mesh(mesh_prm_, *triangulation_);
+    if (effects_.coupling)
+      FemParticleCoupling<dim>::prepare_mesh(coupling_prm_, *triangulation_);
+  }
 
   if (effects_.heat) {
     heat_ = std::make_unique<fem::HeatSolver<dim>>(*triangulation_, heat_prm_);
@@ -216,11 +216,30 @@ void Simulation<dim>::build(RunContext& ctx) {
         std::vector<dealii::types::material_id>(ids.begin(), ids.end()), ctx.comm());
     for (const auto id : all_ids)
       mechanics_->set_material(id, law_);
-    if (effects_.thermal_expansion)
-      mechanics_->set_temperature_change(
-          std::make_shared<TemperatureChange<dim>>(*heat_, sim_.reference_temperature));
+    if (effects_.thermal_expansion && heat_)
+      // T − T_ref read from the heat field at the mechanics' quadrature points (same mesh).
+      mechanics_->set_temperature_field(heat_->dof_handler(), heat_->solution(),
+                                        sim_.reference_temperature);
+    if (heat_ && mech_prm_.taylor_quinney > 0)
+      // Plastic-work heating: β × the last mechanics step's dissipation rate [W/m^3].
+      heat_->set_cell_source([this](const auto& cell, const auto&, double, auto& values) {
+        const auto i = cell->active_cell_index();
+        if (i < plastic_heating_.size())
+          for (auto& v : values)
+            v += mech_prm_.taylor_quinney * plastic_heating_(i);
+      });
     if (!ctx.restarting())
       mechanics_->setup();
+  }
+  if (effects_.coupling) {
+    coupled_ = std::make_unique<FemParticleCoupling<dim>>(coupling_prm_, *mechanics_, heat_.get());
+    if (!ctx.restarting()) {
+      coupled_->initialise();
+      ctx.log() << "  particles: " << coupled_->n_free_particles() << " free from t = 0 ("
+                << coupled_->n_converted_cells() << " cells), " << coupled_->n_ghost_particles()
+                << " ghosts; spacing " << coupled_->particle_spacing() << " m, horizon "
+                << coupled_->horizon() << " m\n";
+    }
   }
   ctx.log() << "  mesh: " << triangulation_->n_global_active_cells() << " cells";
   if (mechanics_)
@@ -242,7 +261,29 @@ void Simulation<dim>::advance(unsigned int step, double time, double dt, RunCont
   }
   if (mechanics_) {
     dealii::TimerOutput::Scope scope(ctx.timer(), "mechanics");
-    if (mech_prm_.time_integration == "explicit") {
+    if (heat_ && mech_prm_.taylor_quinney > 0)
+      mechanics_->mark_plastic_work(); // dissipation over this step, for plastic heating
+    if (coupled_) {
+      double t = mechanics_->time();
+      if (coupled_dt_ == 0)
+        coupled_dt_ = coupled_->stable_time_step();
+      while (t < time - 1e-12 * time) {
+        coupled_->step(std::min(coupled_dt_, time - t));
+        t = mechanics_->time();
+        ++explicit_steps_;
+        if (effects_.conversion && explicit_steps_ % coupling_prm_.check_interval == 0) {
+          const auto r = coupled_->convert_flagged();
+          if (r.cells > 0) {
+            coupled_dt_ = coupled_->stable_time_step();
+            ctx.log() << "  t = " << t << " s: " << r.cells << " cells -> " << r.particles
+                      << " particles (mass change " << r.mass_change_relative()
+                      << ", momentum change " << r.momentum_change_relative()
+                      << " relative; kinetic energy moved " << r.kinetic_after - r.kinetic_before
+                      << " J)\n";
+          }
+        }
+      }
+    } else if (mech_prm_.time_integration == "explicit") {
       double t = mechanics_->time();
       while (t < time - 1e-12 * time) {
         const double h = std::min(mechanics_->stable_time_step(), time - t);
@@ -256,6 +297,8 @@ void Simulation<dim>::advance(unsigned int step, double time, double dt, RunCont
           linear_iterations_ += n;
       }
     }
+    if (heat_ && mech_prm_.taylor_quinney > 0) // heats the next heat step (staggered)
+      plastic_heating_ = mechanics_->cell_plastic_dissipation_rate();
   }
   if (particles_) {
     dealii::TimerOutput::Scope scope(ctx.timer(), "particles");
@@ -269,10 +312,12 @@ void Simulation<dim>::record(unsigned int step, double time, RunContext& ctx) {
   History::Row row{{"step", step}, {"time", time}, {"load_factor", time / sim_.end_time}};
   if (mechanics_) {
     if (sim_.reaction_boundary_id >= 0) {
-      const auto r = mechanics_->reaction_force(sim_.reaction_boundary_id);
+      const auto r = coupled_ ? coupled_->reaction_force(sim_.reaction_boundary_id)
+                              : mechanics_->reaction_force(sim_.reaction_boundary_id);
       const char* names[] = {"reaction_x", "reaction_y", "reaction_z"};
       for (unsigned int d = 0; d < dim; ++d)
         row.emplace_back(names[d], r[d]);
+      peak_load_ = std::max(peak_load_, r.norm());
     }
     row.emplace_back("strain_energy", mechanics_->strain_energy());
     row.emplace_back("max_von_mises", mechanics_->max_von_mises());
@@ -284,6 +329,13 @@ void Simulation<dim>::record(unsigned int step, double time, RunContext& ctx) {
   }
   if (particles_)
     particles_->add_history(row);
+  if (coupled_) {
+    row.emplace_back("free_particles", coupled_->n_free_particles());
+    row.emplace_back("converted_cells", coupled_->n_converted_cells());
+    row.emplace_back("broken_bonds", double(coupled_->n_broken_bonds()));
+    row.emplace_back("max_damage", coupled_->max_damage());
+    row.emplace_back("kinetic_energy", coupled_->kinetic_energy());
+  }
   ctx.history().add(row);
 }
 
@@ -300,6 +352,10 @@ void Simulation<dim>::write_output(unsigned int step, double time, RunContext& c
   if (heat_) {
     temperature_pvd_.add(time, heat_->write_output(dir, output_cycle_, "temperature"));
     temperature_pvd_.write(ctx);
+  }
+  if (coupled_) {
+    particles_pvd_.add(time, coupled_->write_output(dir, output_cycle_));
+    particles_pvd_.write(ctx);
   }
   if (particles_) {
     std::string name;
@@ -334,6 +390,8 @@ void Simulation<dim>::write_checkpoint(unsigned int step, double time, RunContex
     triangulation_->save(mesh_file);
   if (particles_ && ctx.is_root())
     particles_->save((tmp_dir / "particles.bin").string());
+  if (coupled_)
+    coupled_->save((tmp_dir / "coupling.txt").string());
   if (ctx.is_root()) {
     nlohmann::json state;
     state["step"] = step;
@@ -344,6 +402,8 @@ void Simulation<dim>::write_checkpoint(unsigned int step, double time, RunContex
     state["solution_pvd"] = solution_pvd_.to_json();
     state["temperature_pvd"] = temperature_pvd_.to_json();
     state["particles_pvd"] = particles_pvd_.to_json();
+    state["explicit_steps"] = explicit_steps_;
+    state["peak_load"] = peak_load_;
     if (heat_) {
       state["heat_supplied_energy"] = heat_->supplied_energy();
       state["initial_heat_content"] = initial_heat_content_;
@@ -382,6 +442,10 @@ unsigned int Simulation<dim>::load_checkpoint(RunContext& ctx) {
   }
   if (mechanics_)
     mechanics_->deserialize(mesh_file);
+  if (coupled_)
+    coupled_->load((dir / "coupling.txt").string());
+  explicit_steps_ = state.value("explicit_steps", 0u);
+  peak_load_ = state.value("peak_load", 0.0);
   output_cycle_ = state["output_cycle"];
   newton_iterations_ = state["newton_iterations"];
   linear_iterations_ = state["linear_iterations"];
@@ -407,13 +471,47 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
     s.set_figure("cells", triangulation_->n_global_active_cells(), "-");
   if (particles_)
     particles_->add_figures(ctx);
+  if (coupled_) {
+    const char* force_unit = dim == 2 ? "N/m" : "N";
+    s.set_figure("peak_load_N", peak_load_, force_unit);
+    s.set_figure("free_particles", coupled_->n_free_particles(), "-");
+    s.set_figure("ghost_particles", coupled_->n_ghost_particles(), "-");
+    s.set_figure("converted_cells", coupled_->n_converted_cells(), "-");
+    s.set_figure("broken_bonds", double(coupled_->n_broken_bonds()), "-");
+    s.set_figure("max_damage", coupled_->max_damage(), "-");
+    s.set_figure("explicit_steps", explicit_steps_, "iterations");
+    double dm = 0, dp = 0;
+    for (const auto& r : coupled_->conversions()) {
+      dm = std::max(dm, r.mass_change_relative());
+      dp = std::max(dp, r.momentum_change_relative());
+    }
+    s.set_figure("conversion_mass_change_relative", dm, "-");
+    s.set_figure("conversion_momentum_change_relative", dp, "-");
+    // The crack: damaged particles (φ >= 0.35, about a third of the bonds broken).
+    double tip_min = 0, tip_max = 0, path_sq = 0;
+    unsigned int n_cracked = 0;
+    const auto& p = coupled_->particles();
+    for (unsigned int i = 0; i < p.size(); ++i)
+      if (coupled_->is_free(i) && p.damage(i) >= 0.35) {
+        const auto& x = p.reference_position(i);
+        tip_min = n_cracked ? std::min(tip_min, x[0]) : x[0];
+        tip_max = n_cracked ? std::max(tip_max, x[0]) : x[0];
+        path_sq += x[1] * x[1];
+        ++n_cracked;
+      }
+    s.set_figure("crack_extent_min_x_m", tip_min, "m");
+    s.set_figure("crack_extent_max_x_m", tip_max, "m");
+    s.set_figure("crack_path_rms_y_m", n_cracked ? std::sqrt(path_sq / n_cracked) : 0.0, "m");
+    s.set_figure("particle_spacing_m", coupled_->particle_spacing(), "m");
+  }
   if (mechanics_) {
     s.set_figure("mechanics_dofs", mechanics_->dof_handler().n_dofs(), "-");
     s.set_figure("strain_energy", mechanics_->strain_energy(), dim == 2 ? "J/m" : "J");
     s.set_figure("max_von_mises", mechanics_->max_von_mises(), "Pa");
     s.set_figure("max_displacement", mechanics_->displacement().linfty_norm(), "m");
     if (sim_.reaction_boundary_id >= 0) {
-      const auto r = mechanics_->reaction_force(sim_.reaction_boundary_id);
+      const auto r = coupled_ ? coupled_->reaction_force(sim_.reaction_boundary_id)
+                              : mechanics_->reaction_force(sim_.reaction_boundary_id);
       s.set_figure("reaction_force_norm", r.norm(), dim == 2 ? "N/m" : "N");
     }
     s.set_figure("newton_iterations", newton_iterations_, "iterations");
@@ -437,6 +535,7 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
 
 template <int dim>
 void Simulation<dim>::run(RunContext& ctx) {
+  const auto start = std::chrono::steady_clock::now();
   build(ctx);
   unsigned int first_step = 1;
   if (ctx.restarting())
@@ -472,6 +571,9 @@ void Simulation<dim>::run(RunContext& ctx) {
   ctx.progress().finish();
   report_figures(ctx);
   ctx.summary().set_figure("last_step", last_step, "-");
+  ctx.summary().set_figure(
+      "wall_time_s",
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), "s");
 }
 
 void declare_simulation(SectionDeclarer& sections) {
@@ -481,6 +583,7 @@ void declare_simulation(SectionDeclarer& sections) {
   sections.declare("Mechanics", fem::MechanicsSolver<2>::Parameters::declare);
   sections.declare("Heat", fem::HeatSolver<2>::Parameters::declare);
   sections.declare("Particles", ParticleZoneParameters::declare);
+  sections.declare("Coupling", FemParticleCoupling<2>::Parameters::declare);
 }
 
 std::unique_ptr<Scenario> create_simulation(const ScenarioFactoryArgs& args) {

@@ -38,7 +38,7 @@ void CellIndicators<dim>::Parameters::parse(const ParameterHandler& prm) {
 }
 
 template <int dim>
-void CellIndicators<dim>::compute(const MechanicsSolver<dim>& solver) {
+void CellIndicators<dim>::compute(const MechanicsSolver<dim>& solver, bool with_state) {
   const auto& dof_handler = solver.dof_handler();
   const unsigned int n_cells = dof_handler.get_triangulation().n_active_cells();
   for (auto* v : {&min_jacobian_ratio, &inverted, &aspect_ratio, &equivalent_plastic_strain,
@@ -99,13 +99,20 @@ void CellIndicators<dim>::compute(const MechanicsSolver<dim>& solver) {
     stable_time_step(c) = prm_.cfl_safety_factor * emin / (degree * wave);
 
     double ep = 0, e1 = -std::numeric_limits<double>::max(), s1 = e1;
-    const auto data = solver.quadrature_point_data(cell);
-    for (const auto& d : data) {
-      ep += d.state.equivalent_plastic_strain;
-      e1 = std::max(e1, eigenvalues(d.strain)[0]);
-      s1 = std::max(s1, eigenvalues(d.cauchy_stress)[0]);
+    if (with_state) {
+      const auto data = solver.quadrature_point_data(cell);
+      for (const auto& d : data) {
+        ep += d.state.equivalent_plastic_strain;
+        e1 = std::max(e1, eigenvalues(d.strain)[0]);
+        s1 = std::max(s1, eigenvalues(d.cauchy_stress)[0]);
+      }
+      ep /= data.size();
+    } else {
+      s1 = 0;
+      for (const auto& H : grad_q)
+        e1 = std::max(e1, eigenvalues(symmetrize(H))[0]);
     }
-    equivalent_plastic_strain(c) = ep / data.size();
+    equivalent_plastic_strain(c) = ep;
     max_principal_strain(c) = e1;
     max_principal_stress(c) = s1;
     damage(c) = std::max(e1 / prm_.critical_principal_strain, s1 / prm_.critical_principal_stress);

@@ -27,7 +27,9 @@ class CellIndicators {
   explicit CellIndicators(const Parameters& parameters = Parameters()) : prm_(parameters) {}
 
   // Evaluates everything at the solver's current (committed) state.
-  void compute(const MechanicsSolver<dim>& solver);
+  // Without `with_state` the point-wise states are not read (no stress refresh): principal
+  // strains come from the in-plane displacement gradient, plastic strain and stress are 0.
+  void compute(const MechanicsSolver<dim>& solver, bool with_state = true);
 
   // min over vertices and quadrature points of det J (deformed) / max of the same [-];
   // 1 for an undistorted parallelogram, <= 0 when the cell is inverted.

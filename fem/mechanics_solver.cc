@@ -292,6 +292,7 @@ void MechanicsSolver<dim>::set_active_cells(const std::vector<bool>& active) {
                        "one flag per active cell (" + std::to_string(tria_.n_active_cells()) +
                            ")");
   active_ = active;
+  explicit_matrix_ready_ = false;
   if (is_setup_) {
     compute_lumped_mass();
     mark_orphan_dofs();
@@ -324,6 +325,7 @@ const materials::ConstitutiveLaw& MechanicsSolver<dim>::material(types::material
 template <int dim>
 ArrayView<const QuadraturePointData>
 MechanicsSolver<dim>::quadrature_point_data(const CellIterator& cell) const {
+  refresh_states();
   const unsigned int nq = quadrature_.size();
   return ArrayView<const QuadraturePointData>(committed_.data() + cell->active_cell_index() * nq,
                                               nq);
@@ -340,6 +342,8 @@ void MechanicsSolver<dim>::setup() {
   hanging_.reinit(relevant_);
   DoFTools::make_hanging_node_constraints(dof_handler_, hanging_);
   hanging_.close();
+  explicit_matrix_ready_ = false;
+  states_stale_ = false;
   cell_laws_.assign(tria_.n_active_cells(), nullptr);
   if (cell_law_function_)
     for (const auto& cell : tria_.active_cell_iterators())
@@ -538,8 +542,9 @@ typename MechanicsSolver<dim>::AssemblyNorms
 MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
                                const AffineConstraints<double>& constraints) {
   ScopedTime timer(timings_.assembly);
+  MatrixType& matrix = assemble_into_explicit_matrix_ ? explicit_matrix_ : matrix_;
   if (with_matrix)
-    matrix_ = 0;
+    matrix = 0;
   rhs_ = 0;
   VectorType f_int(owned_, comm_), f_ext(owned_, comm_);
 
@@ -724,14 +729,14 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
     for (unsigned int i = 0; i < n; ++i)
       cell_rhs(i) = cell_fext(i) - cell_fint(i);
     if (with_matrix)
-      constraints.distribute_local_to_global(cell_matrix, cell_rhs, dofs, matrix_, rhs_);
+      constraints.distribute_local_to_global(cell_matrix, cell_rhs, dofs, matrix, rhs_);
     else
       constraints.distribute_local_to_global(cell_rhs, dofs, rhs_);
     f_int.add(dofs, cell_fint);
     f_ext.add(dofs, cell_fext);
   }
   if (with_matrix)
-    matrix_.compress(VectorOperation::add);
+    matrix.compress(VectorOperation::add);
   rhs_.compress(VectorOperation::add);
   f_int.compress(VectorOperation::add);
   f_ext.compress(VectorOperation::add);
@@ -966,7 +971,15 @@ double MechanicsSolver<dim>::stable_time_step() const {
       // The shortest edge (not the diameter) bounds the highest mode of distorted cells;
       // degree p splits the edge into p node spacings.
       const double h = cell->minimum_vertex_distance() / prm_.fe_degree;
-      dt = std::min(dt, h / cell_material(cell).p_wave_speed());
+      const auto& law = cell_material(cell);
+      // Plane stress carries the in-plane P wave sqrt(E / ((1 − ν²) ρ)), slower than the
+      // 3-D one.
+      const double c = prm_.plane_stress
+                           ? std::sqrt(law.youngs_modulus() /
+                                       ((1 - law.poisson_ratio() * law.poisson_ratio()) *
+                                        law.density()))
+                           : law.p_wave_speed();
+      dt = std::min(dt, h / c);
     }
   return prm_.cfl_safety_factor * Utilities::MPI::min(dt, comm_);
 }
@@ -979,19 +992,48 @@ void MechanicsSolver<dim>::explicit_step(double dt) {
   loaded_ = false; // loads are evaluated at the current time only
   if (temperature_field_)
     evaluate_temperature_field(dT_target_);
-  assemble(false, 1.0, hanging_);
+  if (linear_explicit()) {
+    // Linear elasticity without loads in the volume: f_int = K u with K assembled once per
+    // set of active cells (a sparse product instead of a constitutive call per point).
+    if (!explicit_matrix_ready_) {
+      DynamicSparsityPattern dsp(relevant_);
+      DoFTools::make_sparsity_pattern(dof_handler_, dsp, hanging_, true);
+      SparsityTools::distribute_sparsity_pattern(dsp, owned_, comm_, relevant_);
+      explicit_matrix_.reinit(owned_, owned_, dsp, comm_);
+      assemble_into_explicit_matrix_ = true;
+      assemble(true, 1.0, hanging_);
+      assemble_into_explicit_matrix_ = false;
+      trial_ = committed_;
+      explicit_matrix_ready_ = true;
+    }
+    ScopedTime timer(timings_.assembly);
+    explicit_matrix_.vmult(raw_residual_, u_);
+    rhs_ = raw_residual_;
+    rhs_ *= -1.0;
+    states_stale_ = true;
+  } else {
+    assemble(false, 1.0, hanging_);
+  }
 
   const double a = prm_.mass_damping;
-  for (const auto i : owned_) {
-    if (hanging_.is_constrained(i) || orphan_[relevant_.index_within_set(i)])
-      continue;
-    const double m = lumped_mass_(i);
-    if (!(m > 0))
-      throw NumericalFailure("zero lumped mass at dof " + std::to_string(i), "explicit step",
-                             "every material needs a positive density");
-    const double acc = rhs_(i) / m;
-    v_(i) = ((1.0 - 0.5 * a * dt) * v_(i) + dt * acc) / (1.0 + 0.5 * a * dt);
-    u_(i) += dt * v_(i);
+  {
+    // Local arrays in the order of owned_ (element access through Trilinos is a map lookup).
+    double* u = u_.begin();
+    double* v = v_.begin();
+    const double* r = rhs_.begin();
+    const double* mass = lumped_mass_.begin();
+    std::size_t k = 0;
+    for (auto it = owned_.begin(); it != owned_.end(); ++it, ++k) {
+      const auto i = *it;
+      if (hanging_.is_constrained(i) || orphan_[relevant_.index_within_set(i)])
+        continue;
+      const double m = mass[k];
+      if (!(m > 0))
+        throw NumericalFailure("zero lumped mass at dof " + std::to_string(i), "explicit step",
+                               "every material needs a positive density");
+      v[k] = ((1.0 - 0.5 * a * dt) * v[k] + dt * r[k] / m) / (1.0 + 0.5 * a * dt);
+      u[k] += dt * v[k];
+    }
   }
   std::map<types::global_dof_index, double> g;
   for (const auto& d : bcs_.dirichlet()) {
@@ -1014,9 +1056,35 @@ void MechanicsSolver<dim>::explicit_step(double dt) {
                            "explicit step at t = " + std::to_string(time_) +
                                ", dt = " + std::to_string(dt),
                            "reduce the time step (CFL safety factor) or check the materials");
-  commit_history();
+  if (!states_stale_)
+    commit_history();
   time_ += dt;
   update_ghosts();
+}
+
+template <int dim>
+bool MechanicsSolver<dim>::linear_explicit() const {
+  if (prm_.kinematics != "small_strain" || body_force_ || temperature_change_ ||
+      temperature_field_ || !bcs_.traction().empty() || !bcs_.pressure().empty())
+    return false;
+  for (const auto& [id, law] : laws_)
+    if (law && law->name() != "linear_elastic")
+      return false;
+  for (const auto& law : cell_laws_)
+    if (law && law->name() != "linear_elastic")
+      return false;
+  return true;
+}
+
+template <int dim>
+void MechanicsSolver<dim>::refresh_states() const {
+  // The linear explicit path skips the point-wise update: bring stresses to the current u.
+  if (!states_stale_)
+    return;
+  auto& self = const_cast<MechanicsSolver<dim>&>(*this);
+  self.assemble(false, 1.0, hanging_);
+  self.commit_history();
+  self.states_stale_ = false;
 }
 
 template <int dim>
@@ -1114,6 +1182,7 @@ double MechanicsSolver<dim>::plastic_work() const {
 
 template <int dim>
 double MechanicsSolver<dim>::strain_energy() const {
+  refresh_states();
   FEValues<dim> fe_values(*mapping_, fe_, quadrature_, update_JxW_values);
   double e = 0;
   for (const auto& cell : dof_handler_.active_cell_iterators())
@@ -1128,6 +1197,7 @@ double MechanicsSolver<dim>::strain_energy() const {
 
 template <int dim>
 double MechanicsSolver<dim>::max_von_mises() const {
+  refresh_states();
   double m = 0;
   for (const auto& cell : dof_handler_.active_cell_iterators())
     if (cell->is_locally_owned() && is_active(cell))
@@ -1146,6 +1216,7 @@ double MechanicsSolver<dim>::kinetic_energy() const {
 
 template <int dim>
 Vector<float> MechanicsSolver<dim>::cell_von_mises() const {
+  refresh_states();
   Vector<float> out(tria_.n_active_cells());
   for (const auto& cell : dof_handler_.active_cell_iterators())
     if (cell->is_locally_owned()) {
@@ -1160,6 +1231,7 @@ Vector<float> MechanicsSolver<dim>::cell_von_mises() const {
 
 template <int dim>
 Vector<float> MechanicsSolver<dim>::cell_equivalent_plastic_strain() const {
+  refresh_states();
   Vector<float> out(tria_.n_active_cells());
   for (const auto& cell : dof_handler_.active_cell_iterators())
     if (cell->is_locally_owned()) {
@@ -1176,6 +1248,7 @@ template <int dim>
 std::string MechanicsSolver<dim>::write_output(const std::string& directory,
                                                const std::string& basename,
                                                unsigned int cycle) const {
+  refresh_states();
   ScopedTime timer(timings_.output);
   DataOut<dim> data_out;
   data_out.attach_dof_handler(dof_handler_);
@@ -1208,6 +1281,7 @@ std::string MechanicsSolver<dim>::write_output(const std::string& directory,
 
 template <int dim>
 void MechanicsSolver<dim>::prepare_for_serialization(const std::string& filename) const {
+  refresh_states();
   ScopedTime timer(timings_.checkpoint);
   auto& tria = const_cast<parallel::distributed::Triangulation<dim>&>(tria_);
   // The transfer must live until the triangulation is saved.

@@ -214,6 +214,8 @@ class MechanicsSolver {
                     double load_factor) const;
   void build_rigid_body_modes();
   void compute_lumped_mass();
+  bool linear_explicit() const;
+  void refresh_states() const;
   void mark_orphan_dofs();
 
   MPI_Comm comm_;
@@ -240,6 +242,9 @@ class MechanicsSolver {
   CellLawFunction cell_law_function_;
   std::vector<std::shared_ptr<const materials::ConstitutiveLaw>> cell_laws_; // by cell index
   std::vector<bool> active_;
+  MatrixType explicit_matrix_; // K over the active cells for the linear explicit path
+  bool explicit_matrix_ready_ = false, assemble_into_explicit_matrix_ = false;
+  mutable bool states_stale_ = false;
   std::vector<bool> orphan_; // relevant DoFs touched by no active cell (by local index)
   std::map<dealii::types::global_dof_index, double> driven_;
 

@@ -1,4 +1,5 @@
-# Checkpoint and restart: the default scene stopped after step 5 and continued with
+# Checkpoint and restart: the default scene (coupled FEM / particles, explicit) stopped after
+# step 5 and continued with
 # --restart ends with the same figures as the uninterrupted run (cli.default_scene).
 set(_runs ${CMAKE_CURRENT_BINARY_DIR}/runs)
 spinesim_add_scene_test(scene.restart_first_half SET "Simulation/Stop after step=5"
@@ -6,7 +7,7 @@ spinesim_add_scene_test(scene.restart_first_half SET "Simulation/Stop after step
 set_tests_properties(scene.restart_first_half PROPERTIES FIXTURES_SETUP restart_half)
 spinesim_add_scene_test(scene.restart_second_half
   ARGS "run;--restart;${_runs}/scene.restart_first_half;--set;Simulation/Stop after step=0;--progress;lines"
-  OUT ${_runs}/scene.restart_first_half EXPECT "status==ok;last_step~10:0")
+  OUT ${_runs}/scene.restart_first_half EXPECT "status==ok;last_step~20:0")
 set_tests_properties(scene.restart_second_half PROPERTIES FIXTURES_REQUIRED restart_half
                      FIXTURES_SETUP restart_done)
 # Same figures as the run without interruption, to 1e-8 relative: the restart reloads the
@@ -17,3 +18,20 @@ add_test(NAME scene.restart_matches_uninterrupted
                  -DTOL=1e-8 -DFLOOR=1e-9 -P ${PROJECT_SOURCE_DIR}/tests/support/compare_summaries.cmake)
 set_tests_properties(scene.restart_matches_uninterrupted PROPERTIES LABELS "scene"
                      FIXTURES_REQUIRED "restart_done;default_run")
+
+# The same for the thermo-mechanical demo (heat + quasi-static mechanics checkpoints).
+set(_drill ${PROJECT_SOURCE_DIR}/applications/scenes/plate_drilling.prm)
+spinesim_add_scene_test(scene.restart_drilling_first_half SCENE ${_drill}
+                        SET "Simulation/Stop after step=5" EXPECT "status==ok;last_step~5:0")
+set_tests_properties(scene.restart_drilling_first_half PROPERTIES FIXTURES_SETUP drill_half)
+spinesim_add_scene_test(scene.restart_drilling_second_half
+  ARGS "run;--restart;${_runs}/scene.restart_drilling_first_half;--set;Simulation/Stop after step=0;--progress;lines"
+  OUT ${_runs}/scene.restart_drilling_first_half EXPECT "status==ok;last_step~10:0")
+set_tests_properties(scene.restart_drilling_second_half PROPERTIES FIXTURES_REQUIRED drill_half
+                     FIXTURES_SETUP drill_done)
+add_test(NAME scene.restart_drilling_matches_uninterrupted
+         COMMAND ${CMAKE_COMMAND} -DA=${_runs}/scene.restart_drilling_first_half/summary.json
+                 -DB=${PROJECT_BINARY_DIR}/tests/cli/runs/scene.plate_drilling/summary.json
+                 -DTOL=1e-8 -DFLOOR=1e-9 -P ${PROJECT_SOURCE_DIR}/tests/support/compare_summaries.cmake)
+set_tests_properties(scene.restart_drilling_matches_uninterrupted PROPERTIES LABELS "scene"
+                     FIXTURES_REQUIRED "drill_done;drill_run")
