@@ -57,6 +57,29 @@ int run_cli(int argc, char** argv) {
   check_cmd->add_option("SCENE", check_scene, "Scene file (.prm or .json)")->required();
   check_cmd->add_option("-s,--set", check_source.overrides, "Override a parameter")->take_all();
 
+  // convert: the ct_to_particles scenario on a scene's CT, Bone and Caps sections (a CT
+  // scene such as vertebra_compression.prm), through the same run path as `run`.
+  RunOptions convert;
+  convert.output = "spinesim-particles";
+  std::string convert_scene, convert_per = "cell";
+  auto* convert_cmd = app.add_subcommand(
+      "convert", "Convert the CT model of a scene (sections CT, Bone, Caps) to particles: "
+                 "positions, volumes, density and material per cell or Gauss point, written to "
+                 "particles.vtu and particles.h5 in the output directory.");
+  convert_cmd->add_option("SCENE", convert_scene, "Scene file with a CT section")->required();
+  convert_cmd->add_option("-o,--output", convert.output, "Output directory")
+      ->capture_default_str();
+  convert_cmd->add_option("--per", convert_per, "One particle per cell or per quadrature point")
+      ->check(CLI::IsMember({"cell", "quadrature"}))
+      ->capture_default_str();
+  convert_cmd->add_option("-s,--set", convert.scene.overrides, "Override a parameter")
+      ->take_all();
+  convert_cmd->add_flag("-f,--force", convert.force,
+                        "Replace the output directory of an earlier run");
+  convert_cmd->add_option("--progress", convert.progress, "Progress display")
+      ->check(CLI::IsMember({"auto", "bar", "lines", "off"}))
+      ->capture_default_str();
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -88,6 +111,12 @@ int run_cli(int argc, char** argv) {
     if (!params_scene.empty())
       params_source.file = params_scene;
     return params_command(params_source, format);
+  }
+  if (*convert_cmd) {
+    convert.scene.file = convert_scene;
+    convert.scene.overrides.push_back("Scenario=ct_to_particles");
+    convert.scene.overrides.push_back("Particle conversion/Per=" + convert_per);
+    return run_command(convert);
   }
   check_source.file = check_scene;
   return check_command(check_source);

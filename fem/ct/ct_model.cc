@@ -63,6 +63,7 @@ CtModel build_ct_model(const CtParameters& p, dealii::Triangulation<3>& triangul
   for (std::size_t n = 0; n < law_cell.size(); ++n)
     model.cell_modulus[law_cell[n]] = evaluation.modulus[n];
   model.floored_cells = evaluation.floored_cells;
+  model.cell_label = std::move(material);
   model.poisson_ratio = p.poisson_ratio;
   if (p.mark_end_faces)
     model.end_faces = p.end_face_labels.empty()

@@ -20,6 +20,7 @@ struct CtModel {
   VoxelMesh mesh;
   std::vector<double> cell_modulus; // [Pa] by coarse cell id: Label moduli, else the law
                                     // with floors; mesh.cell_density has Label densities
+  std::vector<int> cell_label;      // material id (label, 0 in threshold mode) by coarse id
   unsigned int floored_cells = 0;   // cells where the density or modulus floor acted
   EndFaceCount end_faces;           // coarse faces given ids 4 / 5 (Mark end faces)
   double poisson_ratio = 0.3;       // [-]

@@ -11,6 +11,11 @@
 namespace spinesim::fem {
 
 void CtParameters::declare(dealii::ParameterHandler& prm) {
+  declare_volume(prm);
+  declare_material(prm);
+}
+
+void CtParameters::declare_volume(dealii::ParameterHandler& prm) {
   using namespace dealii::Patterns;
   prm.declare_entry(
       "Image file", "", Anything(),
@@ -46,6 +51,16 @@ void CtParameters::declare(dealii::ParameterHandler& prm) {
       "Empty: end faces are the lowest / highest z faces of the whole mesh. Two "
       "labels 'lower, upper' (e.g. the PMMA caps 5, 6 of verse004): the lowest "
       "z faces of the lower label's cells get id 4, the highest of the upper's 5 [-].");
+  prm.declare_entry("Label moduli", "", Map(Integer(0, 254), Double(0)),
+                    "Young's modulus per label replacing the density law, 'label: E' comma "
+                    "list, e.g. '5: 2.5e9, 6: 2.5e9' for PMMA caps that carry no density [Pa].");
+  prm.declare_entry("Label densities", "", Map(Integer(0, 254), Double(0)),
+                    "Density per label replacing the image's, 'label: rho' comma list, e.g. "
+                    "'5: 1.18, 6: 1.18' for PMMA [g/cm^3].");
+}
+
+void CtParameters::declare_material(dealii::ParameterHandler& prm) {
+  using namespace dealii::Patterns;
   prm.declare_entry("Density modulus law", "morgan2003_vertebra",
                     Selection(DensityModulusLaw::names()),
                     "Density-elasticity relation, rho in g/cm^3: morgan2003_vertebra "
@@ -57,12 +72,6 @@ void CtParameters::declare(dealii::ParameterHandler& prm) {
                     "Densities below this are raised to it before the law [g/cm^3].");
   prm.declare_entry("Minimum modulus", "1e6", Double(0),
                     "Moduli below this are raised to it (keeps the stiffness positive) [Pa].");
-  prm.declare_entry("Label moduli", "", Map(Integer(0, 254), Double(0)),
-                    "Young's modulus per label replacing the density law, 'label: E' comma "
-                    "list, e.g. '5: 2.5e9, 6: 2.5e9' for PMMA caps that carry no density [Pa].");
-  prm.declare_entry("Label densities", "", Map(Integer(0, 254), Double(0)),
-                    "Density per label replacing the image's, 'label: rho' comma list, e.g. "
-                    "'5: 1.18, 6: 1.18' for PMMA [g/cm^3].");
   prm.declare_entry("Poisson ratio", "0.3", Double(-1, 0.5),
                     "Poisson's ratio of the bone cells [-].");
 }
@@ -77,6 +86,11 @@ std::string CtParameters::resolve_path(const std::string& file, const std::strin
 }
 
 void CtParameters::parse(const dealii::ParameterHandler& prm, const std::string& base) {
+  parse_volume(prm, base);
+  parse_material(prm);
+}
+
+void CtParameters::parse_volume(const dealii::ParameterHandler& prm, const std::string& base) {
   image_file = resolve_path(prm.get("Image file"), base);
   label_file = resolve_path(prm.get("Label file"), base);
   value_type = prm.get("Value type");
@@ -100,11 +114,6 @@ void CtParameters::parse(const dealii::ParameterHandler& prm, const std::string&
     if (std::find(labels.begin(), labels.end(), l) == labels.end())
       throw InvalidInput("End face labels", "label " + std::to_string(l) + " is not meshed",
                          "labels listed in Labels");
-  density_modulus_law = prm.get("Density modulus law");
-  constant_modulus = prm.get_double("Constant modulus");
-  minimum_density = prm.get_double("Minimum density");
-  minimum_modulus = prm.get_double("Minimum modulus");
-  poisson_ratio = prm.get_double("Poisson ratio");
   auto parse_map = [&](const std::string& entry, double floor, const std::string& unit) {
     std::map<int, double> out;
     for (const auto& item : dealii::Utilities::split_string_list(prm.get(entry), ',')) {
@@ -126,9 +135,18 @@ void CtParameters::parse(const dealii::ParameterHandler& prm, const std::string&
   if (!labels.empty() && label_file.empty())
     throw InvalidInput("Label file", "Labels are given but no label file",
                        "a segmentation file, or an empty Labels list for threshold mode");
-  // Constructing them validates value type, calibration, law and floors.
+  // Constructing it validates value type and calibration.
   if (value_type == "hu")
     DensityCalibration(DensityCalibration::ValueType::hu, calibration_intercept, calibration_slope);
+}
+
+void CtParameters::parse_material(const dealii::ParameterHandler& prm) {
+  density_modulus_law = prm.get("Density modulus law");
+  constant_modulus = prm.get_double("Constant modulus");
+  minimum_density = prm.get_double("Minimum density");
+  minimum_modulus = prm.get_double("Minimum modulus");
+  poisson_ratio = prm.get_double("Poisson ratio");
+  // Constructing it validates law and floors.
   DensityModulusLaw(density_modulus_law, constant_modulus, minimum_density, minimum_modulus);
   if (!(poisson_ratio > -1 && poisson_ratio < 0.5))
     throw InvalidInput("Poisson ratio", std::to_string(poisson_ratio), "a value in (-1, 0.5)");

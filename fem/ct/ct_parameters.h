@@ -33,10 +33,20 @@ struct CtParameters {
   std::map<int, double> label_moduli;    // [Pa] label -> E replacing the law (PMMA caps)
   std::map<int, double> label_densities; // [g/cm^3] label -> density replacing the image's
 
+  // All entries in the current subsection: declare_volume() + declare_material().
   static void declare(dealii::ParameterHandler& prm);
   // Reads and validates (InvalidInput naming the parameter); relative paths are made absolute
   // against base_directory (the scene file's directory; empty = leave them as given).
   void parse(const dealii::ParameterHandler& prm, const std::string& base_directory = "");
+
+  // The two halves, for scenes that keep the image and the bone law in different sections
+  // (vertebra_compression: "CT" and "Bone").
+  // Volume: files, calibration, selection, coarsening, end faces, label moduli / densities.
+  static void declare_volume(dealii::ParameterHandler& prm);
+  void parse_volume(const dealii::ParameterHandler& prm, const std::string& base_directory = "");
+  // Material: Density modulus law, Constant modulus, Minimum density / modulus, Poisson ratio.
+  static void declare_material(dealii::ParameterHandler& prm);
+  void parse_material(const dealii::ParameterHandler& prm);
 
   // `file` unchanged if empty or absolute, else base_directory/file.
   static std::string resolve_path(const std::string& file, const std::string& base_directory);

@@ -2,6 +2,7 @@
 // counts, density-modulus laws against their formulas, reader round trips on synthetic
 // volumes in every format, voxel meshing (counts, volume, components, orientation, ids),
 // mass conservation under coarsening, and the mesh -> particle conversion's conservation.
+#include "fem/ct/ct_cell_laws.h"
 #include "fem/ct/ct_model.h"
 #include "fem/ct/ct_parameters.h"
 #include "fem/ct/ct_volume.h"
@@ -11,6 +12,8 @@
 #include "fem/ct/mesh_to_particles.h"
 #include "fem/ct/voxel_mesher.h"
 #include "fem/materials/failure.h"
+#include "fem/materials/j2_plasticity.h"
+#include "fem/mechanics_solver.h"
 
 #include <deal.II/base/hdf5.h>
 #include <deal.II/base/mpi.h>
@@ -554,4 +557,90 @@ TEST(CtParameters, ParseResolveAndBuildVerse004Model) {
   prm.set("Image file", "");
   EXPECT_THROW(p.parse(prm), InvalidInput);
   prm.leave_subsection();
+}
+
+// Per-cell laws: E, nu, mass density and (J2 kind) the yield stress of every coarse cell
+// follow its density through the laws; labelled caps stay elastic with their own nu.
+TEST(CtCellLaws, FollowTheDensityAndKeepCapsElastic) {
+  CtModel model;
+  model.mesh.cell_density = {0.2, 0.5, 1.18};
+  model.mesh.cell_volume = {1e-9, 1e-9, 1e-9};
+  model.cell_label = {1, 2, 5};
+  const DensityModulusLaw law("kopperdahl2002", 0, 1e-3, 1e6);
+  model.cell_modulus = {law.modulus(0.2), law.modulus(0.5), 3e9};
+  model.poisson_ratio = 0.3;
+  CtCellLaws::Options o;
+  o.kind = CtCellLaws::Kind::j2_plasticity;
+  o.label_poisson_ratio[5] = 0.35;
+  o.elastic_labels = {5};
+  o.hardening_ratio = 0.05;
+  const CtCellLaws laws(model, o);
+  ASSERT_EQ(laws.size(), 3u);
+  EXPECT_EQ(laws.n_plastic_cells(), 2u);
+  for (unsigned int c = 0; c < 2; ++c) {
+    const double rho = model.mesh.cell_density[c];
+    EXPECT_EQ(laws.law(c)->name(), "j2_plasticity");
+    EXPECT_EQ(laws.law(c)->youngs_modulus(), model.cell_modulus[c]);
+    EXPECT_EQ(laws.law(c)->poisson_ratio(), 0.3);
+    EXPECT_DOUBLE_EQ(laws.law(c)->density(), 1000 * rho);
+    // Relative 1e-14: the same formula as the published one, evaluated in another order.
+    EXPECT_NEAR(laws.yield_stress(c), 37.4e6 * std::pow(rho, 1.39), 1e-14 * laws.yield_stress(c));
+    const auto& j2 = dynamic_cast<const materials::J2Plasticity&>(*laws.law(c));
+    EXPECT_DOUBLE_EQ(j2.hardening().yield_stress(), laws.yield_stress(c));
+  }
+  EXPECT_EQ(laws.law(2)->name(), "linear_elastic");
+  EXPECT_EQ(laws.law(2)->youngs_modulus(), 3e9);
+  EXPECT_EQ(laws.law(2)->poisson_ratio(), 0.35);
+  EXPECT_EQ(laws.yield_stress(2), 0.0);
+  // A law without a yield relation cannot drive the J2 kind.
+  o.yield_law = "morgan2003_vertebra";
+  EXPECT_THROW(CtCellLaws(model, o), InvalidInput);
+}
+
+// Density-mapped moduli reach the FE model: a bar of two densities in series (lower half
+// 200, upper half 500 mg/cm^3) compressed axially has K = A / (L1/E1 + L2/E2). With nu = 0
+// the uniaxial-strain field is piecewise linear along z and the interface is a cell face, so
+// the trilinear FE solution is exact: only the solver tolerance (1e-10) separates them. A
+// model using one modulus for all cells misses by tens of percent.
+TEST(CtCellLaws, TwoDensityBarInSeriesHasTheSeriesStiffness) {
+  CtVolume v;
+  v.size = {{3, 2, 8}};
+  v.spacing = {{1e-3, 1.5e-3, 0.5e-3}};
+  v.origin = {{0.5e-3, 0.75e-3, 0.25e-3}}; // voxel corners from 0: the mesh spans [0, L] in z
+  v.values.resize(v.n_voxels());
+  for (unsigned int k = 0; k < v.size[2]; ++k)
+    for (unsigned int j = 0; j < v.size[1]; ++j)
+      for (unsigned int i = 0; i < v.size[0]; ++i)
+        v.values[v.linear_index(i, j, k)] = k < 4 ? 200.0 : 500.0;
+  const std::string file = scratch("two_density_bar.mha");
+  write_ct_volume(v, file);
+  CtParameters p;
+  p.image_file = file;
+  p.density_threshold = 0.1;
+  p.density_modulus_law = "morgan2003_vertebra";
+  p.poisson_ratio = 0.0;
+  parallel::distributed::Triangulation<3> tria(MPI_COMM_WORLD);
+  const CtModel model = build_ct_model(p, tria);
+  ASSERT_EQ(model.cell_modulus.size(), 3u * 2 * 8);
+  tria.refine_global(1); // children keep their coarse cell's law
+
+  MechanicsSolver<3>::Parameters mp;
+  mp.linear_tolerance = 1e-12;
+  MechanicsSolver<3> solver(tria, mp);
+  solver.set_cell_laws(CtCellLaws(model, {}).function());
+  const double L = 8 * 0.5e-3, delta = 1e-6, A = 3e-3 * 3e-3;
+  solver.boundary_conditions().add_dirichlet(4, "x,y,z", "0; 0; 0");
+  solver.boundary_conditions().add_dirichlet(5, "x,y,z", "0; 0; -1e-6*t");
+  solver.setup();
+  solver.solve_quasi_static(1.0);
+  const DensityModulusLaw law("morgan2003_vertebra", 0, 1e-3, 1e6);
+  const double E1 = law.modulus(0.2), E2 = law.modulus(0.5);
+  const double K = -solver.reaction_force(5)[2] / delta;
+  const double K_series = A / (0.5 * L / E1 + 0.5 * L / E2);
+  EXPECT_NEAR(K, K_series, 1e-8 * K_series);
+  // The cell laws are what the solver uses, cell by cell.
+  for (const auto& cell : solver.dof_handler().active_cell_iterators())
+    if (cell->is_locally_owned()) {
+      EXPECT_EQ(solver.cell_material(cell).youngs_modulus(), cell->center()[2] < 0.5 * L ? E1 : E2);
+    }
 }

@@ -1,0 +1,77 @@
+# CT to model: the synthetic phantom (validation), the verse004 vertebra between PMMA caps
+# and the CT -> particles conversion (`spinesim convert`).
+set(_val ${PROJECT_SOURCE_DIR}/applications/validation)
+set(_vertebra ${PROJECT_SOURCE_DIR}/applications/scenes/vertebra_compression.prm)
+
+# Phantom cylinder, MetaImage, one cell per voxel. stiffness_relative_error is against
+# E A_mesh / L with the meshed (voxelised) area; the issue's bound is 2 %; measured 2.4e-5,
+# what is left being the x-y pin at the axis (a one-voxel perturbation of the frictionless
+# platen). Against pi r^2 the voxelised circle adds 0.59 % (r = 10 voxels), also within 2 %.
+# The voxel values are written as doubles and read back exactly: density error 0 (1e-12
+# allows for the mg -> g/cm^3 scaling). Strain energy = F delta / 2 for a linear solve to
+# solver tolerance (1e-10 relative residual): 1e-8.
+spinesim_add_scene_test(validation.ct_phantom_cylinder SCENE ${_val}/ct_phantom_cylinder.prm
+  EXPECT "status==ok;stiffness_relative_error<=0.02;stiffness_relative_error_exact_area<=0.02;density_relative_error<=1e-12;energy_balance_error<=1e-8"
+  LABELS "scene;validation")
+# The other reader and calibration paths: NRRD with Hounsfield units through rho = a + b HU,
+# 2x coarsening (blocks of the round surface by majority). Same bounds on the pipeline; the
+# exact-area error grows to 1.9 % at 2-voxel cells, not asserted here.
+spinesim_add_scene_test(validation.ct_phantom_cylinder_nrrd_hu SCENE ${_val}/ct_phantom_cylinder.prm
+  SET "Phantom/File format=nrrd" "Phantom/Value type=hu" "Phantom/Coarsening factor=2"
+  EXPECT "status==ok;stiffness_relative_error<=0.02;density_relative_error<=1e-12;energy_balance_error<=1e-8"
+  LABELS "scene;validation")
+spinesim_add_scene_test(validation.ct_phantom_cylinder_nifti_2ranks SCENE ${_val}/ct_phantom_cylinder.prm
+  SET "Phantom/File format=nii.gz" RANKS 2
+  EXPECT "status==ok;stiffness_relative_error<=0.02;density_relative_error<=1e-12"
+  LABELS "scene;validation")
+
+# verse004 vertebra, linear, 3 mm cells (coarsening 3: 2.4k cells, 11k DoFs, ~1 s). CT-FE
+# vertebral body stiffness is published at about 5-30 kN/mm (measured 11.4 kN/mm here,
+# 11.1 at 2 mm, see docs/validation.md); the bounds 5..30 kN/mm are that range. The
+# reaction is stiffness x displacement for a linear solve (~1136 N at 0.1 mm); upper and
+# lower cap reactions balance to the solver tolerance (1e-10 relative residual): 1e-6.
+set(_runs ${CMAKE_CURRENT_BINARY_DIR}/runs)
+spinesim_add_scene_test(scene.vertebra_compression SCENE ${_vertebra}
+  SET "CT/Coarsening factor=3"
+  EXPECT "status==ok;stiffness_N_per_mm>=5000;stiffness_N_per_mm<=30000;force_balance_error<=1e-6"
+  LABELS "scene;fem")
+set_tests_properties(scene.vertebra_compression PROPERTIES FIXTURES_SETUP vertebra_1)
+spinesim_add_scene_test(scene.vertebra_compression_2ranks SCENE ${_vertebra} RANKS 2
+  SET "CT/Coarsening factor=3"
+  EXPECT "status==ok;stiffness_N_per_mm>=5000;stiffness_N_per_mm<=30000;force_balance_error<=1e-6"
+  LABELS "scene;fem")
+set_tests_properties(scene.vertebra_compression_2ranks PROPERTIES FIXTURES_SETUP vertebra_2)
+# 1 and 2 ranks agree: the same mesh and laws, only the partition (and so the AMG and the
+# round-off of the CG iterates) differ; figures to 1e-6 relative (solver tolerance 1e-10 on
+# the residual, condition number of a 3000:1 modulus contrast); balance errors below 1e-6
+# count as zero.
+add_test(NAME scene.vertebra_compression_ranks_agree
+         COMMAND ${CMAKE_COMMAND} -DA=${_runs}/scene.vertebra_compression/summary.json
+                 -DB=${_runs}/scene.vertebra_compression_2ranks/summary.json
+                 -DTOL=1e-6 -DFLOOR=1e-6 -P ${PROJECT_SOURCE_DIR}/tests/support/compare_summaries.cmake)
+set_tests_properties(scene.vertebra_compression_ranks_agree PROPERTIES LABELS "scene;fem;mpi"
+                     FIXTURES_REQUIRED "vertebra_1;vertebra_2")
+
+# Nonlinear variant (J2 bone, kopperdahl2002 yield), 3 mm cells, 0.6 mm in 12 steps (~10 s).
+# Published QCT/FE and experimental failure loads of (osteoporotic) lumbar vertebral bodies
+# lie around 1.5-6 kN; measured 2.1 kN at 0.6 mm (peak = last step: J2 does not soften) and
+# 0.2 %-offset yield 1.8 kN. The first step (0.05 mm) must stay elastic for the offset line.
+spinesim_add_scene_test(scene.vertebra_compression_nonlinear SCENE ${_vertebra}
+  SET "CT/Coarsening factor=3" "Loading/Nonlinear=true" "Loading/Axial displacement=0.6"
+      "Loading/Steps=12"
+  EXPECT "status==ok;failure_load_kN>=1.0;failure_load_kN<=6.0;yield_load_0_2_offset_kN>=1.0;first_step_plastic_volume_fraction<=0"
+  LABELS "scene;fem" TIMEOUT 300)
+
+# CT -> particles from the CLI: count = 8 per cell (quadrature) or 1 per cell, total volume
+# = mesh volume (JxW of parallelepipeds: round-off of ~1e5 terms, measured 1e-12) and total
+# mass = the CT model's sum of rho V (measured 7e-15; 1e-10 leaves room for summation order).
+spinesim_add_scene_test(scene.ct_convert_quadrature
+  ARGS "convert;${_vertebra};--output;${_runs}/scene.ct_convert_quadrature;--per;quadrature;--force;--progress;lines;--set;CT/Coarsening factor=3"
+  OUT ${_runs}/scene.ct_convert_quadrature
+  EXPECT "status==ok;particle_count_mismatch<=0;particles>=1000;volume_relative_error<=1e-10;mass_relative_error<=1e-10"
+  LABELS "scene;fem")
+spinesim_add_scene_test(scene.ct_convert_cell_2ranks RANKS 2
+  ARGS "convert;${_vertebra};--output;${_runs}/scene.ct_convert_cell_2ranks;--per;cell;--force;--progress;lines;--set;CT/Coarsening factor=3"
+  OUT ${_runs}/scene.ct_convert_cell_2ranks
+  EXPECT "status==ok;particle_count_mismatch<=0;particles>=1000;volume_relative_error<=1e-10;mass_relative_error<=1e-10"
+  LABELS "scene;fem")
