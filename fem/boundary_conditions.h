@@ -1,8 +1,8 @@
 #ifndef SPINESIM_FEM_BOUNDARY_CONDITIONS_H
 #define SPINESIM_FEM_BOUNDARY_CONDITIONS_H
 
-// Mechanical boundary conditions by boundary id, given as expressions in x, y, z (the
-// reference position [m]) and t (time [s]).
+// Mechanical boundary conditions by boundary id or by region (an axis-aligned box), given as
+// expressions in x, y, z (the reference position [m]) and t (time [s]).
 //
 // Parameter grammar (in the subsection the caller entered, usually "Boundary conditions"):
 //   subsection Dirichlet k   (k = 1..n_slots)
@@ -15,14 +15,23 @@
 //   subsection Pressure k
 //     set Boundary id = 0
 //     set Value       = 1e6          # normal pressure, positive pushes into the body [Pa]
+// Instead of a Boundary id every slot may give `set Region = x0,y0[,z0]; x1,y1[,z1]` [m]
+// (opposite corners of a box, faces included): a Dirichlet slot then constrains every DoF
+// whose support point lies in the box (interior ones too), a traction / pressure slot loads
+// every boundary face whose centre lies in the box. A slot names one of the two, not both.
 // Tractions and pressures act on the reference configuration (dead loads).
 
 #include <deal.II/base/function.h>
 #include <deal.II/base/parameter_handler.h>
+#include <deal.II/base/point.h>
 #include <deal.II/base/types.h>
+#include <deal.II/dofs/dof_handler.h>
 #include <deal.II/fe/component_mask.h>
+#include <deal.II/fe/mapping.h>
 
+#include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -33,17 +42,30 @@ class BoundaryConditions {
  public:
   static constexpr unsigned int n_slots = 6;
 
+  // Axis-aligned box [m]; points on its faces count as inside (relative tolerance 1e-9 of
+  // the box size, so a flat box "0,0; 0,1" selects the line x = 0).
+  struct Region {
+    dealii::Point<dim> lower, upper;
+    bool contains(const dealii::Point<dim>& p) const;
+    // "x0,y0[,z0]; x1,y1[,z1]", corners in any order; InvalidInput naming `where`.
+    static Region parse(const std::string& text, const std::string& where);
+    std::string to_string() const;
+  };
+
   struct Parameters {
     struct Dirichlet {
       int boundary_id = -1;
+      std::string region; // empty: by boundary id
       std::string components, values;
     };
     struct Traction {
       int boundary_id = -1;
+      std::string region;
       std::string values;
     };
     struct Pressure {
       int boundary_id = -1;
+      std::string region;
       std::string value;
     };
     std::vector<Dirichlet> dirichlet; // used slots only
@@ -57,18 +79,29 @@ class BoundaryConditions {
                const std::vector<std::string>& subsection_path = {});
   };
 
+  // Each condition acts on boundary_id unless `region` is set.
   struct Dirichlet {
     dealii::types::boundary_id boundary_id;
     dealii::ComponentMask mask;                      // constrained components
     std::shared_ptr<dealii::Function<dim>> function; // dim components [m]
+    std::optional<Region> region;
   };
   struct Traction {
     dealii::types::boundary_id boundary_id;
     std::shared_ptr<dealii::Function<dim>> function; // dim components [Pa]
+    std::optional<Region> region;
+    // Does the condition load the boundary face with this id and (unmapped) centre?
+    bool acts_on(dealii::types::boundary_id id, const dealii::Point<dim>& face_centre) const {
+      return region ? region->contains(face_centre) : id == boundary_id;
+    }
   };
   struct Pressure {
     dealii::types::boundary_id boundary_id;
     std::shared_ptr<dealii::Function<dim>> function; // scalar [Pa]
+    std::optional<Region> region;
+    bool acts_on(dealii::types::boundary_id id, const dealii::Point<dim>& face_centre) const {
+      return region ? region->contains(face_centre) : id == boundary_id;
+    }
   };
 
   // Adds every used slot of the parameters. `where` prefixes parameter paths in errors.
@@ -86,7 +119,23 @@ class BoundaryConditions {
   void add_pressure(dealii::types::boundary_id id, const std::string& value,
                     const std::string& where = "Pressure");
   void add_pressure(dealii::types::boundary_id id, std::shared_ptr<dealii::Function<dim>> function);
+  // The same by region.
+  void add_dirichlet(const Region& region, const std::string& components, const std::string& values,
+                     const std::string& where = "Dirichlet");
+  void add_dirichlet(const Region& region, const dealii::ComponentMask& mask,
+                     std::shared_ptr<dealii::Function<dim>> function);
+  void add_traction(const Region& region, const std::string& values,
+                    const std::string& where = "Traction");
+  void add_pressure(const Region& region, const std::string& value,
+                    const std::string& where = "Pressure");
   void clear();
+
+  // Values of `function` (dim components, at its current time) at the DoFs that `condition`
+  // constrains, on all locally relevant cells; later calls overwrite earlier entries.
+  static void interpolate(const Dirichlet& condition, const dealii::Mapping<dim>& mapping,
+                          const dealii::DoFHandler<dim>& dof_handler,
+                          const dealii::Function<dim>& function,
+                          std::map<dealii::types::global_dof_index, double>& values);
 
   const std::vector<Dirichlet>& dirichlet() const { return dirichlet_; }
   const std::vector<Traction>& traction() const { return traction_; }

@@ -33,6 +33,51 @@ dealii::Point<dim> to_point(const std::vector<double>& v, const std::string& whe
   return p;
 }
 
+// Reads the file into a serial coarse mesh, scales it, then hands it to the distributed
+// triangulation: p4est builds its forest from the final (scaled) coarse vertices, and
+// material / boundary ids travel with copy_triangulation.
+template <int dim>
+void import_mesh(const MeshParameters& p, dealii::parallel::distributed::Triangulation<dim>& tria) {
+  using namespace dealii;
+  const std::string& f = p.file_name;
+  const auto dot = f.rfind('.');
+  const std::string ext = dot == std::string::npos ? "" : f.substr(dot + 1);
+  if (ext != "msh" && ext != "inp" && ext != "vtk" && ext != "vtu")
+    throw InvalidInput("Mesh file", "unknown extension '." + ext + "' of '" + f + "'",
+                       ".msh, .inp, .vtk or .vtu");
+  std::ifstream in(f);
+  if (!in)
+    throw InvalidInput("Mesh file", "cannot open '" + f + "'", "a readable mesh file");
+  if (!(p.scale > 0))
+    throw InvalidInput("Scale", "must be positive", "a factor > 0 [m/unit]");
+  Triangulation<dim> serial;
+  GridIn<dim> grid_in;
+  grid_in.attach_triangulation(serial);
+  try {
+    if (ext == "msh")
+      grid_in.read_msh(in);
+    else if (ext == "inp")
+      grid_in.read_abaqus(in);
+    else if (ext == "vtk")
+      grid_in.read_vtk(in);
+    else
+      grid_in.read_vtu(in);
+  } catch (const std::exception& e) {
+    throw InvalidInput(
+        "Mesh file", "cannot read '" + f + "' as a " + std::to_string(dim) + "-D mesh: " + e.what(),
+        "a valid " + std::to_string(dim) + "-D hexahedral/quadrilateral mesh");
+  }
+  if (serial.n_active_cells() == 0)
+    throw InvalidInput("Mesh file", "'" + f + "' holds no " + std::to_string(dim) + "-D cells",
+                       "a mesh with quadrilateral (2-D) or hexahedral (3-D) cells");
+  if (!serial.all_reference_cells_are_hyper_cube())
+    throw InvalidInput("Mesh file", "'" + f + "' has simplex cells",
+                       "quadrilateral (2-D) or hexahedral (3-D) cells only");
+  if (p.scale != 1.0)
+    GridTools::scale(p.scale, serial);
+  tria.copy_triangulation(serial);
+}
+
 } // namespace
 
 void MeshParameters::declare(dealii::ParameterHandler& prm) {
@@ -59,8 +104,16 @@ void MeshParameters::declare(dealii::ParameterHandler& prm) {
   prm.declare_entry("Thickness", "1", Double(0), "Extrusion length of a 3-D plate [m].");
   prm.declare_entry("Shell cells", "0", Integer(0),
                     "Coarse cells around a shell, 0 for the default [-].");
-  prm.declare_entry("Mesh file", "", Anything(), "Mesh file (.msh, .inp, .vtk, .vtu) [-].");
-  prm.declare_entry("Scale", "1", Double(0), "Factor applied to imported coordinates [m/unit].");
+  prm.declare_entry(
+      "Mesh file", "", Anything(),
+      "Quadrilateral (2-D) / hexahedral (3-D) mesh read by deal.II's GridIn when Shape = file "
+      "[-]: Gmsh .msh v2 or v4 (cell physical tag -> material id, physical tag of boundary "
+      "lines/faces -> boundary id), Abaqus .inp (ELSET=EB<n> -> material id n, surface SS<n> "
+      "-> boundary id n), legacy VTK .vtk (CELL_DATA SCALARS MaterialID on cells and on "
+      "boundary lines/faces) or a deal.II-written .vtu. Unlisted boundary faces get id 0.");
+  prm.declare_entry("Scale", "1", Double(0),
+                    "Factor applied to imported coordinates, e.g. 0.001 for a mesh in mm "
+                    "[m/unit].");
   prm.declare_entry("Global refinements", "0", Integer(0, 12), "Uniform refinements [-].");
 }
 
@@ -87,6 +140,9 @@ void MeshParameters::parse(const dealii::ParameterHandler& prm) {
   shell_cells = prm.get_integer("Shell cells");
   file_name = prm.get("Mesh file");
   scale = prm.get_double("Scale");
+  if (!(scale > 0))
+    throw InvalidInput("Scale", "must be positive, got " + prm.get("Scale"),
+                       "a factor > 0 [m/unit]");
   global_refinements = prm.get_integer("Global refinements");
   if ((shape == "hyper_shell" || shape == "quarter_hyper_shell" || shape == "plate_with_a_hole") &&
       !(inner_radius > 0 && inner_radius < outer_radius))
@@ -115,6 +171,10 @@ void build_coarse_mesh(const MeshParameters& p,
     GridGenerator::plate_with_a_hole(tria, p.inner_radius, p.outer_radius, pad, pad, pad, pad,
                                      to_point<dim>(p.center, "Center"), 0, 1, p.thickness, 2,
                                      /*colorize=*/true);
+    // colorize numbers the blocks around the hole as materials 0..2: one material, as
+    // documented.
+    for (const auto& cell : tria.active_cell_iterators())
+      cell->set_material_id(0);
   } else if (p.shape == "hyper_shell") {
     GridGenerator::hyper_shell(tria, to_point<dim>(p.center, "Center"), p.inner_radius,
                                p.outer_radius, p.shell_cells, /*colorize=*/true);
@@ -122,34 +182,7 @@ void build_coarse_mesh(const MeshParameters& p,
     GridGenerator::quarter_hyper_shell(tria, to_point<dim>(p.center, "Center"), p.inner_radius,
                                        p.outer_radius, p.shell_cells, /*colorize=*/true);
   } else if (p.shape == "file") {
-    const std::string& f = p.file_name;
-    const auto dot = f.rfind('.');
-    const std::string ext = dot == std::string::npos ? "" : f.substr(dot + 1);
-    std::ifstream in(f);
-    if (!in)
-      throw InvalidInput("Mesh file", "cannot open '" + f + "'", "a readable mesh file");
-    GridIn<dim> grid_in;
-    grid_in.attach_triangulation(tria);
-    try {
-      if (ext == "msh")
-        grid_in.read_msh(in);
-      else if (ext == "inp")
-        grid_in.read_abaqus(in);
-      else if (ext == "vtk")
-        grid_in.read_vtk(in);
-      else if (ext == "vtu")
-        grid_in.read_vtu(in);
-      else
-        throw InvalidInput("Mesh file", "unknown extension '." + ext + "' of '" + f + "'",
-                           ".msh, .inp, .vtk or .vtu");
-    } catch (const InvalidInput&) {
-      throw;
-    } catch (const std::exception& e) {
-      throw InvalidInput("Mesh file", "cannot read '" + f + "': " + e.what(),
-                         "a valid " + std::to_string(dim) + "-D hexahedral/quadrilateral mesh");
-    }
-    if (p.scale != 1.0)
-      GridTools::scale(p.scale, tria);
+    import_mesh(p, tria);
   } else {
     throw InvalidInput("Shape", "unknown shape '" + p.shape + "'",
                        "hyper_rectangle|plate_with_a_hole|hyper_shell|quarter_hyper_shell|file");

@@ -8,9 +8,12 @@
 //   plate_with_a_hole    deal.II colorize: x− 0, x+ 1, y− 2, y+ 3, hole 4, z− 5, z+ 6.
 //   hyper_shell          inner 0, outer 1.
 //   quarter_hyper_shell  inner 0, outer 1, x = 0 face 2, y = 0 face 3 (3-D: z = 0 face 4).
-//   file                 the ids stored in the file (physical tags for .msh, surface sets for
-//   .inp).
-// Material ids: generated shapes have material id 0; imported files keep theirs.
+//   file                 the ids stored in the file: Gmsh physical tags of boundary lines/faces,
+//                        Abaqus surfaces SS<n>, VTK MaterialID of boundary lines/faces;
+//                        faces not listed get 0.
+// Material ids: generated shapes have material id 0; imported files keep theirs (Gmsh cell
+// physical tag, Abaqus ELSET=EB<n>, VTK MaterialID cell data). Imported coordinates are
+// multiplied by `scale` before the distributed mesh is built.
 
 #include <deal.II/base/parameter_handler.h>
 #include <deal.II/distributed/tria.h>
