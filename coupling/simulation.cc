@@ -216,8 +216,9 @@ void Simulation<dim>::build(RunContext& ctx) {
         std::vector<dealii::types::material_id>(ids.begin(), ids.end()), ctx.comm());
     for (const auto id : all_ids)
       mechanics_->set_material(id, law_);
-    if (effects_.thermal_expansion && heat_)
-      // T − T_ref read from the heat field at the mechanics' quadrature points (same mesh).
+    if (effects_.thermal_expansion && heat_ && !ctx.restarting())
+      // T − T_ref read from the heat field at the mechanics' quadrature points (same mesh);
+      // a restart connects them once the heat DoFs exist again (load_checkpoint).
       mechanics_->set_temperature_field(heat_->dof_handler(), heat_->solution(),
                                         sim_.reference_temperature);
     if (heat_ && mech_prm_.taylor_quinney > 0)
@@ -440,6 +441,9 @@ unsigned int Simulation<dim>::load_checkpoint(RunContext& ctx) {
     heat_->set_time(state["time"].get<double>(), state.value("heat_supplied_energy", 0.0));
     initial_heat_content_ = state.value("initial_heat_content", 0.0);
   }
+  if (effects_.thermal_expansion && heat_ && mechanics_)
+    mechanics_->set_temperature_field(heat_->dof_handler(), heat_->solution(),
+                                      sim_.reference_temperature);
   if (mechanics_)
     mechanics_->deserialize(mesh_file);
   if (coupled_)
