@@ -8,12 +8,18 @@
 #include "meshfree/spg/rk_kernel.h"
 #include "meshfree/spg/rk_shape_functions.h"
 #include "meshfree/spg/spg_solver.h"
+#include "meshfree/spg/spg_vtu_writer.h"
 #include "meshfree/velocity_verlet.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <random>
+#include <sstream>
+
+#include <unistd.h>
 
 namespace spinesim::meshfree {
 namespace {
@@ -335,6 +341,57 @@ TEST(SpgSolver, ExplicitEnergyBalanceWithContact) {
   EXPECT_GT(max_contact, 0.0); // the block reached the plane
   // Verlet energy error O((ω dt)²) with CFL 0.3: well under 1 %.
   EXPECT_LT(max_dev, 1e-2);
+}
+
+// The VTU writer outputs the PHYSICAL state (u_h = Σ Ψ d, not the coefficients), writes
+// particles_<cycle>.vtu and particles.pvd atomically (no .tmp left) and the files parse.
+template <int dim>
+void check_vtu_output() {
+  const double h = 0.1;
+  auto p = jittered_box<dim>(dim == 2 ? 5 : 3, h, 0.2);
+  auto law = copper_law();
+  typename SPGSolver<dim>::Parameters prm;
+  SPGSolver<dim> spg(prm, *law, p, h);
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("spg_vtu_test_" + std::to_string(dim) + "_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  SPGVtuWriter<dim> vtu(dir.string());
+  spg.compute_forces(p);
+  EXPECT_EQ(vtu.write(spg, p, 0.0), "particles_0000.vtu");
+  // Quadratic coefficients: u_h ≠ d, so the copy must carry Σ Ψ d.
+  for (unsigned int i = 0; i < p.size(); ++i) {
+    p.displacement(i)[0] = 0.05 * p.reference_position(i).norm_square();
+    p.velocity(i)[dim - 1] = 3.0;
+  }
+  spg.compute_forces(p);
+  EXPECT_EQ(vtu.write(spg, p, 1e-6), "particles_0001.vtu");
+  const auto out = SPGVtuWriter<dim>::physical_particles(spg, p);
+  double du = 0, dv = 0;
+  for (unsigned int i = 0; i < p.size(); ++i) {
+    du = std::max(du, (out.displacement(i) - spg.physical_displacements()[i]).norm());
+    // Partition of unity: a uniform coefficient velocity is the physical velocity.
+    dv = std::max(dv, std::abs(out.velocity(i)[dim - 1] - 3.0));
+  }
+  EXPECT_EQ(du, 0.0);
+  EXPECT_LT(dv, 1e-12); // round-off of Σ Ψ = 1
+  EXPECT_TRUE(out.has_scalar_field("equivalent_plastic_strain"));
+  EXPECT_TRUE(out.has_scalar_field("stress_xy"));
+  EXPECT_TRUE(vtu.verify(p.size()));
+  EXPECT_FALSE(vtu.verify(p.size() + 1)); // the check can fail
+  std::ifstream in(dir / "particles_0001.vtu");
+  std::stringstream text;
+  text << in.rdbuf();
+  EXPECT_NE(text.str().find("equivalent_plastic_strain"), std::string::npos);
+  EXPECT_FALSE(std::filesystem::exists(dir / "particles.pvd.tmp"));
+  std::filesystem::remove_all(dir);
+}
+
+TEST(SpgVtuWriter, WritesParsableAtomicFiles2D) {
+  check_vtu_output<2>();
+}
+TEST(SpgVtuWriter, WritesParsableAtomicFiles3D) {
+  check_vtu_output<3>();
 }
 
 } // namespace
