@@ -3,6 +3,7 @@
 #include "fem/materials/failure.h"
 #include "meshfree/bond_loop.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -174,95 +175,152 @@ void BondBasedPD<dim>::initialise(const ParticleSet<dim>& particles, const BondL
 // * ξ = x_j − x_i is recomputed from the (cache-resident) reference positions instead of
 //   streamed from bonds.xi: the same floating-point operations as the stored vector, so the
 //   result is unchanged, and 24 of the 45 bytes a bond streamed per step are gone;
-// * no branch per bond: a broken bond (or one breaking now) selects a zero coefficient, so
-//   the row is a straight-line SIMD loop (two bonds per SSE2 lane pair for sqrt and divide);
+// * no branch per bond: a broken bond (or one breaking now) selects a zero coefficient. The
+//   `omp simd` loop is NOT vectorised by GCC 12 at the project's -O2 (objdump shows scalar
+//   sqrtsd; -fopt-info-vec: "control flow in loop" even with scalar temporaries and
+//   -fno-math-errno), so it runs one bond at a time; the fixed order stays;
 // * each particle sums its own row in a fixed order (the SIMD lanes are a fixed split of the
-//   row), so forces stay bitwise independent of the thread count.
+//   row), so forces stay bitwise independent of the thread count and of how the particles
+//   are split among threads.
+namespace {
 template <int dim>
-std::size_t BondBasedPD<dim>::compute_forces(ParticleSet<dim>& particles, BondList<dim>& bonds,
-                                             bool allow_breaking) const {
+struct ForceKernel {
+  const double* x;
+  const double* u;
+  double* f;
+  const double* V;
+  const std::size_t* off;
+  const unsigned int* nb;
+  const double* len;
+  const double* kb;
+  std::uint8_t* broken;
+  double s0;
+
+  // Forces on particles [begin, end); returns the bond ends broken, sets bad on a non-finite
+  // force.
+  std::size_t rows(std::size_t begin, std::size_t end, int& bad) const {
+    std::size_t total = 0;
+    for (std::size_t i = begin; i < end; ++i) {
+      double xi[dim], ui[dim], acc[dim];
+      for (unsigned int d = 0; d < dim; ++d) {
+        xi[d] = x[dim * i + d];
+        ui[d] = u[dim * i + d];
+        acc[d] = 0.0;
+      }
+      double acc0 = 0, acc1 = 0, acc2 = 0; // named: OpenMP reduces scalars, not array elements
+      std::size_t broke = 0;
+#pragma omp simd reduction(+ : acc0, acc1, acc2, broke)
+      for (std::size_t k = off[i]; k < off[i + 1]; ++k) {
+        const std::size_t j = nb[k];
+        double y[dim], l2 = 0.0;
+        for (unsigned int d = 0; d < dim; ++d) {
+          y[d] = (x[dim * j + d] - xi[d]) + (u[dim * j + d] - ui[d]);
+          l2 += y[d] * y[d];
+        }
+        const double l = std::sqrt(l2);
+        const double e = l - len[k];
+        const std::uint8_t was = broken[k];
+        const std::uint8_t now = was | std::uint8_t(e > s0 * len[k]);
+        broken[k] = now;
+        broke += std::size_t(now - was);
+        const double a = now ? 0.0 : kb[k] * e / l;
+        acc0 += a * y[0];
+        acc1 += a * y[1];
+        if (dim == 3)
+          acc2 += a * y[dim - 1];
+      }
+      acc[0] = acc0;
+      acc[1] = acc1;
+      if (dim == 3)
+        acc[dim - 1] = acc2;
+      for (unsigned int d = 0; d < dim; ++d) {
+        const double fd = V[i] * acc[d];
+        f[dim * i + d] = fd;
+        if (!std::isfinite(fd))
+          bad = 1;
+      }
+      total += broke;
+    }
+    return total;
+  }
+};
+
+template <int dim>
+ForceKernel<dim> make_kernel(ParticleSet<dim>& particles, BondList<dim>& bonds,
+                             const std::vector<double>& k, double s0) {
   static_assert(sizeof(dealii::Point<dim>) == dim * sizeof(double) &&
                     sizeof(dealii::Tensor<1, dim>) == dim * sizeof(double),
                 "points and vectors are read as packed doubles");
+  return {&particles.reference_positions()[0][0],
+          &particles.displacements()[0][0],
+          &particles.forces()[0][0],
+          particles.volumes().data(),
+          bonds.offsets.data(),
+          bonds.neighbor.data(),
+          bonds.length.data(),
+          k.data(),
+          bonds.broken.data(),
+          s0};
+}
+
+template <int dim>
+[[noreturn]] void throw_non_finite_force(const ParticleSet<dim>& particles) {
+  for (unsigned int i = 0; i < particles.size(); ++i)
+    for (unsigned int d = 0; d < dim; ++d)
+      if (!std::isfinite(particles.force(i)[d])) {
+        std::ostringstream where;
+        where << "particle " << i << " at (" << particles.reference_position(i) << ")";
+        throw NumericalFailure("non-finite peridynamic force", where.str(),
+                               "two particles may coincide (zero bond length) or the time "
+                               "step is too large; check the stable time step");
+      }
+  throw NumericalFailure("non-finite peridynamic force", "unknown particle",
+                         "the force changed while it was being checked");
+}
+} // namespace
+
+template <int dim>
+std::size_t BondBasedPD<dim>::compute_forces(ParticleSet<dim>& particles, BondList<dim>& bonds,
+                                             bool allow_breaking) const {
   if (k_.size() != bonds.n_bonds())
     throw InvalidInput("bond-based PD", "compute_forces before initialise",
                        "initialise(particles, bonds) first");
-  const long n = static_cast<long>(particles.size());
+  const std::size_t n = particles.size();
   if (n == 0)
     return 0;
-  const double* x = &particles.reference_positions()[0][0];
-  const double* u = &particles.displacements()[0][0];
-  double* f = &particles.forces()[0][0];
-  const double* V = particles.volumes().data();
-  const std::size_t* off = bonds.offsets.data();
-  const unsigned int* nb = bonds.neighbor.data();
-  const double* len = bonds.length.data();
-  const double* kb = k_.data();
-  std::uint8_t* broken = bonds.broken.data();
   // s0 = +inf never breaks: e > inf is false (and false for NaN, which then shows in f).
   const double s0 =
       allow_breaking && std::isfinite(s0_) ? s0_ : std::numeric_limits<double>::infinity();
+  const ForceKernel<dim> kernel = make_kernel(particles, bonds, k_, s0);
 
   std::size_t total = 0;
   int bad = 0;
-// Dynamic chunks: on a shared machine a descheduled thread does not hold the others at the
-// barrier; each row is still summed by one thread in a fixed order.
-#pragma omp parallel for schedule(dynamic, 512) reduction(+ : total) reduction(| : bad)           \
+  // Dynamic chunks of force_chunk particles: on a shared machine a descheduled thread does
+  // not hold the others at the barrier; each row is still summed by one thread in order.
+  const long n_chunks = static_cast<long>((n + force_chunk - 1) / force_chunk);
+#pragma omp parallel for schedule(dynamic, 1) reduction(+ : total) reduction(| : bad)             \
     if (bonds.n_bonds() > parallel_bond_threshold)
-  for (long ii = 0; ii < n; ++ii) {
-    const std::size_t i = static_cast<std::size_t>(ii);
-    double xi[dim], ui[dim], acc[dim];
-    for (unsigned int d = 0; d < dim; ++d) {
-      xi[d] = x[dim * i + d];
-      ui[d] = u[dim * i + d];
-      acc[d] = 0.0;
-    }
-    double acc0 = 0, acc1 = 0, acc2 = 0; // named: OpenMP reduces scalars, not array elements
-    std::size_t broke = 0;
-#pragma omp simd reduction(+ : acc0, acc1, acc2, broke)
-    for (std::size_t k = off[i]; k < off[i + 1]; ++k) {
-      const std::size_t j = nb[k];
-      double y[dim], l2 = 0.0;
-      for (unsigned int d = 0; d < dim; ++d) {
-        y[d] = (x[dim * j + d] - xi[d]) + (u[dim * j + d] - ui[d]);
-        l2 += y[d] * y[d];
-      }
-      const double l = std::sqrt(l2);
-      const double e = l - len[k];
-      const std::uint8_t was = broken[k];
-      const std::uint8_t now = was | std::uint8_t(e > s0 * len[k]);
-      broken[k] = now;
-      broke += std::size_t(now - was);
-      const double a = now ? 0.0 : kb[k] * e / l;
-      acc0 += a * y[0];
-      acc1 += a * y[1];
-      if (dim == 3)
-        acc2 += a * y[dim - 1];
-    }
-    acc[0] = acc0;
-    acc[1] = acc1;
-    if (dim == 3)
-      acc[dim - 1] = acc2;
-    for (unsigned int d = 0; d < dim; ++d) {
-      const double fd = V[i] * acc[d];
-      f[dim * i + d] = fd;
-      if (!std::isfinite(fd))
-        bad = 1;
-    }
-    total += broke;
+  for (long c = 0; c < n_chunks; ++c) {
+    const std::size_t begin = static_cast<std::size_t>(c) * force_chunk;
+    total += kernel.rows(begin, std::min(n, begin + force_chunk), bad);
   }
-
   if (bad) // located outside the parallel region: exceptions must not cross it
-    for (unsigned int i = 0; i < particles.size(); ++i)
-      for (unsigned int d = 0; d < dim; ++d)
-        if (!std::isfinite(particles.force(i)[d])) {
-          std::ostringstream where;
-          where << "particle " << i << " at (" << particles.reference_position(i) << ")";
-          throw NumericalFailure("non-finite peridynamic force", where.str(),
-                                 "two particles may coincide (zero bond length) or the time "
-                                 "step is too large; check the stable time step");
-        }
+    throw_non_finite_force(particles);
   return total;
+}
+
+template <int dim>
+std::size_t BondBasedPD<dim>::compute_forces_range(ParticleSet<dim>& particles,
+                                                   BondList<dim>& bonds, std::size_t begin,
+                                                   std::size_t end, bool allow_breaking) const {
+  if (k_.size() != bonds.n_bonds())
+    throw InvalidInput("bond-based PD", "compute_forces before initialise",
+                       "initialise(particles, bonds) first");
+  const double s0 =
+      allow_breaking && std::isfinite(s0_) ? s0_ : std::numeric_limits<double>::infinity();
+  int bad = 0; // a non-finite force reaches the acceleration, where the caller checks it
+  return make_kernel(particles, bonds, k_, s0)
+      .rows(begin, std::min<std::size_t>(end, particles.size()), bad);
 }
 
 template <int dim>

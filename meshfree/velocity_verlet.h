@@ -18,8 +18,16 @@ template <int dim>
 class VelocityVerlet {
  public:
   using ForceFunction = std::function<void(ParticleSet<dim>&)>;
+  // Forces on particles [begin, end) only. Called concurrently by the step's threads on
+  // disjoint ranges: it must write only those particles' forces and open no parallel region
+  // (e.g. BondBasedPD::compute_forces_range).
+  using RangeForceFunction = std::function<void(ParticleSet<dim>&, std::size_t, std::size_t)>;
 
   explicit VelocityVerlet(ForceFunction compute_forces);
+  // Range form: the whole step is one parallel region with one barrier inside (kick + drift,
+  // then forces with the acceleration and second kick of each particle right after its
+  // force), instead of four parallel loops. Same arithmetic, bitwise the same result.
+  explicit VelocityVerlet(RangeForceFunction compute_forces);
 
   // Forces and accelerations at the current state; step() calls it on first use.
   // Call again after changing displacements, loads or bonds from outside.
@@ -33,7 +41,12 @@ class VelocityVerlet {
   static void update_accelerations(ParticleSet<dim>& particles);
 
  private:
+  static constexpr std::size_t range_chunk = 256; // particles per work unit of the range form
+
+  void step_fused(ParticleSet<dim>& particles, double dt);
+
   ForceFunction compute_forces_;
+  RangeForceFunction range_forces_;
   bool initialised_ = false;
 };
 

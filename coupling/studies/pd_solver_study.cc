@@ -45,6 +45,8 @@ struct StudyParameters {
   double tolerance = 1e-6;
   unsigned int max_iterations = 20000;
   unsigned int mg_degree = 2;
+  double mg_range = 5;
+  unsigned int mg_eigen_steps = 8;
 
   static void declare(dealii::ParameterHandler& prm) {
     using namespace dealii::Patterns;
@@ -83,6 +85,10 @@ struct StudyParameters {
                       "Iteration limit of one linear solve [-].");
     prm.declare_entry("MG smoother degree", "2", Integer(1),
                       "Chebyshev-Jacobi degree of the lattice multigrid smoother [-].");
+    prm.declare_entry("MG smoothing range", "5", Double(1.0),
+                      "Chebyshev smoother range lambda_max/lambda_min of the multigrid [-].");
+    prm.declare_entry("MG eigenvalue steps", "8", Integer(2),
+                      "Lanczos steps for lambda_max of D^-1 K per multigrid level [-].");
     prm.declare_entry("Plot", "true", Bool(),
                       "Write solvers.png with gnuplot (skipped with a warning if absent) [-].");
   }
@@ -108,6 +114,8 @@ struct StudyParameters {
     max_iterations = prm.get_integer("Max linear iterations");
     plot = prm.get_bool("Plot");
     mg_degree = prm.get_integer("MG smoother degree");
+    mg_range = prm.get_double("MG smoothing range");
+    mg_eigen_steps = prm.get_integer("MG eigenvalue steps");
     if (h_levels.empty() || alphas.empty() || ratios.empty() || solvers.empty())
       throw InvalidInput("Study", "an empty sweep list",
                          "at least one h level, alpha, horizon ratio and solver");
@@ -250,6 +258,8 @@ class PDSolverStudy : public Scenario {
       lp.tolerance = study_.tolerance;
       lp.max_iterations = study_.max_iterations;
       lp.mg_smoother_degree = study_.mg_degree;
+      lp.mg_smoothing_range = study_.mg_range;
+      lp.mg_eigenvalue_steps = study_.mg_eigen_steps;
       PDLinearSolver<2> solver(lp);
       solver.set_lattice(geometry);
       typename PDLinearSolver<2>::Result r;
@@ -263,6 +273,11 @@ class PDSolverStudy : public Scenario {
                 << " iterations, setup " << std::setprecision(3) << r.setup_seconds << " s, solve "
                 << r.solve_seconds << " s"
                 << (name == "cg" ? ", kappa " + std::to_string(kappa) : std::string()) << "\n";
+      if (name == "mg")
+        ctx.log() << "           mg setup: coarse levels " << r.mg_setup.coarse_levels
+                  << " s, block copies " << r.mg_setup.block_copy << " s, lambda_max "
+                  << r.mg_setup.eigenvalues << " s, coarse KLU " << r.mg_setup.coarse_factorisation
+                  << " s\n";
       rows.push_back({name, alpha, R, h, k, tangent.n_dofs(), r.iterations, r.setup_seconds,
                       r.solve_seconds, std::numeric_limits<double>::quiet_NaN()});
     }

@@ -1,6 +1,7 @@
 #include "meshfree/implicit/lattice_multigrid.h"
 
 #include "fem/materials/failure.h"
+#include "meshfree/implicit/block_csr_matrix.h"
 #include "meshfree/neighbor_search.h"
 
 #include <deal.II/base/index_set.h>
@@ -10,10 +11,17 @@
 #include <deal.II/lac/solver_control.h>
 
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <string>
 
 namespace spinesim::meshfree {
+
+namespace {
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+} // namespace
 
 template <int dim>
 struct LatticeMultigrid<dim>::Level {
@@ -30,7 +38,8 @@ struct LatticeMultigrid<dim>::Level {
   std::unique_ptr<BondBasedTangent<dim>> tangent;
   // From this level to the next finer one (rows: finer dofs, columns: this level's dofs).
   dealii::TrilinosWrappers::SparseMatrix prolongation;
-  VectorType inverse_diagonal;
+  BlockCsrMatrix<dim> fast; // single-precision copy of *matrix for the smoother
+  std::vector<double> inverse_diagonal;
   double lambda_max = 0; // of D⁻¹K
   mutable VectorType x, b, r, tmp;
 };
@@ -53,6 +62,8 @@ unsigned int LatticeMultigrid<dim>::n_dofs(unsigned int level) const {
 template <int dim>
 void LatticeMultigrid<dim>::initialize(const BondBasedTangent<dim>& fine,
                                        const ParticleSet<dim>& fine_particles) {
+  timings_ = Timings();
+  const auto t0 = std::chrono::steady_clock::now();
   if (!coarse_built_) {
     levels_.clear();
     auto level = std::make_unique<Level>();
@@ -75,21 +86,29 @@ void LatticeMultigrid<dim>::initialize(const BondBasedTangent<dim>& fine,
     build_coarse_levels(fine_particles);
     coarse_built_ = true;
   }
+  timings_.coarse_levels = seconds_since(t0);
   levels_[0]->matrix = &fine.matrix();
   for (auto& level : levels_) {
     level->x.reinit(dealii::complete_index_set(level->n_particles * dim), MPI_COMM_SELF);
     level->b.reinit(level->x);
-    level->inverse_diagonal.reinit(level->x);
     level->r.reinit(level->x);
     level->tmp.reinit(level->x);
   }
-  for (unsigned int l = 0; l + 1 < levels_.size(); ++l)
+  for (unsigned int l = 0; l + 1 < levels_.size(); ++l) {
+    const auto t1 = std::chrono::steady_clock::now();
+    levels_[l]->fast.reinit(*levels_[l]->matrix);
+    timings_.block_copy += seconds_since(t1);
+    const auto t2 = std::chrono::steady_clock::now();
     setup_smoother(*levels_[l]);
+    timings_.eigenvalues += seconds_since(t2);
+  }
+  const auto t3 = std::chrono::steady_clock::now();
   coarse_control_ = std::make_unique<dealii::SolverControl>(1, 0);
   coarse_solver_ = std::make_unique<dealii::TrilinosWrappers::SolverDirect>(
       *coarse_control_,
       dealii::TrilinosWrappers::SolverDirect::AdditionalData(false, "Amesos_Klu"));
   coarse_solver_->initialize(*levels_.back()->matrix);
+  timings_.coarse_factorisation = seconds_since(t3);
 }
 
 template <int dim>
@@ -262,18 +281,21 @@ void LatticeMultigrid<dim>::build_coarse_levels(const ParticleSet<dim>& fine_par
 
 template <int dim>
 void LatticeMultigrid<dim>::setup_smoother(Level& level) const {
-  VectorType& inv = level.inverse_diagonal;
-  for (std::size_t q = 0; q < level.n_particles * dim; ++q)
-    inv[q] = 1.0 / level.matrix->diag_element(q);
-  inv.compress(dealii::VectorOperation::insert);
-  // λmax(D⁻¹K) from the Lanczos matrix of a few Jacobi-PCG steps: the extreme Ritz values
-  // converge first (a power iteration needs many more products on large lattices, and an
-  // underestimate makes the Chebyshev smoother amplify the top of the spectrum).
+  const std::size_t n = level.n_particles * dim;
+  level.inverse_diagonal.resize(n);
+  for (std::size_t q = 0; q < n; ++q)
+    level.inverse_diagonal[q] = 1.0 / level.fast.diagonal()[q];
+  // λmax(D⁻¹K) from the Lanczos matrix of a few Jacobi-PCG steps on the single-precision
+  // copy (the operator the smoother applies): the extreme Ritz values converge first (a power
+  // iteration needs many more products on large lattices, and an underestimate makes the
+  // Chebyshev smoother amplify the top of the spectrum).
   VectorType& rhs = level.tmp;
   VectorType& sol = level.r;
-  for (std::size_t q = 0; q < level.n_particles * dim; ++q)
+  VectorType inv(rhs);
+  for (std::size_t q = 0; q < n; ++q) {
     rhs[q] = 1.0 + 0.5 * std::sin(1.3 * q);
-  rhs.compress(dealii::VectorOperation::insert);
+    inv[q] = level.inverse_diagonal[q];
+  }
   sol = 0.0;
   dealii::SolverControl control(options_.eigenvalue_iterations, 0.0, false, false);
   dealii::SolverCG<VectorType> cg(control);
@@ -286,7 +308,7 @@ void LatticeMultigrid<dim>::setup_smoother(Level& level) const {
       false);
   dealii::DiagonalMatrix<VectorType> jacobi(inv);
   try {
-    cg.solve(*level.matrix, sol, rhs, jacobi);
+    cg.solve(level.fast, sol, rhs, jacobi);
   } catch (const dealii::SolverControl::NoConvergence&) {
     // expected: only the Lanczos coefficients are wanted
   }
@@ -294,33 +316,33 @@ void LatticeMultigrid<dim>::setup_smoother(Level& level) const {
   level.lambda_max = 1.1 * lambda;
 }
 
+// Chebyshev–Jacobi on raw arrays; the products are the single-precision block copy's.
 template <int dim>
-void LatticeMultigrid<dim>::smooth(const Level& L, VectorType& x, const VectorType& b,
+void LatticeMultigrid<dim>::smooth(const Level& L, VectorType& xv, const VectorType& bv,
                                    bool zero_start) const {
   const double hi = L.lambda_max, lo = hi / options_.smoothing_range;
   const double theta = 0.5 * (hi + lo), half_width = 0.5 * (hi - lo);
   const double sigma = theta / half_width;
   double rho_old = 1.0 / sigma;
-  VectorType& r = L.r;
-  VectorType& d = L.tmp;
-  if (zero_start) {
-    x = 0.0;
-    r = b;
-  } else {
-    L.matrix->vmult(r, x);
-    r.sadd(-1.0, 1.0, b);
-  }
-  r.scale(L.inverse_diagonal);
-  d.equ(1.0 / theta, r);
-  for (unsigned int k = 1;; ++k) {
-    x += d;
-    if (k == options_.smoother_degree)
-      break;
-    L.matrix->vmult(r, x);
-    r.sadd(-1.0, 1.0, b);
-    r.scale(L.inverse_diagonal);
+  const std::size_t n = L.n_particles * dim;
+  double* x = xv.begin();
+  const double* b = bv.begin();
+  double* r = L.r.begin();
+  double* d = L.tmp.begin();
+  const double* inv = L.inverse_diagonal.data();
+  L.fast.jacobi_residual(r, b, zero_start ? nullptr : x, inv);
+  if (zero_start)
+    for (std::size_t q = 0; q < n; ++q)
+      x[q] = d[q] = r[q] / theta;
+  else
+    for (std::size_t q = 0; q < n; ++q)
+      x[q] += (d[q] = r[q] / theta);
+  for (unsigned int k = 2; k <= options_.smoother_degree; ++k) {
+    L.fast.jacobi_residual(r, b, x, inv);
     const double rho = 1.0 / (2.0 * sigma - rho_old);
-    d.sadd(rho * rho_old, 2.0 * rho / half_width, r);
+    const double a = rho * rho_old, c = 2.0 * rho / half_width;
+    for (std::size_t q = 0; q < n; ++q)
+      x[q] += (d[q] = a * d[q] + c * r[q]);
     rho_old = rho;
   }
 }
@@ -334,8 +356,7 @@ void LatticeMultigrid<dim>::v_cycle(unsigned int l, VectorType& x, const VectorT
   const Level& L = *levels_[l];
   const Level& C = *levels_[l + 1];
   smooth(L, x, b, true);
-  L.matrix->vmult(L.r, x);
-  L.r.sadd(-1.0, 1.0, b);
+  L.fast.jacobi_residual(L.r.begin(), b.begin(), x.begin(), nullptr); // r = b − K x
   C.prolongation.Tvmult(C.b, L.r);
   v_cycle(l + 1, C.x, C.b);
   C.prolongation.vmult(L.tmp, C.x);

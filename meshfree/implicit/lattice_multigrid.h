@@ -12,7 +12,8 @@
 // Transfer: cell-centred bilinear (trilinear) prolongation, weights 3/4 and 1/4 per
 // direction, restriction its transpose. Weights to a coarse particle across a pre-crack are
 // dropped (and the rest renormalised), so the crack opening is not smeared over the crack.
-// Smoother: Chebyshev–Jacobi (symmetric, so the V-cycle is an SPD preconditioner for CG).
+// Smoother: Chebyshev–Jacobi (symmetric, so the V-cycle is an SPD preconditioner for CG),
+// applied with a single-precision block copy of each level matrix (block_csr_matrix.h).
 // Coarsest level: sparse direct (Amesos KLU). Dirichlet: a coarse component is constrained
 // when all its fine children are; constrained components get no correction.
 
@@ -64,12 +65,22 @@ class LatticeMultigrid {
   unsigned int n_levels() const { return static_cast<unsigned int>(levels_.size()); }
   unsigned int n_dofs(unsigned int level) const;
 
+  // Where the last initialize() spent its time [s] (the first one builds the coarse levels).
+  struct Timings {
+    double coarse_levels = 0;        // coarse lattices, bonds, tangents, prolongations
+    double block_copy = 0;           // single-precision block copies of the level matrices
+    double eigenvalues = 0;          // Lanczos λmax(D⁻¹K) per smoothed level
+    double coarse_factorisation = 0; // KLU of the coarsest level
+  };
+  const Timings& timings() const { return timings_; }
+
  private:
   struct Level;
   Geometry geometry_;
   Options options_;
   std::vector<std::unique_ptr<Level>> levels_; // 0 = fine
   bool coarse_built_ = false;
+  Timings timings_;
   std::unique_ptr<dealii::TrilinosWrappers::SolverDirect> coarse_solver_;
   std::unique_ptr<dealii::SolverControl> coarse_control_;
 

@@ -39,6 +39,12 @@ void PDLinearSolver<dim>::Parameters::declare(dealii::ParameterHandler& prm) {
                     "entries, and a larger threshold drops every connection (no coarsening).");
   prm.declare_entry("MG smoother degree", "3", dealii::Patterns::Integer(1),
                     "Chebyshev-Jacobi degree of the lattice multigrid smoother [-].");
+  prm.declare_entry("MG smoothing range", "5", dealii::Patterns::Double(1.0),
+                    "The Chebyshev smoother of the lattice multigrid damps eigenvalues of "
+                    "D^-1 K in [lambda_max / range, lambda_max] [-].");
+  prm.declare_entry("MG eigenvalue steps", "8", dealii::Patterns::Integer(2),
+                    "Lanczos (Jacobi-PCG) steps for lambda_max of D^-1 K on each multigrid "
+                    "level [-].");
   prm.declare_entry("MG min horizon ratio", "2", dealii::Patterns::Double(1.0),
                     "Lattice multigrid coarsens while delta/h on the coarser level stays at "
                     "least this [-].");
@@ -52,6 +58,8 @@ void PDLinearSolver<dim>::Parameters::parse(const dealii::ParameterHandler& prm)
   amg_smoother_sweeps = prm.get_integer("AMG smoother sweeps");
   amg_aggregation_threshold = prm.get_double("AMG aggregation threshold");
   mg_smoother_degree = prm.get_integer("MG smoother degree");
+  mg_smoothing_range = prm.get_double("MG smoothing range");
+  mg_eigenvalue_steps = prm.get_integer("MG eigenvalue steps");
   mg_min_horizon_ratio = prm.get_double("MG min horizon ratio");
   if (!(tolerance > 0.0 && tolerance < 1.0))
     throw InvalidInput("Linear tolerance", "= " + std::to_string(tolerance), "0 < tolerance < 1");
@@ -169,11 +177,14 @@ PDLinearSolver<dim>::solve(const BondBasedTangent<dim>& tangent, const ParticleS
     if (!mg_) {
       typename LatticeMultigrid<dim>::Options o;
       o.smoother_degree = prm_.mg_smoother_degree;
+      o.smoothing_range = prm_.mg_smoothing_range;
+      o.eigenvalue_iterations = prm_.mg_eigenvalue_steps;
       o.min_horizon_ratio = prm_.mg_min_horizon_ratio;
       mg_ = std::make_unique<LatticeMultigrid<dim>>(*lattice_, o);
     }
     mg_->initialize(tangent, particles);
     result.setup_seconds = seconds_since(t0);
+    result.mg_setup = mg_->timings();
     run(*mg_);
   }
   result.iterations = control.last_step();

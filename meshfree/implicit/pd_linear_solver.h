@@ -34,6 +34,8 @@ class PDLinearSolver {
     unsigned int amg_smoother_sweeps = 2;
     double amg_aggregation_threshold = 1e-4;
     unsigned int mg_smoother_degree = 3;
+    double mg_smoothing_range = 5;
+    unsigned int mg_eigenvalue_steps = 8;
     double mg_min_horizon_ratio = 2;
 
     static void declare(dealii::ParameterHandler& prm);
@@ -45,6 +47,7 @@ class PDLinearSolver {
     double setup_seconds = 0, solve_seconds = 0;
     double condition_estimate = std::numeric_limits<double>::quiet_NaN();
     double relative_residual = 0;
+    typename LatticeMultigrid<dim>::Timings mg_setup; // `mg` only: where setup_seconds went
   };
 
   static std::string names() { return "cg|jacobi|amg|mg"; }

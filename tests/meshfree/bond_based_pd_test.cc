@@ -4,6 +4,7 @@
 
 #include "fem/materials/failure.h"
 #include "meshfree/bond_based_pd.h"
+#include "meshfree/velocity_verlet.h"
 #include "meshfree_test_util.h"
 
 #include <deal.II/base/parameter_handler.h>
@@ -11,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <atomic>
 #include <random>
 
 using namespace spinesim;
@@ -453,6 +455,57 @@ TEST(BondBasedPD, DamageIrreversible2D) {
 }
 TEST(BondBasedPD, DamageIrreversible3D) {
   check_damage_irreversible<3>();
+}
+
+// The fused velocity-Verlet step (one parallel region, compute_forces_range per chunk) must
+// be the plain step (four loops, compute_forces) bit for bit, bond breaking included: the
+// same operations on every particle, only the work split differs. An expanding cube, big
+// enough (> 5000 particles) that both forms run their parallel branches.
+template <int dim>
+void check_fused_verlet() {
+  const unsigned int n = dim == 2 ? 80 : 18;
+  const double h = 1e-3;
+  auto prm = pd_parameters<dim>("constant", 0.0, 3.015, false, true);
+  prm.critical_stretch = dim == 2 ? 2e-3 : 2e-4; // low enough that bonds break in 30 steps
+  BondBasedPD<dim> pd(prm, 20e9, dim == 2 ? 1.0 / 3 : 0.25);
+  ParticleSet<dim> p1 = cube<dim>(n, h);
+  BondList<dim> b1 = NeighborSearch<dim>(pd.neighbor_options(h)).build(p1);
+  pd.initialise(p1, b1);
+  dealii::Point<dim> centre;
+  for (unsigned int d = 0; d < dim; ++d)
+    centre[d] = 0.5 * n * h;
+  for (unsigned int i = 0; i < p1.size(); ++i)
+    p1.velocity(i) = 400.0 * (p1.reference_position(i) - centre);
+  p1.set_fixed(0, 1u); // a fixed component goes through both paths too
+  ParticleSet<dim> p2 = p1;
+  BondList<dim> b2 = b1;
+  const double dt = pd.stable_time_step(p1, b1, 0.5);
+  std::size_t broke_plain = 0;
+  std::atomic<std::size_t> broke_fused{0};
+  VelocityVerlet<dim> plain([&](ParticleSet<dim>& q) { broke_plain += pd.compute_forces(q, b1); });
+  VelocityVerlet<dim> fused([&](ParticleSet<dim>& q, std::size_t begin, std::size_t end) {
+    broke_fused += pd.compute_forces_range(q, b2, begin, end);
+  });
+  for (unsigned int step = 0; step < 30; ++step) {
+    plain.step(p1, dt);
+    fused.step(p2, dt);
+  }
+  EXPECT_GT(broke_plain, 0u); // the breaking branch was exercised
+  EXPECT_EQ(broke_plain, broke_fused.load());
+  EXPECT_EQ(b1.broken, b2.broken);
+  for (unsigned int i = 0; i < p1.size(); ++i)
+    for (unsigned int d = 0; d < dim; ++d) {
+      ASSERT_EQ(p1.displacement(i)[d], p2.displacement(i)[d]) << "particle " << i;
+      ASSERT_EQ(p1.velocity(i)[d], p2.velocity(i)[d]) << "particle " << i;
+      ASSERT_EQ(p1.acceleration(i)[d], p2.acceleration(i)[d]) << "particle " << i;
+    }
+}
+
+TEST(BondBasedPD, FusedVerletStepIsThePlainStep2D) {
+  check_fused_verlet<2>();
+}
+TEST(BondBasedPD, FusedVerletStepIsThePlainStep3D) {
+  check_fused_verlet<3>();
 }
 
 TEST(BondBasedPD, ParametersDeclareParse) {

@@ -5,6 +5,7 @@
 #include "fem/materials/failure.h"
 #include "meshfree/adaptive_dynamic_relaxation.h"
 #include "meshfree/bond_based_pd.h"
+#include "meshfree/implicit/block_csr_matrix.h"
 #include "meshfree/implicit/bond_based_tangent.h"
 #include "meshfree/implicit/implicit_static_solver.h"
 #include "meshfree/implicit/pd_linear_solver.h"
@@ -272,6 +273,65 @@ TEST(ImplicitPD, ConditionEstimateMatchesDenseEigenvalues) {
   // Lanczos converges to the extreme eigenvalues first; after a 1e-12 reduction both are
   // resolved to far better than 1e-3.
   EXPECT_NEAR(r.condition_estimate / (lmax / lmin), 1.0, 1e-3);
+}
+
+// The multigrid's single-precision block copy applies the tangent it was made from: each
+// entry is rounded to float (relative 2^-24 = 6e-8), so |A x − Ã x|_i ≤ 6e-8 Σ_j |A_ij x_j|;
+// the test allows 1e-7 of that row scale. Dirichlet rows (diagonal only) and a deformed
+// state (geometric part, non-symmetric-looking blocks) are included; the diagonal is exact.
+template <int dim>
+void check_block_copy() {
+  const unsigned int n[3] = {9, 7, 5};
+  unsigned int nn[dim];
+  for (unsigned int d = 0; d < dim; ++d)
+    nn[d] = n[d];
+  const double h = 1e-3;
+  Body<dim> b(nn, h, fractional<dim>(0.0, 3.0), 70e9, dim == 2 ? 1.0 / 3 : 0.25);
+  std::mt19937 gen(11);
+  std::uniform_real_distribution<double> U(-0.02 * h, 0.02 * h);
+  for (unsigned int i = 0; i < b.p.size(); ++i)
+    for (unsigned int d = 0; d < dim; ++d)
+      b.p.displacement(i)[d] = U(gen);
+  b.p.set_fixed(0);
+  b.p.set_fixed(5, 1u);
+  BondBasedTangent<dim> K;
+  K.reinit(b.p, b.bonds);
+  K.assemble(b.p, b.bonds, b.pd, true);
+  BlockCsrMatrix<dim> A;
+  A.reinit(K.matrix());
+  ASSERT_EQ(A.n_rows(), K.n_dofs());
+  typename BlockCsrMatrix<dim>::VectorType x, y, z;
+  K.initialize_vector(x);
+  K.initialize_vector(y);
+  K.initialize_vector(z);
+  std::uniform_real_distribution<double> V(-1.0, 1.0);
+  for (unsigned int q = 0; q < K.n_dofs(); ++q)
+    x[q] = V(gen);
+  x.compress(dealii::VectorOperation::insert);
+  K.matrix().vmult(y, x);
+  A.vmult(z, x);
+  const dealii::TrilinosWrappers::SparseMatrix& M = K.matrix();
+  for (unsigned int q = 0; q < K.n_dofs(); ++q) {
+    double scale = 0;
+    for (auto it = M.begin(q); it != M.end(q); ++it)
+      scale += std::abs(it->value() * x[it->column()]);
+    EXPECT_LE(std::abs(y[q] - z[q]), 1e-7 * scale) << "row " << q;
+    EXPECT_EQ(A.diagonal()[q], M.diag_element(q));
+  }
+  // The fused Jacobi residual is D⁻¹(b − A x) with the same product.
+  std::vector<double> inv(K.n_dofs()), r(K.n_dofs()), bvec(K.n_dofs(), 1.0);
+  for (unsigned int q = 0; q < K.n_dofs(); ++q)
+    inv[q] = 1.0 / M.diag_element(q);
+  A.jacobi_residual(r.data(), bvec.data(), x.begin(), inv.data());
+  for (unsigned int q = 0; q < K.n_dofs(); ++q)
+    EXPECT_NEAR(r[q], inv[q] * (1.0 - z[q]), 1e-12 * (1.0 + std::abs(inv[q] * z[q])));
+}
+
+TEST(ImplicitPD, BlockCopyAppliesTheTangent2D) {
+  check_block_copy<2>();
+}
+TEST(ImplicitPD, BlockCopyAppliesTheTangent3D) {
+  check_block_copy<3>();
 }
 
 // cg, jacobi, amg and mg solve the same cracked, clamped plate to the same answer; the

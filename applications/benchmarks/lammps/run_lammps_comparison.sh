@@ -5,9 +5,11 @@
 #   run_lammps_comparison.sh [points_per_side [steps [repeats]]]
 #
 # Environment: SPINESIM (default: <repo>/build/bin/spinesim), LMP (default: lmp), MPIRUN
-# (default: mpirun), CORES (default: "1 2"), OUT (default: a fresh directory under /tmp).
+# (default: mpirun), CORES (default: "1 2"), OUT (default: a fresh directory under /tmp),
+# OMP_WAIT_POLICY for spinesim (default: passive).
 # spinesim uses OMP_NUM_THREADS threads, LAMMPS (this build has no OPENMP package) MPI ranks.
-# With repeats > 1 each configuration keeps its best run: the machine may be shared.
+# Each repeat is a same-minute pair (spinesim, then LAMMPS); the script prints every pair's
+# ratio with the 1-minute load and the min / median / max ratio per core count.
 set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
@@ -32,22 +34,25 @@ case "$("$LMP" -h 2>/dev/null)" in *peri/pmb*) ;; *) false ;; esac || { echo "'$
 figure() { # figure <summary.json> <name>
   sed -n "/\"$2\"/,/}/p" "$1" | sed -n 's/.*"value": *\([-+0-9.eE]*\).*/\1/p' | head -1
 }
-best() { # larger of two numbers
-  awk -v a="$1" -v b="$2" 'BEGIN { print (b == "" || a + 0 > b + 0) ? a : b }'
-}
+load1() { uptime | sed 's/.*load average: //' | cut -d, -f1; }
 
-echo "# PMB throughput comparison: ${n}^3 particles, $steps steps, $repeats repeat(s)"
+# spinesim's OpenMP threads wait passively (sleep) at barriers unless told otherwise: on a
+# shared machine a spinning waiter burns the core the late thread needs (docs/benchmarks.md).
+WAIT_POLICY="${OMP_WAIT_POLICY:-passive}"
+echo "# PMB throughput comparison: ${n}^3 particles, $steps steps, $repeats repeat(s), OMP_WAIT_POLICY=$WAIT_POLICY"
 echo "# host $(hostname), $(nproc) cores; load before: $(uptime | sed 's/.*load average: //')"
 echo "# output in $OUT"
-printf "%-6s %-16s %-16s %-8s %s\n" cores spinesim_ps/s lammps_ps/s ratio "load(1min) at end"
+echo "# each repeat runs spinesim then LAMMPS back to back; ratio = spinesim / LAMMPS particle-steps/s"
+printf "%-6s %-7s %-16s %-16s %-8s %s\n" cores repeat spinesim_ps/s lammps_ps/s ratio "load(1min) before/after"
 for cores in $CORES; do
-  ours=""; theirs=""
+  ratios=""
   for r in $(seq 1 "$repeats"); do
+    before=$(load1)
     dir="$OUT/spinesim_${cores}_$r"
-    OMP_NUM_THREADS=$cores "$SPINESIM" run "$scene" --output "$dir" --force --progress off --threads "$cores" \
+    OMP_WAIT_POLICY=$WAIT_POLICY OMP_NUM_THREADS=$cores "$SPINESIM" run "$scene" --output "$dir" --force --progress off --threads "$cores" \
       --set "Benchmark/Lattice points per side=$n" --set "Benchmark/Steps=$steps" \
       > "$dir.log" 2>&1 || { echo "spinesim failed, see $dir.log"; exit 1; }
-    ours=$(best "$(figure "$dir/summary.json" particle_steps_per_s)" "$ours")
+    ours=$(figure "$dir/summary.json" particle_steps_per_s)
     vars=$(cat "$dir/lammps_vars.txt")
     lmp_cmd=("$LMP")
     [ "$cores" -gt 1 ] && lmp_cmd=("$MPIRUN" -np "$cores" "$LMP")
@@ -56,11 +61,13 @@ for cores in $CORES; do
       > "$OUT/lammps_${cores}_$r.log" 2>&1) || { echo "LAMMPS failed, see $OUT/lammps_${cores}_$r.log"; exit 1; }
     loop=$(sed -n 's/^Loop time of \([0-9.eE+-]*\) on .* for \([0-9]*\) steps with \([0-9]*\) atoms.*/\1 \2 \3/p' \
       "$OUT/lammps_${cores}_$r.log")
-    theirs=$(best "$(echo "$loop" | awk '{ printf "%.6g", $2 * $3 / $1 }')" "$theirs")
+    theirs=$(echo "$loop" | awk '{ printf "%.6g", $2 * $3 / $1 }')
+    ratio=$(awk -v a="$ours" -v b="$theirs" 'BEGIN { printf "%.2f", a / b }')
+    ratios="$ratios $ratio"
+    printf "%-6s %-7s %-16.4g %-16.4g %-8s %s / %s\n" "$cores" "$r" "$ours" "$theirs" "$ratio" "$before" "$(load1)"
   done
-  ratio=$(awk -v a="$ours" -v b="$theirs" 'BEGIN { printf "%.2f", a / b }')
-  printf "%-6s %-16.4g %-16.4g %-8s %s\n" "$cores" "$ours" "$theirs" "$ratio" \
-    "$(uptime | sed 's/.*load average: //' | cut -d, -f1)"
+  echo "$ratios" | tr ' ' '\n' | sed '/^$/d' | sort -g | awk -v c="$cores" '{ a[++n] = $1 }
+    END { printf "# %s core(s): ratio min %s, median %s, max %s over %d repeat(s)\n", c, a[1], a[int((n + 1) / 2)], a[n], n }'
 done
 
 # Same physics: the final energies (per unit particle volume) of the last 1-core runs.
