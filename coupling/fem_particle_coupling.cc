@@ -246,6 +246,7 @@ struct FemParticleCoupling<dim>::Impl {
   std::map<std::string, DoFCell> owned_cells; // locally owned cells by CellId
   // Ghost particles hosted by locally owned cells: cell and its particle per point.
   std::vector<std::pair<DoFCell, std::vector<int>>> ghost_cells;
+  std::vector<int> ghost_lids; // per ghost cell, its DoFs' local indices in the FEM vectors
   std::vector<std::pair<DoFCell, std::vector<int>>> free_cells; // for temperatures
   std::vector<InterfaceDof> interface;
   std::vector<FixedParticle> fixed;
@@ -711,6 +712,20 @@ void FemParticleCoupling<dim>::rebuild_interface() {
   }
   for (auto& [id, row] : by_cell_ghost)
     impl_->ghost_cells.emplace_back(impl_->owned_cells.at(id), std::move(row));
+  {
+    // Local indices in the ghosted FEM vectors: element access without a map lookup per read.
+    const auto& map = fem_.displacement().trilinos_vector().Map();
+    std::vector<types::global_dof_index> dofs(fem_.fe().n_dofs_per_cell());
+    impl_->ghost_lids.clear();
+    for (const auto& [cell, row] : impl_->ghost_cells) {
+      cell->get_dof_indices(dofs);
+      for (const auto d : dofs) {
+        const int lid = map.LID(static_cast<TrilinosWrappers::types::int_type>(d));
+        Assert(lid >= 0, ExcInternalError());
+        impl_->ghost_lids.push_back(lid);
+      }
+    }
+  }
   for (auto& [id, row] : by_cell_free)
     impl_->free_cells.emplace_back(impl_->owned_cells.at(id), std::move(row));
 
@@ -872,17 +887,22 @@ void FemParticleCoupling<dim>::update_ghosts() {
   const auto& u = fem_.displacement();
   const auto& v = fem_.velocity();
   std::vector<double> buffer(2 * dim * particles_.size(), 0.0);
-  std::vector<types::global_dof_index> dofs(fe.n_dofs_per_cell());
-  for (const auto& [cell, row] : impl_->ghost_cells) {
-    cell->get_dof_indices(dofs);
+  const unsigned int n = fe.n_dofs_per_cell();
+  const double* uu = u.trilinos_vector()[0];
+  const double* vv = v.trilinos_vector()[0];
+  std::vector<unsigned int> component(n);
+  for (unsigned int i = 0; i < n; ++i)
+    component[i] = fe.system_to_component_index(i).first;
+  for (std::size_t k = 0; k < impl_->ghost_cells.size(); ++k) {
+    const auto& row = impl_->ghost_cells[k].second;
+    const int* lids = &impl_->ghost_lids[k * n];
     for (unsigned int q = 0; q < row.size(); ++q) {
       if (row[q] < 0)
         continue;
       double* b = &buffer[2 * dim * row[q]];
-      for (unsigned int i = 0; i < dofs.size(); ++i) {
-        const unsigned int c = fe.system_to_component_index(i).first;
-        b[c] += impl_->shape(q, i) * u(dofs[i]);
-        b[dim + c] += impl_->shape(q, i) * v(dofs[i]);
+      for (unsigned int i = 0; i < n; ++i) {
+        b[component[i]] += impl_->shape(q, i) * uu[lids[i]];
+        b[dim + component[i]] += impl_->shape(q, i) * vv[lids[i]];
       }
     }
   }

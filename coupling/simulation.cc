@@ -272,6 +272,10 @@ void Simulation<dim>::advance(unsigned int step, double time, double dt, RunCont
         coupled_->step(std::min(coupled_dt_, time - t));
         t = mechanics_->time();
         ++explicit_steps_;
+        // The peak load is tracked every step, not only at history rows.
+        if (sim_.reaction_boundary_id >= 0)
+          peak_load_ =
+              std::max(peak_load_, coupled_->reaction_force(sim_.reaction_boundary_id).norm());
         if (effects_.conversion && explicit_steps_ % coupling_prm_.check_interval == 0) {
           const auto r = coupled_->convert_flagged();
           if (r.cells > 0) {
@@ -290,6 +294,9 @@ void Simulation<dim>::advance(unsigned int step, double time, double dt, RunCont
         const double h = std::min(mechanics_->stable_time_step(), time - t);
         mechanics_->explicit_step(h);
         t = mechanics_->time();
+        if (sim_.reaction_boundary_id >= 0)
+          peak_load_ = std::max(peak_load_,
+                                mechanics_->reaction_force(sim_.reaction_boundary_id).norm());
       }
     } else {
       for (const auto& report : mechanics_->solve_quasi_static(time)) {

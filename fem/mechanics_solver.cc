@@ -343,6 +343,8 @@ void MechanicsSolver<dim>::setup() {
   DoFTools::make_hanging_node_constraints(dof_handler_, hanging_);
   hanging_.close();
   explicit_matrix_ready_ = false;
+  dirichlet_dofs_ready_ = false;
+  reaction_dofs_.clear();
   states_stale_ = false;
   cell_laws_.assign(tria_.n_active_cells(), nullptr);
   if (cell_law_function_)
@@ -1035,10 +1037,29 @@ void MechanicsSolver<dim>::explicit_step(double dt) {
       u[k] += dt * v[k];
     }
   }
+  if (!dirichlet_dofs_ready_) {
+    std::map<types::global_dof_index, Point<dim>> support;
+    DoFTools::map_dofs_to_support_points(*mapping_, dof_handler_, support);
+    dirichlet_dofs_.assign(bcs_.dirichlet().size(), {});
+    for (unsigned int k = 0; k < bcs_.dirichlet().size(); ++k) {
+      std::map<types::global_dof_index, double> dofs;
+      BoundaryConditions<dim>::interpolate(bcs_.dirichlet()[k], *mapping_, dof_handler_,
+                                           Functions::ZeroFunction<dim>(dim), dofs);
+      for (const auto& [dof, zero] : dofs)
+        if (owned_.is_element(dof))
+          for (unsigned int c = 0; c < dim; ++c)
+            if (component_dofs_[c].is_element(dof))
+              dirichlet_dofs_[k].push_back({dof, c, support.at(dof)});
+    }
+    dirichlet_dofs_ready_ = true;
+  }
+  // Later conditions overwrite earlier ones on shared DoFs, as interpolate_boundary_values.
   std::map<types::global_dof_index, double> g;
-  for (const auto& d : bcs_.dirichlet()) {
-    d.function->set_time(time_ + dt);
-    BoundaryConditions<dim>::interpolate(d, *mapping_, dof_handler_, *d.function, g);
+  for (unsigned int k = 0; k < bcs_.dirichlet().size(); ++k) {
+    auto& f = *bcs_.dirichlet()[k].function;
+    f.set_time(time_ + dt);
+    for (const auto& b : dirichlet_dofs_[k])
+      g[b.dof] = f.value(b.point, b.component);
   }
   for (const auto& [dof, value] : driven_)
     g.emplace(dof, value); // boundary values take precedence over driven values
@@ -1115,14 +1136,21 @@ const typename MechanicsSolver<dim>::VectorType& MechanicsSolver<dim>::evaluate_
 
 template <int dim>
 Tensor<1, dim> MechanicsSolver<dim>::reaction_force(types::boundary_id id) const {
-  const IndexSet on_boundary = DoFTools::extract_boundary_dofs(dof_handler_, ComponentMask(), {id});
-  Tensor<1, dim> r;
-  for (unsigned int c = 0; c < dim; ++c) {
-    const IndexSet s = on_boundary & component_dofs_[c];
-    for (const auto i : s)
-      r[c] += raw_residual_(i);
-    r[c] = Utilities::MPI::sum(r[c], comm_);
+  auto it = reaction_dofs_.find(id);
+  if (it == reaction_dofs_.end()) {
+    const IndexSet on_boundary =
+        DoFTools::extract_boundary_dofs(dof_handler_, ComponentMask(), {id});
+    auto& list = reaction_dofs_[id];
+    for (unsigned int c = 0; c < dim; ++c)
+      for (const auto i : on_boundary & component_dofs_[c])
+        list.emplace_back(i, c);
+    it = reaction_dofs_.find(id);
   }
+  Tensor<1, dim> r;
+  for (const auto& [i, c] : it->second)
+    r[c] += raw_residual_(i);
+  for (unsigned int c = 0; c < dim; ++c)
+    r[c] = Utilities::MPI::sum(r[c], comm_);
   return r;
 }
 

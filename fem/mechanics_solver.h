@@ -242,6 +242,19 @@ class MechanicsSolver {
   CellLawFunction cell_law_function_;
   std::vector<std::shared_ptr<const materials::ConstitutiveLaw>> cell_laws_; // by cell index
   std::vector<bool> active_;
+  // Explicit steps evaluate the Dirichlet functions at cached support points of the cached
+  // boundary DoFs (the DoF search over the mesh is done once per setup); reactions sum cached
+  // boundary DoFs per id and component.
+  struct BoundaryDof {
+    dealii::types::global_dof_index dof;
+    unsigned int component;
+    dealii::Point<dim> point;
+  };
+  std::vector<std::vector<BoundaryDof>> dirichlet_dofs_;
+  bool dirichlet_dofs_ready_ = false;
+  mutable std::map<dealii::types::boundary_id,
+                   std::vector<std::pair<dealii::types::global_dof_index, unsigned int>>>
+      reaction_dofs_;
   MatrixType explicit_matrix_; // K over the active cells for the linear explicit path
   bool explicit_matrix_ready_ = false, assemble_into_explicit_matrix_ = false;
   mutable bool states_stale_ = false;
