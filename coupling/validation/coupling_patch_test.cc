@@ -11,6 +11,7 @@
 //    the kinetic-energy change (the interpolation defect) is reported.
 
 #include "coupling/fem_particle_coupling.h"
+#include "coupling/parse_section.h"
 #include "coupling/run_context.h"
 #include "coupling/scenario.h"
 #include "fem/materials/failure.h"
@@ -98,22 +99,11 @@ template <int dim>
 class CouplingPatchTest : public Scenario {
 public:
   explicit CouplingPatchTest(const ScenarioFactoryArgs& args) {
-    auto& prm = const_cast<dealii::ParameterHandler&>(args.prm);
-    prm.enter_subsection("Geometry");
-    mesh_.parse(prm);
-    prm.leave_subsection();
-    prm.enter_subsection("Material");
-    law_.parse(prm);
-    prm.leave_subsection();
-    prm.enter_subsection("Mechanics");
-    mech_.parse(prm);
-    prm.leave_subsection();
-    prm.enter_subsection("Coupling");
-    coupling_.parse(prm);
-    prm.leave_subsection();
-    prm.enter_subsection("Patch test");
-    patch_.parse(prm);
-    prm.leave_subsection();
+    parse_section(args.prm, "Geometry", mesh_);
+    parse_section(args.prm, "Material", law_);
+    parse_section(args.prm, "Mechanics", mech_);
+    parse_section(args.prm, "Coupling", coupling_);
+    parse_section(args.prm, "Patch test", patch_);
     if (mesh_.shape != "hyper_rectangle")
       throw InvalidInput("Geometry/Shape", "the patch test needs a rectangle", "hyper_rectangle");
     if (!mech_.boundary_conditions.dirichlet.empty())

@@ -8,6 +8,7 @@
 // energy carried into the particles and the total balance are reported too.
 
 #include "coupling/fem_particle_coupling.h"
+#include "coupling/parse_section.h"
 #include "coupling/run_context.h"
 #include "coupling/scenario.h"
 #include "fem/materials/failure.h"
@@ -72,22 +73,11 @@ template <int dim>
 class CouplingWave : public Scenario {
 public:
   explicit CouplingWave(const ScenarioFactoryArgs& args) {
-    auto& prm = const_cast<dealii::ParameterHandler&>(args.prm);
-    prm.enter_subsection("Geometry");
-    mesh_.parse(prm);
-    prm.leave_subsection();
-    prm.enter_subsection("Material");
-    law_.parse(prm);
-    prm.leave_subsection();
-    prm.enter_subsection("Mechanics");
-    mech_.parse(prm);
-    prm.leave_subsection();
-    prm.enter_subsection("Coupling");
-    coupling_.parse(prm);
-    prm.leave_subsection();
-    prm.enter_subsection("Wave");
-    wave_.parse(prm);
-    prm.leave_subsection();
+    parse_section(args.prm, "Geometry", mesh_);
+    parse_section(args.prm, "Material", law_);
+    parse_section(args.prm, "Mechanics", mech_);
+    parse_section(args.prm, "Coupling", coupling_);
+    parse_section(args.prm, "Wave", wave_);
     if (mesh_.shape != "hyper_rectangle")
       throw InvalidInput("Geometry/Shape", "the wave test needs a strip", "hyper_rectangle");
     // The particle zone is everything beyond the interface.
