@@ -44,12 +44,29 @@ std::vector<double> parse_doubles(const std::string& list, const std::string& wh
 // Uniform bins of the given size over a point set: candidates within one bin distance.
 template <int dim>
 class PointBins {
-public:
+ public:
   PointBins(const std::vector<Point<dim>>& points, double size) : points_(points), size_(size) {
     for (unsigned int i = 0; i < points.size(); ++i)
       bins_[key(points[i])].push_back(i);
   }
-  // Indices of points within `radius` (<= bin size) of x.
+  // Whether some point lies within `radius` of x.
+  bool any_within(const Point<dim>& x, double radius) const {
+    std::array<long, 3> k = coords(x);
+    const int span = static_cast<int>(std::ceil(radius / size_));
+    std::array<long, 3> o{};
+    for (o[0] = -span; o[0] <= span; ++o[0])
+      for (o[1] = -span; o[1] <= span; ++o[1])
+        for (o[2] = (dim == 3 ? -span : 0); o[2] <= (dim == 3 ? span : 0); ++o[2]) {
+          const auto it = bins_.find(pack({k[0] + o[0], k[1] + o[1], k[2] + o[2]}));
+          if (it == bins_.end())
+            continue;
+          for (const unsigned int i : it->second)
+            if (points_[i].distance(x) <= radius)
+              return true;
+        }
+    return false;
+  }
+  // Indices of points within `radius` of x.
   std::vector<unsigned int> within(const Point<dim>& x, double radius) const {
     std::vector<unsigned int> out;
     std::array<long, 3> k = coords(x);
@@ -68,7 +85,7 @@ public:
     return out;
   }
 
-private:
+ private:
   std::array<long, 3> coords(const Point<dim>& x) const {
     std::array<long, 3> k{0, 0, 0};
     for (unsigned int d = 0; d < dim; ++d)
@@ -124,8 +141,7 @@ void FemParticleCoupling<dim>::Parameters::declare(ParameterHandler& prm) {
   prm.declare_entry("Initial region lower corner", "", Anything(),
                     "Lower corner of a box whose cells are particles from t = 0; empty = none "
                     "[m].");
-  prm.declare_entry("Initial region upper corner", "", Anything(),
-                    "Upper corner of that box [m].");
+  prm.declare_entry("Initial region upper corner", "", Anything(), "Upper corner of that box [m].");
   prm.declare_entry("Principal strain threshold", "0", Double(0),
                     "Convert cells whose maximum principal strain reaches this (e.g. a fraction "
                     "of the PD critical stretch); 0 = off [-].");
@@ -168,10 +184,10 @@ void FemParticleCoupling<dim>::Parameters::parse(const ParameterHandler& cprm) {
   interface_radius = prm.get_double("Interface radius");
   time_step_safety = prm.get_double("Time step safety");
   all_particles = prm.get_bool("All particles");
-  region_lower = parse_doubles(prm.get("Initial region lower corner"),
-                               "Coupling/Initial region lower corner");
-  region_upper = parse_doubles(prm.get("Initial region upper corner"),
-                               "Coupling/Initial region upper corner");
+  region_lower =
+      parse_doubles(prm.get("Initial region lower corner"), "Coupling/Initial region lower corner");
+  region_upper =
+      parse_doubles(prm.get("Initial region upper corner"), "Coupling/Initial region upper corner");
   if (region_lower.size() != region_upper.size() ||
       (!region_lower.empty() && region_lower.size() < dim))
     throw InvalidInput("Coupling/Initial region lower corner",
@@ -223,8 +239,7 @@ double FemParticleCoupling<dim>::ConversionReport::mass_change_relative() const 
 
 template <int dim>
 double FemParticleCoupling<dim>::ConversionReport::momentum_change_relative() const {
-  return (momentum_after - momentum_before).norm() /
-         std::max(momentum_before.norm(), 1e-300);
+  return (momentum_after - momentum_before).norm() / std::max(momentum_before.norm(), 1e-300);
 }
 
 // ---------------------------------------------------------------- implementation state
@@ -248,7 +263,9 @@ struct FemParticleCoupling<dim>::Impl {
   std::vector<std::pair<DoFCell, std::vector<int>>> ghost_cells;
   std::vector<int> ghost_lids; // per ghost cell, its DoFs' local indices in the FEM vectors
   std::vector<std::pair<DoFCell, std::vector<int>>> free_cells; // for temperatures
-  std::vector<InterfaceDof> interface;
+  std::vector<InterfaceDof> interface;                          // ascending DoF order
+  std::vector<double> interface_values;
+  bool interface_registered = false; // the solver knows the interface DoFs
   std::vector<FixedParticle> fixed;
   std::vector<std::uint32_t> fixed_slots; // per particle: Dirichlet slots of its cell
 
@@ -460,12 +477,17 @@ std::vector<CellId> FemParticleCoupling<dim>::flagged_cells() const {
                    prm_.min_jacobian_ratio > 0 || prm_.min_time_step > 0;
   std::vector<Point<dim>> centres;
   if (any) {
+    // Only active cells of the particle lattice's size can convert (the refinement box).
+    std::vector<bool> candidate(fem_.dof_handler().get_triangulation().n_active_cells(), false);
+    for (const auto& [id, cell] : impl_->owned_cells)
+      candidate[cell->active_cell_index()] =
+          fem_.is_active(cell) &&
+          cell->minimum_vertex_distance() <= 1.5 * spacing_ * prm_.particles_per_direction;
     fem::CellIndicators<dim> indicators;
-    indicators.compute(fem_, prm_.plastic_strain_threshold > 0);
+    indicators.compute(fem_, prm_.plastic_strain_threshold > 0, candidate,
+                       prm_.min_jacobian_ratio > 0 || prm_.min_time_step > 0);
     for (const auto& [id, cell] : impl_->owned_cells) {
-      // Only cells of the particle lattice's size can convert (the refinement box).
-      if (!fem_.is_active(cell) ||
-          cell->minimum_vertex_distance() > 1.5 * spacing_ * prm_.particles_per_direction)
+      if (!candidate[cell->active_cell_index()])
         continue;
       const unsigned int c = cell->active_cell_index();
       bool flag = false;
@@ -582,8 +604,8 @@ FemParticleCoupling<dim>::convert(const std::vector<CellId>& cells) {
         if (cell->face(f)->at_boundary() && cell->face(f)->boundary_id() == bcs[k].boundary_id)
           slots |= 1u << k;
     for (unsigned int q = 0; q < np; ++q) {
-      std::vector<double> r{double(q), 1.0, double(slots), at_points.JxW(q) * scale, rho,
-                            temperature[q]};
+      std::vector<double> r{double(q), 1.0,           double(slots), at_points.JxW(q) * scale,
+                            rho,       temperature[q]};
       for (unsigned int d = 0; d < dim; ++d)
         r.push_back(at_points.quadrature_point(q)[d]);
       for (unsigned int d = 0; d < dim; ++d)
@@ -661,16 +683,19 @@ void FemParticleCoupling<dim>::rebuild_interface() {
   const double reach = prm_.ghost_layer * (horizon() + 0.5 * spacing_) + 0.5 * spacing_;
   PointBins<dim> free_bins(free_points, reach);
   std::vector<Record> mine;
+  std::vector<Point<dim>> xs(np);
   for (const auto& [id, cell] : impl_->owned_cells) {
-    if (!fem_.is_active(cell))
+    // Cells hosting particles already, or farther than the reach from every free particle
+    // (tested at the centre with the half diagonal added), need no mapping of their points.
+    if (!fem_.is_active(cell) || index_of_.count({id, 0}) ||
+        !free_bins.any_within(cell->center(), reach + 0.5 * cell->diameter()))
       continue;
-    std::vector<Point<dim>> xs(np);
     bool near = false;
     for (unsigned int q = 0; q < np; ++q) {
       xs[q] = fem_.mapping().transform_unit_to_real_cell(cell, impl_->points.point(q));
-      near |= !free_bins.within(xs[q], reach).empty();
+      near = near || free_bins.any_within(xs[q], reach);
     }
-    if (!near || index_of_.count({id, 0}))
+    if (!near)
       continue;
     FEValues<dim> at_points(fem_.mapping(), fe, impl_->points, update_JxW_values);
     at_points.reinit(cell);
@@ -750,22 +775,30 @@ void FemParticleCoupling<dim>::rebuild_interface() {
 
   // 4. Interface DoFs: shared by an active and a converted cell; MLS fit of free particles.
   impl_->interface.clear();
+  impl_->interface_registered = false;
   const auto& dh = fem_.dof_handler();
-  std::set<types::global_dof_index> on_active, on_inactive;
+  // DoFs of active cells (flags by index among the locally relevant DoFs), then the DoFs of
+  // converted cells among them, with their support points.
+  IndexSet relevant;
+  DoFTools::extract_locally_relevant_dofs(dh, relevant);
+  std::vector<std::uint8_t> on_active(relevant.n_elements(), 0);
   std::map<types::global_dof_index, std::pair<Point<dim>, unsigned int>> where;
   std::vector<types::global_dof_index> dofs(fe.n_dofs_per_cell());
   const auto& unit_support = fe.get_unit_support_points();
+  for (const auto& cell : dh.active_cell_iterators())
+    if ((cell->is_locally_owned() || cell->is_ghost()) && fem_.is_active(cell)) {
+      cell->get_dof_indices(dofs);
+      for (const auto d : dofs)
+        on_active[relevant.index_within_set(d)] = 1;
+    }
   for (const auto& cell : dh.active_cell_iterators()) {
-    if (!(cell->is_locally_owned() || cell->is_ghost()))
+    if (!(cell->is_locally_owned() || cell->is_ghost()) || fem_.is_active(cell))
       continue;
     cell->get_dof_indices(dofs);
-    const bool active = fem_.is_active(cell);
-    for (unsigned int i = 0; i < dofs.size(); ++i) {
-      (active ? on_active : on_inactive).insert(dofs[i]);
-      if (!active && !where.count(dofs[i]))
+    for (unsigned int i = 0; i < dofs.size(); ++i)
+      if (on_active[relevant.index_within_set(dofs[i])] && !where.count(dofs[i]))
         where[dofs[i]] = {fem_.mapping().transform_unit_to_real_cell(cell, unit_support[i]),
                           fe.system_to_component_index(i).first};
-    }
   }
   PointBins<dim> bins(free_points, prm_.interface_radius * spacing_ * 4);
   std::vector<unsigned int> free_index;
@@ -773,8 +806,6 @@ void FemParticleCoupling<dim>::rebuild_interface() {
     if (free_[i])
       free_index.push_back(i);
   for (const auto& [dof, pc] : where) {
-    if (!on_active.count(dof))
-      continue;
     const Point<dim>& X = pc.first;
     typename Impl::InterfaceDof entry{dof, pc.second, {}};
     bool ok = false;
@@ -820,14 +851,17 @@ void FemParticleCoupling<dim>::rebuild_interface() {
       ok = true;
     }
     if (!ok)
-      throw NumericalFailure("singular moving-least-squares fit for an interface node",
-                             "FEM node at (" + [&] {
-                               std::ostringstream s;
-                               s << X;
-                               return s.str();
-                             }() + ")",
-                             "convert larger blocks (Coupling/Buffer), use more particles per "
-                             "cell direction or a larger Coupling/Interface radius");
+      throw NumericalFailure(
+          "singular moving-least-squares fit for an interface node",
+          "FEM node at (" +
+              [&] {
+                std::ostringstream s;
+                s << X;
+                return s.str();
+              }() +
+              ")",
+          "convert larger blocks (Coupling/Buffer), use more particles per "
+          "cell direction or a larger Coupling/Interface radius");
     impl_->interface.push_back(std::move(entry));
   }
   update_interface_dofs();
@@ -849,8 +883,8 @@ void FemParticleCoupling<dim>::rebuild_bonds() {
           meshfree::PreCrack<dim>::segment(Point<dim>(c[0], c[1]), Point<dim>(c[2], c[3])));
     else
       options.pre_cracks.push_back(meshfree::PreCrack<dim>::quadrilateral(
-          Point<dim>(c[0], c[1], c[2]), Point<dim>(c[3], c[4], c[5]),
-          Point<dim>(c[6], c[7], c[8]), Point<dim>(c[9], c[10], c[11])));
+          Point<dim>(c[0], c[1], c[2]), Point<dim>(c[3], c[4], c[5]), Point<dim>(c[6], c[7], c[8]),
+          Point<dim>(c[9], c[10], c[11])));
   }
   meshfree::NeighborSearch<dim> search(options);
   const meshfree::BondList<dim> all = search.build(particles_);
@@ -918,14 +952,26 @@ void FemParticleCoupling<dim>::update_ghosts() {
 
 template <int dim>
 void FemParticleCoupling<dim>::update_interface_dofs() {
-  std::map<types::global_dof_index, double> values;
-  for (const auto& entry : impl_->interface) {
+  // Entries are in ascending DoF order (built from an ordered map), the key order of the
+  // solver's driven set: after the set is registered once, a step only passes values.
+  auto& values = impl_->interface_values;
+  values.resize(impl_->interface.size());
+  for (std::size_t k = 0; k < impl_->interface.size(); ++k) {
+    const auto& entry = impl_->interface[k];
     double value = 0;
     for (const auto& [p, w] : entry.weights)
       value += w * particles_.displacement(p)[entry.component];
-    values.emplace(entry.dof, value);
+    values[k] = value;
   }
-  fem_.set_driven_dofs(values);
+  if (impl_->interface_registered) {
+    fem_.set_driven_values(values);
+    return;
+  }
+  std::map<types::global_dof_index, double> driven;
+  for (std::size_t k = 0; k < impl_->interface.size(); ++k)
+    driven.emplace_hint(driven.end(), impl_->interface[k].dof, values[k]);
+  fem_.set_driven_dofs(driven);
+  impl_->interface_registered = true;
 }
 
 template <int dim>
@@ -1016,11 +1062,11 @@ void FemParticleCoupling<dim>::step(double dt) {
 template <int dim>
 void FemParticleCoupling<dim>::impose_affine(const Tensor<2, dim>& H) {
   class Affine : public Function<dim> {
-  public:
+   public:
     explicit Affine(const Tensor<2, dim>& H) : Function<dim>(dim), H_(H) {}
     double value(const Point<dim>& x, unsigned int c) const override { return (H_ * x)[c]; }
 
-  private:
+   private:
     Tensor<2, dim> H_;
   };
   typename fem::MechanicsSolver<dim>::VectorType u(fem_.lumped_mass()), v(fem_.lumped_mass());
@@ -1127,7 +1173,8 @@ std::string FemParticleCoupling<dim>::write_output(const std::string& directory,
   meshfree::ParticleSet<dim> out(particles_.thickness());
   for (unsigned int i = 0; i < particles_.size(); ++i)
     if (free_[i]) {
-      const unsigned int k = out.add_particle(particles_.reference_position(i), particles_.volume(i));
+      const unsigned int k =
+          out.add_particle(particles_.reference_position(i), particles_.volume(i));
       out.displacement(k) = particles_.displacement(i);
       out.velocity(k) = particles_.velocity(i);
       out.density(k) = particles_.density(i);
@@ -1147,8 +1194,9 @@ void FemParticleCoupling<dim>::save(const std::string& file) const {
     return;
   std::ofstream out(file, std::ios::binary);
   out.precision(17);
-  out << "spinesim_coupling 1\n" << time_ << " " << particles_.size() << " " << converted_.size()
-      << " " << bonds_.n_bonds() << "\n";
+  out << "spinesim_coupling 1\n"
+      << time_ << " " << particles_.size() << " " << converted_.size() << " " << bonds_.n_bonds()
+      << "\n";
   for (const auto& [id, batch] : converted_)
     out << id << " " << batch << "\n";
   for (unsigned int i = 0; i < particles_.size(); ++i) {

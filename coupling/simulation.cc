@@ -63,7 +63,7 @@ namespace {
 
 // A ParaView .pvd time series, rewritten atomically at every output.
 class PvdRecord {
-public:
+ public:
   explicit PvdRecord(std::string name) : name_(std::move(name)) {}
   void add(double time, const std::string& file) { entries_.emplace_back(time, file); }
   void truncate_after(double time) {
@@ -82,18 +82,18 @@ public:
     entries_ = j.get<std::vector<std::pair<double, std::string>>>();
   }
 
-private:
+ private:
   std::string name_;
   std::vector<std::pair<double, std::string>> entries_;
 };
 
 template <int dim>
 class Simulation : public Scenario {
-public:
+ public:
   explicit Simulation(const ScenarioFactoryArgs& args);
   void run(RunContext& ctx) override;
 
-private:
+ private:
   void build(RunContext& ctx);
   void advance(unsigned int step, double time, double dt, RunContext& ctx);
   void record(unsigned int step, double time, RunContext& ctx);
@@ -255,8 +255,8 @@ void Simulation<dim>::advance(unsigned int step, double time, double dt, RunCont
   if (heat_) {
     dealii::TimerOutput::Scope scope(ctx.timer(), "heat");
     // The heat solver's own step bounds accuracy; sub-step to land exactly on `time`.
-    const unsigned int n = std::max(1u, static_cast<unsigned int>(
-                                            std::ceil(dt / heat_prm_.time_step - 1e-9)));
+    const unsigned int n =
+        std::max(1u, static_cast<unsigned int>(std::ceil(dt / heat_prm_.time_step - 1e-9)));
     for (unsigned int i = 0; i < n; ++i)
       heat_->advance(dt / n);
   }
@@ -277,6 +277,7 @@ void Simulation<dim>::advance(unsigned int step, double time, double dt, RunCont
           peak_load_ =
               std::max(peak_load_, coupled_->reaction_force(sim_.reaction_boundary_id).norm());
         if (effects_.conversion && explicit_steps_ % coupling_prm_.check_interval == 0) {
+          dealii::TimerOutput::Scope conversion_scope(ctx.timer(), "conversion");
           const auto r = coupled_->convert_flagged();
           if (r.cells > 0) {
             coupled_dt_ = coupled_->stable_time_step();
@@ -295,8 +296,8 @@ void Simulation<dim>::advance(unsigned int step, double time, double dt, RunCont
         mechanics_->explicit_step(h);
         t = mechanics_->time();
         if (sim_.reaction_boundary_id >= 0)
-          peak_load_ = std::max(peak_load_,
-                                mechanics_->reaction_force(sim_.reaction_boundary_id).norm());
+          peak_load_ =
+              std::max(peak_load_, mechanics_->reaction_force(sim_.reaction_boundary_id).norm());
       }
     } else {
       for (const auto& report : mechanics_->solve_quasi_static(time)) {
@@ -317,6 +318,7 @@ void Simulation<dim>::advance(unsigned int step, double time, double dt, RunCont
 
 template <int dim>
 void Simulation<dim>::record(unsigned int step, double time, RunContext& ctx) {
+  dealii::TimerOutput::Scope scope(ctx.timer(), "history");
   History::Row row{{"step", step}, {"time", time}, {"load_factor", time / sim_.end_time}};
   if (mechanics_) {
     if (sim_.reaction_boundary_id >= 0) {
@@ -605,8 +607,9 @@ std::unique_ptr<Scenario> create_simulation(const ScenarioFactoryArgs& args) {
 
 } // namespace
 
-SPINESIM_REGISTER_SCENARIO(simulation, "simulation",
-                           "the effects-driven step loop: FEM mechanics, heat and a particle zone as switched on.",
-                           declare_simulation, create_simulation)
+SPINESIM_REGISTER_SCENARIO(
+    simulation, "simulation",
+    "the effects-driven step loop: FEM mechanics, heat and a particle zone as switched on.",
+    declare_simulation, create_simulation)
 
 } // namespace spinesim::coupling

@@ -39,6 +39,12 @@ void CellIndicators<dim>::Parameters::parse(const ParameterHandler& prm) {
 
 template <int dim>
 void CellIndicators<dim>::compute(const MechanicsSolver<dim>& solver, bool with_state) {
+  compute(solver, with_state, {}, true);
+}
+
+template <int dim>
+void CellIndicators<dim>::compute(const MechanicsSolver<dim>& solver, bool with_state,
+                                  const std::vector<bool>& cells, bool geometry) {
   const auto& dof_handler = solver.dof_handler();
   const unsigned int n_cells = dof_handler.get_triangulation().n_active_cells();
   for (auto* v : {&min_jacobian_ratio, &inverted, &aspect_ratio, &equivalent_plastic_strain,
@@ -52,7 +58,7 @@ void CellIndicators<dim>::compute(const MechanicsSolver<dim>& solver, bool with_
                             update_values | update_gradients | update_jacobians |
                                 update_quadrature_points);
   FEValues<dim> at_gauss(solver.mapping(), solver.fe(), solver.quadrature(),
-                         update_gradients | update_jacobians);
+                         geometry ? update_gradients | update_jacobians : update_gradients);
   std::vector<Tensor<2, dim>> grad_v(vertex_quadrature.size()), grad_q(solver.quadrature().size());
   std::vector<Tensor<1, dim>> u_v(vertex_quadrature.size());
   const auto& u = solver.displacement();
@@ -60,43 +66,45 @@ void CellIndicators<dim>::compute(const MechanicsSolver<dim>& solver, bool with_
 
   unsigned int n_inv = 0, n_dam = 0;
   for (const auto& cell : dof_handler.active_cell_iterators()) {
-    if (!cell->is_locally_owned())
+    if (!cell->is_locally_owned() || (!cells.empty() && !cells[cell->active_cell_index()]))
       continue;
     const unsigned int c = cell->active_cell_index();
-    at_vertices.reinit(cell);
     at_gauss.reinit(cell);
-    at_vertices[displacements].get_function_gradients(u, grad_v);
-    at_vertices[displacements].get_function_values(u, u_v);
     at_gauss[displacements].get_function_gradients(u, grad_q);
+    if (geometry) {
+      at_vertices.reinit(cell);
+      at_vertices[displacements].get_function_gradients(u, grad_v);
+      at_vertices[displacements].get_function_values(u, u_v);
 
-    double jmin = std::numeric_limits<double>::max(), jmax = -jmin;
-    auto take = [&](const DerivativeForm<1, dim, dim>& J, const Tensor<2, dim>& H) {
-      const double det =
-          determinant(Tensor<2, dim>(J)) * determinant(unit_symmetric_tensor<dim>() + H);
-      jmin = std::min(jmin, det);
-      jmax = std::max(jmax, det);
-    };
-    for (unsigned int q = 0; q < vertex_quadrature.size(); ++q)
-      take(at_vertices.jacobian(q), grad_v[q]);
-    for (unsigned int q = 0; q < solver.quadrature().size(); ++q)
-      take(at_gauss.jacobian(q), grad_q[q]);
-    min_jacobian_ratio(c) = jmax > 0 ? jmin / jmax : jmin;
-    inverted(c) = jmin <= 0 ? 1 : 0;
-    n_inv += jmin <= 0;
+      double jmin = std::numeric_limits<double>::max(), jmax = -jmin;
+      auto take = [&](const DerivativeForm<1, dim, dim>& J, const Tensor<2, dim>& H) {
+        const double det =
+            determinant(Tensor<2, dim>(J)) * determinant(unit_symmetric_tensor<dim>() + H);
+        jmin = std::min(jmin, det);
+        jmax = std::max(jmax, det);
+      };
+      for (unsigned int q = 0; q < vertex_quadrature.size(); ++q)
+        take(at_vertices.jacobian(q), grad_v[q]);
+      for (unsigned int q = 0; q < solver.quadrature().size(); ++q)
+        take(at_gauss.jacobian(q), grad_q[q]);
+      min_jacobian_ratio(c) = jmax > 0 ? jmin / jmax : jmin;
+      inverted(c) = jmin <= 0 ? 1 : 0;
+      n_inv += jmin <= 0;
 
-    double emin = std::numeric_limits<double>::max(), emax = 0;
-    for (unsigned int l = 0; l < GeometryInfo<dim>::lines_per_cell; ++l) {
-      const unsigned int a = GeometryInfo<dim>::line_to_cell_vertices(l, 0),
-                         b = GeometryInfo<dim>::line_to_cell_vertices(l, 1);
-      const Point<dim> xa = at_vertices.quadrature_point(a) + u_v[a],
-                       xb = at_vertices.quadrature_point(b) + u_v[b];
-      const double len = xa.distance(xb);
-      emin = std::min(emin, len);
-      emax = std::max(emax, len);
+      double emin = std::numeric_limits<double>::max(), emax = 0;
+      for (unsigned int l = 0; l < GeometryInfo<dim>::lines_per_cell; ++l) {
+        const unsigned int a = GeometryInfo<dim>::line_to_cell_vertices(l, 0),
+                           b = GeometryInfo<dim>::line_to_cell_vertices(l, 1);
+        const Point<dim> xa = at_vertices.quadrature_point(a) + u_v[a],
+                         xb = at_vertices.quadrature_point(b) + u_v[b];
+        const double len = xa.distance(xb);
+        emin = std::min(emin, len);
+        emax = std::max(emax, len);
+      }
+      aspect_ratio(c) = emin > 0 ? emax / emin : std::numeric_limits<float>::max();
+      const double wave = solver.cell_material(cell).p_wave_speed();
+      stable_time_step(c) = prm_.cfl_safety_factor * emin / (degree * wave);
     }
-    aspect_ratio(c) = emin > 0 ? emax / emin : std::numeric_limits<float>::max();
-    const double wave = solver.cell_material(cell).p_wave_speed();
-    stable_time_step(c) = prm_.cfl_safety_factor * emin / (degree * wave);
 
     double ep = 0, e1 = -std::numeric_limits<double>::max(), s1 = e1;
     if (with_state) {

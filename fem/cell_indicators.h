@@ -30,6 +30,11 @@ class CellIndicators {
   // Without `with_state` the point-wise states are not read (no stress refresh): principal
   // strains come from the in-plane displacement gradient, plastic strain and stress are 0.
   void compute(const MechanicsSolver<dim>& solver, bool with_state = true);
+  // The subset a conversion check needs: only the cells flagged in `cells` (by active cell
+  // index; others stay 0) and, without `geometry`, no Jacobian ratio, aspect ratio or stable
+  // step (those need the vertices and the mapping's Jacobians: the larger part of the cost).
+  void compute(const MechanicsSolver<dim>& solver, bool with_state, const std::vector<bool>& cells,
+               bool geometry);
 
   // min over vertices and quadrature points of det J (deformed) / max of the same [-];
   // 1 for an undistorted parallelogram, <= 0 when the cell is inverted.

@@ -30,6 +30,7 @@
 #include <deal.II/lac/trilinos_vector.h>
 #include <deal.II/lac/vector.h>
 
+#include <cstdint>
 #include <functional>
 #include <map>
 #include <memory>
@@ -68,7 +69,7 @@ class MechanicsSolver {
     double linear_tolerance = 1e-10;
     unsigned int max_linear_iterations = 1000;
     double cfl_safety_factor = 0.5;
-    double mass_damping = 0.0; // [1/s]
+    double mass_damping = 0.0;   // [1/s]
     double taylor_quinney = 0.9; // fraction of plastic work turned into heat [-]
     typename BoundaryConditions<dim>::Parameters boundary_conditions;
 
@@ -123,10 +124,14 @@ class MechanicsSolver {
     return active_.empty() || active_[cell->active_cell_index()];
   }
   const std::vector<bool>& active_cells() const { return active_; }
+  unsigned int n_active_cells() const; // over all ranks
   // Driven DoFs: displacement values [m] imposed on these (locally relevant) DoFs, e.g. the
   // interface nodes of the coupling. Explicit steps set u and v = Δu/Δt; quasi-static solves
   // treat them as inhomogeneous constraints. Replaces the previous set.
   void set_driven_dofs(const std::map<dealii::types::global_dof_index, double>& values);
+  // New values for the DoFs of the last set_driven_dofs(), in its key (ascending DoF) order:
+  // the per-step update of the coupling without rebuilding the set.
+  void set_driven_values(const std::vector<double>& values);
 
   void setup();
 
@@ -249,6 +254,7 @@ class MechanicsSolver {
     dealii::types::global_dof_index dof;
     unsigned int component;
     dealii::Point<dim> point;
+    unsigned int local; // index within owned_
   };
   std::vector<std::vector<BoundaryDof>> dirichlet_dofs_;
   bool dirichlet_dofs_ready_ = false;
@@ -260,6 +266,31 @@ class MechanicsSolver {
   mutable bool states_stale_ = false;
   std::vector<bool> orphan_; // relevant DoFs touched by no active cell (by local index)
   std::map<dealii::types::global_dof_index, double> driven_;
+  // Explicit-step tables by index within owned_, so that a step touches plain arrays only:
+  // DoFs the update skips (hanging or orphaned), DoFs with a Dirichlet condition, and the
+  // owned slot of every driven DoF in key order (-1: not owned, constrained or Dirichlet).
+  std::vector<std::uint8_t> step_skip_, step_dirichlet_;
+  std::vector<int> driven_slot_;
+  std::vector<double> u_previous_;
+  // Hanging-node lines of owned DoFs with owned masters (local indices): distributed on the
+  // local arrays instead of AffineConstraints::distribute, which builds a ghosted copy of the
+  // vector every call. Used when every rank's masters are its own (hanging_local_).
+  struct HangingLine {
+    unsigned int local;
+    std::vector<std::pair<unsigned int, double>> masters;
+    double inhomogeneity;
+  };
+  std::vector<HangingLine> hanging_lines_;
+  bool hanging_local_ = false;
+  void distribute_hanging(VectorType& vector) const;
+  bool step_tables_ready_ = false;
+  unsigned int n_active_cells_ = 0; // global count of active cells
+  void build_step_tables();
+  // Incremental assembly: when set, assemble() visits exactly these cells (by active cell
+  // index) and adds sign × their matrices without zeroing the matrix first.
+  const std::vector<bool>* assembly_cells_ = nullptr;
+  bool assemble_states_only_ = false; // refresh_states(): point states, no vectors
+  double assembly_sign_ = 1.0;
 
   std::map<dealii::types::global_dof_index, double> dirichlet_start_, dirichlet_target_;
   // set_temperature_field(): T − T_ref per quadrature point (active_cell_index * n_q + q) at

@@ -164,9 +164,13 @@ BondList<dim> NeighborSearch<dim>::build(const ParticleSet<dim>& particles) cons
   const unsigned int n = particles.size();
   const double delta = options_.horizon;
 
+  // Spacings once per particle: the pair tests below would otherwise take a root per visit.
+  std::vector<double> spacing(n);
   double max_spacing = 0;
-  for (unsigned int i = 0; i < n; ++i)
-    max_spacing = std::max(max_spacing, particles.spacing(i));
+  for (unsigned int i = 0; i < n; ++i) {
+    spacing[i] = particles.spacing(i);
+    max_spacing = std::max(max_spacing, spacing[i]);
+  }
   const double radius = options_.partial_volume ? delta + 0.5 * max_spacing : delta;
 
   BondList<dim> bonds;
@@ -174,7 +178,7 @@ BondList<dim> NeighborSearch<dim>::build(const ParticleSet<dim>& particles) cons
   auto accept = [&](unsigned int i, unsigned int j) {
     if (!options_.partial_volume)
       return true;
-    const double h = 0.5 * (particles.spacing(i) + particles.spacing(j));
+    const double h = 0.5 * (spacing[i] + spacing[j]);
     return (x[j] - x[i]).norm() < delta + 0.5 * h; // β > 0
   };
   build_csr<dim>(x, radius, accept, bonds.offsets, bonds.neighbor);
@@ -196,7 +200,7 @@ BondList<dim> NeighborSearch<dim>::build(const ParticleSet<dim>& particles) cons
       bonds.length[k] = bonds.xi[k].norm();
       bonds.influence[k] = options_.influence(bonds.length[k], delta);
       if (options_.partial_volume) {
-        const double h = 0.5 * (particles.spacing(i) + particles.spacing(j));
+        const double h = 0.5 * (spacing[i] + spacing[j]);
         bonds.volume_fraction[k] =
             std::min(1.0, std::max(0.0, (delta + 0.5 * h - bonds.length[k]) / h));
       }

@@ -11,7 +11,7 @@ namespace {
 
 template <int dim>
 class ParticleDataOut : public dealii::DataOutInterface<0, dim> {
-public:
+ public:
   explicit ParticleDataOut(const ParticleSet<dim>& p) {
     names_.clear();
     for (const char* vec : {"displacement", "velocity"})
@@ -43,7 +43,7 @@ public:
     }
   }
 
-private:
+ private:
   const std::vector<dealii::DataOutBase::Patch<0, dim>>& get_patches() const override {
     return patches_;
   }
@@ -67,6 +67,9 @@ template <int dim>
 void write_particles_vtu(const ParticleSet<dim>& particles, const std::string& file_name) {
   ParticleDataOut<dim> out(particles);
   std::ofstream file(file_name);
+  dealii::DataOutBase::VtkFlags flags;
+  flags.compression_level = dealii::DataOutBase::VtkFlags::best_speed; // see mechanics output
+  out.set_flags(flags);
   out.write_vtu(file);
 }
 

@@ -825,6 +825,9 @@ std::string HeatSolver<dim>::write_output(const std::string& directory, unsigned
   data_out.build_patches(fe_->degree);
   const std::string dir =
       directory.empty() ? "./" : (directory.back() == '/' ? directory : directory + "/");
+  DataOutBase::VtkFlags flags;
+  flags.compression_level = DataOutBase::VtkFlags::best_speed; // see mechanics output
+  data_out.set_flags(flags);
   return data_out.write_vtu_with_pvtu_record(dir, basename, counter, comm_, 4);
 }
 
