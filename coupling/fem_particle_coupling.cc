@@ -164,6 +164,10 @@ void FemParticleCoupling<dim>::Parameters::declare(ParameterHandler& prm) {
                     "Upper corner of that box [m].");
   prm.declare_entry("Region refinements", "0", Integer(0, 8),
                     "Times the cells in the refinement box are bisected [-].");
+  prm.declare_entry("Fracture heat fraction", "1", Double(0, 1),
+                    "With Heat: share of the elastic energy a bond holds when it breaks that "
+                    "returns to the FEM heat equation as a source in the particle's host cell "
+                    "(the rest leaves as surface energy and sound) [-].");
   prm.enter_subsection("Bond based");
   meshfree::BondBasedPD<dim>::Parameters::declare(prm);
   prm.leave_subsection();
@@ -204,6 +208,7 @@ void FemParticleCoupling<dim>::Parameters::parse(const ParameterHandler& cprm) {
   refine_upper = parse_doubles(prm.get("Refinement region upper corner"),
                                "Coupling/Refinement region upper corner");
   region_refinements = prm.get_integer("Region refinements");
+  fracture_heat_fraction = prm.get_double("Fracture heat fraction");
   if (refine_lower.size() != refine_upper.size() ||
       (!refine_lower.empty() && refine_lower.size() < dim))
     throw InvalidInput("Coupling/Refinement region lower corner",
@@ -267,7 +272,8 @@ struct FemParticleCoupling<dim>::Impl {
   std::vector<double> interface_values;
   bool interface_registered = false; // the solver knows the interface DoFs
   std::vector<FixedParticle> fixed;
-  std::vector<std::uint32_t> fixed_slots; // per particle: Dirichlet slots of its cell
+  std::vector<std::uint32_t> fixed_slots;  // per particle: Dirichlet slots of its cell
+  std::vector<std::uint8_t> broken_before; // bond flags before a force pass (fracture heat)
 
   explicit Impl(unsigned int n) : points(QMidpoint<1>(), n) {}
 };
@@ -1019,7 +1025,23 @@ void FemParticleCoupling<dim>::step(double dt) {
   // 3. Ghosts to the FEM field of t_{n+1}.
   const double a = fem_.parameters().mass_damping;
   if (n_free_particles() > 0) {
-    pd_->compute_forces(particles_, bonds_, prm_.damage);
+    // With heat, bonds breaking in this force pass release their energy (at the state of t_n)
+    // into their particle's heat account: compare with the flags before the pass.
+    const bool track_heat = heat_ && prm_.damage && prm_.fracture_heat_fraction > 0;
+    if (track_heat)
+      impl_->broken_before = bonds_.broken;
+    const std::size_t newly_broken = pd_->compute_forces(particles_, bonds_, prm_.damage);
+    if (track_heat && newly_broken > 0) {
+      if (fracture_energy_.size() != particles_.size())
+        fracture_energy_.resize(particles_.size(), 0.0);
+      for (unsigned int i = 0; i < particles_.size(); ++i)
+        for (std::size_t k = bonds_.begin(i); k < bonds_.end(i); ++k)
+          if (bonds_.broken[k] && !impl_->broken_before[k]) {
+            const double e = pd_->bond_energy(particles_, bonds_, i, k);
+            fracture_energy_[i] += e;
+            fracture_dissipation_ += e;
+          }
+    }
     for (unsigned int i = 0; i < particles_.size(); ++i) {
       if (!free_[i])
         continue;
@@ -1055,6 +1077,27 @@ void FemParticleCoupling<dim>::step(double dt) {
       if (free_[i])
         particles_.temperature(i) = buffer[i];
   }
+}
+
+template <int dim>
+Vector<double> FemParticleCoupling<dim>::take_fracture_heat(double elapsed) {
+  // Particles are replicated: every rank holds every account, and fills its own host cells.
+  Vector<double> power(fem_.dof_handler().get_triangulation().n_active_cells());
+  if (fracture_energy_.empty() || !(elapsed > 0))
+    return power;
+  const double fraction = prm_.fracture_heat_fraction;
+  double local = 0; // energy handed over by this rank's host cells [J]
+  for (const auto& [cell, row] : impl_->free_cells) {
+    double energy = 0;
+    for (const int i : row)
+      if (i >= 0 && static_cast<unsigned int>(i) < fracture_energy_.size())
+        energy += fracture_energy_[i];
+    power(cell->active_cell_index()) = fraction * energy / (cell->measure() * elapsed);
+    local += energy;
+  }
+  fracture_heat_ += fraction * Utilities::MPI::sum(local, fem_.mpi_communicator());
+  std::fill(fracture_energy_.begin(), fracture_energy_.end(), 0.0);
+  return power;
 }
 
 // ---------------------------------------------------------------- patch test support
@@ -1194,9 +1237,11 @@ void FemParticleCoupling<dim>::save(const std::string& file) const {
     return;
   std::ofstream out(file, std::ios::binary);
   out.precision(17);
-  out << "spinesim_coupling 1\n"
+  // Version 2 adds the fracture-heat totals (the per-particle accounts are handed to the FEM
+  // at the end of every macro step, so they are empty when a checkpoint is written).
+  out << "spinesim_coupling 2\n"
       << time_ << " " << particles_.size() << " " << converted_.size() << " " << bonds_.n_bonds()
-      << "\n";
+      << " " << fracture_dissipation_ << " " << fracture_heat_ << "\n";
   for (const auto& [id, batch] : converted_)
     out << id << " " << batch << "\n";
   for (unsigned int i = 0; i < particles_.size(); ++i) {
@@ -1222,9 +1267,14 @@ void FemParticleCoupling<dim>::load(const std::string& file) {
   std::string tag;
   int version = 0;
   std::size_t n = 0, nc = 0, nb = 0;
-  if (!(in >> tag >> version >> time_ >> n >> nc >> nb) || tag != "spinesim_coupling")
+  if (!(in >> tag >> version >> time_ >> n >> nc >> nb) || tag != "spinesim_coupling" ||
+      (version != 1 && version != 2) ||
+      (version == 2 && !(in >> fracture_dissipation_ >> fracture_heat_)))
     throw InvalidInput(file, "missing or unreadable coupling checkpoint",
-                       "a file written by FemParticleCoupling::save");
+                       "a file written by FemParticleCoupling::save (versions 1 and 2)");
+  if (version == 1)
+    fracture_dissipation_ = fracture_heat_ = 0;
+  fracture_energy_.clear();
   converted_.clear();
   for (std::size_t k = 0; k < nc; ++k) {
     std::string id;

@@ -35,6 +35,7 @@
 
 #include <deal.II/base/parameter_handler.h>
 #include <deal.II/grid/cell_id.h>
+#include <deal.II/lac/vector.h>
 
 #include <map>
 #include <memory>
@@ -50,7 +51,7 @@ namespace spinesim::coupling {
 
 template <int dim>
 class FemParticleCoupling {
-public:
+ public:
   struct Parameters {
     unsigned int particles_per_direction = 1; // particles per cell = this^dim
     double ghost_layer = 2.0;                 // ghost layer width [horizons]
@@ -67,6 +68,7 @@ public:
     bool damage = true;                             // bonds may break (Effects/Damage)
     std::vector<double> refine_lower, refine_upper; // box refined before the run [m]
     unsigned int region_refinements = 0;
+    double fracture_heat_fraction = 1.0; // share of broken-bond energy returned as heat [-]
     typename meshfree::BondBasedPD<dim>::Parameters pd;
     std::vector<std::vector<double>> cracks; // flattened corners per pre-crack [m]
 
@@ -76,9 +78,9 @@ public:
 
   struct ConversionReport {
     unsigned int cells = 0, particles = 0;
-    double mass_before = 0, mass_after = 0;                      // [kg]
-    dealii::Tensor<1, dim> momentum_before, momentum_after;      // [kg m/s]
-    double kinetic_before = 0, kinetic_after = 0;                // [J]
+    double mass_before = 0, mass_after = 0;                 // [kg]
+    dealii::Tensor<1, dim> momentum_before, momentum_after; // [kg m/s]
+    double kinetic_before = 0, kinetic_after = 0;           // [J]
     double mass_change_relative() const;
     double momentum_change_relative() const; // over |p| (or over mass × max speed if p ≈ 0)
   };
@@ -126,6 +128,14 @@ public:
   // Reaction on a boundary id: FEM reaction + fixed particles of converted boundary cells [N].
   dealii::Tensor<1, dim> reaction_force(dealii::types::boundary_id id) const;
 
+  // Particle heat sources for the FEM heat equation: the energy of the bonds broken since the
+  // last call (× Fracture heat fraction) as a power density [W/m^3] over `elapsed` [s], one
+  // entry per active cell (locally owned host cells of free particles; others 0). Tracked only
+  // when the coupling has a heat solver.
+  dealii::Vector<double> take_fracture_heat(double elapsed);
+  double fracture_dissipation() const { return fracture_dissipation_; } // broken bonds [J]
+  double fracture_heat() const { return fracture_heat_; } // handed to the FEM so far [J]
+
   unsigned int n_free_particles() const;
   unsigned int n_ghost_particles() const;
   unsigned int n_converted_cells() const { return static_cast<unsigned int>(converted_.size()); }
@@ -142,7 +152,7 @@ public:
   void save(const std::string& file) const; // rank 0 writes
   void load(const std::string& file);       // every rank reads; FEM state restored separately
 
-private:
+ private:
   struct Impl;
   Parameters prm_;
   fem::MechanicsSolver<dim>& fem_;
@@ -152,14 +162,16 @@ private:
   meshfree::ParticleSet<dim> particles_;
   meshfree::BondList<dim> bonds_;
   std::unique_ptr<meshfree::BondBasedPD<dim>> pd_;
-  std::vector<std::uint8_t> free_;          // 1 free, 0 ghost (driven by the FEM)
-  std::vector<std::string> host_cell_;      // CellId of the cell the particle sits in
-  std::vector<unsigned int> host_point_;    // index of the point within that cell
+  std::vector<std::uint8_t> free_;       // 1 free, 0 ghost (driven by the FEM)
+  std::vector<std::string> host_cell_;   // CellId of the cell the particle sits in
+  std::vector<unsigned int> host_point_; // index of the point within that cell
   std::map<std::pair<std::string, unsigned int>, unsigned int> index_of_;
   std::map<std::string, unsigned int> converted_; // CellId -> conversion batch
   std::vector<ConversionReport> reports_;
   double spacing_ = 0, youngs_ = 0, poisson_ = 0, density_ = 0;
   double time_ = 0;
+  std::vector<double> fracture_energy_; // per particle, not yet handed to the FEM [J]
+  double fracture_dissipation_ = 0, fracture_heat_ = 0;
 
   void prepare(); // material, lattice spacing, shape table, PD model (once)
   void rebuild_interface();

@@ -115,7 +115,9 @@ class Simulation : public Scenario {
   std::shared_ptr<const materials::ConstitutiveLaw> law_;
   std::unique_ptr<fem::MechanicsSolver<dim>> mechanics_;
   std::unique_ptr<fem::HeatSolver<dim>> heat_;
-  dealii::Vector<double> plastic_heating_; // plastic dissipation rate per cell [W/m^3]
+  dealii::Vector<double> plastic_heating_;  // plastic dissipation rate per cell [W/m^3]
+  dealii::Vector<double> fracture_heating_; // heat of broken bonds per cell [W/m^3]
+  double fracture_heat_applied_ = 0;        // of it, what heat steps have used [J]
   std::unique_ptr<ParticleZone<dim>> particles_;
   typename FemParticleCoupling<dim>::Parameters coupling_prm_;
   std::unique_ptr<FemParticleCoupling<dim>> coupled_;
@@ -221,13 +223,19 @@ void Simulation<dim>::build(RunContext& ctx) {
       // a restart connects them once the heat DoFs exist again (load_checkpoint).
       mechanics_->set_temperature_field(heat_->dof_handler(), heat_->solution(),
                                         sim_.reference_temperature);
-    if (heat_ && mech_prm_.taylor_quinney > 0)
-      // Plastic-work heating: β × the last mechanics step's dissipation rate [W/m^3].
+    if (heat_ && (mech_prm_.taylor_quinney > 0 || effects_.coupling))
+      // Plastic-work heating (β × the last mechanics step's dissipation rate) and the heat of
+      // the bonds the particles broke in that step [W/m^3].
       heat_->set_cell_source([this](const auto& cell, const auto&, double, auto& values) {
         const auto i = cell->active_cell_index();
+        double q = 0;
         if (i < plastic_heating_.size())
+          q += mech_prm_.taylor_quinney * plastic_heating_(i);
+        if (i < fracture_heating_.size())
+          q += fracture_heating_(i);
+        if (q != 0)
           for (auto& v : values)
-            v += mech_prm_.taylor_quinney * plastic_heating_(i);
+            v += q;
       });
     if (!ctx.restarting())
       mechanics_->setup();
@@ -308,6 +316,10 @@ void Simulation<dim>::advance(unsigned int step, double time, double dt, RunCont
     }
     if (heat_ && mech_prm_.taylor_quinney > 0) // heats the next heat step (staggered)
       plastic_heating_ = mechanics_->cell_plastic_dissipation_rate();
+    if (heat_ && coupled_) { // the same for the energy of the bonds broken in this step
+      fracture_heat_applied_ = coupled_->fracture_heat(); // what this step's heat solve used
+      fracture_heating_ = coupled_->take_fracture_heat(dt);
+    }
   }
   if (particles_) {
     dealii::TimerOutput::Scope scope(ctx.timer(), "particles");
@@ -345,6 +357,10 @@ void Simulation<dim>::record(unsigned int step, double time, RunContext& ctx) {
     row.emplace_back("broken_bonds", double(coupled_->n_broken_bonds()));
     row.emplace_back("max_damage", coupled_->max_damage());
     row.emplace_back("kinetic_energy", coupled_->kinetic_energy());
+    if (heat_) {
+      row.emplace_back("fracture_dissipation", coupled_->fracture_dissipation());
+      row.emplace_back("fracture_heat", coupled_->fracture_heat());
+    }
   }
   ctx.history().add(row);
 }
@@ -535,6 +551,18 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
     s.set_figure("max_temperature", heat_->max_temperature(), "K");
     s.set_figure("heat_content", heat_->heat_content(), dim == 2 ? "J/m" : "J");
     s.set_figure("heat_supplied_energy", heat_->supplied_energy(), dim == 2 ? "J/m" : "J");
+    if (coupled_) {
+      // Particle heat sources: the energy of broken bonds, handed to the FEM heat equation one
+      // macro step later (staggered), so the last step's share is not yet in the body.
+      s.set_figure("fracture_dissipation", coupled_->fracture_dissipation(),
+                   dim == 2 ? "J/m" : "J");
+      s.set_figure("fracture_heat_applied", fracture_heat_applied_, dim == 2 ? "J/m" : "J");
+      if (fracture_heat_applied_ > 0) // the only source when the scene has no other heat input
+        s.set_figure("fracture_heat_supplied_relative",
+                     std::abs(heat_->supplied_energy() - fracture_heat_applied_) /
+                         fracture_heat_applied_,
+                     "-");
+    }
     // Energy conservation: what the sources supplied is what the body gained (heat through
     // fixed-temperature boundaries is not counted by the solver, so scenes with such
     // boundaries do not balance).

@@ -366,6 +366,15 @@ std::vector<double> BondBasedPD<dim>::strain_energy_density(const ParticleSet<di
 }
 
 template <int dim>
+double BondBasedPD<dim>::bond_energy(const ParticleSet<dim>& particles, const BondList<dim>& bonds,
+                                     unsigned int i, std::size_t k) const {
+  const unsigned int j = bonds.neighbor[k];
+  const double e = (bonds.xi[k] + (particles.displacement(j) - particles.displacement(i))).norm() -
+                   bonds.length[k];
+  return 0.25 * k_[k] * e * e * particles.volume(i);
+}
+
+template <int dim>
 double BondBasedPD<dim>::strain_energy(const ParticleSet<dim>& particles,
                                        const BondList<dim>& bonds) const {
   const std::vector<double> W = strain_energy_density(particles, bonds);

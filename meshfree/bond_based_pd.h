@@ -99,6 +99,10 @@ class BondBasedPD {
   std::vector<double> strain_energy_density(const ParticleSet<dim>& particles,
                                             const BondList<dim>& bonds) const; // W_i [J/m^3]
   double strain_energy(const ParticleSet<dim>& particles, const BondList<dim>& bonds) const; // [J]
+  // Energy bond k of particle i holds at the current displacements, its share of W_i V_i
+  // (¼ k_ij e² V_i, the reverse bond holds the other half): what breaking it dissipates [J].
+  double bond_energy(const ParticleSet<dim>& particles, const BondList<dim>& bonds, unsigned int i,
+                     std::size_t k) const;
 
   // S_i = Σ_j k_ij = Σ_j V_j C_ij, C_ij = c ω β G/ξ the linearised bond stiffness [N/m^4].
   std::vector<double> stiffness_bound(const BondList<dim>& bonds) const;

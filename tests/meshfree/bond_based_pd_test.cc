@@ -395,6 +395,46 @@ void check_force_is_energy_gradient() {
     }
 }
 
+// Bond energies (what a break dissipates, used as the particles' heat source) add up to the
+// stored energy, and a bond's two ends hold equal halves.
+template <int dim>
+void check_bond_energies_sum_to_strain_energy() {
+  const double h = 1e-3;
+  auto p = cube<dim>(dim == 2 ? 10 : 6, h);
+  std::mt19937 gen(11);
+  std::uniform_real_distribution<double> U(-0.01 * h, 0.01 * h);
+  for (unsigned int i = 0; i < p.size(); ++i)
+    for (unsigned int d = 0; d < dim; ++d)
+      p.displacement(i)[d] = U(gen);
+  BondBasedPD<dim> pd(pd_parameters<dim>("constant", 0.0, 3.015, true, true), 50e9, 0.25);
+  auto bonds = NeighborSearch<dim>(pd.neighbor_options(h)).build(p);
+  pd.initialise(p, bonds);
+  double sum = 0, asymmetry = 0, largest = 0;
+  for (unsigned int i = 0; i < p.size(); ++i)
+    for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
+      const double e = pd.bond_energy(p, bonds, i, k);
+      sum += e;
+      largest = std::max(largest, e);
+      const unsigned int j = bonds.neighbor[k];
+      for (std::size_t m = bonds.begin(j); m < bonds.end(j); ++m)
+        if (bonds.neighbor[m] == i)
+          asymmetry = std::max(asymmetry, std::abs(pd.bond_energy(p, bonds, j, m) - e));
+    }
+  // Same terms summed in another order: round-off only (1e-16 per term, ~1e5 terms).
+  EXPECT_NEAR(sum / pd.strain_energy(p, bonds), 1.0, 1e-12);
+  // The halves differ by the surface factor's pair mean only if V_i k_ij != V_j k_ji; on a
+  // uniform lattice they agree to round-off.
+  EXPECT_LE(asymmetry, 1e-12 * largest);
+}
+
+TEST(BondBasedPD, BondEnergiesSumToStrainEnergy2D) {
+  check_bond_energies_sum_to_strain_energy<2>();
+}
+
+TEST(BondBasedPD, BondEnergiesSumToStrainEnergy3D) {
+  check_bond_energies_sum_to_strain_energy<3>();
+}
+
 TEST(BondBasedPD, ForceIsEnergyGradient2D) {
   check_force_is_energy_gradient<2>();
 }

@@ -29,6 +29,32 @@ spinesim_add_scene_test(coupling.wave_fine SCENE ${_val}/coupling_wave.prm
   EXPECT "status==ok;reflected_energy_relative<=0.01;energy_balance_relative>=-0.01"
   LABELS "scene;validation")
 
+# Particle heat sources back into the FEM: the energy of every broken bond heats its host
+# cell one macro step later. What the heat solver supplied is the fracture heat it was handed
+# (the same numbers summed: round-off); what the insulated body gained is what was supplied,
+# up to the heat solver's linear tolerance on a content of 7.7e8 J/m dominated by the 310 K
+# baseline (about 3e-12 of it, 3e-5 of the 95 J/m gained). Every bond crossing the new crack
+# broke at a stretch >= s0, so the dissipation is at least Gc x crack growth
+# (100 J/m^2 x 2 x 0.30 m = 60 J/m for tips past x = ±0.45 m; 95 J/m measured).
+# On 2 ranks the host cells are split: the same totals must come out.
+set(_heat_checks "status==ok;fracture_heat_supplied_relative<=1e-12;heat_energy_balance_relative<=1e-3;fracture_dissipation>=60;crack_extent_max_x_m>=0.45;crack_extent_min_x_m<=-0.45")
+set(_heat_runs ${CMAKE_CURRENT_BINARY_DIR}/runs)
+spinesim_add_scene_test(coupling.fracture_heat SCENE ${_val}/coupling_fracture_heat.prm
+  OUT ${_heat_runs}/fracture_heat_1 EXPECT "${_heat_checks}" LABELS "scene;validation;coupling")
+spinesim_add_scene_test(coupling.fracture_heat_2ranks SCENE ${_val}/coupling_fracture_heat.prm
+  OUT ${_heat_runs}/fracture_heat_2 RANKS 2 EXPECT "${_heat_checks}"
+  LABELS "scene;validation;coupling;mpi")
+# Same particles on both layouts (replicated), so the dissipation agrees to summation order.
+add_test(NAME coupling.fracture_heat_ranks_agree
+         COMMAND ${CMAKE_COMMAND} -DA=${_heat_runs}/fracture_heat_1/summary.json
+                 -DB=${_heat_runs}/fracture_heat_2/summary.json
+                 "-DCHECKS=fracture_dissipation:rel:1e-9;fracture_heat_applied:rel:1e-9;heat_content:rel:1e-12"
+                 -P ${PROJECT_SOURCE_DIR}/tests/support/compare_figures.cmake)
+set_tests_properties(coupling.fracture_heat PROPERTIES FIXTURES_SETUP heat_1)
+set_tests_properties(coupling.fracture_heat_2ranks PROPERTIES FIXTURES_SETUP heat_2)
+set_tests_properties(coupling.fracture_heat_ranks_agree PROPERTIES LABELS "scene;coupling;mpi"
+                     FIXTURES_REQUIRED "heat_1;heat_2")
+
 # The cracked plate, coupled and fully in particles. Each run conserves mass and momentum
 # at every conversion (round-off, see the patch test) and the crack must run from the 0.15 m
 # pre-crack tips to the plate edges (damaged particles, phi >= 0.35, beyond x = 0.45 m).
