@@ -274,6 +274,8 @@ struct FemParticleCoupling<dim>::Impl {
   std::vector<FixedParticle> fixed;
   std::vector<std::uint32_t> fixed_slots;  // per particle: Dirichlet slots of its cell
   std::vector<std::uint8_t> broken_before; // bond flags before a force pass (fracture heat)
+  // Halo plan by rank: particles received from it (it owns them), particles sent to it.
+  std::map<unsigned int, std::vector<unsigned int>> halo_recv, halo_send;
 
   explicit Impl(unsigned int n) : points(QMidpoint<1>(), n) {}
 };
@@ -285,6 +287,7 @@ FemParticleCoupling<dim>::FemParticleCoupling(const Parameters& parameters,
     : prm_(parameters), fem_(mechanics), heat_(heat),
       impl_(std::make_unique<Impl>(parameters.particles_per_direction)),
       particles_(parameters.pd.thickness) {
+  rank_ = Utilities::MPI::this_mpi_process(fem_.mpi_communicator());
   if (fem_.parameters().time_integration != "explicit")
     throw InvalidInput("Mechanics/Time integration", "coupling runs explicit dynamics",
                        "explicit (set Mechanics/Time integration = explicit)");
@@ -426,9 +429,9 @@ double FemParticleCoupling<dim>::total_mass() const {
 
 template <int dim>
 Tensor<1, dim> FemParticleCoupling<dim>::total_momentum() const {
-  Tensor<1, dim> p;
+  Tensor<1, dim> p; // owned free particles, summed over the ranks with the FEM part
   for (unsigned int i = 0; i < particles_.size(); ++i)
-    if (free_[i])
+    if (free_[i] && is_owned(i))
       p += particles_.mass(i) * particles_.velocity(i);
   const auto& lumped = fem_.lumped_mass();
   const auto& v = fem_.velocity();
@@ -450,29 +453,30 @@ Tensor<1, dim> FemParticleCoupling<dim>::total_momentum() const {
         pf[fe.system_to_component_index(i).first] += lumped(dofs[i]) * v(dofs[i]);
       }
     }
+  pf += p;
   for (unsigned int d = 0; d < dim; ++d)
     pf[d] = Utilities::MPI::sum(pf[d], fem_.mpi_communicator());
-  return p + pf;
+  return pf;
 }
 
 template <int dim>
 double FemParticleCoupling<dim>::kinetic_energy() const {
   double e = 0;
   for (unsigned int i = 0; i < particles_.size(); ++i)
-    if (free_[i])
+    if (free_[i] && is_owned(i))
       e += 0.5 * particles_.mass(i) * particles_.velocity(i).norm_square();
-  return e + fem_.kinetic_energy();
+  return Utilities::MPI::sum(e, fem_.mpi_communicator()) + fem_.kinetic_energy();
 }
 
 template <int dim>
 double FemParticleCoupling<dim>::strain_energy() const {
   // Bonds are stored from free particles only: W = ¼ Σ k e² over the free rows.
   const auto w = pd_ ? pd_->strain_energy_density(particles_, bonds_) : std::vector<double>();
-  double e = 0;
+  double e = 0; // rows live with their owners
   for (unsigned int i = 0; i < w.size(); ++i)
-    if (free_[i])
+    if (free_[i] && is_owned(i))
       e += w[i] * particles_.volume(i);
-  return e + fem_.strain_energy();
+  return Utilities::MPI::sum(e, fem_.mpi_communicator()) + fem_.strain_energy();
 }
 
 // ---------------------------------------------------------------- conversion
@@ -777,7 +781,6 @@ void FemParticleCoupling<dim>::rebuild_interface() {
   }
 
   rebuild_bonds();
-  update_ghosts();
 
   // 4. Interface DoFs: shared by an active and a converted cell; MLS fit of free particles.
   impl_->interface.clear();
@@ -870,7 +873,124 @@ void FemParticleCoupling<dim>::rebuild_interface() {
           "cell direction or a larger Coupling/Interface radius");
     impl_->interface.push_back(std::move(entry));
   }
+  plan_exchange();
+  update_ghosts(); // owned ghosts from the FEM, then the halo (free particles included)
   update_interface_dofs();
+}
+
+template <int dim>
+void FemParticleCoupling<dim>::plan_exchange() {
+  const MPI_Comm comm = fem_.mpi_communicator();
+  impl_->halo_recv.clear();
+  impl_->halo_send.clear();
+  if (Utilities::MPI::n_mpi_processes(comm) == 1) {
+    owner_.clear(); // everything is owned
+    return;
+  }
+  std::vector<int> owner(particles_.size(), -1);
+  for (unsigned int i = 0; i < particles_.size(); ++i)
+    if (impl_->owned_cells.count(host_cell_[i]))
+      owner[i] = static_cast<int>(rank_);
+  owner_.resize(owner.size());
+  MPI_Allreduce(owner.data(), owner_.data(), static_cast<int>(owner.size()), MPI_INT, MPI_MAX,
+                comm);
+  // Read here, owned elsewhere: bond partners of the owned rows and the MLS stencils of this
+  // rank's interface nodes.
+  std::set<unsigned int> needed;
+  for (unsigned int i = 0; i < bonds_.n_particles(); ++i)
+    for (std::size_t k = bonds_.begin(i); k < bonds_.end(i); ++k)
+      if (!is_owned(bonds_.neighbor[k]))
+        needed.insert(bonds_.neighbor[k]);
+  for (const auto& entry : impl_->interface)
+    for (const auto& [p, w] : entry.weights)
+      if (!is_owned(p))
+        needed.insert(p);
+  std::map<unsigned int, std::vector<unsigned int>> requests;
+  for (const unsigned int j : needed) {
+    AssertThrow(owner_[j] >= 0, ExcMessage("particle " + std::to_string(j) + " has no owner"));
+    requests[static_cast<unsigned int>(owner_[j])].push_back(j);
+  }
+  impl_->halo_recv = requests;
+  impl_->halo_send = Utilities::MPI::some_to_some(comm, requests);
+}
+
+template <int dim>
+void FemParticleCoupling<dim>::exchange_halo() {
+  const MPI_Comm comm = fem_.mpi_communicator();
+  if (Utilities::MPI::n_mpi_processes(comm) == 1)
+    return;
+  constexpr int tag = 7301;
+  constexpr unsigned int width = 2 * dim; // u, v
+  std::vector<std::vector<double>> out, in;
+  std::vector<MPI_Request> requests;
+  for (const auto& [rank, list] : impl_->halo_send) {
+    out.emplace_back();
+    auto& b = out.back();
+    b.reserve(width * list.size());
+    for (const unsigned int i : list)
+      for (unsigned int d = 0; d < dim; ++d)
+        b.push_back(particles_.displacement(i)[d]);
+    for (const unsigned int i : list)
+      for (unsigned int d = 0; d < dim; ++d)
+        b.push_back(particles_.velocity(i)[d]);
+  }
+  requests.reserve(impl_->halo_send.size() + impl_->halo_recv.size());
+  for (const auto& [rank, list] : impl_->halo_recv) {
+    in.emplace_back(width * list.size());
+    requests.emplace_back();
+    MPI_Irecv(in.back().data(), static_cast<int>(in.back().size()), MPI_DOUBLE,
+              static_cast<int>(rank), tag, comm, &requests.back());
+  }
+  std::size_t k = 0;
+  for (const auto& [rank, list] : impl_->halo_send) {
+    requests.emplace_back();
+    MPI_Isend(out[k].data(), static_cast<int>(out[k].size()), MPI_DOUBLE, static_cast<int>(rank),
+              tag, comm, &requests.back());
+    ++k;
+  }
+  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
+  k = 0;
+  for (const auto& [rank, list] : impl_->halo_recv) {
+    const auto& b = in[k++];
+    const std::size_t n = list.size();
+    for (std::size_t m = 0; m < n; ++m)
+      for (unsigned int d = 0; d < dim; ++d) {
+        particles_.displacement(list[m])[d] = b[dim * m + d];
+        particles_.velocity(list[m])[d] = b[dim * n + dim * m + d];
+      }
+  }
+}
+
+template <int dim>
+void FemParticleCoupling<dim>::synchronise() const {
+  auto& p = const_cast<meshfree::ParticleSet<dim>&>(particles_);
+  if (pd_ && n_free_particles() > 0)
+    pd_->update_damage(p, bonds_); // owned rows
+  const MPI_Comm comm = fem_.mpi_communicator();
+  if (Utilities::MPI::n_mpi_processes(comm) == 1)
+    return;
+  constexpr unsigned int width = 2 * dim + 2; // u, v, damage, temperature
+  std::vector<double> buffer(width * particles_.size(), 0.0);
+  for (unsigned int i = 0; i < particles_.size(); ++i)
+    if (is_owned(i)) {
+      double* b = &buffer[width * i];
+      for (unsigned int d = 0; d < dim; ++d) {
+        b[d] = particles_.displacement(i)[d];
+        b[dim + d] = particles_.velocity(i)[d];
+      }
+      b[2 * dim] = particles_.damage(i);
+      b[2 * dim + 1] = particles_.temperature(i);
+    }
+  Utilities::MPI::sum(buffer, comm, buffer);
+  for (unsigned int i = 0; i < particles_.size(); ++i) {
+    const double* b = &buffer[width * i];
+    for (unsigned int d = 0; d < dim; ++d) {
+      p.displacement(i)[d] = b[d];
+      p.velocity(i)[d] = b[dim + d];
+    }
+    p.damage(i) = b[2 * dim];
+    p.temperature(i) = b[2 * dim + 1];
+  }
 }
 
 template <int dim>
@@ -881,6 +1001,13 @@ void FemParticleCoupling<dim>::rebuild_bonds() {
     for (std::size_t k = bonds_.begin(i); k < bonds_.end(i); ++k)
       if (bonds_.broken[k])
         broken.emplace(std::min(i, bonds_.neighbor[k]), std::max(i, bonds_.neighbor[k]));
+  if (Utilities::MPI::n_mpi_processes(fem_.mpi_communicator()) > 1) {
+    // Rows live with their owners: every rank learns every broken pair (a particle that turns
+    // from ghost to free inherits the breaks its partners recorded).
+    const std::vector<std::pair<unsigned int, unsigned int>> mine(broken.begin(), broken.end());
+    for (const auto& part : Utilities::MPI::all_gather(fem_.mpi_communicator(), mine))
+      broken.insert(part.begin(), part.end());
+  }
 
   auto options = pd_->neighbor_options(spacing_);
   for (const auto& c : prm_.cracks) {
@@ -895,13 +1022,19 @@ void FemParticleCoupling<dim>::rebuild_bonds() {
   meshfree::NeighborSearch<dim> search(options);
   const meshfree::BondList<dim> all = search.build(particles_);
 
-  // Keep the rows of free particles only: ghosts are driven and need no force.
+  // Owners (before the first plan: host cells owned here) and their rows.
+  std::vector<std::uint8_t> mine(particles_.size(), 1);
+  if (Utilities::MPI::n_mpi_processes(fem_.mpi_communicator()) > 1)
+    for (unsigned int i = 0; i < particles_.size(); ++i)
+      mine[i] = impl_->owned_cells.count(host_cell_[i]) ? 1 : 0;
+  // Keep the rows of the free particles this rank owns: ghosts are driven and need no force,
+  // other ranks' particles are theirs to move.
   meshfree::BondList<dim> kept;
   kept.horizon = all.horizon;
   kept.offsets.assign(all.n_particles() + 1, 0);
   const bool has_volume = !all.volume_fraction.empty(), has_surface = !all.surface_factor.empty();
   for (unsigned int i = 0; i < all.n_particles(); ++i) {
-    if (free_[i])
+    if (free_[i] && mine[i])
       for (std::size_t k = all.begin(i); k < all.end(i); ++k) {
         const unsigned int j = all.neighbor[k];
         kept.neighbor.push_back(j);
@@ -922,14 +1055,12 @@ void FemParticleCoupling<dim>::rebuild_bonds() {
 
 template <int dim>
 void FemParticleCoupling<dim>::update_ghosts() {
-  // u and v of ghosts = FEM interpolation; summed over the ranks owning the host cells.
+  // u and v of the ghosts this rank owns (host cell owned here) = FEM interpolation; then the
+  // halo brings the particles owned elsewhere that this rank reads.
   const auto& fe = fem_.fe();
-  const auto& u = fem_.displacement();
-  const auto& v = fem_.velocity();
-  std::vector<double> buffer(2 * dim * particles_.size(), 0.0);
   const unsigned int n = fe.n_dofs_per_cell();
-  const double* uu = u.trilinos_vector()[0];
-  const double* vv = v.trilinos_vector()[0];
+  const double* uu = fem_.displacement().trilinos_vector()[0];
+  const double* vv = fem_.velocity().trilinos_vector()[0];
   std::vector<unsigned int> component(n);
   for (unsigned int i = 0; i < n; ++i)
     component[i] = fe.system_to_component_index(i).first;
@@ -939,21 +1070,18 @@ void FemParticleCoupling<dim>::update_ghosts() {
     for (unsigned int q = 0; q < row.size(); ++q) {
       if (row[q] < 0)
         continue;
-      double* b = &buffer[2 * dim * row[q]];
+      double b[2 * dim] = {};
       for (unsigned int i = 0; i < n; ++i) {
         b[component[i]] += impl_->shape(q, i) * uu[lids[i]];
         b[dim + component[i]] += impl_->shape(q, i) * vv[lids[i]];
       }
+      for (unsigned int d = 0; d < dim; ++d) {
+        particles_.displacement(row[q])[d] = b[d];
+        particles_.velocity(row[q])[d] = b[dim + d];
+      }
     }
   }
-  if (Utilities::MPI::n_mpi_processes(fem_.mpi_communicator()) > 1)
-    Utilities::MPI::sum(buffer, fem_.mpi_communicator(), buffer);
-  for (unsigned int i = 0; i < particles_.size(); ++i)
-    if (!free_[i])
-      for (unsigned int d = 0; d < dim; ++d) {
-        particles_.displacement(i)[d] = buffer[2 * dim * i + d];
-        particles_.velocity(i)[d] = buffer[2 * dim * i + dim + d];
-      }
+  exchange_halo();
 }
 
 template <int dim>
@@ -985,6 +1113,8 @@ void FemParticleCoupling<dim>::apply_particle_dirichlet(double time, double dt) 
   const auto& bcs = fem_.boundary_conditions().dirichlet();
   Vector<double> value(dim);
   for (const auto& f : impl_->fixed) {
+    if (!is_owned(f.particle))
+      continue;
     const auto& bc = bcs[f.slot];
     bc.function->set_time(time);
     bc.function->vector_value(particles_.reference_position(f.particle), value);
@@ -1014,7 +1144,7 @@ double FemParticleCoupling<dim>::stable_time_step() const {
       if (free_[i] && S[i] > 0)
         dt = std::min(dt, prm_.time_step_safety * std::sqrt(2.0 * particles_.density(i) / S[i]));
   }
-  return dt;
+  return Utilities::MPI::min(dt, fem_.mpi_communicator()); // rows live with their owners
 }
 
 template <int dim>
@@ -1043,7 +1173,7 @@ void FemParticleCoupling<dim>::step(double dt) {
           }
     }
     for (unsigned int i = 0; i < particles_.size(); ++i) {
-      if (!free_[i])
+      if (!free_[i] || !is_owned(i))
         continue;
       const double m = particles_.mass(i);
       for (unsigned int d = 0; d < dim; ++d) {
@@ -1056,6 +1186,7 @@ void FemParticleCoupling<dim>::step(double dt) {
       }
     }
     apply_particle_dirichlet(time_ + dt, dt);
+    exchange_halo(); // partners and interface stencils at t_{n+1}
     update_interface_dofs();
   }
   fem_.explicit_step(dt);
@@ -1063,20 +1194,21 @@ void FemParticleCoupling<dim>::step(double dt) {
   if (n_ghost_particles() > 0)
     update_ghosts();
   if (heat_ && n_free_particles() > 0) {
-    // The FEM temperature drives the particles' temperatures.
-    std::vector<double> buffer(particles_.size(), 0.0), values;
+    // The FEM temperature drives the temperatures of the free particles owned here (their
+    // host cells are this rank's; synchronise() spreads them).
+    std::vector<double> values;
     for (const auto& [cell, row] : impl_->free_cells) {
       heat_->temperature_at_unit_points(cell, impl_->points.get_points(), values);
       for (unsigned int q = 0; q < row.size(); ++q)
         if (row[q] >= 0)
-          buffer[row[q]] = values[q];
+          particles_.temperature(row[q]) = values[q];
     }
-    if (Utilities::MPI::n_mpi_processes(fem_.mpi_communicator()) > 1)
-      Utilities::MPI::sum(buffer, fem_.mpi_communicator(), buffer);
-    for (unsigned int i = 0; i < particles_.size(); ++i)
-      if (free_[i])
-        particles_.temperature(i) = buffer[i];
   }
+}
+
+template <int dim>
+double FemParticleCoupling<dim>::fracture_dissipation() const {
+  return Utilities::MPI::sum(fracture_dissipation_, fem_.mpi_communicator());
 }
 
 template <int dim>
@@ -1143,11 +1275,12 @@ std::pair<double, double> FemParticleCoupling<dim>::max_free_forces() {
   if (n_free_particles() > 0) {
     pd_->compute_forces(particles_, bonds_, false);
     for (unsigned int i = 0; i < particles_.size(); ++i)
-      if (free_[i])
+      if (free_[i] && is_owned(i))
         for (unsigned int d = 0; d < dim; ++d)
           if (!particles_.is_fixed(i, d))
             fp = std::max(fp, std::abs(particles_.force(i)[d]));
   }
+  fp = Utilities::MPI::max(fp, fem_.mpi_communicator());
   const auto& r = fem_.evaluate_residual();
   // Free FEM DoFs: neither on a Dirichlet boundary, nor driven, nor orphaned (zero mass).
   std::set<types::global_dof_index> excluded;
@@ -1179,7 +1312,7 @@ unsigned int FemParticleCoupling<dim>::n_ghost_particles() const {
 
 template <int dim>
 std::size_t FemParticleCoupling<dim>::n_broken_bonds() const {
-  return bonds_.n_broken();
+  return Utilities::MPI::sum(bonds_.n_broken(), fem_.mpi_communicator());
 }
 
 template <int dim>
@@ -1190,29 +1323,32 @@ double FemParticleCoupling<dim>::max_damage() const {
   pd_->update_damage(p, bonds_);
   double m = 0;
   for (unsigned int i = 0; i < particles_.size(); ++i)
-    if (free_[i])
+    if (free_[i] && is_owned(i))
       m = std::max(m, particles_.damage(i));
-  return m;
+  return Utilities::MPI::max(m, fem_.mpi_communicator());
 }
 
 template <int dim>
 Tensor<1, dim> FemParticleCoupling<dim>::reaction_force(types::boundary_id id) const {
-  Tensor<1, dim> r = fem_.reaction_force(id);
   const auto& bcs = fem_.boundary_conditions().dirichlet();
   std::set<unsigned int> counted;
+  Tensor<1, dim> particles; // owned fixed particles; the support balances their force
   for (const auto& f : impl_->fixed)
-    if (bcs[f.slot].boundary_id == id && counted.insert(f.particle).second)
-      r -= particles_.force(f.particle); // the support balances the internal force
-  return r;
+    if (bcs[f.slot].boundary_id == id && is_owned(f.particle) && counted.insert(f.particle).second)
+      particles -= particles_.force(f.particle);
+  if (Utilities::MPI::n_mpi_processes(fem_.mpi_communicator()) > 1)
+    for (unsigned int d = 0; d < dim; ++d)
+      particles[d] = Utilities::MPI::sum(particles[d], fem_.mpi_communicator());
+  return fem_.reaction_force(id) + particles;
 }
 
 template <int dim>
 std::string FemParticleCoupling<dim>::write_output(const std::string& directory,
                                                    unsigned int cycle) const {
   const std::string name = "particles_" + Utilities::int_to_string(cycle, 4) + ".vtu";
+  synchronise(); // collective: damage and states of every particle on every rank
   if (Utilities::MPI::this_mpi_process(fem_.mpi_communicator()) != 0)
     return name;
-  max_damage(); // refreshes the damage field
   meshfree::ParticleSet<dim> out(particles_.thickness());
   for (unsigned int i = 0; i < particles_.size(); ++i)
     if (free_[i]) {
@@ -1233,6 +1369,20 @@ std::string FemParticleCoupling<dim>::write_output(const std::string& directory,
 
 template <int dim>
 void FemParticleCoupling<dim>::save(const std::string& file) const {
+  // Collective: states from their owners, broken pairs from the rows' owners.
+  synchronise();
+  const double dissipation = fracture_dissipation();
+  std::vector<std::pair<unsigned int, unsigned int>> broken;
+  for (unsigned int i = 0; i < bonds_.n_particles(); ++i)
+    for (std::size_t k = bonds_.begin(i); k < bonds_.end(i); ++k)
+      if (bonds_.broken[k])
+        broken.emplace_back(i, bonds_.neighbor[k]);
+  if (Utilities::MPI::n_mpi_processes(fem_.mpi_communicator()) > 1) {
+    std::vector<std::pair<unsigned int, unsigned int>> all;
+    for (const auto& part : Utilities::MPI::all_gather(fem_.mpi_communicator(), broken))
+      all.insert(all.end(), part.begin(), part.end());
+    broken = std::move(all);
+  }
   if (Utilities::MPI::this_mpi_process(fem_.mpi_communicator()) != 0)
     return;
   std::ofstream out(file, std::ios::binary);
@@ -1240,8 +1390,8 @@ void FemParticleCoupling<dim>::save(const std::string& file) const {
   // Version 2 adds the fracture-heat totals (the per-particle accounts are handed to the FEM
   // at the end of every macro step, so they are empty when a checkpoint is written).
   out << "spinesim_coupling 2\n"
-      << time_ << " " << particles_.size() << " " << converted_.size() << " " << bonds_.n_bonds()
-      << " " << fracture_dissipation_ << " " << fracture_heat_ << "\n";
+      << time_ << " " << particles_.size() << " " << converted_.size() << " " << broken.size()
+      << " " << dissipation << " " << fracture_heat_ << "\n";
   for (const auto& [id, batch] : converted_)
     out << id << " " << batch << "\n";
   for (unsigned int i = 0; i < particles_.size(); ++i) {
@@ -1254,10 +1404,8 @@ void FemParticleCoupling<dim>::save(const std::string& file) const {
       out << " " << particles_.displacement(i)[d] << " " << particles_.velocity(i)[d];
     out << "\n";
   }
-  for (unsigned int i = 0; i < bonds_.n_particles(); ++i)
-    for (std::size_t k = bonds_.begin(i); k < bonds_.end(i); ++k)
-      if (bonds_.broken[k])
-        out << i << " " << bonds_.neighbor[k] << "\n";
+  for (const auto& [i, j] : broken)
+    out << i << " " << j << "\n";
 }
 
 template <int dim>
@@ -1274,6 +1422,8 @@ void FemParticleCoupling<dim>::load(const std::string& file) {
                        "a file written by FemParticleCoupling::save (versions 1 and 2)");
   if (version == 1)
     fracture_dissipation_ = fracture_heat_ = 0;
+  if (Utilities::MPI::this_mpi_process(fem_.mpi_communicator()) != 0)
+    fracture_dissipation_ = 0; // the saved total counts once, on rank 0
   fracture_energy_.clear();
   converted_.clear();
   for (std::size_t k = 0; k < nc; ++k) {

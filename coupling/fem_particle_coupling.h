@@ -23,9 +23,13 @@
 // statement); the wave test measures the reflection this costs. Explicit steps use one common
 // stable step (the smaller of the FEM CFL and the PD bound).
 //
-// MPI: the FEM side is distributed by p4est; the particle zone is replicated on every rank
-// (records of new particles are all-gathered in rank order, ghost displacements summed from the
-// ranks owning their host cells), so every rank advances identical particles.
+// MPI: the FEM side is distributed by p4est, and every particle is owned by the rank owning
+// its host cell: only that rank holds its bond row, computes its force, advances it (free) or
+// interpolates it from the FEM (ghost). The particle records (positions, volumes, flags) are
+// replicated, so conversions and the neighbour search see every particle; the states of
+// the particles a rank reads but does not own (bond partners, MLS stencils of its interface
+// nodes) arrive by a halo exchange with their owners after every update, and synchronise()
+// brings every state to every rank for output, checkpoints and figures.
 
 #include "fem/mechanics_solver.h"
 #include "meshfree/bond_based_pd.h"
@@ -133,7 +137,7 @@ class FemParticleCoupling {
   // entry per active cell (locally owned host cells of free particles; others 0). Tracked only
   // when the coupling has a heat solver.
   dealii::Vector<double> take_fracture_heat(double elapsed);
-  double fracture_dissipation() const { return fracture_dissipation_; } // broken bonds [J]
+  double fracture_dissipation() const; // energy of all broken bonds so far [J], collective
   double fracture_heat() const { return fracture_heat_; } // handed to the FEM so far [J]
 
   unsigned int n_free_particles() const;
@@ -147,7 +151,12 @@ class FemParticleCoupling {
   bool is_free(unsigned int i) const { return free_[i] != 0; }
   const std::vector<ConversionReport>& conversions() const { return reports_; }
 
-  // particles_<cycle>.vtu of the free particles (rank 0); returns the file name.
+  // Every rank's copy of u, v, damage and temperature of all particles from their owners
+  // (collective; output, checkpoints and figures read the replicated set).
+  void synchronise() const;
+  bool is_owned(unsigned int i) const { return owner_.empty() || owner_[i] == rank_; }
+
+  // particles_<cycle>.vtu of the free particles (rank 0); returns the file name. Collective.
   std::string write_output(const std::string& directory, unsigned int cycle) const;
   void save(const std::string& file) const; // rank 0 writes
   void load(const std::string& file);       // every rank reads; FEM state restored separately
@@ -171,7 +180,8 @@ class FemParticleCoupling {
   double spacing_ = 0, youngs_ = 0, poisson_ = 0, density_ = 0;
   double time_ = 0;
   std::vector<double> fracture_energy_; // per particle, not yet handed to the FEM [J]
-  double fracture_dissipation_ = 0, fracture_heat_ = 0;
+  double fracture_dissipation_ = 0; // of the rows owned here [J]
+  double fracture_heat_ = 0;        // global [J]
 
   void prepare(); // material, lattice spacing, shape table, PD model (once)
   void rebuild_interface();
@@ -179,6 +189,12 @@ class FemParticleCoupling {
   void update_ghosts();
   void update_interface_dofs();
   void apply_particle_dirichlet(double time, double dt);
+  // Owners and the halo plan: which particles this rank reads but others own, and which of its
+  // own the others read.
+  void plan_exchange();
+  void exchange_halo();    // u, v of halo particles from their owners
+  std::vector<int> owner_; // rank owning each particle's host cell
+  unsigned int rank_ = 0;
 };
 
 } // namespace spinesim::coupling

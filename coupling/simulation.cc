@@ -189,7 +189,9 @@ void Simulation<dim>::build(RunContext& ctx) {
   if (!effects_.mechanics && !effects_.heat)
     return;
   triangulation_ = std::make_unique<dealii::parallel::distributed::Triangulation<dim>>(
-      ctx.comm(), dealii::Triangulation<dim>::maximum_smoothing);
+      ctx.comm(), typename dealii::Triangulation<dim>::MeshSmoothing(
+                      dealii::Triangulation<dim>::smoothing_on_refinement |
+                      dealii::Triangulation<dim>::smoothing_on_coarsening));
   if (ctx.restarting())
     fem::build_coarse_mesh(mesh_prm_, *triangulation_);
   else {
@@ -519,6 +521,7 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
     // The crack: damaged particles (φ >= 0.35, about a third of the bonds broken).
     double tip_min = 0, tip_max = 0, path_sq = 0;
     unsigned int n_cracked = 0;
+    coupled_->synchronise(); // every particle's damage on every rank
     const auto& p = coupled_->particles();
     for (unsigned int i = 0; i < p.size(); ++i)
       if (coupled_->is_free(i) && p.damage(i) >= 0.35) {
