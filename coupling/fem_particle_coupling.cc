@@ -51,37 +51,15 @@ class PointBins {
   }
   // Whether some point lies within `radius` of x.
   bool any_within(const Point<dim>& x, double radius) const {
-    std::array<long, 3> k = coords(x);
-    const int span = static_cast<int>(std::ceil(radius / size_));
-    std::array<long, 3> o{};
-    for (o[0] = -span; o[0] <= span; ++o[0])
-      for (o[1] = -span; o[1] <= span; ++o[1])
-        for (o[2] = (dim == 3 ? -span : 0); o[2] <= (dim == 3 ? span : 0); ++o[2]) {
-          const auto it = bins_.find(pack({k[0] + o[0], k[1] + o[1], k[2] + o[2]}));
-          if (it == bins_.end())
-            continue;
-          for (const unsigned int i : it->second)
-            if (points_[i].distance(x) <= radius)
-              return true;
-        }
-    return false;
+    return !visit_within(x, radius, [](unsigned int) { return false; });
   }
   // Indices of points within `radius` of x.
   std::vector<unsigned int> within(const Point<dim>& x, double radius) const {
     std::vector<unsigned int> out;
-    std::array<long, 3> k = coords(x);
-    const int span = static_cast<int>(std::ceil(radius / size_));
-    std::array<long, 3> o{};
-    for (o[0] = -span; o[0] <= span; ++o[0])
-      for (o[1] = -span; o[1] <= span; ++o[1])
-        for (o[2] = (dim == 3 ? -span : 0); o[2] <= (dim == 3 ? span : 0); ++o[2]) {
-          const auto it = bins_.find(pack({k[0] + o[0], k[1] + o[1], k[2] + o[2]}));
-          if (it == bins_.end())
-            continue;
-          for (const unsigned int i : it->second)
-            if (points_[i].distance(x) <= radius)
-              out.push_back(i);
-        }
+    visit_within(x, radius, [&](unsigned int i) {
+      out.push_back(i);
+      return true;
+    });
     return out;
   }
 
@@ -96,6 +74,25 @@ class PointBins {
     return ((k[0] + (1L << 20)) << 42) ^ ((k[1] + (1L << 20)) << 21) ^ (k[2] + (1L << 20));
   }
   long long key(const Point<dim>& x) const { return pack(coords(x)); }
+  // Calls visit(i) for the points within `radius` of x until it returns false; returns
+  // whether every call returned true.
+  template <class Visit>
+  bool visit_within(const Point<dim>& x, double radius, Visit&& visit) const {
+    const std::array<long, 3> k = coords(x);
+    const int span = static_cast<int>(std::ceil(radius / size_));
+    std::array<long, 3> o{};
+    for (o[0] = -span; o[0] <= span; ++o[0])
+      for (o[1] = -span; o[1] <= span; ++o[1])
+        for (o[2] = (dim == 3 ? -span : 0); o[2] <= (dim == 3 ? span : 0); ++o[2]) {
+          const auto it = bins_.find(pack({k[0] + o[0], k[1] + o[1], k[2] + o[2]}));
+          if (it == bins_.end())
+            continue;
+          for (const unsigned int i : it->second)
+            if (points_[i].distance(x) <= radius && !visit(i))
+              return false;
+        }
+    return true;
+  }
   const std::vector<Point<dim>>& points_;
   double size_;
   std::unordered_map<long long, std::vector<unsigned int>> bins_;

@@ -154,7 +154,9 @@ class FemParticleCoupling {
   // Every rank's copy of u, v, damage and temperature of all particles from their owners
   // (collective; output, checkpoints and figures read the replicated set).
   void synchronise() const;
-  bool is_owned(unsigned int i) const { return owner_.empty() || owner_[i] == rank_; }
+  bool is_owned(unsigned int i) const {
+    return owner_.empty() || owner_[i] == static_cast<int>(rank_);
+  }
 
   // particles_<cycle>.vtu of the free particles (rank 0); returns the file name. Collective.
   std::string write_output(const std::string& directory, unsigned int cycle) const;

@@ -367,15 +367,22 @@ TEST(BondBasedPD, HomogeneousDeformationNoInteriorForce3D) {
 }
 
 // The force is minus the gradient of the stored energy (central differences).
+// A 10² / 6³ lattice of spacing h with random displacements of up to 1 % of h.
 template <int dim>
-void check_force_is_energy_gradient() {
-  const double h = 1e-3;
+ParticleSet<dim> randomly_displaced_cube(double h, unsigned int seed) {
   auto p = cube<dim>(dim == 2 ? 10 : 6, h);
-  std::mt19937 gen(9);
+  std::mt19937 gen(seed);
   std::uniform_real_distribution<double> U(-0.01 * h, 0.01 * h);
   for (unsigned int i = 0; i < p.size(); ++i)
     for (unsigned int d = 0; d < dim; ++d)
       p.displacement(i)[d] = U(gen);
+  return p;
+}
+
+template <int dim>
+void check_force_is_energy_gradient() {
+  const double h = 1e-3;
+  auto p = randomly_displaced_cube<dim>(h, 9);
   BondBasedPD<dim> pd(pd_parameters<dim>("fractional", 0.3, 3.015, true, true), 50e9, 0.25);
   auto bonds = NeighborSearch<dim>(pd.neighbor_options(h)).build(p);
   pd.initialise(p, bonds);
@@ -400,12 +407,7 @@ void check_force_is_energy_gradient() {
 template <int dim>
 void check_bond_energies_sum_to_strain_energy() {
   const double h = 1e-3;
-  auto p = cube<dim>(dim == 2 ? 10 : 6, h);
-  std::mt19937 gen(11);
-  std::uniform_real_distribution<double> U(-0.01 * h, 0.01 * h);
-  for (unsigned int i = 0; i < p.size(); ++i)
-    for (unsigned int d = 0; d < dim; ++d)
-      p.displacement(i)[d] = U(gen);
+  auto p = randomly_displaced_cube<dim>(h, 11);
   BondBasedPD<dim> pd(pd_parameters<dim>("constant", 0.0, 3.015, true, true), 50e9, 0.25);
   auto bonds = NeighborSearch<dim>(pd.neighbor_options(h)).build(p);
   pd.initialise(p, bonds);
