@@ -2,6 +2,7 @@
 
 #include "fem/materials/failure.h"
 #include "meshfree/bond_loop.h"
+#include "meshfree/pmb_force_rows.h"
 
 #include <algorithm>
 #include <cmath>
@@ -171,83 +172,11 @@ void BondBasedPD<dim>::initialise(const ParticleSet<dim>& particles, const BondL
   });
 }
 
-// The hot loop of every explicit PD run, written out rather than through bond_loop.h:
-// * ξ = x_j − x_i is recomputed from the (cache-resident) reference positions instead of
-//   streamed from bonds.xi: the same floating-point operations as the stored vector, so the
-//   result is unchanged, and 24 of the 45 bytes a bond streamed per step are gone;
-// * no branch per bond: a broken bond (or one breaking now) selects a zero coefficient. The
-//   `omp simd` loop is NOT vectorised by GCC 12 at the project's -O2 (objdump shows scalar
-//   sqrtsd; -fopt-info-vec: "control flow in loop" even with scalar temporaries and
-//   -fno-math-errno), so it runs one bond at a time; the fixed order stays;
-// * each particle sums its own row in a fixed order (the SIMD lanes are a fixed split of the
-//   row), so forces stay bitwise independent of the thread count and of how the particles
-//   are split among threads.
 namespace {
+// The force loop's view of the particles and bonds (meshfree/pmb_force_rows.h).
 template <int dim>
-struct ForceKernel {
-  const double* x;
-  const double* u;
-  double* f;
-  const double* V;
-  const std::size_t* off;
-  const unsigned int* nb;
-  const double* len;
-  const double* kb;
-  std::uint8_t* broken;
-  double s0;
-
-  // Forces on particles [begin, end); returns the bond ends broken, sets bad on a non-finite
-  // force.
-  std::size_t rows(std::size_t begin, std::size_t end, int& bad) const {
-    std::size_t total = 0;
-    for (std::size_t i = begin; i < end; ++i) {
-      double xi[dim], ui[dim], acc[dim];
-      for (unsigned int d = 0; d < dim; ++d) {
-        xi[d] = x[dim * i + d];
-        ui[d] = u[dim * i + d];
-        acc[d] = 0.0;
-      }
-      double acc0 = 0, acc1 = 0, acc2 = 0; // named: OpenMP reduces scalars, not array elements
-      std::size_t broke = 0;
-#pragma omp simd reduction(+ : acc0, acc1, acc2, broke)
-      for (std::size_t k = off[i]; k < off[i + 1]; ++k) {
-        const std::size_t j = nb[k];
-        double y[dim], l2 = 0.0;
-        for (unsigned int d = 0; d < dim; ++d) {
-          y[d] = (x[dim * j + d] - xi[d]) + (u[dim * j + d] - ui[d]);
-          l2 += y[d] * y[d];
-        }
-        const double l = std::sqrt(l2);
-        const double e = l - len[k];
-        const std::uint8_t was = broken[k];
-        const std::uint8_t now = was | std::uint8_t(e > s0 * len[k]);
-        broken[k] = now;
-        broke += std::size_t(now - was);
-        const double a = now ? 0.0 : kb[k] * e / l;
-        acc0 += a * y[0];
-        acc1 += a * y[1];
-        if (dim == 3)
-          acc2 += a * y[dim - 1];
-      }
-      acc[0] = acc0;
-      acc[1] = acc1;
-      if (dim == 3)
-        acc[dim - 1] = acc2;
-      for (unsigned int d = 0; d < dim; ++d) {
-        const double fd = V[i] * acc[d];
-        f[dim * i + d] = fd;
-        if (!std::isfinite(fd))
-          bad = 1;
-      }
-      total += broke;
-    }
-    return total;
-  }
-};
-
-template <int dim>
-ForceKernel<dim> make_kernel(ParticleSet<dim>& particles, BondList<dim>& bonds,
-                             const std::vector<double>& k, double s0) {
+PmbForceRows<dim> make_kernel(ParticleSet<dim>& particles, BondList<dim>& bonds,
+                              const std::vector<double>& k, double s0) {
   static_assert(sizeof(dealii::Point<dim>) == dim * sizeof(double) &&
                     sizeof(dealii::Tensor<1, dim>) == dim * sizeof(double),
                 "points and vectors are read as packed doubles");
@@ -291,7 +220,7 @@ std::size_t BondBasedPD<dim>::compute_forces(ParticleSet<dim>& particles, BondLi
   // s0 = +inf never breaks: e > inf is false (and false for NaN, which then shows in f).
   const double s0 =
       allow_breaking && std::isfinite(s0_) ? s0_ : std::numeric_limits<double>::infinity();
-  const ForceKernel<dim> kernel = make_kernel(particles, bonds, k_, s0);
+  const PmbForceRows<dim> kernel = make_kernel(particles, bonds, k_, s0);
 
   std::size_t total = 0;
   int bad = 0;
@@ -302,7 +231,7 @@ std::size_t BondBasedPD<dim>::compute_forces(ParticleSet<dim>& particles, BondLi
     if (bonds.n_bonds() > parallel_bond_threshold)
   for (long c = 0; c < n_chunks; ++c) {
     const std::size_t begin = static_cast<std::size_t>(c) * force_chunk;
-    total += kernel.rows(begin, std::min(n, begin + force_chunk), bad);
+    total += pmb_force_rows(kernel, begin, std::min(n, begin + force_chunk), bad);
   }
   if (bad) // located outside the parallel region: exceptions must not cross it
     throw_non_finite_force(particles);
@@ -319,8 +248,8 @@ std::size_t BondBasedPD<dim>::compute_forces_range(ParticleSet<dim>& particles,
   const double s0 =
       allow_breaking && std::isfinite(s0_) ? s0_ : std::numeric_limits<double>::infinity();
   int bad = 0; // a non-finite force reaches the acceleration, where the caller checks it
-  return make_kernel(particles, bonds, k_, s0)
-      .rows(begin, std::min<std::size_t>(end, particles.size()), bad);
+  return pmb_force_rows(make_kernel(particles, bonds, k_, s0), begin,
+                        std::min<std::size_t>(end, particles.size()), bad);
 }
 
 template <int dim>

@@ -14,6 +14,7 @@
 #include "meshfree/bond_based_pd.h"
 #include "meshfree/neighbor_search.h"
 #include "meshfree/particle_set.h"
+#include "meshfree/pmb_force_rows.h"
 #include "meshfree/velocity_verlet.h"
 
 #include <deal.II/base/point.h>
@@ -167,7 +168,8 @@ class PdExplicitThroughput : public Scenario {
     const std::size_t n_bonds = bonds.n_bonds() / 2; // each pair is stored from both ends
     ctx.log() << "  " << particles.size() << " particles, " << n_bonds << " bonds ("
               << double(bonds.n_bonds()) / particles.size() << " per particle), dt = " << dt
-              << " s, " << omp_get_max_threads() << " thread(s), setup " << setup_time << " s\n";
+              << " s, " << omp_get_max_threads() << " thread(s), force loop " << pmb_force_rows_isa()
+              << ", setup " << setup_time << " s\n";
 
     // Timed loop: steps only, no output inside.
     ctx.progress().start("pd throughput", b_.steps, b_.steps * dt);
@@ -192,6 +194,7 @@ class PdExplicitThroughput : public Scenario {
     const double steps = b_.steps;
 
     Summary& s = ctx.summary();
+    s.set_label("force_loop_isa", pmb_force_rows_isa()); // meshfree/pmb_force_rows.h
     s.set_figure("particle_steps_per_s", particles.size() * steps / wall, "1/s");
     s.set_figure("bond_updates_per_s", n_bonds * steps / wall, "1/s");
     s.set_figure("n_particles", particles.size(), "-");

@@ -4,6 +4,7 @@
 
 #include "fem/materials/failure.h"
 #include "meshfree/bond_based_pd.h"
+#include "meshfree/pmb_force_rows.h"
 #include "meshfree/velocity_verlet.h"
 #include "meshfree_test_util.h"
 
@@ -427,6 +428,60 @@ void check_bond_energies_sum_to_strain_energy() {
   // The halves differ by the surface factor's pair mean only if V_i k_ij != V_j k_ji; on a
   // uniform lattice they agree to round-off.
   EXPECT_LE(asymmetry, 1e-12 * largest);
+}
+
+// The force loop's two compiled variants (meshfree/pmb_force_rows.h) are the same arithmetic:
+// forces agree to round-off, the same bonds break. On a CPU without x86-64-v3 the dispatched
+// variant is the baseline and this checks the dispatch alone.
+template <int dim>
+void check_force_loop_variants_agree() {
+  const double h = 1e-3;
+  auto p = randomly_displaced_cube<dim>(h, 13);
+  for (unsigned int i = 0; i < p.size(); i += 3)
+    p.volume(i) *= 1.3;
+  BondBasedPD<dim> pd(pd_parameters<dim>("gaussian", 0, 3.015, true, true), 50e9, 0.25);
+  auto bonds = NeighborSearch<dim>(pd.neighbor_options(h)).build(p);
+  pd.initialise(p, bonds);
+  std::vector<double> f[2];
+  std::vector<std::uint8_t> broken[2];
+  std::size_t broke[2];
+  for (int variant = 0; variant < 2; ++variant) {
+    auto b = bonds;
+    std::vector<double> force(dim * p.size());
+    // s0 between the smallest and largest stretch (displacements up to 1 % of h, bonds of at
+    // least h: stretches up to 2 %); 0.5 % breaks some bonds but not all.
+    const PmbForceRows<dim> rows{&p.reference_positions()[0][0], &p.displacements()[0][0],
+                                 force.data(),   p.volumes().data(),
+                                 b.offsets.data(), b.neighbor.data(),
+                                 b.length.data(), pd.bond_stiffness().data(),
+                                 b.broken.data(), 5e-3};
+    int bad = 0;
+    broke[variant] = variant == 0 ? pmb_force_rows_baseline(rows, 0, p.size(), bad)
+                                  : pmb_force_rows(rows, 0, p.size(), bad);
+    EXPECT_EQ(bad, 0);
+    f[variant] = force;
+    broken[variant] = b.broken;
+  }
+  EXPECT_GT(broke[0], 0u);
+  EXPECT_LT(broke[0], bonds.n_bonds());
+  EXPECT_EQ(broke[0], broke[1]);
+  EXPECT_EQ(broken[0], broken[1]);
+  double scale = 0;
+  for (double v : f[0])
+    scale = std::max(scale, std::abs(v));
+  EXPECT_GT(scale, 0);
+  // FMA rounds once where the baseline rounds twice: ~1 ulp per operation, amplified by the
+  // cancellation in e = |y| − |ξ| (|ξ|/e ≲ 1e3 here) and summed over ~30-120 bonds: < 1e-11.
+  for (std::size_t c = 0; c < f[0].size(); ++c)
+    ASSERT_NEAR(f[1][c], f[0][c], 1e-11 * scale)
+        << "component " << c << ", dispatched variant " << pmb_force_rows_isa();
+}
+
+TEST(BondBasedPD, ForceLoopVariantsAgree2D) {
+  check_force_loop_variants_agree<2>();
+}
+TEST(BondBasedPD, ForceLoopVariantsAgree3D) {
+  check_force_loop_variants_agree<3>();
 }
 
 TEST(BondBasedPD, BondEnergiesSumToStrainEnergy2D) {
