@@ -180,7 +180,8 @@ class PDSolverStudy : public Scenario {
       for (double R : study_.ratios)
         for (double alpha : study_.alphas) {
           run_case(ctx, k, R, alpha, rows);
-          ctx.progress().update(++done, done);
+          ++done; // not inside the call: argument evaluation order is unspecified
+          ctx.progress().update(done, done);
         }
     ctx.progress().finish();
     write_csv(ctx, rows);
