@@ -273,6 +273,10 @@ struct FemParticleCoupling<dim>::Impl {
   std::vector<std::uint8_t> broken_before; // bond flags before a force pass (fracture heat)
   // Halo plan by rank: particles received from it (it owns them), particles sent to it.
   std::map<unsigned int, std::vector<unsigned int>> halo_recv, halo_send;
+  // Every particle's bonds as last searched (pre-crack flags only) and the volumes they were
+  // searched with: the next rebuild searches only rows that new or changed particles touch.
+  meshfree::BondList<dim> searched_bonds;
+  std::vector<double> searched_volumes;
 
   explicit Impl(unsigned int n) : points(QMidpoint<1>(), n) {}
 };
@@ -992,19 +996,26 @@ void FemParticleCoupling<dim>::synchronise() const {
 
 template <int dim>
 void FemParticleCoupling<dim>::rebuild_bonds() {
-  // Broken pairs survive a rebuild (particle indices never change).
-  std::set<std::pair<unsigned int, unsigned int>> broken;
+  // Broken pairs survive a rebuild (particle indices never change). Sorted pairs (i < j).
+  std::vector<std::pair<unsigned int, unsigned int>> broken;
   for (unsigned int i = 0; i < bonds_.n_particles(); ++i)
     for (std::size_t k = bonds_.begin(i); k < bonds_.end(i); ++k)
       if (bonds_.broken[k])
-        broken.emplace(std::min(i, bonds_.neighbor[k]), std::max(i, bonds_.neighbor[k]));
+        broken.emplace_back(std::min(i, bonds_.neighbor[k]), std::max(i, bonds_.neighbor[k]));
   if (Utilities::MPI::n_mpi_processes(fem_.mpi_communicator()) > 1) {
     // Rows live with their owners: every rank learns every broken pair (a particle that turns
     // from ghost to free inherits the breaks its partners recorded).
-    const std::vector<std::pair<unsigned int, unsigned int>> mine(broken.begin(), broken.end());
+    const auto mine = broken;
+    broken.clear();
     for (const auto& part : Utilities::MPI::all_gather(fem_.mpi_communicator(), mine))
-      broken.insert(part.begin(), part.end());
+      broken.insert(broken.end(), part.begin(), part.end());
   }
+  std::sort(broken.begin(), broken.end());
+  broken.erase(std::unique(broken.begin(), broken.end()), broken.end());
+  const auto was_broken = [&](unsigned int i, unsigned int j) {
+    return std::binary_search(broken.begin(), broken.end(),
+                              std::make_pair(std::min(i, j), std::max(i, j)));
+  };
 
   auto options = pd_->neighbor_options(spacing_);
   for (const auto& c : prm_.cracks) {
@@ -1016,8 +1027,20 @@ void FemParticleCoupling<dim>::rebuild_bonds() {
           Point<dim>(c[0], c[1], c[2]), Point<dim>(c[3], c[4], c[5]), Point<dim>(c[6], c[7], c[8]),
           Point<dim>(c[9], c[10], c[11])));
   }
+  // Particles are only appended and never move; a conversion changes the volumes of the ghosts
+  // it frees. The search reuses the rows that neither touches (the same list as a full build).
   meshfree::NeighborSearch<dim> search(options);
-  const meshfree::BondList<dim> all = search.build(particles_);
+  auto& all = impl_->searched_bonds;
+  if (all.n_particles() == 0) {
+    all = search.build(particles_);
+  } else {
+    std::vector<unsigned int> changed;
+    for (unsigned int i = 0; i < all.n_particles(); ++i)
+      if (particles_.volume(i) != impl_->searched_volumes[i])
+        changed.push_back(i);
+    all = search.extend(particles_, all, changed);
+  }
+  impl_->searched_volumes = particles_.volumes();
 
   // Owners (before the first plan: host cells owned here) and their rows.
   std::vector<std::uint8_t> mine(particles_.size(), 1);
@@ -1038,7 +1061,7 @@ void FemParticleCoupling<dim>::rebuild_bonds() {
         kept.xi.push_back(all.xi[k]);
         kept.length.push_back(all.length[k]);
         kept.influence.push_back(all.influence[k]);
-        kept.broken.push_back(all.broken[k] || broken.count({std::min(i, j), std::max(i, j)}));
+        kept.broken.push_back(all.broken[k] || was_broken(i, j));
         if (has_volume)
           kept.volume_fraction.push_back(all.volume_fraction[k]);
         if (has_surface)
@@ -1408,6 +1431,8 @@ void FemParticleCoupling<dim>::save(const std::string& file) const {
 template <int dim>
 void FemParticleCoupling<dim>::load(const std::string& file) {
   prepare();
+  impl_->searched_bonds = {}; // the particles are replaced: search them afresh
+  impl_->searched_volumes.clear();
   std::ifstream in(file, std::ios::binary);
   std::string tag;
   int version = 0;

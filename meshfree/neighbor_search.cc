@@ -160,9 +160,22 @@ NeighborSearch<dim>::neighbors(const std::vector<dealii::Point<dim>>& points, do
 
 template <int dim>
 BondList<dim> NeighborSearch<dim>::build(const ParticleSet<dim>& particles) const {
+  return extend(particles, BondList<dim>(), {});
+}
+
+template <int dim>
+BondList<dim> NeighborSearch<dim>::extend(const ParticleSet<dim>& particles,
+                                          const BondList<dim>& previous,
+                                          const std::vector<unsigned int>& changed) const {
   const auto& x = particles.reference_positions();
   const unsigned int n = particles.size();
+  const unsigned int n0 = previous.n_particles();
   const double delta = options_.horizon;
+  if (n0 > n || (n0 > 0 && previous.horizon != delta))
+    throw InvalidInput("neighbour search",
+                       "previous bond list of " + std::to_string(n0) + " particles, horizon " +
+                           std::to_string(previous.horizon) + " m",
+                       "a list this search built from a prefix of these particles");
 
   // Spacings once per particle: the pair tests below would otherwise take a root per visit.
   std::vector<double> spacing(n);
@@ -172,29 +185,82 @@ BondList<dim> NeighborSearch<dim>::build(const ParticleSet<dim>& particles) cons
     max_spacing = std::max(max_spacing, spacing[i]);
   }
   const double radius = options_.partial_volume ? delta + 0.5 * max_spacing : delta;
+  const double r2 = radius * radius;
+  const CellGrid<dim> grid(x, radius);
+
+  // Rows searched again: new and changed particles, their present partners (within the
+  // radius) and their former ones (rows are symmetric, so a former partner is in their old row).
+  std::vector<std::uint8_t> dirty(n, 0);
+  std::fill(dirty.begin() + n0, dirty.end(), 1);
+  std::vector<unsigned int> seeds(changed);
+  for (unsigned int i = n0; i < n; ++i)
+    seeds.push_back(i);
+  for (const unsigned int s : seeds) {
+    dirty[s] = 1;
+    grid.around(x[s], [&](unsigned int j) {
+      if ((x[j] - x[s]).norm_square() <= r2)
+        dirty[j] = 1;
+    });
+    if (s < n0)
+      for (std::size_t k = previous.begin(s); k < previous.end(s); ++k)
+        dirty[previous.neighbor[k]] = 1;
+  }
 
   BondList<dim> bonds;
   bonds.horizon = delta;
   auto accept = [&](unsigned int i, unsigned int j) {
+    if (j == i || (x[j] - x[i]).norm_square() > r2)
+      return false;
     if (!options_.partial_volume)
       return true;
     const double h = 0.5 * (spacing[i] + spacing[j]);
     return (x[j] - x[i]).norm() < delta + 0.5 * h; // β > 0
   };
-  build_csr<dim>(x, radius, accept, bonds.offsets, bonds.neighbor);
-
-  const std::size_t nb = bonds.n_bonds();
+  // Two passes (count, fill); each searched row sorted by neighbour index.
+  const long nl = n;
+  bonds.offsets.assign(n + 1, 0);
+#pragma omp parallel for schedule(dynamic, 64) if (nl > parallel_particle_threshold)
+  for (long ii = 0; ii < nl; ++ii) {
+    const unsigned int i = static_cast<unsigned int>(ii);
+    std::size_t count = 0;
+    if (dirty[i])
+      grid.around(x[i], [&](unsigned int j) { count += accept(i, j) ? 1 : 0; });
+    else
+      count = previous.end(i) - previous.begin(i);
+    bonds.offsets[i + 1] = count;
+  }
+  std::partial_sum(bonds.offsets.begin(), bonds.offsets.end(), bonds.offsets.begin());
+  const std::size_t nb = bonds.offsets.back();
+  bonds.neighbor.resize(nb);
   bonds.xi.resize(nb);
   bonds.length.resize(nb);
   bonds.influence.resize(nb);
   bonds.broken.assign(nb, 0);
   if (options_.partial_volume)
     bonds.volume_fraction.resize(nb);
-  const long nl = n;
-#pragma omp parallel for schedule(static) if (nl > parallel_particle_threshold)
+#pragma omp parallel for schedule(dynamic, 64) if (nl > parallel_particle_threshold)
   for (long ii = 0; ii < nl; ++ii) {
     const unsigned int i = static_cast<unsigned int>(ii);
-    for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
+    if (!dirty[i]) {
+      // Unchanged row: copied (the same arithmetic on the same inputs would give the same bits).
+      const std::size_t from = previous.begin(i), to = bonds.begin(i), m = bonds.end(i) - to;
+      std::copy_n(previous.neighbor.begin() + from, m, bonds.neighbor.begin() + to);
+      std::copy_n(previous.xi.begin() + from, m, bonds.xi.begin() + to);
+      std::copy_n(previous.length.begin() + from, m, bonds.length.begin() + to);
+      std::copy_n(previous.influence.begin() + from, m, bonds.influence.begin() + to);
+      std::copy_n(previous.broken.begin() + from, m, bonds.broken.begin() + to);
+      if (options_.partial_volume)
+        std::copy_n(previous.volume_fraction.begin() + from, m,
+                    bonds.volume_fraction.begin() + to);
+      continue;
+    }
+    std::size_t k = bonds.begin(i);
+    grid.around(x[i], [&](unsigned int j) {
+      if (accept(i, j))
+        bonds.neighbor[k++] = j;
+    });
+    std::sort(bonds.neighbor.begin() + bonds.begin(i), bonds.neighbor.begin() + bonds.end(i));
+    for (k = bonds.begin(i); k < bonds.end(i); ++k) {
       const unsigned int j = bonds.neighbor[k];
       bonds.xi[k] = x[j] - x[i];
       bonds.length[k] = bonds.xi[k].norm();

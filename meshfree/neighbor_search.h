@@ -43,6 +43,13 @@ class NeighborSearch {
   // InvalidInput if δ <= 0. The bonds of each particle are sorted by neighbour index.
   BondList<dim> build(const ParticleSet<dim>& particles) const;
 
+  // The same list as build(), reusing `previous` (built by this search from the first
+  // previous.n_particles() particles, same positions): only the rows of new particles, of the
+  // `changed` ones (volume changed) and of their partners are searched again; the surface
+  // correction is recomputed for every row. For particle sets that grow a little at a time.
+  BondList<dim> extend(const ParticleSet<dim>& particles, const BondList<dim>& previous,
+                       const std::vector<unsigned int>& changed) const;
+
   // Neighbour lists only (indices j != i with |x_j − x_i| <= radius), for tests and other
   // methods. Cell-list search; `brute_force` checks every pair (O(N²), reference only).
   static std::vector<std::vector<unsigned int>>
