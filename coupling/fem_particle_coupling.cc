@@ -6,6 +6,7 @@
 #include "meshfree/neighbor_search.h"
 #include "meshfree/particle_output.h"
 
+#include <deal.II/base/array_view.h>
 #include <deal.II/base/mpi.h>
 #include <deal.II/base/quadrature_lib.h>
 #include <deal.II/base/utilities.h>
@@ -22,6 +23,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <set>
 #include <unordered_map>
 
@@ -65,7 +67,7 @@ class PointBins {
 
  private:
   std::array<long, 3> coords(const Point<dim>& x) const {
-    std::array<long, 3> k{0, 0, 0};
+    std::array<long, 3> k{{0, 0, 0}};
     for (unsigned int d = 0; d < dim; ++d)
       k[d] = static_cast<long>(std::floor(x[d] / size_));
     return k;
@@ -84,7 +86,7 @@ class PointBins {
     for (o[0] = -span; o[0] <= span; ++o[0])
       for (o[1] = -span; o[1] <= span; ++o[1])
         for (o[2] = (dim == 3 ? -span : 0); o[2] <= (dim == 3 ? span : 0); ++o[2]) {
-          const auto it = bins_.find(pack({k[0] + o[0], k[1] + o[1], k[2] + o[2]}));
+          const auto it = bins_.find(pack({{k[0] + o[0], k[1] + o[1], k[2] + o[2]}}));
           if (it == bins_.end())
             continue;
           for (const unsigned int i : it->second)
@@ -165,6 +167,22 @@ void FemParticleCoupling<dim>::Parameters::declare(ParameterHandler& prm) {
                     "With Heat: share of the elastic energy a bond holds when it breaks that "
                     "returns to the FEM heat equation as a source in the particle's host cell "
                     "(the rest leaves as surface energy and sound) [-].");
+  prm.declare_entry("Conserve kinetic energy", "true", Bool(),
+                    "At conversion, scale each cell's interpolated velocity fluctuation about "
+                    "its mean so that the particles carry the kinetic energy the cell's nodes "
+                    "lose (with more than one particle per cell). The lumped nodal energy of a "
+                    "linear velocity field is that of its values at the nodes, so the particles "
+                    "take a steeper profile inside the cell (scale 2 for an affine field with 2 "
+                    "particles per direction); false keeps the interpolated velocities (mass and "
+                    "momentum still exact) and logs the energy defect [-].");
+  prm.declare_entry("Relaxation tolerance", "1e-6", Double(0),
+                    "Quasi-static coupled runs (Mechanics/Time integration = quasi_static): "
+                    "dynamic relaxation of each step ends when the free residual (FEM DoFs and "
+                    "particles) is this fraction of the larger of the reactions and the largest "
+                    "residual of the step [-].");
+  prm.declare_entry("Relaxation max iterations", "200000", Integer(1),
+                    "Quasi-static coupled runs: pseudo-time steps allowed per step before the "
+                    "run stops as not converged [-].");
   prm.enter_subsection("Bond based");
   meshfree::BondBasedPD<dim>::Parameters::declare(prm);
   prm.leave_subsection();
@@ -206,6 +224,9 @@ void FemParticleCoupling<dim>::Parameters::parse(const ParameterHandler& cprm) {
                                "Coupling/Refinement region upper corner");
   region_refinements = prm.get_integer("Region refinements");
   fracture_heat_fraction = prm.get_double("Fracture heat fraction");
+  conserve_kinetic_energy = prm.get_bool("Conserve kinetic energy");
+  relaxation_tolerance = prm.get_double("Relaxation tolerance");
+  relaxation_max_iterations = prm.get_integer("Relaxation max iterations");
   if (refine_lower.size() != refine_upper.size() ||
       (!refine_lower.empty() && refine_lower.size() < dim))
     throw InvalidInput("Coupling/Refinement region lower corner",
@@ -244,6 +265,11 @@ double FemParticleCoupling<dim>::ConversionReport::momentum_change_relative() co
   return (momentum_after - momentum_before).norm() / std::max(momentum_before.norm(), 1e-300);
 }
 
+template <int dim>
+double FemParticleCoupling<dim>::ConversionReport::kinetic_change_relative() const {
+  return std::abs(kinetic_after - kinetic_before) / std::max(kinetic_before, 1e-300);
+}
+
 // ---------------------------------------------------------------- implementation state
 
 template <int dim>
@@ -277,6 +303,8 @@ struct FemParticleCoupling<dim>::Impl {
   // searched with: the next rebuild searches only rows that new or changed particles touch.
   meshfree::BondList<dim> searched_bonds;
   std::vector<double> searched_volumes;
+  // Net accelerations of the free particle components at the last relaxation step [m/s²].
+  std::vector<double> relax_acceleration;
 
   explicit Impl(unsigned int n) : points(QMidpoint<1>(), n) {}
 };
@@ -289,9 +317,11 @@ FemParticleCoupling<dim>::FemParticleCoupling(const Parameters& parameters,
       impl_(std::make_unique<Impl>(parameters.particles_per_direction)),
       particles_(parameters.pd.thickness) {
   rank_ = Utilities::MPI::this_mpi_process(fem_.mpi_communicator());
-  if (fem_.parameters().time_integration != "explicit")
-    throw InvalidInput("Mechanics/Time integration", "coupling runs explicit dynamics",
-                       "explicit (set Mechanics/Time integration = explicit)");
+  if (fem_.parameters().time_integration != "explicit" &&
+      fem_.parameters().time_integration != "quasi_static")
+    throw InvalidInput("Mechanics/Time integration",
+                       "coupling runs explicit dynamics or quasi-static relaxation",
+                       "explicit or quasi_static");
   if (fem_.parameters().kinematics != "small_strain" || fem_.parameters().fe_degree != 1)
     throw InvalidInput("Mechanics/Kinematics", "coupling needs small strain with Q1 elements",
                        "Kinematics = small_strain, Finite element degree = 1");
@@ -570,6 +600,9 @@ FemParticleCoupling<dim>::convert(const std::vector<CellId>& cells) {
   const unsigned int np = impl_->points.size();
   std::vector<Tensor<1, dim>> u(np), v(np), vg(fem_.quadrature().size());
   std::vector<double> temperature(np, 0.0);
+  std::vector<types::global_dof_index> dofs(fe.n_dofs_per_cell());
+  const auto& hanging = fem_.hanging_constraints();
+  const auto& velocity = fem_.velocity();
   std::vector<Record> mine;
   for (const auto& id : todo) {
     const auto it = impl_->owned_cells.find(id);
@@ -609,6 +642,37 @@ FemParticleCoupling<dim>::convert(const std::vector<CellId>& cells) {
     for (unsigned int q = 0; q < np; ++q)
       p_interp += rho * at_points.JxW(q) * scale * v[q];
     const Tensor<1, dim> dv = (cell_momentum - p_interp) / cell_mass;
+    // Kinetic energy the cell's nodes lose: ½ Σ Δm_a v_a² with Δm_a the cell's share of the
+    // row-sum lumped mass (condensed onto the masters of hanging nodes, as the solver does).
+    std::map<types::global_dof_index, double> dm;
+    cell->get_dof_indices(dofs);
+    for (unsigned int i = 0; i < dofs.size(); ++i) {
+      double m = 0;
+      for (unsigned int q = 0; q < vg.size(); ++q)
+        m += rho * at_gauss.shape_value(i, q) * at_gauss.JxW(q);
+      if (const auto* entries = hanging.get_constraint_entries(dofs[i]))
+        for (const auto& [master, weight] : *entries)
+          dm[master] += weight * m;
+      else
+        dm[dofs[i]] += m;
+    }
+    double nodal_kinetic = 0;
+    for (const auto& [dof, m] : dm)
+      nodal_kinetic += 0.5 * m * velocity(dof) * velocity(dof);
+    // The particle velocities are the cell's mean velocity plus the interpolated fluctuation
+    // about it, scaled by λ so that they carry that kinetic energy as well as the momentum:
+    // ½ M |v̄|² + λ² ½ Σ m_p |w_p|² = nodal. The nodal energy is at least ½ M |v̄|² (Jensen),
+    // so λ is real; λ → 1 as the field is resolved, and it is reported. One particle per cell
+    // (no fluctuation) keeps λ = 1 and the defect is logged.
+    const Tensor<1, dim> mean = cell_momentum / cell_mass;
+    double fluctuation = 0;
+    for (unsigned int q = 0; q < np; ++q)
+      fluctuation += 0.5 * rho * at_points.JxW(q) * scale * (v[q] + dv - mean).norm_square();
+    const double excess = nodal_kinetic - 0.5 * cell_mass * mean.norm_square();
+    double lambda = 1;
+    if (prm_.conserve_kinetic_energy && fluctuation > 1e-14 * nodal_kinetic && excess > 0)
+      lambda = std::sqrt(excess / fluctuation);
+    report.max_velocity_scale = std::max(report.max_velocity_scale, lambda);
     std::uint32_t slots = 0;
     for (unsigned int k = 0; k < bcs.size(); ++k)
       for (const unsigned int f : cell->face_indices())
@@ -622,7 +686,7 @@ FemParticleCoupling<dim>::convert(const std::vector<CellId>& cells) {
       for (unsigned int d = 0; d < dim; ++d)
         r.push_back(u[q][d]);
       for (unsigned int d = 0; d < dim; ++d)
-        r.push_back(v[q][d] + dv[d]);
+        r.push_back(mean[d] + lambda * (v[q][d] + dv[d] - mean[d]));
       mine.emplace_back(id, std::move(r));
     }
   }
@@ -669,6 +733,8 @@ FemParticleCoupling<dim>::convert(const std::vector<CellId>& cells) {
   fem_.set_active_cells(active);
   rebuild_interface();
 
+  report.max_velocity_scale =
+      Utilities::MPI::max(report.max_velocity_scale, fem_.mpi_communicator());
   report.mass_after = total_mass();
   report.momentum_after = total_momentum();
   report.kinetic_after = kinetic_energy();
@@ -1169,11 +1235,19 @@ double FemParticleCoupling<dim>::stable_time_step() const {
 
 template <int dim>
 void FemParticleCoupling<dim>::step(double dt) {
+  advance(dt, fem_.parameters().mass_damping, time_ + dt, false, nullptr);
+  time_ += dt;
+}
+
+template <int dim>
+void FemParticleCoupling<dim>::advance(double dt, double a, double load_time, bool first,
+                                       RelaxationSums* sums) {
   // Central differences on both sides, all forces from the state at t_n:
   // 1. PD forces on free particles (ghosts hold the FEM field of t_n); particles to t_{n+1}.
   // 2. Interface DoFs of t_{n+1} from the particles; FEM step from t_n to t_{n+1}.
   // 3. Ghosts to the FEM field of t_{n+1}.
-  const double a = fem_.parameters().mass_damping;
+  // A relaxation step (sums given) holds the loads at load_time and adds this rank's sums of
+  // the free particles to the FEM's.
   if (n_free_particles() > 0) {
     // With heat, bonds breaking in this force pass release their energy (at the state of t_n)
     // into their particle's heat account: compare with the flags before the pass.
@@ -1192,25 +1266,49 @@ void FemParticleCoupling<dim>::step(double dt) {
             fracture_dissipation_ += e;
           }
     }
+    auto& previous = impl_->relax_acceleration;
+    if (sums && (first || previous.size() != dim * particles_.size()))
+      previous.assign(dim * particles_.size(), std::numeric_limits<double>::quiet_NaN());
     for (unsigned int i = 0; i < particles_.size(); ++i) {
       if (!free_[i] || !is_owned(i))
         continue;
       const double m = particles_.mass(i);
       for (unsigned int d = 0; d < dim; ++d) {
-        if (particles_.is_fixed(i, d))
+        const double f = particles_.force(i)[d] + particles_.external_force(i)[d];
+        if (particles_.is_fixed(i, d)) {
+          if (sums)
+            sums->reaction_square += f * f;
           continue;
-        const double acc = (particles_.force(i)[d] + particles_.external_force(i)[d]) / m;
+        }
+        const double acc = f / m;
         double& vi = particles_.velocity(i)[d];
+        if (sums) {
+          sums->residual_square += f * f;
+          double& before = previous[dim * i + d]; // as MechanicsSolver::relaxation_step
+          const double ui = particles_.displacement(i)[d];
+          if (std::isfinite(before) && vi != 0) {
+            sums->stiffness_numerator += ui * ui * (-(acc - before) / (dt * vi));
+            sums->stiffness_denominator += ui * ui;
+          }
+          before = acc;
+        }
         vi = ((1.0 - 0.5 * a * dt) * vi + dt * acc) / (1.0 + 0.5 * a * dt);
         particles_.displacement(i)[d] += dt * vi;
       }
     }
-    apply_particle_dirichlet(time_ + dt, dt);
+    apply_particle_dirichlet(load_time, dt);
     exchange_halo(); // partners and interface stencils at t_{n+1}
     update_interface_dofs();
   }
-  fem_.explicit_step(dt);
-  time_ += dt;
+  if (sums) {
+    const auto fem_sums = fem_.relaxation_step(dt, a, load_time, first);
+    sums->stiffness_numerator += fem_sums.stiffness_numerator;
+    sums->stiffness_denominator += fem_sums.stiffness_denominator;
+    sums->residual_square += fem_sums.residual_square;
+    sums->reaction_square += fem_sums.reaction_square;
+  } else {
+    fem_.explicit_step(dt);
+  }
   if (n_ghost_particles() > 0)
     update_ghosts();
   if (heat_ && n_free_particles() > 0) {
@@ -1224,6 +1322,64 @@ void FemParticleCoupling<dim>::step(double dt) {
           particles_.temperature(row[q]) = values[q];
     }
   }
+}
+
+template <int dim>
+typename FemParticleCoupling<dim>::RelaxationReport
+FemParticleCoupling<dim>::relax(double time, bool with_conversion) {
+  // Adaptive dynamic relaxation of the coupled system at the load of `time` (Underwood 1983;
+  // Kilic & Madenci 2010 for PD): central differences in pseudo-time with the real lumped and
+  // particle masses at the common stable step, and the damping c = 2 sqrt(uᵀ k u / uᵀ u) from
+  // the local stiffness estimates of both models (critical for the lowest mode, updated every
+  // step, one step late). Converged when ‖free residual‖ ≤ tolerance × max(‖reactions‖,
+  // largest ‖free residual‖ of this relaxation). Bonds break as the state relaxes; cells
+  // convert every Check interval steps. Velocities are pseudo-velocities and end at zero.
+  const MPI_Comm comm = fem_.mpi_communicator();
+  RelaxationReport report;
+  double dt = stable_time_step();
+  double c = 0, peak_residual = 0;
+  bool first = true;
+  for (unsigned int it = 1; it <= prm_.relaxation_max_iterations; ++it) {
+    RelaxationSums local;
+    advance(dt, c, time, first, &local);
+    time_ = time;
+    first = false;
+    double values[4] = {local.stiffness_numerator, local.stiffness_denominator,
+                        local.residual_square, local.reaction_square};
+    Utilities::MPI::sum(ArrayView<const double>(values, 4), comm, ArrayView<double>(values, 4));
+    const double residual = std::sqrt(values[2]), reaction = std::sqrt(values[3]);
+    peak_residual = std::max(peak_residual, residual);
+    const double scale = std::max(reaction, peak_residual);
+    report.iterations = it;
+    report.relative_residual = scale > 0 ? residual / scale : 0.0;
+    if (!std::isfinite(residual))
+      throw NumericalFailure("non-finite residual", "relaxation at t = " + std::to_string(time) +
+                                                        ", iteration " + std::to_string(it),
+                             "check the materials and the loads of this step");
+    // The first step's forces are those of the previous state: judge from the second on.
+    if (it > 1 && residual <= prm_.relaxation_tolerance * scale) {
+      report.converged = true;
+      break;
+    }
+    const double q = values[1] > 0 ? values[0] / values[1] : 0.0;
+    c = q > 0 ? std::min(2.0 * std::sqrt(q), 2.0 / dt) : 0.0; // c dt ≤ 2 keeps 1 − c dt/2 ≥ 0
+    report.damping = c;
+    if (with_conversion && it % prm_.check_interval == 0) {
+      const auto r = convert_flagged();
+      if (r.cells > 0) {
+        report.conversions.push_back(r);
+        dt = stable_time_step();
+        first = true; // new unknowns: restart the stiffness estimate
+      }
+    }
+  }
+  // Quasi-static: the pseudo-velocities go.
+  for (unsigned int i = 0; i < particles_.size(); ++i)
+    particles_.velocity(i) = Tensor<1, dim>();
+  fem_.clear_velocity();
+  if (n_ghost_particles() > 0)
+    update_ghosts();
+  return report;
 }
 
 template <int dim>

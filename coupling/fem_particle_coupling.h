@@ -1,16 +1,19 @@
 #ifndef SPINESIM_COUPLING_FEM_PARTICLE_COUPLING_H
 #define SPINESIM_COUPLING_FEM_PARTICLE_COUPLING_H
 
-// The FEM bulk and a bond-based PD fracture zone in one explicit run.
+// The FEM bulk and a bond-based PD fracture zone in one run: explicit dynamics, or
+// quasi-static steps by adaptive dynamic relaxation of both models together.
 //
 // Conversion: a flagged cell leaves the FEM system (MechanicsSolver::set_active_cells, no
 // remeshing) and becomes n^dim particles at the points of the iterated midpoint rule (sub-cell
 // centres: on a uniform mesh they form the regular lattice PD is calibrated on). Each particle
 // inherits u, v and T interpolated from the cell; the particle masses are scaled so that they
-// add up to the mass the cell removes from the lumped FEM mass, and a uniform velocity
-// correction per cell makes them carry exactly the momentum the cell's nodes lose. Mass and
-// linear momentum are therefore conserved to round-off; kinetic energy changes by the
-// interpolation defect, which is logged.
+// add up to the mass the cell removes from the lumped FEM mass; the particle velocities are the
+// cell's mean velocity (the momentum its nodes lose over their mass) plus the interpolated
+// fluctuation about it, scaled so that they carry the kinetic energy the nodes lose. Mass,
+// linear momentum and kinetic energy are therefore conserved to round-off (kinetic energy
+// only with more than one particle per cell: a single particle has no fluctuation to scale,
+// and the defect is logged).
 //
 // Interface (why this method): an overlapping Dirichlet–Dirichlet splice. Active cells within a
 // ghost layer (at least 2 horizons) of the free particles carry ghost particles on the same
@@ -73,6 +76,9 @@ class FemParticleCoupling {
     std::vector<double> refine_lower, refine_upper; // box refined before the run [m]
     unsigned int region_refinements = 0;
     double fracture_heat_fraction = 1.0; // share of broken-bond energy returned as heat [-]
+    bool conserve_kinetic_energy = true; // scale the velocity fluctuation at conversion
+    double relaxation_tolerance = 1e-6;  // quasi-static: free residual / reaction scale [-]
+    unsigned int relaxation_max_iterations = 200000; // quasi-static: per step [-]
     typename meshfree::BondBasedPD<dim>::Parameters pd;
     std::vector<std::vector<double>> cracks; // flattened corners per pre-crack [m]
 
@@ -85,7 +91,9 @@ class FemParticleCoupling {
     double mass_before = 0, mass_after = 0;                 // [kg]
     dealii::Tensor<1, dim> momentum_before, momentum_after; // [kg m/s]
     double kinetic_before = 0, kinetic_after = 0;           // [J]
+    double max_velocity_scale = 1; // largest λ on the velocity fluctuation of a cell [-]
     double mass_change_relative() const;
+    double kinetic_change_relative() const; // over the kinetic energy before
     double momentum_change_relative() const; // over |p| (or over mass × max speed if p ≈ 0)
   };
 
@@ -117,6 +125,19 @@ class FemParticleCoupling {
   double stable_time_step() const; // min(FEM CFL step, PD step) [s]
   // One central-difference step of both models (see the .cc for the order).
   void step(double dt);
+
+  // Quasi-static: adaptive dynamic relaxation of both models to equilibrium under the loads of
+  // `time` (see the .cc); bonds break on the way and, with `with_conversion`, cells convert
+  // every Check interval pseudo-steps. Ends with zero velocities. Not converged within
+  // Relaxation max iterations: converged = false (the caller decides).
+  struct RelaxationReport {
+    bool converged = false;
+    unsigned int iterations = 0;
+    double relative_residual = 0; // at the end [-]
+    double damping = 0;           // last adaptive damping [1/s]
+    std::vector<ConversionReport> conversions;
+  };
+  RelaxationReport relax(double time, bool with_conversion);
 
   // Sets every free DoF and free particle to the affine field u = H x (for the patch test).
   void impose_affine(const dealii::Tensor<2, dim>& H);
@@ -191,6 +212,11 @@ class FemParticleCoupling {
   void update_ghosts();
   void update_interface_dofs();
   void apply_particle_dirichlet(double time, double dt);
+  using RelaxationSums = typename fem::MechanicsSolver<dim>::RelaxationSums;
+  // One central-difference step of both models with damping a [1/s] and the loads of
+  // load_time; with `sums`, a relaxation step (the time is held) that adds up the free
+  // residual, reactions and stiffness estimate of this rank.
+  void advance(double dt, double a, double load_time, bool first, RelaxationSums* sums);
   // Owners and the halo plan: which particles this rank reads but others own, and which of its
   // own the others read.
   void plan_exchange();

@@ -129,6 +129,8 @@ class Simulation : public Scenario {
   unsigned int output_cycle_ = 0;
   double initial_heat_content_ = 0;
   unsigned int newton_iterations_ = 0, linear_iterations_ = 0;
+  unsigned long relaxation_iterations_ = 0; // quasi-static coupled runs
+  typename FemParticleCoupling<dim>::RelaxationReport last_relaxation_;
 };
 
 template <int dim>
@@ -172,10 +174,6 @@ Simulation<dim>::Simulation(const ScenarioFactoryArgs& args)
     coupling_prm_.parse(prm);
     prm.leave_subsection();
     coupling_prm_.damage = effects_.damage;
-    if (mech_prm_.time_integration != "explicit")
-      throw InvalidInput("Mechanics/Time integration",
-                         "the coupled FEM / particle run is explicit dynamics",
-                         "explicit (add Mechanics/Mass damping for quasi-static loading)");
   }
 }
 
@@ -274,7 +272,27 @@ void Simulation<dim>::advance(unsigned int step, double time, double dt, RunCont
     dealii::TimerOutput::Scope scope(ctx.timer(), "mechanics");
     if (heat_ && mech_prm_.taylor_quinney > 0)
       mechanics_->mark_plastic_work(); // dissipation over this step, for plastic heating
-    if (coupled_) {
+    if (coupled_ && mech_prm_.time_integration == "quasi_static") {
+      // Equilibrium of both models at this step's load, by dynamic relaxation.
+      const auto report = coupled_->relax(time, effects_.conversion);
+      relaxation_iterations_ += report.iterations;
+      last_relaxation_ = report;
+      for (const auto& r : report.conversions)
+        ctx.log() << "  t = " << time << " s: " << r.cells << " cells -> " << r.particles
+                  << " particles (mass change " << r.mass_change_relative()
+                  << ", momentum change " << r.momentum_change_relative() << " relative)\n";
+      if (!report.converged)
+        throw NumericalFailure("relaxation not converged",
+                               "step " + std::to_string(step) + ", t = " + std::to_string(time) +
+                                   " s: relative residual " +
+                                   std::to_string(report.relative_residual) + " after " +
+                                   std::to_string(report.iterations) + " iterations",
+                               "raise Coupling/Relaxation max iterations, take more Simulation/"
+                               "Steps, or run explicit dynamics if the crack runs unstably");
+      if (sim_.reaction_boundary_id >= 0)
+        peak_load_ =
+            std::max(peak_load_, coupled_->reaction_force(sim_.reaction_boundary_id).norm());
+    } else if (coupled_) {
       double t = mechanics_->time();
       if (coupled_dt_ == 0)
         coupled_dt_ = coupled_->stable_time_step();
@@ -343,7 +361,9 @@ void Simulation<dim>::record(unsigned int step, double time, RunContext& ctx) {
         row.emplace_back(names[d], r[d]);
       peak_load_ = std::max(peak_load_, r.norm());
     }
-    row.emplace_back("strain_energy", mechanics_->strain_energy());
+    // Coupled: the FEM's active cells plus the bonds of the free particles.
+    row.emplace_back("strain_energy",
+                     coupled_ ? coupled_->strain_energy() : mechanics_->strain_energy());
     row.emplace_back("max_von_mises", mechanics_->max_von_mises());
     row.emplace_back("max_displacement", mechanics_->displacement().linfty_norm());
   }
@@ -359,6 +379,10 @@ void Simulation<dim>::record(unsigned int step, double time, RunContext& ctx) {
     row.emplace_back("broken_bonds", double(coupled_->n_broken_bonds()));
     row.emplace_back("max_damage", coupled_->max_damage());
     row.emplace_back("kinetic_energy", coupled_->kinetic_energy());
+    if (mech_prm_.time_integration == "quasi_static") {
+      row.emplace_back("relaxation_iterations", last_relaxation_.iterations);
+      row.emplace_back("relaxation_relative_residual", last_relaxation_.relative_residual);
+    }
     if (heat_) {
       row.emplace_back("fracture_dissipation", coupled_->fracture_dissipation());
       row.emplace_back("fracture_heat", coupled_->fracture_heat());
@@ -511,13 +535,21 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
     s.set_figure("broken_bonds", double(coupled_->n_broken_bonds()), "-");
     s.set_figure("max_damage", coupled_->max_damage(), "-");
     s.set_figure("explicit_steps", explicit_steps_, "iterations");
-    double dm = 0, dp = 0;
+    double dm = 0, dp = 0, dk = 0, scale = 1;
     for (const auto& r : coupled_->conversions()) {
       dm = std::max(dm, r.mass_change_relative());
       dp = std::max(dp, r.momentum_change_relative());
+      dk = std::max(dk, r.kinetic_change_relative());
+      scale = std::max(scale, r.max_velocity_scale);
     }
     s.set_figure("conversion_mass_change_relative", dm, "-");
     s.set_figure("conversion_momentum_change_relative", dp, "-");
+    s.set_figure("conversion_kinetic_energy_change_relative", dk, "-");
+    s.set_figure("conversion_max_velocity_scale", scale, "-");
+    if (mech_prm_.time_integration == "quasi_static") {
+      s.set_figure("relaxation_iterations", double(relaxation_iterations_), "iterations");
+      s.set_figure("relaxation_relative_residual", last_relaxation_.relative_residual, "-");
+    }
     // The crack: damaged particles (φ >= 0.35, about a third of the bonds broken).
     double tip_min = 0, tip_max = 0, path_sq = 0;
     unsigned int n_cracked = 0;
@@ -538,7 +570,9 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
   }
   if (mechanics_) {
     s.set_figure("mechanics_dofs", mechanics_->dof_handler().n_dofs(), "-");
-    s.set_figure("strain_energy", mechanics_->strain_energy(), dim == 2 ? "J/m" : "J");
+    s.set_figure("strain_energy",
+                 coupled_ ? coupled_->strain_energy() : mechanics_->strain_energy(),
+                 dim == 2 ? "J/m" : "J");
     s.set_figure("max_von_mises", mechanics_->max_von_mises(), "Pa");
     s.set_figure("max_displacement", mechanics_->displacement().linfty_norm(), "m");
     if (sim_.reaction_boundary_id >= 0) {

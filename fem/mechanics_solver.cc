@@ -362,6 +362,7 @@ void MechanicsSolver<dim>::build_step_tables() {
   const std::size_t n = owned_.n_elements();
   step_skip_.assign(n, 0);
   step_dirichlet_.assign(n, 0);
+  step_driven_.assign(n, 0);
   std::size_t k = 0;
   for (auto it = owned_.begin(); it != owned_.end(); ++it, ++k)
     step_skip_[k] = hanging_.is_constrained(*it) || orphan_[relevant_.index_within_set(*it)];
@@ -376,6 +377,7 @@ void MechanicsSolver<dim>::build_step_tables() {
       const auto local = owned_.index_within_set(dof);
       if (!step_dirichlet_[local])
         slot = static_cast<int>(local);
+      step_driven_[local] = 1;
     }
     driven_slot_.push_back(slot);
   }
@@ -1128,6 +1130,43 @@ void MechanicsSolver<dim>::explicit_step(double dt) {
     return;
   }
   target_time_ = time_;
+  central_difference(dt, prm_.mass_damping, time_ + dt, nullptr);
+  if (!states_stale_)
+    commit_history();
+  time_ += dt;
+  update_ghosts();
+}
+
+template <int dim>
+typename MechanicsSolver<dim>::RelaxationSums
+MechanicsSolver<dim>::relaxation_step(double dt, double damping, double time, bool first) {
+  if (!is_setup_)
+    setup();
+  RelaxationSums sums;
+  time_ = previous_time_ = target_time_ = time;
+  if (n_active_cells() == 0) {
+    raw_residual_ = 0;
+    rhs_ = 0;
+    return sums;
+  }
+  if (first)
+    relax_acceleration_.clear();
+  central_difference(dt, damping, time, &sums);
+  if (!states_stale_)
+    commit_history();
+  update_ghosts();
+  return sums;
+}
+
+template <int dim>
+void MechanicsSolver<dim>::clear_velocity() {
+  v_ = 0;
+  update_ghosts();
+}
+
+template <int dim>
+void MechanicsSolver<dim>::central_difference(double dt, double a, double bc_time,
+                                              RelaxationSums* sums) {
   loaded_ = false; // loads are evaluated at the current time only
   if (temperature_field_)
     evaluate_temperature_field(dT_target_);
@@ -1153,8 +1192,6 @@ void MechanicsSolver<dim>::explicit_step(double dt) {
     assemble(false, 1.0, hanging_);
   }
   // Net force on the DoFs: −K u on the linear path (rhs_ is not formed), f_ext − f_int else.
-
-  const double a = prm_.mass_damping;
   if (!dirichlet_dofs_ready_) {
     std::map<types::global_dof_index, Point<dim>> support;
     DoFTools::map_dofs_to_support_points(*mapping_, dof_handler_, support);
@@ -1185,6 +1222,8 @@ void MechanicsSolver<dim>::explicit_step(double dt) {
     const double* mass = lumped_mass_.begin();
     const std::size_t n = owned_.n_elements();
     std::copy(u, u + n, u_previous_.begin());
+    if (sums && relax_acceleration_.size() != n)
+      relax_acceleration_.assign(n, std::numeric_limits<double>::quiet_NaN());
     for (std::size_t k = 0; k < n; ++k) {
       if (step_skip_[k])
         continue;
@@ -1193,14 +1232,30 @@ void MechanicsSolver<dim>::explicit_step(double dt) {
         throw NumericalFailure("zero lumped mass at dof " +
                                    std::to_string(owned_.nth_index_in_set(k)),
                                "explicit step", "every material needs a positive density");
-      v[k] = ((1.0 - 0.5 * a * dt) * v[k] + dt * sign * r[k] / m) / (1.0 + 0.5 * a * dt);
+      const double acc = sign * r[k] / m;
+      if (sums) {
+        if (step_dirichlet_[k] || step_driven_[k]) {
+          sums->reaction_square += r[k] * r[k];
+        } else {
+          sums->residual_square += r[k] * r[k];
+          // Local stiffness from the change of acceleration over the last step (Kilic &
+          // Madenci 2010): k_i = −(a_i^n − a_i^{n−1}) / (dt v_i^{n−½}), weighted by u_i².
+          const double previous = relax_acceleration_[k];
+          if (std::isfinite(previous) && v[k] != 0) {
+            sums->stiffness_numerator += u[k] * u[k] * (-(acc - previous) / (dt * v[k]));
+            sums->stiffness_denominator += u[k] * u[k];
+          }
+        }
+        relax_acceleration_[k] = acc;
+      }
+      v[k] = ((1.0 - 0.5 * a * dt) * v[k] + dt * acc) / (1.0 + 0.5 * a * dt);
       u[k] += dt * v[k];
     }
     // Later conditions overwrite earlier ones on shared DoFs (as interpolate_boundary_values);
     // boundary values take precedence over driven values.
     for (unsigned int k = 0; k < bcs_.dirichlet().size(); ++k) {
       auto& f = *bcs_.dirichlet()[k].function;
-      f.set_time(time_ + dt);
+      f.set_time(bc_time);
       for (const auto& b : dirichlet_dofs_[k]) {
         const double value = f.value(b.point, b.component);
         v[b.local] = (value - u_previous_[b.local]) / dt;
@@ -1222,13 +1277,10 @@ void MechanicsSolver<dim>::explicit_step(double dt) {
   distribute_hanging(v_);
   if (!std::isfinite(u_.l2_norm())) // NaN must not pass silently
     throw NumericalFailure("non-finite displacement",
-                           "explicit step at t = " + std::to_string(time_) +
+                           (sums ? "relaxation step at t = " : "explicit step at t = ") +
+                               std::to_string(time_) +
                                ", dt = " + std::to_string(dt),
                            "reduce the time step (CFL safety factor) or check the materials");
-  if (!states_stale_)
-    commit_history();
-  time_ += dt;
-  update_ghosts();
 }
 
 template <int dim>

@@ -143,6 +143,22 @@ class MechanicsSolver {
   double stable_time_step() const;
   void explicit_step(double dt);
 
+  // Dynamic relaxation towards the quasi-static state at `time` (coupled quasi-static runs):
+  // one central-difference step of pseudo-time dt with mass damping `damping` [1/s], loads and
+  // Dirichlet values of `time`; the solver's time becomes `time` and does not advance. `first`
+  // starts a new relaxation (no previous forces for the stiffness estimate). Returns this
+  // rank's sums over the free DoFs (neither Dirichlet, driven, hanging nor orphaned), from the
+  // net forces at the state before the step.
+  struct RelaxationSums {
+    double stiffness_numerator = 0;   // Σ u_i² k_i, k_i = −Δa_i / (dt v_i) [m²/s²]
+    double stiffness_denominator = 0; // Σ u_i² [m²]
+    double residual_square = 0;       // Σ r_i² over free DoFs [N²]
+    double reaction_square = 0;       // Σ r_i² over Dirichlet and driven DoFs [N²]
+  };
+  RelaxationSums relaxation_step(double dt, double damping, double time, bool first);
+  // Sets every velocity to zero (the end of a relaxation).
+  void clear_velocity();
+
   // Plastic-work heating. The mark (per-cell ∫ w_p dV and the time) is set at the start of
   // every solve_quasi_static() and by mark_plastic_work() (call it before a series of
   // explicit steps). cell_plastic_dissipation_rate(): per active cell (active_cell_index,
@@ -195,6 +211,8 @@ class MechanicsSolver {
   const materials::ConstitutiveLaw& material(dealii::types::material_id id) const;
   const materials::ConstitutiveLaw& cell_material(const CellIterator& cell) const;
   const VectorType& lumped_mass() const { return lumped_mass_; } // owned [kg]
+  // Hanging-node constraints (locally relevant DoFs).
+  const dealii::AffineConstraints<double>& hanging_constraints() const { return hanging_; }
   dealii::ArrayView<const QuadraturePointData>
   quadrature_point_data(const CellIterator& cell) const;
   const Timings& timings() const { return timings_; }
@@ -220,6 +238,9 @@ class MechanicsSolver {
   void build_rigid_body_modes();
   void compute_lumped_mass();
   bool linear_explicit() const;
+  // The central-difference update of explicit_step() and relaxation_step(): net forces at the
+  // current state, damping a [1/s], Dirichlet values at bc_time; sums if asked.
+  void central_difference(double dt, double a, double bc_time, RelaxationSums* sums);
   void refresh_states() const;
   void mark_orphan_dofs();
 
@@ -269,7 +290,8 @@ class MechanicsSolver {
   // Explicit-step tables by index within owned_, so that a step touches plain arrays only:
   // DoFs the update skips (hanging or orphaned), DoFs with a Dirichlet condition, and the
   // owned slot of every driven DoF in key order (-1: not owned, constrained or Dirichlet).
-  std::vector<std::uint8_t> step_skip_, step_dirichlet_;
+  std::vector<std::uint8_t> step_skip_, step_dirichlet_, step_driven_;
+  std::vector<double> relax_acceleration_; // previous net acceleration per owned DoF [m/s²]
   std::vector<int> driven_slot_;
   std::vector<double> u_previous_;
   // Hanging-node lines of owned DoFs with owned masters (local indices): distributed on the

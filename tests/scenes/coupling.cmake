@@ -7,7 +7,10 @@ set(_val ${PROJECT_SOURCE_DIR}/applications/validation)
 # out, a per-cell velocity correction): 1e-12 is round-off over a few hundred particles.
 # The drift after 50 explicit steps stays at round-off (1e-14 measured); 1e-10 allows for
 # accumulation over the steps.
-set(_patch "status==ok;max_interface_force_relative<=1e-8;max_interface_force_relative_after_conversion<=1e-8;patch_drift_relative<=1e-10;conversion_mass_change_relative<=1e-12;conversion_momentum_change_relative<=1e-12")
+# Quasi-static: dynamic relaxation from u = 0 to a free residual of 1e-10 of the reactions
+# lands on the affine field to 1.4e-9 to 1.6e-9 (2-D, 3-D, 2 ranks): the residual amplified by
+# the conditioning of the coupled operator; 1e-7 leaves a factor 60.
+set(_patch "status==ok;max_interface_force_relative<=1e-8;max_interface_force_relative_after_conversion<=1e-8;patch_drift_relative<=1e-10;conversion_mass_change_relative<=1e-12;conversion_momentum_change_relative<=1e-12;quasi_static_converged>=1;quasi_static_affine_error_relative<=1e-7")
 spinesim_add_scene_test(coupling.patch_test_2d SCENE ${_val}/coupling_patch_test.prm
   EXPECT "${_patch}" LABELS "scene;validation")
 spinesim_add_scene_test(coupling.patch_test_2d_2ranks SCENE ${_val}/coupling_patch_test.prm
@@ -17,6 +20,64 @@ spinesim_add_scene_test(coupling.patch_test_3d SCENE ${_val}/coupling_patch_test
   SET "Dimension=3" "Mechanics/Plane stress=false" "Material/Poisson ratio=0.25"
       "Geometry/Subdivisions=20,20,20"
   EXPECT "${_patch}" LABELS "scene;validation")
+
+# Two particles per cell direction: the velocity fluctuation of each converted cell is scaled
+# to carry the kinetic energy its nodes lose, so kinetic energy is conserved to round-off too
+# (1.8e-16 measured; 1e-12 as for mass and momentum). For the affine velocity field of the
+# test the scale is exactly 2 (nodal fluctuation at h/2, sub-cell centres at h/4).
+set(_patch_fine "${_patch};conversion_kinetic_energy_change_relative<=1e-12;conversion_max_velocity_scale>=1.999;conversion_max_velocity_scale<=2.001")
+spinesim_add_scene_test(coupling.patch_test_2d_fine SCENE ${_val}/coupling_patch_test.prm
+  SET "Coupling/Particles per cell direction=2" EXPECT "${_patch_fine}" LABELS "scene;validation")
+spinesim_add_scene_test(coupling.patch_test_3d_fine SCENE ${_val}/coupling_patch_test.prm
+  SET "Dimension=3" "Mechanics/Plane stress=false" "Material/Poisson ratio=0.25"
+      "Coupling/Particles per cell direction=2"
+  EXPECT "${_patch_fine}" LABELS "scene;validation")
+
+# Quasi-static coupled runs against Newton on the same mesh, all FEM. Both models are exact on
+# affine fields, so what separates the reactions is the PD / FEM difference on the strain
+# gradients that reach the particle block from the gripped edges, plus the relaxation
+# residual (1e-9): 3.9e-5 (2-D) and 2.9e-5 (3-D) measured, bound 2e-4. The stored energy
+# differs by more (7.6e-4 in 2-D): the splice counts the bonds between free and ghost
+# particles from the free side only, so it has no exact energy statement; bound 2e-3.
+# 2 ranks reduce the relaxation sums in another order and stop a few iterations apart:
+# 5e-8 measured, bound 1e-6 (well under the model difference above).
+set(_qs ${_val}/coupling_quasi_static.prm)
+set(_qs_runs ${CMAKE_CURRENT_BINARY_DIR}/runs/quasi_static)
+set(_qs_checks "status==ok;relaxation_relative_residual<=1e-9;free_particles>=384")
+spinesim_add_scene_test(coupling.quasi_static_2d SCENE ${_qs} OUT ${_qs_runs}/coupled_2d
+  EXPECT "${_qs_checks}" LABELS "scene;validation;coupling")
+spinesim_add_scene_test(coupling.quasi_static_2d_2ranks SCENE ${_qs} OUT ${_qs_runs}/coupled_2d_2ranks
+  RANKS 2 EXPECT "${_qs_checks}" LABELS "scene;validation;coupling;mpi")
+spinesim_add_scene_test(coupling.quasi_static_2d_fem SCENE ${_qs} OUT ${_qs_runs}/fem_2d
+  SET "Effects/Coupling=false" "Effects/Particles method=none"
+  EXPECT "status==ok" LABELS "scene;validation;coupling")
+set(_qs_3d "Dimension=3" "Geometry/Origin=-0.5,-0.5,-0.5" "Geometry/Lengths=1,1,1"
+    "Geometry/Subdivisions=24,24,24" "Mechanics/Plane stress=false" "Material/Poisson ratio=0.25"
+    "Coupling/Initial region lower corner=-0.15,-0.15,-0.15"
+    "Coupling/Initial region upper corner=0.15,0.15,0.15")
+spinesim_add_scene_test(coupling.quasi_static_3d SCENE ${_qs} OUT ${_qs_runs}/coupled_3d
+  SET ${_qs_3d} EXPECT "status==ok;relaxation_relative_residual<=1e-9;free_particles>=512"
+  LABELS "scene;validation;coupling")
+spinesim_add_scene_test(coupling.quasi_static_3d_fem SCENE ${_qs} OUT ${_qs_runs}/fem_3d
+  SET ${_qs_3d} "Effects/Coupling=false" "Effects/Particles method=none"
+  EXPECT "status==ok" LABELS "scene;validation;coupling")
+set_tests_properties(coupling.quasi_static_2d PROPERTIES FIXTURES_SETUP qs_coupled_2d)
+set_tests_properties(coupling.quasi_static_2d_2ranks PROPERTIES FIXTURES_SETUP qs_coupled_2d_2ranks)
+set_tests_properties(coupling.quasi_static_2d_fem PROPERTIES FIXTURES_SETUP qs_fem_2d)
+set_tests_properties(coupling.quasi_static_3d PROPERTIES FIXTURES_SETUP qs_coupled_3d)
+set_tests_properties(coupling.quasi_static_3d_fem PROPERTIES FIXTURES_SETUP qs_fem_3d)
+spinesim_add_comparison_test(coupling.quasi_static_2d_agrees_with_fem
+  A ${_qs_runs}/fem_2d/summary.json B ${_qs_runs}/coupled_2d/summary.json
+  CHECKS "reaction_force_norm:rel:2e-4;strain_energy:rel:2e-3"
+  REQUIRES "qs_coupled_2d;qs_fem_2d" LABELS "scene;coupling")
+spinesim_add_comparison_test(coupling.quasi_static_3d_agrees_with_fem
+  A ${_qs_runs}/fem_3d/summary.json B ${_qs_runs}/coupled_3d/summary.json
+  CHECKS "reaction_force_norm:rel:2e-4;strain_energy:rel:2e-3"
+  REQUIRES "qs_coupled_3d;qs_fem_3d" LABELS "scene;coupling")
+spinesim_add_comparison_test(coupling.quasi_static_ranks_agree
+  A ${_qs_runs}/coupled_2d/summary.json B ${_qs_runs}/coupled_2d_2ranks/summary.json
+  CHECKS "reaction_force_norm:rel:1e-6;strain_energy:rel:1e-6"
+  REQUIRES "qs_coupled_2d;qs_coupled_2d_2ranks" LABELS "scene;coupling;mpi")
 
 # Reflected energy below 1 % (issue bound; 0.12 % measured at one particle per cell). The
 # splice is not exactly energy conserving: 4.2 % of the energy is lost in the overlap at this
