@@ -9,6 +9,7 @@
 #include <deal.II/base/array_view.h>
 #include <deal.II/base/mpi.h>
 #include <deal.II/base/quadrature_lib.h>
+#include <deal.II/base/timer.h>
 #include <deal.II/base/utilities.h>
 #include <deal.II/dofs/dof_tools.h>
 #include <deal.II/fe/fe_values.h>
@@ -24,6 +25,7 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <set>
 #include <unordered_map>
 
@@ -109,6 +111,17 @@ double spline_weight(double r) {
   const double s = 1 - r;
   return 4.0 / 3.0 * s * s * s;
 }
+
+// Adds the wall time of its scope to a sink [s].
+class ScopedTime {
+ public:
+  explicit ScopedTime(double& sink) : sink_(sink) { timer_.start(); }
+  ~ScopedTime() { sink_ += timer_.wall_time(); }
+
+ private:
+  double& sink_;
+  Timer timer_;
+};
 
 // A particle made by a conversion or a ghost-layer update, as exchanged between ranks.
 using Record = std::pair<std::string, std::vector<double>>;
@@ -514,6 +527,7 @@ double FemParticleCoupling<dim>::strain_energy() const {
 
 template <int dim>
 std::vector<CellId> FemParticleCoupling<dim>::flagged_cells() const {
+  ScopedTime time(timings_.criteria);
   const bool any = prm_.principal_strain_threshold > 0 || prm_.plastic_strain_threshold > 0 ||
                    prm_.min_jacobian_ratio > 0 || prm_.min_time_step > 0;
   std::vector<Point<dim>> centres;
@@ -586,9 +600,13 @@ FemParticleCoupling<dim>::convert(const std::vector<CellId>& cells) {
   if (todo.empty())
     return report;
   const MPI_Comm comm = fem_.mpi_communicator();
-  report.mass_before = total_mass();
-  report.momentum_before = total_momentum();
-  report.kinetic_before = kinetic_energy();
+  {
+    ScopedTime time(timings_.totals);
+    report.mass_before = total_mass();
+    report.momentum_before = total_momentum();
+    report.kinetic_before = kinetic_energy();
+  }
+  std::optional<ScopedTime> records_time(timings_.records);
 
   // Records of the new free particles from the ranks owning their cells.
   const auto& fe = fem_.fe();
@@ -725,14 +743,18 @@ FemParticleCoupling<dim>::convert(const std::vector<CellId>& cells) {
   for (const auto& id : todo)
     converted_.emplace(id, batch);
 
+  records_time.reset();
   // Deactivate the converted cells (owned and ghost cells, by CellId).
+  std::optional<ScopedTime> deactivation_time(timings_.deactivation);
   std::vector<bool> active(fem_.dof_handler().get_triangulation().n_active_cells(), true);
   for (const auto& cell : fem_.dof_handler().active_cell_iterators())
     if ((cell->is_locally_owned() || cell->is_ghost()) && converted_.count(cell->id().to_string()))
       active[cell->active_cell_index()] = false;
   fem_.set_active_cells(active);
+  deactivation_time.reset();
   rebuild_interface();
 
+  ScopedTime time(timings_.totals);
   report.max_velocity_scale =
       Utilities::MPI::max(report.max_velocity_scale, fem_.mpi_communicator());
   report.mass_after = total_mass();
@@ -751,6 +773,7 @@ void FemParticleCoupling<dim>::rebuild_interface() {
   const unsigned int np = impl_->points.size();
 
   // 1. Ghost particles: every point of an active cell near a free particle (whole cells).
+  std::optional<ScopedTime> ghosts_time(timings_.ghosts);
   std::vector<Point<dim>> free_points;
   for (unsigned int i = 0; i < particles_.size(); ++i)
     if (free_[i])
@@ -847,9 +870,14 @@ void FemParticleCoupling<dim>::rebuild_interface() {
       }
   }
 
-  rebuild_bonds();
+  ghosts_time.reset();
+  {
+    ScopedTime time(timings_.bonds);
+    rebuild_bonds();
+  }
 
   // 4. Interface DoFs: shared by an active and a converted cell; MLS fit of free particles.
+  ScopedTime interface_time(timings_.interface);
   impl_->interface.clear();
   impl_->interface_registered = false;
   const auto& dh = fem_.dof_handler();

@@ -172,6 +172,18 @@ class FemParticleCoupling {
   bool is_free(unsigned int i) const { return free_[i] != 0; }
   const std::vector<ConversionReport>& conversions() const { return reports_; }
 
+  // Wall time of the conversions by phase, summed over the run [s].
+  struct Timings {
+    double criteria = 0;     // indicators on the candidate cells (flagged_cells)
+    double records = 0;      // particles made from the cells, exchanged and added
+    double deactivation = 0; // cells out of the FEM (stiffness, mass)
+    double ghosts = 0;       // the ghost layer
+    double bonds = 0;        // incremental bond search and row ownership
+    double interface = 0;    // interface DoFs, their MLS fits, halo plan, first update
+    double totals = 0;       // mass, momentum and energy before and after (the report)
+  };
+  const Timings& timings() const { return timings_; }
+
   // Every rank's copy of u, v, damage and temperature of all particles from their owners
   // (collective; output, checkpoints and figures read the replicated set).
   void synchronise() const;
@@ -222,6 +234,7 @@ class FemParticleCoupling {
   void plan_exchange();
   void exchange_halo();    // u, v of halo particles from their owners
   std::vector<int> owner_; // rank owning each particle's host cell
+  mutable Timings timings_;
   unsigned int rank_ = 0;
 };
 

@@ -546,6 +546,12 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
     s.set_figure("conversion_momentum_change_relative", dp, "-");
     s.set_figure("conversion_kinetic_energy_change_relative", dk, "-");
     s.set_figure("conversion_max_velocity_scale", scale, "-");
+    const auto& t = coupled_->timings();
+    for (const auto& [name, value] :
+         {std::pair<const char*, double>{"criteria", t.criteria}, {"records", t.records},
+          {"deactivation", t.deactivation}, {"ghosts", t.ghosts}, {"bonds", t.bonds},
+          {"interface", t.interface}, {"totals", t.totals}})
+      s.set_figure(std::string("conversion_time_") + name + "_s", value, "s");
     if (mech_prm_.time_integration == "quasi_static") {
       s.set_figure("relaxation_iterations", double(relaxation_iterations_), "iterations");
       s.set_figure("relaxation_relative_residual", last_relaxation_.relative_residual, "-");

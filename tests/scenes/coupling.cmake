@@ -114,6 +114,14 @@ spinesim_add_comparison_test(coupling.fracture_heat_ranks_agree
   CHECKS "fracture_dissipation:rel:1e-9;fracture_heat_applied:rel:1e-9;heat_content:rel:1e-12"
   REQUIRES "heat_1;heat_2" LABELS "scene;coupling;mpi")
 
+# The same in 3-D, a 0.1 m thick slab (about 20 s): the same balances; the dissipation bound is
+# Gc x the new crack area, 100 J/m^2 x 2 x 0.30 m x 0.1 m = 6 J (9.2 J measured; the damage
+# band is wider than one bond layer, as in 2-D). Heat gained vs supplied: 1.8e-4 measured.
+spinesim_add_scene_test(coupling.fracture_heat_3d SCENE ${_val}/coupling_fracture_heat_3d.prm
+  OUT ${_heat_runs}/fracture_heat_3d
+  EXPECT "status==ok;fracture_heat_supplied_relative<=1e-12;heat_energy_balance_relative<=1e-3;fracture_dissipation>=6;crack_extent_max_x_m>=0.45;crack_extent_min_x_m<=-0.45"
+  LABELS "scene;validation;coupling" TIMEOUT 600)
+
 # The cracked plate, coupled and fully in particles. Each run conserves mass and momentum
 # at every conversion (round-off, see the patch test) and the crack must run from the 0.15 m
 # pre-crack tips to the plate edges (damaged particles, phi >= 0.35, beyond x = 0.45 m).
