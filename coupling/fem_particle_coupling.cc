@@ -3,6 +3,7 @@
 #include "fem/cell_indicators.h"
 #include "fem/heat/heat_solver.h"
 #include "fem/materials/failure.h"
+#include "fem/scoped_time.h"
 #include "meshfree/neighbor_search.h"
 #include "meshfree/particle_output.h"
 
@@ -111,17 +112,6 @@ double spline_weight(double r) {
   const double s = 1 - r;
   return 4.0 / 3.0 * s * s * s;
 }
-
-// Adds the wall time of its scope to a sink [s].
-class ScopedTime {
- public:
-  explicit ScopedTime(double& sink) : sink_(sink) { timer_.start(); }
-  ~ScopedTime() { sink_ += timer_.wall_time(); }
-
- private:
-  double& sink_;
-  Timer timer_;
-};
 
 // A particle made by a conversion or a ghost-layer update, as exchanged between ranks.
 using Record = std::pair<std::string, std::vector<double>>;
@@ -527,7 +517,7 @@ double FemParticleCoupling<dim>::strain_energy() const {
 
 template <int dim>
 std::vector<CellId> FemParticleCoupling<dim>::flagged_cells() const {
-  ScopedTime time(timings_.criteria);
+  fem::ScopedTime time(timings_.criteria);
   const bool any = prm_.principal_strain_threshold > 0 || prm_.plastic_strain_threshold > 0 ||
                    prm_.min_jacobian_ratio > 0 || prm_.min_time_step > 0;
   std::vector<Point<dim>> centres;
@@ -601,12 +591,12 @@ FemParticleCoupling<dim>::convert(const std::vector<CellId>& cells) {
     return report;
   const MPI_Comm comm = fem_.mpi_communicator();
   {
-    ScopedTime time(timings_.totals);
+    fem::ScopedTime time(timings_.totals);
     report.mass_before = total_mass();
     report.momentum_before = total_momentum();
     report.kinetic_before = kinetic_energy();
   }
-  std::optional<ScopedTime> records_time(timings_.records);
+  std::optional<fem::ScopedTime> records_time(timings_.records);
 
   // Records of the new free particles from the ranks owning their cells.
   const auto& fe = fem_.fe();
@@ -745,7 +735,7 @@ FemParticleCoupling<dim>::convert(const std::vector<CellId>& cells) {
 
   records_time.reset();
   // Deactivate the converted cells (owned and ghost cells, by CellId).
-  std::optional<ScopedTime> deactivation_time(timings_.deactivation);
+  std::optional<fem::ScopedTime> deactivation_time(timings_.deactivation);
   std::vector<bool> active(fem_.dof_handler().get_triangulation().n_active_cells(), true);
   for (const auto& cell : fem_.dof_handler().active_cell_iterators())
     if ((cell->is_locally_owned() || cell->is_ghost()) && converted_.count(cell->id().to_string()))
@@ -754,7 +744,7 @@ FemParticleCoupling<dim>::convert(const std::vector<CellId>& cells) {
   deactivation_time.reset();
   rebuild_interface();
 
-  ScopedTime time(timings_.totals);
+  fem::ScopedTime time(timings_.totals);
   report.max_velocity_scale =
       Utilities::MPI::max(report.max_velocity_scale, fem_.mpi_communicator());
   report.mass_after = total_mass();
@@ -773,7 +763,7 @@ void FemParticleCoupling<dim>::rebuild_interface() {
   const unsigned int np = impl_->points.size();
 
   // 1. Ghost particles: every point of an active cell near a free particle (whole cells).
-  std::optional<ScopedTime> ghosts_time(timings_.ghosts);
+  std::optional<fem::ScopedTime> ghosts_time(timings_.ghosts);
   std::vector<Point<dim>> free_points;
   for (unsigned int i = 0; i < particles_.size(); ++i)
     if (free_[i])
@@ -872,12 +862,12 @@ void FemParticleCoupling<dim>::rebuild_interface() {
 
   ghosts_time.reset();
   {
-    ScopedTime time(timings_.bonds);
+    fem::ScopedTime time(timings_.bonds);
     rebuild_bonds();
   }
 
   // 4. Interface DoFs: shared by an active and a converted cell; MLS fit of free particles.
-  ScopedTime interface_time(timings_.interface);
+  fem::ScopedTime interface_time(timings_.interface);
   impl_->interface.clear();
   impl_->interface_registered = false;
   const auto& dh = fem_.dof_handler();
@@ -1381,8 +1371,9 @@ FemParticleCoupling<dim>::relax(double time, bool with_conversion) {
     report.iterations = it;
     report.relative_residual = scale > 0 ? residual / scale : 0.0;
     if (!std::isfinite(residual))
-      throw NumericalFailure("non-finite residual", "relaxation at t = " + std::to_string(time) +
-                                                        ", iteration " + std::to_string(it),
+      throw NumericalFailure("non-finite residual",
+                             "relaxation at t = " + std::to_string(time) + ", iteration " +
+                                 std::to_string(it),
                              "check the materials and the loads of this step");
     // The first step's forces are those of the previous state: judge from the second on.
     if (it > 1 && residual <= prm_.relaxation_tolerance * scale) {

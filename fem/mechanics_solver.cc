@@ -1,5 +1,7 @@
 #include "fem/mechanics_solver.h"
 
+#include "fem/scoped_time.h"
+
 #include "fem/materials/failure.h"
 
 #include <deal.II/base/mpi.h>
@@ -106,16 +108,6 @@ void unpack(const double* in, QuadraturePointData& d) {
   full(d.deformation);
   d.work_density = *in++;
 }
-
-class ScopedTime {
- public:
-  explicit ScopedTime(double& sink) : sink_(sink) { timer_.start(); }
-  ~ScopedTime() { sink_ += timer_.wall_time(); }
-
- private:
-  double& sink_;
-  Timer timer_;
-};
 
 } // namespace
 
@@ -1278,8 +1270,7 @@ void MechanicsSolver<dim>::central_difference(double dt, double a, double bc_tim
   if (!std::isfinite(u_.l2_norm())) // NaN must not pass silently
     throw NumericalFailure("non-finite displacement",
                            (sums ? "relaxation step at t = " : "explicit step at t = ") +
-                               std::to_string(time_) +
-                               ", dt = " + std::to_string(dt),
+                               std::to_string(time_) + ", dt = " + std::to_string(dt),
                            "reduce the time step (CFL safety factor) or check the materials");
 }
 
