@@ -29,13 +29,11 @@ spinesim_add_scene_test(cli.missing_file ARGS "run;${_cli}/no_such_scene.prm;--o
 # crack must grow beyond the 0.15 m pre-crack tips (damaged particles beyond x = 0.3 m).
 spinesim_add_scene_test(cli.default_scene
   EXPECT "status==ok;conversion_mass_change_relative<=1e-12;conversion_momentum_change_relative<=1e-11;max_damage>=0.5;crack_extent_max_x_m>=0.3;converted_cells>=300"
-  LABELS "cli;scene")
+  LABELS "cli;scene" FIXTURE default_run)
 # The thermo-mechanical demo: the drill heat is conserved, heat gained equals energy supplied
 # to the CG tolerance (1e-10 relative per step, 40 steps: 1e-6 leaves ample room).
 spinesim_add_scene_test(scene.plate_drilling SCENE ${PROJECT_SOURCE_DIR}/applications/scenes/plate_drilling.prm
-  EXPECT "status==ok;heat_energy_balance_relative<=1e-6" LABELS "scene")
-set_tests_properties(scene.plate_drilling PROPERTIES FIXTURES_SETUP drill_run)
-set_tests_properties(cli.default_scene PROPERTIES FIXTURES_SETUP default_run)
+  EXPECT "status==ok;heat_energy_balance_relative<=1e-6" LABELS "scene" FIXTURE drill_run)
 spinesim_add_scene_test(cli.no_overwrite
   ARGS "run;--output;${CMAKE_CURRENT_BINARY_DIR}/runs/cli.default_scene"
   EXIT 2 MATCH "refusing to overwrite" LABELS "cli")
@@ -44,11 +42,10 @@ set_tests_properties(cli.no_overwrite PROPERTIES FIXTURES_REQUIRED default_run)
 # Two MPI ranks give the same figures as one (relative 1e-6): the explicit coupled run differs
 # between partitions only by the summation order of the FEM forces (measured 1e-13 relative;
 # the crack follows the same bonds).
-spinesim_add_scene_test(cli.default_scene_2ranks RANKS 2 EXPECT "status==ok" LABELS "cli;scene")
+spinesim_add_scene_test(cli.default_scene_2ranks RANKS 2 EXPECT "status==ok" LABELS "cli;scene" FIXTURE default_run_2)
 add_test(NAME cli.ranks_agree
          COMMAND ${CMAKE_COMMAND} -DA=${CMAKE_CURRENT_BINARY_DIR}/runs/cli.default_scene/summary.json
                  -DB=${CMAKE_CURRENT_BINARY_DIR}/runs/cli.default_scene_2ranks/summary.json
                  -DTOL=1e-6 -DFLOOR=1e-9 -P ${PROJECT_SOURCE_DIR}/tests/support/compare_summaries.cmake)
-set_tests_properties(cli.default_scene_2ranks PROPERTIES FIXTURES_SETUP default_run_2)
 set_tests_properties(cli.ranks_agree PROPERTIES LABELS "cli;mpi"
                      FIXTURES_REQUIRED "default_run;default_run_2")

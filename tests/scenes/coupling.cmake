@@ -45,27 +45,22 @@ set(_qs ${_val}/coupling_quasi_static.prm)
 set(_qs_runs ${CMAKE_CURRENT_BINARY_DIR}/runs/quasi_static)
 set(_qs_checks "status==ok;relaxation_relative_residual<=1e-9;free_particles>=384")
 spinesim_add_scene_test(coupling.quasi_static_2d SCENE ${_qs} OUT ${_qs_runs}/coupled_2d
-  EXPECT "${_qs_checks}" LABELS "scene;validation;coupling")
+  EXPECT "${_qs_checks}" LABELS "scene;validation;coupling" FIXTURE qs_coupled_2d)
 spinesim_add_scene_test(coupling.quasi_static_2d_2ranks SCENE ${_qs} OUT ${_qs_runs}/coupled_2d_2ranks
-  RANKS 2 EXPECT "${_qs_checks}" LABELS "scene;validation;coupling;mpi")
+  RANKS 2 EXPECT "${_qs_checks}" LABELS "scene;validation;coupling;mpi" FIXTURE qs_coupled_2d_2ranks)
 spinesim_add_scene_test(coupling.quasi_static_2d_fem SCENE ${_qs} OUT ${_qs_runs}/fem_2d
   SET "Effects/Coupling=false" "Effects/Particles method=none"
-  EXPECT "status==ok" LABELS "scene;validation;coupling")
+  EXPECT "status==ok" LABELS "scene;validation;coupling" FIXTURE qs_fem_2d)
 set(_qs_3d "Dimension=3" "Geometry/Origin=-0.5,-0.5,-0.5" "Geometry/Lengths=1,1,1"
     "Geometry/Subdivisions=24,24,24" "Mechanics/Plane stress=false" "Material/Poisson ratio=0.25"
     "Coupling/Initial region lower corner=-0.15,-0.15,-0.15"
     "Coupling/Initial region upper corner=0.15,0.15,0.15")
 spinesim_add_scene_test(coupling.quasi_static_3d SCENE ${_qs} OUT ${_qs_runs}/coupled_3d
   SET ${_qs_3d} EXPECT "status==ok;relaxation_relative_residual<=1e-9;free_particles>=512"
-  LABELS "scene;validation;coupling")
+  LABELS "scene;validation;coupling" FIXTURE qs_coupled_3d)
 spinesim_add_scene_test(coupling.quasi_static_3d_fem SCENE ${_qs} OUT ${_qs_runs}/fem_3d
   SET ${_qs_3d} "Effects/Coupling=false" "Effects/Particles method=none"
-  EXPECT "status==ok" LABELS "scene;validation;coupling")
-set_tests_properties(coupling.quasi_static_2d PROPERTIES FIXTURES_SETUP qs_coupled_2d)
-set_tests_properties(coupling.quasi_static_2d_2ranks PROPERTIES FIXTURES_SETUP qs_coupled_2d_2ranks)
-set_tests_properties(coupling.quasi_static_2d_fem PROPERTIES FIXTURES_SETUP qs_fem_2d)
-set_tests_properties(coupling.quasi_static_3d PROPERTIES FIXTURES_SETUP qs_coupled_3d)
-set_tests_properties(coupling.quasi_static_3d_fem PROPERTIES FIXTURES_SETUP qs_fem_3d)
+  EXPECT "status==ok" LABELS "scene;validation;coupling" FIXTURE qs_fem_3d)
 spinesim_add_comparison_test(coupling.quasi_static_2d_agrees_with_fem
   A ${_qs_runs}/fem_2d/summary.json B ${_qs_runs}/coupled_2d/summary.json
   CHECKS "reaction_force_norm:rel:2e-4;strain_energy:rel:2e-3"
@@ -101,14 +96,12 @@ spinesim_add_scene_test(coupling.wave_fine SCENE ${_val}/coupling_wave.prm
 set(_heat_checks "status==ok;fracture_heat_supplied_relative<=1e-12;heat_energy_balance_relative<=1e-3;fracture_dissipation>=60;crack_extent_max_x_m>=0.45;crack_extent_min_x_m<=-0.45")
 set(_heat_runs ${CMAKE_CURRENT_BINARY_DIR}/runs)
 spinesim_add_scene_test(coupling.fracture_heat SCENE ${_val}/coupling_fracture_heat.prm
-  OUT ${_heat_runs}/fracture_heat_1 EXPECT "${_heat_checks}" LABELS "scene;validation;coupling")
+  OUT ${_heat_runs}/fracture_heat_1 EXPECT "${_heat_checks}" LABELS "scene;validation;coupling" FIXTURE heat_1)
 spinesim_add_scene_test(coupling.fracture_heat_2ranks SCENE ${_val}/coupling_fracture_heat.prm
   OUT ${_heat_runs}/fracture_heat_2 RANKS 2 EXPECT "${_heat_checks}"
-  LABELS "scene;validation;coupling;mpi")
+  LABELS "scene;validation;coupling;mpi" FIXTURE heat_2)
 # Each bond row is summed in the same order on its owner, so the runs differ only in the order
 # of the sums over ranks (measured 1.7e-14 and 4.9e-14).
-set_tests_properties(coupling.fracture_heat PROPERTIES FIXTURES_SETUP heat_1)
-set_tests_properties(coupling.fracture_heat_2ranks PROPERTIES FIXTURES_SETUP heat_2)
 spinesim_add_comparison_test(coupling.fracture_heat_ranks_agree
   A ${_heat_runs}/fracture_heat_1/summary.json B ${_heat_runs}/fracture_heat_2/summary.json
   CHECKS "fracture_dissipation:rel:1e-9;fracture_heat_applied:rel:1e-9;heat_content:rel:1e-12"
@@ -130,16 +123,14 @@ set(_runs ${CMAKE_CURRENT_BINARY_DIR}/runs)
 spinesim_add_scene_test(scene.cracked_plate_coupled SCENE ${_plate} OUT ${_runs}/cracked_plate_coupled
   SET "Simulation/Write VTU=false"
   EXPECT "status==ok;conversion_mass_change_relative<=1e-12;conversion_momentum_change_relative<=1e-11;max_damage>=0.5;crack_extent_max_x_m>=0.45"
-  LABELS "scene;coupling" TIMEOUT 600)
+  LABELS "scene;coupling" TIMEOUT 600 FIXTURE plate_coupled)
 spinesim_add_scene_test(scene.cracked_plate_all_particles SCENE ${_plate}
   OUT ${_runs}/cracked_plate_all_particles
   SET "Simulation/Write VTU=false" "Coupling/All particles=true"
   EXPECT "status==ok;free_particles>=25600"
-  LABELS "scene;coupling" TIMEOUT 900)
+  LABELS "scene;coupling" TIMEOUT 900 FIXTURE plate_particles)
 # Issue bounds: peak loads within 5 %, crack paths within two particle spacings (12.5 mm):
 # the crack's mean offset from y = 0 and both ends of the damaged band.
-set_tests_properties(scene.cracked_plate_coupled PROPERTIES FIXTURES_SETUP plate_coupled)
-set_tests_properties(scene.cracked_plate_all_particles PROPERTIES FIXTURES_SETUP plate_particles)
 spinesim_add_comparison_test(scene.cracked_plate_agree
   A ${_runs}/cracked_plate_all_particles/summary.json B ${_runs}/cracked_plate_coupled/summary.json
   CHECKS "peak_load_N:rel:0.05;crack_path_rms_y_m:abs:0.0125;crack_extent_max_x_m:abs:0.0125;crack_extent_min_x_m:abs:0.0125"

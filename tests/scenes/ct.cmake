@@ -34,13 +34,11 @@ set(_runs ${CMAKE_CURRENT_BINARY_DIR}/runs)
 spinesim_add_scene_test(scene.vertebra_compression SCENE ${_vertebra}
   SET "CT/Coarsening factor=3"
   EXPECT "status==ok;stiffness_N_per_mm>=5000;stiffness_N_per_mm<=30000;force_balance_error<=1e-6"
-  LABELS "scene;fem")
-set_tests_properties(scene.vertebra_compression PROPERTIES FIXTURES_SETUP vertebra_1)
+  LABELS "scene;fem" FIXTURE vertebra_1)
 spinesim_add_scene_test(scene.vertebra_compression_2ranks SCENE ${_vertebra} RANKS 2
   SET "CT/Coarsening factor=3"
   EXPECT "status==ok;stiffness_N_per_mm>=5000;stiffness_N_per_mm<=30000;force_balance_error<=1e-6"
-  LABELS "scene;fem")
-set_tests_properties(scene.vertebra_compression_2ranks PROPERTIES FIXTURES_SETUP vertebra_2)
+  LABELS "scene;fem" FIXTURE vertebra_2)
 # 1 and 2 ranks agree: the same mesh and laws, only the partition (and so the AMG and the
 # round-off of the CG iterates) differ; figures to 1e-6 relative (solver tolerance 1e-10 on
 # the residual, condition number of a 3000:1 modulus contrast); balance errors below 1e-6

@@ -3,8 +3,7 @@
 # --restart ends with the same figures as the uninterrupted run (cli.default_scene).
 set(_runs ${CMAKE_CURRENT_BINARY_DIR}/runs)
 spinesim_add_scene_test(scene.restart_first_half SET "Simulation/Stop after step=5"
-                        EXPECT "status==ok;last_step~5:0")
-set_tests_properties(scene.restart_first_half PROPERTIES FIXTURES_SETUP restart_half)
+                        EXPECT "status==ok;last_step~5:0" FIXTURE restart_half)
 spinesim_add_scene_test(scene.restart_second_half
   ARGS "run;--restart;${_runs}/scene.restart_first_half;--set;Simulation/Stop after step=0;--progress;lines"
   OUT ${_runs}/scene.restart_first_half EXPECT "status==ok;last_step~20:0")
@@ -22,8 +21,7 @@ set_tests_properties(scene.restart_matches_uninterrupted PROPERTIES LABELS "scen
 # The same for the thermo-mechanical demo (heat + quasi-static mechanics checkpoints).
 set(_drill ${PROJECT_SOURCE_DIR}/applications/scenes/plate_drilling.prm)
 spinesim_add_scene_test(scene.restart_drilling_first_half SCENE ${_drill}
-                        SET "Simulation/Stop after step=5" EXPECT "status==ok;last_step~5:0")
-set_tests_properties(scene.restart_drilling_first_half PROPERTIES FIXTURES_SETUP drill_half)
+                        SET "Simulation/Stop after step=5" EXPECT "status==ok;last_step~5:0" FIXTURE drill_half)
 spinesim_add_scene_test(scene.restart_drilling_second_half
   ARGS "run;--restart;${_runs}/scene.restart_drilling_first_half;--set;Simulation/Stop after step=0;--progress;lines"
   OUT ${_runs}/scene.restart_drilling_first_half EXPECT "status==ok;last_step~10:0")
