@@ -1300,16 +1300,8 @@ void FemParticleCoupling<dim>::advance(double dt, double a, double load_time, bo
         }
         const double acc = f / m;
         double& vi = particles_.velocity(i)[d];
-        if (sums) {
-          sums->residual_square += f * f;
-          double& before = previous[dim * i + d]; // as MechanicsSolver::relaxation_step
-          const double ui = particles_.displacement(i)[d];
-          if (std::isfinite(before) && vi != 0) {
-            sums->stiffness_numerator += ui * ui * (-(acc - before) / (dt * vi));
-            sums->stiffness_denominator += ui * ui;
-          }
-          before = acc;
-        }
+        if (sums)
+          sums->add_free(f, acc, previous[dim * i + d], particles_.displacement(i)[d], vi, dt);
         vi = ((1.0 - 0.5 * a * dt) * vi + dt * acc) / (1.0 + 0.5 * a * dt);
         particles_.displacement(i)[d] += dt * vi;
       }
@@ -1319,11 +1311,7 @@ void FemParticleCoupling<dim>::advance(double dt, double a, double load_time, bo
     update_interface_dofs();
   }
   if (sums) {
-    const auto fem_sums = fem_.relaxation_step(dt, a, load_time, first);
-    sums->stiffness_numerator += fem_sums.stiffness_numerator;
-    sums->stiffness_denominator += fem_sums.stiffness_denominator;
-    sums->residual_square += fem_sums.residual_square;
-    sums->reaction_square += fem_sums.reaction_square;
+    *sums += fem_.relaxation_step(dt, a, load_time, first);
   } else {
     fem_.explicit_step(dt);
   }
@@ -1357,10 +1345,10 @@ FemParticleCoupling<dim>::relax(double time, bool with_conversion) {
   double dt = stable_time_step();
   double c = 0, peak_residual = 0;
   bool first = true;
+  time_ = time; // held: advance() with sums does not move the clock
   for (unsigned int it = 1; it <= prm_.relaxation_max_iterations; ++it) {
     RelaxationSums local;
     advance(dt, c, time, first, &local);
-    time_ = time;
     first = false;
     double values[4] = {local.stiffness_numerator, local.stiffness_denominator,
                         local.residual_square, local.reaction_square};

@@ -87,6 +87,15 @@ class PvdRecord {
   std::vector<std::pair<double, std::string>> entries_;
 };
 
+// One log line per conversion: what moved and what it conserved.
+template <typename Report>
+void log_conversion(RunContext& ctx, double time, const Report& r) {
+  ctx.log() << "  t = " << time << " s: " << r.cells << " cells -> " << r.particles
+            << " particles (mass change " << r.mass_change_relative() << ", momentum change "
+            << r.momentum_change_relative() << " relative; kinetic energy moved "
+            << r.kinetic_after - r.kinetic_before << " J)\n";
+}
+
 template <int dim>
 class Simulation : public Scenario {
  public:
@@ -278,9 +287,7 @@ void Simulation<dim>::advance(unsigned int step, double time, double dt, RunCont
       relaxation_iterations_ += report.iterations;
       last_relaxation_ = report;
       for (const auto& r : report.conversions)
-        ctx.log() << "  t = " << time << " s: " << r.cells << " cells -> " << r.particles
-                  << " particles (mass change " << r.mass_change_relative()
-                  << ", momentum change " << r.momentum_change_relative() << " relative)\n";
+        log_conversion(ctx, time, r);
       if (!report.converged)
         throw NumericalFailure("relaxation not converged",
                                "step " + std::to_string(step) + ", t = " + std::to_string(time) +
@@ -309,11 +316,7 @@ void Simulation<dim>::advance(unsigned int step, double time, double dt, RunCont
           const auto r = coupled_->convert_flagged();
           if (r.cells > 0) {
             coupled_dt_ = coupled_->stable_time_step();
-            ctx.log() << "  t = " << t << " s: " << r.cells << " cells -> " << r.particles
-                      << " particles (mass change " << r.mass_change_relative()
-                      << ", momentum change " << r.momentum_change_relative()
-                      << " relative; kinetic energy moved " << r.kinetic_after - r.kinetic_before
-                      << " J)\n";
+            log_conversion(ctx, t, r);
           }
         }
       }

@@ -1228,17 +1228,10 @@ void MechanicsSolver<dim>::central_difference(double dt, double a, double bc_tim
       if (sums) {
         if (step_dirichlet_[k] || step_driven_[k]) {
           sums->reaction_square += r[k] * r[k];
+          relax_acceleration_[k] = acc;
         } else {
-          sums->residual_square += r[k] * r[k];
-          // Local stiffness from the change of acceleration over the last step (Kilic &
-          // Madenci 2010): k_i = −(a_i^n − a_i^{n−1}) / (dt v_i^{n−½}), weighted by u_i².
-          const double previous = relax_acceleration_[k];
-          if (std::isfinite(previous) && v[k] != 0) {
-            sums->stiffness_numerator += u[k] * u[k] * (-(acc - previous) / (dt * v[k]));
-            sums->stiffness_denominator += u[k] * u[k];
-          }
+          sums->add_free(r[k], acc, relax_acceleration_[k], u[k], v[k], dt);
         }
-        relax_acceleration_[k] = acc;
       }
       v[k] = ((1.0 - 0.5 * a * dt) * v[k] + dt * acc) / (1.0 + 0.5 * a * dt);
       u[k] += dt * v[k];

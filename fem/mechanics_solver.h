@@ -31,6 +31,7 @@
 #include <deal.II/lac/vector.h>
 
 #include <cstdint>
+#include <cmath>
 #include <functional>
 #include <map>
 #include <memory>
@@ -154,6 +155,25 @@ class MechanicsSolver {
     double stiffness_denominator = 0; // Σ u_i² [m²]
     double residual_square = 0;       // Σ r_i² over free DoFs [N²]
     double reaction_square = 0;       // Σ r_i² over Dirichlet and driven DoFs [N²]
+
+    // A free component with net force r [N], net acceleration a [m/s²], displacement u and
+    // velocity v^{n−½} at pseudo-step dt: its residual and its local stiffness estimate
+    // k = −(a − a_previous) / (dt v) (Kilic & Madenci 2010); a_previous becomes a.
+    void add_free(double r, double a, double& a_previous, double u, double v, double dt) {
+      residual_square += r * r;
+      if (std::isfinite(a_previous) && v != 0) {
+        stiffness_numerator += u * u * (-(a - a_previous) / (dt * v));
+        stiffness_denominator += u * u;
+      }
+      a_previous = a;
+    }
+    RelaxationSums& operator+=(const RelaxationSums& o) {
+      stiffness_numerator += o.stiffness_numerator;
+      stiffness_denominator += o.stiffness_denominator;
+      residual_square += o.residual_square;
+      reaction_square += o.reaction_square;
+      return *this;
+    }
   };
   RelaxationSums relaxation_step(double dt, double damping, double time, bool first);
   // Sets every velocity to zero (the end of a relaxation).
