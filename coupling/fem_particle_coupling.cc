@@ -1339,7 +1339,8 @@ FemParticleCoupling<dim>::relax(double time, bool with_conversion) {
   // the local stiffness estimates of both models (critical for the lowest mode, updated every
   // step, one step late). Converged when ‖free residual‖ ≤ tolerance × max(‖reactions‖,
   // largest ‖free residual‖ of this relaxation). Bonds break as the state relaxes; cells
-  // convert every Check interval steps. Velocities are pseudo-velocities and end at zero.
+  // convert at equilibrium, and the state relaxes again after a conversion. Velocities are
+  // pseudo-velocities and end at zero.
   const MPI_Comm comm = fem_.mpi_communicator();
   RelaxationReport report;
   double dt = stable_time_step();
@@ -1365,20 +1366,23 @@ FemParticleCoupling<dim>::relax(double time, bool with_conversion) {
                              "check the materials and the loads of this step");
     // The first step's forces are those of the previous state: judge from the second on.
     if (it > 1 && residual <= prm_.relaxation_tolerance * scale) {
-      report.converged = true;
-      break;
+      // Conversion is decided at equilibrium, not on the transient strains of the relaxation
+      // (which depend on its path and tolerance): cells flagged now convert and the state
+      // relaxes again, until no cell converts.
+      const auto r = with_conversion ? convert_flagged() : ConversionReport();
+      if (r.cells == 0) {
+        report.converged = true;
+        break;
+      }
+      report.conversions.push_back(r);
+      dt = stable_time_step();
+      first = true; // new unknowns: restart the stiffness estimate
+      c = 0;
+      continue;
     }
     const double q = values[1] > 0 ? values[0] / values[1] : 0.0;
     c = q > 0 ? std::min(2.0 * std::sqrt(q), 2.0 / dt) : 0.0; // c dt ≤ 2 keeps 1 − c dt/2 ≥ 0
     report.damping = c;
-    if (with_conversion && it % prm_.check_interval == 0) {
-      const auto r = convert_flagged();
-      if (r.cells > 0) {
-        report.conversions.push_back(r);
-        dt = stable_time_step();
-        first = true; // new unknowns: restart the stiffness estimate
-      }
-    }
   }
   // Quasi-static: the pseudo-velocities go.
   for (unsigned int i = 0; i < particles_.size(); ++i)

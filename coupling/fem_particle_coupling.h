@@ -127,9 +127,10 @@ class FemParticleCoupling {
   void step(double dt);
 
   // Quasi-static: adaptive dynamic relaxation of both models to equilibrium under the loads of
-  // `time` (see the .cc); bonds break on the way and, with `with_conversion`, cells convert
-  // every Check interval pseudo-steps. Ends with zero velocities. Not converged within
-  // Relaxation max iterations: converged = false (the caller decides).
+  // `time` (see the .cc); bonds break on the way and, with `with_conversion`, the cells
+  // flagged at equilibrium convert and the state relaxes again, until none is flagged. Ends
+  // with zero velocities. Not converged within Relaxation max iterations (all relaxations of
+  // the step together): converged = false (the caller decides).
   struct RelaxationReport {
     bool converged = false;
     unsigned int iterations = 0;

@@ -1226,8 +1226,11 @@ void MechanicsSolver<dim>::central_difference(double dt, double a, double bc_tim
                                "explicit step", "every material needs a positive density");
       const double acc = sign * r[k] / m;
       if (sums) {
-        if (step_dirichlet_[k] || step_driven_[k]) {
+        // Driven DoFs (the coupling interface; boundary values win where both apply) carry
+        // internal forces of the coupled system: neither residual nor reaction.
+        if (step_dirichlet_[k])
           sums->reaction_square += r[k] * r[k];
+        if (step_dirichlet_[k] || step_driven_[k]) {
           relax_acceleration_[k] = acc;
         } else {
           sums->add_free(r[k], acc, relax_acceleration_[k], u[k], v[k], dt);

@@ -154,7 +154,7 @@ class MechanicsSolver {
     double stiffness_numerator = 0;   // Σ u_i² k_i, k_i = −Δa_i / (dt v_i) [m²/s²]
     double stiffness_denominator = 0; // Σ u_i² [m²]
     double residual_square = 0;       // Σ r_i² over free DoFs [N²]
-    double reaction_square = 0;       // Σ r_i² over Dirichlet and driven DoFs [N²]
+    double reaction_square = 0;       // Σ r_i² over Dirichlet DoFs [N²] (driven: in neither)
 
     // A free component with net force r [N], net acceleration a [m/s²], displacement u and
     // velocity v^{n−½} at pseudo-step dt: its residual and its local stiffness estimate
