@@ -290,6 +290,13 @@ struct FemParticleCoupling<dim>::Impl {
   QIterated<dim> points;                      // particle points of a cell (unit cell)
   FullMatrix<double> shape;                   // N_i(ξ_q), [q][i]
   std::map<std::string, DoFCell> owned_cells; // locally owned cells by CellId
+  // Per active cell index: a locally owned cell of the particle lattice's size (only these
+  // can convert; the refinement box makes them).
+  std::vector<std::uint8_t> lattice_cell;
+  std::vector<DoFCell> owned_by_index; // locally owned cells by active cell index (else invalid)
+  // Per particle: the active cell index of its host cell if this rank owns it, else -1 (the
+  // CellId strings need a map lookup).
+  std::vector<int> host_index;
   // Ghost particles hosted by locally owned cells: cell and its particle per point.
   std::vector<std::pair<DoFCell, std::vector<int>>> ghost_cells;
   std::vector<int> ghost_lids; // per ghost cell, its DoFs' local indices in the FEM vectors
@@ -436,6 +443,13 @@ void FemParticleCoupling<dim>::prepare() {
   density_ = props[2];
   // The lattice spacing of the particles (uniform meshes: cell edge / n).
   spacing_ = h_min / prm_.particles_per_direction;
+  impl_->lattice_cell.assign(dh.get_triangulation().n_active_cells(), 0);
+  impl_->owned_by_index.assign(dh.get_triangulation().n_active_cells(), typename Impl::DoFCell());
+  for (const auto& [id, cell] : impl_->owned_cells) {
+    impl_->lattice_cell[cell->active_cell_index()] =
+        cell->minimum_vertex_distance() <= 1.5 * spacing_ * prm_.particles_per_direction;
+    impl_->owned_by_index[cell->active_cell_index()] = cell;
+  }
 
   impl_->shape.reinit(impl_->points.size(), fe.n_dofs_per_cell());
   for (unsigned int q = 0; q < impl_->points.size(); ++q)
@@ -463,34 +477,13 @@ double FemParticleCoupling<dim>::total_mass() const {
 
 template <int dim>
 Tensor<1, dim> FemParticleCoupling<dim>::total_momentum() const {
-  Tensor<1, dim> p; // owned free particles, summed over the ranks with the FEM part
+  Tensor<1, dim> p; // owned free particles summed over the ranks, plus the FEM's lumped M v
   for (unsigned int i = 0; i < particles_.size(); ++i)
     if (free_[i] && is_owned(i))
       p += particles_.mass(i) * particles_.velocity(i);
-  const auto& lumped = fem_.lumped_mass();
-  const auto& v = fem_.velocity();
-  const auto& fe = fem_.fe();
-  std::vector<types::global_dof_index> dofs(fe.n_dofs_per_cell());
-  // Component of each owned DoF via the cells (Q1: one component per DoF).
-  Tensor<1, dim> pf;
-  std::vector<bool> seen(lumped.locally_owned_elements().n_elements(), false);
-  for (const auto& cell : fem_.dof_handler().active_cell_iterators())
-    if (cell->is_locally_owned()) {
-      cell->get_dof_indices(dofs);
-      for (unsigned int i = 0; i < dofs.size(); ++i) {
-        if (!lumped.locally_owned_elements().is_element(dofs[i]))
-          continue;
-        const auto local = lumped.locally_owned_elements().index_within_set(dofs[i]);
-        if (seen[local])
-          continue;
-        seen[local] = true;
-        pf[fe.system_to_component_index(i).first] += lumped(dofs[i]) * v(dofs[i]);
-      }
-    }
-  pf += p;
   for (unsigned int d = 0; d < dim; ++d)
-    pf[d] = Utilities::MPI::sum(pf[d], fem_.mpi_communicator());
-  return pf;
+    p[d] = Utilities::MPI::sum(p[d], fem_.mpi_communicator());
+  return p + fem_.momentum();
 }
 
 template <int dim>
@@ -526,8 +519,7 @@ std::vector<CellId> FemParticleCoupling<dim>::flagged_cells() const {
     std::vector<bool> candidate(fem_.dof_handler().get_triangulation().n_active_cells(), false);
     for (const auto& [id, cell] : impl_->owned_cells)
       candidate[cell->active_cell_index()] =
-          fem_.is_active(cell) &&
-          cell->minimum_vertex_distance() <= 1.5 * spacing_ * prm_.particles_per_direction;
+          impl_->lattice_cell[cell->active_cell_index()] && fem_.is_active(cell);
     fem::CellIndicators<dim> indicators;
     indicators.compute(fem_, prm_.plastic_strain_threshold > 0, candidate,
                        prm_.min_jacobian_ratio > 0 || prm_.min_time_step > 0);
@@ -556,8 +548,7 @@ std::vector<CellId> FemParticleCoupling<dim>::flagged_cells() const {
     const double reach = std::max(prm_.buffer, 1e-9 * spacing_);
     PointBins<dim> bins(all_centres, std::max(prm_.buffer, spacing_));
     for (const auto& [id, cell] : impl_->owned_cells)
-      if (fem_.is_active(cell) &&
-          cell->minimum_vertex_distance() <= 1.5 * spacing_ * prm_.particles_per_direction &&
+      if (impl_->lattice_cell[cell->active_cell_index()] && fem_.is_active(cell) &&
           !bins.within(cell->center(), reach).empty())
         mine.push_back(id);
   }
@@ -713,8 +704,7 @@ FemParticleCoupling<dim>::convert(const std::vector<CellId>& cells) {
         i = particles_.add_particle(x, r[3]);
         index_of_[{id, q}] = i;
         free_.push_back(0);
-        host_cell_.push_back(id);
-        host_point_.push_back(q);
+        add_host(id, q);
         impl_->fixed_slots.push_back(0);
       }
       free_[i] = 1;
@@ -736,9 +726,14 @@ FemParticleCoupling<dim>::convert(const std::vector<CellId>& cells) {
   records_time.reset();
   // Deactivate the converted cells (owned and ghost cells, by CellId).
   std::optional<fem::ScopedTime> deactivation_time(timings_.deactivation);
+  // The cells converted before are inactive already; of the others only this batch turns.
+  std::set<CellId> batch_ids;
+  for (const auto& id : todo)
+    batch_ids.emplace(id);
   std::vector<bool> active(fem_.dof_handler().get_triangulation().n_active_cells(), true);
   for (const auto& cell : fem_.dof_handler().active_cell_iterators())
-    if ((cell->is_locally_owned() || cell->is_ghost()) && converted_.count(cell->id().to_string()))
+    if ((cell->is_locally_owned() || cell->is_ghost()) &&
+        (!fem_.is_active(cell) || batch_ids.count(cell->id())))
       active[cell->active_cell_index()] = false;
   fem_.set_active_cells(active);
   deactivation_time.reset();
@@ -774,10 +769,15 @@ void FemParticleCoupling<dim>::rebuild_interface() {
   PointBins<dim> free_bins(free_points, reach);
   std::vector<Record> mine;
   std::vector<Point<dim>> xs(np);
+  FEValues<dim> at_points(fem_.mapping(), fe, impl_->points, update_JxW_values);
+  std::vector<std::uint8_t> hosts(impl_->owned_by_index.size(), 0); // owned cells with particles
+  for (const int c : impl_->host_index)
+    if (c >= 0)
+      hosts[c] = 1;
   for (const auto& [id, cell] : impl_->owned_cells) {
     // Cells hosting particles already, or farther than the reach from every free particle
     // (tested at the centre with the half diagonal added), need no mapping of their points.
-    if (!fem_.is_active(cell) || index_of_.count({id, 0}) ||
+    if (!fem_.is_active(cell) || hosts[cell->active_cell_index()] ||
         !free_bins.any_within(cell->center(), reach + 0.5 * cell->diameter()))
       continue;
     bool near = false;
@@ -787,7 +787,6 @@ void FemParticleCoupling<dim>::rebuild_interface() {
     }
     if (!near)
       continue;
-    FEValues<dim> at_points(fem_.mapping(), fe, impl_->points, update_JxW_values);
     at_points.reinit(cell);
     const double rho = fem_.cell_material(cell).density();
     for (unsigned int q = 0; q < np; ++q) {
@@ -808,25 +807,36 @@ void FemParticleCoupling<dim>::rebuild_interface() {
       particles_.density(i) = r[4];
       index_of_[{id, static_cast<unsigned int>(r[0])}] = i;
       free_.push_back(0);
-      host_cell_.push_back(id);
-      host_point_.push_back(static_cast<unsigned int>(r[0]));
+      add_host(id, static_cast<unsigned int>(r[0]));
       impl_->fixed_slots.push_back(0);
     }
 
   // 2. Local host-cell tables for ghosts (displacements) and free particles (temperatures).
   impl_->ghost_cells.clear();
   impl_->free_cells.clear();
-  std::map<std::string, std::vector<int>> by_cell_ghost, by_cell_free;
-  for (unsigned int i = 0; i < particles_.size(); ++i) {
-    if (!impl_->owned_cells.count(host_cell_[i]))
-      continue;
-    auto& table = free_[i] ? by_cell_free : by_cell_ghost;
-    auto& row = table[host_cell_[i]];
-    row.resize(np, -1);
-    row[host_point_[i]] = static_cast<int>(i);
+  {
+    // Rows by owned host cell, in ascending active cell index. A cell's points are all free
+    // (converted cell) or all ghosts (active cell): each row goes to one table.
+    std::vector<int> slot(impl_->owned_by_index.size(), -1);
+    std::vector<std::pair<int, std::vector<int>>> rows; // (active cell index, row)
+    for (unsigned int i = 0; i < particles_.size(); ++i) {
+      const int c = impl_->host_index[i];
+      if (c < 0)
+        continue;
+      if (slot[c] < 0) {
+        slot[c] = static_cast<int>(rows.size());
+        rows.emplace_back(c, std::vector<int>(np, -1));
+      }
+      rows[slot[c]].second[host_point_[i]] = static_cast<int>(i);
+    }
+    std::sort(rows.begin(), rows.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (auto& [c, row] : rows) {
+      const int any = *std::max_element(row.begin(), row.end());
+      auto& table = free_[any] ? impl_->free_cells : impl_->ghost_cells;
+      table.emplace_back(impl_->owned_by_index[c], std::move(row));
+    }
   }
-  for (auto& [id, row] : by_cell_ghost)
-    impl_->ghost_cells.emplace_back(impl_->owned_cells.at(id), std::move(row));
   {
     // Local indices in the ghosted FEM vectors: element access without a map lookup per read.
     const auto& map = fem_.displacement().trilinos_vector().Map();
@@ -841,8 +851,6 @@ void FemParticleCoupling<dim>::rebuild_interface() {
       }
     }
   }
-  for (auto& [id, row] : by_cell_free)
-    impl_->free_cells.emplace_back(impl_->owned_cells.at(id), std::move(row));
 
   // 3. Dirichlet conditions of converted boundary cells act on their particles.
   impl_->fixed.clear();
@@ -974,7 +982,7 @@ void FemParticleCoupling<dim>::plan_exchange() {
   }
   std::vector<int> owner(particles_.size(), -1);
   for (unsigned int i = 0; i < particles_.size(); ++i)
-    if (impl_->owned_cells.count(host_cell_[i]))
+    if (impl_->host_index[i] >= 0)
       owner[i] = static_cast<int>(rank_);
   owner_.resize(owner.size());
   MPI_Allreduce(owner.data(), owner_.data(), static_cast<int>(owner.size()), MPI_INT, MPI_MAX,
@@ -1079,6 +1087,15 @@ void FemParticleCoupling<dim>::synchronise() const {
 }
 
 template <int dim>
+void FemParticleCoupling<dim>::add_host(const std::string& cell_id, unsigned int point) {
+  host_cell_.push_back(cell_id);
+  host_point_.push_back(point);
+  const auto it = impl_->owned_cells.find(cell_id);
+  impl_->host_index.push_back(
+      it == impl_->owned_cells.end() ? -1 : static_cast<int>(it->second->active_cell_index()));
+}
+
+template <int dim>
 void FemParticleCoupling<dim>::rebuild_bonds() {
   // Broken pairs survive a rebuild (particle indices never change). Sorted pairs (i < j).
   std::vector<std::pair<unsigned int, unsigned int>> broken;
@@ -1096,8 +1113,12 @@ void FemParticleCoupling<dim>::rebuild_bonds() {
   }
   std::sort(broken.begin(), broken.end());
   broken.erase(std::unique(broken.begin(), broken.end()), broken.end());
+  std::vector<std::uint8_t> in_broken(particles_.size(), 0); // the search only where it can hit
+  for (const auto& [i, j] : broken)
+    in_broken[i] = in_broken[j] = 1;
   const auto was_broken = [&](unsigned int i, unsigned int j) {
-    return std::binary_search(broken.begin(), broken.end(),
+    return in_broken[i] && in_broken[j] &&
+           std::binary_search(broken.begin(), broken.end(),
                               std::make_pair(std::min(i, j), std::max(i, j)));
   };
 
@@ -1130,7 +1151,7 @@ void FemParticleCoupling<dim>::rebuild_bonds() {
   std::vector<std::uint8_t> mine(particles_.size(), 1);
   if (Utilities::MPI::n_mpi_processes(fem_.mpi_communicator()) > 1)
     for (unsigned int i = 0; i < particles_.size(); ++i)
-      mine[i] = impl_->owned_cells.count(host_cell_[i]) ? 1 : 0;
+      mine[i] = impl_->host_index[i] >= 0 ? 1 : 0;
   // Keep the rows of the free particles this rank owns: ghosts are driven and need no force,
   // other ranks' particles are theirs to move.
   meshfree::BondList<dim> kept;
@@ -1625,6 +1646,7 @@ void FemParticleCoupling<dim>::load(const std::string& file) {
   free_.clear();
   host_cell_.clear();
   host_point_.clear();
+  impl_->host_index.clear();
   index_of_.clear();
   impl_->fixed_slots.clear();
   for (std::size_t i = 0; i < n; ++i) {
@@ -1645,8 +1667,7 @@ void FemParticleCoupling<dim>::load(const std::string& file) {
     particles_.displacement(k) = u;
     particles_.velocity(k) = v;
     free_.push_back(static_cast<std::uint8_t>(fr));
-    host_cell_.push_back(id);
-    host_point_.push_back(q);
+    add_host(id, q);
     index_of_[{id, q}] = k;
     impl_->fixed_slots.push_back(slots);
   }

@@ -222,6 +222,8 @@ class FemParticleCoupling {
   void prepare(); // material, lattice spacing, shape table, PD model (once)
   void rebuild_interface();
   void rebuild_bonds();
+  // Appends the host cell and point of a particle just added (and its owned-cell index).
+  void add_host(const std::string& cell_id, unsigned int point);
   void update_ghosts();
   void update_interface_dofs();
   void apply_particle_dirichlet(double time, double dt);

@@ -1,6 +1,7 @@
 #include "fem/mechanics_solver.h"
 
 #include "fem/scoped_time.h"
+#include "fem/sparse_product.h"
 
 #include "fem/materials/failure.h"
 
@@ -25,6 +26,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <exception>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -316,7 +318,12 @@ void MechanicsSolver<dim>::set_active_cells(const std::vector<bool>& active) {
       assemble_into_explicit_matrix_ = false;
       assembly_cells_ = nullptr;
       assembly_sign_ = 1.0;
-      trial_ = committed_;
+      // The assembly wrote the trial states of the removed cells only: reset those.
+      const unsigned int nq = quadrature_.size();
+      for (std::size_t c = 0; c < removed.size(); ++c)
+        if (removed[c])
+          std::copy(committed_.begin() + c * nq, committed_.begin() + (c + 1) * nq,
+                    trial_.begin() + c * nq);
       rhs_ = rhs;
       raw_residual_ = raw;
     }
@@ -334,7 +341,7 @@ unsigned int MechanicsSolver<dim>::n_active_cells() const {
 template <int dim>
 void MechanicsSolver<dim>::set_driven_dofs(
     const std::map<types::global_dof_index, double>& values) {
-  driven_ = values;
+  driven_.assign(values.begin(), values.end());
   step_tables_ready_ = false;
 }
 
@@ -344,9 +351,8 @@ void MechanicsSolver<dim>::set_driven_values(const std::vector<double>& values) 
     throw InvalidInput("driven DoF values", "got " + std::to_string(values.size()) + " values",
                        "one per DoF of the last set_driven_dofs() (" +
                            std::to_string(driven_.size()) + ")");
-  std::size_t k = 0;
-  for (auto& entry : driven_)
-    entry.second = values[k++];
+  for (std::size_t k = 0; k < values.size(); ++k)
+    driven_[k].second = values[k];
 }
 
 template <int dim>
@@ -479,6 +485,10 @@ void MechanicsSolver<dim>::setup() {
     mask[c] = true;
     component_dofs_[c] = DoFTools::extract_dofs(dof_handler_, ComponentMask(mask)) & owned_;
   }
+  owned_component_.assign(owned_.n_elements(), 0);
+  for (unsigned int c = 0; c < dim; ++c)
+    for (const auto dof : component_dofs_[c])
+      owned_component_[owned_.index_within_set(dof)] = static_cast<unsigned char>(c);
 
   const unsigned int nq = quadrature_.size();
   QuadraturePointData initial;
@@ -591,6 +601,13 @@ void MechanicsSolver<dim>::build_rigid_body_modes() {
 
 template <int dim>
 void MechanicsSolver<dim>::update_ghosts() {
+  if (relevant_ == owned_) {
+    // Nothing to import (one rank): both vectors have the map of owned_, a copy will do.
+    const std::size_t n = owned_.n_elements();
+    std::copy(u_.begin(), u_.begin() + n, u_ghost_.trilinos_vector()[0]);
+    std::copy(v_.begin(), v_.begin() + n, v_ghost_.trilinos_vector()[0]);
+    return;
+  }
   u_ghost_ = u_;
   v_ghost_ = v_;
 }
@@ -648,6 +665,80 @@ void MechanicsSolver<dim>::make_constraints(AffineConstraints<double>& c, bool h
   c.close();
 }
 
+template <int dim>
+Tensor2 MechanicsSolver<dim>::update_point(const materials::ConstitutiveLaw& law, const Tensor2& H,
+                                           double dT, const QuadraturePointData& old,
+                                           QuadraturePointData& tr, double (*A)[3][3][3]) const {
+  Tensor2 S; // stress conjugate to ∇u: σ or P
+  if (prm_.kinematics != "finite_strain") {
+    SymTensor2 eps = symmetrize(H);
+    materials::SmallStrainResponse r;
+    if (prm_.plane_stress) {
+      // Local Newton on ε_zz so that σ_zz = 0; exact in one step for linear laws.
+      const double nu = law.poisson_ratio();
+      eps[2][2] = -nu / (1.0 - nu) * (eps[0][0] + eps[1][1]);
+      for (unsigned int it = 0; it < 20; ++it) {
+        r = law.small_strain(eps, dT, old.state);
+        if (std::abs(r.stress[2][2]) <= 1e-12 * (r.stress.norm() + 1e-300))
+          break;
+        eps[2][2] -= r.stress[2][2] / r.tangent[2][2][2][2];
+      }
+      if (A) {
+        // Condensed tangent: C − C:zz ⊗ Czz: / Czzzz.
+        const double czz = r.tangent[2][2][2][2];
+        SymTensor2 a, b;
+        for (unsigned int i = 0; i < 3; ++i)
+          for (unsigned int j = i; j < 3; ++j) {
+            a[i][j] = r.tangent[i][j][2][2];
+            b[i][j] = r.tangent[2][2][i][j];
+          }
+        r.tangent -= outer_product(a, b) / czz;
+      }
+    } else {
+      r = law.small_strain(eps, dT, old.state);
+    }
+    S = r.stress;
+    if (A)
+      for (unsigned int i = 0; i < 3; ++i)
+        for (unsigned int j = 0; j < 3; ++j)
+          for (unsigned int k = 0; k < 3; ++k)
+            for (unsigned int l = 0; l < 3; ++l)
+              A[i][j][k][l] = r.tangent[i][j][k][l];
+    tr.state = r.state;
+    tr.cauchy_stress = r.stress;
+    tr.strain = eps;
+    tr.deformation = eps;
+  } else {
+    const Tensor2 F = unit_symmetric_tensor<3>() + H;
+    const double J = determinant(F);
+    if (!(J > 0))
+      throw NumericalFailure("inverted element (det F = " + std::to_string(J) + ")", "",
+                             "reduce the load increment (more Load steps) or refine the "
+                             "mesh where the deformation concentrates");
+    const materials::FiniteStrainResponse r = law.finite_strain(F, dT, old.state);
+    S = r.first_piola;
+    if (A)
+      for (unsigned int i = 0; i < 3; ++i)
+        for (unsigned int j = 0; j < 3; ++j)
+          for (unsigned int k = 0; k < 3; ++k)
+            for (unsigned int l = 0; l < 3; ++l)
+              A[i][j][k][l] = r.dP_dF[i][j][k][l];
+    tr.state = r.state;
+    tr.cauchy_stress = symmetrize(S * transpose(F)) / J;
+    tr.strain = 0.5 * (symmetrize(transpose(F) * F) - unit_symmetric_tensor<3>());
+    tr.deformation = F;
+  }
+  for (unsigned int i = 0; i < 3; ++i)
+    for (unsigned int j = 0; j < 3; ++j)
+      if (!std::isfinite(S[i][j]))
+        throw NumericalFailure("non-finite stress from '" + law.name() + "'", "",
+                               "check the material parameters and the load increment");
+  tr.work_stress = S;
+  tr.work_density = old.work_density +
+                    0.5 * scalar_product(old.work_stress + S, tr.deformation - old.deformation);
+  return S;
+}
+
 // ---------------------------------------------------------------- assembly
 
 template <int dim>
@@ -658,12 +749,10 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
   MatrixType& matrix = assemble_into_explicit_matrix_ ? explicit_matrix_ : matrix_;
   if (with_matrix && !assembly_cells_)
     matrix = 0;
-  if (!assemble_states_only_)
-    rhs_ = 0;
+  rhs_ = 0;
   VectorType f_int(owned_, comm_), f_ext(owned_, comm_);
 
   const unsigned int nq = quadrature_.size(), n = fe_.n_dofs_per_cell();
-  const bool finite = prm_.kinematics == "finite_strain";
   FEValues<dim> fe_values(*mapping_, fe_, quadrature_,
                           update_values | update_gradients | update_quadrature_points |
                               update_JxW_values);
@@ -710,78 +799,10 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
 
       Tensor2 S; // stress conjugate to ∇u: σ or P
       try {
-        if (!finite) {
-          SymTensor2 eps = symmetrize(H);
-          materials::SmallStrainResponse r;
-          if (prm_.plane_stress) {
-            // Local Newton on ε_zz so that σ_zz = 0; exact in one step for linear laws.
-            const double nu = law.poisson_ratio();
-            eps[2][2] = -nu / (1.0 - nu) * (eps[0][0] + eps[1][1]);
-            for (unsigned int it = 0; it < 20; ++it) {
-              r = law.small_strain(eps, dT, old.state);
-              if (std::abs(r.stress[2][2]) <= 1e-12 * (r.stress.norm() + 1e-300))
-                break;
-              eps[2][2] -= r.stress[2][2] / r.tangent[2][2][2][2];
-            }
-            if (with_matrix) {
-              // Condensed tangent: C − C:zz ⊗ Czz: / Czzzz.
-              const double czz = r.tangent[2][2][2][2];
-              SymTensor2 a, b;
-              for (unsigned int i = 0; i < 3; ++i)
-                for (unsigned int j = i; j < 3; ++j) {
-                  a[i][j] = r.tangent[i][j][2][2];
-                  b[i][j] = r.tangent[2][2][i][j];
-                }
-              r.tangent -= outer_product(a, b) / czz;
-            }
-          } else {
-            r = law.small_strain(eps, dT, old.state);
-          }
-          S = r.stress;
-          if (with_matrix)
-            for (unsigned int i = 0; i < 3; ++i)
-              for (unsigned int j = 0; j < 3; ++j)
-                for (unsigned int k = 0; k < 3; ++k)
-                  for (unsigned int l = 0; l < 3; ++l)
-                    A[i][j][k][l] = r.tangent[i][j][k][l];
-          tr.state = r.state;
-          tr.cauchy_stress = r.stress;
-          tr.strain = eps;
-          tr.deformation = eps;
-        } else {
-          const Tensor2 F = unit_symmetric_tensor<3>() + H;
-          const double J = determinant(F);
-          if (!(J > 0))
-            throw NumericalFailure("inverted element (det F = " + std::to_string(J) + ")", "",
-                                   "reduce the load increment (more Load steps) or refine the "
-                                   "mesh where the deformation concentrates");
-          const materials::FiniteStrainResponse r = law.finite_strain(F, dT, old.state);
-          S = r.first_piola;
-          for (unsigned int i = 0; i < 3; ++i)
-            for (unsigned int j = 0; j < 3; ++j)
-              for (unsigned int k = 0; k < 3; ++k)
-                for (unsigned int l = 0; l < 3; ++l)
-                  A[i][j][k][l] = r.dP_dF[i][j][k][l];
-          tr.state = r.state;
-          tr.cauchy_stress = symmetrize(S * transpose(F)) / J;
-          tr.strain = 0.5 * (symmetrize(transpose(F) * F) - unit_symmetric_tensor<3>());
-          tr.deformation = F;
-        }
+        S = update_point(law, H, dT, old, tr, with_matrix ? A : nullptr);
       } catch (const NumericalFailure& e) {
         throw NumericalFailure(e.what_failed(), cell_location<dim>(cell, q), e.hint());
       }
-      for (unsigned int i = 0; i < 3; ++i)
-        for (unsigned int j = 0; j < 3; ++j)
-          if (!std::isfinite(S[i][j]))
-            throw NumericalFailure("non-finite stress from '" + law.name() + "'",
-                                   cell_location<dim>(cell, q),
-                                   "check the material parameters and the load increment");
-      tr.work_stress = S;
-      tr.work_density = old.work_density +
-                        0.5 * scalar_product(old.work_stress + S, tr.deformation - old.deformation);
-      if (assemble_states_only_)
-        continue;
-
       const double JxW = fe_values.JxW(q);
       Tensor<1, dim> body;
       if (body_force_)
@@ -815,8 +836,6 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
           }
     }
 
-    if (assemble_states_only_)
-      continue;
     // Tractions and pressures on the reference configuration.
     if (cell->at_boundary() && (!bcs_.traction().empty() || !bcs_.pressure().empty()))
       for (const unsigned int f : cell->face_indices()) {
@@ -859,8 +878,6 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
     f_int.add(dofs, cell_fint);
     f_ext.add(dofs, cell_fext);
   }
-  if (assemble_states_only_)
-    return AssemblyNorms();
   if (with_matrix)
     matrix.compress(VectorOperation::add);
   rhs_.compress(VectorOperation::add);
@@ -1178,7 +1195,7 @@ void MechanicsSolver<dim>::central_difference(double dt, double a, double bc_tim
       explicit_matrix_ready_ = true;
     }
     ScopedTime timer(timings_.assembly);
-    explicit_matrix_.vmult(raw_residual_, u_);
+    threaded_vmult(explicit_matrix_, raw_residual_, u_);
     states_stale_ = true;
   } else {
     assemble(false, 1.0, hanging_);
@@ -1216,25 +1233,47 @@ void MechanicsSolver<dim>::central_difference(double dt, double a, double bc_tim
     std::copy(u, u + n, u_previous_.begin());
     if (sums && relax_acceleration_.size() != n)
       relax_acceleration_.assign(n, std::numeric_limits<double>::quiet_NaN());
-    for (std::size_t k = 0; k < n; ++k) {
+    const auto zero_mass = [&](std::size_t k) {
+      return NumericalFailure("zero lumped mass at dof " +
+                                  std::to_string(owned_.nth_index_in_set(k)),
+                              "explicit step", "every material needs a positive density");
+    };
+    if (!sums) {
+      // Independent DoFs, split among the threads as the sparse product splits its rows (the
+      // same static partition of the same local order: each thread reads what it wrote).
+      long first_bad = -1;
+      const long n_dofs = static_cast<long>(n);
+#pragma omp parallel for schedule(static) if (n_dofs > 4000) reduction(max : first_bad)
+      for (long k = 0; k < n_dofs; ++k) {
+        if (step_skip_[k])
+          continue;
+        const double m = mass[k];
+        if (!(m > 0)) {
+          first_bad = std::max(first_bad, n_dofs - k); // the lowest bad k wins the max
+          continue;
+        }
+        const double acc = sign * r[k] / m;
+        v[k] = ((1.0 - 0.5 * a * dt) * v[k] + dt * acc) / (1.0 + 0.5 * a * dt);
+        u[k] += dt * v[k];
+      }
+      if (first_bad >= 0)
+        throw zero_mass(static_cast<std::size_t>(n_dofs - first_bad));
+    }
+    for (std::size_t k = 0; sums && k < n; ++k) { // relaxation: sums in a fixed order
       if (step_skip_[k])
         continue;
       const double m = mass[k];
       if (!(m > 0))
-        throw NumericalFailure("zero lumped mass at dof " +
-                                   std::to_string(owned_.nth_index_in_set(k)),
-                               "explicit step", "every material needs a positive density");
+        throw zero_mass(k);
       const double acc = sign * r[k] / m;
-      if (sums) {
-        // Driven DoFs (the coupling interface; boundary values win where both apply) carry
-        // internal forces of the coupled system: neither residual nor reaction.
-        if (step_dirichlet_[k])
-          sums->reaction_square += r[k] * r[k];
-        if (step_dirichlet_[k] || step_driven_[k]) {
-          relax_acceleration_[k] = acc;
-        } else {
-          sums->add_free(r[k], acc, relax_acceleration_[k], u[k], v[k], dt);
-        }
+      // Driven DoFs (the coupling interface; boundary values win where both apply) carry
+      // internal forces of the coupled system: neither residual nor reaction.
+      if (step_dirichlet_[k])
+        sums->reaction_square += r[k] * r[k];
+      if (step_dirichlet_[k] || step_driven_[k]) {
+        relax_acceleration_[k] = acc;
+      } else {
+        sums->add_free(r[k], acc, relax_acceleration_[k], u[k], v[k], dt);
       }
       v[k] = ((1.0 - 0.5 * a * dt) * v[k] + dt * acc) / (1.0 + 0.5 * a * dt);
       u[k] += dt * v[k];
@@ -1287,17 +1326,60 @@ bool MechanicsSolver<dim>::linear_explicit() const {
 template <int dim>
 void MechanicsSolver<dim>::refresh_states() const {
   // The linear explicit path skips the point-wise update: bring stresses to the current u.
+  // Points are independent, so the threads share the cells. Only that path leaves states stale
+  // (no temperature, so dT = 0), and on it trial_ equals committed_ away from the points
+  // refreshed here (reset after every matrix assembly): copying those is commit_history().
   if (!states_stale_)
     return;
-  auto& self = const_cast<MechanicsSolver<dim>&>(*this);
-  struct StatesOnly { // reset even if the constitutive update throws
-    bool& flag;
-    explicit StatesOnly(bool& f) : flag(f) { flag = true; }
-    ~StatesOnly() { flag = false; }
-  } states_only(self.assemble_states_only_);
-  self.assemble(false, 1.0, hanging_);
-  self.commit_history();
-  self.states_stale_ = false;
+  Assert(!temperature_field_ && !temperature_change_, ExcInternalError());
+  std::vector<CellIterator> cells;
+  for (const auto& cell : dof_handler_.active_cell_iterators())
+    if (cell->is_locally_owned() && is_active(cell))
+      cells.push_back(cell);
+  auto& trial = const_cast<std::vector<QuadraturePointData>&>(trial_);
+  auto& committed = const_cast<std::vector<QuadraturePointData>&>(committed_);
+  const unsigned int nq = quadrature_.size();
+  const long n = static_cast<long>(cells.size());
+  std::exception_ptr failure; // the first one; exceptions must not leave a parallel region
+#pragma omp parallel if (n > 256)
+  {
+    FEValues<dim> fe_values(*mapping_, fe_, quadrature_, update_gradients);
+    const FEValuesExtractors::Vector displacements(0);
+    std::vector<Tensor<2, dim>> grads(nq);
+#pragma omp for schedule(dynamic, 64)
+    for (long k = 0; k < n; ++k) {
+      const auto& cell = cells[k];
+      try {
+        fe_values.reinit(cell);
+        fe_values[displacements].get_function_gradients(u_ghost_, grads);
+        const materials::ConstitutiveLaw& law = cell_material(cell);
+        for (unsigned int q = 0; q < nq; ++q) {
+          const std::size_t idx = cell->active_cell_index() * nq + q;
+          Tensor2 H;
+          for (unsigned int i = 0; i < dim; ++i)
+            for (unsigned int j = 0; j < dim; ++j)
+              H[i][j] = grads[q][i][j];
+          try {
+            update_point(law, H, 0.0, committed_[idx], trial[idx], nullptr);
+          } catch (const NumericalFailure& e) {
+            throw NumericalFailure(e.what_failed(), cell_location<dim>(cell, q), e.hint());
+          }
+        }
+      } catch (...) {
+#pragma omp critical(spinesim_refresh_states)
+        if (!failure)
+          failure = std::current_exception();
+      }
+    }
+  }
+  if (failure)
+    std::rethrow_exception(failure);
+#pragma omp parallel for schedule(static) if (n > 256)
+  for (long k = 0; k < n; ++k) {
+    const std::size_t first = cells[k]->active_cell_index() * nq;
+    std::copy(trial_.begin() + first, trial_.begin() + first + nq, committed.begin() + first);
+  }
+  states_stale_ = false;
 }
 
 template <int dim>
@@ -1424,20 +1506,36 @@ double MechanicsSolver<dim>::strain_energy() const {
 template <int dim>
 double MechanicsSolver<dim>::max_von_mises() const {
   refresh_states();
+  const unsigned int nq = quadrature_.size();
   double m = 0;
   for (const auto& cell : dof_handler_.active_cell_iterators())
-    if (cell->is_locally_owned() && is_active(cell))
-      for (const auto& d : quadrature_point_data(cell))
-        m = std::max(m, von_mises(d.cauchy_stress));
+    if (cell->is_locally_owned() && is_active(cell)) {
+      const std::size_t first = cell->active_cell_index() * nq;
+      for (std::size_t k = first; k < first + nq; ++k)
+        m = std::max(m, von_mises(committed_[k].cauchy_stress));
+    }
   return Utilities::MPI::max(m, comm_);
 }
 
 template <int dim>
 double MechanicsSolver<dim>::kinetic_energy() const {
+  // Local arrays in the order of owned_ (element access through Trilinos is a map lookup).
+  const double* m = lumped_mass_.begin();
+  const double* v = v_.begin();
   double e = 0;
-  for (const auto i : owned_)
-    e += 0.5 * lumped_mass_(i) * v_(i) * v_(i);
+  for (std::size_t k = 0; k < owned_.n_elements(); ++k)
+    e += 0.5 * m[k] * v[k] * v[k];
   return Utilities::MPI::sum(e, comm_);
+}
+
+template <int dim>
+Tensor<1, dim> MechanicsSolver<dim>::momentum() const {
+  const double* m = lumped_mass_.begin();
+  const double* v = v_.begin();
+  Tensor<1, dim> p;
+  for (std::size_t k = 0; k < owned_component_.size(); ++k)
+    p[owned_component_[k]] += m[k] * v[k];
+  return Utilities::MPI::sum(p, comm_);
 }
 
 template <int dim>

@@ -205,6 +205,7 @@ class MechanicsSolver {
   double strain_energy() const;                 // ∫ (stress work − plastic work) dV [J]
   double max_von_mises() const;                 // over all quadrature points [Pa]
   double kinetic_energy() const;                // ½ vᵀ M v with the lumped mass [J]
+  dealii::Tensor<1, dim> momentum() const;      // Σ M v per component, lumped mass [kg m/s]
   dealii::Vector<float> cell_von_mises() const; // cell averages [Pa]
   dealii::Vector<float> cell_equivalent_plastic_strain() const; // cell averages [-]
   // Writes <directory>/<basename>_<cycle>.<rank>.vtu + .pvtu; returns the pvtu file name.
@@ -233,8 +234,12 @@ class MechanicsSolver {
   const VectorType& lumped_mass() const { return lumped_mass_; } // owned [kg]
   // Hanging-node constraints (locally relevant DoFs).
   const dealii::AffineConstraints<double>& hanging_constraints() const { return hanging_; }
+  // Point states of a cell at the current displacement (refresh_states() first).
   dealii::ArrayView<const QuadraturePointData>
   quadrature_point_data(const CellIterator& cell) const;
+  // The linear explicit path defers the point-wise update: this brings the states to the
+  // current displacement (threaded over cells). Call it before reading states from threads.
+  void refresh_states() const;
   const Timings& timings() const { return timings_; }
   const std::vector<unsigned int>& linear_iterations() const { return linear_iterations_; }
   MPI_Comm mpi_communicator() const { return comm_; }
@@ -261,7 +266,13 @@ class MechanicsSolver {
   // The central-difference update of explicit_step() and relaxation_step(): net forces at the
   // current state, damping a [1/s], Dirichlet values at bc_time; sums if asked.
   void central_difference(double dt, double a, double bc_time, RelaxationSums* sums);
-  void refresh_states() const;
+  // The constitutive update at one point from the displacement gradient H (3×3, zero-padded):
+  // fills tr from the committed old, returns the stress conjugate to ∇u (σ small, P finite)
+  // and, if A is given, its tangent. Throws NumericalFailure without a location.
+  materials::Tensor2 update_point(const materials::ConstitutiveLaw& law,
+                                  const materials::Tensor2& H, double dT,
+                                  const QuadraturePointData& old, QuadraturePointData& tr,
+                                  double (*A)[3][3][3]) const;
   void mark_orphan_dofs();
 
   MPI_Comm comm_;
@@ -277,6 +288,7 @@ class MechanicsSolver {
   MatrixType matrix_;
   VectorType u_, u_ghost_, v_, v_ghost_, rhs_, raw_residual_, lumped_mass_;
   std::vector<dealii::IndexSet> component_dofs_; // owned dofs of each component
+  std::vector<unsigned char> owned_component_;   // component of each owned dof (local order)
   std::vector<std::vector<double>> rigid_modes_; // per mode, per owned dof (local order)
 
   BoundaryConditions<dim> bcs_;
@@ -306,7 +318,8 @@ class MechanicsSolver {
   bool explicit_matrix_ready_ = false, assemble_into_explicit_matrix_ = false;
   mutable bool states_stale_ = false;
   std::vector<bool> orphan_; // relevant DoFs touched by no active cell (by local index)
-  std::map<dealii::types::global_dof_index, double> driven_;
+  // Driven DoFs and values in ascending DoF order (a vector: every step walks it).
+  std::vector<std::pair<dealii::types::global_dof_index, double>> driven_;
   // Explicit-step tables by index within owned_, so that a step touches plain arrays only:
   // DoFs the update skips (hanging or orphaned), DoFs with a Dirichlet condition, and the
   // owned slot of every driven DoF in key order (-1: not owned, constrained or Dirichlet).
@@ -331,7 +344,6 @@ class MechanicsSolver {
   // Incremental assembly: when set, assemble() visits exactly these cells (by active cell
   // index) and adds sign × their matrices without zeroing the matrix first.
   const std::vector<bool>* assembly_cells_ = nullptr;
-  bool assemble_states_only_ = false; // refresh_states(): point states, no vectors
   double assembly_sign_ = 1.0;
 
   std::map<dealii::types::global_dof_index, double> dirichlet_start_, dirichlet_target_;
