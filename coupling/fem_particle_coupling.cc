@@ -294,6 +294,7 @@ struct FemParticleCoupling<dim>::Impl {
   // can convert; the refinement box makes them).
   std::vector<std::uint8_t> lattice_cell;
   std::vector<DoFCell> owned_by_index; // locally owned cells by active cell index (else invalid)
+  std::vector<DoFCell> lattice_cells;  // the owned cells of lattice size, by active index
   // Per particle: the active cell index of its host cell if this rank owns it, else -1 (the
   // CellId strings need a map lookup).
   std::vector<int> host_index;
@@ -450,6 +451,10 @@ void FemParticleCoupling<dim>::prepare() {
         cell->minimum_vertex_distance() <= 1.5 * spacing_ * prm_.particles_per_direction;
     impl_->owned_by_index[cell->active_cell_index()] = cell;
   }
+  impl_->lattice_cells.clear();
+  for (const auto& cell : impl_->owned_by_index)
+    if (cell.state() == IteratorState::valid && impl_->lattice_cell[cell->active_cell_index()])
+      impl_->lattice_cells.push_back(cell);
 
   impl_->shape.reinit(impl_->points.size(), fe.n_dofs_per_cell());
   for (unsigned int q = 0; q < impl_->points.size(); ++q)
@@ -517,13 +522,12 @@ std::vector<CellId> FemParticleCoupling<dim>::flagged_cells() const {
   if (any) {
     // Only active cells of the particle lattice's size can convert (the refinement box).
     std::vector<bool> candidate(fem_.dof_handler().get_triangulation().n_active_cells(), false);
-    for (const auto& [id, cell] : impl_->owned_cells)
-      candidate[cell->active_cell_index()] =
-          impl_->lattice_cell[cell->active_cell_index()] && fem_.is_active(cell);
+    for (const auto& cell : impl_->lattice_cells)
+      candidate[cell->active_cell_index()] = fem_.is_active(cell);
     fem::CellIndicators<dim> indicators;
     indicators.compute(fem_, prm_.plastic_strain_threshold > 0, candidate,
                        prm_.min_jacobian_ratio > 0 || prm_.min_time_step > 0);
-    for (const auto& [id, cell] : impl_->owned_cells) {
+    for (const auto& cell : impl_->lattice_cells) {
       if (!candidate[cell->active_cell_index()])
         continue;
       const unsigned int c = cell->active_cell_index();
@@ -547,10 +551,9 @@ std::vector<CellId> FemParticleCoupling<dim>::flagged_cells() const {
   if (!all_centres.empty()) {
     const double reach = std::max(prm_.buffer, 1e-9 * spacing_);
     PointBins<dim> bins(all_centres, std::max(prm_.buffer, spacing_));
-    for (const auto& [id, cell] : impl_->owned_cells)
-      if (impl_->lattice_cell[cell->active_cell_index()] && fem_.is_active(cell) &&
-          !bins.within(cell->center(), reach).empty())
-        mine.push_back(id);
+    for (const auto& cell : impl_->lattice_cells)
+      if (fem_.is_active(cell) && !bins.within(cell->center(), reach).empty())
+        mine.push_back(cell->id().to_string());
   }
   std::vector<CellId> out;
   for (const auto& part : Utilities::MPI::all_gather(comm, mine))
@@ -1158,6 +1161,21 @@ void FemParticleCoupling<dim>::rebuild_bonds() {
   kept.horizon = all.horizon;
   kept.offsets.assign(all.n_particles() + 1, 0);
   const bool has_volume = !all.volume_fraction.empty(), has_surface = !all.surface_factor.empty();
+  {
+    std::size_t n_kept = 0;
+    for (unsigned int i = 0; i < all.n_particles(); ++i)
+      if (free_[i] && mine[i])
+        n_kept += all.end(i) - all.begin(i);
+    for (auto* v : {&kept.length, &kept.influence})
+      v->reserve(n_kept);
+    kept.neighbor.reserve(n_kept);
+    kept.xi.reserve(n_kept);
+    kept.broken.reserve(n_kept);
+    if (has_volume)
+      kept.volume_fraction.reserve(n_kept);
+    if (has_surface)
+      kept.surface_factor.reserve(n_kept);
+  }
   for (unsigned int i = 0; i < all.n_particles(); ++i) {
     if (free_[i] && mine[i])
       for (std::size_t k = all.begin(i); k < all.end(i); ++k) {
@@ -1189,7 +1207,10 @@ void FemParticleCoupling<dim>::update_ghosts() {
   std::vector<unsigned int> component(n);
   for (unsigned int i = 0; i < n; ++i)
     component[i] = fe.system_to_component_index(i).first;
-  for (std::size_t k = 0; k < impl_->ghost_cells.size(); ++k) {
+  const long n_cells = static_cast<long>(impl_->ghost_cells.size());
+  // Each ghost is written by its own host cell only.
+#pragma omp parallel for schedule(static) if (n_cells > 1000)
+  for (long k = 0; k < n_cells; ++k) {
     const auto& row = impl_->ghost_cells[k].second;
     const int* lids = &impl_->ghost_lids[k * n];
     for (unsigned int q = 0; q < row.size(); ++q) {
@@ -1308,7 +1329,29 @@ void FemParticleCoupling<dim>::advance(double dt, double a, double load_time, bo
     auto& previous = impl_->relax_acceleration;
     if (sums && (first || previous.size() != dim * particles_.size()))
       previous.assign(dim * particles_.size(), std::numeric_limits<double>::quiet_NaN());
-    for (unsigned int i = 0; i < particles_.size(); ++i) {
+    if (!sums) {
+      // Independent particles: the threads share them (the relaxation sums below keep one
+      // thread and a fixed order).
+      const double keep = 1.0 - 0.5 * a * dt, denominator = 1.0 + 0.5 * a * dt;
+      const long n = static_cast<long>(particles_.size());
+      // A few flops a particle: worth a parallel region from a couple of thousand on.
+#pragma omp parallel for schedule(static) if (n > 2000)
+      for (long ii = 0; ii < n; ++ii) {
+        const unsigned int i = static_cast<unsigned int>(ii);
+        if (!free_[i] || !is_owned(i))
+          continue;
+        const double m = particles_.mass(i);
+        for (unsigned int d = 0; d < dim; ++d) {
+          if (particles_.is_fixed(i, d))
+            continue;
+          const double acc = (particles_.force(i)[d] + particles_.external_force(i)[d]) / m;
+          double& vi = particles_.velocity(i)[d];
+          vi = (keep * vi + dt * acc) / denominator;
+          particles_.displacement(i)[d] += dt * vi;
+        }
+      }
+    }
+    for (unsigned int i = 0; sums && i < particles_.size(); ++i) {
       if (!free_[i] || !is_owned(i))
         continue;
       const double m = particles_.mass(i);

@@ -329,7 +329,7 @@ void MechanicsSolver<dim>::set_active_cells(const std::vector<bool>& active) {
     }
     compute_lumped_mass();
     mark_orphan_dofs();
-    make_constraints(homogeneous_, true, 1.0);
+    homogeneous_stale_ = true; // rebuilt where a Newton solve needs it (explicit runs never)
   }
 }
 
@@ -343,6 +343,7 @@ void MechanicsSolver<dim>::set_driven_dofs(
     const std::map<types::global_dof_index, double>& values) {
   driven_.assign(values.begin(), values.end());
   step_tables_ready_ = false;
+  homogeneous_stale_ = true;
 }
 
 template <int dim>
@@ -622,6 +623,15 @@ double MechanicsSolver<dim>::load_blend(Function<dim>& f, const Point<dim>& x, u
     value += (1.0 - load_factor) * f.value(x, c);
   }
   return value;
+}
+
+template <int dim>
+const AffineConstraints<double>& MechanicsSolver<dim>::homogeneous_constraints() {
+  if (homogeneous_stale_) {
+    make_constraints(homogeneous_, true, 1.0);
+    homogeneous_stale_ = false;
+  }
+  return homogeneous_;
 }
 
 template <int dim>
@@ -1005,7 +1015,7 @@ bool MechanicsSolver<dim>::newton(double load_factor, LoadStepReport& report) {
       update_ghosts();
       double r;
       try {
-        const AssemblyNorms trial = assemble(false, load_factor, homogeneous_);
+        const AssemblyNorms trial = assemble(false, load_factor, homogeneous_constraints());
         r = trial.free_residual;
         if (ls == 0 && trial.free_residual <= tol * std::max(trial.reference, 1e-300)) {
           report.relative_residual = trial.free_residual / std::max(trial.reference, 1e-300);
@@ -1681,7 +1691,7 @@ void MechanicsSolver<dim>::deserialize(const std::string& filename) {
   trial_ = committed_;
   update_ghosts();
   // Reactions need the residual at the restored state.
-  assemble(false, 1.0, homogeneous_);
+  assemble(false, 1.0, homogeneous_constraints());
   trial_ = committed_;
 }
 

@@ -254,6 +254,8 @@ class MechanicsSolver {
   AssemblyNorms assemble(bool with_matrix, double load_factor,
                          const dealii::AffineConstraints<double>& constraints);
   void make_constraints(dealii::AffineConstraints<double>& c, bool homogeneous, double load_factor);
+  // homogeneous_, rebuilt first if the active cells or the driven DoFs changed since.
+  const dealii::AffineConstraints<double>& homogeneous_constraints();
   unsigned int solve_linear(VectorType& du);
   bool newton(double load_factor, LoadStepReport& report);
   void commit_history();
@@ -317,6 +319,7 @@ class MechanicsSolver {
   MatrixType explicit_matrix_; // K over the active cells for the linear explicit path
   bool explicit_matrix_ready_ = false, assemble_into_explicit_matrix_ = false;
   mutable bool states_stale_ = false;
+  bool homogeneous_stale_ = false;
   std::vector<bool> orphan_; // relevant DoFs touched by no active cell (by local index)
   // Driven DoFs and values in ascending DoF order (a vector: every step walks it).
   std::vector<std::pair<dealii::types::global_dof_index, double>> driven_;
