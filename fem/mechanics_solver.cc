@@ -365,6 +365,10 @@ void MechanicsSolver<dim>::build_step_tables() {
   std::size_t k = 0;
   for (auto it = owned_.begin(); it != owned_.end(); ++it, ++k)
     step_skip_[k] = hanging_.is_constrained(*it) || orphan_[relevant_.index_within_set(*it)];
+  step_rows_.clear();
+  for (std::size_t k = 0; k < n; ++k)
+    if (!step_skip_[k])
+      step_rows_.push_back(static_cast<int>(k));
   for (const auto& list : dirichlet_dofs_)
     for (const auto& b : list)
       step_dirichlet_[b.local] = 1;
@@ -1204,9 +1208,6 @@ void MechanicsSolver<dim>::central_difference(double dt, double a, double bc_tim
       trial_ = committed_;
       explicit_matrix_ready_ = true;
     }
-    ScopedTime timer(timings_.assembly);
-    threaded_vmult(explicit_matrix_, raw_residual_, u_);
-    states_stale_ = true;
   } else {
     assemble(false, 1.0, hanging_);
   }
@@ -1230,8 +1231,17 @@ void MechanicsSolver<dim>::central_difference(double dt, double a, double bc_tim
     dirichlet_dofs_ready_ = true;
     step_tables_ready_ = false;
   }
-  if (!step_tables_ready_)
+  if (!step_tables_ready_) {
     build_step_tables();
+    raw_residual_ = 0; // rows outside step_rows_ are not computed below: they stay zero
+  }
+  if (linear) {
+    // Only the rows the update reads: hanging and orphaned DoFs (under converted cells only)
+    // are skipped, so a step costs what the FEM part still holds.
+    ScopedTime timer(timings_.assembly);
+    threaded_vmult(explicit_matrix_, raw_residual_, u_, &step_rows_);
+    states_stale_ = true;
+  }
   {
     // Local arrays in the order of owned_ (element access through Trilinos is a map lookup).
     double* u = u_.begin();
@@ -1252,11 +1262,10 @@ void MechanicsSolver<dim>::central_difference(double dt, double a, double bc_tim
       // Independent DoFs, split among the threads as the sparse product splits its rows (the
       // same static partition of the same local order: each thread reads what it wrote).
       long first_bad = -1;
-      const long n_dofs = static_cast<long>(n);
-#pragma omp parallel for schedule(static) if (n_dofs > 4000) reduction(max : first_bad)
-      for (long k = 0; k < n_dofs; ++k) {
-        if (step_skip_[k])
-          continue;
+      const long n_dofs = static_cast<long>(n), n_rows = static_cast<long>(step_rows_.size());
+#pragma omp parallel for schedule(static) if (n_rows > 4000) reduction(max : first_bad)
+      for (long row = 0; row < n_rows; ++row) {
+        const long k = step_rows_[row];
         const double m = mass[k];
         if (!(m > 0)) {
           first_bad = std::max(first_bad, n_dofs - k); // the lowest bad k wins the max
@@ -1312,11 +1321,24 @@ void MechanicsSolver<dim>::central_difference(double dt, double a, double bc_tim
   v_.compress(VectorOperation::insert);
   distribute_hanging(u_);
   distribute_hanging(v_);
-  if (!std::isfinite(u_.l2_norm())) // NaN must not pass silently
-    throw NumericalFailure("non-finite displacement",
-                           (sums ? "relaxation step at t = " : "explicit step at t = ") +
-                               std::to_string(time_) + ", dt = " + std::to_string(dt),
-                           "reduce the time step (CFL safety factor) or check the materials");
+  // NaN must not pass silently: the first non-finite owned entry (a scan of the local array;
+  // Epetra's norm is a serial, scaled BLAS call), then every rank learns of any.
+  const double* uu = u_.begin();
+  const long n_owned = static_cast<long>(owned_.n_elements());
+  long first_bad = n_owned;
+#pragma omp parallel for schedule(static) if (n_owned > 4000) reduction(min : first_bad)
+  for (long k = 0; k < n_owned; ++k)
+    if (!std::isfinite(uu[k]))
+      first_bad = std::min(first_bad, k);
+  if (Utilities::MPI::max(first_bad < n_owned ? 1 : 0, comm_) > 0)
+    throw NumericalFailure(
+        "non-finite displacement",
+        (sums ? "relaxation step at t = " : "explicit step at t = ") + std::to_string(time_) +
+            ", dt = " + std::to_string(dt) +
+            (first_bad < n_owned
+                 ? ", first at DoF " + std::to_string(owned_.nth_index_in_set(first_bad))
+                 : std::string(", on another rank")),
+        "reduce the time step (CFL safety factor) or check the materials");
 }
 
 template <int dim>

@@ -327,6 +327,7 @@ class MechanicsSolver {
   // DoFs the update skips (hanging or orphaned), DoFs with a Dirichlet condition, and the
   // owned slot of every driven DoF in key order (-1: not owned, constrained or Dirichlet).
   std::vector<std::uint8_t> step_skip_, step_dirichlet_, step_driven_;
+  std::vector<int> step_rows_; // the local indices that are not skipped, ascending
   std::vector<double> relax_acceleration_; // previous net acceleration per owned DoF [m/s²]
   std::vector<int> driven_slot_;
   std::vector<double> u_previous_;
