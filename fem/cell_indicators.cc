@@ -76,16 +76,18 @@ void CellIndicators<dim>::compute(const MechanicsSolver<dim>& solver, bool with_
     std::vector<Tensor<2, dim>> grad_v(vertex_quadrature.size()),
         grad_q(solver.quadrature().size());
     std::vector<Tensor<1, dim>> u_v(vertex_quadrature.size());
+    std::vector<double> local;
 #pragma omp for schedule(dynamic, 64)
     for (long k = 0; k < n; ++k) {
       const auto& cell = selected[k];
       const unsigned int c = cell->active_cell_index();
+      solver.get_cell_values(u, cell, local);
       at_gauss.reinit(cell);
-      at_gauss[displacements].get_function_gradients(u, grad_q);
+      at_gauss[displacements].get_function_gradients_from_local_dof_values(local, grad_q);
       if (geometry) {
         at_vertices.reinit(cell);
-        at_vertices[displacements].get_function_gradients(u, grad_v);
-        at_vertices[displacements].get_function_values(u, u_v);
+        at_vertices[displacements].get_function_gradients_from_local_dof_values(local, grad_v);
+        at_vertices[displacements].get_function_values_from_local_dof_values(local, u_v);
 
         double jmin = std::numeric_limits<double>::max(), jmax = -jmin;
         auto take = [&](const DerivativeForm<1, dim, dim>& J, const Tensor<2, dim>& H) {

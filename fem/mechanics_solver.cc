@@ -483,6 +483,19 @@ void MechanicsSolver<dim>::setup() {
   lumped_mass_.reinit(owned_, comm_);
   u_ghost_.reinit(owned_, relevant_, comm_);
   v_ghost_.reinit(owned_, relevant_, comm_);
+  {
+    const auto& map = u_ghost_.trilinos_vector().Map();
+    const unsigned int n = fe_.n_dofs_per_cell();
+    std::vector<types::global_dof_index> dofs(n);
+    cell_lids_.assign(tria_.n_active_cells() * n, -1);
+    for (const auto& cell : dof_handler_.active_cell_iterators())
+      if (cell->is_locally_owned() || cell->is_ghost()) {
+        cell->get_dof_indices(dofs);
+        for (unsigned int i = 0; i < n; ++i)
+          cell_lids_[cell->active_cell_index() * n + i] =
+              map.LID(static_cast<TrilinosWrappers::types::int_type>(dofs[i]));
+      }
+  }
 
   component_dofs_.assign(dim, IndexSet());
   for (unsigned int c = 0; c < dim; ++c) {
@@ -1356,6 +1369,22 @@ bool MechanicsSolver<dim>::linear_explicit() const {
 }
 
 template <int dim>
+void MechanicsSolver<dim>::get_cell_values(const VectorType& ghosted, const CellIterator& cell,
+                                           std::vector<double>& values) const {
+  Assert(ghosted.trilinos_vector().Map().SameAs(u_ghost_.trilinos_vector().Map()),
+         ExcMessage("get_cell_values reads vectors with the layout of displacement()"));
+  const unsigned int n = fe_.n_dofs_per_cell();
+  values.resize(n);
+  const double* x = ghosted.trilinos_vector()[0];
+  const int* lids = &cell_lids_[cell->active_cell_index() * n];
+  for (unsigned int i = 0; i < n; ++i) {
+    AssertThrow(lids[i] >= 0, ExcMessage("get_cell_values on a cell that is neither locally "
+                                         "owned nor a ghost"));
+    values[i] = x[lids[i]];
+  }
+}
+
+template <int dim>
 void MechanicsSolver<dim>::refresh_states() const {
   // The linear explicit path skips the point-wise update: bring stresses to the current u.
   // Points are independent, so the threads share the cells. Only that path leaves states stale
@@ -1378,12 +1407,14 @@ void MechanicsSolver<dim>::refresh_states() const {
     FEValues<dim> fe_values(*mapping_, fe_, quadrature_, update_gradients);
     const FEValuesExtractors::Vector displacements(0);
     std::vector<Tensor<2, dim>> grads(nq);
+    std::vector<double> local;
 #pragma omp for schedule(dynamic, 64)
     for (long k = 0; k < n; ++k) {
       const auto& cell = cells[k];
       try {
         fe_values.reinit(cell);
-        fe_values[displacements].get_function_gradients(u_ghost_, grads);
+        get_cell_values(u_ghost_, cell, local);
+        fe_values[displacements].get_function_gradients_from_local_dof_values(local, grads);
         const materials::ConstitutiveLaw& law = cell_material(cell);
         for (unsigned int q = 0; q < nq; ++q) {
           const std::size_t idx = cell->active_cell_index() * nq + q;

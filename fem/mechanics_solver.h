@@ -234,6 +234,11 @@ class MechanicsSolver {
   const VectorType& lumped_mass() const { return lumped_mass_; } // owned [kg]
   // Hanging-node constraints (locally relevant DoFs).
   const dealii::AffineConstraints<double>& hanging_constraints() const { return hanging_; }
+  // The DoF values of displacement() or velocity() on a locally owned or ghost cell, in the
+  // cell's DoF order, through a table of local indices made at setup (Trilinos element access
+  // is a map lookup per entry). For FEValues' *_from_local_dof_values; safe from threads.
+  void get_cell_values(const VectorType& ghosted, const CellIterator& cell,
+                       std::vector<double>& values) const;
   // Point states of a cell at the current displacement (refresh_states() first).
   dealii::ArrayView<const QuadraturePointData>
   quadrature_point_data(const CellIterator& cell) const;
@@ -328,6 +333,7 @@ class MechanicsSolver {
   // owned slot of every driven DoF in key order (-1: not owned, constrained or Dirichlet).
   std::vector<std::uint8_t> step_skip_, step_dirichlet_, step_driven_;
   std::vector<int> step_rows_; // the local indices that are not skipped, ascending
+  std::vector<int> cell_lids_;  // per active cell, its DoFs' local indices in u_ghost_ (or -1)
   std::vector<double> relax_acceleration_; // previous net acceleration per owned DoF [m/s²]
   std::vector<int> driven_slot_;
   std::vector<double> u_previous_;
