@@ -298,6 +298,8 @@ struct FemParticleCoupling<dim>::Impl {
   // Per particle: the active cell index of its host cell if this rank owns it, else -1 (the
   // CellId strings need a map lookup).
   std::vector<int> host_index;
+  // Per particle: free at the last ghost-layer search (later ones are searched around).
+  std::vector<std::uint8_t> free_searched;
   // Ghost particles hosted by locally owned cells: cell and its particle per point.
   std::vector<std::pair<DoFCell, std::vector<int>>> ghost_cells;
   std::vector<int> ghost_lids; // per ghost cell, its DoFs' local indices in the FEM vectors
@@ -762,14 +764,19 @@ void FemParticleCoupling<dim>::rebuild_interface() {
 
   // 1. Ghost particles: every point of an active cell near a free particle (whole cells).
   std::optional<fem::ScopedTime> ghosts_time(timings_.ghosts);
-  std::vector<Point<dim>> free_points;
+  // Only particles freed since the last search can need new ghosts: every active cell within
+  // reach of an earlier free particle hosts ghosts already (cells never turn active again).
+  std::vector<Point<dim>> free_points, new_free_points;
   for (unsigned int i = 0; i < particles_.size(); ++i)
-    if (free_[i])
+    if (free_[i]) {
       free_points.push_back(particles_.reference_position(i));
+      if (i >= impl_->free_searched.size() || !impl_->free_searched[i])
+        new_free_points.push_back(particles_.reference_position(i));
+    }
   // Bonds reach δ + h/2 (partial volumes), so a ghost bonded to a free particle needs ghosts
   // out to 2(δ + h/2) for a complete horizon of its own.
   const double reach = prm_.ghost_layer * (horizon() + 0.5 * spacing_) + 0.5 * spacing_;
-  PointBins<dim> free_bins(free_points, reach);
+  PointBins<dim> free_bins(new_free_points, reach);
   std::vector<Record> mine;
   std::vector<Point<dim>> xs(np);
   FEValues<dim> at_points(fem_.mapping(), fe, impl_->points, update_JxW_values);
@@ -778,6 +785,8 @@ void FemParticleCoupling<dim>::rebuild_interface() {
     if (c >= 0)
       hosts[c] = 1;
   for (const auto& [id, cell] : impl_->owned_cells) {
+    if (new_free_points.empty())
+      break;
     // Cells hosting particles already, or farther than the reach from every free particle
     // (tested at the centre with the half diagonal added), need no mapping of their points.
     if (!fem_.is_active(cell) || hosts[cell->active_cell_index()] ||
@@ -813,6 +822,8 @@ void FemParticleCoupling<dim>::rebuild_interface() {
       add_host(id, static_cast<unsigned int>(r[0]));
       impl_->fixed_slots.push_back(0);
     }
+
+  impl_->free_searched.assign(free_.begin(), free_.end());
 
   // 2. Local host-cell tables for ghosts (displacements) and free particles (temperatures).
   impl_->ghost_cells.clear();
@@ -1664,6 +1675,7 @@ void FemParticleCoupling<dim>::load(const std::string& file) {
   prepare();
   impl_->searched_bonds = {}; // the particles are replaced: search them afresh
   impl_->searched_volumes.clear();
+  impl_->free_searched.clear(); // every loaded free particle is searched around afresh
   std::ifstream in(file, std::ios::binary);
   std::string tag;
   int version = 0;
