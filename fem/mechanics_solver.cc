@@ -1473,6 +1473,11 @@ const typename MechanicsSolver<dim>::VectorType& MechanicsSolver<dim>::evaluate_
 
 template <int dim>
 Tensor<1, dim> MechanicsSolver<dim>::reaction_force(types::boundary_id id) const {
+  return Utilities::MPI::sum(local_reaction_force(id), comm_); // one reduction for all components
+}
+
+template <int dim>
+Tensor<1, dim> MechanicsSolver<dim>::local_reaction_force(types::boundary_id id) const {
   auto it = reaction_dofs_.find(id);
   if (it == reaction_dofs_.end()) {
     const IndexSet on_boundary =
@@ -1486,8 +1491,6 @@ Tensor<1, dim> MechanicsSolver<dim>::reaction_force(types::boundary_id id) const
   Tensor<1, dim> r;
   for (const auto& [i, c] : it->second)
     r[c] += raw_residual_(i);
-  for (unsigned int c = 0; c < dim; ++c)
-    r[c] = Utilities::MPI::sum(r[c], comm_);
   return r;
 }
 

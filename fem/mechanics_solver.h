@@ -202,6 +202,8 @@ class MechanicsSolver {
   // Force the supports exert on the body on boundary `id` (sum of f_int − f_ext over the
   // dofs there, all ranks) [N] (2-D plane: N per unit thickness).
   dealii::Tensor<1, dim> reaction_force(dealii::types::boundary_id id) const;
+  // This rank's share of it (its owned DoFs), for callers that add parts and reduce once.
+  dealii::Tensor<1, dim> local_reaction_force(dealii::types::boundary_id id) const;
   double strain_energy() const;                 // ∫ (stress work − plastic work) dV [J]
   double max_von_mises() const;                 // over all quadrature points [Pa]
   double kinetic_energy() const;                // ½ vᵀ M v with the lumped mass [J]
