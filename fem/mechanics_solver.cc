@@ -21,6 +21,7 @@
 #include <deal.II/numerics/data_out.h>
 #include <deal.II/numerics/vector_tools.h>
 
+#include <Epetra_Import.h>
 #include <Epetra_Map.h>
 #include <Teuchos_ParameterList.hpp>
 
@@ -387,35 +388,42 @@ void MechanicsSolver<dim>::build_step_tables() {
   u_previous_.resize(n);
   hanging_lines_.clear();
   bool local = true;
+  for (const auto& line : hanging_.get_lines())
+    if (owned_.is_element(line.index))
+      for (const auto& [master, weight] : line.entries)
+        local = local && owned_.is_element(master);
+  hanging_local_ = Utilities::MPI::min(local ? 1 : 0, comm_) == 1;
+  const auto& ghost_map = u_ghost_.trilinos_vector().Map();
   for (const auto& line : hanging_.get_lines()) {
     if (!owned_.is_element(line.index))
       continue;
     HangingLine h{
         static_cast<unsigned int>(owned_.index_within_set(line.index)), {}, line.inhomogeneity};
     for (const auto& [master, weight] : line.entries) {
-      if (!owned_.is_element(master)) {
-        local = false;
-        break;
-      }
-      h.masters.emplace_back(static_cast<unsigned int>(owned_.index_within_set(master)), weight);
+      const int index =
+          hanging_local_
+              ? static_cast<int>(owned_.index_within_set(master))
+              : ghost_map.LID(static_cast<TrilinosWrappers::types::int_type>(master));
+      AssertThrow(index >= 0, ExcMessage("hanging-node master outside the relevant DoFs"));
+      h.masters.emplace_back(static_cast<unsigned int>(index), weight);
     }
     hanging_lines_.push_back(std::move(h));
   }
-  hanging_local_ = Utilities::MPI::min(local ? 1 : 0, comm_) == 1;
   step_tables_ready_ = true;
 }
 
 template <int dim>
 void MechanicsSolver<dim>::distribute_hanging(VectorType& vector) const {
-  if (!hanging_local_) {
-    hanging_.distribute(vector);
-    return;
-  }
   double* x = vector.begin();
+  const double* masters = x;
+  if (!hanging_local_) { // collective: every rank takes this branch or none
+    hanging_scratch_.trilinos_vector().Import(vector.trilinos_vector(), *ghost_import_, Insert);
+    masters = hanging_scratch_.trilinos_vector()[0];
+  }
   for (const auto& line : hanging_lines_) {
     double value = line.inhomogeneity;
     for (const auto& [master, weight] : line.masters)
-      value += weight * x[master];
+      value += weight * masters[master];
     x[line.local] = value;
   }
 }
@@ -483,6 +491,9 @@ void MechanicsSolver<dim>::setup() {
   lumped_mass_.reinit(owned_, comm_);
   u_ghost_.reinit(owned_, relevant_, comm_);
   v_ghost_.reinit(owned_, relevant_, comm_);
+  ghost_import_ = std::make_shared<Epetra_Import>(u_ghost_.trilinos_vector().Map(),
+                                                 u_.trilinos_vector().Map());
+  hanging_scratch_.reinit(owned_, relevant_, comm_);
   {
     const auto& map = u_ghost_.trilinos_vector().Map();
     const unsigned int n = fe_.n_dofs_per_cell();
@@ -626,8 +637,8 @@ void MechanicsSolver<dim>::update_ghosts() {
     std::copy(v_.begin(), v_.begin() + n, v_ghost_.trilinos_vector()[0]);
     return;
   }
-  u_ghost_ = u_;
-  v_ghost_ = v_;
+  u_ghost_.trilinos_vector().Import(u_.trilinos_vector(), *ghost_import_, Insert);
+  v_ghost_.trilinos_vector().Import(v_.trilinos_vector(), *ghost_import_, Insert);
 }
 
 template <int dim>

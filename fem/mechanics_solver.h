@@ -38,6 +38,8 @@
 #include <string>
 #include <vector>
 
+class Epetra_Import;
+
 namespace spinesim::fem {
 
 // What one quadrature point remembers.
@@ -336,12 +338,16 @@ class MechanicsSolver {
   std::vector<std::uint8_t> step_skip_, step_dirichlet_, step_driven_;
   std::vector<int> step_rows_; // the local indices that are not skipped, ascending
   std::vector<int> cell_lids_;  // per active cell, its DoFs' local indices in u_ghost_ (or -1)
+  // owned_ -> relevant_ import for update_ghosts(), made once at setup (an assignment between
+  // the two layouts would construct one, with its directory, at every call).
+  std::shared_ptr<Epetra_Import> ghost_import_;
   std::vector<double> relax_acceleration_; // previous net acceleration per owned DoF [m/s²]
   std::vector<int> driven_slot_;
   std::vector<double> u_previous_;
-  // Hanging-node lines of owned DoFs with owned masters (local indices): distributed on the
-  // local arrays instead of AffineConstraints::distribute, which builds a ghosted copy of the
-  // vector every call. Used when every rank's masters are its own (hanging_local_).
+  // Hanging-node lines of owned DoFs: distributed on the local arrays instead of
+  // AffineConstraints::distribute, which builds a ghosted copy of the vector (and an import)
+  // every call. Masters by owned index when every rank's masters are its own
+  // (hanging_local_), else by index in the ghosted layout, read after ghost_import_.
   struct HangingLine {
     unsigned int local;
     std::vector<std::pair<unsigned int, double>> masters;
@@ -349,6 +355,7 @@ class MechanicsSolver {
   };
   std::vector<HangingLine> hanging_lines_;
   bool hanging_local_ = false;
+  mutable VectorType hanging_scratch_; // ghosted copy for masters owned elsewhere
   void distribute_hanging(VectorType& vector) const;
   bool step_tables_ready_ = false;
   unsigned int n_active_cells_ = 0; // global count of active cells
