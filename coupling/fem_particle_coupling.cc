@@ -290,11 +290,10 @@ struct FemParticleCoupling<dim>::Impl {
   QIterated<dim> points;                      // particle points of a cell (unit cell)
   FullMatrix<double> shape;                   // N_i(ξ_q), [q][i]
   std::map<std::string, DoFCell> owned_cells; // locally owned cells by CellId
-  // Per active cell index: a locally owned cell of the particle lattice's size (only these
-  // can convert; the refinement box makes them).
-  std::vector<std::uint8_t> lattice_cell;
   std::vector<DoFCell> owned_by_index; // locally owned cells by active cell index (else invalid)
-  std::vector<DoFCell> lattice_cells;  // the owned cells of lattice size, by active index
+  // The owned cells of the particle lattice's size, by active index: only these can convert
+  // (the refinement box makes them).
+  std::vector<DoFCell> lattice_cells;
   // Per particle: the active cell index of its host cell if this rank owns it, else -1 (the
   // CellId strings need a map lookup).
   std::vector<int> host_index;
@@ -446,16 +445,13 @@ void FemParticleCoupling<dim>::prepare() {
   density_ = props[2];
   // The lattice spacing of the particles (uniform meshes: cell edge / n).
   spacing_ = h_min / prm_.particles_per_direction;
-  impl_->lattice_cell.assign(dh.get_triangulation().n_active_cells(), 0);
   impl_->owned_by_index.assign(dh.get_triangulation().n_active_cells(), typename Impl::DoFCell());
-  for (const auto& [id, cell] : impl_->owned_cells) {
-    impl_->lattice_cell[cell->active_cell_index()] =
-        cell->minimum_vertex_distance() <= 1.5 * spacing_ * prm_.particles_per_direction;
+  for (const auto& [id, cell] : impl_->owned_cells)
     impl_->owned_by_index[cell->active_cell_index()] = cell;
-  }
   impl_->lattice_cells.clear();
   for (const auto& cell : impl_->owned_by_index)
-    if (cell.state() == IteratorState::valid && impl_->lattice_cell[cell->active_cell_index()])
+    if (cell.state() == IteratorState::valid &&
+        cell->minimum_vertex_distance() <= 1.5 * spacing_ * prm_.particles_per_direction)
       impl_->lattice_cells.push_back(cell);
 
   impl_->shape.reinit(impl_->points.size(), fe.n_dofs_per_cell());
@@ -1340,10 +1336,16 @@ void FemParticleCoupling<dim>::advance(double dt, double a, double load_time, bo
     auto& previous = impl_->relax_acceleration;
     if (sums && (first || previous.size() != dim * particles_.size()))
       previous.assign(dim * particles_.size(), std::numeric_limits<double>::quiet_NaN());
+    // The damped central-difference update of one component, in both loops below.
+    const double keep = 1.0 - 0.5 * a * dt, denominator = 1.0 + 0.5 * a * dt;
+    const auto advance_component = [&](unsigned int i, unsigned int d, double acc) {
+      double& vi = particles_.velocity(i)[d];
+      vi = (keep * vi + dt * acc) / denominator;
+      particles_.displacement(i)[d] += dt * vi;
+    };
     if (!sums) {
       // Independent particles: the threads share them (the relaxation sums below keep one
       // thread and a fixed order).
-      const double keep = 1.0 - 0.5 * a * dt, denominator = 1.0 + 0.5 * a * dt;
       const long n = static_cast<long>(particles_.size());
       // A few flops a particle: worth a parallel region from a couple of thousand on.
 #pragma omp parallel for schedule(static) if (n > 2000)
@@ -1355,10 +1357,7 @@ void FemParticleCoupling<dim>::advance(double dt, double a, double load_time, bo
         for (unsigned int d = 0; d < dim; ++d) {
           if (particles_.is_fixed(i, d))
             continue;
-          const double acc = (particles_.force(i)[d] + particles_.external_force(i)[d]) / m;
-          double& vi = particles_.velocity(i)[d];
-          vi = (keep * vi + dt * acc) / denominator;
-          particles_.displacement(i)[d] += dt * vi;
+          advance_component(i, d, (particles_.force(i)[d] + particles_.external_force(i)[d]) / m);
         }
       }
     }
@@ -1369,16 +1368,13 @@ void FemParticleCoupling<dim>::advance(double dt, double a, double load_time, bo
       for (unsigned int d = 0; d < dim; ++d) {
         const double f = particles_.force(i)[d] + particles_.external_force(i)[d];
         if (particles_.is_fixed(i, d)) {
-          if (sums)
-            sums->reaction_square += f * f;
+          sums->reaction_square += f * f;
           continue;
         }
         const double acc = f / m;
-        double& vi = particles_.velocity(i)[d];
-        if (sums)
-          sums->add_free(f, acc, previous[dim * i + d], particles_.displacement(i)[d], vi, dt);
-        vi = ((1.0 - 0.5 * a * dt) * vi + dt * acc) / (1.0 + 0.5 * a * dt);
-        particles_.displacement(i)[d] += dt * vi;
+        sums->add_free(f, acc, previous[dim * i + d], particles_.displacement(i)[d],
+                       particles_.velocity(i)[d], dt);
+        advance_component(i, d, acc);
       }
     }
     apply_particle_dirichlet(load_time, dt);

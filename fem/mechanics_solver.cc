@@ -708,6 +708,13 @@ Tensor2 MechanicsSolver<dim>::update_point(const materials::ConstitutiveLaw& law
                                            double dT, const QuadraturePointData& old,
                                            QuadraturePointData& tr, double (*A)[3][3][3]) const {
   Tensor2 S; // stress conjugate to ∇u: σ or P
+  const auto copy_tangent = [A](const auto& T) { // T: the law's fourth-order tangent
+    for (unsigned int i = 0; i < 3; ++i)
+      for (unsigned int j = 0; j < 3; ++j)
+        for (unsigned int k = 0; k < 3; ++k)
+          for (unsigned int l = 0; l < 3; ++l)
+            A[i][j][k][l] = T[i][j][k][l];
+  };
   if (prm_.kinematics != "finite_strain") {
     SymTensor2 eps = symmetrize(H);
     materials::SmallStrainResponse r;
@@ -737,11 +744,7 @@ Tensor2 MechanicsSolver<dim>::update_point(const materials::ConstitutiveLaw& law
     }
     S = r.stress;
     if (A)
-      for (unsigned int i = 0; i < 3; ++i)
-        for (unsigned int j = 0; j < 3; ++j)
-          for (unsigned int k = 0; k < 3; ++k)
-            for (unsigned int l = 0; l < 3; ++l)
-              A[i][j][k][l] = r.tangent[i][j][k][l];
+      copy_tangent(r.tangent);
     tr.state = r.state;
     tr.cauchy_stress = r.stress;
     tr.strain = eps;
@@ -756,11 +759,7 @@ Tensor2 MechanicsSolver<dim>::update_point(const materials::ConstitutiveLaw& law
     const materials::FiniteStrainResponse r = law.finite_strain(F, dT, old.state);
     S = r.first_piola;
     if (A)
-      for (unsigned int i = 0; i < 3; ++i)
-        for (unsigned int j = 0; j < 3; ++j)
-          for (unsigned int k = 0; k < 3; ++k)
-            for (unsigned int l = 0; l < 3; ++l)
-              A[i][j][k][l] = r.dP_dF[i][j][k][l];
+      copy_tangent(r.dP_dF);
     tr.state = r.state;
     tr.cauchy_stress = symmetrize(S * transpose(F)) / J;
     tr.strain = 0.5 * (symmetrize(transpose(F) * F) - unit_symmetric_tensor<3>());
@@ -1282,25 +1281,28 @@ void MechanicsSolver<dim>::central_difference(double dt, double a, double bc_tim
                                   std::to_string(owned_.nth_index_in_set(k)),
                               "explicit step", "every material needs a positive density");
     };
+    // The damped central-difference update of one DoF, in both loops below.
+    const auto advance_dof = [&](std::size_t k, double acc) {
+      v[k] = ((1.0 - 0.5 * a * dt) * v[k] + dt * acc) / (1.0 + 0.5 * a * dt);
+      u[k] += dt * v[k];
+    };
     if (!sums) {
       // Independent DoFs, split among the threads as the sparse product splits its rows (the
       // same static partition of the same local order: each thread reads what it wrote).
-      long first_bad = -1;
-      const long n_dofs = static_cast<long>(n), n_rows = static_cast<long>(step_rows_.size());
-#pragma omp parallel for schedule(static) if (n_rows > 4000) reduction(max : first_bad)
+      const long n_rows = static_cast<long>(step_rows_.size());
+      long first_bad = static_cast<long>(n); // lowest local index without mass
+#pragma omp parallel for schedule(static) if (n_rows > 4000) reduction(min : first_bad)
       for (long row = 0; row < n_rows; ++row) {
         const long k = step_rows_[row];
         const double m = mass[k];
         if (!(m > 0)) {
-          first_bad = std::max(first_bad, n_dofs - k); // the lowest bad k wins the max
+          first_bad = std::min(first_bad, k);
           continue;
         }
-        const double acc = sign * r[k] / m;
-        v[k] = ((1.0 - 0.5 * a * dt) * v[k] + dt * acc) / (1.0 + 0.5 * a * dt);
-        u[k] += dt * v[k];
+        advance_dof(k, sign * r[k] / m);
       }
-      if (first_bad >= 0)
-        throw zero_mass(static_cast<std::size_t>(n_dofs - first_bad));
+      if (first_bad < static_cast<long>(n))
+        throw zero_mass(static_cast<std::size_t>(first_bad));
     }
     for (std::size_t k = 0; sums && k < n; ++k) { // relaxation: sums in a fixed order
       if (step_skip_[k])
@@ -1318,8 +1320,7 @@ void MechanicsSolver<dim>::central_difference(double dt, double a, double bc_tim
       } else {
         sums->add_free(r[k], acc, relax_acceleration_[k], u[k], v[k], dt);
       }
-      v[k] = ((1.0 - 0.5 * a * dt) * v[k] + dt * acc) / (1.0 + 0.5 * a * dt);
-      u[k] += dt * v[k];
+      advance_dof(k, acc);
     }
     // Later conditions overwrite earlier ones on shared DoFs (as interpolate_boundary_values);
     // boundary values take precedence over driven values.
