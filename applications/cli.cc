@@ -1,6 +1,6 @@
 #include "cli.h"
 
-#include "coupling/driver.h"
+#include "applications/framework/driver.h"
 #include "default_scene.h"
 
 #include <deal.II/base/mpi.h>
@@ -12,7 +12,7 @@
 namespace spinesim {
 
 int run_cli(int argc, char** argv) {
-  using namespace coupling;
+  using namespace framework;
   CLI::App app{"spinesim: coupled finite-element / meshfree simulation of fracture in bone and "
                "implants.\nExit codes: 0 ok, 1 run failed (divergence, NaN, ...), 2 bad input."};
   app.set_version_flag("--version", std::string("spinesim ") + SPINESIM_VERSION);
@@ -21,11 +21,13 @@ int run_cli(int argc, char** argv) {
   RunOptions run;
   run.scene.default_text = default_scene_text;
   std::string run_scene, restart_dir;
-  auto* run_cmd = app.add_subcommand("run", "Run a scene (the embedded default scene without SCENE).");
+  auto* run_cmd =
+      app.add_subcommand("run", "Run a scene (the embedded default scene without SCENE).");
   run_cmd->add_option("SCENE", run_scene, "Scene file (.prm or .json)");
   run_cmd->add_option("-o,--output", run.output, "Output directory")->capture_default_str();
-  run_cmd->add_option("-s,--set", run.scene.overrides,
-                      "Override a parameter: \"Section/Sub/Parameter=value\" (repeatable)")
+  run_cmd
+      ->add_option("-s,--set", run.scene.overrides,
+                   "Override a parameter: \"Section/Sub/Parameter=value\" (repeatable)")
       ->take_all();
   run_cmd->add_option("-t,--threads", run.threads, "Threads per MPI rank (0: all available)")
       ->check(CLI::NonNegativeNumber);
@@ -67,13 +69,11 @@ int run_cli(int argc, char** argv) {
                  "positions, volumes, density and material per cell or Gauss point, written to "
                  "particles.vtu and particles.h5 in the output directory.");
   convert_cmd->add_option("SCENE", convert_scene, "Scene file with a CT section")->required();
-  convert_cmd->add_option("-o,--output", convert.output, "Output directory")
-      ->capture_default_str();
+  convert_cmd->add_option("-o,--output", convert.output, "Output directory")->capture_default_str();
   convert_cmd->add_option("--per", convert_per, "One particle per cell or per quadrature point")
       ->check(CLI::IsMember({"cell", "quadrature"}))
       ->capture_default_str();
-  convert_cmd->add_option("-s,--set", convert.scene.overrides, "Override a parameter")
-      ->take_all();
+  convert_cmd->add_option("-s,--set", convert.scene.overrides, "Override a parameter")->take_all();
   convert_cmd->add_flag("-f,--force", convert.force,
                         "Replace the output directory of an earlier run");
   convert_cmd->add_option("--progress", convert.progress, "Progress display")

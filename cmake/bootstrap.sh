@@ -24,6 +24,7 @@ packages=(
   libeigen3-dev libcli11-dev nlohmann-json3-dev libgtest-dev
   libinsighttoolkit5-dev  # CT volumes: NIfTI, NRRD, MetaImage readers
   gnuplot-nox             # PNG plots of studies and benchmarks
+  clang-format            # the format-check target (.ci/run)
 )
 
 missing=()

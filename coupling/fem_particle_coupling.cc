@@ -1,9 +1,10 @@
 #include "coupling/fem_particle_coupling.h"
 
+#include "base/exceptions.h"
+#include "base/list_parsing.h"
+#include "base/scoped_time.h"
 #include "fem/cell_indicators.h"
 #include "fem/heat/heat_solver.h"
-#include "fem/materials/failure.h"
-#include "fem/scoped_time.h"
 #include "meshfree/neighbor_search.h"
 #include "meshfree/particle_output.h"
 
@@ -37,13 +38,7 @@ using namespace dealii;
 namespace {
 
 std::vector<double> parse_doubles(const std::string& list, const std::string& where) {
-  if (list.empty())
-    return {};
-  try {
-    return Utilities::string_to_double(Utilities::split_string_list(list, ','));
-  } catch (...) {
-    throw InvalidInput(where, "cannot read '" + list + "' as numbers", "comma-separated numbers");
-  }
+  return parse_number_list(list, where, /*allow_empty=*/true);
 }
 
 // Uniform bins of the given size over a point set: candidates within one bin distance.
@@ -186,9 +181,8 @@ void FemParticleCoupling<dim>::Parameters::declare(ParameterHandler& prm) {
   prm.declare_entry("Relaxation max iterations", "200000", Integer(1),
                     "Quasi-static coupled runs: pseudo-time steps allowed per step before the "
                     "run stops as not converged [-].");
-  prm.enter_subsection("Bond based");
-  meshfree::BondBasedPD<dim>::Parameters::declare(prm);
-  prm.leave_subsection();
+  // One subsection per registered particle method ("Bond based", "NOSB", ...).
+  meshfree::declare_particle_method_sections(prm);
   for (unsigned int k = 1; k <= 4; ++k) {
     prm.enter_subsection("Crack " + std::to_string(k));
     prm.declare_entry("Corners", "", Anything(),
@@ -199,8 +193,7 @@ void FemParticleCoupling<dim>::Parameters::declare(ParameterHandler& prm) {
 }
 
 template <int dim>
-void FemParticleCoupling<dim>::Parameters::parse(const ParameterHandler& cprm) {
-  auto& prm = const_cast<ParameterHandler&>(cprm);
+void FemParticleCoupling<dim>::Parameters::parse(ParameterHandler& prm, const std::string& method) {
   particles_per_direction = prm.get_integer("Particles per cell direction");
   ghost_layer = prm.get_double("Ghost layer");
   interface_radius = prm.get_double("Interface radius");
@@ -235,9 +228,8 @@ void FemParticleCoupling<dim>::Parameters::parse(const ParameterHandler& cprm) {
     throw InvalidInput("Coupling/Refinement region lower corner",
                        "the two corners need " + std::to_string(dim) + " coordinates each",
                        "both empty, or both 'x,y" + std::string(dim == 3 ? ",z" : "") + "' [m]");
-  prm.enter_subsection("Bond based");
-  pd.parse(prm);
-  prm.leave_subsection();
+  particles_method = method;
+  make_method = meshfree::particle_method_maker<dim>(method, prm, "Effects/Particles method");
   cracks.clear();
   for (unsigned int k = 1; k <= 4; ++k) {
     prm.enter_subsection("Crack " + std::to_string(k));
@@ -245,16 +237,8 @@ void FemParticleCoupling<dim>::Parameters::parse(const ParameterHandler& cprm) {
     prm.leave_subsection();
     if (corners.empty())
       continue;
-    std::vector<double> flat;
-    for (const auto& point : Utilities::split_string_list(corners, ';'))
-      for (double v : parse_doubles(point, "Coupling/Crack " + std::to_string(k) + "/Corners"))
-        flat.push_back(v);
-    if (flat.size() != (dim == 2 ? 4u : 12u))
-      throw InvalidInput("Coupling/Crack " + std::to_string(k) + "/Corners",
-                         "has " + std::to_string(flat.size()) + " numbers",
-                         dim == 2 ? "two points 'x,y; x,y' [m]"
-                                  : "four points 'x,y,z; x,y,z; x,y,z; x,y,z' [m]");
-    cracks.push_back(flat);
+    cracks.push_back(
+        parse_crack_corners(corners, "Coupling/Crack " + std::to_string(k) + "/Corners", dim));
   }
 }
 
@@ -327,7 +311,7 @@ FemParticleCoupling<dim>::FemParticleCoupling(const Parameters& parameters,
                                               const fem::HeatSolver<dim>* heat)
     : prm_(parameters), fem_(mechanics), heat_(heat),
       impl_(std::make_unique<Impl>(parameters.particles_per_direction)),
-      particles_(parameters.pd.thickness) {
+      particles_(1.0) { // 2-D coupled runs are per unit thickness (prepare())
   rank_ = Utilities::MPI::this_mpi_process(fem_.mpi_communicator());
   if (fem_.parameters().time_integration != "explicit" &&
       fem_.parameters().time_integration != "quasi_static")
@@ -381,7 +365,7 @@ void FemParticleCoupling<dim>::prepare_mesh(const Parameters& p,
 
 template <int dim>
 double FemParticleCoupling<dim>::horizon() const {
-  return prm_.pd.horizon_ratio * spacing_;
+  return method_->neighbor_options(spacing_).horizon;
 }
 
 template <int dim>
@@ -410,11 +394,8 @@ void FemParticleCoupling<dim>::initialise() {
 
 template <int dim>
 void FemParticleCoupling<dim>::prepare() {
-  if (pd_)
+  if (method_)
     return;
-  if (dim == 2 && prm_.pd.thickness != 1.0)
-    throw InvalidInput("Coupling/Bond based/Thickness", "2-D FEM works per unit thickness",
-                       "1 (results are per metre of thickness) [m]");
   const auto& dh = fem_.dof_handler();
   const auto& fe = fem_.fe();
   impl_->owned_cells.clear();
@@ -459,7 +440,20 @@ void FemParticleCoupling<dim>::prepare() {
     for (unsigned int i = 0; i < fe.n_dofs_per_cell(); ++i)
       impl_->shape(q, i) = fe.shape_value(i, impl_->points.point(q));
 
-  pd_ = std::make_unique<meshfree::BondBasedPD<dim>>(prm_.pd, youngs_, poisson_);
+  if (!prm_.make_method)
+    throw InvalidInput("Coupling", "no particle method was read for the coupling",
+                       "Coupling parameters parsed with Effects/Particles method");
+  // Calibrated to the law of the FEM cells the particles replace (the same law on every
+  // rank; the law object itself is not needed by methods without point-wise laws).
+  method_ = prm_.make_method(meshfree::ParticleMaterial{youngs_, poisson_, density_, nullptr});
+  if (dim == 2 && method_->thickness() != 1.0)
+    throw InvalidInput("Coupling/" +
+                           meshfree::ParticleMethods::instance()
+                               .get(prm_.particles_method, "Effects/Particles method")
+                               .section +
+                           "/Thickness",
+                       "2-D FEM works per unit thickness",
+                       "1 (results are per metre of thickness) [m]");
 }
 
 // ---------------------------------------------------------------- totals
@@ -501,7 +495,8 @@ double FemParticleCoupling<dim>::kinetic_energy() const {
 template <int dim>
 double FemParticleCoupling<dim>::strain_energy() const {
   // Bonds are stored from free particles only: W = ¼ Σ k e² over the free rows.
-  const auto w = pd_ ? pd_->strain_energy_density(particles_, bonds_) : std::vector<double>();
+  const auto w =
+      method_ ? method_->strain_energy_density(particles_, bonds_) : std::vector<double>();
   double e = 0; // rows live with their owners
   for (unsigned int i = 0; i < w.size(); ++i)
     if (free_[i] && is_owned(i))
@@ -513,7 +508,7 @@ double FemParticleCoupling<dim>::strain_energy() const {
 
 template <int dim>
 std::vector<CellId> FemParticleCoupling<dim>::flagged_cells() const {
-  fem::ScopedTime time(timings_.criteria);
+  ScopedTime time(timings_.criteria);
   const bool any = prm_.principal_strain_threshold > 0 || prm_.plastic_strain_threshold > 0 ||
                    prm_.min_jacobian_ratio > 0 || prm_.min_time_step > 0;
   std::vector<Point<dim>> centres;
@@ -583,12 +578,12 @@ FemParticleCoupling<dim>::convert(const std::vector<CellId>& cells) {
     return report;
   const MPI_Comm comm = fem_.mpi_communicator();
   {
-    fem::ScopedTime time(timings_.totals);
+    ScopedTime time(timings_.totals);
     report.mass_before = total_mass();
     report.momentum_before = total_momentum();
     report.kinetic_before = kinetic_energy();
   }
-  std::optional<fem::ScopedTime> records_time(timings_.records);
+  std::optional<ScopedTime> records_time(timings_.records);
 
   // Records of the new free particles from the ranks owning their cells.
   const auto& fe = fem_.fe();
@@ -726,7 +721,7 @@ FemParticleCoupling<dim>::convert(const std::vector<CellId>& cells) {
 
   records_time.reset();
   // Deactivate the converted cells (owned and ghost cells, by CellId).
-  std::optional<fem::ScopedTime> deactivation_time(timings_.deactivation);
+  std::optional<ScopedTime> deactivation_time(timings_.deactivation);
   // The cells converted before are inactive already; of the others only this batch turns.
   std::set<CellId> batch_ids;
   for (const auto& id : todo)
@@ -740,7 +735,7 @@ FemParticleCoupling<dim>::convert(const std::vector<CellId>& cells) {
   deactivation_time.reset();
   rebuild_interface();
 
-  fem::ScopedTime time(timings_.totals);
+  ScopedTime time(timings_.totals);
   report.max_velocity_scale =
       Utilities::MPI::max(report.max_velocity_scale, fem_.mpi_communicator());
   report.mass_after = total_mass();
@@ -759,7 +754,7 @@ void FemParticleCoupling<dim>::rebuild_interface() {
   const unsigned int np = impl_->points.size();
 
   // 1. Ghost particles: every point of an active cell near a free particle (whole cells).
-  std::optional<fem::ScopedTime> ghosts_time(timings_.ghosts);
+  std::optional<ScopedTime> ghosts_time(timings_.ghosts);
   // Only particles freed since the last search can need new ghosts: every active cell within
   // reach of an earlier free particle hosts ghosts already (cells never turn active again).
   std::vector<Point<dim>> free_points, new_free_points;
@@ -880,12 +875,12 @@ void FemParticleCoupling<dim>::rebuild_interface() {
 
   ghosts_time.reset();
   {
-    fem::ScopedTime time(timings_.bonds);
+    ScopedTime time(timings_.bonds);
     rebuild_bonds();
   }
 
   // 4. Interface DoFs: shared by an active and a converted cell; MLS fit of free particles.
-  fem::ScopedTime interface_time(timings_.interface);
+  ScopedTime interface_time(timings_.interface);
   impl_->interface.clear();
   impl_->interface_registered = false;
   const auto& dh = fem_.dof_handler();
@@ -1067,8 +1062,8 @@ void FemParticleCoupling<dim>::exchange_halo() {
 template <int dim>
 void FemParticleCoupling<dim>::synchronise() const {
   auto& p = const_cast<meshfree::ParticleSet<dim>&>(particles_);
-  if (pd_ && n_free_particles() > 0)
-    pd_->update_damage(p, bonds_); // owned rows
+  if (method_ && n_free_particles() > 0)
+    method_->update_damage(p, bonds_); // owned rows
   const MPI_Comm comm = fem_.mpi_communicator();
   if (Utilities::MPI::n_mpi_processes(comm) == 1)
     return;
@@ -1132,7 +1127,7 @@ void FemParticleCoupling<dim>::rebuild_bonds() {
                               std::make_pair(std::min(i, j), std::max(i, j)));
   };
 
-  auto options = pd_->neighbor_options(spacing_);
+  auto options = method_->neighbor_options(spacing_);
   for (const auto& c : prm_.cracks) {
     if constexpr (dim == 2)
       options.pre_cracks.push_back(
@@ -1200,7 +1195,7 @@ void FemParticleCoupling<dim>::rebuild_bonds() {
     kept.offsets[i + 1] = kept.neighbor.size();
   }
   bonds_ = std::move(kept);
-  pd_->initialise(particles_, bonds_);
+  method_->initialise(particles_, bonds_);
 }
 
 template <int dim>
@@ -1292,7 +1287,7 @@ template <int dim>
 double FemParticleCoupling<dim>::stable_time_step() const {
   double dt = fem_.stable_time_step();
   if (n_free_particles() > 0) {
-    const auto S = pd_->stiffness_bound(bonds_);
+    const auto S = method_->stiffness_bound(particles_, bonds_);
     for (unsigned int i = 0; i < particles_.size(); ++i)
       if (free_[i] && S[i] > 0)
         dt = std::min(dt, prm_.time_step_safety * std::sqrt(2.0 * particles_.density(i) / S[i]));
@@ -1321,14 +1316,14 @@ void FemParticleCoupling<dim>::advance(double dt, double a, double load_time, bo
     const bool track_heat = heat_ && prm_.damage && prm_.fracture_heat_fraction > 0;
     if (track_heat)
       impl_->broken_before = bonds_.broken;
-    const std::size_t newly_broken = pd_->compute_forces(particles_, bonds_, prm_.damage);
+    const std::size_t newly_broken = method_->compute_forces(particles_, bonds_, prm_.damage);
     if (track_heat && newly_broken > 0) {
       if (fracture_energy_.size() != particles_.size())
         fracture_energy_.resize(particles_.size(), 0.0);
       for (unsigned int i = 0; i < particles_.size(); ++i)
         for (std::size_t k = bonds_.begin(i); k < bonds_.end(i); ++k)
           if (bonds_.broken[k] && !impl_->broken_before[k]) {
-            const double e = pd_->bond_energy(particles_, bonds_, i, k);
+            const double e = method_->bond_energy(particles_, bonds_, i, k);
             fracture_energy_[i] += e;
             fracture_dissipation_ += e;
           }
@@ -1531,7 +1526,7 @@ template <int dim>
 std::pair<double, double> FemParticleCoupling<dim>::max_free_forces() {
   double fp = 0;
   if (n_free_particles() > 0) {
-    pd_->compute_forces(particles_, bonds_, false);
+    method_->compute_forces(particles_, bonds_, false);
     for (unsigned int i = 0; i < particles_.size(); ++i)
       if (free_[i] && is_owned(i))
         for (unsigned int d = 0; d < dim; ++d)
@@ -1575,10 +1570,10 @@ std::size_t FemParticleCoupling<dim>::n_broken_bonds() const {
 
 template <int dim>
 double FemParticleCoupling<dim>::max_damage() const {
-  if (!pd_ || n_free_particles() == 0)
+  if (!method_ || n_free_particles() == 0)
     return 0;
   auto& p = const_cast<meshfree::ParticleSet<dim>&>(particles_);
-  pd_->update_damage(p, bonds_);
+  method_->update_damage(p, bonds_);
   double m = 0;
   for (unsigned int i = 0; i < particles_.size(); ++i)
     if (free_[i] && is_owned(i))
@@ -1691,7 +1686,7 @@ void FemParticleCoupling<dim>::load(const std::string& file) {
     in >> id >> batch;
     converted_[id] = batch;
   }
-  particles_ = meshfree::ParticleSet<dim>(prm_.pd.thickness);
+  particles_ = meshfree::ParticleSet<dim>(method_->thickness());
   free_.clear();
   host_cell_.clear();
   host_point_.clear();

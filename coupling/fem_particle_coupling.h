@@ -1,8 +1,8 @@
 #ifndef SPINESIM_COUPLING_FEM_PARTICLE_COUPLING_H
 #define SPINESIM_COUPLING_FEM_PARTICLE_COUPLING_H
 
-// The FEM bulk and a bond-based PD fracture zone in one run: explicit dynamics, or
-// quasi-static steps by adaptive dynamic relaxation of both models together.
+// The FEM bulk and a particle fracture zone (meshfree/particle_method.h) in one run: explicit
+// dynamics, or quasi-static steps by adaptive dynamic relaxation of both models together.
 //
 // Conversion: a flagged cell leaves the FEM system (MechanicsSolver::set_active_cells, no
 // remeshing) and becomes n^dim particles at the points of the iterated midpoint rule (sub-cell
@@ -35,8 +35,8 @@
 // brings every state to every rank for output, checkpoints and figures.
 
 #include "fem/mechanics_solver.h"
-#include "meshfree/bond_based_pd.h"
 #include "meshfree/bond_list.h"
+#include "meshfree/particle_method.h"
 #include "meshfree/particle_set.h"
 #include "meshfree/pre_crack.h"
 
@@ -79,11 +79,15 @@ class FemParticleCoupling {
     bool conserve_kinetic_energy = true; // scale the velocity fluctuation at conversion
     double relaxation_tolerance = 1e-6;  // quasi-static: free residual / reaction scale [-]
     unsigned int relaxation_max_iterations = 200000; // quasi-static: per step [-]
-    typename meshfree::BondBasedPD<dim>::Parameters pd;
+    // The particle method (Effects/Particles method), its parameters read from its subsection
+    // of "Coupling"; made in prepare() with the material of the FEM cells.
+    std::string particles_method = "bond_based";
+    meshfree::ParticleMethodMaker<dim> make_method;
     std::vector<std::vector<double>> cracks; // flattened corners per pre-crack [m]
 
     static void declare(dealii::ParameterHandler& prm);
-    void parse(const dealii::ParameterHandler& prm);
+    // `particles_method` is the registered name the scene chose (Effects/Particles method).
+    void parse(dealii::ParameterHandler& prm, const std::string& particles_method);
   };
 
   struct ConversionReport {
@@ -93,7 +97,7 @@ class FemParticleCoupling {
     double kinetic_before = 0, kinetic_after = 0;           // [J]
     double max_velocity_scale = 1; // largest λ on the velocity fluctuation of a cell [-]
     double mass_change_relative() const;
-    double kinetic_change_relative() const; // over the kinetic energy before
+    double kinetic_change_relative() const;  // over the kinetic energy before
     double momentum_change_relative() const; // over |p| (or over mass × max speed if p ≈ 0)
   };
 
@@ -206,18 +210,18 @@ class FemParticleCoupling {
 
   meshfree::ParticleSet<dim> particles_;
   meshfree::BondList<dim> bonds_;
-  std::unique_ptr<meshfree::BondBasedPD<dim>> pd_;
-  std::vector<std::uint8_t> free_;       // 1 free, 0 ghost (driven by the FEM)
-  std::vector<std::string> host_cell_;   // CellId of the cell the particle sits in
-  std::vector<unsigned int> host_point_; // index of the point within that cell
+  std::unique_ptr<meshfree::ParticleMethod<dim>> method_; // made by prepare()
+  std::vector<std::uint8_t> free_;                        // 1 free, 0 ghost (driven by the FEM)
+  std::vector<std::string> host_cell_;                    // CellId of the cell the particle sits in
+  std::vector<unsigned int> host_point_;                  // index of the point within that cell
   std::map<std::pair<std::string, unsigned int>, unsigned int> index_of_;
   std::map<std::string, unsigned int> converted_; // CellId -> conversion batch
   std::vector<ConversionReport> reports_;
   double spacing_ = 0, youngs_ = 0, poisson_ = 0, density_ = 0;
   double time_ = 0;
   std::vector<double> fracture_energy_; // per particle, not yet handed to the FEM [J]
-  double fracture_dissipation_ = 0; // of the rows owned here [J]
-  double fracture_heat_ = 0;        // global [J]
+  double fracture_dissipation_ = 0;     // of the rows owned here [J]
+  double fracture_heat_ = 0;            // global [J]
 
   void prepare(); // material, lattice spacing, shape table, PD model (once)
   void rebuild_interface();

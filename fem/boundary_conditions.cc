@@ -1,6 +1,7 @@
 #include "fem/boundary_conditions.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
+#include "base/list_parsing.h"
 
 #include <deal.II/base/function_parser.h>
 #include <deal.II/base/quadrature.h>
@@ -70,22 +71,9 @@ BoundaryConditions<dim>::Region::parse(const std::string& text, const std::strin
     throw InvalidInput(where, "'" + text + "' does not give two corners", allowed);
   dealii::Point<dim> c[2];
   for (unsigned int k = 0; k < 2; ++k) {
-    const auto v = dealii::Utilities::split_string_list(corners[k], ',');
-    if (v.size() != dim)
-      throw InvalidInput(where,
-                         "corner '" + corners[k] + "' has " + std::to_string(v.size()) +
-                             " coordinates in " + std::to_string(dim) + "-D",
-                         allowed);
-    for (unsigned int d = 0; d < dim; ++d) {
-      try {
-        std::size_t used = 0;
-        c[k][d] = std::stod(v[d], &used);
-        if (used != v[d].size() || !std::isfinite(c[k][d]))
-          throw std::invalid_argument(v[d]);
-      } catch (const std::exception&) {
-        throw InvalidInput(where, "'" + v[d] + "' is not a number", allowed);
-      }
-    }
+    const auto v = parse_numbers(corners[k], where, dim, "[m] per corner");
+    for (unsigned int d = 0; d < dim; ++d)
+      c[k][d] = v[d];
   }
   Region r;
   for (unsigned int d = 0; d < dim; ++d) {

@@ -1,6 +1,6 @@
 #include "fem/cell_indicators.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 
 #include <deal.II/base/geometry_info.h>
 #include <deal.II/base/mpi.h>
@@ -62,7 +62,7 @@ void CellIndicators<dim>::compute(const MechanicsSolver<dim>& solver, bool with_
   unsigned int n_inv = 0, n_dam = 0;
   if (with_state)
     solver.refresh_states(); // not from the threads
-  // Cells are independent (each writes its own entries): the threads share them.
+    // Cells are independent (each writes its own entries): the threads share them.
 #pragma omp parallel if (n > 256) reduction(+ : n_inv, n_dam)
   {
     // Vertices (QTrapezoid points are in deal.II's lexicographic vertex order) and Gauss points.
@@ -136,7 +136,8 @@ void CellIndicators<dim>::compute(const MechanicsSolver<dim>& solver, bool with_
       equivalent_plastic_strain(c) = ep;
       max_principal_strain(c) = e1;
       max_principal_stress(c) = s1;
-      damage(c) = std::max(e1 / prm_.critical_principal_strain, s1 / prm_.critical_principal_stress);
+      damage(c) =
+          std::max(e1 / prm_.critical_principal_strain, s1 / prm_.critical_principal_stress);
       n_dam += damage(c) >= 1.0;
     }
   }

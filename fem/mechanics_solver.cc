@@ -1,9 +1,9 @@
 #include "fem/mechanics_solver.h"
 
-#include "fem/scoped_time.h"
+#include "base/scoped_time.h"
 #include "fem/sparse_product.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 
 #include <deal.II/base/mpi.h>
 #include <deal.II/base/timer.h>
@@ -400,10 +400,9 @@ void MechanicsSolver<dim>::build_step_tables() {
     HangingLine h{
         static_cast<unsigned int>(owned_.index_within_set(line.index)), {}, line.inhomogeneity};
     for (const auto& [master, weight] : line.entries) {
-      const int index =
-          hanging_local_
-              ? static_cast<int>(owned_.index_within_set(master))
-              : ghost_map.LID(static_cast<TrilinosWrappers::types::int_type>(master));
+      const int index = hanging_local_
+                            ? static_cast<int>(owned_.index_within_set(master))
+                            : ghost_map.LID(static_cast<TrilinosWrappers::types::int_type>(master));
       AssertThrow(index >= 0, ExcMessage("hanging-node master outside the relevant DoFs"));
       h.masters.emplace_back(static_cast<unsigned int>(index), weight);
     }
@@ -491,8 +490,8 @@ void MechanicsSolver<dim>::setup() {
   lumped_mass_.reinit(owned_, comm_);
   u_ghost_.reinit(owned_, relevant_, comm_);
   v_ghost_.reinit(owned_, relevant_, comm_);
-  ghost_import_ = std::make_shared<Epetra_Import>(u_ghost_.trilinos_vector().Map(),
-                                                 u_.trilinos_vector().Map());
+  ghost_import_ =
+      std::make_shared<Epetra_Import>(u_ghost_.trilinos_vector().Map(), u_.trilinos_vector().Map());
   hanging_scratch_.reinit(owned_, relevant_, comm_);
   {
     const auto& map = u_ghost_.trilinos_vector().Map();
@@ -707,7 +706,7 @@ template <int dim>
 Tensor2 MechanicsSolver<dim>::update_point(const materials::ConstitutiveLaw& law, const Tensor2& H,
                                            double dT, const QuadraturePointData& old,
                                            QuadraturePointData& tr, double (*A)[3][3][3]) const {
-  Tensor2 S; // stress conjugate to ∇u: σ or P
+  Tensor2 S;                                     // stress conjugate to ∇u: σ or P
   const auto copy_tangent = [A](const auto& T) { // T: the law's fourth-order tangent
     for (unsigned int i = 0; i < 3; ++i)
       for (unsigned int j = 0; j < 3; ++j)

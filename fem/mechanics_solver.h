@@ -30,8 +30,8 @@
 #include <deal.II/lac/trilinos_vector.h>
 #include <deal.II/lac/vector.h>
 
-#include <cstdint>
 #include <cmath>
+#include <cstdint>
 #include <functional>
 #include <map>
 #include <memory>
@@ -337,7 +337,7 @@ class MechanicsSolver {
   // owned slot of every driven DoF in key order (-1: not owned, constrained or Dirichlet).
   std::vector<std::uint8_t> step_skip_, step_dirichlet_, step_driven_;
   std::vector<int> step_rows_; // the local indices that are not skipped, ascending
-  std::vector<int> cell_lids_;  // per active cell, its DoFs' local indices in u_ghost_ (or -1)
+  std::vector<int> cell_lids_; // per active cell, its DoFs' local indices in u_ghost_ (or -1)
   // owned_ -> relevant_ import for update_ghosts(), made once at setup (an assignment between
   // the two layouts would construct one, with its directory, at every call).
   std::shared_ptr<Epetra_Import> ghost_import_;

@@ -1,6 +1,7 @@
 #include "fem/mesh.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
+#include "base/list_parsing.h"
 
 #include <deal.II/grid/grid_generator.h>
 #include <deal.II/grid/grid_in.h>
@@ -14,12 +15,7 @@ namespace spinesim::fem {
 namespace {
 
 std::vector<double> parse_doubles(const std::string& text, const std::string& where) {
-  std::vector<double> out;
-  for (const auto& s : dealii::Utilities::split_string_list(text, ','))
-    out.push_back(dealii::Utilities::string_to_double(s));
-  if (out.empty())
-    throw InvalidInput(where, "empty list", "a comma-separated list of numbers");
-  return out;
+  return parse_number_list(text, where);
 }
 
 template <int dim>

@@ -1,6 +1,6 @@
 #include "meshfree/adaptive_dynamic_relaxation.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 
 #include <cmath>
 #include <sstream>

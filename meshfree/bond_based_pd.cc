@@ -1,6 +1,6 @@
 #include "meshfree/bond_based_pd.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 #include "meshfree/bond_loop.h"
 #include "meshfree/pmb_force_rows.h"
 

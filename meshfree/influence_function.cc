@@ -1,6 +1,6 @@
 #include "meshfree/influence_function.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 
 #include <cmath>
 

@@ -1,6 +1,6 @@
 #include "meshfree/neighbor_search.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 #include "meshfree/bond_loop.h"
 
 #include <algorithm>
@@ -250,8 +250,7 @@ BondList<dim> NeighborSearch<dim>::extend(const ParticleSet<dim>& particles,
       std::copy_n(previous.influence.begin() + from, m, bonds.influence.begin() + to);
       std::copy_n(previous.broken.begin() + from, m, bonds.broken.begin() + to);
       if (options_.partial_volume)
-        std::copy_n(previous.volume_fraction.begin() + from, m,
-                    bonds.volume_fraction.begin() + to);
+        std::copy_n(previous.volume_fraction.begin() + from, m, bonds.volume_fraction.begin() + to);
       continue;
     }
     std::size_t k = bonds.begin(i);

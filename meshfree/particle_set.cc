@@ -1,6 +1,6 @@
 #include "meshfree/particle_set.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 
 #include <cmath>
 #include <fstream>

@@ -18,16 +18,16 @@ namespace spinesim::meshfree {
 // Particle and bond arrays as packed doubles (positions and vectors dim per particle).
 template <int dim>
 struct PmbForceRows {
-  const double* x;           // reference positions [m]
-  const double* u;           // displacements [m]
-  double* f;                 // forces, written [N]
-  const double* V;           // volumes [m^3 or m^2·T]
-  const std::size_t* off;    // CSR row offsets
-  const unsigned int* nb;    // neighbour per bond
-  const double* len;         // reference bond length [m]
-  const double* kb;          // bond stiffness k_ij [N/m^4]
-  std::uint8_t* broken;      // bond state, written when a bond breaks
-  double s0;                 // critical stretch (+inf: no breaking)
+  const double* x;        // reference positions [m]
+  const double* u;        // displacements [m]
+  double* f;              // forces, written [N]
+  const double* V;        // volumes [m^3 or m^2·T]
+  const std::size_t* off; // CSR row offsets
+  const unsigned int* nb; // neighbour per bond
+  const double* len;      // reference bond length [m]
+  const double* kb;       // bond stiffness k_ij [N/m^4]
+  std::uint8_t* broken;   // bond state, written when a bond breaks
+  double s0;              // critical stretch (+inf: no breaking)
 };
 
 // Forces on particles [begin, end); breaks bonds whose stretch exceeds s0. Returns the bond

@@ -15,10 +15,10 @@ std::size_t pmb_force_rows_x86_64_v3(const PmbForceRows<dim>& rows, std::size_t 
   return pmb_force_rows_body(rows, begin, end, bad);
 }
 
-template std::size_t pmb_force_rows_x86_64_v3<2>(const PmbForceRows<2>&, std::size_t,
-                                                 std::size_t, int&);
-template std::size_t pmb_force_rows_x86_64_v3<3>(const PmbForceRows<3>&, std::size_t,
-                                                 std::size_t, int&);
+template std::size_t pmb_force_rows_x86_64_v3<2>(const PmbForceRows<2>&, std::size_t, std::size_t,
+                                                 int&);
+template std::size_t pmb_force_rows_x86_64_v3<3>(const PmbForceRows<3>&, std::size_t, std::size_t,
+                                                 int&);
 
 } // namespace spinesim::meshfree
 

@@ -1,6 +1,6 @@
 #include "meshfree/pre_crack.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 
 #include <cmath>
 

@@ -1,6 +1,6 @@
 #include "meshfree/velocity_verlet.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 #include "meshfree/bond_loop.h"
 
 #include <algorithm>

@@ -1,7 +1,7 @@
 #include "fem/ct/ct_cell_laws.h"
 
+#include "base/exceptions.h"
 #include "fem/ct/density_modulus_law.h"
-#include "fem/materials/failure.h"
 #include "fem/materials/isotropic_hardening.h"
 #include "fem/materials/j2_plasticity.h"
 #include "fem/materials/linear_elastic.h"

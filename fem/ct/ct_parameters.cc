@@ -1,8 +1,8 @@
 #include "fem/ct/ct_parameters.h"
 
+#include "base/exceptions.h"
 #include "fem/ct/density_calibration.h"
 #include "fem/ct/density_modulus_law.h"
-#include "fem/materials/failure.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,6 @@
 #include "fem/ct/ct_volume.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 
 #include <itkImage.h>
 #include <itkImageFileReader.h>

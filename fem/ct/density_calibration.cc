@@ -1,6 +1,6 @@
 #include "fem/ct/density_calibration.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 
 #include <cmath>
 

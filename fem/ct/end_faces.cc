@@ -1,6 +1,6 @@
 #include "fem/ct/end_faces.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,6 @@
 #include "fem/ct/mesh_to_particles.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 
 #include <deal.II/base/hdf5.h>
 #include <deal.II/base/quadrature_lib.h>

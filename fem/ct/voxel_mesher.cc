@@ -1,6 +1,6 @@
 #include "fem/ct/voxel_mesher.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 
 #include <algorithm>
 #include <cmath>

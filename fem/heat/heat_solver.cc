@@ -1,8 +1,8 @@
 #include "fem/heat/heat_solver.h"
 
+#include "base/exceptions.h"
 #include "fem/heat/moving_heat_source.h"
 #include "fem/heat/space_time_expression.h"
-#include "fem/materials/failure.h"
 
 #include <deal.II/base/mpi.h>
 #include <deal.II/base/mpi_remote_point_evaluation.h>
@@ -150,9 +150,8 @@ void HeatSolver<dim>::Parameters::declare(ParameterHandler& prm) {
 }
 
 template <int dim>
-void HeatSolver<dim>::Parameters::parse(const ParameterHandler& prm_in) {
-  // get() is const but enter_subsection() is not; the handler is restored on return.
-  auto& prm = const_cast<ParameterHandler&>(prm_in);
+void HeatSolver<dim>::Parameters::parse(ParameterHandler& prm) {
+  // Enters subsections (the handler is restored on return), hence not const.
   degree = prm.get_integer("Finite element degree");
   theta = prm.get_double("Theta");
   time_step = prm.get_double("Time step");

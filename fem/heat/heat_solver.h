@@ -86,7 +86,7 @@ class HeatSolver {
     unsigned int max_iterations = 1000;
 
     static void declare(dealii::ParameterHandler& prm);
-    void parse(const dealii::ParameterHandler& prm);
+    void parse(dealii::ParameterHandler& prm);
     // Throws InvalidInput naming the parameter; parse() calls it, setup() calls it again so
     // values set in code are checked too.
     void validate() const;

@@ -1,6 +1,7 @@
 #include "fem/heat/moving_heat_source.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
+#include "base/list_parsing.h"
 
 #include <deal.II/base/utilities.h>
 
@@ -68,20 +69,11 @@ template <int dim>
 std::vector<dealii::Point<dim>> MovingHeatSource<dim>::parse_path(const std::string& text,
                                                                   const std::string& where) {
   std::vector<dealii::Point<dim>> points;
-  for (const std::string& item : dealii::Utilities::split_string_list(text, ';')) {
-    const auto coords = dealii::Utilities::split_string_list(item, ',');
-    if (coords.size() != dim)
-      throw InvalidInput(
-          where, "point '" + item + "' has " + std::to_string(coords.size()) + " coordinates",
-          std::to_string(dim) + " coordinates per point, points separated by ';'");
+  const auto flat = parse_point_list(text, where, dim);
+  for (std::size_t k = 0; k + dim <= flat.size(); k += dim) {
     dealii::Point<dim> p;
-    for (unsigned int d = 0; d < dim; ++d) {
-      try {
-        p[d] = dealii::Utilities::string_to_double(coords[d]);
-      } catch (...) {
-        throw InvalidInput(where, "'" + coords[d] + "' is not a number", "coordinates in [m]");
-      }
-    }
+    for (unsigned int d = 0; d < dim; ++d)
+      p[d] = flat[k + d];
     points.push_back(p);
   }
   if (points.empty())

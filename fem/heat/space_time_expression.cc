@@ -1,6 +1,6 @@
 #include "fem/heat/space_time_expression.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 
 #include <deal.II/base/exceptions.h>
 

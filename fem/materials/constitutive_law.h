@@ -21,10 +21,11 @@ using Tensor4 = dealii::Tensor<4, 3>;
 // History of one material point. One plain struct for every law keeps particles'
 // structure-of-arrays and FEM quadrature storage simple; each law uses what it needs.
 struct MaterialState {
-  SymTensor2 plastic_strain;            // small-strain J2: plastic strain ε_p [-]
-  SymTensor2 elastic_left_cauchy_green = dealii::unit_symmetric_tensor<3>(); // finite-strain J2: b^e [-]
-  double equivalent_plastic_strain = 0; // accumulated ε̄_p [-]
-  double plastic_work = 0;              // dissipated plastic work per unit volume [J/m^3]
+  SymTensor2 plastic_strain; // small-strain J2: plastic strain ε_p [-]
+  SymTensor2 elastic_left_cauchy_green =
+      dealii::unit_symmetric_tensor<3>(); // finite-strain J2: b^e [-]
+  double equivalent_plastic_strain = 0;   // accumulated ε̄_p [-]
+  double plastic_work = 0;                // dissipated plastic work per unit volume [J/m^3]
 };
 
 // What a law returns at a point. Tangents are consistent (algorithmic) tangents.
@@ -41,7 +42,7 @@ struct FiniteStrainResponse {
 };
 
 class ConstitutiveLaw {
-public:
+ public:
   virtual ~ConstitutiveLaw() = default;
   virtual std::string name() const = 0;
 
@@ -56,7 +57,7 @@ public:
   // Elastic constants for stable-step estimates, stabilisation and AMG scaling.
   virtual double youngs_modulus() const = 0; // [Pa]
   virtual double poisson_ratio() const = 0;  // [-]
-  virtual double density() const = 0;       // [kg/m^3]
+  virtual double density() const = 0;        // [kg/m^3]
   // Longitudinal (P-) wave speed sqrt((λ+2μ)/ρ) [m/s].
   double p_wave_speed() const;
 };

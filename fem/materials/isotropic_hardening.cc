@@ -1,6 +1,6 @@
 #include "fem/materials/isotropic_hardening.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 
 #include <cmath>
 #include <string>

@@ -1,6 +1,8 @@
 #include "fem/materials/j2_finite_strain.h"
 
-#include "fem/materials/failure.h"
+#include "fem/materials/material_models.h"
+
+#include "base/exceptions.h"
 #include "fem/materials/j2_return_mapping.h"
 #include "fem/materials/tensor_tools.h"
 
@@ -125,5 +127,17 @@ FiniteStrainResponse J2FiniteStrain::finite_strain(const Tensor2& F, double dT,
   check_finite(r.first_piola, "first Piola stress", name());
   return r;
 }
+
+SPINESIM_REGISTER_MATERIAL_MODEL(j2_finite_strain, "j2_finite_strain",
+                                 "multiplicative logarithmic-strain von Mises after Simo (1992).",
+                                 true,
+                                 [](const LawParameters& p) -> std::unique_ptr<ConstitutiveLaw> {
+                                   return std::make_unique<J2FiniteStrain>(
+                                       p.youngs_modulus, p.poisson_ratio, p.density,
+                                       p.thermal_expansion,
+                                       IsotropicHardening(p.yield_stress, p.hardening_modulus,
+                                                          p.saturation_stress,
+                                                          p.saturation_exponent));
+                                 })
 
 } // namespace spinesim::materials

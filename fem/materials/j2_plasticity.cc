@@ -1,5 +1,7 @@
 #include "fem/materials/j2_plasticity.h"
 
+#include "fem/materials/material_models.h"
+
 #include "fem/materials/j2_return_mapping.h"
 #include "fem/materials/tensor_tools.h"
 
@@ -43,5 +45,16 @@ FiniteStrainResponse J2Plasticity::finite_strain(const Tensor2& F, double dT,
   r.state = s.state;
   return r;
 }
+
+SPINESIM_REGISTER_MATERIAL_MODEL(j2_plasticity, "j2_plasticity",
+                                 "small-strain von Mises, radial return.", true,
+                                 [](const LawParameters& p) -> std::unique_ptr<ConstitutiveLaw> {
+                                   return std::make_unique<J2Plasticity>(
+                                       p.youngs_modulus, p.poisson_ratio, p.density,
+                                       p.thermal_expansion,
+                                       IsotropicHardening(p.yield_stress, p.hardening_modulus,
+                                                          p.saturation_stress,
+                                                          p.saturation_exponent));
+                                 })
 
 } // namespace spinesim::materials

@@ -1,6 +1,6 @@
 #include "fem/materials/j2_return_mapping.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 
 #include <cmath>
 #include <sstream>

@@ -1,11 +1,8 @@
 #include "fem/materials/law_parameters.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 #include "fem/materials/isotropic_hardening.h"
-#include "fem/materials/j2_finite_strain.h"
-#include "fem/materials/j2_plasticity.h"
-#include "fem/materials/linear_elastic.h"
-#include "fem/materials/neo_hookean.h"
+#include "fem/materials/material_models.h"
 #include "fem/materials/tensor_tools.h"
 
 #include <sstream>
@@ -13,22 +10,20 @@
 namespace spinesim::materials {
 
 namespace {
-const char* const models = "linear_elastic|neo_hookean|j2_plasticity|j2_finite_strain";
 const char* const presets = "custom|cortical_bone|trabecular_bone|ti6al4v|pmma|copper";
 
 bool is_plastic(const std::string& model) {
-  return model == "j2_plasticity" || model == "j2_finite_strain";
+  const auto& entries = MaterialModels::instance().entries();
+  const auto it = entries.find(model);
+  return it != entries.end() && it->second.plastic;
 }
 } // namespace
 
 void LawParameters::declare(dealii::ParameterHandler& prm) {
   using dealii::Patterns::Double;
   using dealii::Patterns::Selection;
-  prm.declare_entry("Model", "linear_elastic", Selection(models),
-                    "Constitutive law [-]: linear_elastic (small strain; St. Venant-Kirchhoff for "
-                    "finite strain), neo_hookean (compressible hyperelastic), j2_plasticity "
-                    "(small-strain von Mises, radial return), j2_finite_strain (multiplicative "
-                    "logarithmic-strain von Mises after Simo 1992).");
+  prm.declare_entry("Model", "linear_elastic", Selection(MaterialModels::instance().names("|")),
+                    "Constitutive law [-]: " + MaterialModels::instance().documentation());
   prm.declare_entry(
       "Preset", "custom", Selection(presets),
       "Material preset [-]. A value other than custom OVERRIDES the explicit entries it "
@@ -103,8 +98,7 @@ void LawParameters::apply_preset() {
 }
 
 void LawParameters::validate() const {
-  if (model != "linear_elastic" && model != "neo_hookean" && !is_plastic(model))
-    throw InvalidInput("Model", "unknown model '" + model + "'", models);
+  MaterialModels::instance().get(model, "Model"); // InvalidInput naming the allowed models
   validate_elastic_constants("material (" + model + ")", youngs_modulus, poisson_ratio, density,
                              thermal_expansion);
   if (is_plastic(model)) // the hardening constructor checks its own ranges
@@ -128,19 +122,7 @@ std::string LawParameters::describe() const {
 
 std::unique_ptr<ConstitutiveLaw> create_law(const LawParameters& p) {
   p.validate();
-  if (p.model == "linear_elastic")
-    return std::make_unique<LinearElastic>(p.youngs_modulus, p.poisson_ratio, p.density,
-                                           p.thermal_expansion);
-  if (p.model == "neo_hookean")
-    return std::make_unique<NeoHookean>(p.youngs_modulus, p.poisson_ratio, p.density,
-                                        p.thermal_expansion);
-  const IsotropicHardening h(p.yield_stress, p.hardening_modulus, p.saturation_stress,
-                             p.saturation_exponent);
-  if (p.model == "j2_plasticity")
-    return std::make_unique<J2Plasticity>(p.youngs_modulus, p.poisson_ratio, p.density,
-                                          p.thermal_expansion, h);
-  return std::make_unique<J2FiniteStrain>(p.youngs_modulus, p.poisson_ratio, p.density,
-                                          p.thermal_expansion, h);
+  return MaterialModels::instance().get(p.model, "Model").create(p);
 }
 
 } // namespace spinesim::materials

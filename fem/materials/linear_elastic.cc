@@ -1,5 +1,7 @@
 #include "fem/materials/linear_elastic.h"
 
+#include "fem/materials/material_models.h"
+
 #include "fem/materials/tensor_tools.h"
 
 #include <cmath>
@@ -78,5 +80,13 @@ LinearElastic::plane_stress(const dealii::SymmetricTensor<2, 2>& strain, double 
   r.strain_zz = alpha_ * dT - lambda_ / (lambda_ + 2.0 * mu_) * dealii::trace(elastic);
   return r;
 }
+
+SPINESIM_REGISTER_MATERIAL_MODEL(linear_elastic, "linear_elastic",
+                                 "small strain; St. Venant-Kirchhoff for finite strain.", false,
+                                 [](const LawParameters& p) -> std::unique_ptr<ConstitutiveLaw> {
+                                   return std::make_unique<LinearElastic>(
+                                       p.youngs_modulus, p.poisson_ratio, p.density,
+                                       p.thermal_expansion);
+                                 })
 
 } // namespace spinesim::materials

@@ -1,5 +1,7 @@
 #include "fem/materials/neo_hookean.h"
 
+#include "fem/materials/material_models.h"
+
 #include "fem/materials/tensor_tools.h"
 
 #include <cmath>
@@ -47,5 +49,12 @@ FiniteStrainResponse NeoHookean::finite_strain(const Tensor2& F, double dT,
   check_finite(r.first_piola, "first Piola stress", name());
   return r;
 }
+
+SPINESIM_REGISTER_MATERIAL_MODEL(neo_hookean, "neo_hookean", "compressible hyperelastic.", false,
+                                 [](const LawParameters& p) -> std::unique_ptr<ConstitutiveLaw> {
+                                   return std::make_unique<NeoHookean>(p.youngs_modulus,
+                                                                       p.poisson_ratio, p.density,
+                                                                       p.thermal_expansion);
+                                 })
 
 } // namespace spinesim::materials

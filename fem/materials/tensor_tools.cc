@@ -1,6 +1,6 @@
 #include "fem/materials/tensor_tools.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 
 #include <cmath>
 #include <sstream>

@@ -1,6 +1,6 @@
 #include "meshfree/implicit/block_csr_matrix.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 
 #include <Epetra_CrsMatrix.h>
 #include <Epetra_Map.h>

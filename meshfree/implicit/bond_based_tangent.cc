@@ -1,6 +1,6 @@
 #include "meshfree/implicit/bond_based_tangent.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 
 #include <deal.II/base/index_set.h>
 #include <deal.II/lac/dynamic_sparsity_pattern.h>

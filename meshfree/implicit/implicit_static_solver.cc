@@ -1,6 +1,6 @@
 #include "meshfree/implicit/implicit_static_solver.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 
 #include <cmath>
 #include <sstream>

@@ -1,6 +1,6 @@
 #include "meshfree/implicit/lattice_multigrid.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 #include "meshfree/implicit/block_csr_matrix.h"
 #include "meshfree/neighbor_search.h"
 

@@ -1,6 +1,6 @@
 #include "meshfree/implicit/pd_linear_solver.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 
 #include <deal.II/lac/precondition.h>
 #include <deal.II/lac/solver_cg.h>

@@ -1,6 +1,6 @@
 #include "meshfree/nosb/nosb_pd.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 #include "meshfree/bond_based_pd.h"
 #include "meshfree/bond_loop.h"
 
@@ -496,29 +496,71 @@ double NosbPD<dim>::stable_time_step(const ParticleSet<dim>& particles, const Bo
 }
 
 template <int dim>
-double NosbPD<dim>::strain_energy(const ParticleSet<dim>& particles) const {
-  // 4-point Gauss–Legendre on [0, 1].
+double NosbPD<dim>::family_energy(unsigned int e, const ParticleSet<dim>& particles) const {
+  // W(F) = ∫_0^1 P(I + t(F−I)) : (F − I) dt by 4-point Gauss–Legendre on [0, 1].
   const double a = std::sqrt(3.0 / 7.0 - 2.0 / 7.0 * std::sqrt(6.0 / 5.0));
   const double b = std::sqrt(3.0 / 7.0 + 2.0 / 7.0 * std::sqrt(6.0 / 5.0));
   const double wa = (18.0 + std::sqrt(30.0)) / 36.0, wb = (18.0 - std::sqrt(30.0)) / 36.0;
   const double t[4] = {0.5 * (1 - b), 0.5 * (1 - a), 0.5 * (1 + a), 0.5 * (1 + b)};
   const double w[4] = {0.5 * wb, 0.5 * wa, 0.5 * wa, 0.5 * wb};
   const auto& fam = families();
-  const auto& u = particles.displacements();
-  double E = 0;
-  for (unsigned int e = 0; e < fam.n_families(); ++e) {
-    const auto F = fam.deformation_gradient(e, u);
-    const dealii::Tensor<2, dim> H =
-        F - dealii::Tensor<2, dim>(dealii::unit_symmetric_tensor<dim>());
-    double W = 0;
-    for (unsigned int q = 0; q < 4; ++q) {
-      const dealii::Tensor<2, dim> Ft =
-          dealii::Tensor<2, dim>(dealii::unit_symmetric_tensor<dim>()) + t[q] * H;
-      W += w[q] * dealii::scalar_product(evaluate(e, Ft, particles, nullptr).P, H);
-    }
-    E += fam.weight(e) * W;
+  const auto F = fam.deformation_gradient(e, particles.displacements());
+  const dealii::Tensor<2, dim> H = F - dealii::Tensor<2, dim>(dealii::unit_symmetric_tensor<dim>());
+  double W = 0;
+  for (unsigned int q = 0; q < 4; ++q) {
+    const dealii::Tensor<2, dim> Ft =
+        dealii::Tensor<2, dim>(dealii::unit_symmetric_tensor<dim>()) + t[q] * H;
+    W += w[q] * dealii::scalar_product(evaluate(e, Ft, particles, nullptr).P, H);
   }
+  return fam.weight(e) * W;
+}
+
+template <int dim>
+double NosbPD<dim>::strain_energy(const ParticleSet<dim>& particles) const {
+  double E = 0;
+  for (unsigned int e = 0; e < families().n_families(); ++e)
+    E += family_energy(e, particles);
   return E;
+}
+
+template <int dim>
+std::vector<double> NosbPD<dim>::strain_energy_density(const ParticleSet<dim>& particles) const {
+  std::vector<double> W(particles.size(), 0.0);
+  const auto& fam = families();
+  for (unsigned int e = 0; e < fam.n_families(); ++e)
+    W[fam.centre(e)] += family_energy(e, particles);
+  for (unsigned int i = 0; i < particles.size(); ++i)
+    W[i] /= particles.volume(i);
+  return W;
+}
+
+template <int dim>
+double NosbPD<dim>::particle_strain_energy(unsigned int i,
+                                           const ParticleSet<dim>& particles) const {
+  const auto& fam = families();
+  unsigned int lo = 0, hi = fam.n_families(); // first family with centre >= i
+  while (lo < hi) {
+    const unsigned int mid = lo + (hi - lo) / 2;
+    if (fam.centre(mid) < i)
+      lo = mid + 1;
+    else
+      hi = mid;
+  }
+  double E = 0;
+  for (unsigned int e = lo; e < fam.n_families() && fam.centre(e) == i; ++e)
+    E += family_energy(e, particles);
+  return E;
+}
+
+template <int dim>
+void NosbPD<dim>::set_committed_states(const std::vector<materials::MaterialState>& states) {
+  if (states.size() != committed_.size())
+    throw InvalidInput("NOSB-PD material history",
+                       "has " + std::to_string(states.size()) + " states, the model " +
+                           std::to_string(committed_.size()),
+                       "one state per family history index of the same particles and bonds");
+  committed_ = states;
+  trial_ = states;
 }
 
 template <int dim>

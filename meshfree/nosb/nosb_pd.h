@@ -129,6 +129,12 @@ class NosbPD {
   // Stored energy Σ_e w_e W(F_e) [J]; W(F) = ∫_0^1 P(I + t(F−I)) : (F − I) dt (4-point Gauss;
   // exact for St. Venant–Kirchhoff, the stored energy for any hyperelastic law).
   double strain_energy(const ParticleSet<dim>& particles) const;
+  // The same energy per particle: each family's w_e W(F_e) goes to its centre particle, over
+  // that particle's volume [J/m^3].
+  std::vector<double> strain_energy_density(const ParticleSet<dim>& particles) const;
+  // Σ w_e W(F_e) over the families centred on particle i [J] (no sweep over all families:
+  // they are built in particle order).
+  double particle_strain_energy(unsigned int i, const ParticleSet<dim>& particles) const;
   HourglassMeasure hourglass(const ParticleSet<dim>& particles, const BondList<dim>& bonds) const;
 
   // φ_i = 1 − Σ_intact ωβV_j / Σ_all ωβV_j, 1 for failed particles, into particles.damage().
@@ -143,6 +149,12 @@ class NosbPD {
   // Messages about failed particles since the last call (for the run log).
   std::vector<std::string> take_messages();
 
+  // Committed material history, one state per family history index (particles, or bonds with
+  // bond-associated families): for checkpoints and for state carried in from elsewhere.
+  const std::vector<materials::MaterialState>& committed_states() const { return committed_; }
+  // InvalidInput if the size differs from the current history.
+  void set_committed_states(const std::vector<materials::MaterialState>& states);
+
  private:
   struct Response {
     dealii::Tensor<2, dim> P;
@@ -151,6 +163,8 @@ class NosbPD {
   Response evaluate(unsigned int e, const dealii::Tensor<2, dim>& F,
                     const ParticleSet<dim>& particles, materials::MaterialState* trial) const;
   void compute_particle_gradients(const ParticleSet<dim>& particles);
+  // w_e W(F_e) of family e at the current displacements [J].
+  double family_energy(unsigned int e, const ParticleSet<dim>& particles) const;
   void log_failed(const ParticleSet<dim>& particles, const std::vector<unsigned int>& newly);
 
   Parameters prm_;

@@ -1,6 +1,6 @@
 #include "meshfree/nosb/nosb_quasi_static.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 #include "meshfree/adaptive_dynamic_relaxation.h"
 
 #include <deal.II/base/index_set.h>

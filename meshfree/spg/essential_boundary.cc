@@ -1,6 +1,6 @@
 #include "meshfree/spg/essential_boundary.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 
 #include <Eigen/Sparse>
 #include <Eigen/SparseLU>

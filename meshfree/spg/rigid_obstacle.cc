@@ -1,6 +1,6 @@
 #include "meshfree/spg/rigid_obstacle.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 
 #include <cmath>
 

@@ -1,6 +1,6 @@
 #include "meshfree/spg/rk_kernel.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 
 #include <cmath>
 

@@ -1,6 +1,6 @@
 #include "meshfree/spg/rk_shape_functions.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 #include "meshfree/bond_loop.h"
 #include "meshfree/neighbor_search.h"
 

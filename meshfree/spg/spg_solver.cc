@@ -1,6 +1,6 @@
 #include "meshfree/spg/spg_solver.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 #include "meshfree/bond_loop.h"
 
 #include <algorithm>

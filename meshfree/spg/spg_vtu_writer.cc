@@ -1,6 +1,6 @@
 #include "meshfree/spg/spg_vtu_writer.h"
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 #include "meshfree/particle_output.h"
 
 #include <deal.II/base/data_out_base.h>

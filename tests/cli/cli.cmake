@@ -49,3 +49,27 @@ add_test(NAME cli.ranks_agree
                  -DTOL=1e-6 -DFLOOR=1e-9 -P ${PROJECT_SOURCE_DIR}/tests/support/compare_summaries.cmake)
 set_tests_properties(cli.ranks_agree PROPERTIES LABELS "cli;mpi"
                      FIXTURES_REQUIRED "default_run;default_run_2")
+
+# A figure that is NaN or infinite is written to summary.json as null and must fail every
+# check on it (tests/support/figures.cmake): the one-particle zone runs fine (exit 0) but its
+# stable time step is infinite, so the bound below must be reported as not finite. The test
+# passes only on that message, not on any other failure.
+spinesim_add_scene_test(cli.non_finite_figure_fails_its_check SCENE ${_cli}/one_particle.prm
+  EXPECT "status==ok;particle_stable_time_step<=1" LABELS "cli")
+set_tests_properties(cli.non_finite_figure_fails_its_check PROPERTIES PASS_REGULAR_EXPRESSION
+  "figure particle_stable_time_step is NULL, not a finite number")
+# The same for a figure that is missing, and for the comparison of two runs.
+spinesim_add_scene_test(cli.missing_figure_fails_its_check SCENE ${_cli}/one_particle.prm
+  OUT ${CMAKE_CURRENT_BINARY_DIR}/runs/cli.one_particle_missing
+  EXPECT "no_such_figure>=0" LABELS "cli")
+set_tests_properties(cli.missing_figure_fails_its_check PROPERTIES PASS_REGULAR_EXPRESSION
+  "figure no_such_figure is missing")
+spinesim_add_scene_test(cli.one_particle SCENE ${_cli}/one_particle.prm
+  OUT ${CMAKE_CURRENT_BINARY_DIR}/runs/cli.one_particle EXPECT "status==ok" LABELS "cli"
+  FIXTURE one_particle_run)
+spinesim_add_comparison_test(cli.non_finite_figure_fails_comparison
+  A ${CMAKE_CURRENT_BINARY_DIR}/runs/cli.one_particle/summary.json
+  B ${CMAKE_CURRENT_BINARY_DIR}/runs/cli.one_particle/summary.json
+  CHECKS "particle_stable_time_step:rel:1e-6" REQUIRES one_particle_run LABELS "cli")
+set_tests_properties(cli.non_finite_figure_fails_comparison PROPERTIES PASS_REGULAR_EXPRESSION
+  "figure particle_stable_time_step is NULL, not a finite number")

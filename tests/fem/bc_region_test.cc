@@ -3,8 +3,8 @@
 // traction and pressure slots and for the explicit integrator; a box inside the body
 // constrains exactly the DoFs whose support points it holds. Rank-independent checks, so the
 // binary also runs on 2 MPI ranks.
+#include "base/exceptions.h"
 #include "fem/boundary_conditions.h"
-#include "fem/materials/failure.h"
 #include "fem/materials/linear_elastic.h"
 #include "fem/mechanics_solver.h"
 #include "fem/mesh.h"

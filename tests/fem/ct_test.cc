@@ -2,6 +2,7 @@
 // counts, density-modulus laws against their formulas, reader round trips on synthetic
 // volumes in every format, voxel meshing (counts, volume, components, orientation, ids),
 // mass conservation under coarsening, and the mesh -> particle conversion's conservation.
+#include "base/exceptions.h"
 #include "fem/ct/ct_cell_laws.h"
 #include "fem/ct/ct_model.h"
 #include "fem/ct/ct_parameters.h"
@@ -11,7 +12,6 @@
 #include "fem/ct/end_faces.h"
 #include "fem/ct/mesh_to_particles.h"
 #include "fem/ct/voxel_mesher.h"
-#include "fem/materials/failure.h"
 #include "fem/materials/j2_plasticity.h"
 #include "fem/mechanics_solver.h"
 

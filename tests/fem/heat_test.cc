@@ -1,8 +1,8 @@
 // HeatSolver against analytic solutions and conservation laws, in 2-D and 3-D. Every test is
 // collective and also runs on 2 MPI ranks.
+#include "base/exceptions.h"
 #include "fem/heat/heat_solver.h"
 #include "fem/heat/moving_heat_source.h"
-#include "fem/materials/failure.h"
 
 #include <deal.II/base/function.h>
 #include <deal.II/base/mpi.h>

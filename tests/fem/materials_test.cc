@@ -1,7 +1,7 @@
 // Point-wise constitutive laws: closed-form responses, finite-difference tangents,
 // objectivity, a published finite-strain J2 benchmark and input validation.
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 #include "fem/materials/isotropic_hardening.h"
 #include "fem/materials/j2_finite_strain.h"
 #include "fem/materials/j2_plasticity.h"

@@ -3,9 +3,9 @@
 // dynamics settling onto the static solution, checkpoints, parameter grammar, indicators.
 // Every assertion compares with a rank-independent reference, so the whole binary also runs
 // on 2 MPI ranks (ctest test_fem_mechanics.mpi2).
+#include "base/exceptions.h"
 #include "fem/boundary_conditions.h"
 #include "fem/cell_indicators.h"
-#include "fem/materials/failure.h"
 #include "fem/materials/linear_elastic.h"
 #include "fem/materials/neo_hookean.h"
 #include "fem/mechanics_solver.h"

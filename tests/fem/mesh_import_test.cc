@@ -3,7 +3,7 @@
 // face boundary id 1, x = 20 mm face boundary id 2), read with Scale = 1e-3 and one global
 // refinement; then a uniaxial-tension solve on an imported mesh against σ = E ε.
 // Every check is rank-independent, so the binary also runs on 2 MPI ranks.
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 #include "fem/materials/linear_elastic.h"
 #include "fem/mechanics_solver.h"
 #include "fem/mesh.h"

@@ -2,7 +2,7 @@
 // equilibrium properties (Newton's third law, homogeneous deformation), force = −∇energy,
 // damage irreversibility, parameters.
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 #include "meshfree/bond_based_pd.h"
 #include "meshfree/pmb_force_rows.h"
 #include "meshfree/velocity_verlet.h"
@@ -450,11 +450,16 @@ void check_force_loop_variants_agree() {
     std::vector<double> force(dim * p.size());
     // s0 between the smallest and largest stretch (displacements up to 1 % of h, bonds of at
     // least h: stretches up to 2 %); 0.5 % breaks some bonds but not all.
-    const PmbForceRows<dim> rows{&p.reference_positions()[0][0], &p.displacements()[0][0],
-                                 force.data(),   p.volumes().data(),
-                                 b.offsets.data(), b.neighbor.data(),
-                                 b.length.data(), pd.bond_stiffness().data(),
-                                 b.broken.data(), 5e-3};
+    const PmbForceRows<dim> rows{&p.reference_positions()[0][0],
+                                 &p.displacements()[0][0],
+                                 force.data(),
+                                 p.volumes().data(),
+                                 b.offsets.data(),
+                                 b.neighbor.data(),
+                                 b.length.data(),
+                                 pd.bond_stiffness().data(),
+                                 b.broken.data(),
+                                 5e-3};
     int bad = 0;
     broke[variant] = variant == 0 ? pmb_force_rows_baseline(rows, 0, p.size(), bad)
                                   : pmb_force_rows(rows, 0, p.size(), bad);

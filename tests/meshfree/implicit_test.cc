@@ -2,7 +2,7 @@
 // rate, the implicit bar against adaptive dynamic relaxation, the CG condition estimate
 // against a dense eigen-decomposition, and the linear solvers against each other.
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 #include "meshfree/adaptive_dynamic_relaxation.h"
 #include "meshfree/bond_based_pd.h"
 #include "meshfree/implicit/block_csr_matrix.h"

@@ -1,7 +1,7 @@
 // Neighbour search: lattice counts, cell list = brute force, bond symmetry, corrections,
 // pre-cracks.
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 #include "meshfree/neighbor_search.h"
 #include "meshfree_test_util.h"
 
@@ -240,9 +240,9 @@ void check_extend_equals_build() {
   if constexpr (dim == 2)
     o.pre_cracks.push_back(PreCrack<2>::segment(a, b));
   else
-    o.pre_cracks.push_back(PreCrack<3>::quadrilateral(
-        dealii::Point<3>(2.5, 4.2, -1), dealii::Point<3>(6.5, 4.2, -1),
-        dealii::Point<3>(6.5, 4.2, 10), dealii::Point<3>(2.5, 4.2, 10)));
+    o.pre_cracks.push_back(
+        PreCrack<3>::quadrilateral(dealii::Point<3>(2.5, 4.2, -1), dealii::Point<3>(6.5, 4.2, -1),
+                                   dealii::Point<3>(6.5, 4.2, 10), dealii::Point<3>(2.5, 4.2, 10)));
   const NeighborSearch<dim> search(o);
 
   // Particles in the order of their first coordinate band: three stages of the set.

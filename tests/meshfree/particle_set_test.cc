@@ -1,6 +1,6 @@
 // ParticleSet: generation (lattice, file, lists), flags and named fields.
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 #include "meshfree/particle_set.h"
 
 #include <gtest/gtest.h>

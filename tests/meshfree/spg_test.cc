@@ -2,7 +2,7 @@
 // nodal deformation gradient, conservation (momentum after bond failure, energy in explicit
 // dynamics), the DNI zero-energy mode and its stabilisation, essential boundaries, contact.
 
-#include "fem/materials/failure.h"
+#include "base/exceptions.h"
 #include "fem/materials/law_parameters.h"
 #include "meshfree/particle_set.h"
 #include "meshfree/spg/rk_kernel.h"

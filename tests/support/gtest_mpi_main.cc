@@ -9,7 +9,7 @@
 
 namespace {
 class RankFailurePrinter : public ::testing::EmptyTestEventListener {
-public:
+ public:
   explicit RankFailurePrinter(unsigned int rank) : rank_(rank) {}
   void OnTestPartResult(const ::testing::TestPartResult& result) override {
     if (result.failed())
@@ -18,7 +18,7 @@ public:
                 << result.summary() << std::endl;
   }
 
-private:
+ private:
   unsigned int rank_;
 };
 } // namespace

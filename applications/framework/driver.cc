@@ -1,0 +1,161 @@
+#include "applications/framework/driver.h"
+
+#include "applications/framework/run_context.h"
+#include "applications/framework/scenario.h"
+#include "applications/framework/scene.h"
+#include "base/exceptions.h"
+
+#include <deal.II/base/exceptions.h>
+#include <deal.II/base/multithread_info.h>
+
+#include <chrono>
+#include <iostream>
+#include <omp.h>
+
+namespace spinesim::framework {
+
+namespace {
+
+bool is_root() {
+  return dealii::Utilities::MPI::this_mpi_process(MPI_COMM_WORLD) == 0;
+}
+
+void report_bad_input(const InvalidInput& e) {
+  if (!is_root())
+    return;
+  std::cerr << "spinesim: bad input\n  where:   " << e.where() << "\n  problem: " << e.problem()
+            << "\n";
+  if (!e.allowed().empty())
+    std::cerr << "  allowed: " << e.allowed() << "\n";
+}
+
+void load(Scene& scene, const SceneSource& source) {
+  if (source.file)
+    scene.load_file(*source.file);
+  else
+    scene.load_text(source.default_text, "default scene (embedded)");
+  for (const auto& assignment : source.overrides)
+    scene.apply_override(assignment);
+}
+
+} // namespace
+
+int params_command(const SceneSource& source, const std::string& format) {
+  try {
+    Scene scene;
+    if (source.file || !source.overrides.empty())
+      load(scene, source);
+    if (is_root())
+      std::cout << scene.listing(format);
+    return exit_ok;
+  } catch (const InvalidInput& e) {
+    report_bad_input(e);
+    return exit_bad_input;
+  }
+}
+
+int check_command(const SceneSource& source) {
+  try {
+    Scene scene;
+    load(scene, source);
+    const Effects effects = scene.effects();
+    Scenarios::instance().get(scene.scenario(), "Scenario");
+    if (is_root()) {
+      std::cout << "scene " << scene.source_name() << ": ok\n  scenario:  " << scene.scenario()
+                << " (" << scene.dimension() << "-D)\n";
+      for (const auto& s : effects.statuses())
+        std::cout << "  " << (s.active ? "[on]  " : "[off] ") << s.name << ": " << s.reason << "\n";
+    }
+    return exit_ok;
+  } catch (const InvalidInput& e) {
+    report_bad_input(e);
+    return exit_bad_input;
+  }
+}
+
+int run_command(const RunOptions& options) {
+  const auto wall_start = std::chrono::steady_clock::now();
+  if (options.threads > 0) {
+    omp_set_num_threads(options.threads);
+    dealii::MultithreadInfo::set_thread_limit(options.threads);
+  }
+
+  Scene scene;
+  Effects effects;
+  std::unique_ptr<RunContext> context;
+  std::unique_ptr<Scenario> scenario;
+  try {
+    SceneSource source = options.scene;
+    OutputDirectory::Mode mode =
+        options.force ? OutputDirectory::Mode::force : OutputDirectory::Mode::fresh;
+    std::string output = options.output;
+    if (options.restart_dir) {
+      // A restart reads the resolved parameters of the run it continues.
+      source.file = *options.restart_dir + "/parameters.prm";
+      output = *options.restart_dir;
+      mode = OutputDirectory::Mode::restart;
+    }
+    load(scene, source);
+    effects = scene.effects();
+    const auto& entry = Scenarios::instance().get(scene.scenario(), "Scenario");
+    context =
+        std::make_unique<RunContext>(MPI_COMM_WORLD, output, mode,
+                                     Progress::parse_style(options.progress), scene.prm(), effects);
+    scenario = entry.create({scene.dimension(), scene.prm(), effects});
+  } catch (const InvalidInput& e) {
+    report_bad_input(e);
+    return exit_bad_input;
+  }
+
+  RunContext& ctx = *context;
+  if (ctx.is_root() && !ctx.restarting())
+    ctx.output().write_atomic("parameters.prm", scene.resolved_prm());
+  ctx.summary().set_scene(scene.source_name(), scene.description());
+  ctx.summary().set_effects(effects.active_names());
+  ctx.log() << "spinesim " << SPINESIM_VERSION
+            << (ctx.restarting() ? ": restarting " : ": running ") << scene.source_name()
+            << "\n  scenario: " << scene.scenario() << ", " << scene.dimension() << "-D, "
+            << ctx.n_ranks() << " MPI rank(s), " << omp_get_max_threads()
+            << " thread(s) per rank\n  output:   " << ctx.output().path().string()
+            << "\n  effects:\n";
+  for (const auto& s : effects.statuses())
+    ctx.log() << "    " << (s.active ? "[on]  " : "[off] ") << s.name << ": " << s.reason << "\n";
+
+  int code = exit_ok;
+  try {
+    scenario->run(ctx);
+    ctx.summary().set_status(true);
+  } catch (const InvalidInput& e) {
+    // Inconsistent input found only while building the model still counts as bad input.
+    report_bad_input(e);
+    ctx.summary().set_status(false, std::string("bad input: ") + e.what());
+    code = exit_bad_input;
+  } catch (const NumericalFailure& e) {
+    ctx.progress().finish();
+    ctx.log() << "\n" << e.report() << "\n";
+    ctx.summary().set_status(false, e.report());
+    code = exit_run_failed;
+  } catch (const dealii::ExceptionBase& e) {
+    ctx.progress().finish();
+    std::ostringstream msg;
+    e.print_info(msg);
+    ctx.log() << "\nrun failed: " << msg.str() << "\n";
+    ctx.summary().set_status(false, msg.str());
+    code = exit_run_failed;
+  } catch (const std::exception& e) {
+    ctx.progress().finish();
+    ctx.log() << "\nrun failed: " << e.what() << "\n";
+    ctx.summary().set_status(false, e.what());
+    code = exit_run_failed;
+  }
+  ctx.summary().add_timing(
+      "total",
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count());
+  ctx.flush_history();
+  ctx.write_summary();
+  ctx.log() << (code == exit_ok ? "done" : "FAILED") << ": results in "
+            << ctx.output().path().string() << " (summary.json, history.csv, log.txt)\n";
+  return code;
+}
+
+} // namespace spinesim::framework

@@ -1,0 +1,40 @@
+#ifndef SPINESIM_COUPLING_PROGRESS_H
+#define SPINESIM_COUPLING_PROGRESS_H
+
+// Progress of a long run: a redrawn bar with step, simulated time and ETA on a terminal,
+// plain periodic lines otherwise (logs, CI). Only rank 0 reports.
+
+#include <chrono>
+#include <ostream>
+#include <string>
+
+namespace spinesim::framework {
+
+class Progress {
+ public:
+  enum class Style { automatic, bar, lines, off };
+
+  Progress(std::ostream& out, Style style, bool is_root);
+
+  // Starts a phase of `total_steps` steps ending at simulated time `end_time` [s].
+  void start(const std::string& label, unsigned int total_steps, double end_time);
+  // Reports step `step` at simulated time `time`; cheap enough to call every step.
+  void update(unsigned int step, double time);
+  void finish();
+
+  static Style parse_style(const std::string& name);
+
+ private:
+  std::ostream& out_;
+  Style style_;
+  bool active_;
+  std::string label_;
+  unsigned int total_ = 0;
+  double end_time_ = 0;
+  std::chrono::steady_clock::time_point start_, last_;
+  bool drew_ = false;
+};
+
+} // namespace spinesim::framework
+
+#endif

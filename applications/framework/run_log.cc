@@ -1,0 +1,36 @@
+#include "applications/framework/run_log.h"
+
+namespace spinesim::framework {
+
+int RunLog::TeeBuffer::overflow(int c) {
+  if (c == traits_type::eof())
+    return traits_type::not_eof(c);
+  if (a)
+    a->sputc(static_cast<char>(c));
+  if (b)
+    b->sputc(static_cast<char>(c));
+  return c;
+}
+
+int RunLog::TeeBuffer::sync() {
+  int r = 0;
+  if (a)
+    r |= a->pubsync();
+  if (b)
+    r |= b->pubsync();
+  return r;
+}
+
+RunLog::RunLog(bool is_root, std::ostream& console) : stream_(&buffer_), is_root_(is_root) {
+  if (is_root_)
+    buffer_.a = console.rdbuf();
+}
+
+void RunLog::open_file(const std::string& path, bool append) {
+  if (!is_root_)
+    return;
+  file_.open(path, append ? std::ios::app : std::ios::trunc);
+  buffer_.b = file_.rdbuf();
+}
+
+} // namespace spinesim::framework

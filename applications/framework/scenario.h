@@ -1,0 +1,81 @@
+#ifndef SPINESIM_COUPLING_SCENARIO_H
+#define SPINESIM_COUPLING_SCENARIO_H
+
+// A scenario is what a run does: the general effects-driven simulation, a solver study,
+// a benchmark. Scenarios register by name; `Scenario = name` in a scene picks one.
+
+#include "base/registry.h"
+
+#include <deal.II/base/parameter_handler.h>
+
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+
+namespace spinesim::framework {
+
+class RunContext;
+struct Effects;
+
+class Scenario {
+ public:
+  virtual ~Scenario() = default;
+  virtual void run(RunContext& context) = 0;
+};
+
+// Declares top-level sections that several scenarios share exactly once. Declaring a section
+// again with different entries is a programming error (std::logic_error at start-up).
+class SectionDeclarer {
+ public:
+  explicit SectionDeclarer(dealii::ParameterHandler& prm) : prm_(prm) {}
+  void declare(const std::string& section,
+               const std::function<void(dealii::ParameterHandler&)>& fn);
+
+ private:
+  dealii::ParameterHandler& prm_;
+  std::map<std::string, std::string> declared_; // section -> its declaration as text
+};
+
+// The scene's handler is not const: reading a section moves its subsection cursor.
+struct ScenarioFactoryArgs {
+  int dim;
+  dealii::ParameterHandler& prm;
+  const Effects& effects;
+};
+
+struct ScenarioEntry {
+  std::string name;
+  std::string description;
+  // Declares the scenario's sections; shared ones go through the declarer once.
+  std::function<void(SectionDeclarer&)> declare_parameters;
+  std::function<std::unique_ptr<Scenario>(const ScenarioFactoryArgs&)> create;
+};
+
+using Scenarios = Registry<ScenarioEntry>;
+
+// The factory of a scenario class template on dim (2 or 3 from the scene's Dimension).
+template <template <int> class S>
+std::unique_ptr<Scenario> create_for_dimension(const ScenarioFactoryArgs& args) {
+  if (args.dim == 2)
+    return std::make_unique<S<2>>(args);
+  return std::make_unique<S<3>>(args);
+}
+
+// The factory of a scenario that runs in one dimension only (it checks Dimension itself).
+template <class S>
+std::unique_ptr<Scenario> create_scenario(const ScenarioFactoryArgs& args) {
+  return std::make_unique<S>(args);
+}
+
+} // namespace spinesim::framework
+
+// Registers a scenario at load time (the libraries are shared, so nothing is dropped).
+#define SPINESIM_REGISTER_SCENARIO(tag, name, description, declare_fn, create_fn)                  \
+  namespace {                                                                                      \
+  const bool spinesim_scenario_registered_##tag =                                                  \
+      ::spinesim::framework::Scenarios::instance().add(                                            \
+          {name, description, declare_fn, create_fn});                                             \
+  }
+
+#endif

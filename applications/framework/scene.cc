@@ -1,0 +1,291 @@
+#include "applications/framework/scene.h"
+
+#include "applications/framework/scenario.h"
+#include "base/exceptions.h"
+
+#include <deal.II/base/exceptions.h>
+
+#include <nlohmann/json.hpp>
+
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+namespace spinesim::framework {
+
+namespace {
+
+std::string collapse_whitespace(const std::string& in) {
+  std::string out;
+  bool space = false;
+  for (const char c : in) {
+    if (std::isspace(static_cast<unsigned char>(c))) {
+      space = !out.empty();
+    } else {
+      if (space)
+        out += ' ';
+      out += c;
+      space = false;
+    }
+  }
+  return out;
+}
+
+std::string trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t\r\n");
+  if (b == std::string::npos)
+    return "";
+  const auto e = s.find_last_not_of(" \t\r\n");
+  return s.substr(b, e - b + 1);
+}
+
+std::string join(const std::vector<std::string>& parts, const std::string& sep) {
+  std::string out;
+  for (const auto& p : parts)
+    out += (out.empty() ? "" : sep) + p;
+  return out;
+}
+
+bool ends_with(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() &&
+         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+// Subsection path in effect at 1-based `line` of a .prm text (before that line's own words).
+std::vector<std::string> subsection_path_at(const std::string& text, unsigned int line) {
+  std::vector<std::string> path;
+  std::istringstream in(text);
+  std::string raw;
+  for (unsigned int n = 1; n < line && std::getline(in, raw); ++n) {
+    std::string l = trim(raw.substr(0, raw.find('#')));
+    if (l.rfind("subsection ", 0) == 0)
+      path.push_back(collapse_whitespace(l.substr(11)));
+    else if (l == "end" && !path.empty())
+      path.pop_back();
+  }
+  return path;
+}
+
+} // namespace
+
+Scene::Scene() {
+  prm_.declare_entry("Dimension", "2", dealii::Patterns::Integer(2, 3),
+                     "Spatial dimension of the run: 2 (plane strain/stress) or 3 [-].");
+  prm_.declare_entry("Scenario", "simulation",
+                     dealii::Patterns::Selection(Scenarios::instance().names("|")),
+                     "What the run does. " + Scenarios::instance().documentation());
+  prm_.declare_entry("Description", "", dealii::Patterns::Anything(),
+                     "One line saying what the run is for; copied into summary.json [-].");
+  prm_.enter_subsection("Effects");
+  Effects::declare(prm_);
+  prm_.leave_subsection();
+  SectionDeclarer sections(prm_);
+  for (const auto& [name, entry] : Scenarios::instance().entries())
+    if (entry.declare_parameters)
+      entry.declare_parameters(sections);
+}
+
+void Scene::load_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in)
+    throw InvalidInput(path, "cannot open the scene file",
+                       "an existing, readable .prm or .json file");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  source_name_ = path;
+  if (ends_with(path, ".json")) {
+    try {
+      std::istringstream json(buffer.str());
+      prm_.parse_input_from_json(json, /*skip_undefined=*/false);
+    } catch (const dealii::ExceptionBase& e) {
+      std::ostringstream msg;
+      e.print_info(msg);
+      throw InvalidInput(path, collapse_whitespace(msg.str()),
+                         "the sections and entries listed by `spinesim params --format json`");
+    } catch (const std::exception& e) {
+      throw InvalidInput(path, collapse_whitespace(e.what()),
+                         "valid JSON with the structure of `spinesim params --format json`");
+    }
+    return;
+  }
+  if (!ends_with(path, ".prm"))
+    throw InvalidInput(path, "unknown scene file type", ".prm or .json");
+  load_text(buffer.str(), path);
+}
+
+void Scene::load_text(const std::string& text, const std::string& name) {
+  source_name_ = name;
+  std::istringstream in(text);
+  try {
+    prm_.parse_input(in, name);
+  } catch (const dealii::ExceptionBase& e) {
+    std::ostringstream msg;
+    e.print_info(msg);
+    rethrow_parse_error(msg.str(), text);
+  }
+}
+
+void Scene::rethrow_parse_error(const std::string& deal_message, const std::string& text) const {
+  const std::string message = collapse_whitespace(deal_message);
+  std::smatch m;
+  const std::regex line_re(R"(Line <(\d+)> of file <(.*?)>?:\s*(.*))");
+  if (!std::regex_search(message, m, line_re))
+    throw InvalidInput(source_name_, message, "");
+  const unsigned int line = std::stoul(m[1]);
+  const std::string detail = m[3];
+  const std::vector<std::string> path = subsection_path_at(text, line);
+  const std::string where = std::string(m[2]) + ":" + std::to_string(line) +
+                            (path.empty() ? "" : " (in subsection " + join(path, "/") + ")");
+  // An unknown name: list what this subsection has. A bad value: deal.II already names the
+  // pattern, which is what is allowed.
+  if (detail.find("No entry with name") != std::string::npos ||
+      detail.find("There is no subsection") != std::string::npos ||
+      detail.find("no such subsection") != std::string::npos)
+    throw InvalidInput(where, detail, allowed_names(path));
+  throw InvalidInput(where, detail, "");
+}
+
+std::string Scene::allowed_names(const std::vector<std::string>& path) const {
+  std::ostringstream out;
+  prm_.print_parameters(out, dealii::ParameterHandler::JSON);
+  nlohmann::json node = nlohmann::json::parse(out.str());
+  for (const auto& p : path) {
+    if (!node.contains(p))
+      return "";
+    node = node[p];
+  }
+  std::vector<std::string> entries, sections;
+  for (const auto& [key, value] : node.items())
+    (value.contains("value") ? entries : sections).push_back(key);
+  std::string allowed;
+  if (!entries.empty())
+    allowed += "entries: " + join(entries, ", ");
+  if (!sections.empty())
+    allowed += std::string(allowed.empty() ? "" : "; ") + "subsections: " + join(sections, ", ");
+  return allowed;
+}
+
+void Scene::apply_override(const std::string& assignment) {
+  const std::string where = "--set \"" + assignment + "\"";
+  const auto eq = assignment.find('=');
+  if (eq == std::string::npos)
+    throw InvalidInput(where, "no '=' in the override", "\"Section/Sub/Parameter=value\"");
+  std::vector<std::string> path;
+  std::stringstream ss(assignment.substr(0, eq));
+  std::string part;
+  while (std::getline(ss, part, '/'))
+    path.push_back(collapse_whitespace(part));
+  const std::string value = trim(assignment.substr(eq + 1));
+  const std::string entry = path.back();
+  path.pop_back();
+
+  std::ostringstream out;
+  prm_.print_parameters(out, dealii::ParameterHandler::JSON);
+  nlohmann::json node = nlohmann::json::parse(out.str());
+  std::vector<std::string> walked;
+  for (const auto& p : path) {
+    if (!node.contains(p) || node[p].contains("value"))
+      throw InvalidInput(
+          where, "no subsection '" + p + "'" + (walked.empty() ? "" : " in " + join(walked, "/")),
+          allowed_names(walked));
+    node = node[p];
+    walked.push_back(p);
+  }
+  if (!node.contains(entry) || !node[entry].contains("value"))
+    throw InvalidInput(
+        where, "no parameter '" + entry + "'" + (walked.empty() ? "" : " in " + join(walked, "/")),
+        allowed_names(walked));
+  for (const auto& p : path)
+    prm_.enter_subsection(p);
+  try {
+    prm_.set(entry, value);
+  } catch (const dealii::ExceptionBase&) {
+    for (std::size_t i = 0; i < path.size(); ++i)
+      prm_.leave_subsection();
+    throw InvalidInput(where, "value '" + value + "' does not fit",
+                       node[entry]["pattern_description"].get<std::string>());
+  }
+  for (std::size_t i = 0; i < path.size(); ++i)
+    prm_.leave_subsection();
+}
+
+int Scene::dimension() const {
+  return prm_.get_integer("Dimension");
+}
+std::string Scene::scenario() const {
+  return prm_.get("Scenario");
+}
+std::string Scene::description() const {
+  return prm_.get("Description");
+}
+
+Effects Scene::effects() const {
+  Effects effects;
+  effects.parse(prm_);
+  effects.check_consistency();
+  return effects;
+}
+
+std::string Scene::resolved_prm() const {
+  std::ostringstream out;
+  out << "# Resolved parameters of scene " << source_name_ << "\n";
+  prm_.print_parameters(out, dealii::ParameterHandler::PRM |
+                                 dealii::ParameterHandler::KeepDeclarationOrder);
+  return out.str();
+}
+
+namespace {
+// Unit from a help text's trailing "[unit]".
+std::string unit_of(const std::string& doc) {
+  const auto close = doc.rfind(']');
+  const auto open = doc.rfind('[', close);
+  if (close == std::string::npos || open == std::string::npos)
+    return "";
+  return doc.substr(open + 1, close - open - 1);
+}
+
+void markdown(const nlohmann::json& node, const std::string& path, std::ostream& out) {
+  bool header = false;
+  for (const auto& [key, value] : node.items()) {
+    if (!value.contains("value"))
+      continue;
+    if (!header) {
+      out << "\n## " << (path.empty() ? "(top level)" : path) << "\n\n"
+          << "| parameter | default | allowed | unit | meaning |\n|---|---|---|---|---|\n";
+      header = true;
+    }
+    std::string doc = value["documentation"].get<std::string>();
+    std::string pattern = value["pattern_description"].get<std::string>();
+    for (auto* s : {&doc, &pattern})
+      for (auto& c : *s)
+        if (c == '|' || c == '\n')
+          c = c == '|' ? '/' : ' ';
+    out << "| " << key << " | `" << value["default_value"].get<std::string>() << "` | " << pattern
+        << " | " << unit_of(doc) << " | " << doc << " |\n";
+  }
+  for (const auto& [key, value] : node.items())
+    if (!value.contains("value"))
+      markdown(value, path.empty() ? key : path + "/" + key, out);
+}
+} // namespace
+
+std::string Scene::listing(const std::string& format) const {
+  std::ostringstream out;
+  if (format == "prm") {
+    prm_.print_parameters(out, dealii::ParameterHandler::PRM |
+                                   dealii::ParameterHandler::KeepDeclarationOrder);
+  } else if (format == "json") {
+    prm_.print_parameters(out, dealii::ParameterHandler::JSON);
+  } else if (format == "md") {
+    std::ostringstream json;
+    prm_.print_parameters(json, dealii::ParameterHandler::JSON);
+    out << "# spinesim parameter reference\n\nGenerated by `spinesim params --format md` from the "
+           "declarations in the code. Units are in brackets at the end of each help text.\n";
+    markdown(nlohmann::json::parse(json.str()), "", out);
+  } else {
+    throw InvalidInput("--format", "unknown format '" + format + "'", "prm|json|md");
+  }
+  return out.str();
+}
+
+} // namespace spinesim::framework

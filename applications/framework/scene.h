@@ -1,0 +1,57 @@
+#ifndef SPINESIM_COUPLING_SCENE_H
+#define SPINESIM_COUPLING_SCENE_H
+
+// A scene: the parameter file that says what a run is. Every parameter of every scenario
+// and module is declared up front (ASPECT-style), so `spinesim params` lists them all and a
+// scene is checked against the same declarations it runs with.
+
+#include "applications/framework/effects.h"
+
+#include <deal.II/base/parameter_handler.h>
+
+#include <string>
+
+namespace spinesim::framework {
+
+class Scene {
+ public:
+  Scene();
+
+  // Reads a .prm or .json scene. Bad input throws InvalidInput naming file, line, parameter
+  // path and what is allowed.
+  void load_file(const std::string& path);
+  // Reads scene text (the embedded default scene); `name` stands in for the file name.
+  void load_text(const std::string& text, const std::string& name);
+  // "Section/Sub/Parameter=value", checked like a file entry.
+  void apply_override(const std::string& assignment);
+
+  const dealii::ParameterHandler& prm() const { return prm_; }
+  dealii::ParameterHandler& prm() { return prm_; }
+  const std::string& source_name() const { return source_name_; }
+
+  int dimension() const;
+  std::string scenario() const;
+  std::string description() const;
+  // Parsed and checked effects.
+  Effects effects() const;
+
+  // The fully resolved parameters, as a .prm text (declaration order, with help texts).
+  std::string resolved_prm() const;
+
+  // Every declared parameter: format "prm", "json" or "md".
+  std::string listing(const std::string& format) const;
+
+ private:
+  // Turns a deal.II parse error into InvalidInput with the subsection path and what the
+  // subsection allows. `text` is the scene text for locating the line's subsection.
+  [[noreturn]] void rethrow_parse_error(const std::string& deal_message,
+                                        const std::string& text) const;
+  std::string allowed_names(const std::vector<std::string>& path) const;
+
+  dealii::ParameterHandler prm_;
+  std::string source_name_ = "(defaults)";
+};
+
+} // namespace spinesim::framework
+
+#endif

@@ -1,0 +1,59 @@
+#include "applications/framework/summary.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+
+namespace spinesim::framework {
+
+void Summary::set_scene(const std::string& scene, const std::string& description) {
+  scene_ = scene;
+  description_ = description;
+}
+
+void Summary::set_figure(const std::string& name, double value, const std::string& unit) {
+  figures_[name] = {value, unit};
+}
+
+void Summary::set_label(const std::string& name, const std::string& value) {
+  labels_[name] = value;
+}
+
+void Summary::add_timing(const std::string& phase, double seconds) {
+  timings_[phase] += seconds;
+}
+
+void Summary::set_effects(const std::vector<std::string>& effects) {
+  effects_ = effects;
+}
+
+void Summary::set_status(bool ok, const std::string& message) {
+  ok_ = ok;
+  message_ = message;
+}
+
+std::string Summary::json() const {
+  nlohmann::ordered_json j;
+  j["scene"] = scene_;
+  j["description"] = description_;
+  j["status"] = ok_ ? "ok" : "failed";
+  if (!message_.empty())
+    j["message"] = message_;
+  j["figures"] = nlohmann::ordered_json::object();
+  for (const auto& [name, fig] : figures_) {
+    // JSON has no NaN: a non-finite figure is written as null so readers see it is missing.
+    if (std::isfinite(fig.first))
+      j["figures"][name] = {{"value", fig.first}, {"unit", fig.second}};
+    else
+      j["figures"][name] = {{"value", nullptr}, {"unit", fig.second}};
+  }
+  for (const auto& [name, value] : labels_)
+    j["figures"][name] = {{"value", value}, {"unit", ""}};
+  j["timings"] = nlohmann::ordered_json::object();
+  for (const auto& [phase, s] : timings_)
+    j["timings"][phase] = s;
+  j["effects"] = effects_;
+  return j.dump(2) + "\n";
+}
+
+} // namespace spinesim::framework

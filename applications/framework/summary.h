@@ -1,0 +1,36 @@
+#ifndef SPINESIM_COUPLING_SUMMARY_H
+#define SPINESIM_COUPLING_SUMMARY_H
+
+// summary.json: the run's key figures with units, phase timings, status and effects.
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace spinesim::framework {
+
+class Summary {
+ public:
+  void set_scene(const std::string& scene, const std::string& description);
+  void set_figure(const std::string& name, double value, const std::string& unit);
+  // Text-valued figures (e.g. the solver kind).
+  void set_label(const std::string& name, const std::string& value);
+  void add_timing(const std::string& phase, double seconds);
+  void set_effects(const std::vector<std::string>& effects);
+  void set_status(bool ok, const std::string& message = "");
+  bool has_figure(const std::string& name) const { return figures_.count(name) > 0; }
+  double figure(const std::string& name) const { return figures_.at(name).first; }
+  std::string json() const;
+
+ private:
+  std::string scene_, description_, message_;
+  bool ok_ = false;
+  std::map<std::string, std::pair<double, std::string>> figures_;
+  std::map<std::string, std::string> labels_;
+  std::map<std::string, double> timings_;
+  std::vector<std::string> effects_;
+};
+
+} // namespace spinesim::framework
+
+#endif

@@ -1,0 +1,150 @@
+#include "applications/simulation/crack_path.h"
+
+#include "applications/framework/summary.h"
+#include "base/exceptions.h"
+#include "base/list_parsing.h"
+
+#include <boost/serialization/utility.hpp>
+#include <boost/serialization/vector.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace spinesim::applications {
+
+namespace {
+const char* const axes = "xyz";
+
+int axis_index(const std::string& word, unsigned int dim) {
+  for (unsigned int d = 0; d < dim; ++d)
+    if (word == std::string(1, axes[d]))
+      return static_cast<int>(d);
+  return -1;
+}
+
+std::string trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t");
+  if (b == std::string::npos)
+    return "";
+  return s.substr(b, s.find_last_not_of(" \t") - b + 1);
+}
+} // namespace
+
+void CrackOutputParameters::declare(dealii::ParameterHandler& prm) {
+  using namespace dealii::Patterns;
+  prm.declare_entry("Damage threshold", "0.35", Double(0, 1),
+                    "Damage at which a particle counts as cracked for crack_path.csv and the "
+                    "crack figures (0.35: about a third of its bonds broken) [-].");
+  prm.declare_entry("Crack line", "", Anything(),
+                    "Figures along a line the crack is expected to follow, '<along>, <across> = "
+                    "<value>' (e.g. 'x, y = 0'): crack_extent_min/max_<along>_m and "
+                    "crack_path_rms_<across>_m over the cracked particles; empty = none [m].");
+}
+
+void CrackOutputParameters::parse(const dealii::ParameterHandler& prm) {
+  damage_threshold = prm.get_double("Damage threshold");
+  crack_line = prm.get("Crack line");
+}
+
+template <int dim>
+CrackPath<dim>::CrackPath(const CrackOutputParameters& parameters) : prm_(parameters) {
+  const std::string text = trim(prm_.crack_line);
+  if (text.empty())
+    return;
+  const std::string where = "Simulation/Crack line";
+  const std::string allowed = std::string("'<along>, <across> = <value>' with axes from ") +
+                              (dim == 2 ? "x, y" : "x, y, z") + ", e.g. 'x, y = 0'";
+  const auto comma = text.find(',');
+  const auto equals = text.find('=');
+  if (comma == std::string::npos || equals == std::string::npos || equals < comma)
+    throw InvalidInput(where, "cannot read '" + text + "'", allowed);
+  along_ = axis_index(trim(text.substr(0, comma)), dim);
+  across_ = axis_index(trim(text.substr(comma + 1, equals - comma - 1)), dim);
+  if (along_ < 0 || across_ < 0 || along_ == across_)
+    throw InvalidInput(where, "'" + text + "' does not name two different axes", allowed);
+  offset_ = parse_numbers(text.substr(equals + 1), where, 1, "[m]")[0];
+}
+
+template <int dim>
+void CrackPath<dim>::update(const std::vector<dealii::Point<dim>>& positions,
+                            const std::vector<double>& damage,
+                            const std::vector<std::uint8_t>& counted, double time) {
+  for (unsigned int i = 0; i < positions.size(); ++i)
+    if (counted[i] && damage[i] >= prm_.damage_threshold)
+      failure_time_.emplace(i, time);
+}
+
+template <int dim>
+std::map<unsigned int, double> CrackPath<dim>::gathered(MPI_Comm comm) const {
+  const std::vector<std::pair<unsigned int, double>> mine(failure_time_.begin(),
+                                                          failure_time_.end());
+  std::map<unsigned int, double> all;
+  for (const auto& part : dealii::Utilities::MPI::all_gather(comm, mine))
+    for (const auto& [i, t] : part) {
+      const auto [it, inserted] = all.emplace(i, t);
+      if (!inserted)
+        it->second = std::min(it->second, t);
+    }
+  return all;
+}
+
+template <int dim>
+std::string CrackPath<dim>::csv(const std::vector<dealii::Point<dim>>& positions,
+                                const std::vector<double>& damage, MPI_Comm comm) const {
+  std::ostringstream out;
+  out.precision(10);
+  for (unsigned int d = 0; d < dim; ++d)
+    out << axes[d] << "_m,";
+  out << "damage,failure_time_s\n";
+  for (const auto& [i, t] : gathered(comm)) {
+    for (unsigned int d = 0; d < dim; ++d)
+      out << positions[i][d] << ",";
+    out << damage[i] << "," << t << "\n";
+  }
+  return out.str();
+}
+
+template <int dim>
+void CrackPath<dim>::add_figures(framework::Summary& s,
+                                 const std::vector<dealii::Point<dim>>& positions,
+                                 const std::vector<double>& damage,
+                                 const std::vector<std::uint8_t>& counted) const {
+  if (along_ < 0)
+    return;
+  double lo = 0, hi = 0, path_sq = 0;
+  unsigned int n = 0;
+  for (unsigned int i = 0; i < positions.size(); ++i)
+    if (counted[i] && damage[i] >= prm_.damage_threshold) {
+      const double a = positions[i][along_];
+      const double c = positions[i][across_] - offset_;
+      lo = n ? std::min(lo, a) : a;
+      hi = n ? std::max(hi, a) : a;
+      path_sq += c * c;
+      ++n;
+    }
+  const std::string a(1, axes[along_]), c(1, axes[across_]);
+  s.set_figure("crack_extent_min_" + a + "_m", lo, "m");
+  s.set_figure("crack_extent_max_" + a + "_m", hi, "m");
+  s.set_figure("crack_path_rms_" + c + "_m", n ? std::sqrt(path_sq / n) : 0.0, "m");
+}
+
+template <int dim>
+nlohmann::json CrackPath<dim>::to_json(MPI_Comm comm) const {
+  nlohmann::json j = nlohmann::json::array();
+  for (const auto& [i, t] : gathered(comm))
+    j.push_back({i, t});
+  return j;
+}
+
+template <int dim>
+void CrackPath<dim>::from_json(const nlohmann::json& j) {
+  failure_time_.clear();
+  for (const auto& entry : j)
+    failure_time_.emplace(entry.at(0).get<unsigned int>(), entry.at(1).get<double>());
+}
+
+template class CrackPath<2>;
+template class CrackPath<3>;
+
+} // namespace spinesim::applications

@@ -1,0 +1,423 @@
+#include "applications/simulation/particle_zone.h"
+
+#include "applications/framework/parse_section.h"
+#include "applications/framework/run_context.h"
+#include "base/exceptions.h"
+#include "base/list_parsing.h"
+#include "fem/materials/law_parameters.h"
+#include "meshfree/adaptive_dynamic_relaxation.h"
+#include "meshfree/neighbor_search.h"
+#include "meshfree/particle_method.h"
+#include "meshfree/particle_output.h"
+#include "meshfree/particle_set.h"
+#include "meshfree/pre_crack.h"
+#include "meshfree/velocity_verlet.h"
+
+#include <deal.II/base/function_parser.h>
+#include <deal.II/base/utilities.h>
+#include <deal.II/lac/vector.h>
+
+#include <cmath>
+#include <fstream>
+
+namespace spinesim::applications {
+
+using namespace framework;
+
+namespace {
+std::vector<double> doubles(const std::string& list, const std::string& where, unsigned int n_min) {
+  const auto values = parse_number_list(list, where);
+  if (values.size() < n_min)
+    throw InvalidInput(where, "needs at least " + std::to_string(n_min) + " numbers",
+                       "comma-separated coordinates [m]");
+  return values;
+}
+} // namespace
+
+void ParticleZoneParameters::declare(dealii::ParameterHandler& prm) {
+  using namespace dealii::Patterns;
+  prm.declare_entry("Lower corner", "-0.5, -0.5, -0.5", Anything(),
+                    "Lower corner of the particle lattice box (dim values) [m].");
+  prm.declare_entry("Upper corner", "0.5, 0.5, 0.5", Anything(),
+                    "Upper corner of the particle lattice box (dim values) [m].");
+  prm.declare_entry("Spacing", "0.05", Double(0), "Lattice spacing h [m].");
+  prm.declare_entry("Integration", "explicit", Selection("explicit|quasi_static"),
+                    "explicit: velocity Verlet sub-stepped at the stable step; quasi_static: "
+                    "adaptive dynamic relaxation to equilibrium at every step [-].");
+  prm.declare_entry("Time step safety", "0.8", Double(0, 1),
+                    "Fraction of the stable time step used by explicit steps [-].");
+  prm.declare_entry("Damping", "0", Double(0),
+                    "Mass-proportional damping of explicit steps (velocity decay rate) [1/s].");
+  prm.declare_entry("Reaction region", "-1", Integer(-1, n_region_slots),
+                    "Loaded region whose reaction force is reported; -1 = none [-].");
+  // One subsection per registered particle method ("Bond based", "NOSB", ...).
+  meshfree::declare_particle_method_sections(prm);
+  prm.enter_subsection("Quasi-static");
+  meshfree::AdaptiveDynamicRelaxation<2>::Parameters::declare(prm);
+  prm.leave_subsection();
+  for (unsigned int k = 1; k <= n_region_slots; ++k) {
+    prm.enter_subsection("Region " + std::to_string(k));
+    prm.declare_entry("Lower corner", "", Anything(),
+                      "Lower corner of the box whose particles are prescribed; empty = slot "
+                      "unused [m].");
+    prm.declare_entry("Upper corner", "", Anything(), "Upper corner of the box [m].");
+    prm.declare_entry("Components", "x,y", Anything(),
+                      "Prescribed components, letters from x,y,z [-].");
+    prm.declare_entry("Values", "0; 0", Anything(),
+                      "Displacement per listed component, ';'-separated expressions in x, y, "
+                      "z (reference position) and t [m].");
+    prm.leave_subsection();
+  }
+  for (unsigned int k = 1; k <= n_crack_slots; ++k) {
+    prm.enter_subsection("Crack " + std::to_string(k));
+    prm.declare_entry("Corners", "", Anything(),
+                      "Pre-crack: 2-D segment 'x1,y1; x2,y2', 3-D planar quadrilateral "
+                      "'x1,y1,z1; ...; x4,y4,z4'; empty = slot unused [m].");
+    prm.leave_subsection();
+  }
+}
+
+void ParticleZoneParameters::parse(dealii::ParameterHandler& prm) {
+  lower = doubles(prm.get("Lower corner"), "Particles/Lower corner", 2);
+  upper = doubles(prm.get("Upper corner"), "Particles/Upper corner", 2);
+  spacing = prm.get_double("Spacing");
+  integration = prm.get("Integration");
+  time_step_safety = prm.get_double("Time step safety");
+  damping = prm.get_double("Damping");
+  reaction_region = prm.get_integer("Reaction region");
+  regions.clear();
+  for (unsigned int k = 1; k <= n_region_slots; ++k) {
+    prm.enter_subsection("Region " + std::to_string(k));
+    const std::string where = "Particles/Region " + std::to_string(k);
+    if (!prm.get("Lower corner").empty()) {
+      Region r;
+      r.lower = doubles(prm.get("Lower corner"), where + "/Lower corner", 2);
+      r.upper = doubles(prm.get("Upper corner"), where + "/Upper corner", 2);
+      r.components = prm.get("Components");
+      r.values = prm.get("Values");
+      regions.push_back(r);
+    } else if (reaction_region == int(k)) {
+      prm.leave_subsection();
+      throw InvalidInput("Particles/Reaction region", "names an unused region slot",
+                         "a slot with a Lower corner");
+    }
+    prm.leave_subsection();
+  }
+  cracks.clear();
+  for (unsigned int k = 1; k <= n_crack_slots; ++k) {
+    prm.enter_subsection("Crack " + std::to_string(k));
+    const std::string corners = prm.get("Corners");
+    prm.leave_subsection();
+    if (corners.empty())
+      continue;
+    cracks.push_back(corners); // read per dimension in setup()
+  }
+}
+
+template <int dim>
+struct ParticleZone<dim>::Impl {
+  struct PrescribedRegion {
+    std::vector<unsigned int> particles;
+    std::vector<unsigned int> components;
+    std::unique_ptr<dealii::FunctionParser<dim>> values; // one component per listed letter
+  };
+
+  ParticleZoneParameters prm;
+  materials::LawParameters law;
+  typename meshfree::AdaptiveDynamicRelaxation<dim>::Parameters adr_prm;
+  bool damage = false;
+
+  meshfree::ParticleSet<dim> particles;
+  meshfree::BondList<dim> bonds;
+  std::unique_ptr<meshfree::ParticleMethod<dim>> method;
+  std::unique_ptr<meshfree::VelocityVerlet<dim>> verlet;
+  std::vector<PrescribedRegion> regions;
+  std::vector<double> stiffness_bound;
+  double time = 0, dt_stable = 0;
+  unsigned int explicit_steps = 0, relaxation_iterations = 0;
+  std::size_t broken_initially = 0;
+
+  void compute_forces(meshfree::ParticleSet<dim>& p) { method->compute_forces(p, bonds, damage); }
+
+  void prescribe(double t) {
+    for (auto& r : regions) {
+      dealii::Vector<double> value(r.components.size());
+      for (const unsigned int i : r.particles) {
+        const dealii::Point<dim>& x = particles.reference_position(i);
+        r.values->set_time(t);
+        r.values->vector_value(x, value);
+        for (unsigned int c = 0; c < r.components.size(); ++c) {
+          particles.displacements()[i][r.components[c]] = value[c];
+          particles.velocities()[i][r.components[c]] = 0;
+        }
+      }
+    }
+  }
+
+  dealii::Tensor<1, dim> reaction() const {
+    dealii::Tensor<1, dim> r;
+    if (prm.reaction_region < 1)
+      return r;
+    // The supports balance the internal force on the prescribed particles.
+    for (const unsigned int i : regions[prm.reaction_region - 1].particles)
+      r -= particles.force(i);
+    return r;
+  }
+};
+
+template <int dim>
+ParticleZone<dim>::ParticleZone(dealii::ParameterHandler& prm, const std::string& method,
+                                bool damage)
+    : impl_(std::make_unique<Impl>()) {
+  parse_section(prm, "Material", impl_->law);
+  parse_section(prm, "Particles", impl_->prm);
+  parse_section(prm, std::vector<std::string>{"Particles", "Quasi-static"}, impl_->adr_prm);
+  impl_->damage = damage;
+  if (method == "spg")
+    throw InvalidInput("Effects/Particles method",
+                       "SPG particle zones need loads on RK coefficients (constraints by the "
+                       "transformation method), which the simulation scenario does not apply yet",
+                       "bond_based or nosb for a particle zone; SPG runs: the spg_* validation "
+                       "scenarios");
+  const std::shared_ptr<const materials::ConstitutiveLaw> law = materials::create_law(impl_->law);
+  const meshfree::ParticleMaterial material{impl_->law.youngs_modulus, impl_->law.poisson_ratio,
+                                            impl_->law.density, law};
+  prm.enter_subsection("Particles");
+  meshfree::ParticleMethodMaker<dim> make;
+  try {
+    make = meshfree::particle_method_maker<dim>(method, prm, "Effects/Particles method");
+  } catch (...) {
+    prm.leave_subsection();
+    throw;
+  }
+  prm.leave_subsection();
+  impl_->method = make(material);
+  if (impl_->prm.lower.size() < dim || impl_->prm.upper.size() < dim)
+    throw InvalidInput("Particles/Lower corner", "needs one coordinate per dimension",
+                       std::to_string(dim) + " comma-separated values [m]");
+}
+
+template <int dim>
+ParticleZone<dim>::~ParticleZone() = default;
+
+template <int dim>
+void ParticleZone<dim>::setup(RunContext& ctx) {
+  Impl& z = *impl_;
+  dealii::Point<dim> lo, hi;
+  for (unsigned int d = 0; d < dim; ++d) {
+    lo[d] = z.prm.lower[d];
+    hi[d] = z.prm.upper[d];
+  }
+  z.particles = meshfree::ParticleSet<dim>::lattice(lo, hi, z.prm.spacing, z.method->thickness());
+  z.particles.set_density(z.law.density);
+  auto options = z.method->neighbor_options(z.prm.spacing);
+  for (std::size_t k = 0; k < z.prm.cracks.size(); ++k) {
+    const std::string where = "Particles/Crack " + std::to_string(k + 1) + "/Corners";
+    const auto c = parse_crack_corners(z.prm.cracks[k], where, dim);
+    if (dim == 2 && c.size() == 4)
+      options.pre_cracks.push_back(meshfree::PreCrack<dim>::segment(
+          dealii::Point<dim>(c[0], c[1]), dealii::Point<dim>(c[2], c[3])));
+    else if (dim == 3 && c.size() == 12) {
+      dealii::Point<dim> p[4];
+      for (unsigned int v = 0; v < 4; ++v)
+        for (unsigned int d = 0; d < dim; ++d)
+          p[v][d] = c[3 * v + d];
+      options.pre_cracks.push_back(meshfree::PreCrack<dim>::quadrilateral(p[0], p[1], p[2], p[3]));
+    } else
+      throw InvalidInput(where, "wrong number of coordinates",
+                         dim == 2 ? "two points 'x1,y1; x2,y2'" : "four points of 3 coordinates");
+  }
+  z.bonds = meshfree::NeighborSearch<dim>(options).build(z.particles);
+  z.broken_initially = z.bonds.n_broken();
+  z.method->initialise(z.particles, z.bonds);
+  z.stiffness_bound = z.method->stiffness_bound(z.particles, z.bonds);
+  z.dt_stable = z.method->stable_time_step(z.particles, z.bonds, z.prm.time_step_safety);
+
+  const char letters[] = {'x', 'y', 'z'};
+  for (std::size_t k = 0; k < z.prm.regions.size(); ++k) {
+    const auto& r = z.prm.regions[k];
+    const std::string where = "Particles/Region " + std::to_string(k + 1);
+    typename Impl::PrescribedRegion region;
+    for (const auto& letter : dealii::Utilities::split_string_list(r.components, ',')) {
+      const auto* pos = std::find(letters, letters + dim, letter.empty() ? ' ' : letter[0]);
+      if (letter.size() != 1 || pos == letters + dim)
+        throw InvalidInput(where + "/Components", "unknown component '" + letter + "'",
+                           dim == 2 ? "x,y" : "x,y,z");
+      region.components.push_back(pos - letters);
+    }
+    const auto expressions = dealii::Utilities::split_string_list(r.values, ';');
+    if (expressions.size() != region.components.size())
+      throw InvalidInput(where + "/Values", "needs one expression per component",
+                         std::to_string(region.components.size()) + " ';'-separated expressions");
+    region.values = std::make_unique<dealii::FunctionParser<dim>>(expressions.size());
+    try {
+      region.values->initialize(dim == 2 ? "x,y,t" : "x,y,z,t", expressions, {{"pi", M_PI}}, true);
+    } catch (...) {
+      throw InvalidInput(where + "/Values", "cannot parse '" + r.values + "'",
+                         "expressions in x, y, z and t");
+    }
+    for (unsigned int i = 0; i < z.particles.size(); ++i) {
+      const auto& x = z.particles.reference_position(i);
+      bool inside = true;
+      for (unsigned int d = 0; d < dim; ++d)
+        inside = inside && x[d] >= r.lower[d] && x[d] <= r.upper[d];
+      if (inside) {
+        region.particles.push_back(i);
+        for (const unsigned int c : region.components)
+          z.particles.set_fixed(i, c);
+      }
+    }
+    if (region.particles.empty())
+      throw InvalidInput(where, "holds no particle", "a box that contains lattice points");
+    z.regions.push_back(std::move(region));
+  }
+  z.verlet = std::make_unique<meshfree::VelocityVerlet<dim>>(
+      [&z](meshfree::ParticleSet<dim>& p) { z.compute_forces(p); });
+  z.prescribe(0.0);
+  ctx.log() << "  particles: " << z.particles.size() << " on a lattice of spacing " << z.prm.spacing
+            << " m, " << z.bonds.n_bonds() / 2 << " bonds (" << z.broken_initially / 2
+            << " cut by pre-cracks), stable step " << z.dt_stable << " s, method "
+            << z.method->name() << ", material " << z.law.describe() << "\n";
+  for (const auto& message : z.method->take_messages())
+    ctx.log() << "  " << message << "\n";
+}
+
+template <int dim>
+void ParticleZone<dim>::advance_to(double time) {
+  Impl& z = *impl_;
+  if (z.prm.integration == "quasi_static") {
+    z.prescribe(time);
+    meshfree::AdaptiveDynamicRelaxation<dim> adr(
+        z.adr_prm, [&z](meshfree::ParticleSet<dim>& p) { z.compute_forces(p); });
+    const auto result = adr.solve(z.particles, z.stiffness_bound);
+    z.relaxation_iterations += result.iterations;
+    if (!result.converged)
+      throw NumericalFailure("dynamic relaxation did not converge (relative residual " +
+                                 std::to_string(result.relative_residual) + ")",
+                             "particle zone",
+                             "raise Particles/Quasi-static/Maximum iterations "
+                             "or take more, smaller steps");
+    z.method->commit_state();
+    z.time = time;
+    return;
+  }
+  while (z.time < time * (1 - 1e-12)) {
+    const double dt = std::min(z.dt_stable, time - z.time);
+    z.prescribe(z.time + dt);
+    z.verlet->step(z.particles, dt);
+    z.method->commit_state();
+    if (z.prm.damping > 0) {
+      const double factor = std::exp(-z.prm.damping * dt);
+      for (auto& v : z.particles.velocities())
+        v *= factor;
+    }
+    z.time += dt;
+    ++z.explicit_steps;
+  }
+}
+
+template <int dim>
+void ParticleZone<dim>::add_history(std::vector<std::pair<std::string, double>>& row) {
+  Impl& z = *impl_;
+  z.method->update_damage(z.particles, z.bonds);
+  double max_damage = 0;
+  for (const double d : z.particles.damages())
+    max_damage = std::max(max_damage, d);
+  row.emplace_back("particle_kinetic_energy", z.particles.kinetic_energy());
+  row.emplace_back("particle_strain_energy", z.method->strain_energy(z.particles, z.bonds));
+  row.emplace_back("broken_bonds", double(z.bonds.n_broken() - z.broken_initially) / 2);
+  row.emplace_back("max_damage", max_damage);
+  if (z.prm.reaction_region > 0) {
+    const auto r = z.reaction();
+    const char* names[] = {"particle_reaction_x", "particle_reaction_y", "particle_reaction_z"};
+    for (unsigned int d = 0; d < dim; ++d)
+      row.emplace_back(names[d], r[d]);
+  }
+}
+
+template <int dim>
+void ParticleZone<dim>::add_figures(RunContext& ctx) const {
+  const Impl& z = *impl_;
+  Summary& s = ctx.summary();
+  const std::string per = dim == 2 ? "/m" : "";
+  s.set_figure("particles", z.particles.size(), "-");
+  s.set_figure("bonds", z.bonds.n_bonds() / 2, "-");
+  s.set_figure("broken_bonds", double(z.bonds.n_broken() - z.broken_initially) / 2, "-");
+  s.set_figure("particle_strain_energy", z.method->strain_energy(z.particles, z.bonds), "J");
+  s.set_figure("particle_kinetic_energy", z.particles.kinetic_energy(), "J");
+  s.set_figure("particle_stable_time_step", z.dt_stable, "s");
+  if (z.prm.integration == "explicit")
+    s.set_figure("particle_explicit_steps", z.explicit_steps, "-");
+  else
+    s.set_figure("relaxation_iterations", z.relaxation_iterations, "iterations");
+  if (z.prm.reaction_region > 0)
+    s.set_figure("particle_reaction_norm", z.reaction().norm(), "N");
+  (void)per;
+}
+
+template <int dim>
+std::string ParticleZone<dim>::write_output(const std::string& directory,
+                                            unsigned int cycle) const {
+  const std::string name = "particles_" + dealii::Utilities::int_to_string(cycle, 4) + ".vtu";
+  meshfree::write_particles_vtu(impl_->particles, directory + "/" + name);
+  return name;
+}
+
+template <int dim>
+void ParticleZone<dim>::save(const std::string& file) const {
+  const Impl& z = *impl_;
+  std::ofstream out(file, std::ios::binary);
+  const auto write = [&out](const void* data, std::size_t bytes) {
+    out.write(static_cast<const char*>(data), bytes);
+  };
+  const std::uint64_t n = z.particles.size(), nb = z.bonds.n_bonds();
+  write(&n, sizeof n);
+  write(&nb, sizeof nb);
+  write(&z.time, sizeof z.time);
+  write(&z.explicit_steps, sizeof z.explicit_steps);
+  write(&z.relaxation_iterations, sizeof z.relaxation_iterations);
+  for (const auto* field :
+       {&z.particles.displacements(), &z.particles.velocities(), &z.particles.accelerations()})
+    write(field->data(), field->size() * sizeof(dealii::Tensor<1, dim>));
+  write(z.bonds.broken.data(), nb);
+  z.method->save(out);
+  if (!out)
+    throw std::runtime_error("cannot write particle checkpoint " + file);
+}
+
+template <int dim>
+void ParticleZone<dim>::load(const std::string& file) {
+  Impl& z = *impl_;
+  std::ifstream in(file, std::ios::binary);
+  const auto read = [&in](void* data, std::size_t bytes) {
+    in.read(static_cast<char*>(data), bytes);
+  };
+  std::uint64_t n = 0, nb = 0;
+  read(&n, sizeof n);
+  read(&nb, sizeof nb);
+  if (!in || n != z.particles.size() || nb != z.bonds.n_bonds())
+    throw InvalidInput(file, "particle checkpoint does not match the scene's particle zone",
+                       "the checkpoint of this run, unchanged Particles parameters");
+  read(&z.time, sizeof z.time);
+  read(&z.explicit_steps, sizeof z.explicit_steps);
+  read(&z.relaxation_iterations, sizeof z.relaxation_iterations);
+  for (auto* field :
+       {&z.particles.displacements(), &z.particles.velocities(), &z.particles.accelerations()})
+    read(field->data(), field->size() * sizeof(dealii::Tensor<1, dim>));
+  read(z.bonds.broken.data(), nb);
+  if (!in)
+    throw InvalidInput(file, "particle checkpoint is truncated", "a complete checkpoint");
+  z.method->initialise(z.particles, z.bonds); // families from the restored intact bonds
+  z.method->load(in);
+  z.verlet->initialise(z.particles);
+}
+
+template <int dim>
+const meshfree::ParticleSet<dim>& ParticleZone<dim>::particles() const {
+  return impl_->particles;
+}
+
+template class ParticleZone<2>;
+template class ParticleZone<3>;
+
+} // namespace spinesim::applications

@@ -1,0 +1,82 @@
+#ifndef SPINESIM_COUPLING_PARTICLE_ZONE_H
+#define SPINESIM_COUPLING_PARTICLE_ZONE_H
+
+// The particle side of the `simulation` scenario: a body of particles on a lattice region, run
+// by the particle method the scene names (meshfree/particle_method.h), loaded through prescribed
+// displacements of particle regions, with pre-cracks, advanced explicitly (velocity Verlet,
+// sub-stepped at the stable step) or quasi-statically (adaptive dynamic relaxation at every step).
+//
+// MPI: the particle zone is not distributed yet: every rank holds and advances the whole
+// zone identically (the loops are deterministic), and rank 0 writes its output.
+
+#include "meshfree/particle_set.h"
+
+#include <deal.II/base/parameter_handler.h>
+
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace spinesim::framework {
+class RunContext;
+}
+
+namespace spinesim::applications {
+
+using framework::RunContext;
+
+struct ParticleZoneParameters {
+  static constexpr unsigned int n_region_slots = 6;
+  static constexpr unsigned int n_crack_slots = 4;
+
+  struct Region {
+    std::vector<double> lower, upper; // box corners [m]
+    std::string components;           // "x,y"
+    std::string values;               // one expression per component, ';'-separated [m]
+  };
+
+  std::vector<double> lower{-0.5, -0.5, -0.5}, upper{0.5, 0.5, 0.5};
+  double spacing = 0.05; // [m]
+  std::string integration = "explicit";
+  double time_step_safety = 0.8;
+  double damping = 0;              // [1/s]
+  std::vector<Region> regions;     // used slots only
+  std::vector<std::string> cracks; // corners per crack (read per dimension)
+  int reaction_region = -1;        // 1-based region whose reaction is reported
+
+  static void declare(dealii::ParameterHandler& prm);
+  void parse(dealii::ParameterHandler& prm);
+};
+
+template <int dim>
+class ParticleZone {
+ public:
+  // Reads the "Particles" and "Material" sections (prm is the whole scene) and makes the
+  // particle method `method` (a registered name) from its subsection of "Particles".
+  ParticleZone(dealii::ParameterHandler& prm, const std::string& method, bool damage);
+  ~ParticleZone();
+
+  void setup(RunContext& ctx);
+  // Advances from the zone's time to `time` [s].
+  void advance_to(double time);
+
+  // Updates the particles' damage, then adds the zone's columns.
+  void add_history(std::vector<std::pair<std::string, double>>& row);
+  void add_figures(RunContext& ctx) const;
+  // The zone's particles (damage as of the last add_history).
+  const meshfree::ParticleSet<dim>& particles() const;
+  // Writes particles_<cycle>.vtu (rank 0); returns the file name.
+  std::string write_output(const std::string& directory, unsigned int cycle) const;
+
+  void save(const std::string& file) const; // rank 0 writes
+  void load(const std::string& file);       // every rank reads
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+} // namespace spinesim::applications
+
+#endif

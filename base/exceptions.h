@@ -1,0 +1,49 @@
+#ifndef SPINESIM_BASE_EXCEPTIONS_H
+#define SPINESIM_BASE_EXCEPTIONS_H
+
+// The two ways a run stops on purpose, shared by every module (base/ is the layer every
+// module may use): bad input (exit code 2) and numerical failure (exit code 1).
+
+#include <stdexcept>
+#include <string>
+
+namespace spinesim {
+
+// A parameter or input file holds a value the code cannot use. `where` names the file and
+// line or the parameter path; `allowed` says what would be accepted.
+class InvalidInput : public std::runtime_error {
+ public:
+  InvalidInput(std::string where, std::string problem, std::string allowed);
+  const std::string& where() const { return where_; }
+  const std::string& problem() const { return problem_; }
+  const std::string& allowed() const { return allowed_; }
+
+ private:
+  std::string where_, problem_, allowed_;
+};
+
+// The numbers went wrong (NaN, divergence, inverted element, singular shape tensor).
+// Thrown where it happens, with the step and location known there and a hint for the user.
+class NumericalFailure : public std::runtime_error {
+ public:
+  NumericalFailure(std::string what_failed, std::string location, std::string hint);
+  const std::string& what_failed() const { return what_failed_; }
+  const std::string& location() const { return location_; }
+  const std::string& hint() const { return hint_; }
+  // The driver adds the step and simulated time when the exception passes through it.
+  void set_step(unsigned int step, double time);
+  bool has_step() const { return has_step_; }
+  unsigned int step() const { return step_; }
+  double time() const { return time_; }
+  std::string report() const;
+
+ private:
+  std::string what_failed_, location_, hint_;
+  bool has_step_ = false;
+  unsigned int step_ = 0;
+  double time_ = 0.0;
+};
+
+} // namespace spinesim
+
+#endif

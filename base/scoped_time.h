@@ -1,0 +1,25 @@
+#ifndef SPINESIM_BASE_SCOPED_TIME_H
+#define SPINESIM_BASE_SCOPED_TIME_H
+
+// Adds the wall time of its scope to a sink [s]: per-phase timings that solvers expose in
+// their Timings structs (and that scenarios write to summary.json).
+
+#include <deal.II/base/timer.h>
+
+namespace spinesim {
+
+class ScopedTime {
+ public:
+  explicit ScopedTime(double& sink) : sink_(sink) { timer_.start(); }
+  ~ScopedTime() { sink_ += timer_.wall_time(); }
+  ScopedTime(const ScopedTime&) = delete;
+  ScopedTime& operator=(const ScopedTime&) = delete;
+
+ private:
+  double& sink_;
+  dealii::Timer timer_;
+};
+
+} // namespace spinesim
+
+#endif

@@ -1,0 +1,53 @@
+#ifndef SPINESIM_MESHFREE_BOND_BASED_METHOD_H
+#define SPINESIM_MESHFREE_BOND_BASED_METHOD_H
+
+// Bond-based PD (meshfree/bond_based_pd.h) behind the particle-method interface, registered
+// as "bond_based". Its micromodulus is matched to the bulk modulus, so its Poisson ratio is
+// fixed (1/4 in 3-D and plane strain, 1/3 in plane stress; implied_poisson_ratio()); the
+// particles hold no constitutive state.
+
+#include "meshfree/bond_based_pd.h"
+#include "meshfree/particle_method.h"
+
+namespace spinesim::meshfree {
+
+template <int dim>
+class BondBasedMethod : public ParticleMethod<dim> {
+ public:
+  using Parameters = typename BondBasedPD<dim>::Parameters;
+  // E and ν of `material` calibrate the micromodulus.
+  BondBasedMethod(const Parameters& parameters, const ParticleMaterial& material);
+  static void declare(dealii::ParameterHandler& prm);
+  static Parameters parse_parameters(const dealii::ParameterHandler& section);
+
+  // The Poisson ratio bond-based PD represents for this dimension and plane model [-].
+  static double implied_poisson_ratio(typename BondBasedPD<dim>::PlaneModel plane_model);
+
+  const BondBasedPD<dim>& model() const { return pd_; }
+
+  std::string name() const override { return "bond_based"; }
+  bool carries_material_state() const override { return false; }
+  double thickness() const override { return pd_.parameters().thickness; }
+  typename NeighborSearch<dim>::Options neighbor_options(double spacing) const override;
+  void initialise(const ParticleSet<dim>& particles, const BondList<dim>& bonds) override;
+  std::size_t compute_forces(ParticleSet<dim>& particles, BondList<dim>& bonds,
+                             bool allow_breaking) override;
+  std::vector<double> stiffness_bound(const ParticleSet<dim>& particles,
+                                      const BondList<dim>& bonds) override;
+  double stable_time_step(const ParticleSet<dim>& particles, const BondList<dim>& bonds,
+                          double safety) override;
+  std::vector<double> strain_energy_density(const ParticleSet<dim>& particles,
+                                            const BondList<dim>& bonds) const override;
+  double strain_energy(const ParticleSet<dim>& particles,
+                       const BondList<dim>& bonds) const override;
+  double bond_energy(const ParticleSet<dim>& particles, const BondList<dim>& bonds, unsigned int i,
+                     std::size_t k) const override;
+  void update_damage(ParticleSet<dim>& particles, const BondList<dim>& bonds) const override;
+
+ private:
+  BondBasedPD<dim> pd_;
+};
+
+} // namespace spinesim::meshfree
+
+#endif

@@ -1,0 +1,159 @@
+#include "meshfree/nosb/nosb_method.h"
+
+#include "base/exceptions.h"
+
+#include <istream>
+#include <ostream>
+
+namespace spinesim::meshfree {
+
+namespace {
+// A material state as 14 doubles: ε_p (6), b^e (6), ε̄_p, w_p.
+constexpr unsigned int state_size = 14;
+
+void write_state(std::ostream& out, const materials::MaterialState& s) {
+  double v[state_size];
+  unsigned int n = 0;
+  for (unsigned int a = 0; a < 3; ++a)
+    for (unsigned int b = a; b < 3; ++b) {
+      v[n] = s.plastic_strain[a][b];
+      v[n + 6] = s.elastic_left_cauchy_green[a][b];
+      ++n;
+    }
+  v[12] = s.equivalent_plastic_strain;
+  v[13] = s.plastic_work;
+  out.write(reinterpret_cast<const char*>(v), sizeof(v));
+}
+
+materials::MaterialState read_state(std::istream& in) {
+  double v[state_size];
+  in.read(reinterpret_cast<char*>(v), sizeof(v));
+  materials::MaterialState s;
+  unsigned int n = 0;
+  for (unsigned int a = 0; a < 3; ++a)
+    for (unsigned int b = a; b < 3; ++b) {
+      s.plastic_strain[a][b] = v[n];
+      s.elastic_left_cauchy_green[a][b] = v[n + 6];
+      ++n;
+    }
+  s.equivalent_plastic_strain = v[12];
+  s.plastic_work = v[13];
+  return s;
+}
+} // namespace
+
+template <int dim>
+NosbMethod<dim>::NosbMethod(const Parameters& parameters, const ParticleMaterial& material)
+    : pd_(parameters, material.law) {}
+
+template <int dim>
+typename NosbMethod<dim>::Parameters
+NosbMethod<dim>::parse_parameters(const dealii::ParameterHandler& section) {
+  Parameters p;
+  p.parse(section);
+  return p;
+}
+
+template <int dim>
+void NosbMethod<dim>::declare(dealii::ParameterHandler& prm) {
+  NosbPD<dim>::Parameters::declare(prm);
+}
+
+template <int dim>
+typename NeighborSearch<dim>::Options NosbMethod<dim>::neighbor_options(double spacing) const {
+  return pd_.neighbor_options(spacing);
+}
+
+template <int dim>
+void NosbMethod<dim>::initialise(const ParticleSet<dim>& particles, const BondList<dim>& bonds) {
+  pd_.initialise(particles, bonds);
+}
+
+template <int dim>
+std::size_t NosbMethod<dim>::compute_forces(ParticleSet<dim>& particles, BondList<dim>& bonds,
+                                            bool allow_breaking) {
+  const std::size_t broken = allow_breaking ? pd_.break_bonds(particles, bonds) : 0;
+  pd_.compute_forces(particles, bonds);
+  return broken;
+}
+
+template <int dim>
+std::vector<double> NosbMethod<dim>::stiffness_bound(const ParticleSet<dim>& particles,
+                                                     const BondList<dim>& bonds) {
+  return pd_.relaxation_stiffness_bound(particles, bonds);
+}
+
+template <int dim>
+double NosbMethod<dim>::stable_time_step(const ParticleSet<dim>& particles,
+                                         const BondList<dim>& bonds, double safety) {
+  return pd_.stable_time_step(particles, bonds, safety);
+}
+
+template <int dim>
+std::vector<double> NosbMethod<dim>::strain_energy_density(const ParticleSet<dim>& particles,
+                                                           const BondList<dim>&) const {
+  return pd_.strain_energy_density(particles);
+}
+
+template <int dim>
+double NosbMethod<dim>::strain_energy(const ParticleSet<dim>& particles,
+                                      const BondList<dim>&) const {
+  return pd_.strain_energy(particles);
+}
+
+template <int dim>
+double NosbMethod<dim>::bond_energy(const ParticleSet<dim>& particles, const BondList<dim>& bonds,
+                                    unsigned int i, std::size_t k) const {
+  if (bonds.broken[k] || pd_.failed(i))
+    return 0.0;
+  const auto& V = particles.volumes();
+  double all = 0;
+  for (std::size_t b = bonds.begin(i); b < bonds.end(i); ++b)
+    if (!bonds.broken[b])
+      all += bonds.influence[b] * bonds.volume_factor(b) * V[bonds.neighbor[b]];
+  if (!(all > 0.0))
+    return 0.0;
+  const double share = bonds.influence[k] * bonds.volume_factor(k) * V[bonds.neighbor[k]] / all;
+  return share * pd_.particle_strain_energy(i, particles);
+}
+
+template <int dim>
+void NosbMethod<dim>::update_damage(ParticleSet<dim>& particles, const BondList<dim>& bonds) const {
+  pd_.update_damage(particles, bonds);
+}
+
+template <int dim>
+void NosbMethod<dim>::save(std::ostream& out) const {
+  const auto& states = pd_.committed_states();
+  const std::uint64_t n = states.size();
+  out.write(reinterpret_cast<const char*>(&n), sizeof(n));
+  for (const auto& s : states)
+    write_state(out, s);
+}
+
+template <int dim>
+void NosbMethod<dim>::load(std::istream& in) {
+  std::uint64_t n = 0;
+  in.read(reinterpret_cast<char*>(&n), sizeof(n));
+  if (!in || n != pd_.committed_states().size())
+    throw InvalidInput("NOSB-PD checkpoint", "the material history does not fit the particles",
+                       "a checkpoint written by the same run");
+  std::vector<materials::MaterialState> states;
+  states.reserve(n);
+  for (std::uint64_t k = 0; k < n; ++k)
+    states.push_back(read_state(in));
+  if (!in)
+    throw InvalidInput("NOSB-PD checkpoint", "truncated material history", "a complete checkpoint");
+  pd_.set_committed_states(states);
+}
+
+template class NosbMethod<2>;
+template class NosbMethod<3>;
+
+SPINESIM_REGISTER_PARTICLE_METHOD(
+    NosbMethod, "nosb", "NOSB",
+    "non-ordinary state-based peridynamics (correspondence model, Silling et al. 2007) with "
+    "the point-wise law of the Material section: any Poisson ratio, plasticity, bond-associated "
+    "or penalty zero-energy-mode control, critical-stretch fracture.")
+
+} // namespace spinesim::meshfree

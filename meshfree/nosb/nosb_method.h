@@ -1,0 +1,58 @@
+#ifndef SPINESIM_MESHFREE_NOSB_NOSB_METHOD_H
+#define SPINESIM_MESHFREE_NOSB_NOSB_METHOD_H
+
+// Non-ordinary state-based PD (meshfree/nosb/nosb_pd.h, correspondence model of Silling et
+// al. 2007) behind the particle-method interface, registered as "nosb". Any Poisson ratio;
+// the particles run the point-wise law of fem/materials and carry its history.
+
+#include "meshfree/nosb/nosb_pd.h"
+#include "meshfree/particle_method.h"
+
+namespace spinesim::meshfree {
+
+template <int dim>
+class NosbMethod : public ParticleMethod<dim> {
+ public:
+  using Parameters = typename NosbPD<dim>::Parameters;
+  // The particles run material.law; InvalidInput without one.
+  NosbMethod(const Parameters& parameters, const ParticleMaterial& material);
+  static void declare(dealii::ParameterHandler& prm);
+  static Parameters parse_parameters(const dealii::ParameterHandler& section);
+
+  NosbPD<dim>& model() { return pd_; }
+  const NosbPD<dim>& model() const { return pd_; }
+
+  std::string name() const override { return "nosb"; }
+  bool carries_material_state() const override { return true; }
+  double thickness() const override { return pd_.parameters().thickness; }
+  typename NeighborSearch<dim>::Options neighbor_options(double spacing) const override;
+  void initialise(const ParticleSet<dim>& particles, const BondList<dim>& bonds) override;
+  std::size_t compute_forces(ParticleSet<dim>& particles, BondList<dim>& bonds,
+                             bool allow_breaking) override;
+  std::vector<double> stiffness_bound(const ParticleSet<dim>& particles,
+                                      const BondList<dim>& bonds) override;
+  double stable_time_step(const ParticleSet<dim>& particles, const BondList<dim>& bonds,
+                          double safety) override;
+  std::vector<double> strain_energy_density(const ParticleSet<dim>& particles,
+                                            const BondList<dim>& bonds) const override;
+  double strain_energy(const ParticleSet<dim>& particles,
+                       const BondList<dim>& bonds) const override;
+  // The particle's stored energy W_i V_i shared among its intact bonds by their weight
+  // ω β V_j: a correspondence bond has no energy of its own.
+  double bond_energy(const ParticleSet<dim>& particles, const BondList<dim>& bonds, unsigned int i,
+                     std::size_t k) const override;
+  void update_damage(ParticleSet<dim>& particles, const BondList<dim>& bonds) const override;
+  void commit_state() override { pd_.commit_state(); }
+  // compute_forces always starts from the committed history: nothing to undo.
+  void rollback_state() override {}
+  void save(std::ostream& out) const override;
+  void load(std::istream& in) override;
+  std::vector<std::string> take_messages() override { return pd_.take_messages(); }
+
+ private:
+  NosbPD<dim> pd_;
+};
+
+} // namespace spinesim::meshfree
+
+#endif

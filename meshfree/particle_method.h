@@ -1,0 +1,162 @@
+#ifndef SPINESIM_MESHFREE_PARTICLE_METHOD_H
+#define SPINESIM_MESHFREE_PARTICLE_METHOD_H
+
+// One interface for the particle methods (bond-based PD, NOSB-PD, SPG, ...): what a
+// stand-alone particle zone or a coupled FEM/particle run needs from a method, so the runs
+// never name a method. Each method implements it in its own file pair and registers itself
+// by name (SPINESIM_REGISTER_PARTICLE_METHOD below); `Effects/Particles method` takes its
+// allowed values and their help text from this registry.
+//
+// Conventions (meshfree/particle_set.h): particles.force() is the internal force [N];
+// volumes carry the 2-D thickness. The bond list is built by the caller with the method's
+// neighbor_options() and belongs to the particles: methods read it, break bonds in it and
+// never reorder it.
+//
+// Material history: compute_forces() evaluates the constitutive law from the last committed
+// state and keeps the new one as a trial state; commit_state() accepts it (explicit dynamics:
+// after every step; quasi-static: once the step has converged), rollback_state() discards it
+// (a step that is cut and retried).
+
+#include "base/registry.h"
+#include "fem/materials/constitutive_law.h"
+#include "meshfree/bond_list.h"
+#include "meshfree/neighbor_search.h"
+#include "meshfree/particle_set.h"
+
+#include <deal.II/base/parameter_handler.h>
+
+#include <functional>
+#include <iosfwd>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace spinesim::meshfree {
+
+// The material a method is calibrated to. E and ν calibrate micromoduli (bond-based PD);
+// `law` is the point-wise constitutive law of fem/materials (NOSB-PD, SPG).
+struct ParticleMaterial {
+  double youngs_modulus = 0; // E [Pa]
+  double poisson_ratio = 0;  // ν [-]
+  double density = 0;        // ρ [kg/m^3]
+  std::shared_ptr<const materials::ConstitutiveLaw> law;
+};
+
+template <int dim>
+class ParticleMethod {
+ public:
+  virtual ~ParticleMethod() = default;
+
+  // The registered name (e.g. "bond_based").
+  virtual std::string name() const = 0;
+  // Whether particles carry the constitutive state (stress, plastic strain, hardening) of
+  // the law; bond-based PD does not.
+  virtual bool carries_material_state() const = 0;
+  // Out-of-plane thickness of a 2-D body the method was set up for [m] (1 in 3-D): particle
+  // sets for it are made with this thickness.
+  virtual double thickness() const = 0;
+
+  // Neighbour requirements for a particle spacing h: search radius (horizon or support),
+  // influence function, partial volumes, surface correction.
+  virtual typename NeighborSearch<dim>::Options neighbor_options(double spacing) const = 0;
+  // Per-particle data for these particles and bonds (families, bond constants, history).
+  // Call again after particles were added or bonds changed from outside.
+  virtual void initialise(const ParticleSet<dim>& particles, const BondList<dim>& bonds) = 0;
+
+  // Internal forces into particles.force() [N] at the current displacements; with
+  // `allow_breaking`, bonds past the method's failure criterion break first. Returns the
+  // number of bond ends broken in this call (each pair counts twice). NumericalFailure naming
+  // the particle on a non-finite force or an inverted deformation.
+  virtual std::size_t compute_forces(ParticleSet<dim>& particles, BondList<dim>& bonds,
+                                     bool allow_breaking) = 0;
+
+  // S_i: a bound of particle i's stiffness row per volume [N/m^4] (the fictitious density of
+  // adaptive dynamic relaxation, Kilic & Madenci 2010).
+  virtual std::vector<double> stiffness_bound(const ParticleSet<dim>& particles,
+                                              const BondList<dim>& bonds) = 0;
+  // Stable explicit step times `safety` [s] (infinity for a particle with no bond).
+  virtual double stable_time_step(const ParticleSet<dim>& particles, const BondList<dim>& bonds,
+                                  double safety) = 0;
+
+  // Stored energy density W_i per particle [J/m^3] and the total Σ W_i V_i [J].
+  virtual std::vector<double> strain_energy_density(const ParticleSet<dim>& particles,
+                                                    const BondList<dim>& bonds) const = 0;
+  virtual double strain_energy(const ParticleSet<dim>& particles,
+                               const BondList<dim>& bonds) const = 0;
+  // The energy bond k of particle i holds now [J]: what breaking it dissipates.
+  virtual double bond_energy(const ParticleSet<dim>& particles, const BondList<dim>& bonds,
+                             unsigned int i, std::size_t k) const = 0;
+  // Damage φ_i ∈ [0, 1] into particles.damage().
+  virtual void update_damage(ParticleSet<dim>& particles, const BondList<dim>& bonds) const = 0;
+
+  virtual void commit_state() {}
+  virtual void rollback_state() {}
+  // The method's own history for checkpoints (the particle set and bonds are saved by the
+  // caller). A method without history writes nothing.
+  virtual void save(std::ostream&) const {}
+  virtual void load(std::istream&) {}
+  // Messages for the run log since the last call (e.g. particles that lost their family).
+  virtual std::vector<std::string> take_messages() { return {}; }
+};
+
+// A method whose parameters are read, waiting for its material: a coupled run learns E, ν and
+// the law from the FEM cells it converts, after the scene was read.
+template <int dim>
+using ParticleMethodMaker =
+    std::function<std::unique_ptr<ParticleMethod<dim>>(const ParticleMaterial& material)>;
+
+// The registry entry of a method: its parameter subsection (declared inside whatever section
+// holds particles, e.g. "Particles" or "Coupling") and, per dimension, a reader of that
+// subsection returning the maker.
+struct ParticleMethodEntry {
+  std::string name;
+  std::string description;
+  std::string section; // parameter subsection of the method, e.g. "Bond based"
+  std::function<void(dealii::ParameterHandler&)> declare;
+  std::function<ParticleMethodMaker<2>(const dealii::ParameterHandler& section)> parse_2d;
+  std::function<ParticleMethodMaker<3>(const dealii::ParameterHandler& section)> parse_3d;
+};
+
+using ParticleMethods = Registry<ParticleMethodEntry>;
+
+// Declares every registered method's subsection in the current section of `prm`.
+void declare_particle_method_sections(dealii::ParameterHandler& prm);
+
+// "none|name|..." for Effects/Particles method, and the help text listing the methods.
+std::string particle_method_choices();
+std::string particle_method_documentation();
+
+// Reads method `name`'s parameters from its subsection of the current section of `prm`
+// (InvalidInput on a bad value, before any model is built). `where` names the parameter that
+// chose the method, for the error on an unknown name.
+template <int dim>
+ParticleMethodMaker<dim> particle_method_maker(const std::string& name,
+                                               dealii::ParameterHandler& prm,
+                                               const std::string& where);
+
+} // namespace spinesim::meshfree
+
+// Registers a particle method at load time: the one line a new method adds besides its own
+// files. `Class` is a template on dim with a `Parameters` type, static
+// `declare(ParameterHandler&)` and `parse_parameters(const ParameterHandler&)`, and a
+// constructor (const Parameters&, const ParticleMaterial&).
+#define SPINESIM_REGISTER_PARTICLE_METHOD(Class, name, section, description)                       \
+  namespace {                                                                                      \
+  template <int dim>                                                                               \
+  ::spinesim::meshfree::ParticleMethodMaker<dim>                                                   \
+      spinesim_parse_particle_method_##Class(const dealii::ParameterHandler& s) {                  \
+    auto p =                                                                                       \
+        std::make_shared<const typename Class<dim>::Parameters>(Class<dim>::parse_parameters(s));  \
+    return [p](const ::spinesim::meshfree::ParticleMaterial& m)                                    \
+               -> std::unique_ptr<::spinesim::meshfree::ParticleMethod<dim>> {                     \
+      return std::make_unique<Class<dim>>(*p, m);                                                  \
+    };                                                                                             \
+  }                                                                                                \
+  const bool spinesim_particle_method_registered_##Class =                                         \
+      ::spinesim::meshfree::ParticleMethods::instance().add(                                       \
+          {name, description, section, &Class<2>::declare,                                         \
+           &spinesim_parse_particle_method_##Class<2>,                                             \
+           &spinesim_parse_particle_method_##Class<3>});                                           \
+  }
+
+#endif

@@ -1,0 +1,172 @@
+#include "meshfree/spg/spg_method.h"
+
+#include "base/exceptions.h"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace spinesim::meshfree {
+
+template <int dim>
+SpgMethod<dim>::SpgMethod(const Parameters& parameters, const ParticleMaterial& material)
+    : prm_(parameters.solver), law_(material.law), thickness_(parameters.thickness) {
+  if (!law_)
+    throw InvalidInput("SPG", "no constitutive law", "a law from the Material section");
+}
+
+template <int dim>
+typename SpgMethod<dim>::Parameters
+SpgMethod<dim>::parse_parameters(const dealii::ParameterHandler& section) {
+  Parameters p;
+  p.solver.parse(section);
+  p.thickness = section.get_double("Thickness");
+  if (!(p.thickness > 0.0))
+    throw InvalidInput("SPG/Thickness", "= " + std::to_string(p.thickness), "> 0 [m]");
+  return p;
+}
+
+template <int dim>
+void SpgMethod<dim>::declare(dealii::ParameterHandler& prm) {
+  SPGSolver<dim>::Parameters::declare(prm);
+  prm.declare_entry("Thickness", "1", dealii::Patterns::Double(0.0),
+                    "Out-of-plane thickness of a 2-D body (plane strain) [m].");
+}
+
+template <int dim>
+SPGSolver<dim>& SpgMethod<dim>::solver() {
+  if (!solver_)
+    throw std::logic_error("SpgMethod: initialise() before use");
+  return *solver_;
+}
+
+template <int dim>
+typename NeighborSearch<dim>::Options SpgMethod<dim>::neighbor_options(double spacing) const {
+  typename NeighborSearch<dim>::Options o;
+  o.horizon = prm_.dilation * spacing;
+  o.partial_volume = false;
+  o.surface_correction = false;
+  return o;
+}
+
+template <int dim>
+void SpgMethod<dim>::initialise(const ParticleSet<dim>& particles, const BondList<dim>& bonds) {
+  if (dim == 2 && std::abs(particles.thickness() - thickness_) > 1e-12 * thickness_)
+    throw InvalidInput("SPG/Thickness",
+                       "particles were made with thickness " +
+                           std::to_string(particles.thickness()) + " m, the method has " +
+                           std::to_string(thickness_) + " m",
+                       "the same thickness for particles and method");
+  if (!(bonds.horizon > 0.0))
+    throw InvalidInput("SPG", "bond list without a search radius",
+                       "bonds searched with SpgMethod::neighbor_options");
+  solver_ = std::make_unique<SPGSolver<dim>>(prm_, *law_, particles, bonds.horizon / prm_.dilation);
+}
+
+template <int dim>
+std::size_t SpgMethod<dim>::compute_forces(ParticleSet<dim>& particles, BondList<dim>&,
+                                           bool allow_breaking) {
+  if (!allow_breaking && (prm_.critical_stretch > 0.0 || prm_.critical_plastic_strain > 0.0))
+    throw InvalidInput("SPG/Critical stretch, SPG/Critical plastic strain",
+                       "bonds may not break in this run (Effects/Damage = false)",
+                       "0 for both, or Effects/Damage = true");
+  const std::size_t before = solver().n_broken_bonds();
+  solver_->compute_forces(particles);
+  return solver_->n_broken_bonds() - before;
+}
+
+template <int dim>
+std::vector<double> SpgMethod<dim>::stiffness_bound(const ParticleSet<dim>& particles,
+                                                    const BondList<dim>&) {
+  return solver().stiffness_bound(particles);
+}
+
+template <int dim>
+double SpgMethod<dim>::stable_time_step(const ParticleSet<dim>&, const BondList<dim>&,
+                                        double safety) {
+  return safety * solver().stable_time_step();
+}
+
+template <int dim>
+double SpgMethod<dim>::energy_density(unsigned int i, const ParticleSet<dim>& particles) const {
+  if (!solver_)
+    throw std::logic_error("SpgMethod: initialise() before use");
+  // 4-point Gauss–Legendre on [0, 1].
+  const double a = std::sqrt(3.0 / 7.0 - 2.0 / 7.0 * std::sqrt(6.0 / 5.0));
+  const double b = std::sqrt(3.0 / 7.0 + 2.0 / 7.0 * std::sqrt(6.0 / 5.0));
+  const double wa = (18.0 + std::sqrt(30.0)) / 36.0, wb = (18.0 - std::sqrt(30.0)) / 36.0;
+  const double t[4] = {0.5 * (1 - b), 0.5 * (1 - a), 0.5 * (1 + a), 0.5 * (1 + b)};
+  const double w[4] = {0.5 * wb, 0.5 * wa, 0.5 * wa, 0.5 * wb};
+  const auto& F = solver_->deformation_gradients()[i];
+  materials::Tensor2 H;
+  for (unsigned int r = 0; r < dim; ++r)
+    for (unsigned int c = 0; c < dim; ++c)
+      H[r][c] = F[r][c] - (r == c ? 1.0 : 0.0);
+  double W = 0;
+  for (unsigned int q = 0; q < 4; ++q) {
+    const materials::Tensor2 Ft = materials::Tensor2(dealii::unit_symmetric_tensor<3>()) + t[q] * H;
+    const auto r = law_->finite_strain(Ft, particles.temperature(i), solver_->states()[i]);
+    W += w[q] * dealii::scalar_product(r.first_piola, H);
+  }
+  return W;
+}
+
+template <int dim>
+std::vector<double> SpgMethod<dim>::strain_energy_density(const ParticleSet<dim>& particles,
+                                                          const BondList<dim>&) const {
+  std::vector<double> W(particles.size(), 0.0);
+  for (unsigned int i = 0; i < particles.size(); ++i)
+    W[i] = energy_density(i, particles);
+  return W;
+}
+
+template <int dim>
+double SpgMethod<dim>::strain_energy(const ParticleSet<dim>& particles,
+                                     const BondList<dim>& bonds) const {
+  const auto W = strain_energy_density(particles, bonds);
+  double E = 0;
+  for (unsigned int i = 0; i < particles.size(); ++i)
+    E += W[i] * particles.volume(i);
+  return E;
+}
+
+template <int dim>
+double SpgMethod<dim>::bond_energy(const ParticleSet<dim>& particles, const BondList<dim>& bonds,
+                                   unsigned int i, std::size_t k) const {
+  if (bonds.broken[k])
+    return 0.0;
+  const auto& V = particles.volumes();
+  double all = 0;
+  for (std::size_t b = bonds.begin(i); b < bonds.end(i); ++b)
+    if (!bonds.broken[b])
+      all += bonds.volume_factor(b) * V[bonds.neighbor[b]];
+  if (!(all > 0.0))
+    return 0.0;
+  return bonds.volume_factor(k) * V[bonds.neighbor[k]] / all * energy_density(i, particles) * V[i];
+}
+
+template <int dim>
+void SpgMethod<dim>::update_damage(ParticleSet<dim>&, const BondList<dim>&) const {}
+
+template <int dim>
+void SpgMethod<dim>::rollback_state() {
+  throw std::logic_error("SPG commits its material history at every force evaluation; a "
+                         "step cannot be rolled back");
+}
+
+template <int dim>
+const std::vector<dealii::Tensor<1, dim>>& SpgMethod<dim>::physical_displacements() const {
+  if (!solver_)
+    throw std::logic_error("SpgMethod: initialise() before use");
+  return solver_->physical_displacements();
+}
+
+template class SpgMethod<2>;
+template class SpgMethod<3>;
+
+SPINESIM_REGISTER_PARTICLE_METHOD(
+    SpgMethod, "spg", "SPG",
+    "smoothed particle Galerkin (Wu, Park & Chen 2015): reproducing-kernel shape functions, "
+    "direct nodal integration with displacement-smoothing stabilisation, the point-wise law "
+    "of the Material section, bond failure by stretch or plastic strain.")
+
+} // namespace spinesim::meshfree

@@ -1,0 +1,80 @@
+#ifndef SPINESIM_MESHFREE_SPG_SPG_METHOD_H
+#define SPINESIM_MESHFREE_SPG_SPG_METHOD_H
+
+// Smoothed Particle Galerkin (meshfree/spg/spg_solver.h; Wu, Park & Chen 2015) behind the
+// particle-method interface, registered as "spg".
+//
+// What differs from the peridynamic methods:
+//  * ParticleSet::displacement holds the RK coefficients d_J, not the physical displacement
+//    u_I = Σ_J Ψ_J(X_I) d_J (physical_displacements()).
+//  * SPG keeps its own neighbour list (the kernel support a = Dilation × h, from
+//    neighbor_options()), and breaks bonds in it by its own criteria (Critical stretch,
+//    Critical plastic strain) inside every force evaluation; damage is written then.
+//  * The material history is committed at every force evaluation (explicit dynamics), so a
+//    step cannot be rolled back.
+
+#include "meshfree/particle_method.h"
+#include "meshfree/spg/spg_solver.h"
+
+#include <memory>
+
+namespace spinesim::meshfree {
+
+template <int dim>
+class SpgMethod : public ParticleMethod<dim> {
+ public:
+  struct Parameters {
+    typename SPGSolver<dim>::Parameters solver;
+    double thickness = 1.0; // out-of-plane thickness of a 2-D body [m]
+  };
+  // The particles run material.law; InvalidInput without one.
+  SpgMethod(const Parameters& parameters, const ParticleMaterial& material);
+  static void declare(dealii::ParameterHandler& prm);
+  static Parameters parse_parameters(const dealii::ParameterHandler& section);
+
+  // The solver (after initialise()).
+  SPGSolver<dim>& solver();
+
+  std::string name() const override { return "spg"; }
+  bool carries_material_state() const override { return true; }
+  double thickness() const override { return thickness_; }
+  typename NeighborSearch<dim>::Options neighbor_options(double spacing) const override;
+  // Builds the RK shape functions; the particle spacing is the bond list's horizon over the
+  // dilation (the list was searched with neighbor_options()).
+  void initialise(const ParticleSet<dim>& particles, const BondList<dim>& bonds) override;
+  // InvalidInput if bonds may not break but a breaking criterion is set.
+  std::size_t compute_forces(ParticleSet<dim>& particles, BondList<dim>& bonds,
+                             bool allow_breaking) override;
+  std::vector<double> stiffness_bound(const ParticleSet<dim>& particles,
+                                      const BondList<dim>& bonds) override;
+  // `safety` times SPG's own step (CFL h σ_min / c_p, from the last force evaluation).
+  double stable_time_step(const ParticleSet<dim>& particles, const BondList<dim>& bonds,
+                          double safety) override;
+  // W_N = ∫_0^1 P(I + t(F_N − I)) : (F_N − I) dt at every particle (4-point Gauss), the
+  // stored energy for hyperelastic laws and the elastic path estimate otherwise.
+  std::vector<double> strain_energy_density(const ParticleSet<dim>& particles,
+                                            const BondList<dim>& bonds) const override;
+  double strain_energy(const ParticleSet<dim>& particles,
+                       const BondList<dim>& bonds) const override;
+  // W_i V_i shared among the intact bonds of i by their weight β V_j.
+  double bond_energy(const ParticleSet<dim>& particles, const BondList<dim>& bonds, unsigned int i,
+                     std::size_t k) const override;
+  // Damage is written by the solver when bonds break (the broken fraction of each particle's
+  // support bonds); nothing else to update.
+  void update_damage(ParticleSet<dim>& particles, const BondList<dim>& bonds) const override;
+  // std::logic_error: SPG has committed its history already (see above).
+  void rollback_state() override;
+
+  const std::vector<dealii::Tensor<1, dim>>& physical_displacements() const;
+
+ private:
+  typename SPGSolver<dim>::Parameters prm_;
+  std::shared_ptr<const materials::ConstitutiveLaw> law_;
+  double thickness_ = 1.0;
+  std::unique_ptr<SPGSolver<dim>> solver_;
+  double energy_density(unsigned int i, const ParticleSet<dim>& particles) const; // W_i [J/m^3]
+};
+
+} // namespace spinesim::meshfree
+
+#endif

@@ -1,0 +1,197 @@
+// The particle-method interface (meshfree/particle_method.h) for every registered method, in
+// 2-D and 3-D: the registry lists bond_based, nosb and spg with their parameter sections; a
+// method made through the registry reproduces an affine field with no interior force (patch
+// test), conserves linear momentum for any displacement (Σ f = 0), has a finite positive
+// stable step, a non-negative stored energy that vanishes at rest, and damage in [0, 1].
+#include "fem/materials/law_parameters.h"
+#include "meshfree/bond_based_method.h"
+#include "meshfree/neighbor_search.h"
+#include "meshfree/particle_method.h"
+#include "meshfree_test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+namespace spinesim::meshfree {
+namespace {
+
+constexpr double h = 0.1;
+
+template <int dim>
+struct Body {
+  ParticleSet<dim> particles;
+  BondList<dim> bonds;
+  std::unique_ptr<ParticleMethod<dim>> method;
+  double extent = 0;
+};
+
+template <int dim>
+Body<dim> make_body(const std::string& name, unsigned int n) {
+  dealii::ParameterHandler prm;
+  declare_particle_method_sections(prm);
+  if (name == "nosb") {
+    // The horizon of the NOSB test suite (small families in 3-D keep the test quick).
+    prm.enter_subsection("NOSB");
+    prm.set("Horizon ratio", dim == 2 ? "3.015" : "2.015");
+    prm.leave_subsection();
+  }
+  const auto make = particle_method_maker<dim>(name, prm, "test");
+  materials::LawParameters law; // linear elastic, E = 17 GPa, ν = 0.3
+  law.poisson_ratio = name == "bond_based" ? 0.25 : 0.3;
+  const ParticleMaterial material{law.youngs_modulus, law.poisson_ratio, law.density,
+                                  materials::create_law(law)};
+  Body<dim> b;
+  b.method = make(material);
+  unsigned int cells[dim];
+  for (unsigned int d = 0; d < dim; ++d)
+    cells[d] = n;
+  b.particles = test::box<dim>(cells, h, b.method->thickness());
+  b.particles.set_density(law.density);
+  b.extent = n * h;
+  b.bonds = NeighborSearch<dim>(b.method->neighbor_options(h)).build(b.particles);
+  b.method->initialise(b.particles, b.bonds);
+  return b;
+}
+
+// Particles this far from the surface have neighbours whose own neighbourhoods (NOSB shape
+// tensors, SPG kernel supports, bond surface corrections) are complete as well.
+template <int dim>
+double interior_depth(const Body<dim>& b) {
+  return 2 * b.bonds.horizon + 1.01 * h;
+}
+
+const std::vector<std::string> methods{"bond_based", "nosb", "spg"};
+
+TEST(ParticleMethodRegistry, ListsTheThreeMethodsWithTheirSections) {
+  const auto& registry = ParticleMethods::instance();
+  for (const auto& name : methods)
+    EXPECT_NO_THROW(registry.get(name, "test")) << name;
+  EXPECT_EQ(registry.get("bond_based", "t").section, "Bond based");
+  EXPECT_EQ(registry.get("nosb", "t").section, "NOSB");
+  EXPECT_EQ(registry.get("spg", "t").section, "SPG");
+  EXPECT_EQ(particle_method_choices().rfind("none|", 0), 0u);
+  EXPECT_THROW(registry.get("no_such_method", "Effects/Particles method"), InvalidInput);
+}
+
+TEST(ParticleMethodRegistry, BondBasedImpliedPoissonRatio) {
+  // Cauchy relation of pairwise central forces (Gerstle, Sau & Silling 2007).
+  using PM = BondBasedPD<2>::PlaneModel;
+  EXPECT_DOUBLE_EQ(BondBasedMethod<2>::implied_poisson_ratio(PM::plane_stress), 1.0 / 3.0);
+  EXPECT_DOUBLE_EQ(BondBasedMethod<2>::implied_poisson_ratio(PM::plane_strain), 0.25);
+  EXPECT_DOUBLE_EQ(
+      BondBasedMethod<3>::implied_poisson_ratio(BondBasedPD<3>::PlaneModel::plane_strain), 0.25);
+}
+
+// u = H x: every method reproduces linear fields, so interior particles feel no force. SPG's
+// unknowns are RK coefficients: d = H X gives u^h = H x by linear reproduction.
+template <int dim>
+void affine_field_has_no_interior_force(const std::string& name) {
+  // Cells per direction that leave an interior: twice the interior depth plus two layers.
+  const double depth = interior_depth(make_body<dim>(name, 3));
+  auto b = make_body<dim>(name, static_cast<unsigned int>(std::ceil(2 * depth / h)) + 2);
+  dealii::Tensor<2, dim> H;
+  for (unsigned int r = 0; r < dim; ++r)
+    for (unsigned int c = 0; c < dim; ++c)
+      H[r][c] = 1e-4 * (1.0 + r + 2.0 * c) * (r == c ? 1.0 : 0.5);
+  for (unsigned int i = 0; i < b.particles.size(); ++i)
+    b.particles.displacement(i) = H * b.particles.reference_position(i);
+  b.method->compute_forces(b.particles, b.bonds, false);
+  // Force scale of one particle: E |H| h^(dim−1) (a stress on a particle face).
+  const double scale = 17e9 * H.norm() * std::pow(h, dim - 1);
+  dealii::Point<dim> L;
+  for (unsigned int d = 0; d < dim; ++d)
+    L[d] = b.extent;
+  unsigned int n_interior = 0;
+  for (unsigned int i = 0; i < b.particles.size(); ++i)
+    if (test::distance_to_boundary(b.particles, i, L) > interior_depth(b)) {
+      ++n_interior;
+      // Round-off of sums over ~100 bonds of terms ~ scale: 1e-9 relative is far above it
+      // and far below any consistency error (which is O(1) relative).
+      EXPECT_LT(b.particles.force(i).norm(), 1e-9 * scale) << name << " particle " << i;
+    }
+  EXPECT_GT(n_interior, 0u);
+}
+
+TEST(ParticleMethod, AffineFieldHasNoInteriorForce2D) {
+  for (const auto& name : methods)
+    affine_field_has_no_interior_force<2>(name);
+}
+TEST(ParticleMethod, AffineFieldHasNoInteriorForce3D) {
+  for (const auto& name : methods)
+    affine_field_has_no_interior_force<3>(name);
+}
+
+// Random displacements: pairwise-antisymmetric bond forces (PD) and partition of unity (SPG)
+// make the internal forces sum to zero; stable step finite and positive; energy ≥ 0.
+template <int dim>
+void momentum_step_energy(const std::string& name) {
+  auto b = make_body<dim>(name, dim == 2 ? 8 : 5);
+  EXPECT_NEAR(b.method->strain_energy(b.particles, b.bonds), 0.0, 1e-30) << name;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> r(-1e-4 * h, 1e-4 * h);
+  for (unsigned int i = 0; i < b.particles.size(); ++i)
+    for (unsigned int d = 0; d < dim; ++d)
+      b.particles.displacement(i)[d] = r(rng);
+  b.method->compute_forces(b.particles, b.bonds, false);
+  dealii::Tensor<1, dim> sum;
+  double largest = 0;
+  for (unsigned int i = 0; i < b.particles.size(); ++i) {
+    sum += b.particles.force(i);
+    largest = std::max(largest, b.particles.force(i).norm());
+  }
+  ASSERT_TRUE(std::isfinite(largest));
+  ASSERT_GT(largest, 0.0);
+  // Cancellation of O(N) terms of size `largest` in double precision.
+  EXPECT_LT(sum.norm(), 1e-11 * largest * b.particles.size()) << name;
+
+  const double dt = b.method->stable_time_step(b.particles, b.bonds, 1.0);
+  EXPECT_TRUE(std::isfinite(dt) && dt > 0) << name << ": " << dt;
+  // The P-wave crossing time of one spacing bounds the stable step of every method from above
+  // up to the O(1) constant of its dispersion relation.
+  const double cp = std::sqrt(17e9 * 0.7 / (1.3 * 0.4) / 1900.0);
+  EXPECT_LT(dt, 10 * h / cp) << name;
+  const auto S = b.method->stiffness_bound(b.particles, b.bonds);
+  ASSERT_EQ(S.size(), b.particles.size());
+  for (const double s : S)
+    EXPECT_TRUE(std::isfinite(s) && s > 0) << name;
+
+  b.method->commit_state();
+  const double W = b.method->strain_energy(b.particles, b.bonds);
+  EXPECT_TRUE(std::isfinite(W) && W > 0) << name << ": " << W;
+  const auto w = b.method->strain_energy_density(b.particles, b.bonds);
+  double sum_w = 0;
+  for (unsigned int i = 0; i < b.particles.size(); ++i)
+    sum_w += w[i] * b.particles.volume(i);
+  // The total is the volume-weighted sum of the densities (same terms, other order).
+  EXPECT_NEAR(sum_w, W, 1e-10 * W) << name;
+  b.method->update_damage(b.particles, b.bonds);
+  for (const double d : b.particles.damages())
+    EXPECT_TRUE(d >= 0.0 && d <= 1.0) << name;
+}
+
+TEST(ParticleMethod, MomentumStableStepEnergy2D) {
+  for (const auto& name : methods)
+    momentum_step_energy<2>(name);
+}
+TEST(ParticleMethod, MomentumStableStepEnergy3D) {
+  for (const auto& name : methods)
+    momentum_step_energy<3>(name);
+}
+
+// A bad parameter in a method's own section is InvalidInput when the scene is read, before
+// any particle exists.
+TEST(ParticleMethod, BadParameterIsInvalidInputAtReading) {
+  dealii::ParameterHandler prm;
+  declare_particle_method_sections(prm);
+  prm.enter_subsection("Bond based");
+  prm.set("Horizon ratio", "0.5");
+  prm.leave_subsection();
+  EXPECT_THROW(particle_method_maker<2>("bond_based", prm, "test"), InvalidInput);
+  EXPECT_THROW(particle_method_maker<2>("none", prm, "Effects/Particles method"), InvalidInput);
+}
+
+} // namespace
+} // namespace spinesim::meshfree
