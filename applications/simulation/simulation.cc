@@ -110,7 +110,22 @@ class Simulation : public Scenario {
 
  private:
   void build(RunContext& ctx);
-  void advance(unsigned int step, double time, double dt, RunContext& ctx);
+  // The step modules: one per switched-on effect, in the order a step advances them (heat,
+  // mechanics, particles). The list is made once in build(); the step loop walks it.
+  using Advance = void (Simulation::*)(unsigned int step, double time, double dt, RunContext& ctx);
+  struct StepModule {
+    std::string name; // phase timer and log
+    Advance advance;
+  };
+  void plan_step_modules(RunContext& ctx);
+  void advance_heat(unsigned int step, double time, double dt, RunContext& ctx);
+  // Mechanics: the integrator chosen in plan_step_modules, then the heat it hands over.
+  void advance_mechanics(unsigned int step, double time, double dt, RunContext& ctx);
+  void coupled_relaxation(unsigned int step, double time, double dt, RunContext& ctx);
+  void coupled_explicit(unsigned int step, double time, double dt, RunContext& ctx);
+  void fem_explicit(unsigned int step, double time, double dt, RunContext& ctx);
+  void fem_quasi_static(unsigned int step, double time, double dt, RunContext& ctx);
+  void advance_particles(unsigned int step, double time, double dt, RunContext& ctx);
   void record(unsigned int step, double time, RunContext& ctx);
   void write_output(unsigned int step, double time, RunContext& ctx);
   void write_checkpoint(unsigned int step, double time, RunContext& ctx);
@@ -135,6 +150,9 @@ class Simulation : public Scenario {
   double fracture_heat_applied_ = 0;        // of it, what heat steps have used [J]
   std::unique_ptr<ParticleZone<dim>> particles_;
   std::unique_ptr<CrackPath<dim>> crack_; // runs with particles
+  std::vector<StepModule> modules_;
+  Advance mechanics_integrator_ = nullptr;
+  bool quasi_static_ = false; // Mechanics/Time integration = quasi_static
   typename FemParticleCoupling<dim>::Parameters coupling_prm_;
   std::unique_ptr<FemParticleCoupling<dim>> coupled_;
   double coupled_dt_ = 0; // stable step of the coupled model, refreshed after conversions
@@ -158,6 +176,7 @@ Simulation<dim>::Simulation(const ScenarioFactoryArgs& args)
   if (effects_.mechanics) {
     parse_section(prm_, "Material", law_prm_);
     parse_section(prm_, "Mechanics", mech_prm_);
+    quasi_static_ = mech_prm_.time_integration == "quasi_static";
   }
   if (effects_.heat)
     parse_section(prm_, "Heat", heat_prm_);
@@ -295,87 +314,126 @@ void Simulation<dim>::build(RunContext& ctx) {
 }
 
 template <int dim>
-void Simulation<dim>::advance(unsigned int step, double time, double dt, RunContext& ctx) {
-  if (heat_) {
-    dealii::TimerOutput::Scope scope(ctx.timer(), "heat");
-    // The heat solver's own step bounds accuracy; sub-step to land exactly on `time`.
-    const unsigned int n =
-        std::max(1u, static_cast<unsigned int>(std::ceil(dt / heat_prm_.time_step - 1e-9)));
-    for (unsigned int i = 0; i < n; ++i)
-      heat_->advance(dt / n);
-  }
+void Simulation<dim>::plan_step_modules(RunContext& ctx) {
+  modules_.clear();
+  if (heat_)
+    modules_.push_back({"heat", &Simulation::advance_heat});
   if (mechanics_) {
-    dealii::TimerOutput::Scope scope(ctx.timer(), "mechanics");
-    if (heat_ && mech_prm_.taylor_quinney > 0)
-      mechanics_->mark_plastic_work(); // dissipation over this step, for plastic heating
-    if (coupled_ && mech_prm_.time_integration == "quasi_static") {
-      // Equilibrium of both models at this step's load, by dynamic relaxation.
-      const auto report = coupled_->relax(time, effects_.conversion);
-      relaxation_iterations_ += report.iterations;
-      last_relaxation_ = report;
-      for (const auto& r : report.conversions)
-        log_conversion(ctx, time, r);
-      if (!report.converged)
-        throw NumericalFailure("relaxation not converged",
-                               "step " + std::to_string(step) + ", t = " + std::to_string(time) +
-                                   " s: relative residual " +
-                                   std::to_string(report.relative_residual) + " after " +
-                                   std::to_string(report.iterations) + " iterations",
-                               "raise Coupling/Relaxation max iterations, take more Simulation/"
-                               "Steps, or run explicit dynamics if the crack runs unstably");
-      if (sim_.reaction_boundary_id >= 0)
-        peak_load_ =
-            std::max(peak_load_, coupled_->reaction_force(sim_.reaction_boundary_id).norm());
+    std::string integrator;
+    if (coupled_ && quasi_static_) {
+      mechanics_integrator_ = &Simulation::coupled_relaxation;
+      integrator = "coupled dynamic relaxation";
     } else if (coupled_) {
-      double t = mechanics_->time();
-      if (coupled_dt_ == 0)
-        coupled_dt_ = coupled_->stable_time_step();
-      while (t < time - 1e-12 * time) {
-        coupled_->step(std::min(coupled_dt_, time - t));
-        t = mechanics_->time();
-        ++explicit_steps_;
-        // The peak load is tracked every step, not only at history rows.
-        if (sim_.reaction_boundary_id >= 0)
-          peak_load_ =
-              std::max(peak_load_, coupled_->reaction_force(sim_.reaction_boundary_id).norm());
-        if (effects_.conversion && explicit_steps_ % coupling_prm_.check_interval == 0) {
-          dealii::TimerOutput::Scope conversion_scope(ctx.timer(), "conversion");
-          const auto r = coupled_->convert_flagged();
-          if (r.cells > 0) {
-            coupled_dt_ = coupled_->stable_time_step();
-            log_conversion(ctx, t, r);
-          }
-        }
-      }
-    } else if (mech_prm_.time_integration == "explicit") {
-      double t = mechanics_->time();
-      while (t < time - 1e-12 * time) {
-        const double h = std::min(mechanics_->stable_time_step(), time - t);
-        mechanics_->explicit_step(h);
-        t = mechanics_->time();
-        if (sim_.reaction_boundary_id >= 0)
-          peak_load_ =
-              std::max(peak_load_, mechanics_->reaction_force(sim_.reaction_boundary_id).norm());
-      }
+      mechanics_integrator_ = &Simulation::coupled_explicit;
+      integrator = "coupled central differences";
+    } else if (quasi_static_) {
+      mechanics_integrator_ = &Simulation::fem_quasi_static;
+      integrator = "FEM Newton";
     } else {
-      for (const auto& report : mechanics_->solve_quasi_static(time)) {
-        newton_iterations_ += report.newton_iterations;
-        for (const auto n : report.linear_iterations)
-          linear_iterations_ += n;
+      mechanics_integrator_ = &Simulation::fem_explicit;
+      integrator = "FEM central differences";
+    }
+    modules_.push_back({"mechanics", &Simulation::advance_mechanics});
+    ctx.log() << "  mechanics integrator: " << integrator << "\n";
+  }
+  if (particles_)
+    modules_.push_back({"particles", &Simulation::advance_particles});
+  ctx.log() << "  step modules:";
+  for (const auto& m : modules_)
+    ctx.log() << " " << m.name;
+  ctx.log() << "\n";
+}
+
+template <int dim>
+void Simulation<dim>::advance_heat(unsigned int, double, double dt, RunContext&) {
+  // The heat solver's own step bounds accuracy; sub-step to land exactly on `time`.
+  const unsigned int n =
+      std::max(1u, static_cast<unsigned int>(std::ceil(dt / heat_prm_.time_step - 1e-9)));
+  for (unsigned int i = 0; i < n; ++i)
+    heat_->advance(dt / n);
+}
+
+template <int dim>
+void Simulation<dim>::advance_mechanics(unsigned int step, double time, double dt,
+                                        RunContext& ctx) {
+  if (heat_ && mech_prm_.taylor_quinney > 0)
+    mechanics_->mark_plastic_work(); // dissipation over this step, for plastic heating
+  (this->*mechanics_integrator_)(step, time, dt, ctx);
+  if (heat_ && mech_prm_.taylor_quinney > 0) // heats the next heat step (staggered)
+    plastic_heating_ = mechanics_->cell_plastic_dissipation_rate();
+  if (heat_ && coupled_) { // the same for the energy of the bonds broken in this step
+    fracture_heat_applied_ = coupled_->fracture_heat(); // what this step's heat solve used
+    fracture_heating_ = coupled_->take_fracture_heat(dt);
+  }
+}
+
+template <int dim>
+void Simulation<dim>::coupled_relaxation(unsigned int step, double time, double, RunContext& ctx) {
+  // Equilibrium of both models at this step's load, by dynamic relaxation.
+  const auto report = coupled_->relax(time, effects_.conversion);
+  relaxation_iterations_ += report.iterations;
+  last_relaxation_ = report;
+  for (const auto& r : report.conversions)
+    log_conversion(ctx, time, r);
+  if (!report.converged)
+    throw NumericalFailure("relaxation not converged",
+                           "step " + std::to_string(step) + ", t = " + std::to_string(time) +
+                               " s: relative residual " + std::to_string(report.relative_residual) +
+                               " after " + std::to_string(report.iterations) + " iterations",
+                           "raise Coupling/Relaxation max iterations, take more Simulation/"
+                           "Steps, or run explicit dynamics if the crack runs unstably");
+  if (sim_.reaction_boundary_id >= 0)
+    peak_load_ = std::max(peak_load_, coupled_->reaction_force(sim_.reaction_boundary_id).norm());
+}
+
+template <int dim>
+void Simulation<dim>::coupled_explicit(unsigned int, double time, double, RunContext& ctx) {
+  double t = mechanics_->time();
+  if (coupled_dt_ == 0)
+    coupled_dt_ = coupled_->stable_time_step();
+  while (t < time - 1e-12 * time) {
+    coupled_->step(std::min(coupled_dt_, time - t));
+    t = mechanics_->time();
+    ++explicit_steps_;
+    // The peak load is tracked every step, not only at history rows.
+    if (sim_.reaction_boundary_id >= 0)
+      peak_load_ = std::max(peak_load_, coupled_->reaction_force(sim_.reaction_boundary_id).norm());
+    if (effects_.conversion && explicit_steps_ % coupling_prm_.check_interval == 0) {
+      dealii::TimerOutput::Scope conversion_scope(ctx.timer(), "conversion");
+      const auto r = coupled_->convert_flagged();
+      if (r.cells > 0) {
+        coupled_dt_ = coupled_->stable_time_step();
+        log_conversion(ctx, t, r);
       }
     }
-    if (heat_ && mech_prm_.taylor_quinney > 0) // heats the next heat step (staggered)
-      plastic_heating_ = mechanics_->cell_plastic_dissipation_rate();
-    if (heat_ && coupled_) { // the same for the energy of the bonds broken in this step
-      fracture_heat_applied_ = coupled_->fracture_heat(); // what this step's heat solve used
-      fracture_heating_ = coupled_->take_fracture_heat(dt);
-    }
   }
-  if (particles_) {
-    dealii::TimerOutput::Scope scope(ctx.timer(), "particles");
-    particles_->advance_to(time);
+}
+
+template <int dim>
+void Simulation<dim>::fem_explicit(unsigned int, double time, double, RunContext&) {
+  double t = mechanics_->time();
+  while (t < time - 1e-12 * time) {
+    const double h = std::min(mechanics_->stable_time_step(), time - t);
+    mechanics_->explicit_step(h);
+    t = mechanics_->time();
+    if (sim_.reaction_boundary_id >= 0)
+      peak_load_ =
+          std::max(peak_load_, mechanics_->reaction_force(sim_.reaction_boundary_id).norm());
   }
-  (void)step;
+}
+
+template <int dim>
+void Simulation<dim>::fem_quasi_static(unsigned int, double time, double, RunContext&) {
+  for (const auto& report : mechanics_->solve_quasi_static(time)) {
+    newton_iterations_ += report.newton_iterations;
+    for (const auto n : report.linear_iterations)
+      linear_iterations_ += n;
+  }
+}
+
+template <int dim>
+void Simulation<dim>::advance_particles(unsigned int, double time, double, RunContext&) {
+  particles_->advance_to(time);
 }
 
 template <int dim>
@@ -409,7 +467,7 @@ void Simulation<dim>::record(unsigned int step, double time, RunContext& ctx) {
     row.emplace_back("broken_bonds", double(coupled_->n_broken_bonds()));
     row.emplace_back("max_damage", coupled_->max_damage());
     row.emplace_back("kinetic_energy", coupled_->kinetic_energy());
-    if (mech_prm_.time_integration == "quasi_static") {
+    if (quasi_static_) {
       row.emplace_back("relaxation_iterations", last_relaxation_.iterations);
       row.emplace_back("relaxation_relative_residual", last_relaxation_.relative_residual);
     }
@@ -601,7 +659,7 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
                                       {"interface", t.interface},
                                       {"totals", t.totals}})
       s.set_figure(std::string("conversion_time_") + name + "_s", value, "s");
-    if (mech_prm_.time_integration == "quasi_static") {
+    if (quasi_static_) {
       s.set_figure("relaxation_iterations", double(relaxation_iterations_), "iterations");
       s.set_figure("relaxation_relative_residual", last_relaxation_.relative_residual, "-");
     }
@@ -654,6 +712,7 @@ template <int dim>
 void Simulation<dim>::run(RunContext& ctx) {
   const auto start = std::chrono::steady_clock::now();
   build(ctx);
+  plan_step_modules(ctx);
   unsigned int first_step = 1;
   if (ctx.restarting())
     first_step = load_checkpoint(ctx) + 1;
@@ -670,7 +729,10 @@ void Simulation<dim>::run(RunContext& ctx) {
   for (unsigned int step = first_step; step <= last_step; ++step) {
     const double time = step * dt;
     try {
-      advance(step, time, dt, ctx);
+      for (const auto& module : modules_) {
+        dealii::TimerOutput::Scope scope(ctx.timer(), module.name);
+        (this->*module.advance)(step, time, dt, ctx);
+      }
     } catch (NumericalFailure& failure) {
       failure.set_step(step, time);
       throw;
