@@ -1,5 +1,8 @@
 #include "coupling/fem_particle_coupling.h"
 
+#include "coupling/mls_fit.h"
+#include "coupling/particle_record.h"
+
 #include "base/exceptions.h"
 #include "base/list_parsing.h"
 #include "base/scoped_time.h"
@@ -97,22 +100,6 @@ class PointBins {
   double size_;
   std::unordered_map<long long, std::vector<unsigned int>> bins_;
 };
-
-// Cubic B-spline weight on [0, 1], w(0) = 1.
-double spline_weight(double r) {
-  if (r >= 1)
-    return 0;
-  if (r <= 0.5)
-    return 2.0 / 3.0 - 4 * r * r + 4 * r * r * r;
-  const double s = 1 - r;
-  return 4.0 / 3.0 * s * s * s;
-}
-
-// A particle made by a conversion or a ghost-layer update, as exchanged between ranks.
-using Record = std::pair<std::string, std::vector<double>>;
-// Layout of the doubles: point index, free flag, Dirichlet slot mask, volume, density, T,
-// x[dim], u[dim], v[dim].
-constexpr unsigned int record_header = 6;
 
 } // namespace
 
@@ -598,7 +585,7 @@ FemParticleCoupling<dim>::convert(const std::vector<CellId>& cells) {
   std::vector<types::global_dof_index> dofs(fe.n_dofs_per_cell());
   const auto& hanging = fem_.hanging_constraints();
   const auto& velocity = fem_.velocity();
-  std::vector<Record> mine;
+  std::vector<ParticleRecord<dim>> mine;
   for (const auto& id : todo) {
     const auto it = impl_->owned_cells.find(id);
     if (it == impl_->owned_cells.end())
@@ -674,44 +661,42 @@ FemParticleCoupling<dim>::convert(const std::vector<CellId>& cells) {
         if (cell->face(f)->at_boundary() && cell->face(f)->boundary_id() == bcs[k].boundary_id)
           slots |= 1u << k;
     for (unsigned int q = 0; q < np; ++q) {
-      std::vector<double> r{double(q), 1.0,           double(slots), at_points.JxW(q) * scale,
-                            rho,       temperature[q]};
+      ParticleRecord<dim> r;
+      r.cell = id;
+      r.point = q;
+      r.free = true;
+      r.fixed_slots = slots;
+      r.volume = at_points.JxW(q) * scale;
+      r.density = rho;
+      r.temperature = temperature[q];
+      r.position = at_points.quadrature_point(q);
+      r.displacement = u[q];
       for (unsigned int d = 0; d < dim; ++d)
-        r.push_back(at_points.quadrature_point(q)[d]);
-      for (unsigned int d = 0; d < dim; ++d)
-        r.push_back(u[q][d]);
-      for (unsigned int d = 0; d < dim; ++d)
-        r.push_back(mean[d] + lambda * (v[q][d] + dv[d] - mean[d]));
-      mine.emplace_back(id, std::move(r));
+        r.velocity[d] = mean[d] + lambda * (v[q][d] + dv[d] - mean[d]);
+      mine.push_back(std::move(r));
     }
   }
   unsigned int added = 0;
   for (const auto& part : Utilities::MPI::all_gather(comm, mine))
-    for (const auto& [id, r] : part) {
-      const unsigned int q = static_cast<unsigned int>(r[0]);
+    for (const auto& r : part) {
       unsigned int i;
-      const auto existing = index_of_.find({id, q});
-      Point<dim> x;
-      for (unsigned int d = 0; d < dim; ++d)
-        x[d] = r[record_header + d];
+      const auto existing = index_of_.find({r.cell, r.point});
       if (existing != index_of_.end()) {
         i = existing->second;
       } else {
-        i = particles_.add_particle(x, r[3]);
-        index_of_[{id, q}] = i;
+        i = particles_.add_particle(r.position, r.volume);
+        index_of_[{r.cell, r.point}] = i;
         free_.push_back(0);
-        add_host(id, q);
+        add_host(r.cell, r.point);
         impl_->fixed_slots.push_back(0);
       }
       free_[i] = 1;
-      impl_->fixed_slots[i] = static_cast<std::uint32_t>(r[2]);
-      particles_.volume(i) = r[3];
-      particles_.density(i) = r[4];
-      particles_.temperature(i) = r[5];
-      for (unsigned int d = 0; d < dim; ++d) {
-        particles_.displacement(i)[d] = r[record_header + dim + d];
-        particles_.velocity(i)[d] = r[record_header + 2 * dim + d];
-      }
+      impl_->fixed_slots[i] = r.fixed_slots;
+      particles_.volume(i) = r.volume;
+      particles_.density(i) = r.density;
+      particles_.temperature(i) = r.temperature;
+      particles_.displacement(i) = r.displacement;
+      particles_.velocity(i) = r.velocity;
       ++added;
     }
   report.particles = added;
@@ -768,7 +753,7 @@ void FemParticleCoupling<dim>::rebuild_interface() {
   // out to 2(δ + h/2) for a complete horizon of its own.
   const double reach = prm_.ghost_layer * (horizon() + 0.5 * spacing_) + 0.5 * spacing_;
   PointBins<dim> free_bins(new_free_points, reach);
-  std::vector<Record> mine;
+  std::vector<ParticleRecord<dim>> mine;
   std::vector<Point<dim>> xs(np);
   FEValues<dim> at_points(fem_.mapping(), fe, impl_->points, update_JxW_values);
   std::vector<std::uint8_t> hosts(impl_->owned_by_index.size(), 0); // owned cells with particles
@@ -793,24 +778,22 @@ void FemParticleCoupling<dim>::rebuild_interface() {
     at_points.reinit(cell);
     const double rho = fem_.cell_material(cell).density();
     for (unsigned int q = 0; q < np; ++q) {
-      std::vector<double> r{double(q), 0.0, 0.0, at_points.JxW(q), rho, 0.0};
-      for (unsigned int d = 0; d < dim; ++d)
-        r.push_back(xs[q][d]);
-      for (unsigned int d = 0; d < 2 * dim; ++d)
-        r.push_back(0.0);
-      mine.emplace_back(id, std::move(r));
+      ParticleRecord<dim> r; // a ghost: state from the FEM once the layer is built
+      r.cell = id;
+      r.point = q;
+      r.volume = at_points.JxW(q);
+      r.density = rho;
+      r.position = xs[q];
+      mine.push_back(std::move(r));
     }
   }
   for (const auto& part : Utilities::MPI::all_gather(comm, mine))
-    for (const auto& [id, r] : part) {
-      Point<dim> x;
-      for (unsigned int d = 0; d < dim; ++d)
-        x[d] = r[record_header + d];
-      const unsigned int i = particles_.add_particle(x, r[3]);
-      particles_.density(i) = r[4];
-      index_of_[{id, static_cast<unsigned int>(r[0])}] = i;
+    for (const auto& r : part) {
+      const unsigned int i = particles_.add_particle(r.position, r.volume);
+      particles_.density(i) = r.density;
+      index_of_[{r.cell, r.point}] = i;
       free_.push_back(0);
-      add_host(id, static_cast<unsigned int>(r[0]));
+      add_host(r.cell, r.point);
       impl_->fixed_slots.push_back(0);
     }
 
@@ -918,43 +901,12 @@ void FemParticleCoupling<dim>::rebuild_interface() {
     bool ok = false;
     for (unsigned int attempt = 0; attempt < 3 && !ok; ++attempt) {
       const double r = prm_.interface_radius * spacing_ * (1.0 + 0.5 * attempt);
-      const auto near = bins.within(X, r);
-      FullMatrix<double> A(dim + 1, dim + 1);
-      std::vector<std::array<double, dim + 1>> basis(near.size());
-      std::vector<double> w(near.size());
-      for (unsigned int k = 0; k < near.size(); ++k) {
-        const Point<dim>& x = free_points[near[k]];
-        basis[k][0] = 1;
-        for (unsigned int d = 0; d < dim; ++d)
-          basis[k][d + 1] = (x[d] - X[d]) / spacing_;
-        w[k] = spline_weight(x.distance(X) / r);
-        for (unsigned int a = 0; a <= dim; ++a)
-          for (unsigned int b = 0; b <= dim; ++b)
-            A(a, b) += w[k] * basis[k][a] * basis[k][b];
-      }
-      if (near.size() < dim + 1)
+      const auto weights = mls_linear_weights<dim>(X, free_points, bins.within(X, r), r, spacing_);
+      if (!weights)
         continue;
-      // Reject an ill-conditioned moment matrix (too few or collinear particles).
-      FullMatrix<double> Ainv(dim + 1, dim + 1);
-      Vector<double> eig_probe(dim + 1);
-      const double trace = [&] {
-        double t = 0;
-        for (unsigned int a = 0; a <= dim; ++a)
-          t += A(a, a);
-        return t;
-      }();
-      if (!(std::abs(A.determinant()) > 1e-10 * std::pow(trace / (dim + 1), dim + 1)))
-        continue;
-      Ainv.invert(A);
       entry.weights.clear();
-      for (unsigned int k = 0; k < near.size(); ++k) {
-        if (w[k] == 0)
-          continue;
-        double phi = 0;
-        for (unsigned int b = 0; b <= dim; ++b)
-          phi += Ainv(0, b) * basis[k][b];
-        entry.weights.emplace_back(free_index[near[k]], phi * w[k]);
-      }
+      for (const auto& [k, phi] : *weights)
+        entry.weights.emplace_back(free_index[k], phi);
       ok = true;
     }
     if (!ok)

@@ -102,7 +102,7 @@ typename NeighborSearch<dim>::Options BondBasedPD<dim>::neighbor_options(double 
 // 2-D (dV = T ξ dξ dθ): W = ½ · ½ c s² · 2π T m_2 = (π T c m_2 / 2) s². Classical, ε = s I₂:
 //   W = ½ σ:ε = 2 k' s² (σ = 2k' s I₂, k' = E/(2(1−ν)) plane stress, E/(2(1−ν−2ν²)) plane
 //   strain). Hence c = 4 k' / (π T m_2). Fractional ω = ξ^(−1−α): m_2 = δ^(2−α)/(2−α) gives
-//   c = 4 k' (2−α)/(π T δ^(2−α)), the seed's eq. (13); constant ω: c = 12 k'/(π T δ³) =
+//   c = 4 k' (2−α)/(π T δ^(2−α)), Jo & Ha (2021), eq. (13); constant ω: c = 12 k'/(π T δ³) =
 //   9E/(π T δ³) at ν = 1/3 plane stress.
 // 3-D (dV = 4π ξ² dξ averaged over directions): W = ½ · ½ c s² · 4π m_3 = π c m_3 s².
 //   Classical, ε = s I: W = ½ · 3K s · 3s = (9/2) K s². Hence c = 9K/(2π m_3). Fractional

@@ -8,13 +8,13 @@
 // Bond force density (stretch form, see influence_function.h):
 //     f_ij = c ω(ξ) β G s μ n,   s = e/ξ,  e = |ξ + η| − |ξ|,  n = (ξ + η)/|ξ + η|,
 // β partial volume, G surface correction, μ ∈ {0,1} the (irreversible) bond state. With the
-// fractional kernel ω = ξ·ω_α this is the seed paper's f = c_α ω_α e μ n (Jo & Ha 2021, eq. 7).
+// fractional kernel ω = ξ·ω_α this is Jo & Ha's (2021) f = c_α ω_α e μ n (their eq. 7).
 // Force on particle i: F_i = V_i Σ_j k_ij e n with the precomputed bond stiffness
 // k_ij = c ω β G V_j / ξ [N/m^4]. Bond energy (the force is its gradient):
 //     w_ij = ½ c ω β G e²/ξ  per unit volume², W_i = ½ Σ_j w_ij V_j = ¼ Σ_j k_ij e².
 //
 // Bond-based PD has a fixed Poisson ratio (1/4 in 3-D and plane strain, 1/3 in plane stress);
-// the micromodulus is calibrated to the bulk modulus (isotropic extension), as in the seed.
+// the micromodulus is calibrated to the bulk modulus (isotropic extension), as in Jo & Ha (2021).
 
 #include "meshfree/bond_list.h"
 #include "meshfree/influence_function.h"

@@ -5,9 +5,9 @@
 // meshfree/: the bond force density is f = c ω(ξ) s n with the bond stretch s = e/ξ, so that
 // ω = 1 ("constant") is the classical PMB model of Silling & Askari (2005).
 //
-// The fractional kernel of the seed paper (Jo & Ha 2021, eqs. 7 and 9) writes the force as
+// The fractional kernel of Jo & Ha (2021, eqs. 7 and 9) writes the force as
 // f = c_α ω_α e with ω_α = 1/ξ^(d+α). Since e = s ξ this is f = c_α (ξ ω_α) s, so its stretch
-// form is ω(ξ) = ξ ω_α = ξ^(1−d−α) (the seed's eq. 21, ω_(α−1)). In 2-D α = −1 gives the PMB
+// form is ω(ξ) = ξ ω_α = ξ^(1−d−α) (Jo & Ha 2021, eq. 21, ω_(α−1)). In 2-D α = −1 gives the PMB
 // kernel, in 3-D α = −2.
 
 #include <string>

@@ -3,6 +3,8 @@
 // per second of the solve, so the AMG's near-flat iteration count and the cost per DoF can
 // be read off one summary.json.
 
+#include "applications/common_sections.h"
+#include "applications/framework/parse_section.h"
 #include "applications/framework/run_context.h"
 #include "applications/framework/scenario.h"
 #include "base/exceptions.h"
@@ -45,18 +47,10 @@ class FemScaling : public Scenario {
  public:
   explicit FemScaling(const ScenarioFactoryArgs& args) {
     dealii::ParameterHandler& prm = args.prm;
-    prm.enter_subsection("Geometry");
-    mesh_.parse(prm);
-    prm.leave_subsection();
-    prm.enter_subsection("Material");
-    law_.parse(prm);
-    prm.leave_subsection();
-    prm.enter_subsection("Mechanics");
-    mech_.parse(prm);
-    prm.leave_subsection();
-    prm.enter_subsection("Scaling");
-    bench_.parse(prm);
-    prm.leave_subsection();
+    parse_section(prm, "Geometry", mesh_);
+    parse_section(prm, "Material", law_);
+    parse_section(prm, "Mechanics", mech_);
+    parse_section(prm, "Scaling", bench_);
   }
 
   void run(RunContext& ctx) override {
@@ -120,18 +114,13 @@ class FemScaling : public Scenario {
   ScalingParameters bench_;
 };
 
-void declare(SectionDeclarer& sections) {
-  sections.declare("Geometry", fem::MeshParameters::declare);
-  sections.declare("Material", materials::LawParameters::declare);
-  sections.declare("Mechanics", fem::MechanicsSolver<2>::Parameters::declare);
-  sections.declare("Scaling", ScalingParameters::declare);
-}
-
 } // namespace
 
 SPINESIM_REGISTER_SCENARIO(fem_scaling, "fem_scaling",
                            "benchmark: linear elasticity at several refinements (DoFs, AMG "
                            "iterations, setup/assembly/solve seconds).",
-                           declare, create_for_dimension<FemScaling>)
+                           "mechanics", create_for_dimension<FemScaling>, sections::geometry(),
+                           sections::material(), sections::mechanics(),
+                           {"Scaling", ScalingParameters::declare})
 
 } // namespace spinesim::applications

@@ -8,6 +8,7 @@
 // lammps_vars.txt and its final energies in LAMMPS units (per unit particle volume) to
 // lammps_reference.txt.
 
+#include "applications/framework/parse_section.h"
 #include "applications/framework/run_context.h"
 #include "applications/framework/scenario.h"
 #include "base/exceptions.h"
@@ -115,9 +116,7 @@ class PdExplicitThroughput : public Scenario {
       throw InvalidInput("Dimension", "= " + std::to_string(args.dim),
                          "3 (the benchmark is the 3-D cube of the LAMMPS comparison)");
     dealii::ParameterHandler& prm = args.prm;
-    prm.enter_subsection("Benchmark");
-    b_.parse(prm);
-    prm.leave_subsection();
+    parse_section(prm, "Benchmark", b_);
   }
 
   void run(RunContext& ctx) override {
@@ -241,15 +240,12 @@ class PdExplicitThroughput : public Scenario {
   }
 };
 
-void declare(SectionDeclarer& sections) {
-  sections.declare("Benchmark", BenchmarkParameters::declare);
-}
-
 } // namespace
 
 SPINESIM_REGISTER_SCENARIO(pd_explicit_throughput, "pd_explicit_throughput",
                            "explicit bond-based PD (PMB) throughput on a simple-cubic cube, "
                            "the LAMMPS peri/pmb comparison (docs/benchmarks.md).",
-                           declare, create_scenario<PdExplicitThroughput>)
+                           "particles:bond_based|damage", create_scenario<PdExplicitThroughput>,
+                           {"Benchmark", BenchmarkParameters::declare})
 
 } // namespace spinesim::applications

@@ -3,6 +3,8 @@
 // of particles, on 1 and on 2 OpenMP threads. Results must not depend on the thread count;
 // the scenario checks the final kinetic energy of both runs is identical.
 
+#include "applications/common_sections.h"
+#include "applications/framework/parse_section.h"
 #include "applications/framework/run_context.h"
 #include "applications/framework/scenario.h"
 #include "base/exceptions.h"
@@ -48,15 +50,9 @@ class Throughput : public Scenario {
     if (args.dim != 3)
       throw InvalidInput("Dimension", std::to_string(args.dim), "3");
     dealii::ParameterHandler& prm = args.prm;
-    prm.enter_subsection("Material");
-    law_.parse(prm);
-    prm.leave_subsection();
-    prm.enter_subsection("SPG");
-    spg_.parse(prm);
-    prm.leave_subsection();
-    prm.enter_subsection("SPG benchmark");
-    bench_.parse(prm);
-    prm.leave_subsection();
+    parse_section(prm, "Material", law_);
+    parse_section(prm, "SPG", spg_);
+    parse_section(prm, "SPG benchmark", bench_);
   }
 
   void run(RunContext& ctx) override {
@@ -114,17 +110,13 @@ class Throughput : public Scenario {
   BenchmarkParameters bench_;
 };
 
-void declare(SectionDeclarer& sections) {
-  sections.declare("Material", materials::LawParameters::declare);
-  sections.declare("SPG", meshfree::SPGSolver<3>::Parameters::declare);
-  sections.declare("SPG benchmark", BenchmarkParameters::declare);
-}
-
 } // namespace
 
 SPINESIM_REGISTER_SCENARIO(spg_throughput, "spg_throughput",
                            "SPG explicit-step throughput (particle-steps per second) on 1 and 2 "
                            "threads, J2 copper block hitting a wall.",
-                           declare, create_scenario<Throughput>)
+                           "particles:spg|contact", create_scenario<Throughput>,
+                           sections::material(), sections::spg(),
+                           {"SPG benchmark", BenchmarkParameters::declare})
 
 } // namespace spinesim::applications

@@ -7,7 +7,9 @@
 // volume (= mesh volume) and total mass (= the CT model's mass, sum of rho V over cells), and
 // reports the relative differences as figures.
 
+#include "applications/common_sections.h"
 #include "applications/ct/ct_sections.h"
+#include "applications/framework/parse_section.h"
 #include "applications/framework/run_context.h"
 #include "applications/framework/scenario.h"
 #include "base/exceptions.h"
@@ -57,15 +59,9 @@ class CtToParticles : public Scenario {
     if (args.dim != 3)
       throw InvalidInput("Dimension", std::to_string(args.dim), "3 (CT volumes are 3-D)");
     dealii::ParameterHandler& prm = args.prm;
-    prm.enter_subsection("Bone");
-    bone_.parse(prm);
-    prm.leave_subsection();
-    prm.enter_subsection("Caps");
-    caps_.parse(prm);
-    prm.leave_subsection();
-    prm.enter_subsection("Particle conversion");
-    conversion_.parse(prm);
-    prm.leave_subsection();
+    parse_section(prm, "Bone", bone_);
+    parse_section(prm, "Caps", caps_);
+    parse_section(prm, "Particle conversion", conversion_);
     ct_ = ct::read_ct_parameters(prm, bone_, nullptr);
     ct_.mark_end_faces = false; // no loads here
     // Caps (when meshed) get their density, as in vertebra_compression; no end faces needed.
@@ -144,18 +140,13 @@ class CtToParticles : public Scenario {
   fem::CtParameters ct_;
 };
 
-void declare(SectionDeclarer& sections) {
-  sections.declare("CT", ct::declare_ct_section);
-  sections.declare("Bone", ct::declare_bone_section);
-  sections.declare("Caps", ct::declare_caps_section);
-  sections.declare("Particle conversion", ConversionParameters::declare);
-}
-
 } // namespace
 
 SPINESIM_REGISTER_SCENARIO(ct_to_particles, "ct_to_particles",
                            "CT model of the scene's CT section converted to particles (per cell "
                            "or Gauss point) in VTU and HDF5; checks count, volume and mass.",
-                           declare, create_scenario<CtToParticles>)
+                           "mechanics", create_scenario<CtToParticles>, sections::ct(),
+                           sections::bone(), sections::caps(),
+                           {"Particle conversion", ConversionParameters::declare})
 
 } // namespace spinesim::applications

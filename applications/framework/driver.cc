@@ -59,7 +59,7 @@ int check_command(const SceneSource& source) {
     Scene scene;
     load(scene, source);
     const Effects effects = scene.effects();
-    Scenarios::instance().get(scene.scenario(), "Scenario");
+    check_scenario_effects(Scenarios::instance().get(scene.scenario(), "Scenario"), effects);
     if (is_root()) {
       std::cout << "scene " << scene.source_name() << ": ok\n  scenario:  " << scene.scenario()
                 << " (" << scene.dimension() << "-D)\n";
@@ -98,6 +98,7 @@ int run_command(const RunOptions& options) {
     load(scene, source);
     effects = scene.effects();
     const auto& entry = Scenarios::instance().get(scene.scenario(), "Scenario");
+    check_scenario_effects(entry, effects);
     context =
         std::make_unique<RunContext>(MPI_COMM_WORLD, output, mode,
                                      Progress::parse_style(options.progress), scene.prm(), effects);

@@ -1,5 +1,10 @@
 #include "applications/framework/scenario.h"
 
+#include "applications/framework/effects.h"
+#include "base/exceptions.h"
+
+#include <algorithm>
+
 #include <sstream>
 #include <stdexcept>
 
@@ -27,6 +32,39 @@ void SectionDeclarer::declare(const std::string& section,
   prm_.enter_subsection(section);
   fn(prm_);
   prm_.leave_subsection();
+}
+
+void check_scenario_effects(const ScenarioEntry& scenario, const Effects& effects) {
+  std::vector<std::string> runs;
+  std::string::size_type start = 0;
+  while (start <= scenario.effects.size()) {
+    const auto end = scenario.effects.find('|', start);
+    runs.push_back(scenario.effects.substr(start, end == std::string::npos ? end : end - start));
+    if (end == std::string::npos)
+      break;
+    start = end + 1;
+  }
+  const auto runs_effect = [&](const std::string& effect) {
+    if (std::find(runs.begin(), runs.end(), effect) != runs.end())
+      return true;
+    return effect.rfind("particles:", 0) == 0 &&
+           std::find(runs.begin(), runs.end(), "particles:*") != runs.end();
+  };
+  const std::map<std::string, std::string> entry{{"mechanics", "Mechanics"},
+                                                 {"heat", "Heat"},
+                                                 {"thermal expansion", "Thermal expansion"},
+                                                 {"damage", "Damage"},
+                                                 {"conversion", "Conversion"},
+                                                 {"coupling", "Coupling"},
+                                                 {"contact", "Contact"}};
+  for (const auto& effect : effects.active_names())
+    if (!runs_effect(effect)) {
+      const bool particles = effect.rfind("particles:", 0) == 0;
+      throw InvalidInput(
+          "Effects/" + (particles ? std::string("Particles method") : entry.at(effect)),
+          "the " + scenario.name + " scenario does not run " + effect,
+          "a scene for " + scenario.name + " switches on what it runs: " + scenario.effects);
+    }
 }
 
 } // namespace spinesim::framework

@@ -12,6 +12,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace spinesim::framework {
 
@@ -38,6 +39,12 @@ class SectionDeclarer {
 };
 
 // The scene's handler is not const: reading a section moves its subsection cursor.
+// A parameter section a scenario reads, with the function declaring its entries.
+struct ScenarioSection {
+  std::string name;
+  std::function<void(dealii::ParameterHandler&)> declare;
+};
+
 struct ScenarioFactoryArgs {
   int dim;
   dealii::ParameterHandler& prm;
@@ -47,12 +54,20 @@ struct ScenarioFactoryArgs {
 struct ScenarioEntry {
   std::string name;
   std::string description;
-  // Declares the scenario's sections; shared ones go through the declarer once.
-  std::function<void(SectionDeclarer&)> declare_parameters;
+  // The effects the scenario runs, '|'-separated in the words of Effects::active_names():
+  // mechanics, heat, thermal expansion, damage, particles:<method> (particles:* = any method),
+  // conversion, coupling, contact. A scene that switches on anything else is bad input.
+  std::string effects;
   std::function<std::unique_ptr<Scenario>(const ScenarioFactoryArgs&)> create;
+  // The sections the scenario reads; a section shared with other scenarios is declared once.
+  std::vector<ScenarioSection> sections;
 };
 
 using Scenarios = Registry<ScenarioEntry>;
+
+// InvalidInput naming the Effects entry if the scene switches on an effect the scenario does
+// not run (`run` and `check` alike).
+void check_scenario_effects(const ScenarioEntry& scenario, const Effects& effects);
 
 // The factory of a scenario class template on dim (2 or 3 from the scene's Dimension).
 template <template <int> class S>
@@ -70,12 +85,13 @@ std::unique_ptr<Scenario> create_scenario(const ScenarioFactoryArgs& args) {
 
 } // namespace spinesim::framework
 
-// Registers a scenario at load time (the libraries are shared, so nothing is dropped).
-#define SPINESIM_REGISTER_SCENARIO(tag, name, description, declare_fn, create_fn)                  \
+// Registers a scenario at load time (the libraries are shared, so nothing is dropped): its
+// name, a description, the effects it runs, its factory and the sections it reads.
+#define SPINESIM_REGISTER_SCENARIO(tag, name, description, effects, create_fn, ...)                \
   namespace {                                                                                      \
   const bool spinesim_scenario_registered_##tag =                                                  \
       ::spinesim::framework::Scenarios::instance().add(                                            \
-          {name, description, declare_fn, create_fn});                                             \
+          {name, description, effects, create_fn, {__VA_ARGS__}});                                 \
   }
 
 #endif

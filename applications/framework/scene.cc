@@ -81,8 +81,8 @@ Scene::Scene() {
   prm_.leave_subsection();
   SectionDeclarer sections(prm_);
   for (const auto& [name, entry] : Scenarios::instance().entries())
-    if (entry.declare_parameters)
-      entry.declare_parameters(sections);
+    for (const auto& section : entry.sections)
+      sections.declare(section.name, section.declare);
 }
 
 void Scene::load_file(const std::string& path) {

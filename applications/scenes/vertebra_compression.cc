@@ -7,7 +7,9 @@
 // (Loading/Nonlinear): small-strain J2 bone with yield from Bone/Yield law, displacement in
 // Loading/Steps steps; failure load = peak reaction.
 
+#include "applications/common_sections.h"
 #include "applications/ct/ct_sections.h"
+#include "applications/framework/parse_section.h"
 #include "applications/framework/run_context.h"
 #include "applications/framework/scenario.h"
 #include "base/exceptions.h"
@@ -91,18 +93,10 @@ class VertebraCompression : public Scenario {
     if (args.dim != 3)
       throw InvalidInput("Dimension", std::to_string(args.dim), "3 (CT volumes are 3-D)");
     dealii::ParameterHandler& prm = args.prm;
-    prm.enter_subsection("Bone");
-    bone_.parse(prm);
-    prm.leave_subsection();
-    prm.enter_subsection("Caps");
-    caps_.parse(prm);
-    prm.leave_subsection();
-    prm.enter_subsection("Loading");
-    loading_.parse(prm);
-    prm.leave_subsection();
-    prm.enter_subsection("Mechanics");
-    mech_.parse(prm);
-    prm.leave_subsection();
+    parse_section(prm, "Bone", bone_);
+    parse_section(prm, "Caps", caps_);
+    parse_section(prm, "Loading", loading_);
+    parse_section(prm, "Mechanics", mech_);
     ct_ = ct::read_ct_parameters(prm, bone_, &caps_);
     if (!mech_.boundary_conditions.dirichlet.empty())
       throw InvalidInput("Mechanics/Boundary conditions",
@@ -257,19 +251,13 @@ class VertebraCompression : public Scenario {
   typename fem::MechanicsSolver<3>::Parameters mech_;
 };
 
-void declare(SectionDeclarer& sections) {
-  sections.declare("CT", ct::declare_ct_section);
-  sections.declare("Bone", ct::declare_bone_section);
-  sections.declare("Caps", ct::declare_caps_section);
-  sections.declare("Loading", LoadingParameters::declare);
-  sections.declare("Mechanics", fem::MechanicsSolver<2>::Parameters::declare);
-}
-
 } // namespace
 
 SPINESIM_REGISTER_SCENARIO(vertebra_compression, "vertebra_compression",
                            "CT vertebra (density-mapped bone) between PMMA caps, lower cap held, "
                            "upper cap displaced axially: stiffness, reaction, failure load.",
-                           declare, create_scenario<VertebraCompression>)
+                           "mechanics", create_scenario<VertebraCompression>, sections::ct(),
+                           sections::bone(), sections::caps(),
+                           {"Loading", LoadingParameters::declare}, sections::mechanics())
 
 } // namespace spinesim::applications

@@ -1,4 +1,5 @@
 #include "applications/simulation/simulation.h"
+#include "applications/common_sections.h"
 
 #include "applications/framework/parse_section.h"
 #include "applications/framework/run_context.h"
@@ -180,9 +181,12 @@ Simulation<dim>::Simulation(const ScenarioFactoryArgs& args)
   }
   if (effects_.heat)
     parse_section(prm_, "Heat", heat_prm_);
-  if (effects_.contact)
-    throw InvalidInput("Effects/Contact", "the simulation scenario does not run contact yet",
-                       "false");
+  // Contact is not among the effects this scenario registers (the driver rejects it).
+  if (effects_.damage && !effects_.particles())
+    throw InvalidInput("Effects/Damage",
+                       "FEM cells of the simulation scenario do not fail; damage acts on particles",
+                       "false, or a Particles method (with Coupling and Conversion for cells "
+                       "that turn into particles)");
   if (effects_.conversion && !effects_.coupling)
     throw InvalidInput("Effects/Conversion",
                        "converted particles must stay coupled to the FEM bulk",
@@ -755,21 +759,15 @@ void Simulation<dim>::run(RunContext& ctx) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), "s");
 }
 
-void declare_simulation(SectionDeclarer& sections) {
-  sections.declare("Simulation", SimulationParameters::declare);
-  sections.declare("Geometry", fem::MeshParameters::declare);
-  sections.declare("Material", materials::LawParameters::declare);
-  sections.declare("Mechanics", fem::MechanicsSolver<2>::Parameters::declare);
-  sections.declare("Heat", fem::HeatSolver<2>::Parameters::declare);
-  sections.declare("Particles", ParticleZoneParameters::declare);
-  sections.declare("Coupling", FemParticleCoupling<2>::Parameters::declare);
-}
-
 } // namespace
 
 SPINESIM_REGISTER_SCENARIO(
     simulation, "simulation",
     "the effects-driven step loop: FEM mechanics, heat and a particle zone as switched on.",
-    declare_simulation, create_for_dimension<Simulation>)
+    "mechanics|heat|thermal expansion|damage|particles:*|conversion|coupling",
+    create_for_dimension<Simulation>, {"Simulation", SimulationParameters::declare},
+    sections::geometry(), sections::material(), sections::mechanics(),
+    {"Heat", fem::HeatSolver<2>::Parameters::declare},
+    {"Particles", ParticleZoneParameters::declare}, sections::coupling())
 
 } // namespace spinesim::applications

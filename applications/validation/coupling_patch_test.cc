@@ -14,6 +14,7 @@
 //    (`conversion_mass_change_relative`, `conversion_momentum_change_relative`,
 //    `conversion_kinetic_energy_change_relative`; one particle per cell reports its defect).
 
+#include "applications/common_sections.h"
 #include "applications/framework/parse_section.h"
 #include "applications/framework/run_context.h"
 #include "applications/framework/scenario.h"
@@ -284,19 +285,14 @@ class CouplingPatchTest : public Scenario {
   dealii::Tensor<1, dim> v0_;
 };
 
-void declare(SectionDeclarer& sections) {
-  sections.declare("Geometry", fem::MeshParameters::declare);
-  sections.declare("Material", materials::LawParameters::declare);
-  sections.declare("Mechanics", fem::MechanicsSolver<2>::Parameters::declare);
-  sections.declare("Coupling", FemParticleCoupling<2>::Parameters::declare);
-  sections.declare("Patch test", PatchParameters::declare);
-}
-
 } // namespace
 
 SPINESIM_REGISTER_SCENARIO(coupling_patch_test, "coupling_patch_test",
                            "Uniform strain across a mixed FEM / particle domain: no ghost forces, "
                            "conserved mass and momentum at conversion",
-                           declare, create_for_dimension<CouplingPatchTest>)
+                           "mechanics|particles:bond_based|conversion|coupling",
+                           create_for_dimension<CouplingPatchTest>, sections::geometry(),
+                           sections::material(), sections::mechanics(), sections::coupling(),
+                           {"Patch test", PatchParameters::declare})
 
 } // namespace spinesim::applications

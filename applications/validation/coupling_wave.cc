@@ -7,6 +7,7 @@
 // is the reflected energy: figure `reflected_energy_relative` (over the initial energy). The
 // energy carried into the particles and the total balance are reported too.
 
+#include "applications/common_sections.h"
 #include "applications/framework/parse_section.h"
 #include "applications/framework/run_context.h"
 #include "applications/framework/scenario.h"
@@ -183,19 +184,14 @@ class CouplingWave : public Scenario {
   WaveParameters wave_;
 };
 
-void declare(SectionDeclarer& sections) {
-  sections.declare("Geometry", fem::MeshParameters::declare);
-  sections.declare("Material", materials::LawParameters::declare);
-  sections.declare("Mechanics", fem::MechanicsSolver<2>::Parameters::declare);
-  sections.declare("Coupling", FemParticleCoupling<2>::Parameters::declare);
-  sections.declare("Wave", WaveParameters::declare);
-}
-
 } // namespace
 
 SPINESIM_REGISTER_SCENARIO(coupling_wave, "coupling_wave",
                            "A longitudinal pulse crossing the FEM / particle interface: reflected "
                            "energy",
-                           declare, create_for_dimension<CouplingWave>)
+                           "mechanics|particles:bond_based|coupling",
+                           create_for_dimension<CouplingWave>, sections::geometry(),
+                           sections::material(), sections::mechanics(), sections::coupling(),
+                           {"Wave", WaveParameters::declare})
 
 } // namespace spinesim::applications

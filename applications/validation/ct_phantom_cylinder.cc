@@ -11,7 +11,9 @@
 // per-cell laws and the solver; the voxelisation of the circle is reported separately
 // (area_relative_error, stiffness_relative_error_exact_area against pi r^2).
 
+#include "applications/common_sections.h"
 #include "applications/ct/ct_sections.h"
+#include "applications/framework/parse_section.h"
 #include "applications/framework/run_context.h"
 #include "applications/framework/scenario.h"
 #include "base/exceptions.h"
@@ -129,15 +131,9 @@ class CtPhantomCylinder : public Scenario {
     if (args.dim != 3)
       throw InvalidInput("Dimension", std::to_string(args.dim), "3 (CT volumes are 3-D)");
     dealii::ParameterHandler& prm = args.prm;
-    prm.enter_subsection("Phantom");
-    phantom_.parse(prm);
-    prm.leave_subsection();
-    prm.enter_subsection("Bone");
-    bone_.parse(prm);
-    prm.leave_subsection();
-    prm.enter_subsection("Mechanics");
-    mech_.parse(prm);
-    prm.leave_subsection();
+    parse_section(prm, "Phantom", phantom_);
+    parse_section(prm, "Bone", bone_);
+    parse_section(prm, "Mechanics", mech_);
     if (!mech_.boundary_conditions.dirichlet.empty())
       throw InvalidInput("Mechanics/Boundary conditions", "the scenario applies its own platens",
                          "no Dirichlet slots here");
@@ -278,17 +274,13 @@ class CtPhantomCylinder : public Scenario {
   typename fem::MechanicsSolver<3>::Parameters mech_;
 };
 
-void declare(SectionDeclarer& sections) {
-  sections.declare("Phantom", PhantomParameters::declare);
-  sections.declare("Bone", ct::declare_bone_section);
-  sections.declare("Mechanics", fem::MechanicsSolver<2>::Parameters::declare);
-}
-
 } // namespace
 
 SPINESIM_REGISTER_SCENARIO(ct_phantom_cylinder, "ct_phantom_cylinder",
                            "synthetic CT cylinder of uniform density written, read back, "
                            "meshed and compressed: stiffness against E A / L.",
-                           declare, create_scenario<CtPhantomCylinder>)
+                           "mechanics", create_scenario<CtPhantomCylinder>,
+                           {"Phantom", PhantomParameters::declare}, sections::bone(),
+                           sections::mechanics())
 
 } // namespace spinesim::applications

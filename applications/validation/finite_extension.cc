@@ -4,6 +4,8 @@
 // the material response. The published table comes from the scene (Validation section);
 // the scenario reports its own values and the relative errors at the reference stretches.
 
+#include "applications/common_sections.h"
+#include "applications/framework/parse_section.h"
 #include "applications/framework/run_context.h"
 #include "applications/framework/scenario.h"
 #include "base/exceptions.h"
@@ -111,18 +113,10 @@ class FiniteExtension : public Scenario {
  public:
   explicit FiniteExtension(const ScenarioFactoryArgs& args) {
     dealii::ParameterHandler& prm = args.prm;
-    prm.enter_subsection("Geometry");
-    mesh_.parse(prm);
-    prm.leave_subsection();
-    prm.enter_subsection("Material");
-    law_.parse(prm);
-    prm.leave_subsection();
-    prm.enter_subsection("Mechanics");
-    mech_.parse(prm);
-    prm.leave_subsection();
-    prm.enter_subsection("Validation");
-    ext_.parse(prm);
-    prm.leave_subsection();
+    parse_section(prm, "Geometry", mesh_);
+    parse_section(prm, "Material", law_);
+    parse_section(prm, "Mechanics", mech_);
+    parse_section(prm, "Validation", ext_);
     if (mesh_.shape != "hyper_rectangle")
       throw InvalidInput("Geometry/Shape", "the extension test needs a rectangle",
                          "hyper_rectangle");
@@ -219,18 +213,13 @@ class FiniteExtension : public Scenario {
   ExtensionParameters ext_;
 };
 
-void declare(SectionDeclarer& sections) {
-  sections.declare("Geometry", fem::MeshParameters::declare);
-  sections.declare("Material", materials::LawParameters::declare);
-  sections.declare("Mechanics", fem::MechanicsSolver<2>::Parameters::declare);
-  sections.declare("Validation", ExtensionParameters::declare);
-}
-
 } // namespace
 
 SPINESIM_REGISTER_SCENARIO(finite_extension, "finite_extension",
                            "homogeneous finite extension of a rectangle (LSMFM Table 1 "
                            "validation): flow stress and effective plastic strain vs stretch.",
-                           declare, create_for_dimension<FiniteExtension>)
+                           "mechanics", create_for_dimension<FiniteExtension>, sections::geometry(),
+                           sections::material(), sections::mechanics(),
+                           {"Validation", ExtensionParameters::declare})
 
 } // namespace spinesim::applications

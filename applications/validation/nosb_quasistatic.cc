@@ -17,6 +17,8 @@
 // horizon from every face of that rectangle (no PD surface or grip layer effects there), with
 // the FEM field evaluated at the particle positions.
 
+#include "applications/common_sections.h"
+#include "applications/framework/parse_section.h"
 #include "applications/framework/run_context.h"
 #include "applications/framework/scenario.h"
 #include "base/exceptions.h"
@@ -83,19 +85,13 @@ class NosbQuasistatic : public Scenario {
  public:
   explicit NosbQuasistatic(const ScenarioFactoryArgs& args) {
     dealii::ParameterHandler& prm = args.prm;
-    prm.enter_subsection("Material");
-    law_.parse(prm);
-    prm.leave_subsection();
-    prm.enter_subsection("Mechanics");
-    mech_.parse(prm);
-    prm.leave_subsection();
+    parse_section(prm, "Material", law_);
+    parse_section(prm, "Mechanics", mech_);
     prm.enter_subsection("NOSB");
     model_.parse(prm);
     solver_.parse(prm);
     prm.leave_subsection();
-    prm.enter_subsection("NOSB validation");
-    column_.parse(prm);
-    prm.leave_subsection();
+    parse_section(prm, "NOSB validation", column_);
     if (mech_.kinematics != "finite_strain")
       throw InvalidInput("Mechanics/Kinematics", "= " + mech_.kinematics,
                          "finite_strain (the particles use the finite-strain law)");
@@ -301,18 +297,13 @@ void declare_nosb(dealii::ParameterHandler& prm) {
   meshfree::NosbQuasiStatic<2>::Parameters::declare(prm);
 }
 
-void declare(SectionDeclarer& sections) {
-  sections.declare("Material", materials::LawParameters::declare);
-  sections.declare("Mechanics", fem::MechanicsSolver<2>::Parameters::declare);
-  sections.declare("NOSB", declare_nosb);
-  sections.declare("NOSB validation", ColumnParameters::declare);
-}
-
 } // namespace
 
 SPINESIM_REGISTER_SCENARIO(nosb_quasistatic, "nosb_quasistatic",
                            "NOSB-PD quasi-static compression of a 15 x 31 particle column "
                            "(Newton or dynamic relaxation) against the deal.II FEM solution.",
-                           declare, create_for_dimension<NosbQuasistatic>)
+                           "mechanics|particles:nosb", create_for_dimension<NosbQuasistatic>,
+                           sections::material(), sections::mechanics(), {"NOSB", declare_nosb},
+                           {"NOSB validation", ColumnParameters::declare})
 
 } // namespace spinesim::applications

@@ -7,6 +7,7 @@
 // CG's Lanczos coefficients. Writes solvers.csv and solvers.png (gnuplot, if installed).
 // See docs/pd-solver-study.md for the boundary conditions and how they relate to the paper.
 
+#include "applications/framework/parse_section.h"
 #include "applications/framework/run_context.h"
 #include "applications/framework/scenario.h"
 #include "base/exceptions.h"
@@ -57,7 +58,7 @@ struct StudyParameters {
     prm.declare_entry("Poisson ratio", "0.333333333333333", Double(-1.0, 0.5),
                       "Poisson ratio nu [-] (bond-based PD in plane stress implies 1/3).");
     prm.declare_entry("Plane model", "plane_stress", Selection("plane_stress|plane_strain"),
-                      "2-D assumption of the micromodulus calibration (seed eq. 14) [-].");
+                      "2-D assumption of the micromodulus calibration (Jo & Ha 2021, eq. 14) [-].");
     prm.declare_entry("Thickness", "1", Double(0.0), "Plate thickness T [m].");
     prm.declare_entry("Crack length", "0.3", Double(0.0, 1.0),
                       "Length of the central horizontal pre-crack [m].");
@@ -82,8 +83,9 @@ struct StudyParameters {
                       "rows on every multigrid level) [-].");
     prm.declare_entry("Solvers", "cg, jacobi, amg, mg", List(Selection(PDLinearSolver<2>::names())),
                       "Linear solvers to compare; cg also gives the condition estimate [-].");
-    prm.declare_entry("Linear tolerance", "1e-6", Double(0.0, 1.0),
-                      "Relative residual at which each linear solve stops (the seed: 1e-6) [-].");
+    prm.declare_entry(
+        "Linear tolerance", "1e-6", Double(0.0, 1.0),
+        "Relative residual at which each linear solve stops (Jo & Ha 2021: 1e-6) [-].");
     prm.declare_entry("Max linear iterations", "20000", Integer(1),
                       "Iteration limit of one linear solve [-].");
     prm.declare_entry("MG smoother degree", "2", Integer(1),
@@ -158,7 +160,7 @@ struct Row {
   double setup_s, solve_s, kappa;
 };
 
-// Seed Tables 2 and 3 (R = 8, α = 0): CG and D-PCG iterations for h = 1/2^5 .. 1/2^8.
+// Jo & Ha (2021), Tables 2 and 3 (R = 8, α = 0): CG and D-PCG iterations for h = 1/2^5 .. 1/2^8.
 const std::map<int, std::pair<double, double>> paper_iterations = {
     {5, {30, 27}}, {6, {55, 50}}, {7, {106, 96}}, {8, {205, 185}}};
 
@@ -167,11 +169,9 @@ class PDSolverStudy : public Scenario {
   explicit PDSolverStudy(const ScenarioFactoryArgs& args) {
     if (args.dim != 2)
       throw InvalidInput("Dimension", "= " + std::to_string(args.dim),
-                         "2 (the seed's cracked plate is two-dimensional)");
+                         "2 (Jo & Ha's (2021) cracked plate is two-dimensional)");
     dealii::ParameterHandler& prm = args.prm;
-    prm.enter_subsection("Study");
-    study_.parse(prm);
-    prm.leave_subsection();
+    parse_section(prm, "Study", study_);
   }
 
   void run(RunContext& ctx) override {
@@ -211,7 +211,7 @@ class PDSolverStudy : public Scenario {
     BondBasedPD<2> model(mp, study_.E, study_.nu);
 
     const auto t0 = std::chrono::steady_clock::now();
-    // Ω extended by δ on every side (the seed's Ω̄), a uniform lattice of spacing h.
+    // Ω extended by δ on every side (Jo & Ha's (2021) Ω̄), a uniform lattice of spacing h.
     const dealii::Point<2> lo(-0.5 - delta, -0.5 - delta), hi(0.5 + delta, 0.5 + delta);
     auto particles = meshfree::ParticleSet<2>::lattice(lo, hi, h, study_.thickness);
     auto options = model.neighbor_options(h);
@@ -419,7 +419,7 @@ class PDSolverStudy : public Scenario {
       }
       if (r.alpha <= 1.0 + 1e-12)
         max_its[r.solver] = std::max(max_its[r.solver], r.iterations);
-      // Against the seed's Tables 2/3 at R = 8, α = 0.
+      // Against Jo & Ha's (2021) Tables 2/3 at R = 8, α = 0.
       const auto paper = paper_iterations.find(r.k);
       if (paper != paper_iterations.end() && std::abs(r.R - 8) < 1e-9 &&
           std::abs(r.alpha) < 1e-12 && (r.solver == "cg" || r.solver == "jacobi")) {
@@ -464,7 +464,8 @@ class PDSolverStudy : public Scenario {
       summary.set_figure("kappa_R_violations", R_violations, "-");
     }
 
-    // Fast preconditioners against D-PCG at the seed's reference case h = 1/2^7, R = 8, α = 0.
+    // Fast preconditioners against D-PCG at Jo & Ha's (2021) reference case h = 1/2^7, R = 8, α =
+    // 0.
     const auto time_of = [&](const std::string& solver) {
       for (const Row& r : rows)
         if (r.solver == solver && r.k == 7 && std::abs(r.R - 8) < 1e-9 && std::abs(r.alpha) < 1e-12)
@@ -480,16 +481,13 @@ class PDSolverStudy : public Scenario {
   }
 };
 
-void declare(SectionDeclarer& sections) {
-  sections.declare("Study", StudyParameters::declare);
-}
-
 } // namespace
 
 SPINESIM_REGISTER_SCENARIO(pd_solver_study, "pd_solver_study",
                            "Jo & Ha (2021) solver study: implicit static bond-based PD on a "
                            "cracked plate; CG, Jacobi-PCG, AMG-PCG and lattice-multigrid PCG "
                            "iterations, times and condition estimates against h, alpha and R.",
-                           declare, create_scenario<PDSolverStudy>)
+                           "particles:bond_based", create_scenario<PDSolverStudy>,
+                           {"Study", StudyParameters::declare})
 
 } // namespace spinesim::applications

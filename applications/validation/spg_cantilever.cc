@@ -2,8 +2,8 @@
 // elastic): Timoshenko's cantilever of length L and depth D with a parabolic end shear P.
 //  1. Static solution by adaptive dynamic relaxation; the exact Timoshenko–Goodier
 //     displacements are imposed at x = 0 by the transformation method and the parabolic
-//     traction at x = L is integrated as f_J = Σ_K Ψ_J(X_K) t(X_K) L_K (seed 000 §7). The tip
-//     deflection u_y(L, 0) is compared with
+//     traction at x = L is integrated as f_J = Σ_K Ψ_J(X_K) t(X_K) L_K (Wu, Park & Chen 2015). The
+//     tip deflection u_y(L, 0) is compared with
 //        u_y(L,0) = P/(6E'I) [ (4 + 5ν') D² L/4 + 2 L³ ],  E' = E/(1−ν²), ν' = ν/(1−ν).
 //  2. Spurious mode: a free square checkerboard patch (same spacing) starts at rest with the
 //     coefficient velocity v_y = v0 (−1)^(i+j) and runs undamped, once with plain nodal
@@ -12,6 +12,8 @@
 //     (see mode_run). Figures spurious_mode_growth_(un)stabilised.
 //  3. particles_<cycle>.vtu / particles.pvd: the reference state and the static solution.
 
+#include "applications/common_sections.h"
+#include "applications/framework/parse_section.h"
 #include "applications/framework/run_context.h"
 #include "applications/framework/scenario.h"
 #include "base/exceptions.h"
@@ -60,9 +62,7 @@ struct CantileverParameters {
     mode_velocity = prm.get_double("Mode velocity");
     mode_steps = prm.get_integer("Mode steps");
     mode_patch = prm.get_integer("Mode patch size");
-    prm.enter_subsection("Relaxation");
-    adr.parse(prm);
-    prm.leave_subsection();
+    parse_section(prm, "Relaxation", adr);
     const double nx = length / spacing, ny = depth / spacing;
     if (std::abs(nx - std::round(nx)) > 1e-9 || std::abs(ny - std::round(ny)) > 1e-9 ||
         int(std::round(ny)) % 2 != 0 || ny < 2)
@@ -77,15 +77,9 @@ class Cantilever : public Scenario {
     if (args.dim != 2)
       throw InvalidInput("Dimension", "= " + std::to_string(args.dim), "2 (plane strain beam)");
     dealii::ParameterHandler& prm = args.prm;
-    prm.enter_subsection("Material");
-    law_.parse(prm);
-    prm.leave_subsection();
-    prm.enter_subsection("SPG");
-    spg_.parse(prm);
-    prm.leave_subsection();
-    prm.enter_subsection("SPG cantilever");
-    beam_.parse(prm);
-    prm.leave_subsection();
+    parse_section(prm, "Material", law_);
+    parse_section(prm, "SPG", spg_);
+    parse_section(prm, "SPG cantilever", beam_);
     if (law_.model != "linear_elastic")
       throw InvalidInput("Material/Model", law_.model, "linear_elastic (Timoshenko solution)");
   }
@@ -325,17 +319,12 @@ class Cantilever : public Scenario {
   CantileverParameters beam_;
 };
 
-void declare(SectionDeclarer& sections) {
-  sections.declare("Material", materials::LawParameters::declare);
-  sections.declare("SPG", meshfree::SPGSolver<3>::Parameters::declare);
-  sections.declare("SPG cantilever", CantileverParameters::declare);
-}
-
 } // namespace
 
 SPINESIM_REGISTER_SCENARIO(spg_cantilever, "spg_cantilever",
                            "SPG Timoshenko cantilever (tip deflection) and the nodal-integration "
                            "spurious mode with and without displacement-smoothing stabilisation.",
-                           declare, create_scenario<Cantilever>)
+                           "particles:spg", create_scenario<Cantilever>, sections::material(),
+                           sections::spg(), {"SPG cantilever", CantileverParameters::declare})
 
 } // namespace spinesim::applications

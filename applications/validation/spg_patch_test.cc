@@ -6,6 +6,8 @@
 // The essential-boundary transformation is checked too: the boundary particles are
 // constrained to the linear field while the interior coefficients are perturbed.
 
+#include "applications/common_sections.h"
+#include "applications/framework/parse_section.h"
 #include "applications/framework/run_context.h"
 #include "applications/framework/scenario.h"
 #include "base/exceptions.h"
@@ -61,15 +63,9 @@ class PatchTest : public Scenario {
  public:
   explicit PatchTest(const ScenarioFactoryArgs& args) {
     dealii::ParameterHandler& prm = args.prm;
-    prm.enter_subsection("Material");
-    law_.parse(prm);
-    prm.leave_subsection();
-    prm.enter_subsection("SPG");
-    spg_.parse(prm);
-    prm.leave_subsection();
-    prm.enter_subsection("SPG patch test");
-    patch_.parse(prm);
-    prm.leave_subsection();
+    parse_section(prm, "Material", law_);
+    parse_section(prm, "SPG", spg_);
+    parse_section(prm, "SPG patch test", patch_);
     if (patch_.gradient.size() < dim * dim || patch_.translation.size() < dim)
       throw InvalidInput("SPG patch test/Displacement gradient",
                          "too few values for dimension " + std::to_string(dim),
@@ -182,17 +178,12 @@ class PatchTest : public Scenario {
   PatchParameters patch_;
 };
 
-void declare(SectionDeclarer& sections) {
-  sections.declare("Material", materials::LawParameters::declare);
-  sections.declare("SPG", meshfree::SPGSolver<3>::Parameters::declare);
-  sections.declare("SPG patch test", PatchParameters::declare);
-}
-
 } // namespace
 
 SPINESIM_REGISTER_SCENARIO(spg_patch_test, "spg_patch_test",
                            "SPG linear patch test on jittered particles: reproduction of a "
                            "linear displacement field and of its gradient, essential boundary.",
-                           declare, create_for_dimension<PatchTest>)
+                           "particles:spg", create_for_dimension<PatchTest>, sections::material(),
+                           sections::spg(), {"SPG patch test", PatchParameters::declare})
 
 } // namespace spinesim::applications

@@ -11,6 +11,8 @@
 // particles. Volumes are the annulus-sector shares (halved on the end layers), so Σ V is the
 // exact cylinder volume and the mass exact.
 
+#include "applications/common_sections.h"
+#include "applications/framework/parse_section.h"
 #include "applications/framework/run_context.h"
 #include "applications/framework/scenario.h"
 #include "base/exceptions.h"
@@ -125,15 +127,9 @@ class TaylorBar : public Scenario {
       throw InvalidInput("Dimension", "= " + std::to_string(args.dim),
                          "3 (the Taylor bar is three-dimensional)");
     dealii::ParameterHandler& prm = args.prm;
-    prm.enter_subsection("Material");
-    law_.parse(prm);
-    prm.leave_subsection();
-    prm.enter_subsection("SPG");
-    spg_.parse(prm);
-    prm.leave_subsection();
-    prm.enter_subsection("Taylor bar");
-    bar_.parse(prm);
-    prm.leave_subsection();
+    parse_section(prm, "Material", law_);
+    parse_section(prm, "SPG", spg_);
+    parse_section(prm, "Taylor bar", bar_);
   }
 
   void run(RunContext& ctx) override {
@@ -307,17 +303,13 @@ class TaylorBar : public Scenario {
   TaylorParameters bar_;
 };
 
-void declare(SectionDeclarer& sections) {
-  sections.declare("Material", materials::LawParameters::declare);
-  sections.declare("SPG", meshfree::SPGSolver<3>::Parameters::declare);
-  sections.declare("Taylor bar", TaylorParameters::declare);
-}
-
 } // namespace
 
 SPINESIM_REGISTER_SCENARIO(taylor_bar, "taylor_bar",
                            "Taylor impact of a copper bar on a rigid wall with SPG particles "
                            "(final length, impact radius, energy balance).",
-                           declare, create_scenario<TaylorBar>)
+                           "particles:spg|contact", create_scenario<TaylorBar>,
+                           sections::material(), sections::spg(),
+                           {"Taylor bar", TaylorParameters::declare})
 
 } // namespace spinesim::applications

@@ -5,7 +5,7 @@
 // With F_i = V_i Σ_j k_ij e n (k_ij the bond stiffness of BondBasedPD, e = l − ξ, n = y/l,
 // y = ξ + u_j − u_i) each intact bond contributes the dim×dim block
 //     B = V_i k_ij [ n ⊗ n + (e/l) (I − n ⊗ n) ],
-// to K_ii (+B) and K_ij (−B). V_i k_ij = c ω β G V_i V_j / ξ is the seed's
+// to K_ii (+B) and K_ij (−B). V_i k_ij = c ω β G V_i V_j / ξ is Jo & Ha's (2021)
 // c_α μ ΔV_i ΔV_k /|ξ|^(2+α); the second term is the geometric part, zero at u = 0.
 // dofs are particle × dim + component. Dirichlet components (particle flags) keep only a
 // diagonal entry equal to the mean free diagonal, so they neither widen the spectrum of
@@ -39,7 +39,7 @@ class BondBasedTangent {
   void reinit(const ParticleSet<dim>& particles, const BondList<dim>& bonds);
 
   // Values at the particles' current displacements, intact bonds only. `geometric` adds the
-  // (e/l)(I − n⊗n) part (exact Newton tangent); false gives the seed's M⊗M form.
+  // (e/l)(I − n⊗n) part (exact Newton tangent); false gives Jo & Ha's (2021) M⊗M form.
   void assemble(const ParticleSet<dim>& particles, const BondList<dim>& bonds,
                 const BondBasedPD<dim>& model, bool geometric = true);
 

@@ -6,7 +6,7 @@
 // with the analytic tangent K = −∂F/∂u (bond_based_tangent.h), u⁰ = 0, in load steps.
 // The full load is what the particle set holds when solve() is called: external_forces()
 // and, on fixed components, the prescribed displacements; step n applies the fraction λ_n.
-// Newton converges when ‖δu‖ ≤ tol_u ‖u‖ (the seed's criterion) or the free residual is
+// Newton converges when ‖δu‖ ≤ tol_u ‖u‖ (Jo & Ha's (2021) criterion) or the free residual is
 // ≤ tol_r max(‖f_ext‖, ‖reactions‖). Bonds break (critical stretch of the model) only at a
 // converged state; when any broke the same load is solved again, until none breaks. A
 // Newton failure restores the state at the start of the step and halves the increment.

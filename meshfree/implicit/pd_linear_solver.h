@@ -1,15 +1,15 @@
 #ifndef SPINESIM_MESHFREE_IMPLICIT_PD_LINEAR_SOLVER_H
 #define SPINESIM_MESHFREE_IMPLICIT_PD_LINEAR_SOLVER_H
 
-// Linear solvers for the bond-based tangent, selected by name (the seed's CG, D-PCG and
+// Linear solvers for the bond-based tangent, selected by name (Jo & Ha's (2021) CG, D-PCG and
 // MG-PCG, plus ML's smoothed-aggregation AMG):
 //   cg      conjugate gradients, no preconditioner
 //   jacobi  diagonal-preconditioned CG (D-PCG)
 //   amg     CG + Trilinos ML AMG (elliptic, rigid-body near-null space)
 //   mg      CG + the lattice multigrid V-cycle (lattice_multigrid.h; needs set_lattice)
-// Stops at ‖b − K x‖ ≤ tolerance · ‖b‖ from x = 0 (the seed: relative residual 1e-6).
+// Stops at ‖b − K x‖ ≤ tolerance · ‖b‖ from x = 0 (Jo & Ha 2021: relative residual 1e-6).
 // The condition estimate is the ratio of the extreme Ritz values of CG's Lanczos matrix: of
-// K itself for `cg` (the seed's κ(A_α)), of the preconditioned operator otherwise.
+// K itself for `cg` (Jo & Ha's (2021) κ(A_α)), of the preconditioned operator otherwise.
 
 #include "meshfree/implicit/bond_based_tangent.h"
 #include "meshfree/implicit/lattice_multigrid.h"

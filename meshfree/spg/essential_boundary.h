@@ -3,7 +3,7 @@
 
 // Essential boundary conditions for RK approximations, which are not interpolating
 // (u^h(X_I) = Σ_J Ψ_J(X_I) d_J ≠ d_I), by the MIXED TRANSFORMATION METHOD (Chen & Wang 2000;
-// seed 000 §8 with Λ_IJ = Ψ_J(X_I) restricted to the constrained particles):
+// as in Wu, Park & Chen 2015, with Λ_IJ = Ψ_J(X_I) restricted to the constrained particles):
 //
 //   for each component c, with B the particles constrained in c and F the rest,
 //       Λ_BB e_B + Λ_BF e_F = ḡ_B − s_B        (the physical value u^h(X_B) = ḡ)

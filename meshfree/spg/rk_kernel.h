@@ -2,12 +2,12 @@
 #define SPINESIM_MESHFREE_SPG_RK_KERNEL_H
 
 // Kernel (weight) functions of the reproducing-kernel approximation, w_a(X − X_J) with support
-// size a = dilation × spacing. The normalisation constant C_d of the seed is dropped: the RK
-// correction M⁻¹ cancels any constant factor, so Ψ does not depend on it.
+// size a = dilation × spacing. The normalisation constant C_d of Wu, Park & Chen (2015) is dropped:
+// the RK correction M⁻¹ cancels any constant factor, so Ψ does not depend on it.
 //
-//  * cubic B-spline (SPG, seed 000 §4), r = |z|/a:
+//  * cubic B-spline (SPG; Wu, Park & Chen 2015), r = |z|/a:
 //        w = 1 − 6r² + 6r³ (r ≤ ½),  2(1 − r)³ (½ < r ≤ 1),  0 beyond;
-//  * quartic (LSMFM, seed 001):  w = (1 − r²)⁴ (r ≤ 1), 0 beyond (constant √(4/π) dropped).
+//  * quartic (LSMFM, Kwon & Youn 2005):  w = (1 − r²)⁴ (r ≤ 1), 0 beyond (constant √(4/π) dropped).
 //
 // Support shape: spherical (r = |z|/a) or cubic, the tensor product w(z) = Π_k w(|z_k|/a)
 // (a box of half-width a; neighbours must then be searched out to a√dim).

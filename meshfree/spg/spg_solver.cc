@@ -281,7 +281,8 @@ void SPGSolver<dim>::compute_forces(ParticleSet<dim>& p) {
     else if (!adaptive)
       stress_[N] = volume_[N] * (P * transpose(Fr_[N]));
     else {
-      // §11 chain rule: v σ ∇_xΨ with ∇_xΨ = F_rel⁻ᵀ ∇_{X^r}Ψ.
+      // Adaptive Lagrangian chain rule (Wu, Park & Chen 2015): v σ ∇_xΨ with ∇_xΨ = F_rel⁻ᵀ
+      // ∇_{X^r}Ψ.
       const double J = dealii::determinant(F);
       const Matrix cauchy = (1.0 / J) * P * transpose(F);
       stress_[N] = (J * volume_[N]) * (cauchy * transpose(invert(Frel)));

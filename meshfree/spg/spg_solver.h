@@ -1,29 +1,30 @@
 #ifndef SPINESIM_MESHFREE_SPG_SPG_SOLVER_H
 #define SPINESIM_MESHFREE_SPG_SPG_SOLVER_H
 
-// Smoothed Particle Galerkin (SPG; seed 000, Wu, Park & Chen 2015): the force model for
+// Smoothed Particle Galerkin (SPG; Wu, Park & Chen 2015): the force model for
 // explicit dynamics (meshfree/velocity_verlet.h) and dynamic relaxation.
 //
 // Unknowns. ParticleSet::displacement holds the RK COEFFICIENTS d_J (generalised
-// displacements ũ_J of seed §1); the physical displacement of particle I is
-// u_I = u^h(X_I) = Σ_J Ψ_J(X_I) d_J (physical_displacements()). Lumped mass M_II = ρ V_I (§10).
+// displacements ũ_J of Wu, Park & Chen 2015); the physical displacement of particle I is
+// u_I = u^h(X_I) = Σ_J Ψ_J(X_I) d_J (physical_displacements()). Lumped mass M_II = ρ V_I (Wu, Park
+// & Chen 2015).
 //
-// Internal force by direct nodal integration (§9, total Lagrangian form):
+// Internal force by direct nodal integration (total Lagrangian form):
 //   F_N = I + Σ_J d_J ⊗ ∇Ψ_J(X_N),   P_N = law(F_N),   f_int,I = Σ_N V_N P_N ∇Ψ_I(X_N).
 // Σ_I ∇Ψ_I(X_N) = 0 (partition of unity), so Σ_I f_int,I = 0: linear momentum is conserved to
 // round-off, also after bond failure. 2-D is plane strain (F_33 = 1).
 //
-// Stabilisation (displacement smoothing, seed §2/§6, WPC 2015). With the smoothed value
+// Stabilisation (displacement smoothing, Wu, Park & Chen 2015). With the smoothed value
 // ū_I = Σ_J Ψ_J(X_I) d_J (the kernel-smoothed field at particle I, Ψ̃ = Ψ) we add the energy
 //   W_stab = ½ Σ_I κ_I |d_I − ū_I|²,   κ_I = η (λ + 2μ) V_I / a²,
 // and its exact gradient as the stabilisation force f_K = −Σ_I κ_I (δ_IK − Ψ_K(X_I))(d_I − ū_I).
 // d_I − ū_I ≈ −½ Σ_J Ψ_J (X_J − X_I)⊗(X_J − X_I) : ∇∇u = O(a² ∇ε), so W_stab ≈ ½ η Σ_I V_I
-// (λ+2μ) |O(a ∇ε)|² is the strain-gradient penalty of §6, η (∇ε_smooth − ∇ε)ᵀ C (…) V with the
-// smoothed-minus-standard difference written through displacements (no second derivatives).
-// It vanishes for linear fields (patch test unaffected), penalises the DNI zero-energy
-// (checkerboard) modes, and conserves momentum (Σ_K (δ_IK − Ψ_K(X_I)) = 0).
-// `Smoothing interval` n: the stabilisation force is re-evaluated every n-th force call and
-// held in between (n = 1, the default, is the energy-consistent choice).
+// (λ+2μ) |O(a ∇ε)|² is the strain-gradient penalty of Wu, Park & Chen (2015), η (∇ε_smooth − ∇ε)ᵀ C
+// (…) V with the smoothed-minus-standard difference written through displacements (no second
+// derivatives). It vanishes for linear fields (patch test unaffected), penalises the DNI
+// zero-energy (checkerboard) modes, and conserves momentum (Σ_K (δ_IK − Ψ_K(X_I)) = 0). `Smoothing
+// interval` n: the stabilisation force is re-evaluated every n-th force call and held in between (n
+// = 1, the default, is the energy-consistent choice).
 //
 // Kernel update (support and gradients):
 //  * total_lagrangian: Ψ and ∇_XΨ at the reference positions, computed once.
@@ -35,17 +36,18 @@
 //    the original configuration, so nothing is mapped at a reset), and
 //        f_int,I = Σ_N V_N (P_N F^rᵀ_N) ∇_{X^r}Ψ_I(X^r_N)   (= the first Piola stress of the
 //    reset configuration times its volume J^r V). The stabilisation acts on d − d^r.
-//  * adaptive_lagrangian (§11): the material kernel is kept and its derivatives are pushed
+//  * adaptive_lagrangian (Wu, Park & Chen 2015): the material kernel is kept and its derivatives
+//  are pushed
 //    forward by the chain rule Ψ_I,i = ∂Ψ_I/∂X^r_j (F_rel⁻¹)_ji; the force is the Cauchy
 //    form f_int,I = Σ_N v_N σ_N ∇_xΨ_I (v = J V), evaluated as the per-particle matrix
 //    v σ F_rel⁻ᵀ so the bond loop stays one mat-vec. The reference is reset adaptively, when
 //    max_N |F_rel − I| exceeds `Adaptive threshold`.
 //
-// Bond failure (§12): bonds are the neighbour pairs within the support. A bond breaks when
-// ½(ε̄_p,I + ε̄_p,J) > ε_crit or (|x_J − x_I| − |X_J − X_I|)/|X_J − X_I| > s_crit (physical
-// positions, original reference). The pair is removed from BOTH shape-function rows, which
-// are recomputed; mass is untouched and momentum conserved (see above). particles.damage()
-// is the broken fraction of a particle's bonds.
+// Bond failure (Wu, Park & Chen 2015): bonds are the neighbour pairs within the support. A bond
+// breaks when ½(ε̄_p,I + ε̄_p,J) > ε_crit or (|x_J − x_I| − |X_J − X_I|)/|X_J − X_I| > s_crit
+// (physical positions, original reference). The pair is removed from BOTH shape-function rows,
+// which are recomputed; mass is untouched and momentum conserved (see above). particles.damage() is
+// the broken fraction of a particle's bonds.
 //
 // Contact with RigidObstacle (frictionless penalty): a particle I at x_I with gap
 // g = gap(x_I) − offset < 0 gets f = −k_c g n, k_c = factor · ρ c_p² h^(dim−2) (the particle's

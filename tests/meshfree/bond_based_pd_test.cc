@@ -71,7 +71,7 @@ TEST(BondBasedPD, MicromodulusClosedForms2D) {
   EXPECT_NEAR(BondBasedPD<2>::micromodulus(constant, delta, kps, T) / c_pmb, 1, tol);
   // The fractional kernel with α = −1 is the PMB kernel in 2-D.
   EXPECT_NEAR(BondBasedPD<2>::micromodulus(fractional_pmb, delta, kps, T) / c_pmb, 1, tol);
-  // Seed eq. (13): c_α = 4k'(2−α)/(π T δ^(2−α)), plane strain k' = E/(2(1−ν−2ν²)).
+  // Jo & Ha (2021), eq. (13): c_α = 4k'(2−α)/(π T δ^(2−α)), plane strain k' = E/(2(1−ν−2ν²)).
   const double nu = 0.3, kpe = E / (2 * (1 - nu - 2 * nu * nu));
   EXPECT_NEAR(BondBasedPD<2>::micromodulus(fractional, delta, kpe, T) /
                   (4 * kpe * 1.5 / (M_PI * T * std::pow(delta, 1.5))),

@@ -98,9 +98,9 @@ TEST(ImplicitPD, TangentMatchesFiniteDifferences3D) {
   check_tangent_fd<3>();
 }
 
-// At u = 0 the tangent is the seed's eq. 20: blocks c ω β G V_i V_j/ξ · n⊗n. Check one bond
+// At u = 0 the tangent is Jo & Ha (2021), eq. 20: blocks c ω β G V_i V_j/ξ · n⊗n. Check one bond
 // entry against the formula from the raw bond data, and symmetry of the whole matrix.
-TEST(ImplicitPD, TangentAtRestIsSeedEquation20) {
+TEST(ImplicitPD, TangentAtRestIsJoHaEquation20) {
   const unsigned int n[2] = {6, 5};
   const double h = 1e-3;
   auto prm = fractional<2>(0.0, 3.0);
@@ -175,7 +175,7 @@ TEST(ImplicitPD, NewtonConvergesQuadratically) {
     EXPECT_LE(res[k + 1], 10 * C * res[k] * res[k]) << "step " << k;
   // Nearly linear (strain 1e-6): the only nonlinearity is geometric, of relative size ~ the
   // strain, so one Newton step leaves r1/r0 ~ 1e-6·½ (measured 4.4e-3 at strain 1e-2 above);
-  // The seed's update criterion (1e-8) then needs the second update (~4e-7 of u) and stops
+  // Jo & Ha's (2021) update criterion (1e-8) then needs the second update (~4e-7 of u) and stops
   // after the third (~1e-13: quadratic).
   Bar<2> small(n, h, 70e9 * 1e-6 * 4 * h * 1.0);
   prm.displacement_tolerance = 1e-8;

@@ -69,7 +69,8 @@ std::unique_ptr<materials::ConstitutiveLaw> copper_law() {
 
 TEST(SpgKernel, CubicBsplineAndQuarticProfiles) {
   const RKKernel<2> cubic(RKKernel<2>::Type::cubic_bspline);
-  // Seed 000 §4: 1 − 6r² + 6r³ and 2(1 − r)³ meet at r = ½ with value ¼ and slope −3.
+  // The SPG kernel (Wu, Park & Chen 2015): 1 − 6r² + 6r³ and 2(1 − r)³ meet at r = ½ with value ¼
+  // and slope −3.
   EXPECT_DOUBLE_EQ(cubic.profile(0.0), 1.0);
   EXPECT_DOUBLE_EQ(cubic.profile(0.5), 0.25);
   EXPECT_NEAR(cubic.profile(0.5 + 1e-12), 0.25, 1e-11);

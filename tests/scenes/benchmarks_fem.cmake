@@ -1,4 +1,4 @@
-# FEM scaling benchmark (label benchmark: not in the default run). Target from the issue:
+# FEM scaling benchmark (label benchmark: not in the default run). Required target:
 # AMG iteration counts within ±30 % across the refinements, largest level >= 1 M DoFs.
 spinesim_add_scene_test(benchmark.fem_scaling
   SCENE ${PROJECT_SOURCE_DIR}/applications/benchmarks/fem_scaling.prm

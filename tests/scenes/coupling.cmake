@@ -2,7 +2,7 @@
 set(_val ${PROJECT_SOURCE_DIR}/applications/validation)
 
 # An affine field is force-free for both models, so every spurious force is round-off:
-# 1e-8 (the issue's bound) leaves seven orders of margin over the measured 2.5e-15.
+# 1e-8 (the required bound) leaves seven orders of margin over the measured 2.5e-15.
 # Mass and momentum are conserved by construction (masses scaled to the lumped mass taken
 # out, a per-cell velocity correction): 1e-12 is round-off over a few hundred particles.
 # The drift after 50 explicit steps stays at round-off (1e-14 measured); 1e-10 allows for

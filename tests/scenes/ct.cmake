@@ -4,7 +4,7 @@ set(_val ${PROJECT_SOURCE_DIR}/applications/validation)
 set(_vertebra ${PROJECT_SOURCE_DIR}/applications/scenes/vertebra_compression.prm)
 
 # Phantom cylinder, MetaImage, one cell per voxel. stiffness_relative_error is against
-# E A_mesh / L with the meshed (voxelised) area; the issue's bound is 2 %; measured 2.4e-5,
+# E A_mesh / L with the meshed (voxelised) area; the required bound is 2 %; measured 2.4e-5,
 # what is left being the x-y pin at the axis (a one-voxel perturbation of the frictionless
 # platen). Against pi r^2 the voxelised circle adds 0.59 % (r = 10 voxels), also within 2 %.
 # The voxel values are written as doubles and read back exactly: density error 0 (1e-12

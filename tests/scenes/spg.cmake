@@ -4,7 +4,7 @@ set(_bench ${PROJECT_SOURCE_DIR}/applications/benchmarks)
 
 # Linear patch test on jittered particles. RK functions with a linear basis reproduce linear
 # fields exactly: the errors are round-off of a well-conditioned (dimensionless) moment
-# matrix, ~1e-15; 1e-10 is the issue's bound and leaves five orders of margin.
+# matrix, ~1e-15; 1e-10 is the required bound and leaves five orders of margin.
 spinesim_add_scene_test(spg.patch_test_2d SCENE ${_val}/spg_patch_test.prm
   EXPECT "status==ok;max_displacement_error<=1e-10;max_gradient_error<=1e-10;boundary_constraint_error<=1e-10;max_smoothing_residual<=1e-10"
   LABELS "scene;meshfree;validation")

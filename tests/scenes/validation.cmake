@@ -1,7 +1,7 @@
 # Validation scenes against published tables.
 set(_val ${PROJECT_SOURCE_DIR}/applications/validation)
 
-# LSMFM Table 1 (ABAQUS column). Tolerances from the issue: flow stress within 1 %,
+# LSMFM Table 1 (ABAQUS column). Required tolerances: flow stress within 1 %,
 # effective plastic strain within 3 %. The flow stress is the Kirchhoff Mises stress
 # the multiplicative J2 law bounds (see docs/validation.md for the Cauchy value).
 spinesim_add_scene_test(validation.finite_extension SCENE ${_val}/finite_extension.prm

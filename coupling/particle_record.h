@@ -1,0 +1,43 @@
+#ifndef SPINESIM_COUPLING_PARTICLE_RECORD_H
+#define SPINESIM_COUPLING_PARTICLE_RECORD_H
+
+// A particle as made from a cell (by a conversion or for the ghost layer) on the rank that
+// owns the cell, and as exchanged between ranks (boost serialization through deal.II's
+// Utilities::MPI::all_gather): everything the other ranks need to add it.
+
+#include <deal.II/base/point.h>
+#include <deal.II/base/tensor.h>
+
+#include <cstdint>
+#include <string>
+
+namespace spinesim::coupling {
+
+template <int dim>
+struct ParticleRecord {
+  std::string cell;              // CellId of the host cell (text form)
+  unsigned int point = 0;        // index of the point within the cell
+  bool free = false;             // a converted cell's particle (else a ghost)
+  std::uint32_t fixed_slots = 0; // Dirichlet slots whose boundary the host cell touches
+  double volume = 0;             // [m^3]
+  double density = 0;            // [kg/m^3]
+  double temperature = 0;        // [K]
+  dealii::Point<dim> position;   // reference position [m]
+  dealii::Tensor<1, dim> displacement, velocity; // [m], [m/s]
+
+  template <class Archive>
+  void serialize(Archive& ar, const unsigned int) {
+    ar& cell& point& free& fixed_slots& volume& density& temperature& position& displacement&
+        velocity;
+  }
+
+  bool operator==(const ParticleRecord& o) const {
+    return cell == o.cell && point == o.point && free == o.free && fixed_slots == o.fixed_slots &&
+           volume == o.volume && density == o.density && temperature == o.temperature &&
+           position == o.position && displacement == o.displacement && velocity == o.velocity;
+  }
+};
+
+} // namespace spinesim::coupling
+
+#endif

@@ -1,0 +1,12 @@
+# The coupling's pieces on their own: the moving-least-squares interface fit, the particle
+# record exchanged between ranks, and the checkpoint of a coupled state (2-D and 3-D; the
+# record exchange and the checkpoint also on 2 ranks).
+spinesim_add_gtest(test_coupling
+  SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/mls_fit_test.cc
+          ${CMAKE_CURRENT_SOURCE_DIR}/particle_record_test.cc
+          ${CMAKE_CURRENT_SOURCE_DIR}/checkpoint_test.cc
+  LIBS spinesim_coupling
+  LABELS "unit;coupling"
+  MPI_RANKS 2)
+target_compile_definitions(test_coupling PRIVATE
+  SPINESIM_TEST_SCRATCH_DIR="${CMAKE_CURRENT_BINARY_DIR}")
