@@ -59,7 +59,10 @@ int check_command(const SceneSource& source) {
     Scene scene;
     load(scene, source);
     const Effects effects = scene.effects();
-    check_scenario_effects(Scenarios::instance().get(scene.scenario(), "Scenario"), effects);
+    const auto& entry = Scenarios::instance().get(scene.scenario(), "Scenario");
+    check_scenario_effects(entry, effects);
+    // The scenario reads and checks its sections as `run` does before its first step.
+    entry.create({scene.dimension(), scene.prm(), effects});
     if (is_root()) {
       std::cout << "scene " << scene.source_name() << ": ok\n  scenario:  " << scene.scenario()
                 << " (" << scene.dimension() << "-D)\n";
@@ -99,10 +102,12 @@ int run_command(const RunOptions& options) {
     effects = scene.effects();
     const auto& entry = Scenarios::instance().get(scene.scenario(), "Scenario");
     check_scenario_effects(entry, effects);
+    // The scenario reads and checks its sections before the output directory is touched, so
+    // bad input found there leaves an earlier run's directory as it was.
+    scenario = entry.create({scene.dimension(), scene.prm(), effects});
     context =
         std::make_unique<RunContext>(MPI_COMM_WORLD, output, mode,
                                      Progress::parse_style(options.progress), scene.prm(), effects);
-    scenario = entry.create({scene.dimension(), scene.prm(), effects});
   } catch (const InvalidInput& e) {
     report_bad_input(e);
     return exit_bad_input;

@@ -268,7 +268,7 @@ void Simulation<dim>::build(RunContext& ctx) {
     law_ = materials::create_law(law_prm_);
     ctx.log() << "  material: " << law_prm_.describe() << "\n";
     mechanics_ = std::make_unique<fem::MechanicsSolver<dim>>(*triangulation_, mech_prm_);
-    // One law for every material id present (per-id materials come with the CT issue).
+    // One law for every material id present (CT models set per-cell laws instead).
     std::set<dealii::types::material_id> ids;
     for (const auto& cell : triangulation_->active_cell_iterators())
       if (cell->is_locally_owned())

@@ -73,3 +73,12 @@ spinesim_add_comparison_test(cli.non_finite_figure_fails_comparison
   CHECKS "particle_stable_time_step:rel:1e-6" REQUIRES one_particle_run LABELS "cli")
 set_tests_properties(cli.non_finite_figure_fails_comparison PROPERTIES PASS_REGULAR_EXPRESSION
   "figure particle_stable_time_step is NULL, not a finite number")
+
+# Bad input that a scenario finds in its own sections (here an unreadable Simulation/Crack
+# line) stops the run before the output directory is touched, even with --force: the default
+# run's directory survives, which cli.ranks_agree (run after this test) reads.
+spinesim_add_scene_test(cli.bad_input_keeps_previous_run
+  ARGS "run;--output;${CMAKE_CURRENT_BINARY_DIR}/runs/cli.default_scene;--force;--set;Simulation/Crack line=q, y = 0"
+  EXIT 2 MATCH "Simulation/Crack line" LABELS "cli")
+set_tests_properties(cli.bad_input_keeps_previous_run PROPERTIES FIXTURES_REQUIRED default_run)
+set_tests_properties(cli.ranks_agree PROPERTIES DEPENDS cli.bad_input_keeps_previous_run)

@@ -511,7 +511,7 @@ TEST(J2FiniteStrain, PlaneStrainExtensionMatchesAbaqusBenchmark) {
                 << ", Mises Cauchy " << q_tau / J / 1e6 << " MPa; ABAQUS " << ref_flow[c] / 1e6
                 << "), eff. plastic strain = " << state.equivalent_plastic_strain << " (ABAQUS "
                 << ref_peeq[c] << ")\n";
-      // Brief's tolerances: flow stress 1 %, effective plastic strain 3 %.
+      // Required tolerances: flow stress 1 %, effective plastic strain 3 %.
       EXPECT_NEAR(flow, ref_flow[c], 0.01 * ref_flow[c]);
       EXPECT_NEAR(q_tau, flow, 1e-6 * flow); // on the yield surface
       EXPECT_NEAR(state.equivalent_plastic_strain, ref_peeq[c], 0.03 * ref_peeq[c]);

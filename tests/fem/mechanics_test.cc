@@ -166,7 +166,7 @@ TEST(Mechanics, AmgIterationsFlatUnderRefinement) {
       std::cout << "2-D Q1 refinement " << r << ": " << its.back() << " CG+AMG iterations\n";
   }
   const auto [lo, hi] = std::minmax_element(its.begin(), its.end());
-  // Optimal multigrid: growth bounded; 1.5x over two halvings of h is the brief's limit.
+  // Optimal multigrid: growth bounded; 1.5x over two halvings of h is the required limit.
   EXPECT_LT(double(*hi), 1.5 * double(*lo));
   EXPECT_GT(*lo, 0u);
 }

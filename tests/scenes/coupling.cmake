@@ -74,7 +74,7 @@ spinesim_add_comparison_test(coupling.quasi_static_ranks_agree
   CHECKS "reaction_force_norm:rel:1e-6;strain_energy:rel:1e-6"
   REQUIRES "qs_coupled_2d;qs_coupled_2d_2ranks" LABELS "scene;coupling;mpi")
 
-# Reflected energy below 1 % (issue bound; 0.12 % measured at one particle per cell). The
+# Reflected energy below 1 % (required bound; 0.12 % measured at one particle per cell). The
 # splice is not exactly energy conserving: 4.2 % of the energy is lost in the overlap at this
 # resolution (0.5 % with two particles per cell direction), so the balance is only bounded.
 spinesim_add_scene_test(coupling.wave SCENE ${_val}/coupling_wave.prm
@@ -129,7 +129,7 @@ spinesim_add_scene_test(scene.cracked_plate_all_particles SCENE ${_plate}
   SET "Simulation/Write VTU=false" "Coupling/All particles=true"
   EXPECT "status==ok;free_particles>=25600"
   LABELS "scene;coupling" TIMEOUT 900 FIXTURE plate_particles)
-# Issue bounds: peak loads within 5 %, crack paths within two particle spacings (12.5 mm):
+# Required bounds: peak loads within 5 %, crack paths within two particle spacings (12.5 mm):
 # the crack's mean offset from y = 0 and both ends of the damaged band.
 spinesim_add_comparison_test(scene.cracked_plate_agree
   A ${_runs}/cracked_plate_all_particles/summary.json B ${_runs}/cracked_plate_coupled/summary.json
@@ -149,7 +149,7 @@ spinesim_add_scene_test(scene.cracked_plate_quasi_static SCENE ${_plate}
   EXPECT "status==ok;peak_load_N>=2.02e6;peak_load_N<=2.74e6;crack_extent_max_x_m>=0.45;crack_extent_min_x_m<=-0.45;conversion_mass_change_relative<=1e-12;relaxation_relative_residual<=1e-6"
   LABELS "scene;coupling" TIMEOUT 900)
 
-# Speed: the coupled run at least 3x faster (issue target). Wall time depends on the machine
+# Speed: the coupled run at least 3x faster (required target). Wall time depends on the machine
 # and its load, so this is a benchmark (excluded from the default run). At 1 thread it reads the
 # default runs above (`ctest -L benchmark` reruns their fixtures; use -j1 for clean timings).
 spinesim_add_comparison_test(benchmark.cracked_plate_speedup

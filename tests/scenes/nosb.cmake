@@ -6,7 +6,7 @@
 set(_val ${PROJECT_SOURCE_DIR}/applications/validation)
 
 # Newton with the consistent tangent: the required targets as they stand. The FEM bound is the
-# issue's 2 % (measured 1.71 %: the remaining difference is the nonlocal free surfaces).
+# required 2 % (measured 1.71 %: the remaining difference is the nonlocal free surfaces).
 spinesim_add_scene_test(nosb.quasistatic SCENE ${_val}/nosb_quasistatic.prm
   EXPECT "status==ok;final_relative_residual<=1e-8;iterations_to_tolerance<=30;relative_error_vs_fem<=0.02;failed_particles<=0"
   LABELS "scene;meshfree;validation")

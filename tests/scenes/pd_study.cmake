@@ -7,7 +7,7 @@ set(_pd_scene ${PROJECT_SOURCE_DIR}/applications/validation/pd_cracked_plate.prm
 # lower bound 2.8 leaves room for the coarsest level where delta/domain = 0.25), increases
 # with alpha and decreases with R without exception. CG and D-PCG within +-30 % of Jo & Ha's (2021)
 # Tables 2/3 at R = 8, alpha = 0 (measured 0.93..1.11). Multigrid-PCG <= 10 iterations
-# (measured 7; the brief's target); ML AMG-PCG is h-independent at 23-24 iterations with the
+# (measured 7; the required target); ML AMG-PCG is h-independent at 23-24 iterations with the
 # aggregation threshold 1e-4 (docs/pd-solver-study.md), <= 30 guards that. Iteration counts
 # are deterministic.
 spinesim_add_scene_test(scene.pd_solver_study SCENE ${_pd_scene}

@@ -13,7 +13,7 @@ spinesim_add_scene_test(spg.patch_test_3d SCENE ${_val}/spg_patch_test.prm
   EXPECT "status==ok;max_displacement_error<=1e-10;max_gradient_error<=1e-10;boundary_constraint_error<=1e-10"
   LABELS "scene;meshfree;validation")
 
-# Cantilever: tip deflection within 1 % of Timoshenko (issue bound; measured −0.40 % at
+# Cantilever: tip deflection within 1 % of Timoshenko (required bound; measured −0.40 % at
 # h = 0.5), and the spurious mode of nodal integration on a free 160 × 160 checkerboard patch
 # started with the checkerboard velocity, undamped, 120 steps for both runs, amplitude in a
 # central window the edge disturbance cannot reach (c_p T + 2a from the edges):
@@ -33,10 +33,10 @@ spinesim_add_scene_test(spg.cantilever SCENE ${_val}/spg_cantilever.prm
 
 # Taylor bar, coarse (h = R0/3 = 1.07 mm, full bar 1209 particles, ~140 s under load). Reference
 # (converged, published): final length 21.4–21.5 mm, impact radius 7.1–7.2 mm. Bounds: the
-# issue's 3 % on the length and 5 % on the radius (relative) around the mid values 21.45 / 7.15 mm
+# required 3 % on the length and 5 % on the radius (relative) around the mid values 21.45 / 7.15 mm
 # (measured, full bar: 21.54 mm, 7.22 mm mean rim radius / 7.25 mm max; the quarter model gave
 # 7.42 mm because its symmetry-plane rim particles run ahead, see docs/spg.md). Energy
-# balance < 1 % (issue); measured 4e-4, the velocity Verlet error at CFL 0.4.
+# balance < 1 % (required); measured 4e-4, the velocity Verlet error at CFL 0.4.
 spinesim_add_scene_test(spg.taylor_bar SCENE ${_val}/taylor_bar.prm
   SET "Taylor bar/Particle spacing=1.0667e-3"
   EXPECT "status==ok;final_length_mm~21.45:0.03;impact_radius_mm~7.15:0.05;energy_balance_error<=0.01;vtu_output_valid>=1"
