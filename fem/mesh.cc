@@ -2,12 +2,14 @@
 
 #include "base/exceptions.h"
 #include "base/list_parsing.h"
+#include "fem/mesh_file_check.h"
 
 #include <deal.II/grid/grid_generator.h>
 #include <deal.II/grid/grid_in.h>
 #include <deal.II/grid/grid_tools.h>
 
 #include <fstream>
+#include <new>
 #include <sstream>
 
 namespace spinesim::fem {
@@ -46,6 +48,7 @@ void import_mesh(const MeshParameters& p, dealii::parallel::distributed::Triangu
     throw InvalidInput("Mesh file", "cannot open '" + f + "'", "a readable mesh file");
   if (!(p.scale > 0))
     throw InvalidInput("Scale", "must be positive", "a factor > 0 [m/unit]");
+  check_mesh_file(f, ext); // strict syntax and sizes first (mesh_file_check.h)
   Triangulation<dim> serial;
   GridIn<dim> grid_in;
   grid_in.attach_triangulation(serial);
@@ -58,6 +61,9 @@ void import_mesh(const MeshParameters& p, dealii::parallel::distributed::Triangu
       grid_in.read_vtk(in);
     else
       grid_in.read_vtu(in);
+  } catch (const std::bad_alloc&) {
+    throw InvalidInput("Mesh file", "reading '" + f + "' needs more memory than there is",
+                       "a mesh of a size this machine can hold");
   } catch (const std::exception& e) {
     throw InvalidInput(
         "Mesh file", "cannot read '" + f + "' as a " + std::to_string(dim) + "-D mesh: " + e.what(),
@@ -79,6 +85,7 @@ void import_mesh(const MeshParameters& p, dealii::parallel::distributed::Triangu
 void MeshParameters::declare(dealii::ParameterHandler& prm) {
   using dealii::Patterns::Anything;
   using dealii::Patterns::Double;
+  using dealii::Patterns::FileName;
   using dealii::Patterns::Integer;
   using dealii::Patterns::Selection;
   prm.declare_entry(
@@ -101,9 +108,10 @@ void MeshParameters::declare(dealii::ParameterHandler& prm) {
   prm.declare_entry("Shell cells", "0", Integer(0),
                     "Coarse cells around a shell, 0 for the default [-].");
   prm.declare_entry(
-      "Mesh file", "", Anything(),
-      "Quadrilateral (2-D) / hexahedral (3-D) mesh read by deal.II's GridIn when Shape = file "
-      "[-]: Gmsh .msh v2 or v4 (cell physical tag -> material id, physical tag of boundary "
+      "Mesh file", "", FileName(FileName::input),
+      "Quadrilateral (2-D) / hexahedral (3-D) mesh read by deal.II's GridIn when Shape = file, "
+      "relative to the scene file [-]: Gmsh .msh v2 or v4 (cell physical tag -> material id, "
+      "physical tag of boundary "
       "lines/faces -> boundary id), Abaqus .inp (ELSET=EB<n> -> material id n, surface SS<n> "
       "-> boundary id n), legacy VTK .vtk (CELL_DATA SCALARS MaterialID on cells and on "
       "boundary lines/faces) or a deal.II-written .vtu. Unlisted boundary faces get id 0.");

@@ -126,12 +126,9 @@ fem::CtCellLaws::Options cell_law_options(const BoneParameters& bone, const Caps
 }
 
 std::string project_source_directory() {
-  // This file is coupling/ct/ct_sections.cc in the source tree; CMake compiles it by its
-  // absolute path, so __FILE__ names the tree.
-  const std::filesystem::path self(__FILE__);
-  if (!self.is_absolute())
-    return "";
-  return self.parent_path().parent_path().parent_path().string();
+  // The build passes the source tree's location (applications/CMakeLists.txt): __FILE__ is
+  // not reliable for this, since a compiler cache may rewrite it into a relative path.
+  return SPINESIM_SOURCE_DIR;
 }
 
 std::string resolve_data_file(const std::string& file) {

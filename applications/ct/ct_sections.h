@@ -50,8 +50,8 @@ fem::CtParameters read_ct_parameters(dealii::ParameterHandler& prm, const BonePa
 fem::CtCellLaws::Options cell_law_options(const BoneParameters& bone, const CapsParameters* caps,
                                           bool nonlinear);
 
-// The project's source directory (where applications/ and meshes/ live), from this file's
-// compiled path; empty if that is not known.
+// The project's source directory (where applications/ and meshes/ live), as the build
+// configured it.
 std::string project_source_directory();
 // `file` if empty, absolute or existing relative to the current directory; else the
 // project-relative file if that exists; else `file` unchanged (the reader reports it).

@@ -1,6 +1,8 @@
 #include "applications/framework/driver.h"
 
+#include "applications/framework/interrupt.h"
 #include "applications/framework/run_context.h"
+#include "applications/framework/run_stops.h"
 #include "applications/framework/scenario.h"
 #include "applications/framework/scene.h"
 #include "base/exceptions.h"
@@ -9,8 +11,12 @@
 #include <deal.II/base/multithread_info.h>
 
 #include <chrono>
+#include <csignal>
+#include <filesystem>
 #include <iostream>
 #include <omp.h>
+#include <thread>
+#include <unistd.h>
 
 namespace spinesim::framework {
 
@@ -27,6 +33,18 @@ void report_bad_input(const InvalidInput& e) {
             << "\n";
   if (!e.allowed().empty())
     std::cerr << "  allowed: " << e.allowed() << "\n";
+}
+
+// More threads than the machine can run make every parallel loop crawl (and OpenMP may fail
+// to create them): a limit of 64 per hardware thread is generous and catches typos.
+void check_thread_count(unsigned int threads) {
+  const unsigned int hardware = std::max(1u, std::thread::hardware_concurrency());
+  const unsigned int limit = 64 * hardware;
+  if (threads > limit)
+    throw InvalidInput("--threads " + std::to_string(threads),
+                       "more threads than this machine can run (" + std::to_string(hardware) +
+                           " hardware threads)",
+                       "0 (all available) up to " + std::to_string(limit));
 }
 
 void load(Scene& scene, const SceneSource& source) {
@@ -54,6 +72,11 @@ int params_command(const SceneSource& source, const std::string& format) {
   }
 }
 
+namespace {
+// Thrown at the first step of a scenario that `check` runs up to it.
+struct CheckReachedFirstStep {};
+} // namespace
+
 int check_command(const SceneSource& source) {
   try {
     Scene scene;
@@ -62,10 +85,26 @@ int check_command(const SceneSource& source) {
     const auto& entry = Scenarios::instance().get(scene.scenario(), "Scenario");
     check_scenario_effects(entry, effects);
     // The scenario reads and checks its sections as `run` does before its first step.
-    entry.create({scene.dimension(), scene.prm(), effects});
+    auto scenario = entry.create({scene.dimension(), scene.prm(), effects});
+    if (scenario->check_by_building()) {
+      // ... and builds its model as `run` does, in a scratch directory that is never
+      // published, stopping where the first step would begin.
+      const auto scratch =
+          std::filesystem::temp_directory_path() / ("spinesim-check-" + std::to_string(::getpid()));
+      std::ostringstream quiet;
+      RunContext ctx(MPI_COMM_WORLD, scratch, OutputDirectory::Mode::fresh, Progress::Style::off,
+                     scene.prm(), effects, {}, &quiet);
+      ctx.progress().on_start([] { throw CheckReachedFirstStep{}; });
+      try {
+        scenario->run(ctx);
+      } catch (const CheckReachedFirstStep&) {
+      }
+    }
     if (is_root()) {
       std::cout << "scene " << scene.source_name() << ": ok\n  scenario:  " << scene.scenario()
-                << " (" << scene.dimension() << "-D)\n";
+                << " (" << scene.dimension() << "-D)"
+                << (scenario->check_by_building() ? ", model built up to the first step" : "")
+                << "\n";
       for (const auto& s : effects.statuses())
         std::cout << "  " << (s.active ? "[on]  " : "[off] ") << s.name << ": " << s.reason << "\n";
     }
@@ -73,11 +112,21 @@ int check_command(const SceneSource& source) {
   } catch (const InvalidInput& e) {
     report_bad_input(e);
     return exit_bad_input;
+  } catch (const NumericalFailure& e) {
+    if (is_root())
+      std::cerr << "spinesim: the model fails before its first step\n" << e.report() << "\n";
+    return exit_run_failed;
   }
 }
 
 int run_command(const RunOptions& options) {
   const auto wall_start = std::chrono::steady_clock::now();
+  try {
+    check_thread_count(options.threads);
+  } catch (const InvalidInput& e) {
+    report_bad_input(e);
+    return exit_bad_input;
+  }
   if (options.threads > 0) {
     omp_set_num_threads(options.threads);
     dealii::MultithreadInfo::set_thread_limit(options.threads);
@@ -105,9 +154,12 @@ int run_command(const RunOptions& options) {
     // The scenario reads and checks its sections before the output directory is touched, so
     // bad input found there leaves an earlier run's directory as it was.
     scenario = entry.create({scene.dimension(), scene.prm(), effects});
-    context =
-        std::make_unique<RunContext>(MPI_COMM_WORLD, output, mode,
-                                     Progress::parse_style(options.progress), scene.prm(), effects);
+    std::vector<std::filesystem::path> protected_paths;
+    if (source.file && !options.restart_dir)
+      protected_paths.emplace_back(*source.file);
+    context = std::make_unique<RunContext>(MPI_COMM_WORLD, output, mode,
+                                           Progress::parse_style(options.progress), scene.prm(),
+                                           effects, protected_paths);
   } catch (const InvalidInput& e) {
     report_bad_input(e);
     return exit_bad_input;
@@ -122,27 +174,48 @@ int run_command(const RunOptions& options) {
             << (ctx.restarting() ? ": restarting " : ": running ") << scene.source_name()
             << "\n  scenario: " << scene.scenario() << ", " << scene.dimension() << "-D, "
             << ctx.n_ranks() << " MPI rank(s), " << omp_get_max_threads()
-            << " thread(s) per rank\n  output:   " << ctx.output().path().string()
+            << " thread(s) per rank\n  output:   " << ctx.output().target().string()
             << "\n  effects:\n";
   for (const auto& s : effects.statuses())
     ctx.log() << "    " << (s.active ? "[on]  " : "[off] ") << s.name << ": " << s.reason << "\n";
 
+  // SIGINT/SIGTERM from here on stop the run after a complete step (see interrupt.h).
+  InterruptGuard interrupts;
   int code = exit_ok;
   try {
     scenario->run(ctx);
+    ctx.start(); // scenarios without a step loop publish their results here
     ctx.summary().set_status(true);
   } catch (const InvalidInput& e) {
     // Inconsistent input found only while building the model still counts as bad input.
     report_bad_input(e);
+    if (!ctx.started())
+      return exit_bad_input; // nothing published: earlier results stay as they were
     ctx.summary().set_status(false, std::string("bad input: ") + e.what());
     code = exit_bad_input;
+  } catch (const NothingToRestart& e) {
+    if (ctx.is_root())
+      std::cout << "spinesim: " << e.what() << "; nothing changed\n";
+    return exit_ok;
+  } catch (const Interrupted& e) {
+    ctx.progress().finish();
+    ctx.start();
+    const std::string name = e.signal() == SIGINT ? "SIGINT" : "SIGTERM";
+    ctx.log() << "\ninterrupted by " << name << " " << e.what();
+    if (std::filesystem::exists(ctx.checkpoint_dir()))
+      ctx.log() << "; continue with: spinesim run --restart " << ctx.output().path().string();
+    ctx.log() << "\n";
+    ctx.summary().set_interrupted("interrupted by " + name + " " + e.what());
+    code = 128 + e.signal();
   } catch (const NumericalFailure& e) {
     ctx.progress().finish();
+    ctx.start();
     ctx.log() << "\n" << e.report() << "\n";
     ctx.summary().set_status(false, e.report());
     code = exit_run_failed;
   } catch (const dealii::ExceptionBase& e) {
     ctx.progress().finish();
+    ctx.start();
     std::ostringstream msg;
     e.print_info(msg);
     ctx.log() << "\nrun failed: " << msg.str() << "\n";
@@ -150,6 +223,7 @@ int run_command(const RunOptions& options) {
     code = exit_run_failed;
   } catch (const std::exception& e) {
     ctx.progress().finish();
+    ctx.start();
     ctx.log() << "\nrun failed: " << e.what() << "\n";
     ctx.summary().set_status(false, e.what());
     code = exit_run_failed;
@@ -159,8 +233,11 @@ int run_command(const RunOptions& options) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count());
   ctx.flush_history();
   ctx.write_summary();
-  ctx.log() << (code == exit_ok ? "done" : "FAILED") << ": results in "
-            << ctx.output().path().string() << " (summary.json, history.csv, log.txt)\n";
+  ctx.log() << (code == exit_ok                                     ? "done"
+                : code == exit_run_failed || code == exit_bad_input ? "FAILED"
+                                                                    : "INTERRUPTED")
+            << ": results in " << ctx.output().path().string()
+            << " (summary.json, history.csv, log.txt)\n";
   return code;
 }
 

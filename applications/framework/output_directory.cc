@@ -5,6 +5,7 @@
 #include <deal.II/base/mpi.h>
 
 #include <fstream>
+#include <regex>
 #include <system_error>
 #include <unistd.h>
 
@@ -13,44 +14,150 @@ namespace spinesim::framework {
 namespace fs = std::filesystem;
 
 namespace {
-// Checks and prepares the directory on one rank; throws InvalidInput on a problem.
-void prepare(const fs::path& path, OutputDirectory::Mode mode) {
+
+fs::path absolute_clean(const fs::path& p) {
+  std::error_code ec;
+  const fs::path c = fs::weakly_canonical(fs::absolute(p), ec);
+  return ec ? fs::absolute(p).lexically_normal() : c;
+}
+
+// Whether `ancestor` is `p` or one of its parents (both absolute and clean).
+bool contains(const fs::path& ancestor, const fs::path& p) {
+  const auto rel = p.lexically_relative(ancestor);
+  return !rel.empty() && *rel.begin() != "..";
+}
+
+// What a spinesim run writes at the top of its directory: its own files, VTU/PVTU/PVD
+// output, CSV tables, plots and their gnuplot scripts, HDF5 particle files, the checkpoint
+// and its swap directories, and the temporaries of atomic writes.
+bool written_by_a_run(const fs::directory_entry& entry) {
+  static const std::regex file_pattern(
+      R"((\.spinesim-run|parameters\.prm|log\.txt|summary\.json|.*\.(vtu|pvtu|pvd|vtk|csv|png|svg|gp|h5|xdmf|json|log|prm)|.*\.tmp[0-9]+))");
+  static const std::regex dir_pattern(
+      R"((checkpoint|checkpoint\.new|checkpoint\.old|\.spinesim-.*))");
+  const std::string name = entry.path().filename().string();
+  std::error_code ec;
+  if (entry.is_directory(ec))
+    return std::regex_match(name, dir_pattern);
+  return std::regex_match(name, file_pattern);
+}
+
+// Rank 0: may --force replace this existing, non-empty directory? Throws InvalidInput if not.
+void check_replaceable(const fs::path& target, const std::vector<fs::path>& protected_paths) {
+  const std::string where = "--output " + target.string() + " --force";
+  const fs::path abs_target = absolute_clean(target);
+  std::error_code ec;
+  const fs::path cwd = absolute_clean(fs::current_path(ec));
+  if (!ec && contains(abs_target, cwd))
+    throw InvalidInput(where,
+                       "is the current directory or one of its parents; refusing to replace it",
+                       "a run directory below the current one, e.g. --output runs/NAME");
+  for (const auto& file : protected_paths)
+    if (contains(abs_target, absolute_clean(file)))
+      throw InvalidInput(
+          where, "holds " + file.string() + ", which this run reads; refusing to replace it",
+          "an output directory that does not contain the scene");
+  const bool marked = fs::exists(target / OutputDirectory::marker, ec);
+  const bool old_run =
+      fs::exists(target / "parameters.prm", ec) && fs::exists(target / "log.txt", ec);
+  if (!marked && !old_run)
+    throw InvalidInput(where,
+                       "does not look like a spinesim run (no " +
+                           std::string(OutputDirectory::marker) +
+                           ", no parameters.prm and log.txt); refusing to delete it",
+                       "the output directory of an earlier spinesim run, or a new directory");
+  for (const auto& entry : fs::directory_iterator(target, ec))
+    if (!written_by_a_run(entry))
+      throw InvalidInput(where,
+                         "holds " + entry.path().filename().string() +
+                             ", which no spinesim run writes; refusing to delete it",
+                         "move it out of the run directory first, or choose a new directory");
+}
+
+fs::path staging_for(const fs::path& target) {
+  const fs::path clean = absolute_clean(target);
+  return clean.parent_path() /
+         ("." + clean.filename().string() + ".incomplete-" + std::to_string(::getpid()));
+}
+
+// Rank 0: checks the target and makes the directory this run writes into; returns it.
+fs::path prepare(const fs::path& target, OutputDirectory::Mode mode,
+                 const std::vector<fs::path>& protected_paths) {
   using Mode = OutputDirectory::Mode;
   std::error_code ec;
-  const bool exists = fs::exists(path, ec);
+  const bool exists = fs::exists(target, ec);
   if (mode == Mode::restart) {
-    if (!exists)
-      throw InvalidInput("--restart " + path.string(), "no such run directory",
+    if (!exists || !fs::is_directory(target, ec))
+      throw InvalidInput("--restart " + target.string(), "no such run directory",
                          "the output directory of an earlier run that wrote a checkpoint");
-    return;
+    return target;
   }
-  if (exists && !fs::is_directory(path, ec))
-    throw InvalidInput("--output " + path.string(), "exists and is not a directory",
+  if (target.empty() || absolute_clean(target) == absolute_clean(target).root_path())
+    throw InvalidInput("--output " + target.string(), "is not a directory a run can own",
                        "a new directory name");
-  if (exists && !fs::is_empty(path, ec)) {
+  if (exists && !fs::is_directory(target, ec))
+    throw InvalidInput("--output " + target.string(), "exists and is not a directory",
+                       "a new directory name");
+  const fs::path cwd = absolute_clean(fs::current_path(ec));
+  if (contains(absolute_clean(target), cwd))
+    throw InvalidInput("--output " + target.string(),
+                       "is the current directory or one of its parents",
+                       "a run directory below the current one, e.g. --output runs/NAME");
+  if (exists && !fs::is_empty(target, ec)) {
     if (mode != Mode::force)
-      throw InvalidInput("--output " + path.string(),
+      throw InvalidInput("--output " + target.string(),
                          "holds an earlier run; refusing to overwrite it",
                          "a new directory, --force to replace it, or --restart to continue it");
-    // Keep nothing stale from the old run: results must all come from this run.
-    fs::remove_all(path, ec);
-    if (ec)
-      throw InvalidInput("--output " + path.string(), "cannot clear: " + ec.message(), "");
+    check_replaceable(target, protected_paths);
   }
-  fs::create_directories(path, ec);
+  const fs::path staging = staging_for(target);
+  fs::remove_all(staging, ec);
+  fs::create_directories(staging, ec);
   if (ec)
-    throw InvalidInput("--output " + path.string(), "cannot create: " + ec.message(),
+    throw InvalidInput("--output " + target.string(),
+                       "cannot create " + staging.string() + ": " + ec.message(),
                        "a writable location");
+  write_file_atomic(staging / OutputDirectory::marker,
+                    "spinesim run directory: --force may replace it\n");
+  return staging;
+}
+
+// Rank 0: the staging directory becomes the target; an earlier run there goes away only
+// after the new one is in place under another name.
+void swap_in(const fs::path& staging, const fs::path& target) {
+  std::error_code ec;
+  fs::path replaced;
+  if (fs::exists(target, ec) && !fs::is_empty(target, ec)) {
+    replaced = staging.parent_path() / (staging.filename().string() + ".replaced");
+    fs::rename(target, replaced, ec);
+    if (ec)
+      throw std::runtime_error("cannot move the earlier run " + target.string() +
+                               " aside: " + ec.message());
+  } else if (fs::exists(target, ec)) {
+    fs::remove(target, ec); // an empty directory
+  }
+  fs::rename(staging, target, ec);
+  if (ec) {
+    if (!replaced.empty())
+      fs::rename(replaced, target);
+    throw std::runtime_error("cannot move " + staging.string() + " to " + target.string() + ": " +
+                             ec.message());
+  }
+  if (!replaced.empty())
+    fs::remove_all(replaced, ec);
 }
 
 } // namespace
 
-OutputDirectory::OutputDirectory(const fs::path& path, Mode mode, MPI_Comm comm) : path_(path) {
+OutputDirectory::OutputDirectory(const fs::path& target, Mode mode, MPI_Comm comm,
+                                 const std::vector<fs::path>& protected_paths)
+    : target_(target), mode_(mode), comm_(comm),
+      is_root_(dealii::Utilities::MPI::this_mpi_process(comm) == 0) {
   // Rank 0 decides; every rank learns the verdict so all of them fail alike.
-  std::string where, problem, allowed;
-  if (dealii::Utilities::MPI::this_mpi_process(comm) == 0) {
+  std::string where, problem, allowed, path;
+  if (is_root_) {
     try {
-      prepare(path, mode);
+      path = prepare(target, mode, protected_paths).string();
     } catch (const InvalidInput& e) {
       where = e.where();
       problem = e.problem();
@@ -62,6 +169,34 @@ OutputDirectory::OutputDirectory(const fs::path& path, Mode mode, MPI_Comm comm)
   allowed = dealii::Utilities::MPI::broadcast(comm, allowed, 0);
   if (!problem.empty())
     throw InvalidInput(where, problem, allowed);
+  path_ = dealii::Utilities::MPI::broadcast(comm, path, 0);
+}
+
+OutputDirectory::~OutputDirectory() {
+  if (is_root_ && !published_ && mode_ != Mode::restart) {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+}
+
+void OutputDirectory::publish() {
+  if (published_)
+    return;
+  published_ = true;
+  if (mode_ == Mode::restart)
+    return;
+  std::string error;
+  if (is_root_) {
+    try {
+      swap_in(path_, target_);
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+  }
+  error = dealii::Utilities::MPI::broadcast(comm_, error, 0);
+  if (!error.empty())
+    throw std::runtime_error(error);
+  path_ = target_;
 }
 
 void OutputDirectory::write_atomic(const std::string& name, const std::string& content) const {

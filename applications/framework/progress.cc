@@ -41,6 +41,8 @@ Progress::Style Progress::parse_style(const std::string& name) {
 }
 
 void Progress::start(const std::string& label, unsigned int total_steps, double end_time) {
+  if (on_start_)
+    on_start_();
   label_ = label;
   total_ = std::max(total_steps, 1u);
   end_time_ = end_time;
@@ -49,6 +51,8 @@ void Progress::start(const std::string& label, unsigned int total_steps, double 
 }
 
 void Progress::update(unsigned int step, double time) {
+  if (on_update_)
+    on_update_();
   if (!active_)
     return;
   const auto now = std::chrono::steady_clock::now();

@@ -5,6 +5,7 @@
 // plain periodic lines otherwise (logs, CI). Only rank 0 reports.
 
 #include <chrono>
+#include <functional>
 #include <ostream>
 #include <string>
 
@@ -24,6 +25,11 @@ class Progress {
 
   static Style parse_style(const std::string& name);
 
+  // Called by start() (the run context publishes its output then) and by every update()
+  // (it checks for an interrupt); on every rank.
+  void on_start(std::function<void()> f) { on_start_ = std::move(f); }
+  void on_update(std::function<void()> f) { on_update_ = std::move(f); }
+
  private:
   std::ostream& out_;
   Style style_;
@@ -33,6 +39,7 @@ class Progress {
   double end_time_ = 0;
   std::chrono::steady_clock::time_point start_, last_;
   bool drew_ = false;
+  std::function<void()> on_start_, on_update_;
 };
 
 } // namespace spinesim::framework

@@ -1,28 +1,63 @@
 #include "applications/framework/run_context.h"
 
+#include "applications/framework/interrupt.h"
+#include "applications/framework/run_stops.h"
+#include "base/exceptions.h"
+
 #include <iostream>
 
 namespace spinesim::framework {
 
 RunContext::RunContext(MPI_Comm comm, const std::filesystem::path& output,
                        OutputDirectory::Mode mode, Progress::Style progress_style,
-                       const dealii::ParameterHandler& prm, const Effects& effects)
+                       const dealii::ParameterHandler& prm, const Effects& effects,
+                       const std::vector<std::filesystem::path>& protected_paths,
+                       std::ostream* console)
     : comm_(comm), is_root_(dealii::Utilities::MPI::this_mpi_process(comm) == 0),
       restarting_(mode == OutputDirectory::Mode::restart), prm_(prm), effects_(effects),
-      output_(output, mode, comm), log_(is_root_, std::cout),
+      output_(output, mode, comm, protected_paths), log_(is_root_, console ? *console : std::cout),
       progress_(std::cout, progress_style, is_root_),
       timer_(comm, log_.stream(), dealii::TimerOutput::never, dealii::TimerOutput::wall_times) {
-  log_.open_file((output_.path() / "log.txt").string(), restarting_);
+  // A new run logs into its staging directory from the first line; a restart keeps its lines
+  // in memory until it starts (see start()).
+  if (!restarting_)
+    log_.open_file((output_.path() / "log.txt").string(), false);
   if (restarting_ && is_root_)
     history_.load(output_.path() / "history.csv");
+  progress_.on_start([this] { start(); });
+  progress_.on_update([this] {
+    if (const int signal = interrupt_signal())
+      throw Interrupted(signal, "after a complete step");
+  });
+}
+
+void RunContext::start() {
+  if (started())
+    return;
+  output_.publish();
+  if (restarting_)
+    log_.open_file((output_.path() / "log.txt").string(), true);
+}
+
+void RunContext::warn(const std::string& text) {
+  log_ << "  warning: " << text << "\n";
+  summary_.add_warning(text);
+}
+
+int RunContext::interrupt_signal() const {
+  return InterruptGuard::agreed_signal(comm_);
 }
 
 void RunContext::flush_history() {
+  if (restarting_ && !started())
+    return;
   if (is_root_ && history_.size() > 0)
     output_.write_atomic("history.csv", history_.csv());
 }
 
 void RunContext::write_summary() {
+  if (restarting_ && !started())
+    return;
   Summary copy = summary_;
   for (const auto& [phase, seconds] :
        timer_.get_summary_data(dealii::TimerOutput::OutputData::total_wall_time))

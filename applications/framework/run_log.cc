@@ -22,14 +22,19 @@ int RunLog::TeeBuffer::sync() {
 }
 
 RunLog::RunLog(bool is_root, std::ostream& console) : stream_(&buffer_), is_root_(is_root) {
-  if (is_root_)
+  if (is_root_) {
     buffer_.a = console.rdbuf();
+    buffer_.b = &pending_;
+  }
 }
 
 void RunLog::open_file(const std::string& path, bool append) {
   if (!is_root_)
     return;
+  stream_.flush();
   file_.open(path, append ? std::ios::app : std::ios::trunc);
+  file_ << pending_.str();
+  pending_.str("");
   buffer_.b = file_.rdbuf();
 }
 

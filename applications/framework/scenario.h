@@ -23,6 +23,11 @@ class Scenario {
  public:
   virtual ~Scenario() = default;
   virtual void run(RunContext& context) = 0;
+  // Whether `spinesim check` runs this scenario up to its first step (until it starts its
+  // progress, in a scratch directory) so that check rejects what run would reject while
+  // building the model (a missing mesh, an unreadable image) by the same code. Scenarios
+  // whose setup is the whole job, or that start no progress, say false.
+  virtual bool check_by_building() const { return false; }
 };
 
 // Declares top-level sections that several scenarios share exactly once. Declaring a section

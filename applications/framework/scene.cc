@@ -7,7 +7,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include <filesystem>
 #include <fstream>
+#include <functional>
 #include <regex>
 #include <sstream>
 
@@ -66,6 +68,51 @@ std::vector<std::string> subsection_path_at(const std::string& text, unsigned in
   return path;
 }
 
+// `include FILE` lines of a .prm text, expanded in place. `origins` receives "file:line" for
+// every line of the result, so parse errors name the file a line came from.
+constexpr unsigned int max_include_depth = 16;
+
+void expand_includes(const std::string& text, const std::filesystem::path& file,
+                     std::vector<std::filesystem::path>& stack, std::string& out,
+                     std::vector<std::string>& origins) {
+  namespace fs = std::filesystem;
+  std::istringstream in(text);
+  std::string raw;
+  for (unsigned int n = 1; std::getline(in, raw); ++n) {
+    const std::string where = file.string() + ":" + std::to_string(n);
+    const std::string l = trim(raw.substr(0, raw.find('#')));
+    if (l.rfind("include", 0) != 0 ||
+        (l.size() > 7 && !std::isspace(static_cast<unsigned char>(l[7])))) {
+      out += raw + "\n";
+      origins.push_back(where);
+      continue;
+    }
+    fs::path target = trim(l.substr(7));
+    if (target.empty())
+      throw InvalidInput(where, "include without a file name", "include FILE (a .prm file)");
+    if (target.is_relative())
+      target = file.parent_path() / target;
+    std::error_code ec;
+    const fs::path canonical = fs::weakly_canonical(target, ec);
+    for (const auto& open : stack)
+      if (open == canonical)
+        throw InvalidInput(where, "includes " + target.string() + ", which includes it again",
+                           "includes without cycles");
+    if (stack.size() >= max_include_depth)
+      throw InvalidInput(where, "includes nested deeper than " + std::to_string(max_include_depth),
+                         "at most " + std::to_string(max_include_depth) + " levels");
+    std::ifstream included(target);
+    if (!included)
+      throw InvalidInput(where, "cannot open included file " + target.string(),
+                         "an existing .prm file, relative to the including file");
+    std::stringstream buffer;
+    buffer << included.rdbuf();
+    stack.push_back(canonical);
+    expand_includes(buffer.str(), target, stack, out, origins);
+    stack.pop_back();
+  }
+}
+
 } // namespace
 
 Scene::Scene() {
@@ -110,7 +157,43 @@ void Scene::load_file(const std::string& path) {
   }
   if (!ends_with(path, ".prm"))
     throw InvalidInput(path, "unknown scene file type", ".prm or .json");
-  load_text(buffer.str(), path);
+  std::vector<std::filesystem::path> stack{std::filesystem::weakly_canonical(path)};
+  std::string expanded;
+  std::vector<std::string> origins;
+  expand_includes(buffer.str(), path, stack, expanded, origins);
+  line_origins_ = std::move(origins);
+  load_text(expanded, path);
+  line_origins_.clear();
+  resolve_file_parameters(std::filesystem::path(path).parent_path().string());
+}
+
+void Scene::resolve_file_parameters(const std::string& directory) {
+  namespace fs = std::filesystem;
+  if (directory.empty())
+    return; // the scene is in the working directory: nothing to resolve
+  std::ostringstream out;
+  prm_.print_parameters(out, dealii::ParameterHandler::JSON);
+  std::vector<std::string> path;
+  std::function<void(const nlohmann::json&)> walk = [&](const nlohmann::json& node) {
+    for (const auto& [key, value] : node.items()) {
+      if (!value.contains("value")) {
+        path.push_back(key);
+        walk(value);
+        path.pop_back();
+        continue;
+      }
+      const std::string v = value["value"].get<std::string>();
+      if (value["pattern_description"].get<std::string>().find("FileName") == std::string::npos ||
+          v.empty() || fs::path(v).is_absolute() || !fs::exists(fs::path(directory) / v))
+        continue;
+      for (const auto& p : path)
+        prm_.enter_subsection(p);
+      prm_.set(key, (fs::path(directory) / v).lexically_normal().string());
+      for (std::size_t i = 0; i < path.size(); ++i)
+        prm_.leave_subsection();
+    }
+  };
+  walk(nlohmann::json::parse(out.str()));
 }
 
 void Scene::load_text(const std::string& text, const std::string& name) {
@@ -134,8 +217,11 @@ void Scene::rethrow_parse_error(const std::string& deal_message, const std::stri
   const unsigned int line = std::stoul(m[1]);
   const std::string detail = m[3];
   const std::vector<std::string> path = subsection_path_at(text, line);
-  const std::string where = std::string(m[2]) + ":" + std::to_string(line) +
-                            (path.empty() ? "" : " (in subsection " + join(path, "/") + ")");
+  const std::string origin = line >= 1 && line <= line_origins_.size()
+                                 ? line_origins_[line - 1]
+                                 : std::string(m[2]) + ":" + std::to_string(line);
+  const std::string where =
+      origin + (path.empty() ? "" : " (in subsection " + join(path, "/") + ")");
   // An unknown name: list what this subsection has. A bad value: deal.II already names the
   // pattern, which is what is allowed.
   if (detail.find("No entry with name") != std::string::npos ||

@@ -10,6 +10,7 @@
 #include <deal.II/base/parameter_handler.h>
 
 #include <string>
+#include <vector>
 
 namespace spinesim::framework {
 
@@ -18,7 +19,10 @@ class Scene {
   Scene();
 
   // Reads a .prm or .json scene. Bad input throws InvalidInput naming file, line, parameter
-  // path and what is allowed.
+  // path and what is allowed. `include FILE` lines are expanded here (relative to the file
+  // that includes; a cycle or more than 16 levels is bad input), and relative values of
+  // file parameters (pattern FileName) resolve against the scene file's directory when the
+  // file is there (otherwise they stay relative to the working directory).
   void load_file(const std::string& path);
   // Reads scene text (the embedded default scene); `name` stands in for the file name.
   void load_text(const std::string& text, const std::string& name);
@@ -46,10 +50,14 @@ class Scene {
   // subsection allows. `text` is the scene text for locating the line's subsection.
   [[noreturn]] void rethrow_parse_error(const std::string& deal_message,
                                         const std::string& text) const;
+  // Relative FileName values that exist below `directory` become paths into it.
+  void resolve_file_parameters(const std::string& directory);
   std::string allowed_names(const std::vector<std::string>& path) const;
 
   dealii::ParameterHandler prm_;
   std::string source_name_ = "(defaults)";
+  // Where each line of the parsed text came from ("file:line"), when includes were expanded.
+  std::vector<std::string> line_origins_;
 };
 
 } // namespace spinesim::framework

@@ -28,7 +28,12 @@ void Summary::set_effects(const std::vector<std::string>& effects) {
 }
 
 void Summary::set_status(bool ok, const std::string& message) {
-  ok_ = ok;
+  status_ = ok ? "ok" : "failed";
+  message_ = message;
+}
+
+void Summary::set_interrupted(const std::string& message) {
+  status_ = "interrupted";
   message_ = message;
 }
 
@@ -36,7 +41,7 @@ std::string Summary::json() const {
   nlohmann::ordered_json j;
   j["scene"] = scene_;
   j["description"] = description_;
-  j["status"] = ok_ ? "ok" : "failed";
+  j["status"] = status_;
   if (!message_.empty())
     j["message"] = message_;
   j["figures"] = nlohmann::ordered_json::object();
@@ -53,6 +58,7 @@ std::string Summary::json() const {
   for (const auto& [phase, s] : timings_)
     j["timings"][phase] = s;
   j["effects"] = effects_;
+  j["warnings"] = warnings_;
   return j.dump(2) + "\n";
 }
 

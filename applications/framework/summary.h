@@ -17,18 +17,23 @@ class Summary {
   void set_label(const std::string& name, const std::string& value);
   void add_timing(const std::string& phase, double seconds);
   void set_effects(const std::vector<std::string>& effects);
+  // Something suspicious that did not stop the run (listed under "warnings").
+  void add_warning(const std::string& text) { warnings_.push_back(text); }
   void set_status(bool ok, const std::string& message = "");
+  // Stopped by a signal after a complete step ("interrupted"); restartable.
+  void set_interrupted(const std::string& message);
   bool has_figure(const std::string& name) const { return figures_.count(name) > 0; }
   double figure(const std::string& name) const { return figures_.at(name).first; }
   std::string json() const;
 
  private:
   std::string scene_, description_, message_;
-  bool ok_ = false;
+  std::string status_ = "failed"; // ok | failed | interrupted
   std::map<std::string, std::pair<double, std::string>> figures_;
   std::map<std::string, std::string> labels_;
   std::map<std::string, double> timings_;
   std::vector<std::string> effects_;
+  std::vector<std::string> warnings_;
 };
 
 } // namespace spinesim::framework

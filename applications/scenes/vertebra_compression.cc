@@ -103,6 +103,7 @@ class VertebraCompression : public Scenario {
                          "the scenario applies its own cap supports", "no Dirichlet slots here");
   }
 
+  bool check_by_building() const override { return true; }
   void run(RunContext& ctx) override {
     dealii::parallel::distributed::Triangulation<3> tria(ctx.comm());
     fem::CtModel model;

@@ -81,6 +81,13 @@ void ParticleZoneParameters::parse(dealii::ParameterHandler& prm) {
   lower = doubles(prm.get("Lower corner"), "Particles/Lower corner", 2);
   upper = doubles(prm.get("Upper corner"), "Particles/Upper corner", 2);
   spacing = prm.get_double("Spacing");
+  if (!(spacing > 0))
+    throw InvalidInput("Particles/Spacing", "must be positive", "a lattice spacing h > 0 [m]");
+  for (unsigned int d = 0; d < std::min(lower.size(), upper.size()); ++d)
+    if (!(upper[d] > lower[d]))
+      throw InvalidInput("Particles/Upper corner",
+                         "not above Particles/Lower corner in direction " + std::to_string(d),
+                         "an upper corner above the lower one in every direction [m]");
   integration = prm.get("Integration");
   time_step_safety = prm.get_double("Time step safety");
   damping = prm.get_double("Damping");

@@ -1,25 +1,13 @@
-#include "applications/simulation/simulation.h"
+#include "applications/simulation/simulation_scenario.h"
+
 #include "applications/common_sections.h"
-
 #include "applications/framework/parse_section.h"
-#include "applications/framework/run_context.h"
-#include "applications/simulation/particle_zone.h"
+#include "applications/framework/run_stops.h"
 #include "base/exceptions.h"
-#include "coupling/fem_particle_coupling.h"
-#include "fem/heat/heat_solver.h"
-#include "fem/materials/law_parameters.h"
-#include "fem/mechanics_solver.h"
-#include "fem/mesh.h"
-
-#include <deal.II/base/data_out_base.h>
-#include <deal.II/distributed/tria.h>
-
-#include <nlohmann/json.hpp>
 
 #include <chrono>
 #include <cmath>
-#include <filesystem>
-#include <fstream>
+#include <limits>
 #include <set>
 #include <sstream>
 
@@ -67,33 +55,6 @@ void SimulationParameters::parse(const dealii::ParameterHandler& prm) {
 }
 
 namespace {
-
-// A ParaView .pvd time series, rewritten atomically at every output.
-class PvdRecord {
- public:
-  explicit PvdRecord(std::string name) : name_(std::move(name)) {}
-  void add(double time, const std::string& file) { entries_.emplace_back(time, file); }
-  void truncate_after(double time) {
-    while (!entries_.empty() && entries_.back().first > time * (1 + 1e-12))
-      entries_.pop_back();
-  }
-  void write(const RunContext& ctx) const {
-    if (!ctx.is_root() || entries_.empty())
-      return;
-    std::ostringstream out;
-    dealii::DataOutBase::write_pvd_record(out, entries_);
-    ctx.output().write_atomic(name_, out.str());
-  }
-  nlohmann::json to_json() const { return entries_; }
-  void from_json(const nlohmann::json& j) {
-    entries_ = j.get<std::vector<std::pair<double, std::string>>>();
-  }
-
- private:
-  std::string name_;
-  std::vector<std::pair<double, std::string>> entries_;
-};
-
 // One log line per conversion: what moved and what it conserved.
 template <typename Report>
 void log_conversion(RunContext& ctx, double time, const Report& r) {
@@ -102,71 +63,7 @@ void log_conversion(RunContext& ctx, double time, const Report& r) {
             << r.momentum_change_relative() << " relative; kinetic energy moved "
             << r.kinetic_after - r.kinetic_before << " J)\n";
 }
-
-template <int dim>
-class Simulation : public Scenario {
- public:
-  explicit Simulation(const ScenarioFactoryArgs& args);
-  void run(RunContext& ctx) override;
-
- private:
-  void build(RunContext& ctx);
-  // The step modules: one per switched-on effect, in the order a step advances them (heat,
-  // mechanics, particles). The list is made once in build(); the step loop walks it.
-  using Advance = void (Simulation::*)(unsigned int step, double time, double dt, RunContext& ctx);
-  struct StepModule {
-    std::string name; // phase timer and log
-    Advance advance;
-  };
-  void plan_step_modules(RunContext& ctx);
-  void advance_heat(unsigned int step, double time, double dt, RunContext& ctx);
-  // Mechanics: the integrator chosen in plan_step_modules, then the heat it hands over.
-  void advance_mechanics(unsigned int step, double time, double dt, RunContext& ctx);
-  void coupled_relaxation(unsigned int step, double time, double dt, RunContext& ctx);
-  void coupled_explicit(unsigned int step, double time, double dt, RunContext& ctx);
-  void fem_explicit(unsigned int step, double time, double dt, RunContext& ctx);
-  void fem_quasi_static(unsigned int step, double time, double dt, RunContext& ctx);
-  void advance_particles(unsigned int step, double time, double dt, RunContext& ctx);
-  void record(unsigned int step, double time, RunContext& ctx);
-  void write_output(unsigned int step, double time, RunContext& ctx);
-  void write_checkpoint(unsigned int step, double time, RunContext& ctx);
-  // Returns the step to continue after.
-  unsigned int load_checkpoint(RunContext& ctx);
-  void report_figures(RunContext& ctx);
-
-  dealii::ParameterHandler& prm_;
-  const Effects& effects_;
-  SimulationParameters sim_;
-  fem::MeshParameters mesh_prm_;
-  materials::LawParameters law_prm_;
-  typename fem::MechanicsSolver<dim>::Parameters mech_prm_;
-  typename fem::HeatSolver<dim>::Parameters heat_prm_;
-
-  std::unique_ptr<dealii::parallel::distributed::Triangulation<dim>> triangulation_;
-  std::shared_ptr<const materials::ConstitutiveLaw> law_;
-  std::unique_ptr<fem::MechanicsSolver<dim>> mechanics_;
-  std::unique_ptr<fem::HeatSolver<dim>> heat_;
-  dealii::Vector<double> plastic_heating_;  // plastic dissipation rate per cell [W/m^3]
-  dealii::Vector<double> fracture_heating_; // heat of broken bonds per cell [W/m^3]
-  double fracture_heat_applied_ = 0;        // of it, what heat steps have used [J]
-  std::unique_ptr<ParticleZone<dim>> particles_;
-  std::unique_ptr<CrackPath<dim>> crack_; // runs with particles
-  std::vector<StepModule> modules_;
-  Advance mechanics_integrator_ = nullptr;
-  bool quasi_static_ = false; // Mechanics/Time integration = quasi_static
-  typename FemParticleCoupling<dim>::Parameters coupling_prm_;
-  std::unique_ptr<FemParticleCoupling<dim>> coupled_;
-  double coupled_dt_ = 0; // stable step of the coupled model, refreshed after conversions
-  unsigned int explicit_steps_ = 0;
-  double peak_load_ = 0;
-  PvdRecord solution_pvd_{"solution.pvd"}, temperature_pvd_{"temperature.pvd"},
-      particles_pvd_{"particles.pvd"};
-  unsigned int output_cycle_ = 0;
-  double initial_heat_content_ = 0;
-  unsigned int newton_iterations_ = 0, linear_iterations_ = 0;
-  unsigned long relaxation_iterations_ = 0; // quasi-static coupled runs
-  typename FemParticleCoupling<dim>::RelaxationReport last_relaxation_;
-};
+} // namespace
 
 template <int dim>
 Simulation<dim>::Simulation(const ScenarioFactoryArgs& args)
@@ -211,38 +108,15 @@ Simulation<dim>::Simulation(const ScenarioFactoryArgs& args)
     crack_ = std::make_unique<CrackPath<dim>>(sim_.crack);
 }
 
-// The particles the crack output looks at: reference positions, damage, and which of them
-// count: every particle of a zone; the free particles of a coupled run, either those this rank
-// owns (damage current there, no communication: history rows) or all of them after
-// synchronising every particle's damage to every rank (collective: the end of the run).
-template <int dim>
-struct CrackView {
-  const std::vector<dealii::Point<dim>>& positions;
-  const std::vector<double>& damage;
-  std::vector<std::uint8_t> counted;
-};
-
-template <int dim>
-CrackView<dim> crack_view(const FemParticleCoupling<dim>* coupled, const ParticleZone<dim>* zone,
-                          bool owned_only) {
-  if (coupled) {
-    if (!owned_only)
-      coupled->synchronise();
-    const auto& p = coupled->particles();
-    std::vector<std::uint8_t> counted(p.size());
-    for (unsigned int i = 0; i < p.size(); ++i)
-      counted[i] = coupled->is_free(i) && (!owned_only || coupled->is_owned(i));
-    return {p.reference_positions(), p.damages(), counted};
-  }
-  const auto& p = zone->particles();
-  return {p.reference_positions(), p.damages(), std::vector<std::uint8_t>(p.size(), 1)};
-}
-
 template <int dim>
 void Simulation<dim>::build(RunContext& ctx) {
   dealii::TimerOutput::Scope scope(ctx.timer(), "setup");
-  if (particles_)
+  if (particles_) {
     particles_->setup(ctx);
+    if (particles_->particles().size() == 1)
+      ctx.warn("the particle zone holds a single particle: it has no bonds, so no internal "
+               "force and an infinite stable step (Particles/Spacing against the box)");
+  }
   if (!effects_.mechanics && !effects_.heat)
     return;
   triangulation_ = std::make_unique<dealii::parallel::distributed::Triangulation<dim>>(
@@ -309,12 +183,59 @@ void Simulation<dim>::build(RunContext& ctx) {
                 << coupled_->horizon() << " m\n";
     }
   }
+  if (coupled_ && !ctx.restarting())
+    warn_outside_body(ctx);
   ctx.log() << "  mesh: " << triangulation_->n_global_active_cells() << " cells";
   if (mechanics_)
     ctx.log() << ", mechanics " << mechanics_->dof_handler().n_dofs() << " DoFs";
   if (heat_)
     ctx.log() << ", heat " << heat_->dof_handler().n_dofs() << " DoFs";
   ctx.log() << "\n";
+}
+
+// Boxes and cracks of the Coupling section that miss the body do nothing, which is almost
+// always a unit or sign slip in the scene: say so.
+template <int dim>
+void Simulation<dim>::warn_outside_body(RunContext& ctx) const {
+  dealii::Point<dim> lo, hi;
+  for (unsigned int d = 0; d < dim; ++d) {
+    lo[d] = std::numeric_limits<double>::max();
+    hi[d] = -std::numeric_limits<double>::max();
+  }
+  for (const auto& cell : triangulation_->active_cell_iterators())
+    if (cell->is_locally_owned())
+      for (const auto v : cell->vertex_indices())
+        for (unsigned int d = 0; d < dim; ++d) {
+          lo[d] = std::min(lo[d], cell->vertex(v)[d]);
+          hi[d] = std::max(hi[d], cell->vertex(v)[d]);
+        }
+  for (unsigned int d = 0; d < dim; ++d) {
+    lo[d] = dealii::Utilities::MPI::min(lo[d], ctx.comm());
+    hi[d] = dealii::Utilities::MPI::max(hi[d], ctx.comm());
+  }
+  const double tol = 1e-9 * lo.distance(hi);
+  std::ostringstream body;
+  body << "the body's bounding box [" << lo << "] to [" << hi << "] m";
+  auto box_misses = [&](const std::vector<double>& a, const std::vector<double>& b) {
+    for (unsigned int d = 0; d < dim && d < a.size() && d < b.size(); ++d)
+      if (std::max(a[d], b[d]) < lo[d] - tol || std::min(a[d], b[d]) > hi[d] + tol)
+        return true;
+    return false;
+  };
+  const auto& c = coupling_prm_;
+  if (!c.refine_lower.empty() && box_misses(c.refine_lower, c.refine_upper))
+    ctx.warn("Coupling/Refinement region lies outside " + body.str());
+  if (!c.region_lower.empty() && box_misses(c.region_lower, c.region_upper))
+    ctx.warn("Coupling/Initial region lies outside " + body.str());
+  for (std::size_t k = 0; k < c.cracks.size(); ++k)
+    for (std::size_t i = 0; i + dim <= c.cracks[k].size(); i += dim) {
+      bool inside = true;
+      for (unsigned int d = 0; d < dim; ++d)
+        inside &= c.cracks[k][i + d] >= lo[d] - tol && c.cracks[k][i + d] <= hi[d] + tol;
+      if (!inside)
+        ctx.warn("Coupling/Crack " + std::to_string(k + 1) + ": corner " +
+                 std::to_string(i / dim + 1) + " lies outside " + body.str());
+    }
 }
 
 template <int dim>
@@ -441,278 +362,6 @@ void Simulation<dim>::advance_particles(unsigned int, double time, double, RunCo
 }
 
 template <int dim>
-void Simulation<dim>::record(unsigned int step, double time, RunContext& ctx) {
-  dealii::TimerOutput::Scope scope(ctx.timer(), "history");
-  History::Row row{{"step", step}, {"time", time}, {"load_factor", time / sim_.end_time}};
-  if (mechanics_) {
-    if (sim_.reaction_boundary_id >= 0) {
-      const auto r = coupled_ ? coupled_->reaction_force(sim_.reaction_boundary_id)
-                              : mechanics_->reaction_force(sim_.reaction_boundary_id);
-      const char* names[] = {"reaction_x", "reaction_y", "reaction_z"};
-      for (unsigned int d = 0; d < dim; ++d)
-        row.emplace_back(names[d], r[d]);
-      peak_load_ = std::max(peak_load_, r.norm());
-    }
-    // Coupled: the FEM's active cells plus the bonds of the free particles.
-    row.emplace_back("strain_energy",
-                     coupled_ ? coupled_->strain_energy() : mechanics_->strain_energy());
-    row.emplace_back("max_von_mises", mechanics_->max_von_mises());
-    row.emplace_back("max_displacement", mechanics_->displacement().linfty_norm());
-  }
-  if (heat_) {
-    row.emplace_back("max_temperature", heat_->max_temperature());
-    row.emplace_back("heat_content", heat_->heat_content());
-  }
-  if (particles_)
-    particles_->add_history(row);
-  if (coupled_) {
-    row.emplace_back("free_particles", coupled_->n_free_particles());
-    row.emplace_back("converted_cells", coupled_->n_converted_cells());
-    row.emplace_back("broken_bonds", double(coupled_->n_broken_bonds()));
-    row.emplace_back("max_damage", coupled_->max_damage());
-    row.emplace_back("kinetic_energy", coupled_->kinetic_energy());
-    if (quasi_static_) {
-      row.emplace_back("relaxation_iterations", last_relaxation_.iterations);
-      row.emplace_back("relaxation_relative_residual", last_relaxation_.relative_residual);
-    }
-    if (heat_) {
-      row.emplace_back("fracture_dissipation", coupled_->fracture_dissipation());
-      row.emplace_back("fracture_heat", coupled_->fracture_heat());
-    }
-  }
-  if (crack_ && (coupled_ || particles_)) { // damage is current: max_damage / add_history
-    const auto view = crack_view<dim>(coupled_.get(), particles_.get(), true);
-    crack_->update(view.positions, view.damage, view.counted, time);
-  }
-  ctx.history().add(row);
-}
-
-template <int dim>
-void Simulation<dim>::write_output(unsigned int step, double time, RunContext& ctx) {
-  if (!sim_.write_vtu)
-    return;
-  dealii::TimerOutput::Scope scope(ctx.timer(), "output");
-  const std::string dir = ctx.output().path().string();
-  if (mechanics_) {
-    solution_pvd_.add(time, mechanics_->write_output(dir, "solution", output_cycle_));
-    solution_pvd_.write(ctx);
-  }
-  if (heat_) {
-    temperature_pvd_.add(time, heat_->write_output(dir, output_cycle_, "temperature"));
-    temperature_pvd_.write(ctx);
-  }
-  if (coupled_) {
-    particles_pvd_.add(time, coupled_->write_output(dir, output_cycle_));
-    particles_pvd_.write(ctx);
-  }
-  if (particles_) {
-    std::string name;
-    if (ctx.is_root())
-      name = particles_->write_output(dir, output_cycle_);
-    particles_pvd_.add(time, name);
-    particles_pvd_.write(ctx);
-  }
-  ++output_cycle_;
-  (void)step;
-}
-
-template <int dim>
-void Simulation<dim>::write_checkpoint(unsigned int step, double time, RunContext& ctx) {
-  dealii::TimerOutput::Scope scope(ctx.timer(), "checkpoint");
-  // Written into a fresh directory and swapped in, so the previous checkpoint survives a
-  // crash during writing.
-  const fs::path final_dir = ctx.checkpoint_dir();
-  const fs::path tmp_dir = final_dir.string() + ".new";
-  if (ctx.is_root()) {
-    fs::remove_all(tmp_dir);
-    fs::create_directories(tmp_dir);
-  }
-  MPI_Barrier(ctx.comm());
-  const std::string mesh_file = (tmp_dir / "mesh").string();
-  // Order matters: deserialisation below must follow the same order.
-  if (heat_)
-    heat_->prepare_for_serialization();
-  if (mechanics_)
-    mechanics_->prepare_for_serialization(mesh_file);
-  if (triangulation_)
-    triangulation_->save(mesh_file);
-  if (particles_ && ctx.is_root())
-    particles_->save((tmp_dir / "particles.bin").string());
-  if (coupled_)
-    coupled_->save((tmp_dir / "coupling.txt").string());
-  const nlohmann::json crack_json = crack_ ? crack_->to_json(ctx.comm()) : nlohmann::json();
-  if (ctx.is_root()) {
-    nlohmann::json state;
-    state["step"] = step;
-    state["time"] = time;
-    state["output_cycle"] = output_cycle_;
-    state["newton_iterations"] = newton_iterations_;
-    state["linear_iterations"] = linear_iterations_;
-    state["solution_pvd"] = solution_pvd_.to_json();
-    state["temperature_pvd"] = temperature_pvd_.to_json();
-    state["particles_pvd"] = particles_pvd_.to_json();
-    state["explicit_steps"] = explicit_steps_;
-    state["peak_load"] = peak_load_;
-    if (crack_)
-      state["crack_path"] = crack_json;
-    if (heat_) {
-      state["heat_supplied_energy"] = heat_->supplied_energy();
-      state["initial_heat_content"] = initial_heat_content_;
-    }
-    write_file_atomic(tmp_dir / "state.json", state.dump(2));
-    ctx.flush_history();
-    fs::copy_file(ctx.output().path() / "history.csv", tmp_dir / "history.csv",
-                  fs::copy_options::overwrite_existing);
-    const fs::path old_dir = final_dir.string() + ".old";
-    fs::remove_all(old_dir);
-    if (fs::exists(final_dir))
-      fs::rename(final_dir, old_dir);
-    fs::rename(tmp_dir, final_dir);
-    fs::remove_all(old_dir);
-  }
-  MPI_Barrier(ctx.comm());
-}
-
-template <int dim>
-unsigned int Simulation<dim>::load_checkpoint(RunContext& ctx) {
-  const fs::path dir = ctx.checkpoint_dir();
-  std::ifstream in(dir / "state.json");
-  if (!in)
-    throw InvalidInput("--restart " + ctx.output().path().string(), "no checkpoint in this run",
-                       "a run directory with checkpoint/state.json");
-  nlohmann::json state = nlohmann::json::parse(in);
-  const std::string mesh_file = (dir / "mesh").string();
-  if (triangulation_)
-    triangulation_->load(mesh_file);
-  if (particles_)
-    particles_->load((dir / "particles.bin").string());
-  if (heat_) {
-    heat_->deserialize();
-    heat_->set_time(state["time"].get<double>(), state.value("heat_supplied_energy", 0.0));
-    initial_heat_content_ = state.value("initial_heat_content", 0.0);
-  }
-  if (effects_.thermal_expansion && heat_ && mechanics_)
-    mechanics_->set_temperature_field(heat_->dof_handler(), heat_->solution(),
-                                      sim_.reference_temperature);
-  if (mechanics_)
-    mechanics_->deserialize(mesh_file);
-  if (coupled_)
-    coupled_->load((dir / "coupling.txt").string());
-  explicit_steps_ = state.value("explicit_steps", 0u);
-  peak_load_ = state.value("peak_load", 0.0);
-  if (crack_ && state.contains("crack_path"))
-    crack_->from_json(state["crack_path"]);
-  output_cycle_ = state["output_cycle"];
-  newton_iterations_ = state["newton_iterations"];
-  linear_iterations_ = state["linear_iterations"];
-  solution_pvd_.from_json(state["solution_pvd"]);
-  temperature_pvd_.from_json(state["temperature_pvd"]);
-  particles_pvd_.from_json(state["particles_pvd"]);
-  const double time = state["time"];
-  // Rows written after the checkpoint came from a segment that did not survive.
-  if (ctx.is_root()) {
-    ctx.history().load(dir / "history.csv");
-    ctx.history().truncate_after("time", time * (1 + 1e-12));
-  }
-  ctx.log() << "  restarting after step " << state["step"].get<unsigned int>() << ", t = " << time
-            << " s\n";
-  return state["step"];
-}
-
-template <int dim>
-void Simulation<dim>::report_figures(RunContext& ctx) {
-  Summary& s = ctx.summary();
-  s.set_figure("steps", sim_.steps, "-");
-  if (triangulation_)
-    s.set_figure("cells", triangulation_->n_global_active_cells(), "-");
-  if (particles_)
-    particles_->add_figures(ctx);
-  if (crack_ && (coupled_ || particles_)) {
-    const auto view = crack_view<dim>(coupled_.get(), particles_.get(), false);
-    crack_->add_figures(s, view.positions, view.damage, view.counted);
-    const std::string csv = crack_->csv(view.positions, view.damage, ctx.comm()); // collective
-    if (ctx.is_root())
-      ctx.output().write_atomic("crack_path.csv", csv);
-  }
-  if (coupled_) {
-    const char* force_unit = dim == 2 ? "N/m" : "N";
-    s.set_figure("peak_load_N", peak_load_, force_unit);
-    s.set_figure("free_particles", coupled_->n_free_particles(), "-");
-    s.set_figure("ghost_particles", coupled_->n_ghost_particles(), "-");
-    s.set_figure("converted_cells", coupled_->n_converted_cells(), "-");
-    s.set_figure("broken_bonds", double(coupled_->n_broken_bonds()), "-");
-    s.set_figure("max_damage", coupled_->max_damage(), "-");
-    s.set_figure("explicit_steps", explicit_steps_, "iterations");
-    double dm = 0, dp = 0, dk = 0, scale = 1;
-    for (const auto& r : coupled_->conversions()) {
-      dm = std::max(dm, r.mass_change_relative());
-      dp = std::max(dp, r.momentum_change_relative());
-      dk = std::max(dk, r.kinetic_change_relative());
-      scale = std::max(scale, r.max_velocity_scale);
-    }
-    s.set_figure("conversion_mass_change_relative", dm, "-");
-    s.set_figure("conversion_momentum_change_relative", dp, "-");
-    s.set_figure("conversion_kinetic_energy_change_relative", dk, "-");
-    s.set_figure("conversion_max_velocity_scale", scale, "-");
-    const auto& t = coupled_->timings();
-    for (const auto& [name, value] : {std::pair<const char*, double>{"criteria", t.criteria},
-                                      {"records", t.records},
-                                      {"deactivation", t.deactivation},
-                                      {"ghosts", t.ghosts},
-                                      {"bonds", t.bonds},
-                                      {"interface", t.interface},
-                                      {"totals", t.totals}})
-      s.set_figure(std::string("conversion_time_") + name + "_s", value, "s");
-    if (quasi_static_) {
-      s.set_figure("relaxation_iterations", double(relaxation_iterations_), "iterations");
-      s.set_figure("relaxation_relative_residual", last_relaxation_.relative_residual, "-");
-    }
-    s.set_figure("particle_spacing_m", coupled_->particle_spacing(), "m");
-  }
-  if (mechanics_) {
-    s.set_figure("mechanics_dofs", mechanics_->dof_handler().n_dofs(), "-");
-    s.set_figure("strain_energy",
-                 coupled_ ? coupled_->strain_energy() : mechanics_->strain_energy(),
-                 dim == 2 ? "J/m" : "J");
-    s.set_figure("max_von_mises", mechanics_->max_von_mises(), "Pa");
-    s.set_figure("max_displacement", mechanics_->displacement().linfty_norm(), "m");
-    if (sim_.reaction_boundary_id >= 0) {
-      const auto r = coupled_ ? coupled_->reaction_force(sim_.reaction_boundary_id)
-                              : mechanics_->reaction_force(sim_.reaction_boundary_id);
-      s.set_figure("reaction_force_norm", r.norm(), dim == 2 ? "N/m" : "N");
-    }
-    s.set_figure("newton_iterations", newton_iterations_, "iterations");
-    s.set_figure("linear_iterations", linear_iterations_, "iterations");
-  }
-  if (heat_) {
-    s.set_figure("heat_dofs", heat_->dof_handler().n_dofs(), "-");
-    s.set_figure("max_temperature", heat_->max_temperature(), "K");
-    s.set_figure("heat_content", heat_->heat_content(), dim == 2 ? "J/m" : "J");
-    s.set_figure("heat_supplied_energy", heat_->supplied_energy(), dim == 2 ? "J/m" : "J");
-    if (coupled_) {
-      // Particle heat sources: the energy of broken bonds, handed to the FEM heat equation one
-      // macro step later (staggered), so the last step's share is not yet in the body.
-      s.set_figure("fracture_dissipation", coupled_->fracture_dissipation(),
-                   dim == 2 ? "J/m" : "J");
-      s.set_figure("fracture_heat_applied", fracture_heat_applied_, dim == 2 ? "J/m" : "J");
-      if (fracture_heat_applied_ > 0) // the only source when the scene has no other heat input
-        s.set_figure("fracture_heat_supplied_relative",
-                     std::abs(heat_->supplied_energy() - fracture_heat_applied_) /
-                         fracture_heat_applied_,
-                     "-");
-    }
-    // Energy conservation: what the sources supplied is what the body gained (heat through
-    // fixed-temperature boundaries is not counted by the solver, so scenes with such
-    // boundaries do not balance).
-    const double gained = heat_->heat_content() - initial_heat_content_;
-    if (heat_->supplied_energy() != 0)
-      s.set_figure("heat_energy_balance_relative",
-                   std::abs(gained - heat_->supplied_energy()) / std::abs(heat_->supplied_energy()),
-                   "-");
-  }
-}
-
-template <int dim>
 void Simulation<dim>::run(RunContext& ctx) {
   const auto start = std::chrono::steady_clock::now();
   build(ctx);
@@ -745,10 +394,23 @@ void Simulation<dim>::run(RunContext& ctx) {
     const bool last = step == last_step;
     if (last || (sim_.output_interval > 0 && step % sim_.output_interval == 0))
       write_output(step, time, ctx);
-    if (last || (sim_.checkpoint_interval > 0 && step % sim_.checkpoint_interval == 0))
+    const bool checkpoint =
+        last || (sim_.checkpoint_interval > 0 && step % sim_.checkpoint_interval == 0);
+    if (checkpoint)
       write_checkpoint(step, time, ctx);
     else
       ctx.flush_history();
+    // SIGINT/SIGTERM: stop here with a checkpoint of this complete step and the figures so
+    // far; `run --restart` continues as if nothing had happened.
+    if (const int signal = ctx.interrupt_signal(); signal != 0 && !last) {
+      if (!checkpoint)
+        write_checkpoint(step, time, ctx);
+      ctx.progress().finish();
+      report_figures(ctx);
+      ctx.summary().set_figure("last_step", step, "-");
+      throw Interrupted(signal, "after step " + std::to_string(step) +
+                                    ", t = " + std::to_string(time) + " s");
+    }
     ctx.progress().update(step, time);
   }
   ctx.progress().finish();
@@ -759,7 +421,8 @@ void Simulation<dim>::run(RunContext& ctx) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), "s");
 }
 
-} // namespace
+template class Simulation<2>;
+template class Simulation<3>;
 
 SPINESIM_REGISTER_SCENARIO(
     simulation, "simulation",

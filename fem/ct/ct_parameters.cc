@@ -18,10 +18,10 @@ void CtParameters::declare(dealii::ParameterHandler& prm) {
 void CtParameters::declare_volume(dealii::ParameterHandler& prm) {
   using namespace dealii::Patterns;
   prm.declare_entry(
-      "Image file", "", Anything(),
+      "Image file", "", FileName(FileName::input),
       "CT volume: NIfTI (.nii, .nii.gz), NRRD (.nrrd, .nhdr) or MetaImage (.mha, "
       ".mhd); spacing read as mm and converted to m; relative to the scene file [-].");
-  prm.declare_entry("Label file", "", Anything(),
+  prm.declare_entry("Label file", "", FileName(FileName::input),
                     "Segmentation on the image grid (integer labels), needed when Labels is "
                     "not empty; relative to the scene file [-].");
   prm.declare_entry("Value type", "density", Selection("density|hu"),

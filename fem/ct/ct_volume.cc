@@ -1,6 +1,7 @@
 #include "fem/ct/ct_volume.h"
 
 #include "base/exceptions.h"
+#include "fem/ct/image_file_check.h"
 
 #include <itkImage.h>
 #include <itkImageFileReader.h>
@@ -68,6 +69,8 @@ DoubleImage::Pointer read_double_image(const std::string& file_name, Volume& geo
                        "image has " + std::to_string(io->GetNumberOfComponents()) +
                            " components per voxel",
                        "a 3-D scalar volume (one value per voxel)");
+  // ITK takes a short file as a smaller or zero-filled volume: count the bytes first.
+  check_image_data_complete(file_name, io->GetImageSizeInBytes());
 
   auto reader = itk::ImageFileReader<DoubleImage>::New();
   reader->SetImageIO(io);

@@ -1,0 +1,180 @@
+#include "applications/simulation/simulation_scenario.h"
+
+#include "applications/framework/checkpoint_manifest.h"
+#include "applications/framework/run_stops.h"
+#include "base/exceptions.h"
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <fstream>
+
+namespace spinesim::applications {
+
+using namespace framework;
+
+namespace fs = std::filesystem;
+
+template <int dim>
+void Simulation<dim>::write_checkpoint(unsigned int step, double time, RunContext& ctx) {
+  dealii::TimerOutput::Scope scope(ctx.timer(), "checkpoint");
+  // Written into a fresh directory and swapped in, so the previous checkpoint survives a
+  // crash during writing.
+  const fs::path final_dir = ctx.checkpoint_dir();
+  const fs::path tmp_dir = final_dir.string() + ".new";
+  if (ctx.is_root()) {
+    fs::remove_all(tmp_dir);
+    fs::create_directories(tmp_dir);
+  }
+  MPI_Barrier(ctx.comm());
+  const std::string mesh_file = (tmp_dir / "mesh").string();
+  // Order matters: deserialisation below must follow the same order.
+  if (heat_)
+    heat_->prepare_for_serialization();
+  if (mechanics_)
+    mechanics_->prepare_for_serialization(mesh_file);
+  if (triangulation_)
+    triangulation_->save(mesh_file);
+  if (particles_ && ctx.is_root())
+    particles_->save((tmp_dir / "particles.bin").string());
+  if (coupled_)
+    coupled_->save((tmp_dir / "coupling.txt").string());
+  const nlohmann::json crack_json = crack_ ? crack_->to_json(ctx.comm()) : nlohmann::json();
+  if (ctx.is_root()) {
+    nlohmann::json state;
+    state["step"] = step;
+    state["time"] = time;
+    state["output_cycle"] = output_cycle_;
+    state["newton_iterations"] = newton_iterations_;
+    state["linear_iterations"] = linear_iterations_;
+    state["solution_pvd"] = solution_pvd_.to_json();
+    state["temperature_pvd"] = temperature_pvd_.to_json();
+    state["particles_pvd"] = particles_pvd_.to_json();
+    state["final_step"] = sim_.steps;
+    state["explicit_steps"] = explicit_steps_;
+    state["peak_load"] = peak_load_;
+    state["relaxation_iterations"] = relaxation_iterations_;
+    state["last_relaxation_iterations"] = last_relaxation_.iterations;
+    state["last_relaxation_residual"] = last_relaxation_.relative_residual;
+    state["conversion_extremes"] = conversion_extremes().to_json();
+    if (crack_)
+      state["crack_path"] = crack_json;
+    if (heat_) {
+      state["heat_supplied_energy"] = heat_->supplied_energy();
+      state["initial_heat_content"] = initial_heat_content_;
+    }
+    write_file_atomic(tmp_dir / "state.json", state.dump(2));
+    ctx.flush_history();
+    fs::copy_file(ctx.output().path() / "history.csv", tmp_dir / "history.csv",
+                  fs::copy_options::overwrite_existing);
+    write_checkpoint_manifest(tmp_dir);
+    const fs::path old_dir = final_dir.string() + ".old";
+    fs::remove_all(old_dir);
+    if (fs::exists(final_dir))
+      fs::rename(final_dir, old_dir);
+    fs::rename(tmp_dir, final_dir);
+    fs::remove_all(old_dir);
+  }
+  MPI_Barrier(ctx.comm());
+}
+
+template <int dim>
+unsigned int Simulation<dim>::load_checkpoint(RunContext& ctx) {
+  const fs::path dir = ctx.checkpoint_dir();
+  if (!fs::exists(dir / "state.json"))
+    throw InvalidInput("--restart " + ctx.output().path().string(), "no checkpoint in this run",
+                       "a run directory with checkpoint/state.json");
+  // Sizes and hashes first: no reader below sees a truncated or altered file.
+  std::string problem_where, problem, allowed;
+  if (ctx.is_root()) {
+    try {
+      if (!verify_checkpoint_manifest(dir))
+        ctx.log() << "  note: checkpoint without a manifest (an older run): not verified\n";
+    } catch (const InvalidInput& e) {
+      problem_where = e.where();
+      problem = e.problem();
+      allowed = e.allowed();
+    }
+  }
+  problem = dealii::Utilities::MPI::broadcast(ctx.comm(), problem, 0);
+  if (!problem.empty())
+    throw InvalidInput(dealii::Utilities::MPI::broadcast(ctx.comm(), problem_where, 0), problem,
+                       dealii::Utilities::MPI::broadcast(ctx.comm(), allowed, 0));
+
+  nlohmann::json state;
+  try {
+    std::ifstream in(dir / "state.json");
+    state = nlohmann::json::parse(in);
+  } catch (const std::exception& e) {
+    throw InvalidInput((dir / "state.json").string(),
+                       std::string("checkpoint state unreadable: ") + e.what(),
+                       "the checkpoint as the run wrote it");
+  }
+  const unsigned int step = state.value("step", 0u);
+  const unsigned int final_step = state.value("final_step", sim_.steps);
+  if (step >= sim_.steps && step >= final_step)
+    throw NothingToRestart("the run in " + ctx.output().path().string() + " finished at step " +
+                           std::to_string(step) + " of " + std::to_string(sim_.steps));
+  if (sim_.stop_after_step > 0 && step >= sim_.stop_after_step)
+    throw NothingToRestart(
+        "the run in " + ctx.output().path().string() + " stopped at step " + std::to_string(step) +
+        " as Simulation/Stop after step = " + std::to_string(sim_.stop_after_step) +
+        " asks; continue with --set \"Simulation/Stop after step=0\" (or a "
+        "later step)");
+
+  // Readers that still fail (a checkpoint without a manifest) fail as bad input naming it.
+  const std::string mesh_file = (dir / "mesh").string();
+  try {
+    if (triangulation_)
+      triangulation_->load(mesh_file);
+    if (particles_)
+      particles_->load((dir / "particles.bin").string());
+    if (heat_) {
+      heat_->deserialize();
+      heat_->set_time(state["time"].get<double>(), state.value("heat_supplied_energy", 0.0));
+      initial_heat_content_ = state.value("initial_heat_content", 0.0);
+    }
+    if (effects_.thermal_expansion && heat_ && mechanics_)
+      mechanics_->set_temperature_field(heat_->dof_handler(), heat_->solution(),
+                                        sim_.reference_temperature);
+    if (mechanics_)
+      mechanics_->deserialize(mesh_file);
+    if (coupled_)
+      coupled_->load((dir / "coupling.txt").string());
+    explicit_steps_ = state.value("explicit_steps", 0u);
+    peak_load_ = state.value("peak_load", 0.0);
+    relaxation_iterations_ = state.value("relaxation_iterations", 0ul);
+    last_relaxation_.iterations = state.value("last_relaxation_iterations", 0u);
+    last_relaxation_.relative_residual = state.value("last_relaxation_residual", 0.0);
+    if (state.contains("conversion_extremes"))
+      restored_conversion_extremes_.from_json(state["conversion_extremes"]);
+    if (crack_ && state.contains("crack_path"))
+      crack_->from_json(state["crack_path"]);
+    output_cycle_ = state["output_cycle"];
+    newton_iterations_ = state["newton_iterations"];
+    linear_iterations_ = state["linear_iterations"];
+    solution_pvd_.from_json(state["solution_pvd"]);
+    temperature_pvd_.from_json(state["temperature_pvd"]);
+    particles_pvd_.from_json(state["particles_pvd"]);
+  } catch (const InvalidInput&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw InvalidInput(dir.string(), std::string("checkpoint unreadable: ") + e.what(),
+                       "the checkpoint as the run wrote it");
+  }
+  const double time = state["time"];
+  // Rows written after the checkpoint came from a segment that did not survive.
+  if (ctx.is_root()) {
+    ctx.history().load(dir / "history.csv");
+    ctx.history().truncate_after("time", time * (1 + 1e-12));
+  }
+  ctx.log() << "  restarting after step " << step << ", t = " << time << " s\n";
+  return step;
+}
+
+template void Simulation<2>::write_checkpoint(unsigned int, double, RunContext&);
+template void Simulation<3>::write_checkpoint(unsigned int, double, RunContext&);
+template unsigned int Simulation<2>::load_checkpoint(RunContext&);
+template unsigned int Simulation<3>::load_checkpoint(RunContext&);
+
+} // namespace spinesim::applications

@@ -1,0 +1,244 @@
+#include "applications/simulation/simulation_scenario.h"
+
+#include <algorithm>
+
+namespace spinesim::applications {
+
+using namespace framework;
+using coupling::FemParticleCoupling;
+
+namespace {
+
+// The particles the crack output looks at: reference positions, damage, and which of them
+// count: every particle of a zone; the free particles of a coupled run, either those this rank
+// owns (damage current there, no communication: history rows) or all of them after
+// synchronising every particle's damage to every rank (collective: the end of the run).
+template <int dim>
+struct CrackView {
+  const std::vector<dealii::Point<dim>>& positions;
+  const std::vector<double>& damage;
+  std::vector<std::uint8_t> counted;
+};
+
+template <int dim>
+CrackView<dim> crack_view(const FemParticleCoupling<dim>* coupled, const ParticleZone<dim>* zone,
+                          bool owned_only) {
+  if (coupled) {
+    if (!owned_only)
+      coupled->synchronise();
+    const auto& p = coupled->particles();
+    std::vector<std::uint8_t> counted(p.size());
+    for (unsigned int i = 0; i < p.size(); ++i)
+      counted[i] = coupled->is_free(i) && (!owned_only || coupled->is_owned(i));
+    return {p.reference_positions(), p.damages(), counted};
+  }
+  const auto& p = zone->particles();
+  return {p.reference_positions(), p.damages(), std::vector<std::uint8_t>(p.size(), 1)};
+}
+
+} // namespace
+
+template <int dim>
+void Simulation<dim>::record(unsigned int step, double time, RunContext& ctx) {
+  dealii::TimerOutput::Scope scope(ctx.timer(), "history");
+  History::Row row{{"step", step}, {"time", time}, {"load_factor", time / sim_.end_time}};
+  if (mechanics_) {
+    if (sim_.reaction_boundary_id >= 0) {
+      const auto r = coupled_ ? coupled_->reaction_force(sim_.reaction_boundary_id)
+                              : mechanics_->reaction_force(sim_.reaction_boundary_id);
+      const char* names[] = {"reaction_x", "reaction_y", "reaction_z"};
+      for (unsigned int d = 0; d < dim; ++d)
+        row.emplace_back(names[d], r[d]);
+      peak_load_ = std::max(peak_load_, r.norm());
+    }
+    // Coupled: the FEM's active cells plus the bonds of the free particles.
+    row.emplace_back("strain_energy",
+                     coupled_ ? coupled_->strain_energy() : mechanics_->strain_energy());
+    row.emplace_back("max_von_mises", mechanics_->max_von_mises());
+    row.emplace_back("max_displacement", mechanics_->displacement().linfty_norm());
+  }
+  if (heat_) {
+    row.emplace_back("max_temperature", heat_->max_temperature());
+    row.emplace_back("heat_content", heat_->heat_content());
+  }
+  if (particles_)
+    particles_->add_history(row);
+  if (coupled_) {
+    row.emplace_back("free_particles", coupled_->n_free_particles());
+    row.emplace_back("converted_cells", coupled_->n_converted_cells());
+    row.emplace_back("broken_bonds", double(coupled_->n_broken_bonds()));
+    row.emplace_back("max_damage", coupled_->max_damage());
+    row.emplace_back("kinetic_energy", coupled_->kinetic_energy());
+    if (quasi_static_) {
+      row.emplace_back("relaxation_iterations", last_relaxation_.iterations);
+      row.emplace_back("relaxation_relative_residual", last_relaxation_.relative_residual);
+    }
+    if (heat_) {
+      row.emplace_back("fracture_dissipation", coupled_->fracture_dissipation());
+      row.emplace_back("fracture_heat", coupled_->fracture_heat());
+    }
+  }
+  if (crack_ && (coupled_ || particles_)) { // damage is current: max_damage / add_history
+    const auto view = crack_view<dim>(coupled_.get(), particles_.get(), true);
+    crack_->update(view.positions, view.damage, view.counted, time);
+  }
+  ctx.history().add(row);
+}
+
+template <int dim>
+void Simulation<dim>::write_output(unsigned int step, double time, RunContext& ctx) {
+  if (!sim_.write_vtu)
+    return;
+  dealii::TimerOutput::Scope scope(ctx.timer(), "output");
+  const std::string dir = ctx.output().path().string();
+  if (mechanics_) {
+    solution_pvd_.add(time, mechanics_->write_output(dir, "solution", output_cycle_));
+    solution_pvd_.write(ctx);
+  }
+  if (heat_) {
+    temperature_pvd_.add(time, heat_->write_output(dir, output_cycle_, "temperature"));
+    temperature_pvd_.write(ctx);
+  }
+  if (coupled_) {
+    particles_pvd_.add(time, coupled_->write_output(dir, output_cycle_));
+    particles_pvd_.write(ctx);
+  }
+  if (particles_) {
+    std::string name;
+    if (ctx.is_root())
+      name = particles_->write_output(dir, output_cycle_);
+    particles_pvd_.add(time, name);
+    particles_pvd_.write(ctx);
+  }
+  ++output_cycle_;
+  (void)step;
+}
+
+template <int dim>
+void Simulation<dim>::report_figures(RunContext& ctx) {
+  Summary& s = ctx.summary();
+  s.set_figure("steps", sim_.steps, "-");
+  if (triangulation_)
+    s.set_figure("cells", triangulation_->n_global_active_cells(), "-");
+  if (particles_)
+    particles_->add_figures(ctx);
+  if (crack_ && (coupled_ || particles_)) {
+    const auto view = crack_view<dim>(coupled_.get(), particles_.get(), false);
+    crack_->add_figures(s, view.positions, view.damage, view.counted);
+    const std::string csv = crack_->csv(view.positions, view.damage, ctx.comm()); // collective
+    if (ctx.is_root())
+      ctx.output().write_atomic("crack_path.csv", csv);
+  }
+  if (coupled_) {
+    const char* force_unit = dim == 2 ? "N/m" : "N";
+    s.set_figure("peak_load_N", peak_load_, force_unit);
+    s.set_figure("free_particles", coupled_->n_free_particles(), "-");
+    s.set_figure("ghost_particles", coupled_->n_ghost_particles(), "-");
+    s.set_figure("converted_cells", coupled_->n_converted_cells(), "-");
+    s.set_figure("broken_bonds", double(coupled_->n_broken_bonds()), "-");
+    s.set_figure("max_damage", coupled_->max_damage(), "-");
+    s.set_figure("explicit_steps", explicit_steps_, "iterations");
+    const ConversionExtremes c = conversion_extremes();
+    s.set_figure("conversion_mass_change_relative", c.mass, "-");
+    s.set_figure("conversion_momentum_change_relative", c.momentum, "-");
+    s.set_figure("conversion_kinetic_energy_change_relative", c.kinetic, "-");
+    s.set_figure("conversion_max_velocity_scale", c.velocity_scale, "-");
+    const auto& t = coupled_->timings();
+    for (const auto& [name, value] : {std::pair<const char*, double>{"criteria", t.criteria},
+                                      {"records", t.records},
+                                      {"deactivation", t.deactivation},
+                                      {"ghosts", t.ghosts},
+                                      {"bonds", t.bonds},
+                                      {"interface", t.interface},
+                                      {"totals", t.totals}})
+      s.set_figure(std::string("conversion_time_") + name + "_s", value, "s");
+    if (quasi_static_) {
+      s.set_figure("relaxation_iterations", double(relaxation_iterations_), "iterations");
+      s.set_figure("relaxation_relative_residual", last_relaxation_.relative_residual, "-");
+    }
+    s.set_figure("particle_spacing_m", coupled_->particle_spacing(), "m");
+  }
+  if (mechanics_) {
+    s.set_figure("mechanics_dofs", mechanics_->dof_handler().n_dofs(), "-");
+    s.set_figure("strain_energy",
+                 coupled_ ? coupled_->strain_energy() : mechanics_->strain_energy(),
+                 dim == 2 ? "J/m" : "J");
+    s.set_figure("max_von_mises", mechanics_->max_von_mises(), "Pa");
+    s.set_figure("max_displacement", mechanics_->displacement().linfty_norm(), "m");
+    if (sim_.reaction_boundary_id >= 0) {
+      const auto r = coupled_ ? coupled_->reaction_force(sim_.reaction_boundary_id)
+                              : mechanics_->reaction_force(sim_.reaction_boundary_id);
+      s.set_figure("reaction_force_norm", r.norm(), dim == 2 ? "N/m" : "N");
+    }
+    s.set_figure("newton_iterations", newton_iterations_, "iterations");
+    s.set_figure("linear_iterations", linear_iterations_, "iterations");
+  }
+  if (heat_) {
+    s.set_figure("heat_dofs", heat_->dof_handler().n_dofs(), "-");
+    s.set_figure("max_temperature", heat_->max_temperature(), "K");
+    s.set_figure("heat_content", heat_->heat_content(), dim == 2 ? "J/m" : "J");
+    s.set_figure("heat_supplied_energy", heat_->supplied_energy(), dim == 2 ? "J/m" : "J");
+    if (coupled_) {
+      // Particle heat sources: the energy of broken bonds, handed to the FEM heat equation one
+      // macro step later (staggered), so the last step's share is not yet in the body.
+      s.set_figure("fracture_dissipation", coupled_->fracture_dissipation(),
+                   dim == 2 ? "J/m" : "J");
+      s.set_figure("fracture_heat_applied", fracture_heat_applied_, dim == 2 ? "J/m" : "J");
+      if (fracture_heat_applied_ > 0) // the only source when the scene has no other heat input
+        s.set_figure("fracture_heat_supplied_relative",
+                     std::abs(heat_->supplied_energy() - fracture_heat_applied_) /
+                         fracture_heat_applied_,
+                     "-");
+    }
+    // Energy conservation: what the sources supplied is what the body gained (heat through
+    // fixed-temperature boundaries is not counted by the solver, so scenes with such
+    // boundaries do not balance).
+    const double gained = heat_->heat_content() - initial_heat_content_;
+    if (heat_->supplied_energy() != 0)
+      s.set_figure("heat_energy_balance_relative",
+                   std::abs(gained - heat_->supplied_energy()) / std::abs(heat_->supplied_energy()),
+                   "-");
+  }
+}
+
+template <int dim>
+typename Simulation<dim>::ConversionExtremes Simulation<dim>::conversion_extremes() const {
+  ConversionExtremes c = restored_conversion_extremes_;
+  if (coupled_)
+    for (const auto& r : coupled_->conversions()) {
+      c.mass = std::max(c.mass, r.mass_change_relative());
+      c.momentum = std::max(c.momentum, r.momentum_change_relative());
+      c.kinetic = std::max(c.kinetic, r.kinetic_change_relative());
+      c.velocity_scale = std::max(c.velocity_scale, r.max_velocity_scale);
+    }
+  return c;
+}
+
+template <int dim>
+nlohmann::json Simulation<dim>::ConversionExtremes::to_json() const {
+  return {{"mass", mass},
+          {"momentum", momentum},
+          {"kinetic", kinetic},
+          {"velocity_scale", velocity_scale}};
+}
+
+template <int dim>
+void Simulation<dim>::ConversionExtremes::from_json(const nlohmann::json& j) {
+  mass = j.value("mass", 0.0);
+  momentum = j.value("momentum", 0.0);
+  kinetic = j.value("kinetic", 0.0);
+  velocity_scale = j.value("velocity_scale", 1.0);
+}
+
+template struct Simulation<2>::ConversionExtremes;
+template struct Simulation<3>::ConversionExtremes;
+template Simulation<2>::ConversionExtremes Simulation<2>::conversion_extremes() const;
+template Simulation<3>::ConversionExtremes Simulation<3>::conversion_extremes() const;
+template void Simulation<2>::record(unsigned int, double, RunContext&);
+template void Simulation<3>::record(unsigned int, double, RunContext&);
+template void Simulation<2>::write_output(unsigned int, double, RunContext&);
+template void Simulation<3>::write_output(unsigned int, double, RunContext&);
+template void Simulation<2>::report_figures(RunContext&);
+template void Simulation<3>::report_figures(RunContext&);
+
+} // namespace spinesim::applications

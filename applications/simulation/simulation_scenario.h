@@ -1,0 +1,110 @@
+#ifndef SPINESIM_APPLICATIONS_SIMULATION_SCENARIO_H
+#define SPINESIM_APPLICATIONS_SIMULATION_SCENARIO_H
+
+// The `simulation` scenario's class (simulation.h describes the step loop). Its members are
+// defined by topic: the model and the step loop in simulation.cc, history rows, field output
+// and figures in simulation_output.cc, checkpoints in simulation_checkpoint.cc.
+
+#include "applications/framework/run_context.h"
+#include "applications/framework/scenario.h"
+#include "applications/simulation/crack_path.h"
+#include "applications/simulation/particle_zone.h"
+#include "applications/simulation/pvd_record.h"
+#include "applications/simulation/simulation.h"
+#include "coupling/fem_particle_coupling.h"
+#include "fem/heat/heat_solver.h"
+#include "fem/materials/law_parameters.h"
+#include "fem/mechanics_solver.h"
+#include "fem/mesh.h"
+
+#include <deal.II/distributed/tria.h>
+
+#include <nlohmann/json.hpp>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace spinesim::applications {
+
+template <int dim>
+class Simulation : public framework::Scenario {
+ public:
+  explicit Simulation(const framework::ScenarioFactoryArgs& args);
+  void run(framework::RunContext& ctx) override;
+  bool check_by_building() const override { return true; }
+
+ private:
+  void build(framework::RunContext& ctx);
+  // The step modules: one per switched-on effect, in the order a step advances them (heat,
+  // mechanics, particles). The list is made once in build(); the step loop walks it.
+  using Advance = void (Simulation::*)(unsigned int step, double time, double dt,
+                                       framework::RunContext& ctx);
+  struct StepModule {
+    std::string name; // phase timer and log
+    Advance advance;
+  };
+  void plan_step_modules(framework::RunContext& ctx);
+  void warn_outside_body(framework::RunContext& ctx) const;
+  void advance_heat(unsigned int step, double time, double dt, framework::RunContext& ctx);
+  // Mechanics: the integrator chosen in plan_step_modules, then the heat it hands over.
+  void advance_mechanics(unsigned int step, double time, double dt, framework::RunContext& ctx);
+  void coupled_relaxation(unsigned int step, double time, double dt, framework::RunContext& ctx);
+  void coupled_explicit(unsigned int step, double time, double dt, framework::RunContext& ctx);
+  void fem_explicit(unsigned int step, double time, double dt, framework::RunContext& ctx);
+  void fem_quasi_static(unsigned int step, double time, double dt, framework::RunContext& ctx);
+  void advance_particles(unsigned int step, double time, double dt, framework::RunContext& ctx);
+  void record(unsigned int step, double time, framework::RunContext& ctx);
+  void write_output(unsigned int step, double time, framework::RunContext& ctx);
+  void write_checkpoint(unsigned int step, double time, framework::RunContext& ctx);
+  // Returns the step to continue after.
+  unsigned int load_checkpoint(framework::RunContext& ctx);
+  void report_figures(framework::RunContext& ctx);
+
+  dealii::ParameterHandler& prm_;
+  const framework::Effects& effects_;
+  SimulationParameters sim_;
+  fem::MeshParameters mesh_prm_;
+  materials::LawParameters law_prm_;
+  typename fem::MechanicsSolver<dim>::Parameters mech_prm_;
+  typename fem::HeatSolver<dim>::Parameters heat_prm_;
+
+  std::unique_ptr<dealii::parallel::distributed::Triangulation<dim>> triangulation_;
+  std::shared_ptr<const materials::ConstitutiveLaw> law_;
+  std::unique_ptr<fem::MechanicsSolver<dim>> mechanics_;
+  std::unique_ptr<fem::HeatSolver<dim>> heat_;
+  dealii::Vector<double> plastic_heating_;  // plastic dissipation rate per cell [W/m^3]
+  dealii::Vector<double> fracture_heating_; // heat of broken bonds per cell [W/m^3]
+  double fracture_heat_applied_ = 0;        // of it, what heat steps have used [J]
+  std::unique_ptr<ParticleZone<dim>> particles_;
+  std::unique_ptr<CrackPath<dim>> crack_; // runs with particles
+  std::vector<StepModule> modules_;
+  Advance mechanics_integrator_ = nullptr;
+  bool quasi_static_ = false; // Mechanics/Time integration = quasi_static
+  typename coupling::FemParticleCoupling<dim>::Parameters coupling_prm_;
+  std::unique_ptr<coupling::FemParticleCoupling<dim>> coupled_;
+  double coupled_dt_ = 0; // stable step of the coupled model, refreshed after conversions
+  unsigned int explicit_steps_ = 0;
+  double peak_load_ = 0;
+  PvdRecord solution_pvd_{"solution.pvd"}, temperature_pvd_{"temperature.pvd"},
+      particles_pvd_{"particles.pvd"};
+  unsigned int output_cycle_ = 0;
+  double initial_heat_content_ = 0;
+  unsigned int newton_iterations_ = 0, linear_iterations_ = 0;
+  unsigned long relaxation_iterations_ = 0; // quasi-static coupled runs
+  typename coupling::FemParticleCoupling<dim>::RelaxationReport last_relaxation_;
+  // The worst conservation defects of all conversions of the run (a restart carries those of
+  // the segments before it in the checkpoint).
+  struct ConversionExtremes {
+    double mass = 0, momentum = 0, kinetic = 0; // relative changes [-]
+    double velocity_scale = 1;                  // largest velocity-fluctuation scale [-]
+    nlohmann::json to_json() const;
+    void from_json(const nlohmann::json& j);
+  };
+  ConversionExtremes conversion_extremes() const; // restored ∪ this segment's conversions
+  ConversionExtremes restored_conversion_extremes_;
+};
+
+} // namespace spinesim::applications
+
+#endif

@@ -1,0 +1,146 @@
+# Hostile input, as a new user types it: every case asserts the exit code, the message, and
+# that the directory an earlier run left is byte-identical afterwards (tests/support/
+# hostile_case.cmake). Cases run one at a time per directory (RESOURCE_LOCK on their folder).
+set(_h ${CMAKE_CURRENT_SOURCE_DIR})
+set(_runs ${CMAKE_CURRENT_BINARY_DIR}/runs)
+
+# spinesim_add_hostile_test(<name> ARGS ... [EXIT n] [MATCH re] [PREPARE how] [EXTRA_FILE f]
+#                           [EXTRA_COPY file:name] [TRUNCATE f] [FLIP f] [WORKDIR d] [ABSENT p] [THEN_ARGS ...] [THEN_EXIT n])
+function(spinesim_add_hostile_test name)
+  cmake_parse_arguments(ARG "" "EXIT;MATCH;PREPARE;EXTRA_FILE;EXTRA_COPY;TRUNCATE;FLIP;WORKDIR;ABSENT;THEN_EXIT"
+                        "ARGS;THEN_ARGS" ${ARGN})
+  if(NOT DEFINED ARG_EXIT)
+    set(ARG_EXIT 2)
+  endif()
+  if(NOT DEFINED ARG_THEN_EXIT)
+    set(ARG_THEN_EXIT 0)
+  endif()
+  string(REPLACE ";" "|" _args "${ARG_ARGS}")
+  string(REPLACE ";" "|" _then "${ARG_THEN_ARGS}")
+  add_test(NAME hostile.${name}
+    COMMAND ${CMAKE_COMMAND} -DSPINESIM=$<TARGET_FILE:spinesim> -DKEEP=${_runs}/${name}/keep
+      "-DARGS=${_args}" -DEXIT=${ARG_EXIT} "-DMATCH=${ARG_MATCH}" -DPREPARE=${ARG_PREPARE}
+      -DEXTRA_FILE=${ARG_EXTRA_FILE} -DEXTRA_COPY=${ARG_EXTRA_COPY} -DTRUNCATE=${ARG_TRUNCATE} -DFLIP=${ARG_FLIP}
+      -DWORKDIR=${ARG_WORKDIR} -DABSENT=${ARG_ABSENT} "-DTHEN_ARGS=${_then}"
+      -DTHEN_EXIT=${ARG_THEN_EXIT}
+      -P ${PROJECT_SOURCE_DIR}/tests/support/hostile_case.cmake)
+  set_tests_properties(hostile.${name} PROPERTIES LABELS "hostile;cli")
+endfunction()
+
+set(_quick ${_h}/quick.prm)
+
+# --force with a bad --set: refused before anything is touched.
+spinesim_add_hostile_test(force_bad_set_keeps_run PREPARE run:${_quick}
+  ARGS run ${_quick} --output @KEEP@ --force --set "Simulation/End time=-1"
+  MATCH "Simulation/End time")
+# --force with bad input found only while the model is built (the mesh file is missing):
+# the new run was staged beside the old one and is dropped; the old run stays.
+spinesim_add_hostile_test(force_late_bad_input_keeps_run PREPARE run:${_quick}
+  ARGS run ${_quick} --output @KEEP@ --force --set "Geometry/Shape=file"
+       --set "Geometry/Mesh file=no_such_mesh.msh"
+  MATCH "Mesh file.*cannot open")
+# The same into a new directory: nothing is left, so the corrected run is not refused.
+spinesim_add_hostile_test(late_bad_input_leaves_nothing
+  ARGS run ${_quick} --output ${_runs}/late_bad_input_leaves_nothing/new --set "Geometry/Shape=file"
+       --set "Geometry/Mesh file=no_such_mesh.msh"
+  MATCH "Mesh file.*cannot open" ABSENT ${_runs}/late_bad_input_leaves_nothing/new
+  THEN_ARGS run ${_quick} --output ${_runs}/late_bad_input_leaves_nothing/new --progress off)
+# --force never replaces the current directory, a parent of it, a directory holding the
+# scene, a directory of unrelated files, or a run with a user's file in it.
+spinesim_add_hostile_test(force_current_directory PREPARE run:${_quick} WORKDIR @KEEP@
+  ARGS run ${_quick} --output . --force MATCH "current directory")
+spinesim_add_hostile_test(force_parent_directory PREPARE run:${_quick} WORKDIR @KEEP@/checkpoint
+  ARGS run ${_quick} --output .. --force MATCH "current directory or one of its parents")
+spinesim_add_hostile_test(force_unrelated_files PREPARE files
+  ARGS run ${_quick} --output @KEEP@ --force MATCH "does not look like a spinesim run")
+spinesim_add_hostile_test(force_run_with_user_file PREPARE run:${_quick} EXTRA_FILE notes.docx
+  ARGS run ${_quick} --output @KEEP@ --force MATCH "notes.docx, which no spinesim run writes")
+spinesim_add_hostile_test(force_directory_of_scene PREPARE run:${_quick} EXTRA_COPY ${_quick}:scene.prm
+  ARGS run @KEEP@/scene.prm --output @KEEP@ --force MATCH "which this run reads")
+# Restarts: a finished run says so and changes nothing; a truncated or altered checkpoint is
+# bad input naming the file, and the run's summary and log stay as they were.
+spinesim_add_hostile_test(restart_finished_run PREPARE run:${_quick} EXIT 0
+  ARGS run --restart @KEEP@ MATCH "finished at step 4 of 4; nothing changed")
+spinesim_add_hostile_test(restart_truncated_mesh PREPARE staged:${_quick} TRUNCATE checkpoint/mesh
+  ARGS run --restart @KEEP@ MATCH "checkpoint/mesh.*bytes.*truncated")
+spinesim_add_hostile_test(restart_truncated_state PREPARE staged:${_quick}
+  TRUNCATE checkpoint/state.json ARGS run --restart @KEEP@ MATCH "state.json.*truncated")
+spinesim_add_hostile_test(restart_altered_mesh PREPARE staged:${_quick} FLIP checkpoint/mesh
+  ARGS run --restart @KEEP@ MATCH "checkpoint/mesh.*altered")
+spinesim_add_hostile_test(restart_truncated_manifest PREPARE staged:${_quick}
+  TRUNCATE checkpoint/manifest.json ARGS run --restart @KEEP@ MATCH "manifest unreadable")
+# Resource exhaustion by a typo: absurd thread counts are bad input, not a hang.
+spinesim_add_hostile_test(threads_100000 PREPARE run:${_quick}
+  ARGS run ${_quick} --output @KEEP@ --force --threads 100000 MATCH "--threads 100000.*allowed: 0")
+spinesim_add_hostile_test(threads_20000 PREPARE run:${_quick}
+  ARGS run ${_quick} --output @KEEP@ --force --threads 20000 MATCH "--threads 20000")
+# Scene files: a scene including itself, a malformed list, an include resolved against the
+# including file's folder (run from another working directory).
+spinesim_add_hostile_test(self_include ARGS check ${_h}/self_include.prm
+  MATCH "self_include.prm:3.*includes it again")
+spinesim_add_hostile_test(malformed_list ARGS check ${_quick} --set "Geometry/Lengths=1, abc"
+  MATCH "Geometry/Lengths")
+spinesim_add_hostile_test(include_relative_to_scene EXIT 0 WORKDIR ${CMAKE_CURRENT_BINARY_DIR}
+  ARGS check ${_h}/include_parent.prm MATCH "ok")
+# Mesh files that deal.II's GridIn would misread (a letter in a coordinate read as 0) or that
+# would make it allocate without bound (a garbled node number or count), and a truncated
+# file: exit 2 naming the file and line, and the earlier run in the target survives --force.
+foreach(_case "letter_in_coordinate.msh:letter_in_coordinate.msh:16: '2O' is not a number"
+              "node_count_too_large.msh:node_count_too_large.msh:13: node count 600000000 is larger"
+              "garbled_node_number.inp:garbled_node_number.inp:7: node number 2000000000000 is larger"
+              "truncated.vtk:truncated.vtk:8: the file ends early")
+  string(REGEX MATCH "^([^:]+):(.*)$" _m "${_case}")
+  set(_file ${CMAKE_MATCH_1})
+  set(_match ${CMAKE_MATCH_2})
+  string(REGEX REPLACE "[.]" "_" _tag "${_file}")
+  spinesim_add_hostile_test(mesh_${_tag} PREPARE run:${_quick}
+    ARGS run ${_quick} --output @KEEP@ --force --set "Geometry/Shape=file"
+         --set "Geometry/Mesh file=${_h}/data/${_file}"
+    MATCH "${_match}")
+endforeach()
+# CT images cut short: ITK would read a smaller or zero-filled volume; here the byte counts
+# are checked against the header first (compressed: the stream must reach its end). `check`
+# builds the vertebra model as `run` does, so it reads the image too.
+set(_vertebra ${PROJECT_SOURCE_DIR}/applications/scenes/vertebra_compression.prm)
+set(_im ${PROJECT_SOURCE_DIR}/meshes/verse004/sub-verse004_0000_vertebra_21_im.nii.gz)
+spinesim_add_hostile_test(ct_truncated_nii_gz PREPARE copy:${_im}
+  TRUNCATE sub-verse004_0000_vertebra_21_im.nii.gz
+  ARGS check ${_vertebra} --set "CT/Image file=@KEEP@/sub-verse004_0000_vertebra_21_im.nii.gz"
+  MATCH "vertebra_21_im.nii.gz.*compressed voxel data ends early")
+spinesim_add_hostile_test(ct_truncated_nii PREPARE gunzip:${_im}
+  TRUNCATE sub-verse004_0000_vertebra_21_im.nii
+  ARGS check ${_vertebra} --set "CT/Image file=@KEEP@/sub-verse004_0000_vertebra_21_im.nii"
+  MATCH "vertebra_21_im.nii.*bytes of voxel data, the header announces")
+# The uncut image passes the same check (the check above fails for the cut, not for the file).
+spinesim_add_hostile_test(ct_complete_nii EXIT 0 PREPARE gunzip:${_im}
+  ARGS check ${_vertebra} --set "CT/Image file=@KEEP@/sub-verse004_0000_vertebra_21_im.nii"
+  MATCH "model built up to the first step")
+
+# SIGTERM after step 7 of the default scene (coupled cracked plate, checkpoints every 5 steps,
+# so the interrupt writes its own), then --restart: exit 143 with status "interrupted", and
+# the restarted run ends with the figures and history of the uninterrupted run.
+add_test(NAME hostile.interrupt_and_restart
+  COMMAND ${CMAKE_COMMAND} -DSPINESIM=$<TARGET_FILE:spinesim> -DDIR=${_runs}/interrupt_and_restart
+    -DAFTER_ROWS=7 -DTOL=1e-12 -DSET=Simulation/Write\ VTU=false
+    -P ${PROJECT_SOURCE_DIR}/tests/support/interrupt_case.cmake)
+set_tests_properties(hostile.interrupt_and_restart PROPERTIES LABELS "hostile;cli" TIMEOUT 300)
+
+# `check` rejects what `run` rejects before its first step, with the same message.
+foreach(_case "Material/Young's modulus=0:Young's modulus"
+              "Simulation/End time=0:Simulation/End time"
+              "Geometry/Shape=file:Mesh file"
+              "Geometry/Lengths=1, 0:Geometry/Lengths"
+              "Geometry/Subdivisions=0, 4:Subdivisions")
+  string(REGEX MATCH "^([^:]+):(.*)$" _m "${_case}")
+  set(_set ${CMAKE_MATCH_1})
+  set(_match ${CMAKE_MATCH_2})
+  string(REGEX REPLACE "[^A-Za-z0-9]+" "_" _tag "${_set}")
+  spinesim_add_hostile_test(check_${_tag} ARGS check ${_quick} --set "${_set}" MATCH "${_match}")
+endforeach()
+spinesim_add_hostile_test(check_missing_ct_image
+  ARGS check ${_vertebra} --set "CT/Image file=no_such_image.nii.gz" MATCH "no_such_image.nii.gz.*not found")
+spinesim_add_hostile_test(check_particle_spacing_zero ARGS check ${PROJECT_SOURCE_DIR}/tests/cli/one_particle.prm
+  --set "Particles/Spacing=0" MATCH "Particles/Spacing")
+spinesim_add_hostile_test(check_horizon_ratio_below_one
+  ARGS check ${PROJECT_SOURCE_DIR}/applications/scenes/default.prm
+       --set "Coupling/Bond based/Horizon ratio=0.5" MATCH "Horizon ratio")

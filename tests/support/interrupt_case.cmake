@@ -1,0 +1,97 @@
+# SIGTERM in the middle of a run, then --restart: the interrupted run exits 143 with status
+# "interrupted" and a checkpoint of its last complete step; the restarted run ends with the
+# summary.json figures and the history.csv of a run that was never interrupted.
+# Variables: SPINESIM, SCENE (empty: the embedded default scene), DIR (work folder), SET
+# ("Section/Param=value|..." for all three runs), AFTER_ROWS (history rows to wait for),
+# TOL (relative tolerance of the summary figures; history values must agree to the digit).
+cmake_minimum_required(VERSION 3.19)
+string(REPLACE "|" ";" _sets "${SET}")
+set(_common ${SCENE} --progress off)
+foreach(_s ${_sets})
+  list(APPEND _common --set "${_s}")
+endforeach()
+file(REMOVE_RECURSE ${DIR})
+file(MAKE_DIRECTORY ${DIR})
+
+execute_process(COMMAND ${SPINESIM} run ${_common} --output ${DIR}/reference RESULT_VARIABLE _rc
+                OUTPUT_QUIET)
+if(NOT _rc EQUAL 0)
+  message(FATAL_ERROR "the uninterrupted reference run failed (exit ${_rc})")
+endif()
+
+# The run in the background; SIGTERM once AFTER_ROWS steps are in history.csv (the header and
+# the row of step 0 come first).
+list(JOIN _common "' '" _quoted)
+set(_script "'${SPINESIM}' run '${_quoted}' --output '${DIR}/run' > '${DIR}/run.out' 2>&1 &
+pid=$!
+rows=$((${AFTER_ROWS} + 2)); waited=0
+while [ \"$(cat '${DIR}/run/history.csv' 2>/dev/null | wc -l)\" -lt $rows ]; do
+  sleep 0.02; waited=$((waited + 1))
+  if ! kill -0 $pid 2>/dev/null || [ $waited -gt 6000 ]; then echo 'ended before the signal'; exit 90; fi
+done
+kill -TERM $pid
+wait $pid")
+execute_process(COMMAND sh -c "${_script}" RESULT_VARIABLE _rc OUTPUT_VARIABLE _o ERROR_VARIABLE _e)
+file(READ ${DIR}/run.out _log)
+message("${_o}${_e}\n${_log}")
+if(NOT _rc EQUAL 143)
+  message(FATAL_ERROR "interrupted run: exit code ${_rc}, expected 143 (SIGTERM)")
+endif()
+file(READ ${DIR}/run/summary.json _json)
+string(JSON _status GET "${_json}" status)
+string(JSON _last GET "${_json}" figures last_step value)
+if(NOT _status STREQUAL "interrupted")
+  message(FATAL_ERROR "status '${_status}', expected 'interrupted'")
+endif()
+if(NOT EXISTS ${DIR}/run/checkpoint/manifest.json)
+  message(FATAL_ERROR "no checkpoint after the interrupt")
+endif()
+message(STATUS "interrupted after step ${_last}")
+
+execute_process(COMMAND ${SPINESIM} run --restart ${DIR}/run --progress off RESULT_VARIABLE _rc
+                OUTPUT_VARIABLE _o ERROR_VARIABLE _e)
+if(NOT _rc EQUAL 0)
+  message(FATAL_ERROR "restart: exit code ${_rc}\n${_o}${_e}")
+endif()
+file(READ ${DIR}/run/log.txt _log)
+if(NOT _log MATCHES "running.*interrupted by SIGTERM.*restarting")
+  message(FATAL_ERROR "log.txt does not hold both segments:\n${_log}")
+endif()
+
+# Figures: compare_summaries (timings and iteration counts aside) to TOL.
+execute_process(COMMAND ${CMAKE_COMMAND} -DA=${DIR}/reference/summary.json
+                        -DB=${DIR}/run/summary.json -DTOL=${TOL} -DFLOOR=0
+                        -P ${CMAKE_CURRENT_LIST_DIR}/compare_summaries.cmake
+                RESULT_VARIABLE _rc OUTPUT_VARIABLE _o ERROR_VARIABLE _e)
+if(NOT _rc EQUAL 0)
+  message(FATAL_ERROR "summary.json differs from the uninterrupted run:\n${_o}${_e}")
+endif()
+# History: the same rows, value by value.
+file(STRINGS ${DIR}/reference/history.csv _ref)
+file(STRINGS ${DIR}/run/history.csv _got)
+list(LENGTH _ref _nref)
+list(LENGTH _got _ngot)
+if(NOT _nref EQUAL _ngot)
+  message(FATAL_ERROR "history.csv has ${_ngot} lines, the uninterrupted run ${_nref}")
+endif()
+math(EXPR _lastline "${_nref} - 1")
+foreach(_i RANGE ${_lastline})
+  list(GET _ref ${_i} _a)
+  list(GET _got ${_i} _b)
+  if(_a STREQUAL _b)
+    continue()
+  endif()
+  string(REPLACE "," ";" _va "${_a}")
+  string(REPLACE "," ";" _vb "${_b}")
+  list(LENGTH _va _n)
+  math(EXPR _n "${_n} - 1")
+  foreach(_k RANGE ${_n})
+    list(GET _va ${_k} _x)
+    list(GET _vb ${_k} _y)
+    # Every printed digit: a restart continues from the exact state (bit for bit).
+    if(NOT _x STREQUAL _y)
+      message(FATAL_ERROR "history.csv line ${_i}, column ${_k}: ${_y}, uninterrupted ${_x}")
+    endif()
+  endforeach()
+endforeach()
+message(STATUS "restart reproduced ${_nref} history lines and every figure")
