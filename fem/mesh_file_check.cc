@@ -268,10 +268,24 @@ void check_vtk(LineReader& r) {
         r.fail("short POINTS line", "'POINTS n double'");
       numbers(3 * bounded(r, t[1], "point count"), false, "POINTS");
     } else if (t[0] == "CELLS") {
+      // n cells, each 'k i1 ... ik'. The declared list size is not used: files in the wild
+      // get it wrong and readers (deal.II's too) go by the per-cell counts.
       if (t.size() < 3)
         r.fail("short CELLS line", "'CELLS n size'");
-      bounded(r, t[1], "cell count");
-      numbers(bounded(r, t[2], "cell list size"), true, "CELLS");
+      const long long n = bounded(r, t[1], "cell count");
+      bounded(r, t[2], "cell list size");
+      for (long long i = 0; i < n; ++i) {
+        const auto c = tokens(r.need(std::to_string(n) + " cell lines"), false);
+        long long k = 0;
+        if (c.empty() || !is_integer(c[0], k) || k < 1 || k > 64)
+          r.fail("cell line without a node count", "'k i1 ... ik' with k from 1 to 64");
+        if (static_cast<long long>(c.size()) != k + 1)
+          r.fail("cell line with " + std::to_string(c.size() - 1) +
+                     " node numbers, its count says " + std::to_string(k),
+                 "'k i1 ... ik'");
+        for (std::size_t j = 1; j < c.size(); ++j)
+          bounded(r, c[j], "node number");
+      }
     } else if (t[0] == "CELL_TYPES") {
       if (t.size() < 2)
         r.fail("short CELL_TYPES line", "'CELL_TYPES n'");

@@ -86,6 +86,7 @@ int check_command(const SceneSource& source) {
     check_scenario_effects(entry, effects);
     // The scenario reads and checks its sections as `run` does before its first step.
     auto scenario = entry.create({scene.dimension(), scene.prm(), effects});
+    std::vector<std::string> warnings;
     if (scenario->check_by_building()) {
       // ... and builds its model as `run` does, in a scratch directory that is never
       // published, stopping where the first step would begin.
@@ -99,6 +100,7 @@ int check_command(const SceneSource& source) {
         scenario->run(ctx);
       } catch (const CheckReachedFirstStep&) {
       }
+      warnings = ctx.summary().warnings();
     }
     if (is_root()) {
       std::cout << "scene " << scene.source_name() << ": ok\n  scenario:  " << scene.scenario()
@@ -107,6 +109,8 @@ int check_command(const SceneSource& source) {
                 << "\n";
       for (const auto& s : effects.statuses())
         std::cout << "  " << (s.active ? "[on]  " : "[off] ") << s.name << ": " << s.reason << "\n";
+      for (const auto& w : warnings)
+        std::cout << "  warning: " << w << "\n";
     }
     return exit_ok;
   } catch (const InvalidInput& e) {

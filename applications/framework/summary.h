@@ -19,6 +19,7 @@ class Summary {
   void set_effects(const std::vector<std::string>& effects);
   // Something suspicious that did not stop the run (listed under "warnings").
   void add_warning(const std::string& text) { warnings_.push_back(text); }
+  const std::vector<std::string>& warnings() const { return warnings_; }
   void set_status(bool ok, const std::string& message = "");
   // Stopped by a signal after a complete step ("interrupted"); restartable.
   void set_interrupted(const std::string& message);

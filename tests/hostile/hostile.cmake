@@ -144,3 +144,10 @@ spinesim_add_hostile_test(check_particle_spacing_zero ARGS check ${PROJECT_SOURC
 spinesim_add_hostile_test(check_horizon_ratio_below_one
   ARGS check ${PROJECT_SOURCE_DIR}/applications/scenes/default.prm
        --set "Coupling/Bond based/Horizon ratio=0.5" MATCH "Horizon ratio")
+
+# Suspicious but runnable: a conversion region and a pre-crack that miss the body, and a
+# particle zone of one particle, are warnings (log, summary.json, and `check`'s report).
+spinesim_add_hostile_test(warn_regions_outside_body EXIT 0 ARGS check ${_h}/regions_outside.prm
+  MATCH "warning: Coupling/Initial region lies outside the body.*warning: Coupling/Crack 1: corner 2 lies outside")
+spinesim_add_hostile_test(warn_single_particle EXIT 0
+  ARGS check ${PROJECT_SOURCE_DIR}/tests/cli/one_particle.prm MATCH "warning: the particle zone holds a single particle")
