@@ -1,3 +1,6 @@
+// Core of MechanicsSolver: construction and inputs, setup (DoFs, constraints, vectors, point
+// history), active cells and driven DoFs, lumped mass, orphaned DoFs and rigid-body modes.
+
 #include "fem/mechanics_solver.h"
 
 #include "base/exceptions.h"
