@@ -29,8 +29,6 @@ namespace spinesim::fem {
 
 template <int dim>
 class SpaceTimeExpression;
-template <int dim>
-class MovingHeatSource;
 
 template <int dim>
 class HeatSolver {
