@@ -12,9 +12,19 @@
 //  - Explicit: central differences with row-sum lumped mass, optional mass-proportional damping.
 // History lives per quadrature point in flat arrays indexed active_cell_index * n_q + q:
 // `committed` (last converged state) and `trial` (state at the current iterate).
+//
+// The members are defined by responsibility in mechanics_solver_*.cc: core (mesh, DoFs,
+// constraints, active cells and driven DoFs, lumped mass), point_states, assembly,
+// quasi_static (Newton and load stepping), explicit (central differences and dynamic
+// relaxation), postprocessing (reactions, energies, cell fields, output) and checkpoint.
 
 #include "fem/boundary_conditions.h"
+#include "fem/hanging_node_lines.h"
 #include "fem/materials/constitutive_law.h"
+#include "fem/mechanics_parameters.h"
+#include "fem/point_update.h"
+#include "fem/quadrature_point_data.h"
+#include "fem/relaxation_sums.h"
 
 #include <deal.II/base/array_view.h>
 #include <deal.II/base/function.h>
@@ -30,7 +40,6 @@
 #include <deal.II/lac/trilinos_vector.h>
 #include <deal.II/lac/vector.h>
 
-#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -42,16 +51,6 @@ class Epetra_Import;
 
 namespace spinesim::fem {
 
-// What one quadrature point remembers.
-struct QuadraturePointData {
-  materials::MaterialState state;
-  materials::SymTensor2 cauchy_stress; // σ [Pa]
-  materials::SymTensor2 strain;        // ε (small) or Green-Lagrange E (finite) [-]
-  materials::Tensor2 work_stress;      // σ (small) or P (finite) [Pa], conjugate to:
-  materials::Tensor2 deformation;      // ε (small) or F (finite) [-]
-  double work_density = 0;             // ∫ stress power dt per reference volume [J/m^3]
-};
-
 template <int dim>
 class MechanicsSolver {
  public:
@@ -59,26 +58,7 @@ class MechanicsSolver {
   using MatrixType = dealii::TrilinosWrappers::SparseMatrix;
   using CellIterator = typename dealii::DoFHandler<dim>::active_cell_iterator;
 
-  struct Parameters {
-    unsigned int fe_degree = 1;
-    std::string kinematics = "small_strain";       // small_strain | finite_strain
-    std::string time_integration = "quasi_static"; // quasi_static | explicit
-    bool plane_stress = false;                     // 2-D small strain only
-    unsigned int load_steps = 1;
-    double newton_tolerance = 1e-8;
-    unsigned int max_newton_iterations = 25;
-    unsigned int max_load_step_cuts = 6;
-    std::string linear_solver = "cg"; // cg | gmres | direct
-    double linear_tolerance = 1e-10;
-    unsigned int max_linear_iterations = 1000;
-    double cfl_safety_factor = 0.5;
-    double mass_damping = 0.0;   // [1/s]
-    double taylor_quinney = 0.9; // fraction of plastic work turned into heat [-]
-    typename BoundaryConditions<dim>::Parameters boundary_conditions;
-
-    static void declare(dealii::ParameterHandler& prm);
-    void parse(const dealii::ParameterHandler& prm);
-  };
+  using Parameters = MechanicsParameters<dim>;
 
   struct Timings { // accumulated wall-clock seconds
     double setup = 0, assembly = 0, linear_solve = 0, output = 0, checkpoint = 0;
@@ -152,31 +132,7 @@ class MechanicsSolver {
   // starts a new relaxation (no previous forces for the stiffness estimate). Returns this
   // rank's sums over the free DoFs (neither Dirichlet, driven, hanging nor orphaned), from the
   // net forces at the state before the step.
-  struct RelaxationSums {
-    double stiffness_numerator = 0;   // Σ u_i² k_i, k_i = −Δa_i / (dt v_i) [m²/s²]
-    double stiffness_denominator = 0; // Σ u_i² [m²]
-    double residual_square = 0;       // Σ r_i² over free DoFs [N²]
-    double reaction_square = 0;       // Σ r_i² over Dirichlet DoFs [N²] (driven: in neither)
-
-    // A free component with net force r [N], net acceleration a [m/s²], displacement u and
-    // velocity v^{n−½} at pseudo-step dt: its residual and its local stiffness estimate
-    // k = −(a − a_previous) / (dt v) (Kilic & Madenci 2010); a_previous becomes a.
-    void add_free(double r, double a, double& a_previous, double u, double v, double dt) {
-      residual_square += r * r;
-      if (std::isfinite(a_previous) && v != 0) {
-        stiffness_numerator += u * u * (-(a - a_previous) / (dt * v));
-        stiffness_denominator += u * u;
-      }
-      a_previous = a;
-    }
-    RelaxationSums& operator+=(const RelaxationSums& o) {
-      stiffness_numerator += o.stiffness_numerator;
-      stiffness_denominator += o.stiffness_denominator;
-      residual_square += o.residual_square;
-      reaction_square += o.reaction_square;
-      return *this;
-    }
-  };
+  using RelaxationSums = fem::RelaxationSums;
   RelaxationSums relaxation_step(double dt, double damping, double time, bool first);
   // Sets every velocity to zero (the end of a relaxation).
   void clear_velocity();
@@ -254,6 +210,21 @@ class MechanicsSolver {
   MPI_Comm mpi_communicator() const { return comm_; }
 
  private:
+  // ---- core (mechanics_solver.cc)
+  void make_constraints(dealii::AffineConstraints<double>& c, bool homogeneous, double load_factor);
+  // homogeneous_, rebuilt first if the active cells or the driven DoFs changed since.
+  const dealii::AffineConstraints<double>& homogeneous_constraints();
+  void update_ghosts();
+  void build_rigid_body_modes();
+  void compute_lumped_mass();
+  void mark_orphan_dofs();
+  // set_temperature_field(): T − T_ref per quadrature point (active_cell_index * n_q + q).
+  void evaluate_temperature_field(std::vector<double>& dT) const;
+
+  // ---- point states (mechanics_solver_point_states.cc)
+  void commit_history();
+
+  // ---- assembly (mechanics_solver_assembly.cc)
   struct AssemblyNorms {
     double free_residual = 0; // ‖f_ext − f_int‖ over unconstrained dofs
     double reference = 0;     // max(‖f_int‖, ‖f_ext‖) over all dofs
@@ -262,33 +233,28 @@ class MechanicsSolver {
   // tangent; the raw f_int − f_ext over all dofs goes to raw_residual_. Evaluates at u_ghost_.
   AssemblyNorms assemble(bool with_matrix, double load_factor,
                          const dealii::AffineConstraints<double>& constraints);
-  void make_constraints(dealii::AffineConstraints<double>& c, bool homogeneous, double load_factor);
-  // homogeneous_, rebuilt first if the active cells or the driven DoFs changed since.
-  const dealii::AffineConstraints<double>& homogeneous_constraints();
-  unsigned int solve_linear(VectorType& du);
-  bool newton(double load_factor, LoadStepReport& report);
-  void commit_history();
-  void update_ghosts();
   double load_blend(dealii::Function<dim>& f, const dealii::Point<dim>& x, unsigned int c,
                     double load_factor) const;
-  void build_rigid_body_modes();
-  void compute_lumped_mass();
+
+  // ---- quasi-static Newton (mechanics_solver_quasi_static.cc)
+  unsigned int solve_linear(VectorType& du);
+  bool newton(double load_factor, LoadStepReport& report);
+
+  // ---- explicit integrator (mechanics_solver_explicit.cc)
   bool linear_explicit() const;
   // The central-difference update of explicit_step() and relaxation_step(): net forces at the
   // current state, damping a [1/s], Dirichlet values at bc_time; sums if asked.
   void central_difference(double dt, double a, double bc_time, RelaxationSums* sums);
-  // The constitutive update at one point from the displacement gradient H (3×3, zero-padded):
-  // fills tr from the committed old, returns the stress conjugate to ∇u (σ small, P finite)
-  // and, if A is given, its tangent. Throws NumericalFailure without a location.
-  materials::Tensor2 update_point(const materials::ConstitutiveLaw& law,
-                                  const materials::Tensor2& H, double dT,
-                                  const QuadraturePointData& old, QuadraturePointData& tr,
-                                  double (*A)[3][3][3]) const;
-  void mark_orphan_dofs();
+  // f_int = K u over the active cells on the linear path: K assembled once per set of them.
+  void assemble_explicit_matrix();
+  // The owned Dirichlet DoFs per condition with their support points (dirichlet_dofs_).
+  void cache_dirichlet_dofs();
+  void build_step_tables();
 
   MPI_Comm comm_;
   dealii::parallel::distributed::Triangulation<dim>& tria_;
   Parameters prm_;
+  ConstitutivePointUpdate point_update_; // the kinematics of prm_
   dealii::FESystem<dim> fe_;
   std::unique_ptr<dealii::MappingQ<dim>> mapping_;
   dealii::QGauss<dim> quadrature_;
@@ -307,7 +273,6 @@ class MechanicsSolver {
   std::map<dealii::types::material_id, std::shared_ptr<const materials::ConstitutiveLaw>> laws_;
   std::vector<QuadraturePointData> committed_, trial_;
 
-  // Quasi-static load path: boundary values at the start of the solve and targets at the end.
   CellLawFunction cell_law_function_;
   std::vector<std::shared_ptr<const materials::ConstitutiveLaw>> cell_laws_; // by cell index
   std::vector<bool> active_;
@@ -344,31 +309,17 @@ class MechanicsSolver {
   std::vector<double> relax_acceleration_; // previous net acceleration per owned DoF [m/s²]
   std::vector<int> driven_slot_;
   std::vector<double> u_previous_;
-  // Hanging-node lines of owned DoFs: distributed on the local arrays instead of
-  // AffineConstraints::distribute, which builds a ghosted copy of the vector (and an import)
-  // every call. Masters by owned index when every rank's masters are its own
-  // (hanging_local_), else by index in the ghosted layout, read after ghost_import_.
-  struct HangingLine {
-    unsigned int local;
-    std::vector<std::pair<unsigned int, double>> masters;
-    double inhomogeneity;
-  };
-  std::vector<HangingLine> hanging_lines_;
-  bool hanging_local_ = false;
-  mutable VectorType hanging_scratch_; // ghosted copy for masters owned elsewhere
-  void distribute_hanging(VectorType& vector) const;
+  HangingNodeLines hanging_lines_; // hanging_ on the owned arrays of an explicit step
   bool step_tables_ready_ = false;
   unsigned int n_active_cells_ = 0; // global count of active cells
-  void build_step_tables();
   // Incremental assembly: when set, assemble() visits exactly these cells (by active cell
   // index) and adds sign × their matrices without zeroing the matrix first.
   const std::vector<bool>* assembly_cells_ = nullptr;
   double assembly_sign_ = 1.0;
 
+  // Quasi-static load path: boundary values at the start of the solve and targets at the end.
   std::map<dealii::types::global_dof_index, double> dirichlet_start_, dirichlet_target_;
-  // set_temperature_field(): T − T_ref per quadrature point (active_cell_index * n_q + q) at
-  // the previous solve and at the target time.
-  void evaluate_temperature_field(std::vector<double>& dT) const;
+  // set_temperature_field(): the field, and T − T_ref at the previous solve and at the target.
   const dealii::DoFHandler<dim>* temperature_dofs_ = nullptr;
   const VectorType* temperature_field_ = nullptr;
   double reference_temperature_ = 0;

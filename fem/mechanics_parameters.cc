@@ -1,0 +1,84 @@
+#include "fem/mechanics_parameters.h"
+
+#include "base/exceptions.h"
+
+namespace spinesim::fem {
+
+using namespace dealii;
+
+template <int dim>
+void MechanicsParameters<dim>::declare(ParameterHandler& prm) {
+  prm.declare_entry("Finite element degree", "1", Patterns::Integer(1, 2),
+                    "Polynomial degree of the Lagrange displacement element (1 or 2) [-].");
+  prm.declare_entry("Kinematics", "small_strain", Patterns::Selection("small_strain|finite_strain"),
+                    "Linearised strain or total-Lagrangian finite strain [-].");
+  prm.declare_entry("Plane stress", "false", Patterns::Bool(),
+                    "2-D only, small strain: sigma_zz = 0 instead of plane strain [-].");
+  prm.declare_entry("Time integration", "quasi_static",
+                    Patterns::Selection("quasi_static|explicit"),
+                    "Implicit quasi-static Newton or explicit central differences [-].");
+  prm.declare_entry("Load steps", "1", Patterns::Integer(1),
+                    "Load increments per quasi-static solve [-].");
+  prm.declare_entry("Newton tolerance", "1e-8", Patterns::Double(0),
+                    "Relative residual (or displacement increment) for convergence [-].");
+  prm.declare_entry("Max Newton iterations", "25", Patterns::Integer(1),
+                    "Newton iterations before the load step is cut [-].");
+  prm.declare_entry("Max load step cuts", "6", Patterns::Integer(0),
+                    "Halvings of the load increment before giving up [-].");
+  prm.declare_entry("Linear solver", "cg", Patterns::Selection("cg|gmres|direct"),
+                    "CG or GMRES with algebraic multigrid, or a direct solver [-].");
+  prm.declare_entry("Linear tolerance", "1e-10", Patterns::Double(0),
+                    "Linear residual reduction relative to the right-hand side [-].");
+  prm.declare_entry("Max linear iterations", "1000", Patterns::Integer(1),
+                    "Iterative solver limit [-].");
+  prm.declare_entry("CFL safety factor", "0.5", Patterns::Double(0, 1),
+                    "Fraction of the CFL stable step used by the explicit integrator [-].");
+  prm.declare_entry("Mass damping", "0", Patterns::Double(0),
+                    "Mass-proportional damping coefficient alpha [1/s].");
+  prm.declare_entry("Taylor-Quinney coefficient", "0.9", Patterns::Double(0, 1),
+                    "Fraction beta of the plastic work turned into heat when Heat and Mechanics "
+                    "are both on (plastic-work heating; 0 switches it off) [-]. 0.9 is the "
+                    "classical value for metals (Taylor & Quinney, Proc. R. Soc. A 143 (1934) "
+                    "307); measured 0.6-1 depending on strain and rate.");
+  prm.enter_subsection("Boundary conditions");
+  BoundaryConditions<dim>::Parameters::declare(prm);
+  prm.leave_subsection();
+}
+
+template <int dim>
+void MechanicsParameters<dim>::parse(const ParameterHandler& prm) {
+  fe_degree = prm.get_integer("Finite element degree");
+  kinematics = prm.get("Kinematics");
+  plane_stress = prm.get_bool("Plane stress");
+  time_integration = prm.get("Time integration");
+  load_steps = prm.get_integer("Load steps");
+  newton_tolerance = prm.get_double("Newton tolerance");
+  max_newton_iterations = prm.get_integer("Max Newton iterations");
+  max_load_step_cuts = prm.get_integer("Max load step cuts");
+  linear_solver = prm.get("Linear solver");
+  linear_tolerance = prm.get_double("Linear tolerance");
+  max_linear_iterations = prm.get_integer("Max linear iterations");
+  cfl_safety_factor = prm.get_double("CFL safety factor");
+  mass_damping = prm.get_double("Mass damping");
+  taylor_quinney = prm.get_double("Taylor-Quinney coefficient");
+  if (!(taylor_quinney >= 0 && taylor_quinney <= 1))
+    throw InvalidInput("Taylor-Quinney coefficient", "must lie in [0, 1]", "0 <= beta <= 1");
+  if (!(newton_tolerance > 0))
+    throw InvalidInput("Newton tolerance", "must be positive", "a value in (0, 1)");
+  if (!(linear_tolerance > 0))
+    throw InvalidInput("Linear tolerance", "must be positive", "a value in (0, 1)");
+  if (!(cfl_safety_factor > 0))
+    throw InvalidInput("CFL safety factor", "must be positive", "a value in (0, 1]");
+  if (plane_stress && dim != 2)
+    throw InvalidInput("Plane stress", "plane stress needs a 2-D model", "false in 3-D");
+  if (plane_stress && kinematics != "small_strain")
+    throw InvalidInput("Plane stress", "plane stress is only implemented for small strain",
+                       "false, or Kinematics = small_strain");
+  // prm is const, so the boundary slots are read by path below the current subsection.
+  boundary_conditions.parse(prm, {"Boundary conditions"});
+}
+
+template struct MechanicsParameters<2>;
+template struct MechanicsParameters<3>;
+
+} // namespace spinesim::fem

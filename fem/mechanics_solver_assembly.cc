@@ -1,0 +1,210 @@
+// Assembly of MechanicsSolver: internal and external forces and the consistent tangent over the
+// active cells, with loads blended along the quasi-static load path.
+
+#include "fem/mechanics_solver.h"
+
+#include "base/exceptions.h"
+#include "base/scoped_time.h"
+
+#include <deal.II/fe/fe_values.h>
+
+#include <array>
+#include <cmath>
+
+namespace spinesim::fem {
+
+using namespace dealii;
+using materials::Tensor2;
+
+template <int dim>
+double MechanicsSolver<dim>::load_blend(Function<dim>& f, const Point<dim>& x, unsigned int c,
+                                        double load_factor) const {
+  f.set_time(target_time_);
+  double value = load_factor * f.value(x, c);
+  if (loaded_ && load_factor < 1.0) {
+    f.set_time(previous_time_);
+    value += (1.0 - load_factor) * f.value(x, c);
+  }
+  return value;
+}
+
+template <int dim>
+typename MechanicsSolver<dim>::AssemblyNorms
+MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
+                               const AffineConstraints<double>& constraints) {
+  ScopedTime timer(timings_.assembly);
+  MatrixType& matrix = assemble_into_explicit_matrix_ ? explicit_matrix_ : matrix_;
+  if (with_matrix && !assembly_cells_)
+    matrix = 0;
+  rhs_ = 0;
+  VectorType f_int(owned_, comm_), f_ext(owned_, comm_);
+
+  const unsigned int nq = quadrature_.size(), n = fe_.n_dofs_per_cell();
+  FEValues<dim> fe_values(*mapping_, fe_, quadrature_,
+                          update_values | update_gradients | update_quadrature_points |
+                              update_JxW_values);
+  FEFaceValues<dim> fe_face(*mapping_, fe_, face_quadrature_,
+                            update_values | update_quadrature_points | update_normal_vectors |
+                                update_JxW_values);
+  const FEValuesExtractors::Vector displacements(0);
+  FullMatrix<double> cell_matrix(n, n);
+  Vector<double> cell_rhs(n), cell_fint(n), cell_fext(n);
+  std::vector<types::global_dof_index> dofs(n);
+  std::vector<Tensor<2, dim>> grads(nq);
+  std::vector<unsigned int> comp(n);
+  for (unsigned int i = 0; i < n; ++i)
+    comp[i] = fe_.system_to_component_index(i).first;
+  std::vector<std::array<double, dim * dim>> w(n); // w_i[d][L] = Σ_J ∇N_i,J A(c_i,J,d,L) JxW
+  double A[3][3][3][3];
+
+  for (const auto& cell : dof_handler_.active_cell_iterators()) {
+    if (!cell->is_locally_owned() ||
+        !(assembly_cells_ ? (*assembly_cells_)[cell->active_cell_index()] : is_active(cell)))
+      continue;
+    fe_values.reinit(cell);
+    const materials::ConstitutiveLaw& law = cell_material(cell);
+    cell_matrix = 0;
+    cell_fint = 0;
+    cell_fext = 0;
+    fe_values[displacements].get_function_gradients(u_ghost_, grads);
+
+    for (unsigned int q = 0; q < nq; ++q) {
+      const std::size_t idx = cell->active_cell_index() * nq + q;
+      const QuadraturePointData& old = committed_[idx];
+      QuadraturePointData& tr = trial_[idx];
+      const Point<dim>& xq = fe_values.quadrature_point(q);
+      double dT = 0.0;
+      if (temperature_field_) // blended like load_blend(): from the previous solve's field
+        dT = load_factor * dT_target_[idx] +
+             (loaded_ && load_factor < 1.0 ? (1.0 - load_factor) * dT_start_[idx] : 0.0);
+      else if (temperature_change_)
+        dT = load_blend(*temperature_change_, xq, 0, load_factor);
+      Tensor2 H;
+      for (unsigned int i = 0; i < dim; ++i)
+        for (unsigned int j = 0; j < dim; ++j)
+          H[i][j] = grads[q][i][j];
+
+      Tensor2 S; // stress conjugate to ∇u: σ or P
+      try {
+        S = point_update_(law, H, dT, old, tr, with_matrix ? A : nullptr);
+      } catch (const NumericalFailure& e) {
+        throw NumericalFailure(e.what_failed(), quadrature_point_location<dim>(cell, q), e.hint());
+      }
+      const double JxW = fe_values.JxW(q);
+      Tensor<1, dim> body;
+      if (body_force_)
+        for (unsigned int c = 0; c < dim; ++c)
+          body[c] = load_blend(*body_force_, xq, c, load_factor);
+      for (unsigned int i = 0; i < n; ++i) {
+        const unsigned int ci = comp[i];
+        const Tensor<1, dim>& g = fe_values.shape_grad(i, q);
+        double f = 0;
+        for (unsigned int J = 0; J < dim; ++J)
+          f += S[ci][J] * g[J];
+        cell_fint(i) += f * JxW;
+        cell_fext(i) += body[ci] * fe_values.shape_value(i, q) * JxW;
+        if (with_matrix)
+          for (unsigned int d = 0; d < dim; ++d)
+            for (unsigned int L = 0; L < dim; ++L) {
+              double s = 0;
+              for (unsigned int J = 0; J < dim; ++J)
+                s += g[J] * A[ci][J][d][L];
+              w[i][d * dim + L] = s * JxW;
+            }
+      }
+      if (with_matrix)
+        for (unsigned int i = 0; i < n; ++i)
+          for (unsigned int j = 0; j < n; ++j) {
+            const Tensor<1, dim>& g = fe_values.shape_grad(j, q);
+            double s = 0;
+            for (unsigned int L = 0; L < dim; ++L)
+              s += w[i][comp[j] * dim + L] * g[L];
+            cell_matrix(i, j) += s;
+          }
+    }
+
+    // Tractions and pressures on the reference configuration.
+    if (cell->at_boundary() && (!bcs_.traction().empty() || !bcs_.pressure().empty()))
+      for (const unsigned int f : cell->face_indices()) {
+        if (!cell->face(f)->at_boundary())
+          continue;
+        const types::boundary_id bid = cell->face(f)->boundary_id();
+        const Point<dim> centre = cell->face(f)->center(); // by boundary id or region
+        bool loaded = false;
+        for (const auto& t : bcs_.traction())
+          loaded |= t.acts_on(bid, centre);
+        for (const auto& p : bcs_.pressure())
+          loaded |= p.acts_on(bid, centre);
+        if (!loaded)
+          continue;
+        fe_face.reinit(cell, f);
+        for (unsigned int q = 0; q < face_quadrature_.size(); ++q) {
+          const Point<dim>& xq = fe_face.quadrature_point(q);
+          Tensor<1, dim> t;
+          for (const auto& tr : bcs_.traction())
+            if (tr.acts_on(bid, centre))
+              for (unsigned int c = 0; c < dim; ++c)
+                t[c] += load_blend(*tr.function, xq, c, load_factor);
+          for (const auto& p : bcs_.pressure())
+            if (p.acts_on(bid, centre))
+              t -= load_blend(*p.function, xq, 0, load_factor) * fe_face.normal_vector(q);
+          for (unsigned int i = 0; i < n; ++i)
+            cell_fext(i) += t[comp[i]] * fe_face.shape_value(i, q) * fe_face.JxW(q);
+        }
+      }
+
+    cell->get_dof_indices(dofs);
+    for (unsigned int i = 0; i < n; ++i)
+      cell_rhs(i) = cell_fext(i) - cell_fint(i);
+    if (assembly_sign_ != 1.0)
+      cell_matrix *= assembly_sign_;
+    if (with_matrix)
+      constraints.distribute_local_to_global(cell_matrix, cell_rhs, dofs, matrix, rhs_);
+    else
+      constraints.distribute_local_to_global(cell_rhs, dofs, rhs_);
+    f_int.add(dofs, cell_fint);
+    f_ext.add(dofs, cell_fext);
+  }
+  if (with_matrix)
+    matrix.compress(VectorOperation::add);
+  rhs_.compress(VectorOperation::add);
+  f_int.compress(VectorOperation::add);
+  f_ext.compress(VectorOperation::add);
+  raw_residual_ = f_int;
+  raw_residual_ -= f_ext;
+
+  AssemblyNorms norms;
+  norms.free_residual = rhs_.l2_norm();
+  norms.reference = std::max(f_int.l2_norm(), f_ext.l2_norm());
+  if (!std::isfinite(norms.free_residual))
+    throw NumericalFailure("non-finite residual", "global assembly",
+                           "check material parameters and boundary conditions");
+  return norms;
+}
+
+template <int dim>
+const typename MechanicsSolver<dim>::VectorType& MechanicsSolver<dim>::evaluate_residual() {
+  if (!is_setup_)
+    setup();
+  target_time_ = time_;
+  loaded_ = false;
+  if (temperature_field_)
+    evaluate_temperature_field(dT_target_);
+  assemble(false, 1.0, hanging_);
+  trial_ = committed_;
+  return raw_residual_;
+}
+
+// Explicit instantiation of the members defined in this file.
+#define SPINESIM_INSTANTIATE(dim)                                                                  \
+  template double MechanicsSolver<dim>::load_blend(Function<dim>&, const Point<dim>&,              \
+                                                   unsigned int, double) const;                    \
+  template typename MechanicsSolver<dim>::AssemblyNorms MechanicsSolver<dim>::assemble(            \
+      bool, double, const AffineConstraints<double>&);                                             \
+  template const typename MechanicsSolver<dim>::VectorType&                                        \
+  MechanicsSolver<dim>::evaluate_residual();
+SPINESIM_INSTANTIATE(2)
+SPINESIM_INSTANTIATE(3)
+#undef SPINESIM_INSTANTIATE
+
+} // namespace spinesim::fem

@@ -1,0 +1,114 @@
+// Checkpoints of MechanicsSolver: the mesh and the displacement and velocity through p4est,
+// the committed point states attached to the cells, and time and degree in a small text file.
+
+#include "fem/mechanics_solver.h"
+
+#include "base/exceptions.h"
+#include "base/scoped_time.h"
+
+#include <deal.II/base/mpi.h>
+#include <deal.II/distributed/solution_transfer.h>
+
+#include <cstring>
+#include <fstream>
+
+namespace spinesim::fem {
+
+using namespace dealii;
+
+template <int dim>
+void MechanicsSolver<dim>::prepare_for_serialization(const std::string& filename) const {
+  refresh_states();
+  ScopedTime timer(timings_.checkpoint);
+  auto& tria = const_cast<parallel::distributed::Triangulation<dim>&>(tria_);
+  // The transfer must live until the triangulation is saved.
+  serialization_transfer_ =
+      std::make_unique<parallel::distributed::SolutionTransfer<dim, VectorType>>(dof_handler_);
+  serialization_transfer_->prepare_for_serialization(
+      std::vector<const VectorType*>{&u_ghost_, &v_ghost_});
+  const unsigned int nq = quadrature_.size();
+  tria.register_data_attach(
+      [this, nq](const typename Triangulation<dim>::cell_iterator& cell,
+                 const typename Triangulation<dim>::CellStatus) {
+        std::vector<double> values(nq * quadrature_point_doubles);
+        for (unsigned int q = 0; q < nq; ++q)
+          pack(committed_[cell->active_cell_index() * nq + q],
+               values.data() + q * quadrature_point_doubles);
+        std::vector<char> bytes(values.size() * sizeof(double));
+        std::memcpy(bytes.data(), values.data(), bytes.size());
+        return bytes;
+      },
+      /*returns_variable_size_data=*/false);
+  if (Utilities::MPI::this_mpi_process(comm_) == 0) {
+    std::ofstream out(filename + ".solver");
+    out.precision(17);
+    out << "spinesim_mechanics 1\n" << time_ << " " << loaded_ << " " << prm_.fe_degree << "\n";
+  }
+}
+
+template <int dim>
+void MechanicsSolver<dim>::save_checkpoint(const std::string& filename) const {
+  prepare_for_serialization(filename);
+  ScopedTime timer(timings_.checkpoint);
+  const_cast<parallel::distributed::Triangulation<dim>&>(tria_).save(filename);
+  serialization_transfer_.reset();
+}
+
+template <int dim>
+void MechanicsSolver<dim>::deserialize(const std::string& filename) {
+  ScopedTime timer(timings_.checkpoint);
+  serialization_transfer_.reset();
+  std::ifstream in(filename + ".solver");
+  std::string tag;
+  int version = 0;
+  unsigned int degree = 0;
+  if (!(in >> tag >> version >> time_ >> loaded_ >> degree) || tag != "spinesim_mechanics")
+    throw InvalidInput(filename + ".solver", "missing or unreadable solver checkpoint",
+                       "a file written by MechanicsSolver::save_checkpoint");
+  if (degree != prm_.fe_degree)
+    throw InvalidInput("Finite element degree", "checkpoint has degree " + std::to_string(degree),
+                       "the degree the checkpoint was written with");
+  previous_time_ = target_time_ = time_;
+  setup();
+  parallel::distributed::SolutionTransfer<dim, VectorType> transfer(dof_handler_);
+  std::vector<VectorType*> vectors{&u_, &v_};
+  transfer.deserialize(vectors);
+  const unsigned int nq = quadrature_.size();
+  const unsigned int handle = tria_.register_data_attach(
+      [](const typename Triangulation<dim>::cell_iterator&,
+         const typename Triangulation<dim>::CellStatus) { return std::vector<char>(); },
+      false);
+  tria_.notify_ready_to_unpack(
+      handle, [this, nq](const typename Triangulation<dim>::cell_iterator& cell,
+                         const typename Triangulation<dim>::CellStatus,
+                         const boost::iterator_range<std::vector<char>::const_iterator>& bytes) {
+        std::vector<double> values(nq * quadrature_point_doubles);
+        std::memcpy(values.data(), &*bytes.begin(), values.size() * sizeof(double));
+        for (unsigned int q = 0; q < nq; ++q)
+          unpack(values.data() + q * quadrature_point_doubles,
+                 committed_[cell->active_cell_index() * nq + q]);
+      });
+  trial_ = committed_;
+  update_ghosts();
+  // Reactions need the residual at the restored state.
+  assemble(false, 1.0, homogeneous_constraints());
+  trial_ = committed_;
+}
+
+template <int dim>
+void MechanicsSolver<dim>::load_checkpoint(const std::string& filename) {
+  tria_.load(filename);
+  deserialize(filename);
+}
+
+// Explicit instantiation of the members defined in this file.
+#define SPINESIM_INSTANTIATE(dim)                                                                  \
+  template void MechanicsSolver<dim>::prepare_for_serialization(const std::string&) const;         \
+  template void MechanicsSolver<dim>::save_checkpoint(const std::string&) const;                   \
+  template void MechanicsSolver<dim>::deserialize(const std::string&);                             \
+  template void MechanicsSolver<dim>::load_checkpoint(const std::string&);
+SPINESIM_INSTANTIATE(2)
+SPINESIM_INSTANTIATE(3)
+#undef SPINESIM_INSTANTIATE
+
+} // namespace spinesim::fem

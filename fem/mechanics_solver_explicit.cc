@@ -1,0 +1,315 @@
+// Explicit dynamics of MechanicsSolver: the CFL-limited step, central differences with the
+// lumped mass, and the dynamic-relaxation step whose sums drive adaptive damping.
+
+#include "fem/mechanics_solver.h"
+
+#include "base/exceptions.h"
+#include "base/scoped_time.h"
+#include "fem/sparse_product.h"
+
+#include <deal.II/base/mpi.h>
+#include <deal.II/dofs/dof_tools.h>
+#include <deal.II/lac/dynamic_sparsity_pattern.h>
+#include <deal.II/lac/sparsity_tools.h>
+
+#include <cmath>
+#include <limits>
+
+namespace spinesim::fem {
+
+using namespace dealii;
+
+template <int dim>
+double MechanicsSolver<dim>::stable_time_step() const {
+  double dt = std::numeric_limits<double>::max();
+  for (const auto& cell : dof_handler_.active_cell_iterators())
+    if (cell->is_locally_owned() && is_active(cell)) {
+      // The shortest edge (not the diameter) bounds the highest mode of distorted cells;
+      // degree p splits the edge into p node spacings.
+      const double h = cell->minimum_vertex_distance() / prm_.fe_degree;
+      const auto& law = cell_material(cell);
+      // Plane stress carries the in-plane P wave sqrt(E / ((1 − ν²) ρ)), slower than the
+      // 3-D one.
+      const double c =
+          prm_.plane_stress
+              ? std::sqrt(law.youngs_modulus() /
+                          ((1 - law.poisson_ratio() * law.poisson_ratio()) * law.density()))
+              : law.p_wave_speed();
+      dt = std::min(dt, h / c);
+    }
+  return prm_.cfl_safety_factor * Utilities::MPI::min(dt, comm_);
+}
+
+template <int dim>
+void MechanicsSolver<dim>::explicit_step(double dt) {
+  if (!is_setup_)
+    setup();
+  if (n_active_cells() == 0) {
+    // Every cell converted: the FEM has no unknowns left, its step only advances time.
+    raw_residual_ = 0;
+    rhs_ = 0;
+    time_ += dt;
+    return;
+  }
+  target_time_ = time_;
+  central_difference(dt, prm_.mass_damping, time_ + dt, nullptr);
+  if (!states_stale_)
+    commit_history();
+  time_ += dt;
+  update_ghosts();
+}
+
+template <int dim>
+typename MechanicsSolver<dim>::RelaxationSums
+MechanicsSolver<dim>::relaxation_step(double dt, double damping, double time, bool first) {
+  if (!is_setup_)
+    setup();
+  RelaxationSums sums;
+  time_ = previous_time_ = target_time_ = time;
+  if (n_active_cells() == 0) {
+    raw_residual_ = 0;
+    rhs_ = 0;
+    return sums;
+  }
+  if (first)
+    relax_acceleration_.clear();
+  central_difference(dt, damping, time, &sums);
+  if (!states_stale_)
+    commit_history();
+  update_ghosts();
+  return sums;
+}
+
+template <int dim>
+void MechanicsSolver<dim>::clear_velocity() {
+  v_ = 0;
+  update_ghosts();
+}
+
+template <int dim>
+void MechanicsSolver<dim>::central_difference(double dt, double a, double bc_time,
+                                              RelaxationSums* sums) {
+  loaded_ = false; // loads are evaluated at the current time only
+  if (temperature_field_)
+    evaluate_temperature_field(dT_target_);
+  const bool linear = linear_explicit();
+  if (linear) {
+    // Linear elasticity without loads in the volume: f_int = K u with K assembled once per
+    // set of active cells (a sparse product instead of a constitutive call per point).
+    if (!explicit_matrix_ready_)
+      assemble_explicit_matrix();
+  } else {
+    assemble(false, 1.0, hanging_);
+  }
+  // Net force on the DoFs: −K u on the linear path (rhs_ is not formed), f_ext − f_int else.
+  if (!dirichlet_dofs_ready_)
+    cache_dirichlet_dofs();
+  if (!step_tables_ready_) {
+    build_step_tables();
+    raw_residual_ = 0; // rows outside step_rows_ are not computed below: they stay zero
+  }
+  if (linear) {
+    // Only the rows the update reads: hanging and orphaned DoFs (under converted cells only)
+    // are skipped, so a step costs what the FEM part still holds.
+    ScopedTime timer(timings_.assembly);
+    threaded_vmult(explicit_matrix_, raw_residual_, u_, &step_rows_);
+    states_stale_ = true;
+  }
+  {
+    // Local arrays in the order of owned_ (element access through Trilinos is a map lookup).
+    double* u = u_.begin();
+    double* v = v_.begin();
+    const double* r = linear ? raw_residual_.begin() : rhs_.begin();
+    const double sign = linear ? -1.0 : 1.0;
+    const double* mass = lumped_mass_.begin();
+    const std::size_t n = owned_.n_elements();
+    std::copy(u, u + n, u_previous_.begin());
+    if (sums && relax_acceleration_.size() != n)
+      relax_acceleration_.assign(n, std::numeric_limits<double>::quiet_NaN());
+    const auto zero_mass = [&](std::size_t k) {
+      return NumericalFailure("zero lumped mass at dof " +
+                                  std::to_string(owned_.nth_index_in_set(k)),
+                              "explicit step", "every material needs a positive density");
+    };
+    // The damped central-difference update of one DoF, in both loops below.
+    const auto advance_dof = [&](std::size_t k, double acc) {
+      v[k] = ((1.0 - 0.5 * a * dt) * v[k] + dt * acc) / (1.0 + 0.5 * a * dt);
+      u[k] += dt * v[k];
+    };
+    if (!sums) {
+      // Independent DoFs, split among the threads as the sparse product splits its rows (the
+      // same static partition of the same local order: each thread reads what it wrote).
+      const long n_rows = static_cast<long>(step_rows_.size());
+      long first_bad = static_cast<long>(n); // lowest local index without mass
+#pragma omp parallel for schedule(static) if (n_rows > 4000) reduction(min : first_bad)
+      for (long row = 0; row < n_rows; ++row) {
+        const long k = step_rows_[row];
+        const double m = mass[k];
+        if (!(m > 0)) {
+          first_bad = std::min(first_bad, k);
+          continue;
+        }
+        advance_dof(k, sign * r[k] / m);
+      }
+      if (first_bad < static_cast<long>(n))
+        throw zero_mass(static_cast<std::size_t>(first_bad));
+    }
+    for (std::size_t k = 0; sums && k < n; ++k) { // relaxation: sums in a fixed order
+      if (step_skip_[k])
+        continue;
+      const double m = mass[k];
+      if (!(m > 0))
+        throw zero_mass(k);
+      const double acc = sign * r[k] / m;
+      // Driven DoFs (the coupling interface; boundary values win where both apply) carry
+      // internal forces of the coupled system: neither residual nor reaction.
+      if (step_dirichlet_[k])
+        sums->reaction_square += r[k] * r[k];
+      if (step_dirichlet_[k] || step_driven_[k]) {
+        relax_acceleration_[k] = acc;
+      } else {
+        sums->add_free(r[k], acc, relax_acceleration_[k], u[k], v[k], dt);
+      }
+      advance_dof(k, acc);
+    }
+    // Later conditions overwrite earlier ones on shared DoFs (as interpolate_boundary_values);
+    // boundary values take precedence over driven values.
+    for (unsigned int k = 0; k < bcs_.dirichlet().size(); ++k) {
+      auto& f = *bcs_.dirichlet()[k].function;
+      f.set_time(bc_time);
+      for (const auto& b : dirichlet_dofs_[k]) {
+        const double value = f.value(b.point, b.component);
+        v[b.local] = (value - u_previous_[b.local]) / dt;
+        u[b.local] = value;
+      }
+    }
+    std::size_t k = 0;
+    for (const auto& entry : driven_) {
+      const int slot = driven_slot_[k++];
+      if (slot >= 0) {
+        v[slot] = (entry.second - u_previous_[slot]) / dt;
+        u[slot] = entry.second;
+      }
+    }
+  }
+  u_.compress(VectorOperation::insert);
+  v_.compress(VectorOperation::insert);
+  hanging_lines_.distribute(u_);
+  hanging_lines_.distribute(v_);
+  // NaN must not pass silently: the first non-finite owned entry (a scan of the local array;
+  // Epetra's norm is a serial, scaled BLAS call), then every rank learns of any.
+  const double* uu = u_.begin();
+  const long n_owned = static_cast<long>(owned_.n_elements());
+  long first_bad = n_owned;
+#pragma omp parallel for schedule(static) if (n_owned > 4000) reduction(min : first_bad)
+  for (long k = 0; k < n_owned; ++k)
+    if (!std::isfinite(uu[k]))
+      first_bad = std::min(first_bad, k);
+  if (Utilities::MPI::max(first_bad < n_owned ? 1 : 0, comm_) > 0)
+    throw NumericalFailure(
+        "non-finite displacement",
+        (sums ? "relaxation step at t = " : "explicit step at t = ") + std::to_string(time_) +
+            ", dt = " + std::to_string(dt) +
+            (first_bad < n_owned
+                 ? ", first at DoF " + std::to_string(owned_.nth_index_in_set(first_bad))
+                 : std::string(", on another rank")),
+        "reduce the time step (CFL safety factor) or check the materials");
+}
+
+template <int dim>
+void MechanicsSolver<dim>::assemble_explicit_matrix() {
+  DynamicSparsityPattern dsp(relevant_);
+  DoFTools::make_sparsity_pattern(dof_handler_, dsp, hanging_, true);
+  SparsityTools::distribute_sparsity_pattern(dsp, owned_, comm_, relevant_);
+  explicit_matrix_.reinit(owned_, owned_, dsp, comm_);
+  assemble_into_explicit_matrix_ = true;
+  assemble(true, 1.0, hanging_);
+  assemble_into_explicit_matrix_ = false;
+  trial_ = committed_;
+  explicit_matrix_ready_ = true;
+}
+
+template <int dim>
+void MechanicsSolver<dim>::cache_dirichlet_dofs() {
+  std::map<types::global_dof_index, Point<dim>> support;
+  DoFTools::map_dofs_to_support_points(*mapping_, dof_handler_, support);
+  dirichlet_dofs_.assign(bcs_.dirichlet().size(), {});
+  for (unsigned int k = 0; k < bcs_.dirichlet().size(); ++k) {
+    std::map<types::global_dof_index, double> dofs;
+    BoundaryConditions<dim>::interpolate(bcs_.dirichlet()[k], *mapping_, dof_handler_,
+                                         Functions::ZeroFunction<dim>(dim), dofs);
+    for (const auto& [dof, zero] : dofs)
+      if (owned_.is_element(dof) && !hanging_.is_constrained(dof))
+        for (unsigned int c = 0; c < dim; ++c)
+          if (component_dofs_[c].is_element(dof))
+            dirichlet_dofs_[k].push_back(
+                {dof, c, support.at(dof), static_cast<unsigned int>(owned_.index_within_set(dof))});
+  }
+  dirichlet_dofs_ready_ = true;
+  step_tables_ready_ = false;
+}
+
+template <int dim>
+bool MechanicsSolver<dim>::linear_explicit() const {
+  if (prm_.kinematics != "small_strain" || body_force_ || temperature_change_ ||
+      temperature_field_ || !bcs_.traction().empty() || !bcs_.pressure().empty())
+    return false;
+  for (const auto& [id, law] : laws_)
+    if (law && law->name() != "linear_elastic")
+      return false;
+  for (const auto& law : cell_laws_)
+    if (law && law->name() != "linear_elastic")
+      return false;
+  return true;
+}
+
+template <int dim>
+void MechanicsSolver<dim>::build_step_tables() {
+  const std::size_t n = owned_.n_elements();
+  step_skip_.assign(n, 0);
+  step_dirichlet_.assign(n, 0);
+  step_driven_.assign(n, 0);
+  std::size_t k = 0;
+  for (auto it = owned_.begin(); it != owned_.end(); ++it, ++k)
+    step_skip_[k] = hanging_.is_constrained(*it) || orphan_[relevant_.index_within_set(*it)];
+  step_rows_.clear();
+  for (std::size_t k = 0; k < n; ++k)
+    if (!step_skip_[k])
+      step_rows_.push_back(static_cast<int>(k));
+  for (const auto& list : dirichlet_dofs_)
+    for (const auto& b : list)
+      step_dirichlet_[b.local] = 1;
+  driven_slot_.clear();
+  driven_slot_.reserve(driven_.size());
+  for (const auto& [dof, value] : driven_) {
+    int slot = -1;
+    if (owned_.is_element(dof) && !hanging_.is_constrained(dof)) {
+      const auto local = owned_.index_within_set(dof);
+      if (!step_dirichlet_[local])
+        slot = static_cast<int>(local);
+      step_driven_[local] = 1;
+    }
+    driven_slot_.push_back(slot);
+  }
+  u_previous_.resize(n);
+  hanging_lines_.build(hanging_);
+  step_tables_ready_ = true;
+}
+
+// Explicit instantiation of the members defined in this file.
+#define SPINESIM_INSTANTIATE(dim)                                                                  \
+  template double MechanicsSolver<dim>::stable_time_step() const;                                  \
+  template void MechanicsSolver<dim>::explicit_step(double);                                       \
+  template typename MechanicsSolver<dim>::RelaxationSums MechanicsSolver<dim>::relaxation_step(    \
+      double, double, double, bool);                                                               \
+  template void MechanicsSolver<dim>::clear_velocity();                                            \
+  template void MechanicsSolver<dim>::central_difference(double, double, double, RelaxationSums*); \
+  template bool MechanicsSolver<dim>::linear_explicit() const;                                     \
+  template void MechanicsSolver<dim>::assemble_explicit_matrix();                                  \
+  template void MechanicsSolver<dim>::cache_dirichlet_dofs();                                      \
+  template void MechanicsSolver<dim>::build_step_tables();
+SPINESIM_INSTANTIATE(2)
+SPINESIM_INSTANTIATE(3)
+#undef SPINESIM_INSTANTIATE
+
+} // namespace spinesim::fem

@@ -1,0 +1,104 @@
+#include "fem/point_update.h"
+
+#include "base/exceptions.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace spinesim::fem {
+
+using namespace dealii;
+using materials::SymTensor2;
+using materials::Tensor2;
+
+Tensor2 ConstitutivePointUpdate::operator()(const materials::ConstitutiveLaw& law, const Tensor2& H,
+                                            double dT, const QuadraturePointData& old,
+                                            QuadraturePointData& tr, double (*A)[3][3][3]) const {
+  Tensor2 S;                                     // stress conjugate to ∇u: σ or P
+  const auto copy_tangent = [A](const auto& T) { // T: the law's fourth-order tangent
+    for (unsigned int i = 0; i < 3; ++i)
+      for (unsigned int j = 0; j < 3; ++j)
+        for (unsigned int k = 0; k < 3; ++k)
+          for (unsigned int l = 0; l < 3; ++l)
+            A[i][j][k][l] = T[i][j][k][l];
+  };
+  if (!finite_strain_) {
+    SymTensor2 eps = symmetrize(H);
+    materials::SmallStrainResponse r;
+    if (plane_stress_) {
+      // Local Newton on ε_zz so that σ_zz = 0; exact in one step for linear laws.
+      const double nu = law.poisson_ratio();
+      eps[2][2] = -nu / (1.0 - nu) * (eps[0][0] + eps[1][1]);
+      for (unsigned int it = 0; it < 20; ++it) {
+        r = law.small_strain(eps, dT, old.state);
+        if (std::abs(r.stress[2][2]) <= 1e-12 * (r.stress.norm() + 1e-300))
+          break;
+        eps[2][2] -= r.stress[2][2] / r.tangent[2][2][2][2];
+      }
+      if (A) {
+        // Condensed tangent: C − C:zz ⊗ Czz: / Czzzz.
+        const double czz = r.tangent[2][2][2][2];
+        SymTensor2 a, b;
+        for (unsigned int i = 0; i < 3; ++i)
+          for (unsigned int j = i; j < 3; ++j) {
+            a[i][j] = r.tangent[i][j][2][2];
+            b[i][j] = r.tangent[2][2][i][j];
+          }
+        r.tangent -= outer_product(a, b) / czz;
+      }
+    } else {
+      r = law.small_strain(eps, dT, old.state);
+    }
+    S = r.stress;
+    if (A)
+      copy_tangent(r.tangent);
+    tr.state = r.state;
+    tr.cauchy_stress = r.stress;
+    tr.strain = eps;
+    tr.deformation = eps;
+  } else {
+    const Tensor2 F = unit_symmetric_tensor<3>() + H;
+    const double J = determinant(F);
+    if (!(J > 0))
+      throw NumericalFailure("inverted element (det F = " + std::to_string(J) + ")", "",
+                             "reduce the load increment (more Load steps) or refine the "
+                             "mesh where the deformation concentrates");
+    const materials::FiniteStrainResponse r = law.finite_strain(F, dT, old.state);
+    S = r.first_piola;
+    if (A)
+      copy_tangent(r.dP_dF);
+    tr.state = r.state;
+    tr.cauchy_stress = symmetrize(S * transpose(F)) / J;
+    tr.strain = 0.5 * (symmetrize(transpose(F) * F) - unit_symmetric_tensor<3>());
+    tr.deformation = F;
+  }
+  for (unsigned int i = 0; i < 3; ++i)
+    for (unsigned int j = 0; j < 3; ++j)
+      if (!std::isfinite(S[i][j]))
+        throw NumericalFailure("non-finite stress from '" + law.name() + "'", "",
+                               "check the material parameters and the load increment");
+  tr.work_stress = S;
+  tr.work_density = old.work_density +
+                    0.5 * scalar_product(old.work_stress + S, tr.deformation - old.deformation);
+  return S;
+}
+
+template <int dim>
+std::string quadrature_point_location(const typename DoFHandler<dim>::active_cell_iterator& cell,
+                                      unsigned int q) {
+  std::ostringstream centre;
+  centre << "(" << cell->center()[0] << ", " << cell->center()[1];
+  if (dim == 3)
+    centre << ", " << cell->center()[dim - 1];
+  centre << ")";
+  return "cell " + cell->id().to_string() + " (active index " +
+         std::to_string(cell->active_cell_index()) + ") centred at " + centre.str() +
+         ", quadrature point " + std::to_string(q);
+}
+
+template std::string
+quadrature_point_location<2>(const typename DoFHandler<2>::active_cell_iterator&, unsigned int);
+template std::string
+quadrature_point_location<3>(const typename DoFHandler<3>::active_cell_iterator&, unsigned int);
+
+} // namespace spinesim::fem

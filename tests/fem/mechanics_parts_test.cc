@@ -1,0 +1,115 @@
+// The mechanics' point-wise pieces: the constitutive update at one quadrature point (plane
+// stress, finite strain, failures), the flat checkpoint layout of a point, and the
+// dynamic-relaxation sums (Kilic & Madenci 2010 stiffness estimate).
+
+#include "base/exceptions.h"
+#include "fem/materials/linear_elastic.h"
+#include "fem/point_update.h"
+#include "fem/quadrature_point_data.h"
+#include "fem/relaxation_sums.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <vector>
+
+using namespace spinesim;
+using namespace spinesim::fem;
+using materials::Tensor2;
+
+namespace {
+
+const double E = 200e9, nu = 0.3;
+
+// ∇u of a 2-D in-plane strain state, zero-padded to 3×3.
+Tensor2 in_plane_gradient(double exx, double eyy, double exy) {
+  Tensor2 H;
+  H[0][0] = exx;
+  H[1][1] = eyy;
+  H[0][1] = H[1][0] = exy;
+  return H;
+}
+
+} // namespace
+
+TEST(PointUpdate, PlaneStressHasNoOutOfPlaneStressAndTheReducedModulus) {
+  const materials::LinearElastic law(E, nu, 7800);
+  const ConstitutivePointUpdate update(false, true);
+  QuadraturePointData old, trial;
+  double A[3][3][3][3];
+  const Tensor2 S = update(law, in_plane_gradient(1e-3, 2e-4, 0), 0.0, old, trial, A);
+  EXPECT_NEAR(S[2][2], 0.0, 1e-6 * std::abs(S[0][0]));
+  EXPECT_NEAR(S[0][0], E / (1 - nu * nu) * (1e-3 + nu * 2e-4), 1e-9 * std::abs(S[0][0]));
+  EXPECT_NEAR(trial.strain[2][2], -nu / (1 - nu) * (1e-3 + 2e-4), 1e-15);
+  // Condensed tangent: the in-plane plane-stress modulus E / (1 − ν²).
+  EXPECT_NEAR(A[0][0][0][0], E / (1 - nu * nu), 1e-9 * E);
+  // Work density ½ σ : ε from a virgin state.
+  EXPECT_NEAR(trial.work_density, 0.5 * (S[0][0] * 1e-3 + S[1][1] * 2e-4), 1e-9 * S[0][0] * 1e-3);
+}
+
+TEST(PointUpdate, FiniteStrainRestIsStressFreeAndInversionFails) {
+  const materials::LinearElastic law(E, nu, 7800);
+  const ConstitutivePointUpdate update(true, false);
+  QuadraturePointData old, trial;
+  old.deformation = dealii::unit_symmetric_tensor<3>();
+  const Tensor2 S = update(law, Tensor2(), 0.0, old, trial, nullptr);
+  EXPECT_EQ(S.norm(), 0.0);
+  EXPECT_EQ((trial.deformation - Tensor2(dealii::unit_symmetric_tensor<3>())).norm(), 0.0);
+  Tensor2 H;
+  H[0][0] = -2.0; // F_xx = −1: det F < 0
+  EXPECT_THROW(update(law, H, 0.0, old, trial, nullptr), NumericalFailure);
+}
+
+TEST(QuadraturePointData, PackUnpackRoundTripIsExact) {
+  QuadraturePointData d;
+  double x = 0.1;
+  for (unsigned int i = 0; i < 3; ++i)
+    for (unsigned int j = 0; j < 3; ++j) {
+      d.work_stress[i][j] = (x += 1.7);
+      d.deformation[i][j] = (x += 0.3);
+      if (j >= i) {
+        d.cauchy_stress[i][j] = (x += 2.9);
+        d.strain[i][j] = (x += 0.11);
+        d.state.plastic_strain[i][j] = (x += 0.7);
+        d.state.elastic_left_cauchy_green[i][j] = (x += 0.13);
+      }
+    }
+  d.state.equivalent_plastic_strain = 0.25;
+  d.state.plastic_work = 3.5e6;
+  d.work_density = 1.0 / 3.0;
+  std::vector<double> flat(quadrature_point_doubles, std::numeric_limits<double>::quiet_NaN());
+  pack(d, flat.data());
+  for (const double v : flat)
+    EXPECT_TRUE(std::isfinite(v)); // every slot written
+  QuadraturePointData back;
+  unpack(flat.data(), back);
+  EXPECT_EQ(back.state.plastic_strain, d.state.plastic_strain);
+  EXPECT_EQ(back.state.elastic_left_cauchy_green, d.state.elastic_left_cauchy_green);
+  EXPECT_EQ(back.state.equivalent_plastic_strain, d.state.equivalent_plastic_strain);
+  EXPECT_EQ(back.state.plastic_work, d.state.plastic_work);
+  EXPECT_EQ(back.cauchy_stress, d.cauchy_stress);
+  EXPECT_EQ(back.strain, d.strain);
+  EXPECT_EQ(back.work_stress, d.work_stress);
+  EXPECT_EQ(back.deformation, d.deformation);
+  EXPECT_EQ(back.work_density, d.work_density);
+}
+
+TEST(RelaxationSums, StiffnessEstimateNeedsAPreviousAcceleration) {
+  RelaxationSums sums;
+  double a_previous = std::numeric_limits<double>::quiet_NaN();
+  // First step: residual only, the acceleration is remembered.
+  sums.add_free(2.0, -4.0, a_previous, 0.5, 1.0, 0.1);
+  EXPECT_EQ(sums.residual_square, 4.0);
+  EXPECT_EQ(sums.stiffness_denominator, 0.0);
+  EXPECT_EQ(a_previous, -4.0);
+  // Second step: k = −(a − a_previous) / (dt v) = −(−6 + 4) / (0.1 · 2) = 10.
+  sums.add_free(1.0, -6.0, a_previous, 0.5, 2.0, 0.1);
+  EXPECT_DOUBLE_EQ(sums.stiffness_numerator, 0.25 * 10.0);
+  EXPECT_EQ(sums.stiffness_denominator, 0.25);
+  RelaxationSums total;
+  total += sums;
+  total += sums;
+  EXPECT_EQ(total.residual_square, 10.0);
+  EXPECT_DOUBLE_EQ(total.stiffness_numerator, 5.0);
+}
