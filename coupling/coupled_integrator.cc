@@ -37,13 +37,13 @@ void CoupledIntegrator<dim>::step(double dt) {
 template <int dim>
 void CoupledIntegrator<dim>::advance(double dt, double a, double load_time, bool first,
                                      RelaxationSums* sums) {
-  auto& particles = state_.particles;
   // Central differences on both sides, all forces from the state at t_n:
   // 1. PD forces on free particles (ghosts hold the FEM field of t_n); particles to t_{n+1}.
   // 2. Interface DoFs of t_{n+1} from the particles; FEM step from t_n to t_{n+1}.
   // 3. Ghosts to the FEM field of t_{n+1}.
   // A relaxation step (sums given) holds the loads at load_time and adds this rank's sums of
   // the free particles to the FEM's.
+  auto& particles = state_.particles;
   if (state_.n_free_particles() > 0) {
     // With heat, bonds breaking in this force pass release their energy (at the state of t_n)
     // into their particle's heat account.

@@ -13,6 +13,15 @@ std::vector<double> parse_doubles(const std::string& list, const std::string& wh
   return parse_number_list(list, where, /*allow_empty=*/true);
 }
 
+// A box is given by both corners or by neither.
+template <int dim>
+void check_box_corners(const std::vector<double>& lower, const std::vector<double>& upper,
+                       const std::string& where) {
+  if (lower.size() != upper.size() || (!lower.empty() && lower.size() < dim))
+    throw InvalidInput(where, "the two corners need " + std::to_string(dim) + " coordinates each",
+                       "both empty, or both 'x,y" + std::string(dim == 3 ? ",z" : "") + "' [m]");
+}
+
 } // namespace
 
 template <int dim>
@@ -100,11 +109,7 @@ void CouplingParameters<dim>::parse(ParameterHandler& prm, const std::string& me
       parse_doubles(prm.get("Initial region lower corner"), "Coupling/Initial region lower corner");
   region_upper =
       parse_doubles(prm.get("Initial region upper corner"), "Coupling/Initial region upper corner");
-  if (region_lower.size() != region_upper.size() ||
-      (!region_lower.empty() && region_lower.size() < dim))
-    throw InvalidInput("Coupling/Initial region lower corner",
-                       "the two corners need " + std::to_string(dim) + " coordinates each",
-                       "both empty, or both 'x,y" + std::string(dim == 3 ? ",z" : "") + "' [m]");
+  check_box_corners<dim>(region_lower, region_upper, "Coupling/Initial region lower corner");
   principal_strain_threshold = prm.get_double("Principal strain threshold");
   plastic_strain_threshold = prm.get_double("Plastic strain threshold");
   min_jacobian_ratio = prm.get_double("Minimum Jacobian ratio");
@@ -120,11 +125,7 @@ void CouplingParameters<dim>::parse(ParameterHandler& prm, const std::string& me
   conserve_kinetic_energy = prm.get_bool("Conserve kinetic energy");
   relaxation_tolerance = prm.get_double("Relaxation tolerance");
   relaxation_max_iterations = prm.get_integer("Relaxation max iterations");
-  if (refine_lower.size() != refine_upper.size() ||
-      (!refine_lower.empty() && refine_lower.size() < dim))
-    throw InvalidInput("Coupling/Refinement region lower corner",
-                       "the two corners need " + std::to_string(dim) + " coordinates each",
-                       "both empty, or both 'x,y" + std::string(dim == 3 ? ",z" : "") + "' [m]");
+  check_box_corners<dim>(refine_lower, refine_upper, "Coupling/Refinement region lower corner");
   particles_method = method;
   make_method = meshfree::particle_method_maker<dim>(method, prm, "Effects/Particles method");
   cracks.clear();

@@ -85,7 +85,8 @@ struct CouplingState {
   double spacing = 0, youngs = 0, poisson = 0, density = 0;
   std::unique_ptr<meshfree::ParticleMethod<dim>> method;
 
-  // The particles, replicated on every rank; indices never change (only appended).
+  // The particles, replicated on every rank; indices never change (only appended; a
+  // checkpoint replaces them all).
   meshfree::ParticleSet<dim> particles;
   std::vector<std::uint8_t> free;       // 1 free, 0 ghost (driven by the FEM)
   std::vector<std::string> host_cell;   // CellId of the cell the particle sits in
@@ -93,7 +94,7 @@ struct CouplingState {
   // Per particle: the active cell index of its host cell if this rank owns it, else -1 (the
   // CellId strings need a map lookup).
   std::vector<int> host_index;
-  std::map<std::pair<std::string, unsigned int>, unsigned int> index_of;
+  std::map<std::pair<std::string, unsigned int>, unsigned int> index_of; // (cell, point) -> i
   std::vector<std::uint32_t> fixed_slots; // per particle: Dirichlet slots of its cell
   // Rank owning each particle's host cell (empty on one rank: all owned); ParticleHalo::plan.
   std::vector<int> owner;
