@@ -3,17 +3,16 @@
 
 // The FEM bulk and a particle fracture zone (meshfree/particle_method.h) in one run: explicit
 // dynamics, or quasi-static steps by adaptive dynamic relaxation of both models together.
-//
-// Conversion: a flagged cell leaves the FEM system (MechanicsSolver::set_active_cells, no
-// remeshing) and becomes n^dim particles at the points of the iterated midpoint rule (sub-cell
-// centres: on a uniform mesh they form the regular lattice PD is calibrated on). Each particle
-// inherits u, v and T interpolated from the cell; the particle masses are scaled so that they
-// add up to the mass the cell removes from the lumped FEM mass; the particle velocities are the
-// cell's mean velocity (the momentum its nodes lose over their mass) plus the interpolated
-// fluctuation about it, scaled so that they carry the kinetic energy the nodes lose. Mass,
-// linear momentum and kinetic energy are therefore conserved to round-off (kinetic energy
-// only with more than one particle per cell: a single particle has no fluctuation to scale,
-// and the defect is logged).
+// This class is the public face; the pieces do the work and share a CouplingState:
+//   CellConverter      cells -> particles, conserving mass, momentum and kinetic energy
+//   GhostLayer         FEM-driven ghost particles around the free ones
+//   BondRows           incremental bond search, rows of the owned free particles
+//   ParticleBoundary   Dirichlet conditions on particles of converted boundary cells
+//   MlsInterface       interface FEM DoFs driven by the MLS fit of the free particles
+//   ParticleHalo       owners, halo exchange and synchronisation across ranks
+//   FractureHeat       broken-bond energy handed to the heat equation
+//   CoupledIntegrator  central-difference steps and dynamic relaxation of both models
+//   CouplingCheckpoint save and load of the particle side
 //
 // Interface (why this method): an overlapping Dirichlet–Dirichlet splice. Active cells within a
 // ghost layer (at least 2 horizons) of the free particles carry ghost particles on the same
@@ -34,72 +33,34 @@
 // nodes) arrive by a halo exchange with their owners after every update, and synchronise()
 // brings every state to every rank for output, checkpoints and figures.
 
-#include "fem/mechanics_solver.h"
-#include "meshfree/bond_list.h"
-#include "meshfree/particle_method.h"
-#include "meshfree/particle_set.h"
-#include "meshfree/pre_crack.h"
+#include "coupling/bond_rows.h"
+#include "coupling/cell_converter.h"
+#include "coupling/coupled_integrator.h"
+#include "coupling/coupling_checkpoint.h"
+#include "coupling/coupling_parameters.h"
+#include "coupling/coupling_state.h"
+#include "coupling/fracture_heat.h"
+#include "coupling/ghost_layer.h"
+#include "coupling/mls_interface.h"
+#include "coupling/particle_boundary.h"
+#include "coupling/particle_halo.h"
 
-#include <deal.II/base/parameter_handler.h>
 #include <deal.II/grid/cell_id.h>
 #include <deal.II/lac/vector.h>
 
-#include <map>
-#include <memory>
 #include <string>
+#include <utility>
 #include <vector>
-
-namespace spinesim::fem {
-template <int dim>
-class HeatSolver;
-}
 
 namespace spinesim::coupling {
 
 template <int dim>
 class FemParticleCoupling {
  public:
-  struct Parameters {
-    unsigned int particles_per_direction = 1; // particles per cell = this^dim
-    double ghost_layer = 2.0;                 // ghost layer width [horizons]
-    double interface_radius = 2.5;            // MLS support of interface nodes [spacings]
-    double time_step_safety = 0.8;            // PD stable step factor [-]
-    bool all_particles = false;
-    std::vector<double> region_lower, region_upper; // particles from t = 0 (empty = none)
-    double principal_strain_threshold = 0;          // [-], 0 = off
-    double plastic_strain_threshold = 0;            // [-], 0 = off
-    double min_jacobian_ratio = 0;                  // [-], 0 = off
-    double min_time_step = 0;                       // [s], 0 = off
-    double buffer = 0;                              // converted around flagged cells [m]
-    unsigned int check_interval = 10;               // steps between conversion checks
-    bool damage = true;                             // bonds may break (Effects/Damage)
-    std::vector<double> refine_lower, refine_upper; // box refined before the run [m]
-    unsigned int region_refinements = 0;
-    double fracture_heat_fraction = 1.0; // share of broken-bond energy returned as heat [-]
-    bool conserve_kinetic_energy = true; // scale the velocity fluctuation at conversion
-    double relaxation_tolerance = 1e-6;  // quasi-static: free residual / reaction scale [-]
-    unsigned int relaxation_max_iterations = 200000; // quasi-static: per step [-]
-    // The particle method (Effects/Particles method), its parameters read from its subsection
-    // of "Coupling"; made in prepare() with the material of the FEM cells.
-    std::string particles_method = "bond_based";
-    meshfree::ParticleMethodMaker<dim> make_method;
-    std::vector<std::vector<double>> cracks; // flattened corners per pre-crack [m]
-
-    static void declare(dealii::ParameterHandler& prm);
-    // `particles_method` is the registered name the scene chose (Effects/Particles method).
-    void parse(dealii::ParameterHandler& prm, const std::string& particles_method);
-  };
-
-  struct ConversionReport {
-    unsigned int cells = 0, particles = 0;
-    double mass_before = 0, mass_after = 0;                 // [kg]
-    dealii::Tensor<1, dim> momentum_before, momentum_after; // [kg m/s]
-    double kinetic_before = 0, kinetic_after = 0;           // [J]
-    double max_velocity_scale = 1; // largest λ on the velocity fluctuation of a cell [-]
-    double mass_change_relative() const;
-    double kinetic_change_relative() const;  // over the kinetic energy before
-    double momentum_change_relative() const; // over |p| (or over mass × max speed if p ≈ 0)
-  };
+  using Parameters = CouplingParameters<dim>;
+  using ConversionReport = coupling::ConversionReport<dim>;
+  using RelaxationReport = coupling::RelaxationReport<dim>;
+  using Timings = CouplingTimings;
 
   // Local refinement of the refinement box; with All particles, uniform refinement to the
   // finest level so that every particle has the same spacing. Call before any solver setup.
@@ -111,6 +72,9 @@ class FemParticleCoupling {
   FemParticleCoupling(const Parameters& parameters, fem::MechanicsSolver<dim>& mechanics,
                       const fem::HeatSolver<dim>* heat = nullptr);
   ~FemParticleCoupling();
+  // The pieces refer to each other and to this object.
+  FemParticleCoupling(const FemParticleCoupling&) = delete;
+  FemParticleCoupling& operator=(const FemParticleCoupling&) = delete;
 
   // Converts the initial region (or every cell with All particles) and builds the interface.
   void initialise();
@@ -127,21 +91,14 @@ class FemParticleCoupling {
   void refresh();
 
   double stable_time_step() const; // min(FEM CFL step, PD step) [s]
-  // One central-difference step of both models (see the .cc for the order).
+  // One central-difference step of both models (see CoupledIntegrator::advance).
   void step(double dt);
 
   // Quasi-static: adaptive dynamic relaxation of both models to equilibrium under the loads of
-  // `time` (see the .cc); bonds break on the way and, with `with_conversion`, the cells
-  // flagged at equilibrium convert and the state relaxes again, until none is flagged. Ends
-  // with zero velocities. Not converged within Relaxation max iterations (all relaxations of
-  // the step together): converged = false (the caller decides).
-  struct RelaxationReport {
-    bool converged = false;
-    unsigned int iterations = 0;
-    double relative_residual = 0; // at the end [-]
-    double damping = 0;           // last adaptive damping [1/s]
-    std::vector<ConversionReport> conversions;
-  };
+  // `time` (see CoupledIntegrator::relax); bonds break on the way and, with `with_conversion`,
+  // the cells flagged at equilibrium convert and the state relaxes again, until none is
+  // flagged. Ends with zero velocities. Not converged within Relaxation max iterations (all
+  // relaxations of the step together): converged = false (the caller decides).
   RelaxationReport relax(double time, bool with_conversion);
 
   // Sets every free DoF and free particle to the affine field u = H x (for the patch test).
@@ -164,85 +121,51 @@ class FemParticleCoupling {
   // when the coupling has a heat solver.
   dealii::Vector<double> take_fracture_heat(double elapsed);
   double fracture_dissipation() const; // energy of all broken bonds so far [J], collective
-  double fracture_heat() const { return fracture_heat_; } // handed to the FEM so far [J]
+  double fracture_heat() const { return fracture_.heat(); } // handed to the FEM so far [J]
 
-  unsigned int n_free_particles() const;
-  unsigned int n_ghost_particles() const;
-  unsigned int n_converted_cells() const { return static_cast<unsigned int>(converted_.size()); }
+  unsigned int n_free_particles() const { return state_.n_free_particles(); }
+  unsigned int n_ghost_particles() const { return state_.n_ghost_particles(); }
+  unsigned int n_converted_cells() const {
+    return static_cast<unsigned int>(converter_.converted().size());
+  }
   std::size_t n_broken_bonds() const;
   double max_damage() const;
-  double particle_spacing() const { return spacing_; }
-  double horizon() const;
-  const meshfree::ParticleSet<dim>& particles() const { return particles_; }
-  bool is_free(unsigned int i) const { return free_[i] != 0; }
-  const std::vector<ConversionReport>& conversions() const { return reports_; }
+  double particle_spacing() const { return state_.spacing; }
+  double horizon() const { return state_.horizon(); }
+  const meshfree::ParticleSet<dim>& particles() const { return state_.particles; }
+  bool is_free(unsigned int i) const { return state_.free[i] != 0; }
+  const std::vector<ConversionReport>& conversions() const { return converter_.reports(); }
 
   // Wall time of the conversions by phase, summed over the run [s].
-  struct Timings {
-    double criteria = 0;     // indicators on the candidate cells (flagged_cells)
-    double records = 0;      // particles made from the cells, exchanged and added
-    double deactivation = 0; // cells out of the FEM (stiffness, mass)
-    double ghosts = 0;       // the ghost layer
-    double bonds = 0;        // incremental bond search and row ownership
-    double interface = 0;    // interface DoFs, their MLS fits, halo plan, first update
-    double totals = 0;       // mass, momentum and energy before and after (the report)
-  };
-  const Timings& timings() const { return timings_; }
+  const Timings& timings() const { return state_.timings; }
 
   // Every rank's copy of u, v, damage and temperature of all particles from their owners
   // (collective; output, checkpoints and figures read the replicated set).
-  void synchronise() const;
-  bool is_owned(unsigned int i) const {
-    return owner_.empty() || owner_[i] == static_cast<int>(rank_);
-  }
+  void synchronise() const { halo_.synchronise(); }
+  bool is_owned(unsigned int i) const { return state_.is_owned(i); }
 
   // particles_<cycle>.vtu of the free particles (rank 0); returns the file name. Collective.
   std::string write_output(const std::string& directory, unsigned int cycle) const;
-  void save(const std::string& file) const; // rank 0 writes
-  void load(const std::string& file);       // every rank reads; FEM state restored separately
+  void save(const std::string& file) const { checkpoint_.save(file); } // rank 0 writes
+  // Every rank reads; FEM state restored separately.
+  void load(const std::string& file) { checkpoint_.load(file); }
 
  private:
-  struct Impl;
-  Parameters prm_;
-  fem::MechanicsSolver<dim>& fem_;
-  const fem::HeatSolver<dim>* heat_;
-  std::unique_ptr<Impl> impl_;
+  // After the particles changed: ghosts, fixed particles, bonds, interface DoFs, halo plan,
+  // and the first update of ghosts and interface values.
+  void rebuild_layers();
 
-  meshfree::ParticleSet<dim> particles_;
-  meshfree::BondList<dim> bonds_;
-  std::unique_ptr<meshfree::ParticleMethod<dim>> method_; // made by prepare()
-  std::vector<std::uint8_t> free_;                        // 1 free, 0 ghost (driven by the FEM)
-  std::vector<std::string> host_cell_;                    // CellId of the cell the particle sits in
-  std::vector<unsigned int> host_point_;                  // index of the point within that cell
-  std::map<std::pair<std::string, unsigned int>, unsigned int> index_of_;
-  std::map<std::string, unsigned int> converted_; // CellId -> conversion batch
-  std::vector<ConversionReport> reports_;
-  double spacing_ = 0, youngs_ = 0, poisson_ = 0, density_ = 0;
-  double time_ = 0;
-  std::vector<double> fracture_energy_; // per particle, not yet handed to the FEM [J]
-  double fracture_dissipation_ = 0;     // of the rows owned here [J]
-  double fracture_heat_ = 0;            // global [J]
-
-  void prepare(); // material, lattice spacing, shape table, PD model (once)
-  void rebuild_interface();
-  void rebuild_bonds();
-  // Appends the host cell and point of a particle just added (and its owned-cell index).
-  void add_host(const std::string& cell_id, unsigned int point);
-  void update_ghosts();
-  void update_interface_dofs();
-  void apply_particle_dirichlet(double time, double dt);
-  using RelaxationSums = typename fem::MechanicsSolver<dim>::RelaxationSums;
-  // One central-difference step of both models with damping a [1/s] and the loads of
-  // load_time; with `sums`, a relaxation step (the time is held) that adds up the free
-  // residual, reactions and stiffness estimate of this rank.
-  void advance(double dt, double a, double load_time, bool first, RelaxationSums* sums);
-  // Owners and the halo plan: which particles this rank reads but others own, and which of its
-  // own the others read.
-  void plan_exchange();
-  void exchange_halo();    // u, v of halo particles from their owners
-  std::vector<int> owner_; // rank owning each particle's host cell
-  mutable Timings timings_;
-  unsigned int rank_ = 0;
+  // Declared in dependency order: each piece refers only to those above it.
+  CouplingState<dim> state_;
+  ParticleHalo<dim> halo_;
+  GhostLayer<dim> ghosts_;
+  BondRows<dim> bond_rows_;
+  ParticleBoundary<dim> boundary_;
+  MlsInterface<dim> interface_;
+  FractureHeat<dim> fracture_;
+  CellConverter<dim> converter_;
+  CoupledIntegrator<dim> integrator_;
+  CouplingCheckpoint<dim> checkpoint_;
 };
 
 } // namespace spinesim::coupling

@@ -1,0 +1,128 @@
+#include "coupling/bond_rows.h"
+
+#include "meshfree/neighbor_search.h"
+#include "meshfree/pre_crack.h"
+
+#include <deal.II/base/mpi.h>
+
+#include <boost/serialization/utility.hpp>
+#include <boost/serialization/vector.hpp>
+
+#include <algorithm>
+#include <cstdint>
+#include <utility>
+
+namespace spinesim::coupling {
+
+using namespace dealii;
+
+template <int dim>
+void BondRows<dim>::rebuild() {
+  // Broken pairs survive a rebuild (particle indices never change). Sorted pairs (i < j).
+  std::vector<std::pair<unsigned int, unsigned int>> broken;
+  for (unsigned int i = 0; i < state_.bonds.n_particles(); ++i)
+    for (std::size_t k = state_.bonds.begin(i); k < state_.bonds.end(i); ++k)
+      if (state_.bonds.broken[k])
+        broken.emplace_back(std::min(i, state_.bonds.neighbor[k]),
+                            std::max(i, state_.bonds.neighbor[k]));
+  if (Utilities::MPI::n_mpi_processes(state_.fem.mpi_communicator()) > 1) {
+    // Rows live with their owners: every rank learns every broken pair (a particle that turns
+    // from ghost to free inherits the breaks its partners recorded).
+    const auto mine = broken;
+    broken.clear();
+    for (const auto& part : Utilities::MPI::all_gather(state_.fem.mpi_communicator(), mine))
+      broken.insert(broken.end(), part.begin(), part.end());
+  }
+  std::sort(broken.begin(), broken.end());
+  broken.erase(std::unique(broken.begin(), broken.end()), broken.end());
+  std::vector<std::uint8_t> in_broken(state_.particles.size(),
+                                      0); // the search only where it can hit
+  for (const auto& [i, j] : broken)
+    in_broken[i] = in_broken[j] = 1;
+  const auto was_broken = [&](unsigned int i, unsigned int j) {
+    return in_broken[i] && in_broken[j] &&
+           std::binary_search(broken.begin(), broken.end(),
+                              std::make_pair(std::min(i, j), std::max(i, j)));
+  };
+
+  auto options = state_.method->neighbor_options(state_.spacing);
+  for (const auto& c : state_.prm.cracks) {
+    if constexpr (dim == 2)
+      options.pre_cracks.push_back(
+          meshfree::PreCrack<dim>::segment(Point<dim>(c[0], c[1]), Point<dim>(c[2], c[3])));
+    else
+      options.pre_cracks.push_back(meshfree::PreCrack<dim>::quadrilateral(
+          Point<dim>(c[0], c[1], c[2]), Point<dim>(c[3], c[4], c[5]), Point<dim>(c[6], c[7], c[8]),
+          Point<dim>(c[9], c[10], c[11])));
+  }
+  // Particles are only appended and never move; a conversion changes the volumes of the ghosts
+  // it frees. The search reuses the rows that neither touches (the same list as a full build).
+  meshfree::NeighborSearch<dim> search(options);
+  auto& all = searched_;
+  if (all.n_particles() == 0) {
+    all = search.build(state_.particles);
+  } else {
+    std::vector<unsigned int> changed;
+    for (unsigned int i = 0; i < all.n_particles(); ++i)
+      if (state_.particles.volume(i) != searched_volumes_[i])
+        changed.push_back(i);
+    all = search.extend(state_.particles, all, changed);
+  }
+  searched_volumes_ = state_.particles.volumes();
+
+  // Owners (before the first plan: host cells owned here) and their rows.
+  std::vector<std::uint8_t> mine(state_.particles.size(), 1);
+  if (Utilities::MPI::n_mpi_processes(state_.fem.mpi_communicator()) > 1)
+    for (unsigned int i = 0; i < state_.particles.size(); ++i)
+      mine[i] = state_.host_index[i] >= 0 ? 1 : 0;
+  // Keep the rows of the free particles this rank owns: ghosts are driven and need no force,
+  // other ranks' particles are theirs to move.
+  meshfree::BondList<dim> kept;
+  kept.horizon = all.horizon;
+  kept.offsets.assign(all.n_particles() + 1, 0);
+  const bool has_volume = !all.volume_fraction.empty(), has_surface = !all.surface_factor.empty();
+  {
+    std::size_t n_kept = 0;
+    for (unsigned int i = 0; i < all.n_particles(); ++i)
+      if (state_.free[i] && mine[i])
+        n_kept += all.end(i) - all.begin(i);
+    for (auto* v : {&kept.length, &kept.influence})
+      v->reserve(n_kept);
+    kept.neighbor.reserve(n_kept);
+    kept.xi.reserve(n_kept);
+    kept.broken.reserve(n_kept);
+    if (has_volume)
+      kept.volume_fraction.reserve(n_kept);
+    if (has_surface)
+      kept.surface_factor.reserve(n_kept);
+  }
+  for (unsigned int i = 0; i < all.n_particles(); ++i) {
+    if (state_.free[i] && mine[i])
+      for (std::size_t k = all.begin(i); k < all.end(i); ++k) {
+        const unsigned int j = all.neighbor[k];
+        kept.neighbor.push_back(j);
+        kept.xi.push_back(all.xi[k]);
+        kept.length.push_back(all.length[k]);
+        kept.influence.push_back(all.influence[k]);
+        kept.broken.push_back(all.broken[k] || was_broken(i, j));
+        if (has_volume)
+          kept.volume_fraction.push_back(all.volume_fraction[k]);
+        if (has_surface)
+          kept.surface_factor.push_back(all.surface_factor[k]);
+      }
+    kept.offsets[i + 1] = kept.neighbor.size();
+  }
+  state_.bonds = std::move(kept);
+  state_.method->initialise(state_.particles, state_.bonds);
+}
+
+template <int dim>
+void BondRows<dim>::forget_search() {
+  searched_ = {};
+  searched_volumes_.clear();
+}
+
+template class BondRows<2>;
+template class BondRows<3>;
+
+} // namespace spinesim::coupling

@@ -1,0 +1,34 @@
+#ifndef SPINESIM_COUPLING_BOND_ROWS_H
+#define SPINESIM_COUPLING_BOND_ROWS_H
+
+// The bond rows of the free particles this rank owns (CouplingState::bonds), searched
+// incrementally: particles are only appended and never move, so a rebuild searches only the
+// rows that new particles or changed volumes touch. Broken bonds stay broken.
+
+#include "coupling/coupling_state.h"
+
+#include <vector>
+
+namespace spinesim::coupling {
+
+template <int dim>
+class BondRows {
+ public:
+  explicit BondRows(CouplingState<dim>& state) : state_(state) {}
+
+  // Searches the new rows, keeps the owned free ones and initialises the particle method.
+  void rebuild();
+  // The next rebuild searches every row afresh (the particles were replaced).
+  void forget_search();
+
+ private:
+  CouplingState<dim>& state_;
+  // Every particle's bonds as last searched (pre-crack flags only) and the volumes they were
+  // searched with.
+  meshfree::BondList<dim> searched_;
+  std::vector<double> searched_volumes_;
+};
+
+} // namespace spinesim::coupling
+
+#endif

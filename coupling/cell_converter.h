@@ -1,0 +1,82 @@
+#ifndef SPINESIM_COUPLING_CELL_CONVERTER_H
+#define SPINESIM_COUPLING_CELL_CONVERTER_H
+
+// Cells -> particles. A flagged cell leaves the FEM system (MechanicsSolver::set_active_cells,
+// no remeshing) and becomes n^dim particles at the points of the iterated midpoint rule
+// (sub-cell centres: on a uniform mesh the regular lattice PD is calibrated on). Each particle
+// inherits u, v and T interpolated from the cell; the particle masses add up to the mass the
+// cell removes from the lumped FEM mass; the velocities are the cell's mean velocity plus the
+// interpolated fluctuation about it, scaled so that they carry the kinetic energy the nodes
+// lose. Mass, linear momentum and kinetic energy are conserved to round-off (kinetic energy
+// only with more than one particle per cell; the defect is reported).
+
+#include "coupling/coupling_state.h"
+#include "coupling/particle_record.h"
+
+#include <deal.II/base/tensor.h>
+#include <deal.II/distributed/tria.h>
+#include <deal.II/grid/cell_id.h>
+
+#include <functional>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace spinesim::coupling {
+
+template <int dim>
+struct ConversionReport {
+  unsigned int cells = 0, particles = 0;
+  double mass_before = 0, mass_after = 0;                 // [kg]
+  dealii::Tensor<1, dim> momentum_before, momentum_after; // [kg m/s]
+  double kinetic_before = 0, kinetic_after = 0;           // [J]
+  double max_velocity_scale = 1; // largest λ on the velocity fluctuation of a cell [-]
+  double mass_change_relative() const;
+  double kinetic_change_relative() const;  // over the kinetic energy before
+  double momentum_change_relative() const; // over |p| (or over mass × max speed if p ≈ 0)
+};
+
+template <int dim>
+class CellConverter {
+ public:
+  // `rebuild_layers` rebuilds the ghost layer, bonds and interface after cells converted.
+  CellConverter(CouplingState<dim>& state, std::function<void()> rebuild_layers)
+      : state_(state), rebuild_layers_(std::move(rebuild_layers)) {}
+
+  // Local refinement of the refinement box; with All particles, uniform refinement to the
+  // finest level so that every particle has the same spacing. Before any solver setup.
+  static void prepare_mesh(const CouplingParameters<dim>& parameters,
+                           dealii::parallel::distributed::Triangulation<dim>& triangulation);
+
+  // The initial region (or every cell with All particles), as CellIds on every rank.
+  std::vector<dealii::CellId> initial_cells() const;
+  // Cells flagged by the criteria (plus the buffer around them), as CellIds on every rank.
+  std::vector<dealii::CellId> flagged_cells() const;
+  // Converts these cells (ids common to all ranks; already converted ones are skipped).
+  ConversionReport<dim> convert(const std::vector<dealii::CellId>& cells);
+  // Checks the criteria and converts; cells = 0 if nothing converted.
+  ConversionReport<dim> convert_flagged();
+
+  // CellId -> conversion batch.
+  const std::map<std::string, unsigned int>& converted() const { return converted_; }
+  // From a checkpoint: these cells are converted, and out of the FEM.
+  void restore(std::map<std::string, unsigned int> converted);
+  const std::vector<ConversionReport<dim>>& reports() const { return reports_; }
+
+ private:
+  // The particles of the cells in `todo` this rank owns, with u, v, T from the FEM, masses
+  // and kinetic energy matched to what the nodes lose; raises max_velocity_scale to the
+  // largest λ used.
+  std::vector<ParticleRecord<dim>> make_records(const std::set<std::string>& todo,
+                                                double& max_velocity_scale) const;
+
+  CouplingState<dim>& state_;
+  std::function<void()> rebuild_layers_;
+  std::map<std::string, unsigned int> converted_;
+  std::vector<ConversionReport<dim>> reports_;
+};
+
+} // namespace spinesim::coupling
+
+#endif

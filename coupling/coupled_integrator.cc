@@ -1,0 +1,186 @@
+#include "coupling/coupled_integrator.h"
+
+#include "base/exceptions.h"
+#include "fem/heat/heat_solver.h"
+
+#include <deal.II/base/array_view.h>
+#include <deal.II/base/mpi.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace spinesim::coupling {
+
+using namespace dealii;
+
+template <int dim>
+double CoupledIntegrator<dim>::stable_time_step() const {
+  const auto& particles = state_.particles;
+  double dt = state_.fem.stable_time_step();
+  if (state_.n_free_particles() > 0) {
+    const auto S = state_.method->stiffness_bound(particles, state_.bonds);
+    for (unsigned int i = 0; i < particles.size(); ++i)
+      if (state_.free[i] && S[i] > 0)
+        dt = std::min(dt,
+                      state_.prm.time_step_safety * std::sqrt(2.0 * particles.density(i) / S[i]));
+  }
+  return Utilities::MPI::min(dt, state_.fem.mpi_communicator()); // rows live with their owners
+}
+
+template <int dim>
+void CoupledIntegrator<dim>::step(double dt) {
+  advance(dt, state_.fem.parameters().mass_damping, time_ + dt, false, nullptr);
+  time_ += dt;
+}
+
+template <int dim>
+void CoupledIntegrator<dim>::advance(double dt, double a, double load_time, bool first,
+                                     RelaxationSums* sums) {
+  // Central differences on both sides, all forces from the state at t_n:
+  // 1. PD forces on free particles (ghosts hold the FEM field of t_n); particles to t_{n+1}.
+  // 2. Interface DoFs of t_{n+1} from the particles; FEM step from t_n to t_{n+1}.
+  // 3. Ghosts to the FEM field of t_{n+1}.
+  // A relaxation step (sums given) holds the loads at load_time and adds this rank's sums of
+  // the free particles to the FEM's.
+  auto& particles = state_.particles;
+  if (state_.n_free_particles() > 0) {
+    // With heat, bonds breaking in this force pass release their energy (at the state of t_n)
+    // into their particle's heat account.
+    fracture_.before_forces();
+    fracture_.after_forces(
+        state_.method->compute_forces(particles, state_.bonds, state_.prm.damage));
+    auto& previous = relax_acceleration_;
+    if (sums && (first || previous.size() != dim * particles.size()))
+      previous.assign(dim * particles.size(), std::numeric_limits<double>::quiet_NaN());
+    // The damped central-difference update of one component, in both loops below.
+    const double keep = 1.0 - 0.5 * a * dt, denominator = 1.0 + 0.5 * a * dt;
+    const auto advance_component = [&](unsigned int i, unsigned int d, double acc) {
+      double& vi = particles.velocity(i)[d];
+      vi = (keep * vi + dt * acc) / denominator;
+      particles.displacement(i)[d] += dt * vi;
+    };
+    if (!sums) {
+      // Independent particles: the threads share them (the relaxation sums below keep one
+      // thread and a fixed order).
+      const long n = static_cast<long>(particles.size());
+      // A few flops a particle: worth a parallel region from a couple of thousand on.
+#pragma omp parallel for schedule(static) if (n > 2000)
+      for (long ii = 0; ii < n; ++ii) {
+        const unsigned int i = static_cast<unsigned int>(ii);
+        if (!state_.free[i] || !state_.is_owned(i))
+          continue;
+        const double m = particles.mass(i);
+        for (unsigned int d = 0; d < dim; ++d) {
+          if (particles.is_fixed(i, d))
+            continue;
+          advance_component(i, d, (particles.force(i)[d] + particles.external_force(i)[d]) / m);
+        }
+      }
+    }
+    for (unsigned int i = 0; sums && i < particles.size(); ++i) {
+      if (!state_.free[i] || !state_.is_owned(i))
+        continue;
+      const double m = particles.mass(i);
+      for (unsigned int d = 0; d < dim; ++d) {
+        const double f = particles.force(i)[d] + particles.external_force(i)[d];
+        if (particles.is_fixed(i, d)) {
+          sums->reaction_square += f * f;
+          continue;
+        }
+        const double acc = f / m;
+        sums->add_free(f, acc, previous[dim * i + d], particles.displacement(i)[d],
+                       particles.velocity(i)[d], dt);
+        advance_component(i, d, acc);
+      }
+    }
+    boundary_.apply(load_time, dt);
+    halo_.exchange(); // partners and interface stencils at t_{n+1}
+    interface_.update();
+  }
+  if (sums) {
+    *sums += state_.fem.relaxation_step(dt, a, load_time, first);
+  } else {
+    state_.fem.explicit_step(dt);
+  }
+  if (state_.n_ghost_particles() > 0)
+    ghosts_.update();
+  if (state_.heat && state_.n_free_particles() > 0) {
+    // The FEM temperature drives the temperatures of the free particles owned here (their
+    // host cells are this rank's; synchronise() spreads them).
+    std::vector<double> values;
+    for (const auto& [cell, row] : state_.free_cells) {
+      state_.heat->temperature_at_unit_points(cell, state_.points.get_points(), values);
+      for (unsigned int q = 0; q < row.size(); ++q)
+        if (row[q] >= 0)
+          particles.temperature(row[q]) = values[q];
+    }
+  }
+}
+
+template <int dim>
+RelaxationReport<dim> CoupledIntegrator<dim>::relax(double time, bool with_conversion) {
+  // Adaptive dynamic relaxation of the coupled system at the load of `time` (Underwood 1983;
+  // Kilic & Madenci 2010 for PD): central differences in pseudo-time with the real lumped and
+  // particle masses at the common stable step, and the damping c = 2 sqrt(uᵀ k u / uᵀ u) from
+  // the local stiffness estimates of both models (critical for the lowest mode, updated every
+  // step, one step late). Converged when ‖free residual‖ ≤ tolerance × max(‖reactions‖,
+  // largest ‖free residual‖ of this relaxation). Bonds break as the state relaxes; cells
+  // convert at equilibrium, and the state relaxes again after a conversion. Velocities are
+  // pseudo-velocities and end at zero.
+  const MPI_Comm comm = state_.fem.mpi_communicator();
+  RelaxationReport<dim> report;
+  double dt = stable_time_step();
+  double c = 0, peak_residual = 0;
+  bool first = true;
+  time_ = time; // held: advance() with sums does not move the clock
+  for (unsigned int it = 1; it <= state_.prm.relaxation_max_iterations; ++it) {
+    RelaxationSums local;
+    advance(dt, c, time, first, &local);
+    first = false;
+    double values[4] = {local.stiffness_numerator, local.stiffness_denominator,
+                        local.residual_square, local.reaction_square};
+    Utilities::MPI::sum(ArrayView<const double>(values, 4), comm, ArrayView<double>(values, 4));
+    const double residual = std::sqrt(values[2]), reaction = std::sqrt(values[3]);
+    peak_residual = std::max(peak_residual, residual);
+    const double scale = std::max(reaction, peak_residual);
+    report.iterations = it;
+    report.relative_residual = scale > 0 ? residual / scale : 0.0;
+    if (!std::isfinite(residual))
+      throw NumericalFailure("non-finite residual",
+                             "relaxation at t = " + std::to_string(time) + ", iteration " +
+                                 std::to_string(it),
+                             "check the materials and the loads of this step");
+    // The first step's forces are those of the previous state: judge from the second on.
+    if (it > 1 && residual <= state_.prm.relaxation_tolerance * scale) {
+      // Conversion is decided at equilibrium, not on the transient strains of the relaxation
+      // (which depend on its path and tolerance): cells flagged now convert and the state
+      // relaxes again, until no cell converts.
+      const auto r = with_conversion ? converter_.convert_flagged() : ConversionReport<dim>();
+      if (r.cells == 0) {
+        report.converged = true;
+        break;
+      }
+      report.conversions.push_back(r);
+      dt = stable_time_step();
+      first = true; // new unknowns: restart the stiffness estimate
+      c = 0;
+      continue;
+    }
+    const double q = values[1] > 0 ? values[0] / values[1] : 0.0;
+    c = q > 0 ? std::min(2.0 * std::sqrt(q), 2.0 / dt) : 0.0; // c dt ≤ 2 keeps 1 − c dt/2 ≥ 0
+    report.damping = c;
+  }
+  // Quasi-static: the pseudo-velocities go.
+  for (unsigned int i = 0; i < state_.particles.size(); ++i)
+    state_.particles.velocity(i) = Tensor<1, dim>();
+  state_.fem.clear_velocity();
+  if (state_.n_ghost_particles() > 0)
+    ghosts_.update();
+  return report;
+}
+
+template class CoupledIntegrator<2>;
+template class CoupledIntegrator<3>;
+
+} // namespace spinesim::coupling

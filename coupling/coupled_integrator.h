@@ -1,0 +1,71 @@
+#ifndef SPINESIM_COUPLING_COUPLED_INTEGRATOR_H
+#define SPINESIM_COUPLING_COUPLED_INTEGRATOR_H
+
+// Time stepping of both models together: explicit central differences at one common stable
+// step (the smaller of the FEM CFL and the PD bound), or quasi-static steps by adaptive
+// dynamic relaxation of both models to equilibrium.
+
+#include "coupling/cell_converter.h"
+#include "coupling/coupling_state.h"
+#include "coupling/fracture_heat.h"
+#include "coupling/ghost_layer.h"
+#include "coupling/mls_interface.h"
+#include "coupling/particle_boundary.h"
+#include "coupling/particle_halo.h"
+
+#include <vector>
+
+namespace spinesim::coupling {
+
+template <int dim>
+struct RelaxationReport {
+  bool converged = false;
+  unsigned int iterations = 0;
+  double relative_residual = 0; // at the end [-]
+  double damping = 0;           // last adaptive damping [1/s]
+  std::vector<ConversionReport<dim>> conversions;
+};
+
+template <int dim>
+class CoupledIntegrator {
+ public:
+  CoupledIntegrator(CouplingState<dim>& state, GhostLayer<dim>& ghosts,
+                    MlsInterface<dim>& interface, ParticleHalo<dim>& halo,
+                    ParticleBoundary<dim>& boundary, FractureHeat<dim>& fracture,
+                    CellConverter<dim>& converter)
+      : state_(state), ghosts_(ghosts), interface_(interface), halo_(halo), boundary_(boundary),
+        fracture_(fracture), converter_(converter) {}
+
+  double stable_time_step() const; // min(FEM CFL step, PD step) [s]
+  // One central-difference step of both models (see advance()).
+  void step(double dt);
+  // Adaptive dynamic relaxation to equilibrium under the loads of `time`; with
+  // `with_conversion`, the cells flagged at equilibrium convert and the state relaxes again.
+  // Ends with zero velocities.
+  RelaxationReport<dim> relax(double time, bool with_conversion);
+
+  double time() const { return time_; }
+  void set_time(double time) { time_ = time; } // a checkpoint's
+
+ private:
+  using RelaxationSums = typename fem::MechanicsSolver<dim>::RelaxationSums;
+  // One central-difference step of both models with damping a [1/s] and the loads of
+  // load_time; with `sums`, a relaxation step (the time is held) that adds up the free
+  // residual, reactions and stiffness estimate of this rank.
+  void advance(double dt, double a, double load_time, bool first, RelaxationSums* sums);
+
+  CouplingState<dim>& state_;
+  GhostLayer<dim>& ghosts_;
+  MlsInterface<dim>& interface_;
+  ParticleHalo<dim>& halo_;
+  ParticleBoundary<dim>& boundary_;
+  FractureHeat<dim>& fracture_;
+  CellConverter<dim>& converter_;
+  double time_ = 0;
+  // Net accelerations of the free particle components at the last relaxation step [m/s²].
+  std::vector<double> relax_acceleration_;
+};
+
+} // namespace spinesim::coupling
+
+#endif

@@ -1,0 +1,31 @@
+#ifndef SPINESIM_COUPLING_COUPLED_TOTALS_H
+#define SPINESIM_COUPLING_COUPLED_TOTALS_H
+
+// Totals over both models (FEM lumped mass, free particles): what a conversion must conserve
+// and what the scenes report. Collective.
+
+#include "coupling/coupling_state.h"
+
+#include <deal.II/base/tensor.h>
+
+#include <cstddef>
+
+namespace spinesim::coupling {
+
+template <int dim>
+double total_mass(const CouplingState<dim>& state); // [kg]
+template <int dim>
+dealii::Tensor<1, dim> total_momentum(const CouplingState<dim>& state); // [kg m/s]
+template <int dim>
+double kinetic_energy(const CouplingState<dim>& state); // [J]
+template <int dim>
+double strain_energy(const CouplingState<dim>& state); // FEM + PD (bonds of free particles) [J]
+template <int dim>
+std::size_t n_broken_bonds(const CouplingState<dim>& state);
+// Updates the damage of the owned rows on the way (the particle set is a cache of it).
+template <int dim>
+double max_damage(const CouplingState<dim>& state);
+
+} // namespace spinesim::coupling
+
+#endif

@@ -1,0 +1,47 @@
+#ifndef SPINESIM_COUPLING_COUPLING_CHECKPOINT_H
+#define SPINESIM_COUPLING_COUPLING_CHECKPOINT_H
+
+// The particle side of a restart file (text, "spinesim_coupling 2"): clock, converted cells,
+// every particle's record and state, broken bonds and the fracture-heat totals. The FEM state
+// is saved and restored separately.
+
+#include "coupling/bond_rows.h"
+#include "coupling/cell_converter.h"
+#include "coupling/coupled_integrator.h"
+#include "coupling/coupling_state.h"
+#include "coupling/fracture_heat.h"
+#include "coupling/ghost_layer.h"
+#include "coupling/particle_halo.h"
+
+#include <functional>
+#include <string>
+
+namespace spinesim::coupling {
+
+template <int dim>
+class CouplingCheckpoint {
+ public:
+  // The pieces whose state the file holds; `rebuild_layers` rebuilds the ghost layer, bonds
+  // and interface after a load.
+  struct Pieces {
+    CouplingState<dim>& state;
+    CellConverter<dim>& converter;
+    CoupledIntegrator<dim>& integrator;
+    FractureHeat<dim>& fracture;
+    ParticleHalo<dim>& halo;
+    BondRows<dim>& bond_rows;
+    GhostLayer<dim>& ghosts;
+    std::function<void()> rebuild_layers;
+  };
+  explicit CouplingCheckpoint(Pieces pieces) : p_(std::move(pieces)) {}
+
+  void save(const std::string& file) const; // collective; rank 0 writes
+  void load(const std::string& file);       // every rank reads
+
+ private:
+  Pieces p_;
+};
+
+} // namespace spinesim::coupling
+
+#endif

@@ -1,0 +1,146 @@
+#include "coupling/coupling_parameters.h"
+
+#include "base/exceptions.h"
+#include "base/list_parsing.h"
+
+namespace spinesim::coupling {
+
+using namespace dealii;
+
+namespace {
+
+std::vector<double> parse_doubles(const std::string& list, const std::string& where) {
+  return parse_number_list(list, where, /*allow_empty=*/true);
+}
+
+// A box is given by both corners or by neither.
+template <int dim>
+void check_box_corners(const std::vector<double>& lower, const std::vector<double>& upper,
+                       const std::string& where) {
+  if (lower.size() != upper.size() || (!lower.empty() && lower.size() < dim))
+    throw InvalidInput(where, "the two corners need " + std::to_string(dim) + " coordinates each",
+                       "both empty, or both 'x,y" + std::string(dim == 3 ? ",z" : "") + "' [m]");
+}
+
+} // namespace
+
+template <int dim>
+void CouplingParameters<dim>::declare(ParameterHandler& prm) {
+  using namespace dealii::Patterns;
+  prm.declare_entry("Particles per cell direction", "1", Integer(1, 3),
+                    "Particles per converted cell and direction (1, 2^dim or 3^dim per cell, at "
+                    "sub-cell centres) [-].");
+  prm.declare_entry("Ghost layer", "2", Double(1),
+                    "Width of the FEM-driven ghost particle layer around the free particles, in "
+                    "horizons; 2 gives every ghost bonded to a free particle a complete horizon "
+                    "for the surface correction [-].");
+  prm.declare_entry("Interface radius", "2.5", Double(1.5),
+                    "Support radius of the moving-least-squares fit that drives interface FEM "
+                    "nodes from the free particles, in particle spacings [-].");
+  prm.declare_entry("Time step safety", "0.8", Double(0, 1),
+                    "Factor on the PD stable time step (Silling & Askari 2005) [-].");
+  prm.declare_entry("All particles", "false", Bool(),
+                    "Convert every cell at t = 0: the same scene run fully in particles [-].");
+  prm.declare_entry("Initial region lower corner", "", Anything(),
+                    "Lower corner of a box whose cells are particles from t = 0; empty = none "
+                    "[m].");
+  prm.declare_entry("Initial region upper corner", "", Anything(), "Upper corner of that box [m].");
+  prm.declare_entry("Principal strain threshold", "0", Double(0),
+                    "Convert cells whose maximum principal strain reaches this (e.g. a fraction "
+                    "of the PD critical stretch); 0 = off [-].");
+  prm.declare_entry("Plastic strain threshold", "0", Double(0),
+                    "Convert cells whose equivalent plastic strain reaches this; 0 = off [-].");
+  prm.declare_entry("Minimum Jacobian ratio", "0", Double(0, 1),
+                    "Convert cells whose deformed min/max det J falls below this (distorted or "
+                    "inverted elements); 0 = off [-].");
+  prm.declare_entry("Minimum time step", "0", Double(0),
+                    "Convert cells whose stable explicit step falls below this; 0 = off [s].");
+  prm.declare_entry("Buffer", "0", Double(0),
+                    "Cells whose centre lies within this distance of a flagged cell convert "
+                    "with it, so the particle zone runs ahead of a crack [m].");
+  prm.declare_entry("Check interval", "10", Integer(1),
+                    "Explicit steps between conversion checks [-].");
+  prm.declare_entry("Refinement region lower corner", "", Anything(),
+                    "Lower corner of a box refined before the run, where particles will "
+                    "appear (particles take the spacing of the finest cells); empty = none [m].");
+  prm.declare_entry("Refinement region upper corner", "", Anything(),
+                    "Upper corner of that box [m].");
+  prm.declare_entry("Region refinements", "0", Integer(0, 8),
+                    "Times the cells in the refinement box are bisected [-].");
+  prm.declare_entry("Fracture heat fraction", "1", Double(0, 1),
+                    "With Heat: share of the elastic energy a bond holds when it breaks that "
+                    "returns to the FEM heat equation as a source in the particle's host cell "
+                    "(the rest leaves as surface energy and sound) [-].");
+  prm.declare_entry("Conserve kinetic energy", "true", Bool(),
+                    "At conversion, scale each cell's interpolated velocity fluctuation about "
+                    "its mean so that the particles carry the kinetic energy the cell's nodes "
+                    "lose (with more than one particle per cell). The lumped nodal energy of a "
+                    "linear velocity field is that of its values at the nodes, so the particles "
+                    "take a steeper profile inside the cell (scale 2 for an affine field with 2 "
+                    "particles per direction); false keeps the interpolated velocities (mass and "
+                    "momentum still exact) and logs the energy defect [-].");
+  prm.declare_entry("Relaxation tolerance", "1e-6", Double(0),
+                    "Quasi-static coupled runs (Mechanics/Time integration = quasi_static): "
+                    "dynamic relaxation of each step ends when the free residual (FEM DoFs and "
+                    "particles) is this fraction of the larger of the reactions and the largest "
+                    "residual of the step [-].");
+  prm.declare_entry("Relaxation max iterations", "200000", Integer(1),
+                    "Quasi-static coupled runs: pseudo-time steps allowed per step before the "
+                    "run stops as not converged [-].");
+  // One subsection per registered particle method ("Bond based", "NOSB", ...).
+  meshfree::declare_particle_method_sections(prm);
+  for (unsigned int k = 1; k <= 4; ++k) {
+    prm.enter_subsection("Crack " + std::to_string(k));
+    prm.declare_entry("Corners", "", Anything(),
+                      "Pre-crack corners 'x,y; x,y' (2-D segment) or four corners (3-D "
+                      "quadrilateral); bonds crossing it start broken; empty = unused [m].");
+    prm.leave_subsection();
+  }
+}
+
+template <int dim>
+void CouplingParameters<dim>::parse(ParameterHandler& prm, const std::string& method) {
+  particles_per_direction = prm.get_integer("Particles per cell direction");
+  ghost_layer = prm.get_double("Ghost layer");
+  interface_radius = prm.get_double("Interface radius");
+  time_step_safety = prm.get_double("Time step safety");
+  all_particles = prm.get_bool("All particles");
+  region_lower =
+      parse_doubles(prm.get("Initial region lower corner"), "Coupling/Initial region lower corner");
+  region_upper =
+      parse_doubles(prm.get("Initial region upper corner"), "Coupling/Initial region upper corner");
+  check_box_corners<dim>(region_lower, region_upper, "Coupling/Initial region lower corner");
+  principal_strain_threshold = prm.get_double("Principal strain threshold");
+  plastic_strain_threshold = prm.get_double("Plastic strain threshold");
+  min_jacobian_ratio = prm.get_double("Minimum Jacobian ratio");
+  min_time_step = prm.get_double("Minimum time step");
+  buffer = prm.get_double("Buffer");
+  check_interval = prm.get_integer("Check interval");
+  refine_lower = parse_doubles(prm.get("Refinement region lower corner"),
+                               "Coupling/Refinement region lower corner");
+  refine_upper = parse_doubles(prm.get("Refinement region upper corner"),
+                               "Coupling/Refinement region upper corner");
+  region_refinements = prm.get_integer("Region refinements");
+  fracture_heat_fraction = prm.get_double("Fracture heat fraction");
+  conserve_kinetic_energy = prm.get_bool("Conserve kinetic energy");
+  relaxation_tolerance = prm.get_double("Relaxation tolerance");
+  relaxation_max_iterations = prm.get_integer("Relaxation max iterations");
+  check_box_corners<dim>(refine_lower, refine_upper, "Coupling/Refinement region lower corner");
+  particles_method = method;
+  make_method = meshfree::particle_method_maker<dim>(method, prm, "Effects/Particles method");
+  cracks.clear();
+  for (unsigned int k = 1; k <= 4; ++k) {
+    prm.enter_subsection("Crack " + std::to_string(k));
+    const std::string corners = prm.get("Corners");
+    prm.leave_subsection();
+    if (corners.empty())
+      continue;
+    cracks.push_back(
+        parse_crack_corners(corners, "Coupling/Crack " + std::to_string(k) + "/Corners", dim));
+  }
+}
+
+template struct CouplingParameters<2>;
+template struct CouplingParameters<3>;
+
+} // namespace spinesim::coupling

@@ -1,0 +1,50 @@
+#ifndef SPINESIM_COUPLING_COUPLING_PARAMETERS_H
+#define SPINESIM_COUPLING_COUPLING_PARAMETERS_H
+
+// The "Coupling" section: how cells turn into particles, the ghost layer and interface fit
+// that join the two models, and the quasi-static relaxation of both.
+
+#include "meshfree/particle_method.h"
+
+#include <deal.II/base/parameter_handler.h>
+
+#include <string>
+#include <vector>
+
+namespace spinesim::coupling {
+
+template <int dim>
+struct CouplingParameters {
+  unsigned int particles_per_direction = 1; // particles per cell = this^dim
+  double ghost_layer = 2.0;                 // ghost layer width [horizons]
+  double interface_radius = 2.5;            // MLS support of interface nodes [spacings]
+  double time_step_safety = 0.8;            // PD stable step factor [-]
+  bool all_particles = false;
+  std::vector<double> region_lower, region_upper; // particles from t = 0 (empty = none)
+  double principal_strain_threshold = 0;          // [-], 0 = off
+  double plastic_strain_threshold = 0;            // [-], 0 = off
+  double min_jacobian_ratio = 0;                  // [-], 0 = off
+  double min_time_step = 0;                       // [s], 0 = off
+  double buffer = 0;                              // converted around flagged cells [m]
+  unsigned int check_interval = 10;               // steps between conversion checks
+  bool damage = true;                             // bonds may break (Effects/Damage)
+  std::vector<double> refine_lower, refine_upper; // box refined before the run [m]
+  unsigned int region_refinements = 0;
+  double fracture_heat_fraction = 1.0; // share of broken-bond energy returned as heat [-]
+  bool conserve_kinetic_energy = true; // scale the velocity fluctuation at conversion
+  double relaxation_tolerance = 1e-6;  // quasi-static: free residual / reaction scale [-]
+  unsigned int relaxation_max_iterations = 200000; // quasi-static: per step [-]
+  // The particle method (Effects/Particles method), its parameters read from its subsection
+  // of "Coupling"; made in CouplingState::prepare() with the material of the FEM cells.
+  std::string particles_method = "bond_based";
+  meshfree::ParticleMethodMaker<dim> make_method;
+  std::vector<std::vector<double>> cracks; // flattened corners per pre-crack [m]
+
+  static void declare(dealii::ParameterHandler& prm);
+  // `particles_method` is the registered name the scene chose (Effects/Particles method).
+  void parse(dealii::ParameterHandler& prm, const std::string& particles_method);
+};
+
+} // namespace spinesim::coupling
+
+#endif

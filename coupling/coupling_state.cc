@@ -1,0 +1,140 @@
+#include "coupling/coupling_state.h"
+
+#include "base/exceptions.h"
+
+#include <deal.II/base/mpi.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace spinesim::coupling {
+
+using namespace dealii;
+
+template <int dim>
+CouplingState<dim>::CouplingState(const CouplingParameters<dim>& parameters,
+                                  fem::MechanicsSolver<dim>& mechanics,
+                                  const fem::HeatSolver<dim>* heat_solver)
+    : prm(parameters), fem(mechanics), heat(heat_solver),
+      points(QMidpoint<1>(), parameters.particles_per_direction),
+      particles(1.0) { // 2-D coupled runs are per unit thickness (prepare())
+  rank = Utilities::MPI::this_mpi_process(fem.mpi_communicator());
+  if (fem.parameters().time_integration != "explicit" &&
+      fem.parameters().time_integration != "quasi_static")
+    throw InvalidInput("Mechanics/Time integration",
+                       "coupling runs explicit dynamics or quasi-static relaxation",
+                       "explicit or quasi_static");
+  if (fem.parameters().kinematics != "small_strain" || fem.parameters().fe_degree != 1)
+    throw InvalidInput("Mechanics/Kinematics", "coupling needs small strain with Q1 elements",
+                       "Kinematics = small_strain, Finite element degree = 1");
+}
+
+template <int dim>
+double CouplingState<dim>::horizon() const {
+  return method->neighbor_options(spacing).horizon;
+}
+
+template <int dim>
+unsigned int CouplingState<dim>::n_free_particles() const {
+  return static_cast<unsigned int>(std::count(free.begin(), free.end(), 1));
+}
+
+template <int dim>
+unsigned int CouplingState<dim>::n_ghost_particles() const {
+  return static_cast<unsigned int>(free.size()) - n_free_particles();
+}
+
+template <int dim>
+void CouplingState<dim>::prepare() {
+  if (method)
+    return;
+  const auto& dh = fem.dof_handler();
+  const auto& fe = fem.fe();
+  owned_cells.clear();
+  double h_min = std::numeric_limits<double>::max(), h_max = 0;
+  bool have_law = false;
+  for (const auto& cell : dh.active_cell_iterators())
+    if (cell->is_locally_owned()) {
+      owned_cells.emplace(cell->id().to_string(), cell);
+      h_min = std::min(h_min, cell->minimum_vertex_distance());
+      h_max = std::max(h_max, cell->diameter() / std::sqrt(double(dim)));
+      if (!have_law) {
+        const auto& law = fem.cell_material(cell);
+        youngs = law.youngs_modulus();
+        poisson = law.poisson_ratio();
+        density = law.density();
+        have_law = true;
+      }
+    }
+  const MPI_Comm comm = fem.mpi_communicator();
+  h_min = Utilities::MPI::min(h_min, comm);
+  // E, ν, ρ from the lowest rank that owns cells.
+  const unsigned int source = Utilities::MPI::min(have_law ? rank : 1u << 30, comm);
+  std::vector<double> props{youngs, poisson, density};
+  props = Utilities::MPI::broadcast(comm, props, source);
+  youngs = props[0];
+  poisson = props[1];
+  density = props[2];
+  // The lattice spacing of the particles (uniform meshes: cell edge / n).
+  spacing = h_min / prm.particles_per_direction;
+  owned_by_index.assign(dh.get_triangulation().n_active_cells(), DoFCell());
+  for (const auto& [id, cell] : owned_cells)
+    owned_by_index[cell->active_cell_index()] = cell;
+  lattice_cells.clear();
+  for (const auto& cell : owned_by_index)
+    if (cell.state() == IteratorState::valid &&
+        cell->minimum_vertex_distance() <= 1.5 * spacing * prm.particles_per_direction)
+      lattice_cells.push_back(cell);
+
+  shape.reinit(points.size(), fe.n_dofs_per_cell());
+  for (unsigned int q = 0; q < points.size(); ++q)
+    for (unsigned int i = 0; i < fe.n_dofs_per_cell(); ++i)
+      shape(q, i) = fe.shape_value(i, points.point(q));
+
+  if (!prm.make_method)
+    throw InvalidInput("Coupling", "no particle method was read for the coupling",
+                       "Coupling parameters parsed with Effects/Particles method");
+  // Calibrated to the law of the FEM cells the particles replace (the same law on every
+  // rank; the law object itself is not needed by methods without point-wise laws).
+  method = prm.make_method(meshfree::ParticleMaterial{youngs, poisson, density, nullptr});
+  if (dim == 2 && method->thickness() != 1.0)
+    throw InvalidInput("Coupling/" +
+                           meshfree::ParticleMethods::instance()
+                               .get(prm.particles_method, "Effects/Particles method")
+                               .section +
+                           "/Thickness",
+                       "2-D FEM works per unit thickness",
+                       "1 (results are per metre of thickness) [m]");
+}
+
+template <int dim>
+unsigned int CouplingState<dim>::add_particle(const std::string& cell_id, unsigned int point,
+                                              const Point<dim>& position, double volume) {
+  const unsigned int i = particles.add_particle(position, volume);
+  index_of[{cell_id, point}] = i;
+  free.push_back(0);
+  host_cell.push_back(cell_id);
+  host_point.push_back(point);
+  const auto it = owned_cells.find(cell_id);
+  host_index.push_back(it == owned_cells.end() ? -1
+                                               : static_cast<int>(it->second->active_cell_index()));
+  fixed_slots.push_back(0);
+  return i;
+}
+
+template <int dim>
+void CouplingState<dim>::clear_particles() {
+  particles = meshfree::ParticleSet<dim>(method->thickness());
+  free.clear();
+  host_cell.clear();
+  host_point.clear();
+  host_index.clear();
+  index_of.clear();
+  fixed_slots.clear();
+}
+
+template struct CouplingState<2>;
+template struct CouplingState<3>;
+
+} // namespace spinesim::coupling

@@ -1,0 +1,112 @@
+#ifndef SPINESIM_COUPLING_COUPLING_STATE_H
+#define SPINESIM_COUPLING_COUPLING_STATE_H
+
+// What the pieces of the coupling share: the two models, the particle lattice made once from
+// the FEM mesh, and the particle side (particles replicated on every rank, their host cells,
+// owners and the bond rows owned here). The pieces (CellConverter, GhostLayer, BondRows,
+// ParticleBoundary, MlsInterface, ParticleHalo, FractureHeat, CoupledIntegrator,
+// CouplingCheckpoint) hold a reference to it; each keeps its own bookkeeping.
+
+#include "coupling/coupling_parameters.h"
+
+#include "fem/mechanics_solver.h"
+#include "meshfree/bond_list.h"
+#include "meshfree/particle_method.h"
+#include "meshfree/particle_set.h"
+
+#include <deal.II/base/quadrature_lib.h>
+#include <deal.II/dofs/dof_handler.h>
+#include <deal.II/lac/full_matrix.h>
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace spinesim::fem {
+template <int dim>
+class HeatSolver;
+}
+
+namespace spinesim::coupling {
+
+// Wall time of the conversions by phase, summed over the run [s].
+struct CouplingTimings {
+  double criteria = 0;     // indicators on the candidate cells (flagged_cells)
+  double records = 0;      // particles made from the cells, exchanged and added
+  double deactivation = 0; // cells out of the FEM (stiffness, mass)
+  double ghosts = 0;       // the ghost layer
+  double bonds = 0;        // incremental bond search and row ownership
+  double interface = 0;    // interface DoFs, their MLS fits, halo plan, first update
+  double totals = 0;       // mass, momentum and energy before and after (the report)
+};
+
+template <int dim>
+struct CouplingState {
+  using DoFCell = typename dealii::DoFHandler<dim>::active_cell_iterator;
+  // A locally owned host cell and its particle per point (-1 where none).
+  using HostRow = std::pair<DoFCell, std::vector<int>>;
+
+  // Checks that the solver runs what the coupling supports (explicit or quasi-static, small
+  // strain, Q1).
+  CouplingState(const CouplingParameters<dim>& parameters, fem::MechanicsSolver<dim>& mechanics,
+                const fem::HeatSolver<dim>* heat);
+
+  // Material, lattice spacing, shape table and particle method, from the FEM (once).
+  void prepare();
+  // Appends a particle hosted by point `point` of cell `cell_id`: a ghost, no fixed slots.
+  unsigned int add_particle(const std::string& cell_id, unsigned int point,
+                            const dealii::Point<dim>& position, double volume);
+  // Empties the particle side (a checkpoint replaces it).
+  void clear_particles();
+
+  bool is_owned(unsigned int i) const {
+    return owner.empty() || owner[i] == static_cast<int>(rank);
+  }
+  unsigned int n_free_particles() const;
+  unsigned int n_ghost_particles() const;
+  double horizon() const;
+
+  const CouplingParameters<dim> prm;
+  fem::MechanicsSolver<dim>& fem;
+  const fem::HeatSolver<dim>* heat; // optional
+  unsigned int rank = 0;
+
+  // The lattice, made by prepare().
+  dealii::QIterated<dim> points;              // particle points of a cell (unit cell)
+  dealii::FullMatrix<double> shape;           // N_i(ξ_q), [q][i]
+  std::map<std::string, DoFCell> owned_cells; // locally owned cells by CellId
+  std::vector<DoFCell> owned_by_index; // locally owned cells by active cell index (else invalid)
+  // The owned cells of the particle lattice's size, by active index: only these can convert
+  // (the refinement box makes them).
+  std::vector<DoFCell> lattice_cells;
+  double spacing = 0, youngs = 0, poisson = 0, density = 0;
+  std::unique_ptr<meshfree::ParticleMethod<dim>> method;
+
+  // The particles, replicated on every rank; indices never change (only appended; a
+  // checkpoint replaces them all).
+  meshfree::ParticleSet<dim> particles;
+  std::vector<std::uint8_t> free;       // 1 free, 0 ghost (driven by the FEM)
+  std::vector<std::string> host_cell;   // CellId of the cell the particle sits in
+  std::vector<unsigned int> host_point; // index of the point within that cell
+  // Per particle: the active cell index of its host cell if this rank owns it, else -1 (the
+  // CellId strings need a map lookup).
+  std::vector<int> host_index;
+  std::map<std::pair<std::string, unsigned int>, unsigned int> index_of; // (cell, point) -> i
+  std::vector<std::uint32_t> fixed_slots; // per particle: Dirichlet slots of its cell
+  // Rank owning each particle's host cell (empty on one rank: all owned); ParticleHalo::plan.
+  std::vector<int> owner;
+  // Owned host cells of free particles in ascending active index (temperatures, fracture
+  // heat); rebuilt with the ghost layer.
+  std::vector<HostRow> free_cells;
+  // Bonds of the free particles owned here (BondRows).
+  meshfree::BondList<dim> bonds;
+
+  CouplingTimings timings;
+};
+
+} // namespace spinesim::coupling
+
+#endif

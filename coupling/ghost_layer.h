@@ -1,0 +1,43 @@
+#ifndef SPINESIM_COUPLING_GHOST_LAYER_H
+#define SPINESIM_COUPLING_GHOST_LAYER_H
+
+// The particle side of the overlapping splice: active cells within the ghost layer (at least
+// 2 horizons) of the free particles carry ghost particles on the same lattice, driven by the
+// FEM displacement, so every free particle sees a complete horizon of particles.
+
+#include "coupling/coupling_state.h"
+#include "coupling/particle_halo.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace spinesim::coupling {
+
+template <int dim>
+class GhostLayer {
+ public:
+  GhostLayer(CouplingState<dim>& state, ParticleHalo<dim>& halo) : state_(state), halo_(halo) {}
+
+  // Adds the ghosts of the active cells near the particles freed since the last call (whole
+  // cells, on every rank).
+  void extend();
+  // The owned host-cell tables: ghosts (here) and free particles (CouplingState::free_cells).
+  void rebuild_tables();
+  // u and v of the ghosts this rank owns from the FEM, then the halo.
+  void update();
+  // The next extend() searches around every free particle (the particles were replaced).
+  void forget_search() { free_searched_.clear(); }
+
+ private:
+  CouplingState<dim>& state_;
+  ParticleHalo<dim>& halo_;
+  // Per particle: free at the last search (later ones are searched around).
+  std::vector<std::uint8_t> free_searched_;
+  // Ghost particles hosted by locally owned cells, ascending active index.
+  std::vector<typename CouplingState<dim>::HostRow> ghost_cells_;
+  std::vector<int> ghost_lids_; // per ghost cell, its DoFs' local indices in the FEM vectors
+};
+
+} // namespace spinesim::coupling
+
+#endif
