@@ -1,32 +1,7 @@
 # Hostile input, as a new user types it: every case asserts the exit code, the message, and
 # that the directory an earlier run left is byte-identical afterwards (tests/support/
-# hostile_case.cmake). Cases run one at a time per directory (RESOURCE_LOCK on their folder).
+# hostile_case.cmake). Each case has a folder of its own, so they run in parallel.
 set(_h ${CMAKE_CURRENT_SOURCE_DIR})
-set(_runs ${CMAKE_CURRENT_BINARY_DIR}/runs)
-
-# spinesim_add_hostile_test(<name> ARGS ... [EXIT n] [MATCH re] [PREPARE how] [EXTRA_FILE f]
-#                           [EXTRA_COPY file:name] [TRUNCATE f] [FLIP f] [WORKDIR d] [ABSENT p] [THEN_ARGS ...] [THEN_EXIT n])
-function(spinesim_add_hostile_test name)
-  cmake_parse_arguments(ARG "" "EXIT;MATCH;PREPARE;EXTRA_FILE;EXTRA_COPY;TRUNCATE;FLIP;WORKDIR;ABSENT;THEN_EXIT"
-                        "ARGS;THEN_ARGS" ${ARGN})
-  if(NOT DEFINED ARG_EXIT)
-    set(ARG_EXIT 2)
-  endif()
-  if(NOT DEFINED ARG_THEN_EXIT)
-    set(ARG_THEN_EXIT 0)
-  endif()
-  string(REPLACE ";" "|" _args "${ARG_ARGS}")
-  string(REPLACE ";" "|" _then "${ARG_THEN_ARGS}")
-  add_test(NAME hostile.${name}
-    COMMAND ${CMAKE_COMMAND} -DSPINESIM=$<TARGET_FILE:spinesim> -DKEEP=${_runs}/${name}/keep
-      "-DARGS=${_args}" -DEXIT=${ARG_EXIT} "-DMATCH=${ARG_MATCH}" -DPREPARE=${ARG_PREPARE}
-      -DEXTRA_FILE=${ARG_EXTRA_FILE} -DEXTRA_COPY=${ARG_EXTRA_COPY} -DTRUNCATE=${ARG_TRUNCATE} -DFLIP=${ARG_FLIP}
-      -DWORKDIR=${ARG_WORKDIR} -DABSENT=${ARG_ABSENT} "-DTHEN_ARGS=${_then}"
-      -DTHEN_EXIT=${ARG_THEN_EXIT}
-      -P ${PROJECT_SOURCE_DIR}/tests/support/hostile_case.cmake)
-  set_tests_properties(hostile.${name} PROPERTIES LABELS "hostile;cli")
-endfunction()
-
 set(_quick ${_h}/quick.prm)
 
 # --force with a bad --set: refused before anything is touched.
