@@ -21,13 +21,8 @@ constexpr double max_number_per_byte = 4.0;
 
 class LineReader {
  public:
-  LineReader(const std::string& file) : file_(file), in_(file) {
-    in_.seekg(0, std::ios::end);
-    bytes_ = static_cast<double>(std::max<std::streamoff>(in_.tellg(), 1));
-    in_.seekg(0);
-    if (!in_)
-      fail("cannot open the file", "a readable mesh file");
-  }
+  LineReader(std::istream& in, const std::string& name, std::size_t bytes)
+      : file_(name), in_(in), bytes_(static_cast<double>(std::max<std::size_t>(bytes, 1))) {}
   bool next(std::string& line) {
     if (!std::getline(in_, line))
       return false;
@@ -51,7 +46,7 @@ class LineReader {
 
  private:
   std::string file_;
-  std::ifstream in_;
+  std::istream& in_;
   double bytes_ = 1;
   unsigned long number_ = 0;
 };
@@ -84,6 +79,14 @@ bool is_real(const std::string& t) {
   char* end = nullptr;
   const double v = std::strtod(t.c_str(), &end);
   return errno == 0 && end == t.c_str() + t.size() && std::isfinite(v);
+}
+
+// The first word of a line that must have one.
+std::string first_word(LineReader& r, const std::string& line, const std::string& what) {
+  const auto t = tokens(line, false);
+  if (t.empty())
+    r.fail("empty line", what);
+  return t[0];
 }
 
 // A count or a node/element number read from the file, bounded by what the file can hold.
@@ -128,7 +131,8 @@ void check_msh(LineReader& r) {
       if (version == 0)
         r.fail("$Nodes before $MeshFormat", "a $MeshFormat section first");
       if (version < 3) {
-        const long long n = bounded(r, tokens(r.need("the node count"), false).at(0), "node count");
+        const long long n =
+            bounded(r, first_word(r, r.need("the node count"), "the node count"), "node count");
         for (long long i = 0; i < n; ++i) {
           const auto t = tokens(r.need(std::to_string(n) + " node lines"), false);
           if (t.empty())
@@ -149,7 +153,7 @@ void check_msh(LineReader& r) {
             r.fail("short node block header", "'entityDim entityTag parametric numNodesInBlock'");
           const long long n = bounded(r, bh[3], "node count");
           for (long long i = 0; i < n; ++i)
-            bounded(r, tokens(r.need("node tags"), false).at(0), "node number");
+            bounded(r, first_word(r, r.need("node tags"), "node tags"), "node number");
           for (long long i = 0; i < n; ++i)
             expect_numbers(r, tokens(r.need("node coordinates"), false), 0, 3, "'X Y Z'");
         }
@@ -168,8 +172,8 @@ void check_msh(LineReader& r) {
           bounded(r, s, "number in " + what);
       };
       if (version < 3) {
-        const long long n =
-            bounded(r, tokens(r.need("the element count"), false).at(0), "element count");
+        const long long n = bounded(
+            r, first_word(r, r.need("the element count"), "the element count"), "element count");
         for (long long i = 0; i < n; ++i)
           whole_numbers(r.need("element lines"), 4, "'ID TYPE NTAGS TAGS... NODES...'");
       } else {
@@ -316,16 +320,27 @@ void check_vtk(LineReader& r) {
 
 } // namespace
 
-void check_mesh_file(const std::string& file, const std::string& extension) {
-  if (extension == "vtu")
-    return;
-  LineReader reader(file);
+void check_mesh_text(std::istream& in, const std::string& name, std::size_t bytes,
+                     const std::string& extension) {
+  LineReader reader(in, name, bytes);
   if (extension == "msh")
     check_msh(reader);
   else if (extension == "inp")
     check_inp(reader);
   else if (extension == "vtk")
     check_vtk(reader);
+}
+
+void check_mesh_file(const std::string& file, const std::string& extension) {
+  if (extension == "vtu")
+    return;
+  std::ifstream in(file, std::ios::binary);
+  if (!in)
+    throw InvalidInput("Mesh file", "cannot open '" + file + "'", "a readable mesh file");
+  in.seekg(0, std::ios::end);
+  const auto bytes = static_cast<std::size_t>(std::max<std::streamoff>(in.tellg(), 0));
+  in.seekg(0);
+  check_mesh_text(in, file, bytes, extension);
 }
 
 } // namespace spinesim::fem

@@ -10,12 +10,18 @@
 // GridIn only ever sees a well-formed file. Bad files are InvalidInput naming file, line and
 // what was expected. (.vtu files are XML written by deal.II and read by its own parser.)
 
+#include <cstddef>
+#include <istream>
 #include <string>
 
 namespace spinesim::fem {
 
 // Throws InvalidInput("Mesh file", "FILE:LINE: ...", expected) on the first problem.
 void check_mesh_file(const std::string& file, const std::string& extension);
+// The same for text already open: `name` for messages, `bytes` its size (bounds the counts),
+// `extension` msh, inp or vtk.
+void check_mesh_text(std::istream& in, const std::string& name, std::size_t bytes,
+                     const std::string& extension);
 
 } // namespace spinesim::fem
 

@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -71,6 +72,8 @@ std::vector<std::string> subsection_path_at(const std::string& text, unsigned in
 // `include FILE` lines of a .prm text, expanded in place. `origins` receives "file:line" for
 // every line of the result, so parse errors name the file a line came from.
 constexpr unsigned int max_include_depth = 16;
+// A scene is a page of text; anything larger (or a device such as /dev/zero) is not one.
+constexpr std::uintmax_t max_scene_bytes = 16u << 20;
 
 void expand_includes(const std::string& text, const std::filesystem::path& file,
                      std::vector<std::filesystem::path>& stack, std::string& out,
@@ -101,6 +104,9 @@ void expand_includes(const std::string& text, const std::filesystem::path& file,
     if (stack.size() >= max_include_depth)
       throw InvalidInput(where, "includes nested deeper than " + std::to_string(max_include_depth),
                          "at most " + std::to_string(max_include_depth) + " levels");
+    if (!fs::is_regular_file(target, ec) || fs::file_size(target, ec) > max_scene_bytes)
+      throw InvalidInput(where, "cannot include " + target.string(),
+                         "an existing .prm file of at most 16 MiB, relative to the including file");
     std::ifstream included(target);
     if (!included)
       throw InvalidInput(where, "cannot open included file " + target.string(),
@@ -133,6 +139,11 @@ Scene::Scene() {
 }
 
 void Scene::load_file(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::exists(path, ec) && (!std::filesystem::is_regular_file(path, ec) ||
+                                            std::filesystem::file_size(path, ec) > max_scene_bytes))
+    throw InvalidInput(path, "not a scene file (not a regular file, or over 16 MiB)",
+                       "a .prm or .json file");
   std::ifstream in(path);
   if (!in)
     throw InvalidInput(path, "cannot open the scene file",

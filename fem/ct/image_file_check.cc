@@ -111,6 +111,9 @@ std::size_t nifti_data_offset(const std::string& file, const std::vector<char>& 
     std::memcpy(buf, header.data() + 108, 4);
     swap(buf, 4);
     std::memcpy(&offset, buf, 4);
+    // A real header puts the data within the file; a huge or non-finite offset is damage.
+    if (!(offset >= 0 && offset < 1e12f))
+      short_data(file, "NIfTI header with an impossible vox_offset " + std::to_string(offset));
     return static_cast<std::size_t>(std::max(352.0f, offset));
   }
   if (size == 540 && header.size() >= 176) {
@@ -118,13 +121,15 @@ std::size_t nifti_data_offset(const std::string& file, const std::vector<char>& 
     std::memcpy(buf, header.data() + 168, 8);
     swap(buf, 8);
     std::memcpy(&offset, buf, 8);
+    if (offset < 0 || offset > (std::int64_t(1) << 40))
+      short_data(file, "NIfTI-2 header with an impossible vox_offset " + std::to_string(offset));
     return static_cast<std::size_t>(std::max<std::int64_t>(544, offset));
   }
   short_data(file, "not a NIfTI-1 or NIfTI-2 header");
 }
 
-void check_nifti(const std::string& file, std::size_t expected, bool gz) {
-  const auto bytes = read_all(file);
+void check_nifti(const std::string& file, const std::vector<char>& bytes, std::size_t expected,
+                 bool gz) {
   if (!gz) {
     const std::vector<char> header(bytes.begin(),
                                    bytes.begin() + std::min<std::size_t>(bytes.size(), 544));
@@ -179,8 +184,8 @@ void check_data_block(const std::string& file, const std::vector<char>& bytes, s
     compare(file, n, expected, "the data");
 }
 
-void check_metaimage(const std::string& file, std::size_t expected) {
-  const auto bytes = read_all(file);
+void check_metaimage(const std::string& file, const std::vector<char>& bytes,
+                     std::size_t expected) {
   const auto h = read_text_header(bytes, '=', true);
   const std::string data_file = h.get("elementdatafile");
   const bool compressed = lower(h.get("compresseddata")) == "true";
@@ -198,8 +203,7 @@ void check_metaimage(const std::string& file, std::size_t expected) {
   check_data_block(raw, read_all(raw), 0, expected, compressed);
 }
 
-void check_nrrd(const std::string& file, std::size_t expected) {
-  const auto bytes = read_all(file);
+void check_nrrd(const std::string& file, const std::vector<char>& bytes, std::size_t expected) {
   const auto h = read_text_header(bytes, ':', false);
   const std::string encoding = lower(h.get("encoding"));
   if (encoding != "raw" && encoding != "gzip" && encoding != "gz")
@@ -224,16 +228,21 @@ void check_nrrd(const std::string& file, std::size_t expected) {
 
 } // namespace
 
-void check_image_data_complete(const std::string& file, std::size_t expected_bytes) {
+void check_image_bytes(const std::string& file, const std::vector<char>& bytes,
+                       std::size_t expected_bytes) {
   const std::string name = lower(file);
   if (ends_with(name, ".nii"))
-    check_nifti(file, expected_bytes, false);
+    check_nifti(file, bytes, expected_bytes, false);
   else if (ends_with(name, ".nii.gz"))
-    check_nifti(file, expected_bytes, true);
+    check_nifti(file, bytes, expected_bytes, true);
   else if (ends_with(name, ".mha") || ends_with(name, ".mhd"))
-    check_metaimage(file, expected_bytes);
+    check_metaimage(file, bytes, expected_bytes);
   else if (ends_with(name, ".nrrd") || ends_with(name, ".nhdr"))
-    check_nrrd(file, expected_bytes);
+    check_nrrd(file, bytes, expected_bytes);
+}
+
+void check_image_data_complete(const std::string& file, std::size_t expected_bytes) {
+  check_image_bytes(file, read_all(file), expected_bytes);
 }
 
 } // namespace spinesim::fem

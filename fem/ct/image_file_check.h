@@ -9,12 +9,17 @@
 
 #include <cstddef>
 #include <string>
+#include <vector>
 
 namespace spinesim::fem {
 
 // InvalidInput naming the file (and the byte counts) when the data is short or the
 // compressed stream is cut. `expected_bytes`: voxels × bytes per voxel from the header.
 void check_image_data_complete(const std::string& file, std::size_t expected_bytes);
+// The same for the file's bytes already in memory (`file` names it and gives the format by
+// its extension; detached data files are still read from beside it).
+void check_image_bytes(const std::string& file, const std::vector<char>& bytes,
+                       std::size_t expected_bytes);
 
 } // namespace spinesim::fem
 
