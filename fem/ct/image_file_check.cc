@@ -198,8 +198,9 @@ void check_metaimage(const std::string& file, const std::vector<char>& bytes,
   if (lower(data_file).rfind("list", 0) == 0 || data_file.find('%') != std::string::npos)
     return; // one file per slice: ITK checks each slice's size itself
   const std::string raw = (fs::path(file).parent_path() / data_file).string();
-  if (!fs::exists(raw))
-    throw InvalidInput(file, "its data file " + raw + " is missing", "the .mhd with its data file");
+  if (!fs::is_regular_file(raw))
+    throw InvalidInput(file, "its data file " + raw + " is missing (or not a file)",
+                       "the .mhd with its data file");
   check_data_block(raw, read_all(raw), 0, expected, compressed);
 }
 
@@ -219,11 +220,14 @@ void check_nrrd(const std::string& file, const std::vector<char>& bytes, std::si
   if (data_file.rfind("LIST", 0) == 0 || data_file.find('%') != std::string::npos)
     return;
   const std::string raw = (fs::path(file).parent_path() / data_file).string();
-  if (!fs::exists(raw))
+  if (!fs::is_regular_file(raw))
     throw InvalidInput(file, "its data file " + raw + " is missing",
                        "the .nhdr with its data file");
-  const std::size_t skip = static_cast<std::size_t>(std::atol(h.get("byte skip").c_str()));
-  check_data_block(raw, read_all(raw), compressed ? 0 : skip, expected, compressed);
+  const long skip = std::atol(h.get("byte skip").c_str());
+  if (skip < 0)
+    return; // -1: the data are the last bytes of the file, whatever comes before
+  check_data_block(raw, read_all(raw), compressed ? 0 : static_cast<std::size_t>(skip), expected,
+                   compressed);
 }
 
 } // namespace
