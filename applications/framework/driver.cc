@@ -47,6 +47,15 @@ void check_thread_count(unsigned int threads) {
                        "0 (all available) up to " + std::to_string(limit));
 }
 
+// A run that failed after it started: its results so far are published with status failed.
+int record_failure(RunContext& ctx, const std::string& log_text, const std::string& message) {
+  ctx.progress().finish();
+  ctx.start();
+  ctx.log() << "\n" << log_text << "\n";
+  ctx.summary().set_status(false, message);
+  return exit_run_failed;
+}
+
 void load(Scene& scene, const SceneSource& source) {
   if (source.file)
     scene.load_file(*source.file);
@@ -212,25 +221,13 @@ int run_command(const RunOptions& options) {
     ctx.summary().set_interrupted("interrupted by " + name + " " + e.what());
     code = 128 + e.signal();
   } catch (const NumericalFailure& e) {
-    ctx.progress().finish();
-    ctx.start();
-    ctx.log() << "\n" << e.report() << "\n";
-    ctx.summary().set_status(false, e.report());
-    code = exit_run_failed;
+    code = record_failure(ctx, e.report(), e.report());
   } catch (const dealii::ExceptionBase& e) {
-    ctx.progress().finish();
-    ctx.start();
     std::ostringstream msg;
     e.print_info(msg);
-    ctx.log() << "\nrun failed: " << msg.str() << "\n";
-    ctx.summary().set_status(false, msg.str());
-    code = exit_run_failed;
+    code = record_failure(ctx, "run failed: " + msg.str(), msg.str());
   } catch (const std::exception& e) {
-    ctx.progress().finish();
-    ctx.start();
-    ctx.log() << "\nrun failed: " << e.what() << "\n";
-    ctx.summary().set_status(false, e.what());
-    code = exit_run_failed;
+    code = record_failure(ctx, std::string("run failed: ") + e.what(), e.what());
   }
   ctx.summary().add_timing(
       "total",

@@ -1,5 +1,7 @@
 #include "applications/framework/output_directory.h"
 
+#include "applications/framework/root_decides.h"
+
 #include "base/exceptions.h"
 
 #include <deal.II/base/mpi.h>
@@ -45,13 +47,9 @@ bool written_by_a_run(const fs::directory_entry& entry) {
 // Rank 0: may --force replace this existing, non-empty directory? Throws InvalidInput if not.
 void check_replaceable(const fs::path& target, const std::vector<fs::path>& protected_paths) {
   const std::string where = "--output " + target.string() + " --force";
+  // (The current directory and its parents were refused by prepare() already.)
   const fs::path abs_target = absolute_clean(target);
   std::error_code ec;
-  const fs::path cwd = absolute_clean(fs::current_path(ec));
-  if (!ec && contains(abs_target, cwd))
-    throw InvalidInput(where,
-                       "is the current directory or one of its parents; refusing to replace it",
-                       "a run directory below the current one, e.g. --output runs/NAME");
   for (const auto& file : protected_paths)
     if (contains(abs_target, absolute_clean(file)))
       throw InvalidInput(
@@ -153,22 +151,8 @@ OutputDirectory::OutputDirectory(const fs::path& target, Mode mode, MPI_Comm com
                                  const std::vector<fs::path>& protected_paths)
     : target_(target), mode_(mode), comm_(comm),
       is_root_(dealii::Utilities::MPI::this_mpi_process(comm) == 0) {
-  // Rank 0 decides; every rank learns the verdict so all of them fail alike.
-  std::string where, problem, allowed, path;
-  if (is_root_) {
-    try {
-      path = prepare(target, mode, protected_paths).string();
-    } catch (const InvalidInput& e) {
-      where = e.where();
-      problem = e.problem();
-      allowed = e.allowed();
-    }
-  }
-  where = dealii::Utilities::MPI::broadcast(comm, where, 0);
-  problem = dealii::Utilities::MPI::broadcast(comm, problem, 0);
-  allowed = dealii::Utilities::MPI::broadcast(comm, allowed, 0);
-  if (!problem.empty())
-    throw InvalidInput(where, problem, allowed);
+  std::string path;
+  root_decides(comm, [&] { path = prepare(target, mode, protected_paths).string(); });
   path_ = dealii::Utilities::MPI::broadcast(comm, path, 0);
 }
 

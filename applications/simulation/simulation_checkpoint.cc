@@ -1,6 +1,7 @@
 #include "applications/simulation/simulation_scenario.h"
 
 #include "applications/framework/checkpoint_manifest.h"
+#include "applications/framework/root_decides.h"
 #include "applications/framework/run_stops.h"
 #include "base/exceptions.h"
 
@@ -85,21 +86,10 @@ unsigned int Simulation<dim>::load_checkpoint(RunContext& ctx) {
     throw InvalidInput("--restart " + ctx.output().path().string(), "no checkpoint in this run",
                        "a run directory with checkpoint/state.json");
   // Sizes and hashes first: no reader below sees a truncated or altered file.
-  std::string problem_where, problem, allowed;
-  if (ctx.is_root()) {
-    try {
-      if (!verify_checkpoint_manifest(dir))
-        ctx.log() << "  note: checkpoint without a manifest (an older run): not verified\n";
-    } catch (const InvalidInput& e) {
-      problem_where = e.where();
-      problem = e.problem();
-      allowed = e.allowed();
-    }
-  }
-  problem = dealii::Utilities::MPI::broadcast(ctx.comm(), problem, 0);
-  if (!problem.empty())
-    throw InvalidInput(dealii::Utilities::MPI::broadcast(ctx.comm(), problem_where, 0), problem,
-                       dealii::Utilities::MPI::broadcast(ctx.comm(), allowed, 0));
+  root_decides(ctx.comm(), [&] {
+    if (!verify_checkpoint_manifest(dir))
+      ctx.log() << "  note: checkpoint without a manifest (an older run): not verified\n";
+  });
 
   nlohmann::json state;
   try {
