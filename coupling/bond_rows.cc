@@ -33,6 +33,8 @@ void BondRows<dim>::rebuild() {
     for (const auto& part : Utilities::MPI::all_gather(state_.fem.mpi_communicator(), mine))
       broken.insert(broken.end(), part.begin(), part.end());
   }
+  broken.insert(broken.end(), restored_broken_.begin(), restored_broken_.end());
+  restored_broken_.clear();
   std::sort(broken.begin(), broken.end());
   broken.erase(std::unique(broken.begin(), broken.end()), broken.end());
   std::vector<std::uint8_t> in_broken(state_.particles.size(),
@@ -76,7 +78,21 @@ void BondRows<dim>::rebuild() {
     for (unsigned int i = 0; i < state_.particles.size(); ++i)
       mine[i] = state_.host_index[i] >= 0 ? 1 : 0;
   // Keep the rows of the free particles this rank owns: ghosts are driven and need no force,
-  // other ranks' particles are theirs to move.
+  // other ranks' particles are theirs to move. A method whose force on a particle gathers its
+  // neighbours' families (NOSB-PD, SPG) also needs the rows of every partner of those rows:
+  // ghosts, and free particles owned by other ranks (computed here again, from the same
+  // inputs, so both ranks agree).
+  std::vector<std::uint8_t> keep(all.n_particles(), 0);
+  for (unsigned int i = 0; i < all.n_particles(); ++i)
+    keep[i] = state_.free[i] && mine[i];
+  if (state_.method->needs_neighbour_rows()) {
+    auto partners = keep;
+    for (unsigned int i = 0; i < all.n_particles(); ++i)
+      if (keep[i])
+        for (std::size_t k = all.begin(i); k < all.end(i); ++k)
+          partners[all.neighbor[k]] = 1;
+    keep = std::move(partners);
+  }
   meshfree::BondList<dim> kept;
   kept.horizon = all.horizon;
   kept.offsets.assign(all.n_particles() + 1, 0);
@@ -84,7 +100,7 @@ void BondRows<dim>::rebuild() {
   {
     std::size_t n_kept = 0;
     for (unsigned int i = 0; i < all.n_particles(); ++i)
-      if (state_.free[i] && mine[i])
+      if (keep[i])
         n_kept += all.end(i) - all.begin(i);
     for (auto* v : {&kept.length, &kept.influence})
       v->reserve(n_kept);
@@ -97,7 +113,7 @@ void BondRows<dim>::rebuild() {
       kept.surface_factor.reserve(n_kept);
   }
   for (unsigned int i = 0; i < all.n_particles(); ++i) {
-    if (state_.free[i] && mine[i])
+    if (keep[i])
       for (std::size_t k = all.begin(i); k < all.end(i); ++k) {
         const unsigned int j = all.neighbor[k];
         kept.neighbor.push_back(j);
@@ -113,7 +129,24 @@ void BondRows<dim>::rebuild() {
     kept.offsets[i + 1] = kept.neighbor.size();
   }
   state_.bonds = std::move(kept);
+  std::vector<std::uint8_t> driven(state_.particles.size());
+  for (unsigned int i = 0; i < driven.size(); ++i)
+    driven[i] = state_.free[i] ? 0 : 1;
+  state_.method->set_driven(std::move(driven));
   state_.method->initialise(state_.particles, state_.bonds);
+  // States carried in by conversions and new ghosts, now that their families exist.
+  if (!state_.pending_states.empty()) {
+    state_.method->set_particle_states(state_.pending_states);
+    state_.pending_states.clear();
+  }
+}
+
+template <int dim>
+void BondRows<dim>::restore_broken(std::vector<std::pair<unsigned int, unsigned int>> pairs) {
+  for (auto& [i, j] : pairs)
+    if (i > j)
+      std::swap(i, j);
+  restored_broken_ = std::move(pairs);
 }
 
 template <int dim>

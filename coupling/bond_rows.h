@@ -7,6 +7,7 @@
 
 #include "coupling/coupling_state.h"
 
+#include <utility>
 #include <vector>
 
 namespace spinesim::coupling {
@@ -20,6 +21,9 @@ class BondRows {
   void rebuild();
   // The next rebuild searches every row afresh (the particles were replaced).
   void forget_search();
+  // Pairs broken in a checkpoint: the next rebuild breaks them before the method builds its
+  // families.
+  void restore_broken(std::vector<std::pair<unsigned int, unsigned int>> pairs);
 
  private:
   CouplingState<dim>& state_;
@@ -27,6 +31,7 @@ class BondRows {
   // searched with.
   meshfree::BondList<dim> searched_;
   std::vector<double> searched_volumes_;
+  std::vector<std::pair<unsigned int, unsigned int>> restored_broken_;
 };
 
 } // namespace spinesim::coupling

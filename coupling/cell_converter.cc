@@ -180,6 +180,9 @@ CellConverter<dim>::make_records(const std::set<std::string>& todo,
   std::vector<types::global_dof_index> dofs(fe.n_dofs_per_cell());
   const auto& hanging = state_.fem.hanging_constraints();
   const auto& velocity = state_.fem.velocity();
+  const bool with_state = state_.carries_state();
+  if (with_state)
+    state_.fem.refresh_states();
   std::vector<ParticleRecord<dim>> mine;
   for (const auto& id : todo) {
     const auto it = state_.owned_cells.find(id);
@@ -268,6 +271,10 @@ CellConverter<dim>::make_records(const std::set<std::string>& todo,
       r.displacement = u[q];
       for (unsigned int d = 0; d < dim; ++d)
         r.velocity[d] = mean[d] + lambda * (v[q][d] + dv[d] - mean[d]);
+      if (with_state) {
+        r.has_state = true;
+        r.state = state_.cell_state(cell, q);
+      }
       mine.push_back(std::move(r));
     }
   }
@@ -314,6 +321,8 @@ ConversionReport<dim> CellConverter<dim>::convert(const std::vector<CellId>& cel
       state_.particles.temperature(i) = r.temperature;
       state_.particles.displacement(i) = r.displacement;
       state_.particles.velocity(i) = r.velocity;
+      if (r.has_state) // the method takes it once the rows are rebuilt (BondRows::rebuild)
+        state_.pending_states.emplace_back(i, r.state);
       ++added;
     }
   report.particles = added;

@@ -50,6 +50,9 @@ void CoupledIntegrator<dim>::advance(double dt, double a, double load_time, bool
     fracture_.before_forces();
     fracture_.after_forces(
         state_.method->compute_forces(particles, state_.bonds, state_.prm.damage));
+    // The material history moves with every step, explicit or relaxation, as the FEM's does
+    // (MechanicsSolver::explicit_step, relaxation_step): both follow the same load path.
+    state_.method->commit_state();
     auto& previous = relax_acceleration_;
     if (sums && (first || previous.size() != dim * particles.size()))
       previous.assign(dim * particles.size(), std::numeric_limits<double>::quiet_NaN());

@@ -44,7 +44,7 @@ double kinetic_energy(const CouplingState<dim>& s) {
 
 template <int dim>
 double strain_energy(const CouplingState<dim>& s) {
-  // Bonds are stored from free particles only: W = ¼ Σ k e² over the free rows.
+  // The stored energy of the owned free particles (rows of ghosts are not the particles').
   const auto w =
       s.method ? s.method->strain_energy_density(s.particles, s.bonds) : std::vector<double>();
   double e = 0; // rows live with their owners
@@ -56,7 +56,14 @@ double strain_energy(const CouplingState<dim>& s) {
 
 template <int dim>
 std::size_t n_broken_bonds(const CouplingState<dim>& s) {
-  return Utilities::MPI::sum(s.bonds.n_broken(), s.fem.mpi_communicator());
+  // Rows of owned free particles only (ghost rows, and other ranks' rows kept for methods
+  // that gather neighbour families, belong to nobody or to their owners).
+  std::size_t n = 0;
+  for (unsigned int i = 0; i < s.bonds.n_particles(); ++i)
+    if (s.free[i] && s.is_owned(i))
+      for (std::size_t k = s.bonds.begin(i); k < s.bonds.end(i); ++k)
+        n += s.bonds.broken[k] ? 1 : 0;
+  return Utilities::MPI::sum(n, s.fem.mpi_communicator());
 }
 
 template <int dim>

@@ -8,6 +8,7 @@
 #include <boost/serialization/vector.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <fstream>
 #include <map>
@@ -18,6 +19,39 @@
 namespace spinesim::coupling {
 
 using namespace dealii;
+
+namespace {
+// A material state as 14 numbers: ε_p (6), b^e (6), ε̄_p, w_p.
+constexpr unsigned int state_doubles = 14;
+
+std::array<double, state_doubles> pack_state(const materials::MaterialState& s) {
+  std::array<double, state_doubles> v{};
+  unsigned int n = 0;
+  for (unsigned int a = 0; a < 3; ++a)
+    for (unsigned int b = a; b < 3; ++b) {
+      v[n] = s.plastic_strain[a][b];
+      v[n + 6] = s.elastic_left_cauchy_green[a][b];
+      ++n;
+    }
+  v[12] = s.equivalent_plastic_strain;
+  v[13] = s.plastic_work;
+  return v;
+}
+
+materials::MaterialState unpack_state(const std::array<double, state_doubles>& v) {
+  materials::MaterialState s;
+  unsigned int n = 0;
+  for (unsigned int a = 0; a < 3; ++a)
+    for (unsigned int b = a; b < 3; ++b) {
+      s.plastic_strain[a][b] = v[n];
+      s.elastic_left_cauchy_green[a][b] = v[n + 6];
+      ++n;
+    }
+  s.equivalent_plastic_strain = v[12];
+  s.plastic_work = v[13];
+  return s;
+}
+} // namespace
 
 template <int dim>
 void CouplingCheckpoint<dim>::save(const std::string& file) const {
@@ -38,15 +72,35 @@ void CouplingCheckpoint<dim>::save(const std::string& file) const {
       all.insert(all.end(), part.begin(), part.end());
     broken = std::move(all);
   }
+  // The method's material history of the families centred on the particles each rank owns
+  // (ghost families included: they continue the FEM's history), as flat rows.
+  std::vector<double> history;
+  if (state.method) {
+    std::vector<std::uint8_t> owned(particles.size());
+    for (unsigned int i = 0; i < particles.size(); ++i)
+      owned[i] = state.is_owned(i) ? 1 : 0;
+    for (const auto& r : state.method->history(owned)) {
+      history.push_back(r.particle);
+      history.push_back(r.neighbour);
+      const auto flat = pack_state(r.state);
+      history.insert(history.end(), flat.begin(), flat.end());
+    }
+  }
+  const auto histories = Utilities::MPI::gather(state.fem.mpi_communicator(), history, 0);
   if (Utilities::MPI::this_mpi_process(state.fem.mpi_communicator()) != 0)
     return;
+  std::size_t n_history = 0;
+  for (const auto& part : histories)
+    n_history += part.size() / (2 + state_doubles);
   std::ofstream out(file, std::ios::binary);
   out.precision(17);
   // Version 2 adds the fracture-heat totals (the per-particle accounts are handed to the FEM
-  // at the end of every macro step, so they are empty when a checkpoint is written).
-  out << "spinesim_coupling 2\n"
+  // at the end of every macro step, so they are empty when a checkpoint is written); version 3
+  // the material history of the particle method.
+  out << "spinesim_coupling 3\n"
       << p_.integrator.time() << " " << particles.size() << " " << p_.converter.converted().size()
-      << " " << broken.size() << " " << dissipation << " " << p_.fracture.heat() << "\n";
+      << " " << broken.size() << " " << dissipation << " " << p_.fracture.heat() << " "
+      << n_history << "\n";
   for (const auto& [id, batch] : p_.converter.converted())
     out << id << " " << batch << "\n";
   for (unsigned int i = 0; i < particles.size(); ++i) {
@@ -61,6 +115,13 @@ void CouplingCheckpoint<dim>::save(const std::string& file) const {
   }
   for (const auto& [i, j] : broken)
     out << i << " " << j << "\n";
+  for (const auto& part : histories)
+    for (std::size_t k = 0; k < part.size(); k += 2 + state_doubles) {
+      out << static_cast<unsigned int>(part[k]) << " " << static_cast<unsigned int>(part[k + 1]);
+      for (unsigned int m = 0; m < state_doubles; ++m)
+        out << " " << part[k + 2 + m];
+      out << "\n";
+    }
 }
 
 template <int dim>
@@ -74,12 +135,13 @@ void CouplingCheckpoint<dim>::load(const std::string& file) {
   std::ifstream in(file, std::ios::binary);
   std::string tag;
   int version = 0;
-  std::size_t n = 0, nc = 0, nb = 0;
+  std::size_t n = 0, nc = 0, nb = 0, nh = 0;
   double time = 0, dissipation = 0, heat = 0;
   if (!(in >> tag >> version >> time >> n >> nc >> nb) || tag != "spinesim_coupling" ||
-      (version != 1 && version != 2) || (version == 2 && !(in >> dissipation >> heat)))
+      version < 1 || version > 3 || (version >= 2 && !(in >> dissipation >> heat)) ||
+      (version >= 3 && !(in >> nh)))
     throw InvalidInput(file, "missing or unreadable coupling checkpoint",
-                       "a file written by FemParticleCoupling::save (versions 1 and 2)");
+                       "a file written by FemParticleCoupling::save (versions 1 to 3)");
   p_.integrator.set_time(time);
   p_.fracture.restore(dissipation, heat); // version 1: none
   std::map<std::string, unsigned int> converted;
@@ -110,23 +172,32 @@ void CouplingCheckpoint<dim>::load(const std::string& file) {
     state.free[k] = static_cast<std::uint8_t>(fr);
     state.fixed_slots[k] = slots;
   }
-  std::set<std::pair<unsigned int, unsigned int>> broken;
+  std::vector<std::pair<unsigned int, unsigned int>> broken;
   for (std::size_t k = 0; k < nb; ++k) {
     unsigned int i, j;
     if (!(in >> i >> j))
       break;
-    broken.emplace(std::min(i, j), std::max(i, j));
+    broken.emplace_back(i, j);
+  }
+  std::vector<meshfree::HistoryRecord> history(nh);
+  for (auto& r : history) {
+    std::array<double, state_doubles> flat;
+    in >> r.particle >> r.neighbour;
+    for (auto& v : flat)
+      in >> v;
+    r.state = unpack_state(flat);
   }
   if (!in && !in.eof())
     throw InvalidInput(file, "truncated coupling checkpoint", "a complete checkpoint");
   p_.converter.restore(std::move(converted));
-  // Rebuild with the saved broken pairs.
+  // Rebuild with the saved broken pairs (broken before the method builds its families), then
+  // the method's history.
   bonds = meshfree::BondList<dim>();
+  p_.bond_rows.restore_broken(std::move(broken));
+  state.pending_states.clear();
   p_.rebuild_layers();
-  for (unsigned int i = 0; i < bonds.n_particles(); ++i)
-    for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k)
-      if (broken.count({std::min(i, bonds.neighbor[k]), std::max(i, bonds.neighbor[k])}))
-        bonds.broken[k] = 1;
+  if (state.method)
+    state.method->set_history(history);
 }
 
 template class CouplingCheckpoint<2>;

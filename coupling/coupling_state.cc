@@ -54,16 +54,17 @@ void CouplingState<dim>::prepare() {
   owned_cells.clear();
   double h_min = std::numeric_limits<double>::max(), h_max = 0;
   bool have_law = false;
+  std::shared_ptr<const materials::ConstitutiveLaw> law;
   for (const auto& cell : dh.active_cell_iterators())
     if (cell->is_locally_owned()) {
       owned_cells.emplace(cell->id().to_string(), cell);
       h_min = std::min(h_min, cell->minimum_vertex_distance());
       h_max = std::max(h_max, cell->diameter() / std::sqrt(double(dim)));
       if (!have_law) {
-        const auto& law = fem.cell_material(cell);
-        youngs = law.youngs_modulus();
-        poisson = law.poisson_ratio();
-        density = law.density();
+        law = fem.cell_law(cell);
+        youngs = law->youngs_modulus();
+        poisson = law->poisson_ratio();
+        density = law->density();
         have_law = true;
       }
     }
@@ -91,21 +92,59 @@ void CouplingState<dim>::prepare() {
   for (unsigned int q = 0; q < points.size(); ++q)
     for (unsigned int i = 0; i < fe.n_dofs_per_cell(); ++i)
       shape(q, i) = fe.shape_value(i, points.point(q));
+  // Nearest quadrature point in the unit cell (affine cells: nearest in space as well).
+  const auto& gauss = fem.quadrature();
+  nearest_quadrature_point.assign(points.size(), 0);
+  for (unsigned int q = 0; q < points.size(); ++q)
+    for (unsigned int g = 1; g < gauss.size(); ++g)
+      if (gauss.point(g).distance(points.point(q)) <
+          gauss.point(nearest_quadrature_point[q]).distance(points.point(q)) - 1e-12)
+        nearest_quadrature_point[q] = g;
 
   if (!prm.make_method)
     throw InvalidInput("Coupling", "no particle method was read for the coupling",
                        "Coupling parameters parsed with Effects/Particles method");
   // Calibrated to the law of the FEM cells the particles replace (the same law on every
   // rank; the law object itself is not needed by methods without point-wise laws).
-  method = prm.make_method(meshfree::ParticleMaterial{youngs, poisson, density, nullptr});
+  // A rank without cells still needs a law object: the same model from the owning rank's E,
+  // ν and ρ is not available generically, so such a rank takes the first cell's law of the
+  // mesh (every rank holds the laws of all material ids).
+  if (!law)
+    law = fem.cell_law(*dh.active_cell_iterators().begin());
+  meshfree::ParticleMaterial material{youngs, poisson, density, law};
+  material.reference_temperature = fem.reference_temperature();
+  method = prm.make_method(material);
+  for (auto& m : method->take_messages())
+    messages.push_back(std::move(m));
+  const std::string section =
+      "Coupling/" +
+      meshfree::ParticleMethods::instance().get(prm.particles_method, "Effects/Particles method")
+          .section;
+  if (dim == 2 && method->plane_stress() != fem.parameters().plane_stress)
+    throw InvalidInput(method->plane_stress() ? "Mechanics/Plane stress" : section,
+                       std::string("the particles (") + prm.particles_method + ") are plane " +
+                           (method->plane_stress() ? "stress" : "strain") +
+                           " but the FEM is plane " +
+                           (fem.parameters().plane_stress ? "stress" : "strain"),
+                       prm.particles_method == "bond_based"
+                           ? "the same model on both sides (Bond based/Plane model and "
+                             "Mechanics/Plane stress)"
+                           : "Mechanics/Plane stress = false (" + prm.particles_method +
+                                 " is plane strain in 2-D)");
+  if (!method->carries_material_state() && law->name() != "linear_elastic")
+    messages.push_back(prm.particles_method + " particles carry no constitutive state: the "
+                       "plastic strain and hardening of converted cells end at conversion (" +
+                       law->name() + " in the FEM); nosb or spg continue them");
   if (dim == 2 && method->thickness() != 1.0)
-    throw InvalidInput("Coupling/" +
-                           meshfree::ParticleMethods::instance()
-                               .get(prm.particles_method, "Effects/Particles method")
-                               .section +
-                           "/Thickness",
+    throw InvalidInput(section + "/Thickness",
                        "2-D FEM works per unit thickness",
                        "1 (results are per metre of thickness) [m]");
+}
+
+template <int dim>
+materials::MaterialState CouplingState<dim>::cell_state(const DoFCell& cell,
+                                                        unsigned int point) const {
+  return fem.quadrature_point_data(cell)[nearest_quadrature_point[point]].state;
 }
 
 template <int dim>

@@ -61,6 +61,13 @@ struct CouplingState {
                             const dealii::Point<dim>& position, double volume);
   // Empties the particle side (a checkpoint replaces it).
   void clear_particles();
+  // Whether the particle method continues the constitutive state of the cells.
+  bool carries_state() const { return method && method->carries_material_state(); }
+  // The committed constitutive state of a locally owned cell at its particle point `point`:
+  // the state of the nearest quadrature point (a transferred state stays admissible, on or
+  // inside the yield surface; interpolated states need not). MechanicsSolver::refresh_states()
+  // first.
+  materials::MaterialState cell_state(const DoFCell& cell, unsigned int point) const;
 
   bool is_owned(unsigned int i) const {
     return owner.empty() || owner[i] == static_cast<int>(rank);
@@ -84,6 +91,13 @@ struct CouplingState {
   std::vector<DoFCell> lattice_cells;
   double spacing = 0, youngs = 0, poisson = 0, density = 0;
   std::unique_ptr<meshfree::ParticleMethod<dim>> method;
+  // Per particle point of a cell: the nearest quadrature point of the FEM (cell_state()).
+  std::vector<unsigned int> nearest_quadrature_point;
+  // States carried into particles since the last bond-row rebuild (conversions, new ghosts):
+  // BondRows::rebuild hands them to the method once its families exist.
+  std::vector<std::pair<unsigned int, materials::MaterialState>> pending_states;
+  // For the run log (FemParticleCoupling::take_messages).
+  std::vector<std::string> messages;
 
   // The particles, replicated on every rank; indices never change (only appended; a
   // checkpoint replaces them all).

@@ -221,14 +221,41 @@ std::pair<double, double> FemParticleCoupling<dim>::max_free_forces() {
 // ---------------------------------------------------------------- output
 
 template <int dim>
+std::vector<double> FemParticleCoupling<dim>::equivalent_plastic_strains() const {
+  std::vector<double> e(state_.particles.size(), 0.0);
+  if (!state_.carries_state())
+    return e;
+  for (unsigned int i = 0; i < e.size(); ++i)
+    if (state_.free[i] && state_.is_owned(i))
+      e[i] = state_.method->particle_state(i).equivalent_plastic_strain;
+  if (Utilities::MPI::n_mpi_processes(state_.fem.mpi_communicator()) > 1)
+    Utilities::MPI::sum(e, state_.fem.mpi_communicator(), e);
+  return e;
+}
+
+template <int dim>
+std::vector<std::string> FemParticleCoupling<dim>::take_messages() {
+  std::vector<std::string> m;
+  m.swap(state_.messages);
+  if (state_.method)
+    for (auto& x : state_.method->take_messages())
+      m.push_back(std::move(x));
+  return m;
+}
+
+template <int dim>
 std::string FemParticleCoupling<dim>::write_output(const std::string& directory,
                                                    unsigned int cycle) const {
   const auto& particles = state_.particles;
   const std::string name = "particles_" + Utilities::int_to_string(cycle, 4) + ".vtu";
   halo_.synchronise(); // collective: damage and states of every particle on every rank
+  const auto plastic = equivalent_plastic_strains(); // collective
   if (Utilities::MPI::this_mpi_process(state_.fem.mpi_communicator()) != 0)
     return name;
   meshfree::ParticleSet<dim> out(particles.thickness());
+  std::vector<double>* eps = state_.carries_state()
+                                 ? &out.add_scalar_field("equivalent_plastic_strain")
+                                 : nullptr;
   for (unsigned int i = 0; i < particles.size(); ++i)
     if (state_.free[i]) {
       const unsigned int k = out.add_particle(particles.reference_position(i), particles.volume(i));
@@ -237,6 +264,8 @@ std::string FemParticleCoupling<dim>::write_output(const std::string& directory,
       out.density(k) = particles.density(i);
       out.damage(k) = particles.damage(i);
       out.temperature(k) = particles.temperature(i);
+      if (eps)
+        (*eps)[k] = plastic[i];
     }
   const std::string dir =
       directory.empty() || directory.back() == '/' ? directory : directory + "/";

@@ -144,6 +144,12 @@ class FemParticleCoupling {
   void synchronise() const { halo_.synchronise(); }
   bool is_owned(unsigned int i) const { return state_.is_owned(i); }
 
+  // Equivalent plastic strain ε̄_p of every free particle from its owner (0 for ghosts and for
+  // methods without material state) [-]. Collective.
+  std::vector<double> equivalent_plastic_strains() const;
+  // Messages for the run log since the last call (the method's, and the coupling's own).
+  std::vector<std::string> take_messages();
+
   // particles_<cycle>.vtu of the free particles (rank 0); returns the file name. Collective.
   std::string write_output(const std::string& directory, unsigned int cycle) const;
   void save(const std::string& file) const { checkpoint_.save(file); } // rank 0 writes

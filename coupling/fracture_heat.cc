@@ -27,13 +27,18 @@ void FractureHeat<dim>::after_forces(std::size_t newly_broken) {
   const auto& bonds = state_.bonds;
   if (energy_.size() != particles.size())
     energy_.resize(particles.size(), 0.0);
-  for (unsigned int i = 0; i < particles.size(); ++i)
+  // Rows of the free particles owned here: ghost rows and other ranks' rows (kept for
+  // methods that gather neighbour families) are counted by nobody, or by their owners.
+  for (unsigned int i = 0; i < particles.size(); ++i) {
+    if (!state_.free[i] || !state_.is_owned(i))
+      continue;
     for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k)
       if (bonds.broken[k] && !broken_before_[k]) {
         const double e = state_.method->bond_energy(particles, bonds, i, k);
         energy_[i] += e;
         dissipation_ += e;
       }
+  }
 }
 
 template <int dim>

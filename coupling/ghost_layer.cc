@@ -38,6 +38,9 @@ void GhostLayer<dim>::extend() {
   for (const int c : state_.host_index)
     if (c >= 0)
       hosts[c] = 1;
+  const bool with_state = state_.carries_state() && !new_free_points.empty();
+  if (with_state)
+    state_.fem.refresh_states();
   for (const auto& [id, cell] : state_.owned_cells) {
     if (new_free_points.empty())
       break;
@@ -62,6 +65,10 @@ void GhostLayer<dim>::extend() {
       r.volume = at_points.JxW(q);
       r.density = rho;
       r.position = xs[q];
+      if (with_state) { // a ghost family starts from the cell's history and follows the FEM
+        r.has_state = true;
+        r.state = state_.cell_state(cell, q);
+      }
       mine.push_back(std::move(r));
     }
   }
@@ -69,6 +76,8 @@ void GhostLayer<dim>::extend() {
     for (const auto& r : part) {
       const unsigned int i = state_.add_particle(r.cell, r.point, r.position, r.volume);
       state_.particles.density(i) = r.density;
+      if (r.has_state)
+        state_.pending_states.emplace_back(i, r.state);
     }
 
   free_searched_.assign(state_.free.begin(), state_.free.end());

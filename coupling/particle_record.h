@@ -5,6 +5,8 @@
 // owns the cell, and as exchanged between ranks (boost serialization through deal.II's
 // Utilities::MPI::all_gather): everything the other ranks need to add it.
 
+#include "fem/materials/constitutive_law.h"
+
 #include <deal.II/base/point.h>
 #include <deal.II/base/tensor.h>
 
@@ -24,11 +26,18 @@ struct ParticleRecord {
   double temperature = 0;        // [K]
   dealii::Point<dim> position;   // reference position [m]
   dealii::Tensor<1, dim> displacement, velocity; // [m], [m/s]
+  // The cell's constitutive state at the particle (nearest quadrature point); only for
+  // methods that carry material state.
+  bool has_state = false;
+  materials::MaterialState state;
 
   template <class Archive>
   void serialize(Archive& ar, const unsigned int) {
     ar& cell& point& free& fixed_slots& volume& density& temperature& position& displacement&
-        velocity;
+        velocity& has_state;
+    if (has_state)
+      ar& state.plastic_strain& state.elastic_left_cauchy_green& state.equivalent_plastic_strain&
+          state.plastic_work;
   }
 
   bool operator==(const ParticleRecord& o) const {

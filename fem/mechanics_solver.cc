@@ -197,6 +197,16 @@ MechanicsSolver<dim>::cell_material(const CellIterator& cell) const {
 }
 
 template <int dim>
+std::shared_ptr<const materials::ConstitutiveLaw>
+MechanicsSolver<dim>::cell_law(const CellIterator& cell) const {
+  const unsigned int index = cell->active_cell_index();
+  if (index < cell_laws_.size() && cell_laws_[index])
+    return cell_laws_[index];
+  material(cell->material_id()); // InvalidInput when the id has no law
+  return laws_.at(cell->material_id());
+}
+
+template <int dim>
 const materials::ConstitutiveLaw& MechanicsSolver<dim>::material(types::material_id id) const {
   const auto it = laws_.find(id);
   if (it == laws_.end() || !it->second)

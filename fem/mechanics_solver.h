@@ -191,6 +191,10 @@ class MechanicsSolver {
   const Parameters& parameters() const { return prm_; }
   const materials::ConstitutiveLaw& material(dealii::types::material_id id) const;
   const materials::ConstitutiveLaw& cell_material(const CellIterator& cell) const;
+  // The same law as a shared object (particles made from the cell run it too).
+  std::shared_ptr<const materials::ConstitutiveLaw> cell_law(const CellIterator& cell) const;
+  // T_ref of set_temperature_field() [K] (0 without a temperature field).
+  double reference_temperature() const { return reference_temperature_; }
   const VectorType& lumped_mass() const { return lumped_mass_; } // owned [kg]
   // Hanging-node constraints (locally relevant DoFs).
   const dealii::AffineConstraints<double>& hanging_constraints() const { return hanging_; }

@@ -1,15 +1,49 @@
 #include "meshfree/bond_based_method.h"
 
+#include "base/exceptions.h"
+
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
 namespace spinesim::meshfree {
 
 template <int dim>
 BondBasedMethod<dim>::BondBasedMethod(const Parameters& parameters,
                                       const ParticleMaterial& material)
-    : pd_(parameters, material.youngs_modulus, material.poisson_ratio) {}
+    : pd_(parameters, material.youngs_modulus, material.poisson_ratio) {
+  const auto model = parameters.plane_model;
+  const std::string model_name =
+      model == BondBasedPD<dim>::PlaneModel::plane_stress ? "plane stress" : "plane strain";
+  const double implied = implied_poisson_ratio(model), nu = material.poisson_ratio;
+  // 1e-6: scenes write 1/3 to ten digits or more; any real mismatch is far larger.
+  if (std::abs(nu - implied) <= 1e-6 * implied)
+    return;
+  const std::string where = dim == 3 ? "3-D" : model_name;
+  std::ostringstream error;
+  error << std::setprecision(3) << 100.0 * shear_modulus_error(model, nu);
+  if (!parameters.accept_poisson_mismatch)
+    throw InvalidInput("Material/Poisson ratio",
+                       "= " + std::to_string(nu) + ", but bond-based PD represents nu = " +
+                           std::to_string(implied) + " in " + where +
+                           " (pairwise central forces); the shear modulus would be off by " +
+                           error.str() + " %",
+                       "Effects/Particles method = nosb (any Poisson ratio), nu = " +
+                           std::to_string(implied) +
+                           ", or Bond based/Accept Poisson ratio mismatch = true");
+  messages_.push_back("bond-based PD represents nu = " + std::to_string(implied) + " in " + where +
+                      ", the material has nu = " + std::to_string(nu) +
+                      " (accepted): the particles' shear modulus is off by " + error.str() +
+                      " % (bulk modulus matched)");
+}
 
 template <int dim>
 void BondBasedMethod<dim>::declare(dealii::ParameterHandler& prm) {
   BondBasedPD<dim>::Parameters::declare(prm);
+  prm.declare_entry("Accept Poisson ratio mismatch", "false", dealii::Patterns::Bool(),
+                    "Bond-based PD represents nu = 1/4 (3-D, plane strain) or 1/3 (plane "
+                    "stress): a material with another Poisson ratio is refused unless this is "
+                    "true; the log then states the shear-modulus error in percent [-].");
 }
 
 template <int dim>
@@ -17,7 +51,24 @@ typename BondBasedMethod<dim>::Parameters
 BondBasedMethod<dim>::parse_parameters(const dealii::ParameterHandler& section) {
   Parameters p;
   p.parse(section);
+  p.accept_poisson_mismatch = section.get_bool("Accept Poisson ratio mismatch");
   return p;
+}
+
+template <int dim>
+double BondBasedMethod<dim>::shear_modulus_error(typename BondBasedPD<dim>::PlaneModel model,
+                                                 double nu) {
+  // G over the calibration modulus: 3-D G/K = 3(1−2ν)/(2(1+ν)); plane stress
+  // G/k' = (1−ν)/(1+ν) with k' = E/(2(1−ν)); plane strain G/k' = 1−2ν with
+  // k' = E/(2(1+ν)(1−2ν)).
+  const auto ratio = [&](double v) {
+    if (dim == 3)
+      return 3.0 * (1.0 - 2.0 * v) / (2.0 * (1.0 + v));
+    if (model == BondBasedPD<dim>::PlaneModel::plane_stress)
+      return (1.0 - v) / (1.0 + v);
+    return 1.0 - 2.0 * v;
+  };
+  return ratio(implied_poisson_ratio(model)) / ratio(nu) - 1.0;
 }
 
 template <int dim>

@@ -14,20 +14,38 @@ namespace spinesim::meshfree {
 template <int dim>
 class BondBasedMethod : public ParticleMethod<dim> {
  public:
-  using Parameters = typename BondBasedPD<dim>::Parameters;
-  // E and ν of `material` calibrate the micromodulus.
+  struct Parameters : BondBasedPD<dim>::Parameters {
+    // A material Poisson ratio other than implied_poisson_ratio() is bad input unless set.
+    bool accept_poisson_mismatch = false;
+  };
+  // E and ν of `material` calibrate the micromodulus. InvalidInput if ν differs from the
+  // implied ratio (unless accepted: then a message states the shear-modulus error).
   BondBasedMethod(const Parameters& parameters, const ParticleMaterial& material);
   static void declare(dealii::ParameterHandler& prm);
   static Parameters parse_parameters(const dealii::ParameterHandler& section);
 
   // The Poisson ratio bond-based PD represents for this dimension and plane model [-].
   static double implied_poisson_ratio(typename BondBasedPD<dim>::PlaneModel plane_model);
+  // G_PD / G − 1 [-]: the shear-modulus error of bond-based PD calibrated to the bulk (2-D:
+  // in-plane bulk) modulus of a material with Poisson ratio ν.
+  static double shear_modulus_error(typename BondBasedPD<dim>::PlaneModel plane_model, double nu);
 
   const BondBasedPD<dim>& model() const { return pd_; }
 
   std::string name() const override { return "bond_based"; }
   bool carries_material_state() const override { return false; }
   double thickness() const override { return pd_.parameters().thickness; }
+  bool plane_stress() const override {
+    return dim == 2 && pd_.parameters().plane_model == BondBasedPD<dim>::PlaneModel::plane_stress;
+  }
+  std::optional<double> implied_poisson_ratio() const override {
+    return implied_poisson_ratio(pd_.parameters().plane_model);
+  }
+  std::vector<std::string> take_messages() override {
+    std::vector<std::string> m;
+    m.swap(messages_);
+    return m;
+  }
   typename NeighborSearch<dim>::Options neighbor_options(double spacing) const override;
   void initialise(const ParticleSet<dim>& particles, const BondList<dim>& bonds) override;
   std::size_t compute_forces(ParticleSet<dim>& particles, BondList<dim>& bonds,
@@ -46,6 +64,7 @@ class BondBasedMethod : public ParticleMethod<dim> {
 
  private:
   BondBasedPD<dim> pd_;
+  std::vector<std::string> messages_;
 };
 
 } // namespace spinesim::meshfree

@@ -27,8 +27,11 @@
 
 #include <functional>
 #include <iosfwd>
+#include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace spinesim::meshfree {
@@ -40,6 +43,19 @@ struct ParticleMaterial {
   double poisson_ratio = 0;  // ν [-]
   double density = 0;        // ρ [kg/m^3]
   std::shared_ptr<const materials::ConstitutiveLaw> law;
+  // Temperature at which the particles are free of thermal strain [K]: the law sees
+  // particles.temperature() minus this (a coupled run's particles carry absolute FEM
+  // temperatures; stand-alone zones carry temperature changes and leave it 0).
+  double reference_temperature = 0;
+};
+
+// One entry of a method's committed material history, keyed so that it survives a
+// re-initialisation and can be written to a checkpoint: the family centred on `particle`
+// (`neighbour` is the bond partner of a bond-associated family, `particle` itself for the
+// particle's own family).
+struct HistoryRecord {
+  unsigned int particle = 0, neighbour = 0;
+  materials::MaterialState state;
 };
 
 template <int dim>
@@ -55,6 +71,18 @@ class ParticleMethod {
   // Out-of-plane thickness of a 2-D body the method was set up for [m] (1 in 3-D): particle
   // sets for it are made with this thickness.
   virtual double thickness() const = 0;
+  // 2-D kinematic assumption of the method: plane stress (true) or plane strain.
+  virtual bool plane_stress() const { return false; }
+  // The Poisson ratio the method represents whatever the material says (bond-based PD's
+  // Cauchy relation), or none when it follows the material.
+  virtual std::optional<double> implied_poisson_ratio() const { return std::nullopt; }
+  // Whether the force on a particle also needs the bond rows (families, integration points)
+  // of its neighbours, as in NOSB-PD and SPG: a coupled run then keeps rows for the driven
+  // particles within a horizon of the free ones.
+  virtual bool needs_neighbour_rows() const { return false; }
+  // Particles whose motion is prescribed from outside (the ghosts of a coupled run): a bond
+  // between two of them never breaks. Empty = none. Call before initialise().
+  virtual void set_driven(std::vector<std::uint8_t> driven) { (void)driven; }
 
   // Neighbour requirements for a particle spacing h: search radius (horizon or support),
   // influence function, partial volumes, surface correction.
@@ -91,6 +119,27 @@ class ParticleMethod {
 
   virtual void commit_state() {}
   virtual void rollback_state() {}
+  // The committed material history of the families centred on the particles with
+  // which[i] != 0 (all when `which` is empty); nothing for a method without history.
+  virtual std::vector<HistoryRecord> history(const std::vector<std::uint8_t>& which) const {
+    (void)which;
+    return {};
+  }
+  // Sets committed history by key (after initialise()); records of families this method
+  // does not hold are skipped.
+  virtual void set_history(const std::vector<HistoryRecord>& records) { (void)records; }
+  // Sets the committed history of every family centred on each given particle (state carried
+  // in from a converted FEM cell).
+  virtual void set_particle_states(
+      const std::vector<std::pair<unsigned int, materials::MaterialState>>& states) {
+    (void)states;
+  }
+  // Particle i's committed state for output: its own family's, or the weighted mean over its
+  // bond-associated families. The default state for a method without history.
+  virtual materials::MaterialState particle_state(unsigned int i) const {
+    (void)i;
+    return {};
+  }
   // The method's own history for checkpoints (the particle set and bonds are saved by the
   // caller). A method without history writes nothing.
   virtual void save(std::ostream&) const {}

@@ -89,15 +89,14 @@ Simulation<dim>::Simulation(const ScenarioFactoryArgs& args)
                        "converted particles must stay coupled to the FEM bulk",
                        "false, or set Effects/Coupling = true as well");
   if (effects_.coupling) {
-    // Ghost particles carry no bond rows, so methods whose force on a particle needs its
-    // neighbours' own families (NOSB-PD, SPG) cannot be spliced to the FEM by this interface.
-    if (effects_.particles_method != "bond_based")
+    // SPG's unknowns are RK coefficients, not displacements: the interface would have to fit
+    // and drive coefficients (see docs/coupling.md), which it does not do yet.
+    if (effects_.particles_method == "spg")
       throw InvalidInput("Effects/Particles method",
-                         "'" + effects_.particles_method +
-                             "' particles are not coupled to the FEM yet (the interface drives "
-                             "ghost particles that hold no bonds of their own)",
-                         "bond_based with Effects/Coupling = true; nosb runs as a particle zone "
-                         "(Effects/Coupling = false)");
+                         "'spg' particles are not coupled to the FEM yet (their unknowns are "
+                         "reproducing-kernel coefficients, the interface drives displacements)",
+                         "nosb or bond_based with Effects/Coupling = true; spg runs in the spg_* "
+                         "validation scenarios");
     parse_section(prm_, "Coupling", coupling_prm_, effects_.particles_method);
     coupling_prm_.damage = effects_.damage;
   }
@@ -181,6 +180,7 @@ void Simulation<dim>::build(RunContext& ctx) {
                 << coupled_->n_converted_cells() << " cells), " << coupled_->n_ghost_particles()
                 << " ghosts; spacing " << coupled_->particle_spacing() << " m, horizon "
                 << coupled_->horizon() << " m\n";
+      log_coupling_messages(ctx);
     }
   }
   if (coupled_ && !ctx.restarting())
@@ -191,6 +191,12 @@ void Simulation<dim>::build(RunContext& ctx) {
   if (heat_)
     ctx.log() << ", heat " << heat_->dof_handler().n_dofs() << " DoFs";
   ctx.log() << "\n";
+}
+
+template <int dim>
+void Simulation<dim>::log_coupling_messages(RunContext& ctx) {
+  for (const auto& m : coupled_->take_messages())
+    ctx.log() << "  particles: " << m << "\n";
 }
 
 // Boxes and cracks of the Coupling section that miss the body do nothing, which is almost
@@ -286,6 +292,8 @@ void Simulation<dim>::advance_mechanics(unsigned int step, double time, double d
   (this->*mechanics_integrator_)(step, time, dt, ctx);
   if (heat_ && mech_prm_.taylor_quinney > 0) // heats the next heat step (staggered)
     plastic_heating_ = mechanics_->cell_plastic_dissipation_rate();
+  if (coupled_)
+    log_coupling_messages(ctx);
   if (heat_ && coupled_) { // the same for the energy of the bonds broken in this step
     fracture_heat_applied_ = coupled_->fracture_heat(); // what this step's heat solve used
     fracture_heating_ = coupled_->take_fracture_heat(dt);

@@ -46,6 +46,8 @@ class Simulation : public framework::Scenario {
   };
   void plan_step_modules(framework::RunContext& ctx);
   void warn_outside_body(framework::RunContext& ctx) const;
+  // Messages of the coupling and its particle method for the run log.
+  void log_coupling_messages(framework::RunContext& ctx);
   void advance_heat(unsigned int step, double time, double dt, framework::RunContext& ctx);
   // Mechanics: the integrator chosen in plan_step_modules, then the heat it hands over.
   void advance_mechanics(unsigned int step, double time, double dt, framework::RunContext& ctx);

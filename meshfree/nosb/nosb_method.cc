@@ -2,7 +2,9 @@
 
 #include "base/exceptions.h"
 
+#include <cmath>
 #include <istream>
+#include <limits>
 #include <ostream>
 
 namespace spinesim::meshfree {
@@ -44,7 +46,9 @@ materials::MaterialState read_state(std::istream& in) {
 
 template <int dim>
 NosbMethod<dim>::NosbMethod(const Parameters& parameters, const ParticleMaterial& material)
-    : pd_(parameters, material.law) {}
+    : pd_(parameters, material.law) {
+  pd_.set_reference_temperature(material.reference_temperature);
+}
 
 template <int dim>
 typename NosbMethod<dim>::Parameters
@@ -66,7 +70,43 @@ typename NeighborSearch<dim>::Options NosbMethod<dim>::neighbor_options(double s
 
 template <int dim>
 void NosbMethod<dim>::initialise(const ParticleSet<dim>& particles, const BondList<dim>& bonds) {
+  const auto kept = history({});
   pd_.initialise(particles, bonds);
+  set_history(kept);
+}
+
+template <int dim>
+std::vector<HistoryRecord> NosbMethod<dim>::history(const std::vector<std::uint8_t>& which) const {
+  const auto& keys = pd_.history_keys();
+  const auto& states = pd_.committed_states();
+  std::vector<HistoryRecord> records;
+  const materials::MaterialState virgin;
+  for (std::size_t h = 0; h < keys.size() && h < states.size(); ++h) {
+    const auto [i, j] = keys[h];
+    if (!which.empty() && (i >= which.size() || !which[i]))
+      continue;
+    const auto& s = states[h];
+    // Virgin states need no record (a new family starts from one).
+    if (s.equivalent_plastic_strain == 0 && s.plastic_work == 0 &&
+        s.plastic_strain == virgin.plastic_strain &&
+        s.elastic_left_cauchy_green == virgin.elastic_left_cauchy_green)
+      continue;
+    records.push_back({i, j, s});
+  }
+  return records;
+}
+
+template <int dim>
+void NosbMethod<dim>::set_history(const std::vector<HistoryRecord>& records) {
+  for (const auto& r : records)
+    pd_.set_committed_state({r.particle, r.neighbour}, r.state);
+}
+
+template <int dim>
+void NosbMethod<dim>::set_particle_states(
+    const std::vector<std::pair<unsigned int, materials::MaterialState>>& states) {
+  for (const auto& [i, s] : states)
+    pd_.set_particle_state(i, s);
 }
 
 template <int dim>
@@ -80,13 +120,30 @@ std::size_t NosbMethod<dim>::compute_forces(ParticleSet<dim>& particles, BondLis
 template <int dim>
 std::vector<double> NosbMethod<dim>::stiffness_bound(const ParticleSet<dim>& particles,
                                                      const BondList<dim>& bonds) {
-  return pd_.relaxation_stiffness_bound(particles, bonds);
+  // The family bound (NosbPD::stiffness_row_bound): assembling the tangent for its exact row
+  // sums costs a family's size squared, minutes for bond-associated families in 3-D. S_i as
+  // NosbPD::relaxation_stiffness_bound forms it from R_i.
+  std::vector<double> S = pd_.stiffness_row_bound(particles, bonds);
+  for (unsigned int i = 0; i < S.size(); ++i)
+    S[i] /= 2.0 * std::sqrt(double(dim)) * particles.volume(i);
+  return S;
 }
 
 template <int dim>
 double NosbMethod<dim>::stable_time_step(const ParticleSet<dim>& particles,
                                          const BondList<dim>& bonds, double safety) {
-  return pd_.stable_time_step(particles, bonds, safety);
+  // Central differences: Δt ≤ 2/ω_max, Gershgorin on M⁻¹K with the family bound of R_i.
+  const std::vector<double> R = pd_.stiffness_row_bound(particles, bonds);
+  double dt = std::numeric_limits<double>::infinity();
+  for (unsigned int i = 0; i < particles.size(); ++i) {
+    if (!(particles.mass(i) > 0.0))
+      throw NumericalFailure("non-positive particle mass",
+                             "particle " + std::to_string(i) + " (NOSB-PD stable step)",
+                             "set a positive density before the stable step");
+    if (R[i] > 0.0)
+      dt = std::min(dt, 2.0 * std::sqrt(particles.mass(i) / R[i]));
+  }
+  return safety * dt;
 }
 
 template <int dim>

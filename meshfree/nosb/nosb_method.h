@@ -26,6 +26,8 @@ class NosbMethod : public ParticleMethod<dim> {
   bool carries_material_state() const override { return true; }
   double thickness() const override { return pd_.parameters().thickness; }
   typename NeighborSearch<dim>::Options neighbor_options(double spacing) const override;
+  // Called again (particles appended, rows added), the committed history of every family
+  // that still exists is kept (by its key: centre and bond partner).
   void initialise(const ParticleSet<dim>& particles, const BondList<dim>& bonds) override;
   std::size_t compute_forces(ParticleSet<dim>& particles, BondList<dim>& bonds,
                              bool allow_breaking) override;
@@ -48,6 +50,16 @@ class NosbMethod : public ParticleMethod<dim> {
   void save(std::ostream& out) const override;
   void load(std::istream& in) override;
   std::vector<std::string> take_messages() override { return pd_.take_messages(); }
+  // A particle's force gathers the families of its neighbours (f_m = −Σ_e w_e P_e G_m).
+  bool needs_neighbour_rows() const override { return true; }
+  void set_driven(std::vector<std::uint8_t> driven) override { pd_.set_driven(std::move(driven)); }
+  std::vector<HistoryRecord> history(const std::vector<std::uint8_t>& which) const override;
+  void set_history(const std::vector<HistoryRecord>& records) override;
+  void set_particle_states(
+      const std::vector<std::pair<unsigned int, materials::MaterialState>>& states) override;
+  materials::MaterialState particle_state(unsigned int i) const override {
+    return pd_.particle_state(i);
+  }
 
  private:
   NosbPD<dim> pd_;

@@ -153,6 +153,20 @@ void NosbPD<dim>::initialise(const ParticleSet<dim>& particles, const BondList<d
       prm_.stabilization == Stabilization::bond_associated ? bonds.n_bonds() : particles.size();
   committed_.assign(n_history, materials::MaterialState());
   trial_ = committed_;
+  // History index -> (centre, partner); bond-associated indices are the bond indices, so the
+  // indices of particle i are its bond row.
+  history_keys_.resize(n_history);
+  particle_history_begin_.assign(particles.size() + 1, 0);
+  for (unsigned int i = 0; i < particles.size(); ++i) {
+    if (prm_.stabilization == Stabilization::bond_associated) {
+      for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k)
+        history_keys_[k] = {i, bonds.neighbor[k]};
+      particle_history_begin_[i + 1] = bonds.end(i);
+    } else {
+      history_keys_[i] = {i, i};
+      particle_history_begin_[i + 1] = i + 1;
+    }
+  }
   F_particle_.assign(particles.size(), dealii::unit_symmetric_tensor<dim>());
   update_families(particles, bonds);
 }
@@ -208,7 +222,8 @@ NosbPD<dim>::evaluate(unsigned int e, const dealii::Tensor<2, dim>& F,
       F3[a][b] = F[a][b];
   materials::FiniteStrainResponse r;
   try {
-    r = law_->finite_strain(F3, particles.temperature(i), committed_[fam.history_index(e)]);
+    r = law_->finite_strain(F3, particles.temperature(i) - reference_temperature_,
+                            committed_[fam.history_index(e)]);
   } catch (const NumericalFailure& f) {
     throw NumericalFailure(f.what_failed(), where(particles, i) + " (NOSB-PD family)",
                            "det F <= 0: the load step is too large or particles interpenetrate; "
@@ -316,9 +331,10 @@ std::size_t NosbPD<dim>::break_bonds(ParticleSet<dim>& particles, BondList<dim>&
     return 0;
   const auto& u = particles.displacements();
   std::size_t n_broken = 0;
+  const bool any_driven = !driven_.empty();
   for (unsigned int i = 0; i < particles.size(); ++i)
     for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
-      if (bonds.broken[k])
+      if (bonds.broken[k] || (any_driven && driven_[i] && driven_[bonds.neighbor[k]]))
         continue;
       const auto y = bonds.xi[k] + (u[bonds.neighbor[k]] - u[i]);
       if (y.norm() > (1.0 + s0_) * bonds.length[k]) {
@@ -471,6 +487,46 @@ std::vector<double> NosbPD<dim>::stiffness_row_sums(const ParticleSet<dim>& part
 }
 
 template <int dim>
+std::vector<double> NosbPD<dim>::stiffness_row_bound(const ParticleSet<dim>& particles,
+                                                     const BondList<dim>& bonds) {
+  if (prm_.stabilization == Stabilization::penalty && prm_.stabilization_coefficient > 0)
+    return stiffness_row_sums(particles, bonds);
+  const auto& fam = families();
+  const auto& u = particles.displacements();
+  const long n_fam = fam.n_families();
+  // Per family: B[a][J] = Σ_b Σ_L |A_aJbL| Σ_p |G_p,L|; rows m get w_e Σ_J |G_m,J| B[a][J].
+  std::vector<dealii::Tensor<2, dim>> B(n_fam);
+#pragma omp parallel for schedule(static) if (n_fam > parallel_particle_threshold)
+  for (long e = 0; e < n_fam; ++e) {
+    const Response r = evaluate(e, fam.deformation_gradient(e, u), particles, nullptr);
+    dealii::Tensor<1, dim> g;
+    for (std::size_t q = fam.begin(e); q < fam.end(e); ++q)
+      for (unsigned int L = 0; L < dim; ++L)
+        g[L] += std::abs(fam.gradient(q)[L]);
+    for (unsigned int a = 0; a < dim; ++a)
+      for (unsigned int J = 0; J < dim; ++J)
+        for (unsigned int b = 0; b < dim; ++b)
+          for (unsigned int L = 0; L < dim; ++L)
+            B[e][a][J] += std::abs(r.A[a][J][b][L]) * g[L];
+  }
+  std::vector<dealii::Tensor<1, dim>> rows(particles.size());
+  for (long e = 0; e < n_fam; ++e) {
+    const double w = fam.weight(e);
+    for (std::size_t q = fam.begin(e); q < fam.end(e); ++q) {
+      const auto& G = fam.gradient(q);
+      for (unsigned int a = 0; a < dim; ++a)
+        for (unsigned int J = 0; J < dim; ++J)
+          rows[fam.node(q)][a] += w * std::abs(G[J]) * B[e][a][J];
+    }
+  }
+  std::vector<double> R(particles.size(), 0.0);
+  for (unsigned int i = 0; i < R.size(); ++i)
+    for (unsigned int a = 0; a < dim; ++a)
+      R[i] = std::max(R[i], rows[i][a]);
+  return R;
+}
+
+template <int dim>
 std::vector<double> NosbPD<dim>::relaxation_stiffness_bound(const ParticleSet<dim>& particles,
                                                             const BondList<dim>& bonds,
                                                             double safety) {
@@ -561,6 +617,56 @@ void NosbPD<dim>::set_committed_states(const std::vector<materials::MaterialStat
                        "one state per family history index of the same particles and bonds");
   committed_ = states;
   trial_ = states;
+}
+
+template <int dim>
+bool NosbPD<dim>::set_committed_state(std::pair<unsigned int, unsigned int> key,
+                                      const materials::MaterialState& state) {
+  const unsigned int i = key.first;
+  if (i + 1 >= particle_history_begin_.size())
+    return false;
+  for (std::size_t h = particle_history_begin_[i]; h < particle_history_begin_[i + 1]; ++h)
+    if (history_keys_[h] == key) {
+      committed_[h] = trial_[h] = state;
+      return true;
+    }
+  return false;
+}
+
+template <int dim>
+void NosbPD<dim>::set_particle_state(unsigned int i, const materials::MaterialState& state) {
+  if (i + 1 >= particle_history_begin_.size())
+    return;
+  for (std::size_t h = particle_history_begin_[i]; h < particle_history_begin_[i + 1]; ++h)
+    committed_[h] = trial_[h] = state;
+}
+
+template <int dim>
+materials::MaterialState NosbPD<dim>::particle_state(unsigned int i) const {
+  if (i + 1 >= particle_history_begin_.size())
+    return {};
+  const std::size_t b = particle_history_begin_[i], e = particle_history_begin_[i + 1];
+  if (e == b)
+    return {};
+  if (prm_.stabilization != Stabilization::bond_associated)
+    return committed_[b];
+  // The arithmetic mean over the particle's bond families (their weights differ only by the
+  // partial volumes on a lattice), broken bonds included: their history is the particle's too.
+  materials::MaterialState mean;
+  mean.elastic_left_cauchy_green = materials::SymTensor2();
+  for (std::size_t h = b; h < e; ++h) {
+    const auto& s = committed_[h];
+    mean.plastic_strain += s.plastic_strain;
+    mean.elastic_left_cauchy_green += s.elastic_left_cauchy_green;
+    mean.equivalent_plastic_strain += s.equivalent_plastic_strain;
+    mean.plastic_work += s.plastic_work;
+  }
+  const double total = static_cast<double>(e - b);
+  mean.plastic_strain /= total;
+  mean.elastic_left_cauchy_green /= total;
+  mean.equivalent_plastic_strain /= total;
+  mean.plastic_work /= total;
+  return mean;
 }
 
 template <int dim>

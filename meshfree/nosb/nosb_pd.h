@@ -42,8 +42,10 @@
 #include <deal.II/lac/sparse_matrix.h>
 #include <deal.II/lac/sparsity_pattern.h>
 
+#include <cstdint>
 #include <functional>
 #include <memory>
+#include <utility>
 #include <string>
 #include <vector>
 
@@ -117,6 +119,13 @@ class NosbPD {
   // R_i = max_d Σ_col |K_(i,d),col| of the tangent at the current state [N/m].
   std::vector<double> stiffness_row_sums(const ParticleSet<dim>& particles,
                                          const BondList<dim>& bonds);
+  // An upper bound of R_i without assembling the tangent [N/m]: each family's blocks
+  // w_e A_e(G_m, G_p) bounded by the triangle inequality, Σ_p Σ_b |K_(m,a),(p,b)| ≤
+  // w_e Σ_J |G_m,J| Σ_b Σ_L |A_aJbL| Σ_p |G_p,L|, summed over the families. O(family size) a
+  // family instead of its square; the Gershgorin step from it is never larger than from R_i.
+  // The penalty stabilisation has no family form: with it this is stiffness_row_sums().
+  std::vector<double> stiffness_row_bound(const ParticleSet<dim>& particles,
+                                          const BondList<dim>& bonds);
   // For AdaptiveDynamicRelaxation::solve: S_i with ½√dim S_i = ¼ R_i/V_i·safety (its fictitious
   // density) [N/m^4]; safety 1 is the Gershgorin limit of Kilic & Madenci (2010).
   std::vector<double> relaxation_stiffness_bound(const ParticleSet<dim>& particles,
@@ -154,6 +163,26 @@ class NosbPD {
   const std::vector<materials::MaterialState>& committed_states() const { return committed_; }
   // InvalidInput if the size differs from the current history.
   void set_committed_states(const std::vector<materials::MaterialState>& states);
+  // The key of each history index: (centre particle, bond partner) for bond-associated
+  // families, (particle, particle) for particle families. Set by initialise().
+  const std::vector<std::pair<unsigned int, unsigned int>>& history_keys() const {
+    return history_keys_;
+  }
+  // Sets the committed (and trial) state of the history index with this key; false if there
+  // is none.
+  bool set_committed_state(std::pair<unsigned int, unsigned int> key,
+                           const materials::MaterialState& state);
+  // Every history index centred on particle i gets `state`.
+  void set_particle_state(unsigned int i, const materials::MaterialState& state);
+  // Particle i's committed state: its particle family's, or the mean over its bond-associated
+  // families (tensors and scalars averaged alike).
+  materials::MaterialState particle_state(unsigned int i) const;
+
+  // Temperature at which the particles carry no thermal strain [K]: the law is called with
+  // particles.temperature() minus this. 0 by default (temperatures are changes).
+  void set_reference_temperature(double T) { reference_temperature_ = T; }
+  // Driven particles (coupling ghosts): a bond between two of them never breaks.
+  void set_driven(std::vector<std::uint8_t> driven) { driven_ = std::move(driven); }
 
  private:
   struct Response {
@@ -174,6 +203,10 @@ class NosbPD {
   CorrespondenceFamilies<dim> particle_families_, bond_families_;
   std::vector<dealii::Tensor<2, dim>> F_particle_;
   std::vector<materials::MaterialState> committed_, trial_;
+  std::vector<std::pair<unsigned int, unsigned int>> history_keys_;
+  std::vector<std::size_t> particle_history_begin_; // history indices of particle i: [b_i, b_i+1)
+  double reference_temperature_ = 0;
+  std::vector<std::uint8_t> driven_;
   std::vector<std::string> messages_;
   unsigned long families_version_ = 0, pattern_version_ = ~0ul;
 };
