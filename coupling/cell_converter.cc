@@ -48,6 +48,17 @@ double ConversionReport<dim>::momentum_change_relative() const {
 }
 
 template <int dim>
+double ConversionReport<dim>::plastic_strain_change_relative() const {
+  const double d = std::abs(plastic_strain_after - plastic_strain_before);
+  return plastic_strain_before > 0 ? d / plastic_strain_before : d;
+}
+
+template <int dim>
+double ConversionReport<dim>::reaction_jump_relative() const {
+  return std::abs(reaction_after - reaction_before) / std::max(reaction_before, 1e-300);
+}
+
+template <int dim>
 double ConversionReport<dim>::kinetic_change_relative() const {
   return std::abs(kinetic_after - kinetic_before) / std::max(kinetic_before, 1e-300);
 }
@@ -119,7 +130,7 @@ std::vector<CellId> CellConverter<dim>::flagged_cells() const {
     std::vector<bool> candidate(state_.fem.dof_handler().get_triangulation().n_active_cells(),
                                 false);
     for (const auto& cell : state_.lattice_cells)
-      candidate[cell->active_cell_index()] = state_.fem.is_active(cell);
+      candidate[cell->active_cell_index()] = state_.fem.is_active(cell) && in_conversion_region(cell);
     fem::CellIndicators<dim> indicators;
     indicators.compute(state_.fem, state_.prm.plastic_strain_threshold > 0, candidate,
                        state_.prm.min_jacobian_ratio > 0 || state_.prm.min_time_step > 0);
@@ -149,10 +160,24 @@ std::vector<CellId> CellConverter<dim>::flagged_cells() const {
     const double reach = std::max(state_.prm.buffer, 1e-9 * state_.spacing);
     PointBins<dim> bins(all_centres, std::max(state_.prm.buffer, state_.spacing));
     for (const auto& cell : state_.lattice_cells)
-      if (state_.fem.is_active(cell) && !bins.within(cell->center(), reach).empty())
+      if (state_.fem.is_active(cell) && in_conversion_region(cell) &&
+          !bins.within(cell->center(), reach).empty())
         mine.push_back(cell->id().to_string());
   }
   return gather_cell_ids(comm, mine);
+}
+
+template <int dim>
+bool CellConverter<dim>::in_conversion_region(const DoFCell& cell) const {
+  const auto& lo = state_.prm.convert_lower;
+  const auto& hi = state_.prm.convert_upper;
+  if (lo.empty())
+    return true;
+  const Point<dim> c = cell->center();
+  for (unsigned int d = 0; d < dim; ++d)
+    if (c[d] < lo[d] || c[d] > hi[d])
+      return false;
+  return true;
 }
 
 template <int dim>
@@ -301,10 +326,28 @@ ConversionReport<dim> CellConverter<dim>::convert(const std::vector<CellId>& cel
     report.kinetic_before = kinetic_energy(state_);
   }
   std::optional<ScopedTime> records_time(state_.timings.records);
+  report.carries_state = state_.carries_state();
+  if (report.carries_state) {
+    state_.fem.refresh_states();
+    FEValues<dim> at_gauss(state_.fem.mapping(), state_.fem.fe(), state_.fem.quadrature(),
+                           update_JxW_values);
+    double integral = 0;
+    for (const auto& id : todo) {
+      const auto it = state_.owned_cells.find(id);
+      if (it == state_.owned_cells.end())
+        continue;
+      at_gauss.reinit(it->second);
+      const auto data = state_.fem.quadrature_point_data(it->second);
+      for (unsigned int q = 0; q < data.size(); ++q)
+        integral += data[q].state.equivalent_plastic_strain * at_gauss.JxW(q);
+    }
+    report.plastic_strain_before = Utilities::MPI::sum(integral, comm);
+  }
 
   // Records of the new free particles from the ranks owning their cells.
   const auto mine = make_records(todo, report.max_velocity_scale);
   unsigned int added = 0;
+  std::vector<unsigned int> batch_particles;
   for (const auto& part : Utilities::MPI::all_gather(comm, mine))
     for (const auto& r : part) {
       unsigned int i;
@@ -323,6 +366,7 @@ ConversionReport<dim> CellConverter<dim>::convert(const std::vector<CellId>& cel
       state_.particles.velocity(i) = r.velocity;
       if (r.has_state) // the method takes it once the rows are rebuilt (BondRows::rebuild)
         state_.pending_states.emplace_back(i, r.state);
+      batch_particles.push_back(i);
       ++added;
     }
   report.particles = added;
@@ -347,6 +391,14 @@ ConversionReport<dim> CellConverter<dim>::convert(const std::vector<CellId>& cel
   rebuild_layers_();
 
   ScopedTime time(state_.timings.totals);
+  if (report.carries_state) {
+    double integral = 0; // what the particles' families hold now (owners count)
+    for (const unsigned int i : batch_particles)
+      if (state_.is_owned(i))
+        integral += state_.particles.volume(i) *
+                    state_.method->particle_state(i).equivalent_plastic_strain;
+    report.plastic_strain_after = Utilities::MPI::sum(integral, comm);
+  }
   report.max_velocity_scale =
       Utilities::MPI::max(report.max_velocity_scale, state_.fem.mpi_communicator());
   report.mass_after = total_mass(state_);

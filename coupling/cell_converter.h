@@ -32,6 +32,16 @@ struct ConversionReport {
   dealii::Tensor<1, dim> momentum_before, momentum_after; // [kg m/s]
   double kinetic_before = 0, kinetic_after = 0;           // [J]
   double max_velocity_scale = 1; // largest λ on the velocity fluctuation of a cell [-]
+  // Methods that carry material state: ∫ ε̄_p dV over the cells (their quadrature) and
+  // Σ V_i ε̄_p,i over their particles [m^3]; equal when every state arrived (nearest quadrature
+  // point, n = 2 particles per direction on Q1 with 2 × 2 Gauss: one particle per point).
+  bool carries_state = false;
+  double plastic_strain_before = 0, plastic_strain_after = 0;
+  // Quasi-static: ‖reactions‖ at the equilibrium before the conversion and at the next one,
+  // under the same load [N] (CoupledIntegrator::relax); 0 when not measured.
+  double reaction_before = 0, reaction_after = 0;
+  double plastic_strain_change_relative() const; // over ∫ ε̄_p dV (absolute if that is 0)
+  double reaction_jump_relative() const;
   double mass_change_relative() const;
   double kinetic_change_relative() const;  // over the kinetic energy before
   double momentum_change_relative() const; // over |p| (or over mass × max speed if p ≈ 0)
@@ -63,11 +73,16 @@ class CellConverter {
   // From a checkpoint: these cells are converted, and out of the FEM.
   void restore(std::map<std::string, unsigned int> converted);
   const std::vector<ConversionReport<dim>>& reports() const { return reports_; }
+  // The latest report, for measures taken after the conversion (CoupledIntegrator::relax).
+  ConversionReport<dim>& last_report() { return reports_.back(); }
 
  private:
   // The particles of the cells in `todo` this rank owns, with u, v, T from the FEM, masses
   // and kinetic energy matched to what the nodes lose; raises max_velocity_scale to the
   // largest λ used.
+  using DoFCell = typename CouplingState<dim>::DoFCell;
+  // Whether the criteria may convert this cell (Conversion region; everywhere when unset).
+  bool in_conversion_region(const DoFCell& cell) const;
   std::vector<ParticleRecord<dim>> make_records(const std::set<std::string>& todo,
                                                 double& max_velocity_scale) const;
 

@@ -50,9 +50,11 @@ void CoupledIntegrator<dim>::advance(double dt, double a, double load_time, bool
     fracture_.before_forces();
     fracture_.after_forces(
         state_.method->compute_forces(particles, state_.bonds, state_.prm.damage));
-    // The material history moves with every step, explicit or relaxation, as the FEM's does
-    // (MechanicsSolver::explicit_step, relaxation_step): both follow the same load path.
-    state_.method->commit_state();
+    // Explicit steps commit the material history every step, as the FEM does; a relaxation
+    // commits both models once, at equilibrium (relax()), so the pseudo-dynamics leave no
+    // plastic trace (MechanicsSolver::relaxation_step).
+    if (!sums)
+      state_.method->commit_state();
     auto& previous = relax_acceleration_;
     if (sums && (first || previous.size() != dim * particles.size()))
       previous.assign(dim * particles.size(), std::numeric_limits<double>::quiet_NaN());
@@ -156,14 +158,25 @@ RelaxationReport<dim> CoupledIntegrator<dim>::relax(double time, bool with_conve
                              "check the materials and the loads of this step");
     // The first step's forces are those of the previous state: judge from the second on.
     if (it > 1 && residual <= state_.prm.relaxation_tolerance * scale) {
+      // Equilibrium: the trial histories of both models are the step's result.
+      state_.fem.commit_relaxation();
+      if (state_.method)
+        state_.method->commit_state();
       // Conversion is decided at equilibrium, not on the transient strains of the relaxation
       // (which depend on its path and tolerance): cells flagged now convert and the state
       // relaxes again, until no cell converts.
-      const auto r = with_conversion ? converter_.convert_flagged() : ConversionReport<dim>();
+      // The reactions at this equilibrium close the previous conversion's jump measure (same
+      // load, before and after the cells turned into particles).
+      if (!report.conversions.empty()) {
+        report.conversions.back().reaction_after = reaction;
+        converter_.last_report().reaction_after = reaction;
+      }
+      auto r = with_conversion ? converter_.convert_flagged() : ConversionReport<dim>();
       if (r.cells == 0) {
         report.converged = true;
         break;
       }
+      r.reaction_before = converter_.last_report().reaction_before = reaction;
       report.conversions.push_back(r);
       dt = stable_time_step();
       first = true; // new unknowns: restart the stiffness estimate

@@ -58,6 +58,12 @@ void CouplingParameters<dim>::declare(ParameterHandler& prm) {
   prm.declare_entry("Buffer", "0", Double(0),
                     "Cells whose centre lies within this distance of a flagged cell convert "
                     "with it, so the particle zone runs ahead of a crack [m].");
+  prm.declare_entry("Conversion region lower corner", "", Anything(),
+                    "Lower corner of the box whose cells the criteria may convert (by cell "
+                    "centre; the buffer reaches no farther); empty = anywhere on the particle "
+                    "lattice [m].");
+  prm.declare_entry("Conversion region upper corner", "", Anything(),
+                    "Upper corner of that box [m].");
   prm.declare_entry("Check interval", "10", Integer(1),
                     "Explicit steps between conversion checks [-].");
   prm.declare_entry("Refinement region lower corner", "", Anything(),
@@ -116,6 +122,11 @@ void CouplingParameters<dim>::parse(ParameterHandler& prm, const std::string& me
   min_time_step = prm.get_double("Minimum time step");
   buffer = prm.get_double("Buffer");
   check_interval = prm.get_integer("Check interval");
+  convert_lower = parse_doubles(prm.get("Conversion region lower corner"),
+                                "Coupling/Conversion region lower corner");
+  convert_upper = parse_doubles(prm.get("Conversion region upper corner"),
+                                "Coupling/Conversion region upper corner");
+  check_box_corners<dim>(convert_lower, convert_upper, "Coupling/Conversion region lower corner");
   refine_lower = parse_doubles(prm.get("Refinement region lower corner"),
                                "Coupling/Refinement region lower corner");
   refine_upper = parse_doubles(prm.get("Refinement region upper corner"),

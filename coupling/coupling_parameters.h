@@ -26,6 +26,7 @@ struct CouplingParameters {
   double min_jacobian_ratio = 0;                  // [-], 0 = off
   double min_time_step = 0;                       // [s], 0 = off
   double buffer = 0;                              // converted around flagged cells [m]
+  std::vector<double> convert_lower, convert_upper; // cells the criteria may convert (empty = all)
   unsigned int check_interval = 10;               // steps between conversion checks
   bool damage = true;                             // bonds may break (Effects/Damage)
   std::vector<double> refine_lower, refine_upper; // box refined before the run [m]

@@ -131,9 +131,14 @@ class MechanicsSolver {
   // Dirichlet values of `time`; the solver's time becomes `time` and does not advance. `first`
   // starts a new relaxation (no previous forces for the stiffness estimate). Returns this
   // rank's sums over the free DoFs (neither Dirichlet, driven, hanging nor orphaned), from the
-  // net forces at the state before the step.
+  // net forces at the state before the step. The point history is not committed: every
+  // pseudo-step evaluates the laws from the history committed before the relaxation (one
+  // backward-Euler step over the load step, as Newton takes); committing every pseudo-step
+  // would follow the overshoot of the pseudo-dynamics into plastic flow and unloading.
   using RelaxationSums = fem::RelaxationSums;
   RelaxationSums relaxation_step(double dt, double damping, double time, bool first);
+  // Accepts the point history of the relaxed state (at equilibrium).
+  void commit_relaxation();
   // Sets every velocity to zero (the end of a relaxation).
   void clear_velocity();
 

@@ -74,10 +74,14 @@ MechanicsSolver<dim>::relaxation_step(double dt, double damping, double time, bo
   if (first)
     relax_acceleration_.clear();
   central_difference(dt, damping, time, &sums);
-  if (!states_stale_)
-    commit_history();
   update_ghosts();
   return sums;
+}
+
+template <int dim>
+void MechanicsSolver<dim>::commit_relaxation() {
+  if (!states_stale_)
+    commit_history();
 }
 
 template <int dim>
@@ -106,7 +110,10 @@ void MechanicsSolver<dim>::central_difference(double dt, double a, double bc_tim
     cache_dirichlet_dofs();
   if (!step_tables_ready_) {
     build_step_tables();
-    raw_residual_ = 0; // rows outside step_rows_ are not computed below: they stay zero
+    // The linear path computes only the rows of step_rows_ below: the others stay zero. (The
+    // assembly above wrote every row, and the reactions read them.)
+    if (linear)
+      raw_residual_ = 0;
   }
   if (linear) {
     // Only the rows the update reads: hanging and orphaned DoFs (under converted cells only)
@@ -303,6 +310,7 @@ void MechanicsSolver<dim>::build_step_tables() {
   template typename MechanicsSolver<dim>::RelaxationSums MechanicsSolver<dim>::relaxation_step(    \
       double, double, double, bool);                                                               \
   template void MechanicsSolver<dim>::clear_velocity();                                            \
+  template void MechanicsSolver<dim>::commit_relaxation();                                         \
   template void MechanicsSolver<dim>::central_difference(double, double, double, RelaxationSums*); \
   template bool MechanicsSolver<dim>::linear_explicit() const;                                     \
   template void MechanicsSolver<dim>::assemble_explicit_matrix();                                  \

@@ -3,6 +3,8 @@
 
 #include "fem/mechanics_solver.h"
 
+#include "fem/materials/j2_plasticity.h"
+
 #include "base/scoped_time.h"
 
 #include <deal.II/base/mpi.h>
@@ -132,6 +134,23 @@ double MechanicsSolver<dim>::strain_energy() const {
     if (cell->is_locally_owned() && is_active(cell)) {
       fe_values.reinit(cell);
       const auto data = quadrature_point_data(cell);
+      const auto& law = cell_material(cell);
+      if (prm_.kinematics == "small_strain" &&
+          dynamic_cast<const materials::J2Plasticity*>(&law) != nullptr) {
+        // Small-strain J2 on isotropic linear elasticity: the stored energy is ½ σ : C⁻¹ : σ =
+        // s:s/(4μ) + p²/(2K). Work minus plastic work, integrated over the load steps, is
+        // only that in the limit of small steps (a step across yield adds trapezoid work
+        // against backward-Euler dissipation).
+        const double E = law.youngs_modulus(), nu = law.poisson_ratio();
+        const double mu = E / (2.0 * (1.0 + nu)), K = E / (3.0 * (1.0 - 2.0 * nu));
+        for (unsigned int q = 0; q < quadrature_.size(); ++q) {
+          const auto& sigma = data[q].cauchy_stress;
+          const double p = dealii::trace(sigma) / 3.0;
+          const auto dev = dealii::deviator(sigma);
+          e += (dev * dev / (4.0 * mu) + p * p / (2.0 * K)) * fe_values.JxW(q);
+        }
+        continue;
+      }
       for (unsigned int q = 0; q < quadrature_.size(); ++q)
         e += (data[q].work_density - data[q].state.plastic_work) * fe_values.JxW(q);
     }

@@ -12,6 +12,7 @@
 
 #include <chrono>
 #include <csignal>
+#include <exception>
 #include <filesystem>
 #include <iostream>
 #include <omp.h>
@@ -102,14 +103,23 @@ int check_command(const SceneSource& source) {
       const auto scratch =
           std::filesystem::temp_directory_path() / ("spinesim-check-" + std::to_string(::getpid()));
       std::ostringstream quiet;
-      RunContext ctx(MPI_COMM_WORLD, scratch, OutputDirectory::Mode::fresh, Progress::Style::off,
-                     scene.prm(), effects, {}, &quiet);
-      ctx.progress().on_start([] { throw CheckReachedFirstStep{}; });
-      try {
-        scenario->run(ctx);
-      } catch (const CheckReachedFirstStep&) {
+      // A failure is rethrown once the context is gone: a TimerOutput destroyed while an
+      // exception is in flight prints a note about skipped MPI output over the error.
+      std::exception_ptr failure;
+      {
+        RunContext ctx(MPI_COMM_WORLD, scratch, OutputDirectory::Mode::fresh,
+                       Progress::Style::off, scene.prm(), effects, {}, &quiet);
+        ctx.progress().on_start([] { throw CheckReachedFirstStep{}; });
+        try {
+          scenario->run(ctx);
+        } catch (const CheckReachedFirstStep&) {
+        } catch (...) {
+          failure = std::current_exception();
+        }
+        warnings = ctx.summary().warnings();
       }
-      warnings = ctx.summary().warnings();
+      if (failure)
+        std::rethrow_exception(failure);
     }
     if (is_root()) {
       std::cout << "scene " << scene.source_name() << ": ok\n  scenario:  " << scene.scenario()

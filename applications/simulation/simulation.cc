@@ -62,6 +62,14 @@ void log_conversion(RunContext& ctx, double time, const Report& r) {
             << " particles (mass change " << r.mass_change_relative() << ", momentum change "
             << r.momentum_change_relative() << " relative; kinetic energy moved "
             << r.kinetic_after - r.kinetic_before << " J)\n";
+  if (r.reaction_before > 0 && r.reaction_after > 0)
+    ctx.log() << "    reactions at equilibrium under the same load: " << r.reaction_before
+              << " before, " << r.reaction_after << " after (relative jump "
+              << r.reaction_jump_relative() << ")\n";
+  if (r.carries_state)
+    ctx.log() << "    material state carried: integral of the equivalent plastic strain "
+              << r.plastic_strain_before << " m^3 in the cells, " << r.plastic_strain_after
+              << " m^3 in their particles\n";
 }
 } // namespace
 

@@ -143,6 +143,10 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
     s.set_figure("conversion_momentum_change_relative", c.momentum, "-");
     s.set_figure("conversion_kinetic_energy_change_relative", c.kinetic, "-");
     s.set_figure("conversion_max_velocity_scale", c.velocity_scale, "-");
+    if (c.plastic_strain >= 0)
+      s.set_figure("conversion_plastic_strain_error_relative", c.plastic_strain, "-");
+    if (c.reaction_jump >= 0)
+      s.set_figure("conversion_reaction_jump_relative", c.reaction_jump, "-");
     const auto& t = coupled_->timings();
     for (const auto& [name, value] : {std::pair<const char*, double>{"criteria", t.criteria},
                                       {"records", t.records},
@@ -210,6 +214,10 @@ typename Simulation<dim>::ConversionExtremes Simulation<dim>::conversion_extreme
       c.momentum = std::max(c.momentum, r.momentum_change_relative());
       c.kinetic = std::max(c.kinetic, r.kinetic_change_relative());
       c.velocity_scale = std::max(c.velocity_scale, r.max_velocity_scale);
+      if (r.carries_state)
+        c.plastic_strain = std::max(c.plastic_strain, r.plastic_strain_change_relative());
+      if (r.reaction_before > 0 && r.reaction_after > 0)
+        c.reaction_jump = std::max(c.reaction_jump, r.reaction_jump_relative());
     }
   return c;
 }
@@ -219,7 +227,9 @@ nlohmann::json Simulation<dim>::ConversionExtremes::to_json() const {
   return {{"mass", mass},
           {"momentum", momentum},
           {"kinetic", kinetic},
-          {"velocity_scale", velocity_scale}};
+          {"velocity_scale", velocity_scale},
+          {"plastic_strain", plastic_strain},
+          {"reaction_jump", reaction_jump}};
 }
 
 template <int dim>
@@ -228,6 +238,8 @@ void Simulation<dim>::ConversionExtremes::from_json(const nlohmann::json& j) {
   momentum = j.value("momentum", 0.0);
   kinetic = j.value("kinetic", 0.0);
   velocity_scale = j.value("velocity_scale", 1.0);
+  plastic_strain = j.value("plastic_strain", -1.0);
+  reaction_jump = j.value("reaction_jump", -1.0);
 }
 
 template struct Simulation<2>::ConversionExtremes;

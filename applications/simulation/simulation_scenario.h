@@ -100,6 +100,10 @@ class Simulation : public framework::Scenario {
   struct ConversionExtremes {
     double mass = 0, momentum = 0, kinetic = 0; // relative changes [-]
     double velocity_scale = 1;                  // largest velocity-fluctuation scale [-]
+    // Largest relative change of ∫ ε̄_p dV at a conversion and largest relative jump of the
+    // reactions across one (quasi-static); −1 = none measured (no state carried, or no
+    // conversion inside a relaxation).
+    double plastic_strain = -1, reaction_jump = -1;
     nlohmann::json to_json() const;
     void from_json(const nlohmann::json& j);
   };

@@ -1,6 +1,7 @@
 #include "meshfree/nosb/nosb_pd.h"
 
 #include "base/exceptions.h"
+#include "fem/materials/j2_plasticity.h"
 #include "meshfree/bond_based_pd.h"
 #include "meshfree/bond_loop.h"
 
@@ -181,7 +182,13 @@ void NosbPD<dim>::update_families(const ParticleSet<dim>& particles, const BondL
     o.kind = CorrespondenceFamilies<dim>::Kind::bond_associated;
     bond_families_.build(particles, bonds, o);
   }
-  log_failed(particles, newly);
+  // Driven particles without a row (coupling ghosts beyond a horizon of the free ones) have
+  // no family by design: not a failure worth a message.
+  std::vector<unsigned int> reported;
+  for (const unsigned int i : newly)
+    if (driven_.empty() || !driven_[i] || bonds.end(i) > bonds.begin(i))
+      reported.push_back(i);
+  log_failed(particles, reported);
   ++families_version_;
 }
 
@@ -561,6 +568,23 @@ double NosbPD<dim>::family_energy(unsigned int e, const ParticleSet<dim>& partic
   const double w[4] = {0.5 * wb, 0.5 * wa, 0.5 * wa, 0.5 * wb};
   const auto& fam = families();
   const auto F = fam.deformation_gradient(e, particles.displacements());
+  if (const auto* j2 = dynamic_cast<const materials::J2Plasticity*>(law_.get())) {
+    // Small-strain J2 on isotropic linear elasticity: the path integral from F = I would
+    // count the plastic strain as stored; the stored energy is ½ σ : C⁻¹ : σ = s:s/(4μ) +
+    // p²/(2K) (MechanicsSolver::strain_energy computes the same).
+    materials::Tensor2 F3 = dealii::unit_symmetric_tensor<3>();
+    for (unsigned int r = 0; r < dim; ++r)
+      for (unsigned int c = 0; c < dim; ++c)
+        F3[r][c] = F[r][c];
+    const double dT = particles.temperature(fam.centre(e)) - reference_temperature_;
+    const auto sigma = dealii::symmetrize(
+        law_->finite_strain(F3, dT, committed_[fam.history_index(e)]).first_piola);
+    const double E = j2->youngs_modulus(), nu = j2->poisson_ratio();
+    const double mu = E / (2.0 * (1.0 + nu)), K = E / (3.0 * (1.0 - 2.0 * nu));
+    const double p = dealii::trace(sigma) / 3.0;
+    const auto dev = dealii::deviator(sigma);
+    return fam.weight(e) * (dev * dev / (4.0 * mu) + p * p / (2.0 * K));
+  }
   const dealii::Tensor<2, dim> H = F - dealii::Tensor<2, dim>(dealii::unit_symmetric_tensor<dim>());
   double W = 0;
   for (unsigned int q = 0; q < 4; ++q) {

@@ -1,7 +1,9 @@
 // The coupling's checkpoint (FemParticleCoupling::save/load): a coupled state after a few
 // explicit steps, saved and loaded into a fresh coupling on the same FEM state, gives back the
 // same particles bit for bit (positions, volumes, displacements, velocities, free flags) and
-// the same totals, in 2-D and 3-D (and on 2 ranks when run under mpiexec).
+// the same totals, in 2-D and 3-D (and on 2 ranks when run under mpiexec). With NOSB-PD
+// particles of a J2 material past yield, the material history comes back too (the same
+// equivalent plastic strains and stored energy).
 #include "coupling/fem_particle_coupling.h"
 #include "fem/materials/law_parameters.h"
 #include "fem/mechanics_solver.h"
@@ -13,6 +15,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -20,7 +23,7 @@ namespace spinesim::coupling {
 namespace {
 
 template <int dim>
-void checkpoint_round_trip() {
+void checkpoint_round_trip(const std::string& method) {
   const MPI_Comm comm = MPI_COMM_WORLD;
   fem::MeshParameters mesh;
   mesh.origin = {0, 0, 0};
@@ -32,15 +35,27 @@ void checkpoint_round_trip() {
   mech.time_integration = "explicit";
   fem::MechanicsSolver<dim> solver(tria, mech);
   materials::LawParameters law;
-  law.poisson_ratio = 0.25;
+  law.poisson_ratio = 0.25; // bond-based PD's, in 3-D and plane strain
+  if (method == "nosb") {
+    // Yield at a strain of 6e-5: the imposed field below (1e-4 to 3e-4) is plastic.
+    law.model = "j2_plasticity";
+    law.yield_stress = 1e6;
+    law.hardening_modulus = 1e8;
+  }
   solver.set_material(0, materials::create_law(law));
   solver.setup();
 
   dealii::ParameterHandler prm;
   meshfree::declare_particle_method_sections(prm);
+  prm.enter_subsection("Bond based");
+  prm.set("Plane model", "plane_strain"); // the FEM's
+  prm.leave_subsection();
+  prm.enter_subsection("NOSB");
+  prm.set("Horizon ratio", "2.015"); // small families keep the 3-D case quick
+  prm.leave_subsection();
   typename FemParticleCoupling<dim>::Parameters cp;
-  cp.particles_method = "bond_based";
-  cp.make_method = meshfree::particle_method_maker<dim>("bond_based", prm, "test");
+  cp.particles_method = method;
+  cp.make_method = meshfree::particle_method_maker<dim>(method, prm, "test");
   cp.region_lower = std::vector<double>(dim, 0.25);
   cp.region_upper = std::vector<double>(dim, 0.75);
 
@@ -83,13 +98,29 @@ void checkpoint_round_trip() {
   EXPECT_DOUBLE_EQ(b.total_mass(), a.total_mass());
   EXPECT_DOUBLE_EQ(b.kinetic_energy(), a.kinetic_energy());
   EXPECT_DOUBLE_EQ(b.strain_energy(), a.strain_energy());
+  const auto ea = a.equivalent_plastic_strains(), eb = b.equivalent_plastic_strains();
+  ASSERT_EQ(ea.size(), eb.size());
+  double largest = 0;
+  for (unsigned int i = 0; i < ea.size(); ++i) {
+    ASSERT_EQ(eb[i], ea[i]) << i;
+    largest = std::max(largest, ea[i]);
+  }
+  if (method == "nosb") {
+    EXPECT_GT(largest, 0.0); // the test has history to restore
+  }
 }
 
 TEST(CouplingCheckpoint, RoundTrip2D) {
-  checkpoint_round_trip<2>();
+  checkpoint_round_trip<2>("bond_based");
 }
 TEST(CouplingCheckpoint, RoundTrip3D) {
-  checkpoint_round_trip<3>();
+  checkpoint_round_trip<3>("bond_based");
+}
+TEST(CouplingCheckpoint, NosbHistoryRoundTrip2D) {
+  checkpoint_round_trip<2>("nosb");
+}
+TEST(CouplingCheckpoint, NosbHistoryRoundTrip3D) {
+  checkpoint_round_trip<3>("nosb");
 }
 
 } // namespace

@@ -129,3 +129,21 @@ spinesim_add_hostile_test(warn_single_particle EXIT 0
 spinesim_add_hostile_test(include_device ARGS check ${_h}/include_device.prm
   MATCH "include_device.prm:3.*cannot include /dev/zero")
 spinesim_add_hostile_test(scene_is_a_device ARGS check /dev/zero MATCH "/dev/zero.*not a scene file")
+
+# Bond-based PD represents one Poisson ratio per dimension and plane model (pairwise central
+# forces, the Cauchy relation): a scene with another one is refused with both values and the
+# way out, unless it accepts the mismatch; then the log states the shear-modulus error.
+spinesim_add_hostile_test(bond_based_poisson_mismatch
+  ARGS check ${PROJECT_SOURCE_DIR}/applications/scenes/cracked_plate_coupled.prm
+       --set "Material/Poisson ratio=0.3"
+  MATCH "Material/Poisson ratio.*= 0.300000, but bond-based PD represents nu = 0.333333 in plane stress.*off by -7.14 %.*Particles method = nosb")
+spinesim_add_hostile_test(bond_based_poisson_mismatch_accepted EXIT 0
+  ARGS run ${PROJECT_SOURCE_DIR}/applications/scenes/default.prm --output @KEEP@ --progress off
+       --set "Material/Poisson ratio=0.3" --set "Simulation/Steps=1"
+       --set "Simulation/End time=1e-7" --set "Coupling/Bond based/Accept Poisson ratio mismatch=true"
+  MATCH "nu = 0.300000 \\(accepted\\): the particles' shear modulus is off by -7.14 %")
+# Particles and FEM in different 2-D plane models.
+spinesim_add_hostile_test(particle_plane_model_mismatch
+  ARGS check ${PROJECT_SOURCE_DIR}/applications/scenes/default.prm
+       --set "Mechanics/Plane stress=false"
+  MATCH "Mechanics/Plane stress.*particles \\(bond_based\\) are plane stress but the FEM is plane strain")
