@@ -110,6 +110,7 @@ void CrackPath<dim>::add_figures(framework::Summary& s,
                                  const std::vector<dealii::Point<dim>>& positions,
                                  const std::vector<double>& damage,
                                  const std::vector<std::uint8_t>& counted) const {
+  add_direction_figures(s, positions, damage, counted);
   if (along_ < 0)
     return;
   double lo = 0, hi = 0, path_sq = 0;
@@ -127,6 +128,54 @@ void CrackPath<dim>::add_figures(framework::Summary& s,
   s.set_figure("crack_extent_min_" + a + "_m", lo, "m");
   s.set_figure("crack_extent_max_" + a + "_m", hi, "m");
   s.set_figure("crack_path_rms_" + c + "_m", n ? std::sqrt(path_sq / n) : 0.0, "m");
+}
+
+template <int dim>
+void CrackPath<dim>::add_direction_figures(framework::Summary& s,
+                                           const std::vector<dealii::Point<dim>>& positions,
+                                           const std::vector<double>& damage,
+                                           const std::vector<std::uint8_t>& counted) const {
+  // The principal axis of the cracked particles (largest eigenvalue of their covariance in
+  // the x-y plane): a straight crack's direction whatever it is; the tips are the extreme
+  // cracked particles along it.
+  std::vector<dealii::Point<dim>> cracked;
+  for (unsigned int i = 0; i < positions.size(); ++i)
+    if (counted[i] && damage[i] >= prm_.damage_threshold)
+      cracked.push_back(positions[i]);
+  s.set_figure("crack_particles", double(cracked.size()), "-");
+  if (cracked.size() < 2)
+    return;
+  dealii::Point<dim> mean;
+  for (const auto& p : cracked)
+    mean += p / double(cracked.size());
+  double sxx = 0, syy = 0, sxy = 0;
+  for (const auto& p : cracked) {
+    sxx += (p[0] - mean[0]) * (p[0] - mean[0]);
+    syy += (p[1] - mean[1]) * (p[1] - mean[1]);
+    sxy += (p[0] - mean[0]) * (p[1] - mean[1]);
+  }
+  // Major axis of the 2 x 2 covariance: angle ½ atan2(2 sxy, sxx − syy) from the x axis.
+  double angle = 0.5 * std::atan2(2.0 * sxy, sxx - syy);
+  const double cx = std::cos(angle), cy = std::sin(angle);
+  double lo = 0, hi = 0;
+  dealii::Point<dim> tip_lo = cracked[0], tip_hi = cracked[0];
+  for (unsigned int k = 0; k < cracked.size(); ++k) {
+    const double t = (cracked[k][0] - mean[0]) * cx + (cracked[k][1] - mean[1]) * cy;
+    if (k == 0 || t < lo) {
+      lo = t;
+      tip_lo = cracked[k];
+    }
+    if (k == 0 || t > hi) {
+      hi = t;
+      tip_hi = cracked[k];
+    }
+  }
+  s.set_figure("crack_angle_deg", angle * 180.0 / M_PI, "degree");
+  s.set_figure("crack_length_m", hi - lo, "m");
+  for (unsigned int d = 0; d < dim; ++d) {
+    s.set_figure(std::string("crack_tip_1_") + axes[d] + "_m", tip_lo[d], "m");
+    s.set_figure(std::string("crack_tip_2_") + axes[d] + "_m", tip_hi[d], "m");
+  }
 }
 
 template <int dim>

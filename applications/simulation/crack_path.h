@@ -6,7 +6,8 @@
 // reference position, its damage and the time it first reached the threshold (at history
 // resolution). A scene whose crack should follow a known line asks for figures along it with
 // `Crack line` (e.g. "x, y = 0": the extent along x and the RMS deviation from y = 0);
-// nothing in the scenario knows any particular scene.
+// nothing in the scenario knows any particular scene. Every run with cracked particles gets the
+// direction-free figures of add_direction_figures().
 
 #include <deal.II/base/mpi.h>
 #include <deal.II/base/parameter_handler.h>
@@ -52,6 +53,13 @@ class CrackPath {
   void add_figures(framework::Summary& summary, const std::vector<dealii::Point<dim>>& positions,
                    const std::vector<double>& damage,
                    const std::vector<std::uint8_t>& counted) const;
+  // Whatever the crack's direction: crack_particles, and for two or more cracked particles
+  // crack_angle_deg (principal axis of the cracked particles in the x-y plane, from the x
+  // axis, in (−90, 90]), crack_length_m along it and the tips crack_tip_{1,2}_<axis>_m.
+  void add_direction_figures(framework::Summary& summary,
+                             const std::vector<dealii::Point<dim>>& positions,
+                             const std::vector<double>& damage,
+                             const std::vector<std::uint8_t>& counted) const;
   // Failure times of every rank (collective), for checkpoints; from_json takes them all.
   nlohmann::json to_json(MPI_Comm comm) const;
   void from_json(const nlohmann::json& j);
