@@ -29,7 +29,13 @@ double CoupledIntegrator<dim>::stable_time_step() const {
 }
 
 template <int dim>
+bool CoupledIntegrator<dim>::bonds_broke_in_last_step() const {
+  return Utilities::MPI::logical_or(broken_last_step_ > 0, state_.fem.mpi_communicator());
+}
+
+template <int dim>
 void CoupledIntegrator<dim>::step(double dt) {
+  broken_last_step_ = 0;
   advance(dt, state_.fem.parameters().mass_damping, time_ + dt, false, nullptr);
   time_ += dt;
 }
@@ -48,8 +54,8 @@ void CoupledIntegrator<dim>::advance(double dt, double a, double load_time, bool
     // With heat, bonds breaking in this force pass release their energy (at the state of t_n)
     // into their particle's heat account.
     fracture_.before_forces();
-    fracture_.after_forces(
-        state_.method->compute_forces(particles, state_.bonds, state_.prm.damage));
+    broken_last_step_ = state_.method->compute_forces(particles, state_.bonds, state_.prm.damage);
+    fracture_.after_forces(broken_last_step_);
     // Explicit steps commit the material history every step, as the FEM does; a relaxation
     // commits both models once, at equilibrium (relax()), so the pseudo-dynamics leave no
     // plastic trace (MechanicsSolver::relaxation_step).

@@ -39,6 +39,9 @@ class CoupledIntegrator {
   double stable_time_step() const; // min(FEM CFL step, PD step) [s]
   // One central-difference step of both models (see advance()).
   void step(double dt);
+  // Whether any bond broke on any rank in the last step (collective). Breaking can stiffen a
+  // NOSB family (a smaller shape tensor, larger gradients): the caller renews the stable step.
+  bool bonds_broke_in_last_step() const;
   // Adaptive dynamic relaxation to equilibrium under the loads of `time`; with
   // `with_conversion`, the cells flagged at equilibrium convert and the state relaxes again.
   // Ends with zero velocities.
@@ -62,6 +65,7 @@ class CoupledIntegrator {
   FractureHeat<dim>& fracture_;
   CellConverter<dim>& converter_;
   double time_ = 0;
+  std::size_t broken_last_step_ = 0; // bond ends broken by this rank in the last step
   // Net accelerations of the free particle components at the last relaxation step [m/s²].
   std::vector<double> relax_acceleration_;
 };

@@ -93,6 +93,8 @@ class FemParticleCoupling {
   double stable_time_step() const; // min(FEM CFL step, PD step) [s]
   // One central-difference step of both models (see CoupledIntegrator::advance).
   void step(double dt);
+  // Whether bonds broke anywhere in the last step (collective; see CoupledIntegrator).
+  bool bonds_broke_in_last_step() const { return integrator_.bonds_broke_in_last_step(); }
 
   // Quasi-static: adaptive dynamic relaxation of both models to equilibrium under the loads of
   // `time` (see CoupledIntegrator::relax); bonds break on the way and, with `with_conversion`,

@@ -66,7 +66,7 @@ void log_conversion(RunContext& ctx, double time, const Report& r) {
     ctx.log() << "    reactions at equilibrium under the same load: " << r.reaction_before
               << " before, " << r.reaction_after << " after (relative jump "
               << r.reaction_jump_relative() << ")\n";
-  if (r.carries_state)
+  if (r.carries_state && r.plastic_strain_before > 0)
     ctx.log() << "    material state carried: integral of the equivalent plastic strain "
               << r.plastic_strain_before << " m^3 in the cells, " << r.plastic_strain_after
               << " m^3 in their particles\n";
@@ -336,6 +336,10 @@ void Simulation<dim>::coupled_explicit(unsigned int, double time, double, RunCon
     coupled_->step(std::min(coupled_dt_, time - t));
     t = mechanics_->time();
     ++explicit_steps_;
+    // A broken bond can stiffen a NOSB family (its shape tensor shrinks): the step may only
+    // get smaller (for bond-based PD the bound never falls, so nothing changes there).
+    if (coupled_->bonds_broke_in_last_step())
+      coupled_dt_ = std::min(coupled_dt_, coupled_->stable_time_step());
     // The peak load is tracked every step, not only at history rows.
     if (sim_.reaction_boundary_id >= 0)
       peak_load_ = std::max(peak_load_, coupled_->reaction_force(sim_.reaction_boundary_id).norm());
