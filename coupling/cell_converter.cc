@@ -130,7 +130,8 @@ std::vector<CellId> CellConverter<dim>::flagged_cells() const {
     std::vector<bool> candidate(state_.fem.dof_handler().get_triangulation().n_active_cells(),
                                 false);
     for (const auto& cell : state_.lattice_cells)
-      candidate[cell->active_cell_index()] = state_.fem.is_active(cell) && in_conversion_region(cell);
+      candidate[cell->active_cell_index()] =
+          state_.fem.is_active(cell) && in_conversion_region(cell);
     fem::CellIndicators<dim> indicators;
     indicators.compute(state_.fem, state_.prm.plastic_strain_threshold > 0, candidate,
                        state_.prm.min_jacobian_ratio > 0 || state_.prm.min_time_step > 0);
@@ -395,8 +396,8 @@ ConversionReport<dim> CellConverter<dim>::convert(const std::vector<CellId>& cel
     double integral = 0; // what the particles' families hold now (owners count)
     for (const unsigned int i : batch_particles)
       if (state_.is_owned(i))
-        integral += state_.particles.volume(i) *
-                    state_.method->particle_state(i).equivalent_plastic_strain;
+        integral +=
+            state_.particles.volume(i) * state_.method->particle_state(i).equivalent_plastic_strain;
     report.plastic_strain_after = Utilities::MPI::sum(integral, comm);
   }
   report.max_velocity_scale =

@@ -99,8 +99,8 @@ void CouplingCheckpoint<dim>::save(const std::string& file) const {
   // the material history of the particle method.
   out << "spinesim_coupling 3\n"
       << p_.integrator.time() << " " << particles.size() << " " << p_.converter.converted().size()
-      << " " << broken.size() << " " << dissipation << " " << p_.fracture.heat() << " "
-      << n_history << "\n";
+      << " " << broken.size() << " " << dissipation << " " << p_.fracture.heat() << " " << n_history
+      << "\n";
   for (const auto& [id, batch] : p_.converter.converted())
     out << id << " " << batch << "\n";
   for (unsigned int i = 0; i < particles.size(); ++i) {

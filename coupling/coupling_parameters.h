@@ -20,16 +20,16 @@ struct CouplingParameters {
   double interface_radius = 2.5;            // MLS support of interface nodes [spacings]
   double time_step_safety = 0.8;            // PD stable step factor [-]
   bool all_particles = false;
-  std::vector<double> region_lower, region_upper; // particles from t = 0 (empty = none)
-  double principal_strain_threshold = 0;          // [-], 0 = off
-  double plastic_strain_threshold = 0;            // [-], 0 = off
-  double min_jacobian_ratio = 0;                  // [-], 0 = off
-  double min_time_step = 0;                       // [s], 0 = off
-  double buffer = 0;                              // converted around flagged cells [m]
+  std::vector<double> region_lower, region_upper;   // particles from t = 0 (empty = none)
+  double principal_strain_threshold = 0;            // [-], 0 = off
+  double plastic_strain_threshold = 0;              // [-], 0 = off
+  double min_jacobian_ratio = 0;                    // [-], 0 = off
+  double min_time_step = 0;                         // [s], 0 = off
+  double buffer = 0;                                // converted around flagged cells [m]
   std::vector<double> convert_lower, convert_upper; // cells the criteria may convert (empty = all)
-  unsigned int check_interval = 10;               // steps between conversion checks
-  bool damage = true;                             // bonds may break (Effects/Damage)
-  std::vector<double> refine_lower, refine_upper; // box refined before the run [m]
+  unsigned int check_interval = 10;                 // steps between conversion checks
+  bool damage = true;                               // bonds may break (Effects/Damage)
+  std::vector<double> refine_lower, refine_upper;   // box refined before the run [m]
   unsigned int region_refinements = 0;
   double fracture_heat_fraction = 1.0; // share of broken-bond energy returned as heat [-]
   bool conserve_kinetic_energy = true; // scale the velocity fluctuation at conversion

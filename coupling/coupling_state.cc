@@ -117,9 +117,9 @@ void CouplingState<dim>::prepare() {
   for (auto& m : method->take_messages())
     messages.push_back(std::move(m));
   const std::string section =
-      "Coupling/" +
-      meshfree::ParticleMethods::instance().get(prm.particles_method, "Effects/Particles method")
-          .section;
+      "Coupling/" + meshfree::ParticleMethods::instance()
+                        .get(prm.particles_method, "Effects/Particles method")
+                        .section;
   if (dim == 2 && method->plane_stress() != fem.parameters().plane_stress)
     throw InvalidInput(method->plane_stress() ? "Mechanics/Plane stress" : section,
                        std::string("the particles (") + prm.particles_method + ") are plane " +
@@ -132,12 +132,12 @@ void CouplingState<dim>::prepare() {
                            : "Mechanics/Plane stress = false (" + prm.particles_method +
                                  " is plane strain in 2-D)");
   if (!method->carries_material_state() && law->name() != "linear_elastic")
-    messages.push_back(prm.particles_method + " particles carry no constitutive state: the "
+    messages.push_back(prm.particles_method +
+                       " particles carry no constitutive state: the "
                        "plastic strain and hardening of converted cells end at conversion (" +
                        law->name() + " in the FEM); nosb or spg continue them");
   if (dim == 2 && method->thickness() != 1.0)
-    throw InvalidInput(section + "/Thickness",
-                       "2-D FEM works per unit thickness",
+    throw InvalidInput(section + "/Thickness", "2-D FEM works per unit thickness",
                        "1 (results are per metre of thickness) [m]");
 }
 

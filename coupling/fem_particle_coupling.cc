@@ -253,9 +253,8 @@ std::string FemParticleCoupling<dim>::write_output(const std::string& directory,
   if (Utilities::MPI::this_mpi_process(state_.fem.mpi_communicator()) != 0)
     return name;
   meshfree::ParticleSet<dim> out(particles.thickness());
-  std::vector<double>* eps = state_.carries_state()
-                                 ? &out.add_scalar_field("equivalent_plastic_strain")
-                                 : nullptr;
+  std::vector<double>* eps =
+      state_.carries_state() ? &out.add_scalar_field("equivalent_plastic_strain") : nullptr;
   for (unsigned int i = 0; i < particles.size(); ++i)
     if (state_.free[i]) {
       const unsigned int k = out.add_particle(particles.reference_position(i), particles.volume(i));

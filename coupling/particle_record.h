@@ -36,8 +36,8 @@ struct ParticleRecord {
     ar& cell& point& free& fixed_slots& volume& density& temperature& position& displacement&
         velocity& has_state;
     if (has_state)
-      ar& state.plastic_strain& state.elastic_left_cauchy_green& state.equivalent_plastic_strain&
-          state.plastic_work;
+      ar& state.plastic_strain& state.elastic_left_cauchy_green& state
+          .equivalent_plastic_strain& state.plastic_work;
   }
 
   bool operator==(const ParticleRecord& o) const {

@@ -23,14 +23,13 @@ BondBasedMethod<dim>::BondBasedMethod(const Parameters& parameters,
   std::ostringstream error;
   error << std::setprecision(3) << 100.0 * shear_modulus_error(model, nu);
   if (!parameters.accept_poisson_mismatch)
-    throw InvalidInput("Material/Poisson ratio",
-                       "= " + std::to_string(nu) + ", but bond-based PD represents nu = " +
-                           std::to_string(implied) + " in " + where +
-                           " (pairwise central forces); the shear modulus would be off by " +
-                           error.str() + " %",
-                       "Effects/Particles method = nosb (any Poisson ratio), nu = " +
-                           std::to_string(implied) +
-                           ", or Bond based/Accept Poisson ratio mismatch = true");
+    throw InvalidInput(
+        "Material/Poisson ratio",
+        "= " + std::to_string(nu) +
+            ", but bond-based PD represents nu = " + std::to_string(implied) + " in " + where +
+            " (pairwise central forces); the shear modulus would be off by " + error.str() + " %",
+        "Effects/Particles method = nosb (any Poisson ratio), nu = " + std::to_string(implied) +
+            ", or Bond based/Accept Poisson ratio mismatch = true");
   messages_.push_back("bond-based PD represents nu = " + std::to_string(implied) + " in " + where +
                       ", the material has nu = " + std::to_string(nu) +
                       " (accepted): the particles' shear modulus is off by " + error.str() +

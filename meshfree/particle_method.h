@@ -25,9 +25,9 @@
 
 #include <deal.II/base/parameter_handler.h>
 
+#include <cstdint>
 #include <functional>
 #include <iosfwd>
-#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>

@@ -107,8 +107,8 @@ int check_command(const SceneSource& source) {
       // exception is in flight prints a note about skipped MPI output over the error.
       std::exception_ptr failure;
       {
-        RunContext ctx(MPI_COMM_WORLD, scratch, OutputDirectory::Mode::fresh,
-                       Progress::Style::off, scene.prm(), effects, {}, &quiet);
+        RunContext ctx(MPI_COMM_WORLD, scratch, OutputDirectory::Mode::fresh, Progress::Style::off,
+                       scene.prm(), effects, {}, &quiet);
         ctx.progress().on_start([] { throw CheckReachedFirstStep{}; });
         try {
           scenario->run(ctx);
