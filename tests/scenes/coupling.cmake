@@ -180,7 +180,7 @@ spinesim_add_comparison_test(benchmark.cracked_plate_speedup_2_threads
 # NOSB-PD particles in the same patch test (plane strain, nu = 0.3: any Poisson ratio). Ghosts
 # within a horizon of the free particles carry families too, whose forces reach the free
 # ones; on an affine field every family has the same F and P, so all of it cancels to
-# round-off: 2.4e-15 (2-D), 1.4e-16 (3-D) measured, bound 1e-8 as above. The quasi-static
+# round-off: 2.4e-15 (2-D), 2.7e-15 (2 ranks), 1.2e-15 (3-D) measured, bound 1e-8 as above. The quasi-static
 # and drift bounds are those of bond-based PD (measured 1.3e-9 to 1.6e-9 and 2e-14 to 5e-14).
 set(_nosb "Effects/Particles method=nosb" "Mechanics/Plane stress=false" "Material/Poisson ratio=0.3")
 spinesim_add_scene_test(coupling.patch_test_nosb_2d SCENE ${_val}/coupling_patch_test.prm
