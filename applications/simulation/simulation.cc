@@ -32,6 +32,10 @@ void SimulationParameters::declare(dealii::ParameterHandler& prm) {
   prm.declare_entry("Write VTU", "true", Bool(), "Write field output for ParaView [-].");
   prm.declare_entry("Reaction boundary id", "-1", Integer(-1),
                     "Boundary id whose reaction force is recorded; -1 = none [-].");
+  prm.declare_entry("Critical load estimate", "0", Double(0),
+                    "A closed-form critical load to hold the peak load against (e.g. the "
+                    "Griffith-Irwin load of a cracked plate): summary.json then has "
+                    "griffith_ratio = peak_load_N / this; 0 = none [N, N/m in 2-D].");
   prm.declare_entry("Reference temperature", "310.15", Double(0),
                     "Stress-free temperature for thermal expansion [K].");
   prm.declare_entry("Stop after step", "0", Integer(0),
@@ -47,6 +51,7 @@ void SimulationParameters::parse(const dealii::ParameterHandler& prm) {
   checkpoint_interval = prm.get_integer("Checkpoint interval");
   write_vtu = prm.get_bool("Write VTU");
   reaction_boundary_id = prm.get_integer("Reaction boundary id");
+  critical_load_estimate = prm.get_double("Critical load estimate");
   reference_temperature = prm.get_double("Reference temperature");
   stop_after_step = prm.get_integer("Stop after step");
   crack.parse(prm);

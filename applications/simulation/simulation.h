@@ -23,6 +23,7 @@ struct SimulationParameters {
   unsigned int checkpoint_interval = 0; // [steps], 0 = last step only
   bool write_vtu = true;
   int reaction_boundary_id = -1;         // boundary whose reaction force is reported
+  double critical_load_estimate = 0;     // [N, N/m in 2-D], 0 = none (griffith_ratio)
   double reference_temperature = 310.15; // [K] stress-free temperature
   unsigned int stop_after_step = 0;      // end early after this step (0 = never): staged runs
   CrackOutputParameters crack;           // crack_path.csv and crack-line figures

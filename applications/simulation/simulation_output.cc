@@ -132,6 +132,8 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
   if (coupled_) {
     const char* force_unit = dim == 2 ? "N/m" : "N";
     s.set_figure("peak_load_N", peak_load_, force_unit);
+    if (sim_.critical_load_estimate > 0)
+      s.set_figure("griffith_ratio", peak_load_ / sim_.critical_load_estimate, "-");
     s.set_figure("free_particles", coupled_->n_free_particles(), "-");
     s.set_figure("ghost_particles", coupled_->n_ghost_particles(), "-");
     s.set_figure("converted_cells", coupled_->n_converted_cells(), "-");

@@ -496,8 +496,6 @@ std::vector<double> NosbPD<dim>::stiffness_row_sums(const ParticleSet<dim>& part
 template <int dim>
 std::vector<double> NosbPD<dim>::stiffness_row_bound(const ParticleSet<dim>& particles,
                                                      const BondList<dim>& bonds) {
-  if (prm_.stabilization == Stabilization::penalty && prm_.stabilization_coefficient > 0)
-    return stiffness_row_sums(particles, bonds);
   const auto& fam = families();
   const auto& u = particles.displacements();
   const long n_fam = fam.n_families();
@@ -530,6 +528,32 @@ std::vector<double> NosbPD<dim>::stiffness_row_bound(const ParticleSet<dim>& par
   for (unsigned int i = 0; i < R.size(); ++i)
     for (unsigned int a = 0; a < dim; ++a)
       R[i] = std::max(R[i], rows[i][a]);
+  if (prm_.stabilization == Stabilization::penalty && prm_.stabilization_coefficient > 0) {
+    // The penalty force of row i, κ V_i V_j (2η − (F_i − I)ξ − (F_j − I)ξ) per bond, depends
+    // on u_i, u_j (2κVV each) and on the nodes q of the particle families of i and j through
+    // (G_q · ξ) u_q: its row sum is at most Σ_j κ V_i V_j (4 + |ξ| (Σ_q∈i |G_q| + Σ_q∈j |G_q|)).
+    const auto& pfam = particle_families_;
+    std::vector<double> gsum(particles.size(), 0.0); // Σ_q |G_q| of each particle family
+    for (unsigned int e = 0; e < pfam.n_families(); ++e)
+      for (std::size_t q = pfam.begin(e); q < pfam.end(e); ++q)
+        gsum[pfam.centre(e)] += pfam.gradient(q).norm();
+    const auto& V = particles.volumes();
+    const double Gc = prm_.stabilization_coefficient * c_;
+    for (unsigned int i = 0; i < particles.size(); ++i) {
+      if (failed(i))
+        continue;
+      double r = 0;
+      for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
+        const unsigned int j = bonds.neighbor[k];
+        if (bonds.broken[k] || failed(j))
+          continue;
+        const double kappa =
+            0.5 * Gc * bonds.influence[k] * bonds.volume_factor(k) / bonds.length[k];
+        r += kappa * V[i] * V[j] * (4.0 + bonds.length[k] * (gsum[i] + gsum[j]));
+      }
+      R[i] += r;
+    }
+  }
   return R;
 }
 

@@ -123,7 +123,7 @@ class NosbPD {
   // w_e A_e(G_m, G_p) bounded by the triangle inequality, Σ_p Σ_b |K_(m,a),(p,b)| ≤
   // w_e Σ_J |G_m,J| Σ_b Σ_L |A_aJbL| Σ_p |G_p,L|, summed over the families. O(family size) a
   // family instead of its square; the Gershgorin step from it is never larger than from R_i.
-  // The penalty stabilisation has no family form: with it this is stiffness_row_sums().
+  // The penalty stabilisation adds a bound of its own row sums (see the definition).
   std::vector<double> stiffness_row_bound(const ParticleSet<dim>& particles,
                                           const BondList<dim>& bonds);
   // For AdaptiveDynamicRelaxation::solve: S_i with ½√dim S_i = ¼ R_i/V_i·safety (its fictitious
