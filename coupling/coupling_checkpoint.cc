@@ -1,6 +1,7 @@
 #include "coupling/coupling_checkpoint.h"
 
 #include "base/exceptions.h"
+#include "fem/materials/material_state_io.h"
 
 #include <deal.II/base/mpi.h>
 
@@ -21,36 +22,9 @@ namespace spinesim::coupling {
 using namespace dealii;
 
 namespace {
-// A material state as 14 numbers: ε_p (6), b^e (6), ε̄_p, w_p.
-constexpr unsigned int state_doubles = 14;
-
-std::array<double, state_doubles> pack_state(const materials::MaterialState& s) {
-  std::array<double, state_doubles> v{};
-  unsigned int n = 0;
-  for (unsigned int a = 0; a < 3; ++a)
-    for (unsigned int b = a; b < 3; ++b) {
-      v[n] = s.plastic_strain[a][b];
-      v[n + 6] = s.elastic_left_cauchy_green[a][b];
-      ++n;
-    }
-  v[12] = s.equivalent_plastic_strain;
-  v[13] = s.plastic_work;
-  return v;
-}
-
-materials::MaterialState unpack_state(const std::array<double, state_doubles>& v) {
-  materials::MaterialState s;
-  unsigned int n = 0;
-  for (unsigned int a = 0; a < 3; ++a)
-    for (unsigned int b = a; b < 3; ++b) {
-      s.plastic_strain[a][b] = v[n];
-      s.elastic_left_cauchy_green[a][b] = v[n + 6];
-      ++n;
-    }
-  s.equivalent_plastic_strain = v[12];
-  s.plastic_work = v[13];
-  return s;
-}
+constexpr unsigned int state_doubles = materials::material_state_doubles;
+using materials::pack_state;
+using materials::unpack_state;
 } // namespace
 
 template <int dim>

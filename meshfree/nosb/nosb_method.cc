@@ -1,7 +1,9 @@
 #include "meshfree/nosb/nosb_method.h"
 
 #include "base/exceptions.h"
+#include "fem/materials/material_state_io.h"
 
+#include <array>
 #include <cmath>
 #include <istream>
 #include <limits>
@@ -10,37 +12,15 @@
 namespace spinesim::meshfree {
 
 namespace {
-// A material state as 14 doubles: ε_p (6), b^e (6), ε̄_p, w_p.
-constexpr unsigned int state_size = 14;
-
 void write_state(std::ostream& out, const materials::MaterialState& s) {
-  double v[state_size];
-  unsigned int n = 0;
-  for (unsigned int a = 0; a < 3; ++a)
-    for (unsigned int b = a; b < 3; ++b) {
-      v[n] = s.plastic_strain[a][b];
-      v[n + 6] = s.elastic_left_cauchy_green[a][b];
-      ++n;
-    }
-  v[12] = s.equivalent_plastic_strain;
-  v[13] = s.plastic_work;
-  out.write(reinterpret_cast<const char*>(v), sizeof(v));
+  const auto v = materials::pack_state(s);
+  out.write(reinterpret_cast<const char*>(v.data()), sizeof(double) * v.size());
 }
 
 materials::MaterialState read_state(std::istream& in) {
-  double v[state_size];
-  in.read(reinterpret_cast<char*>(v), sizeof(v));
-  materials::MaterialState s;
-  unsigned int n = 0;
-  for (unsigned int a = 0; a < 3; ++a)
-    for (unsigned int b = a; b < 3; ++b) {
-      s.plastic_strain[a][b] = v[n];
-      s.elastic_left_cauchy_green[a][b] = v[n + 6];
-      ++n;
-    }
-  s.equivalent_plastic_strain = v[12];
-  s.plastic_work = v[13];
-  return s;
+  std::array<double, materials::material_state_doubles> v{};
+  in.read(reinterpret_cast<char*>(v.data()), sizeof(double) * v.size());
+  return materials::unpack_state(v);
 }
 } // namespace
 

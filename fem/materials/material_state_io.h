@@ -1,0 +1,45 @@
+#ifndef SPINESIM_FEM_MATERIALS_MATERIAL_STATE_IO_H
+#define SPINESIM_FEM_MATERIALS_MATERIAL_STATE_IO_H
+
+// A material state as a flat array of numbers, for checkpoints and exchange between ranks:
+// plastic strain ε_p (6, upper triangle), elastic left Cauchy-Green b^e (6), ε̄_p, w_p.
+
+#include "fem/materials/constitutive_law.h"
+
+#include <array>
+
+namespace spinesim::materials {
+
+constexpr unsigned int material_state_doubles = 14;
+
+inline std::array<double, material_state_doubles> pack_state(const MaterialState& s) {
+  std::array<double, material_state_doubles> v{};
+  unsigned int n = 0;
+  for (unsigned int a = 0; a < 3; ++a)
+    for (unsigned int b = a; b < 3; ++b) {
+      v[n] = s.plastic_strain[a][b];
+      v[n + 6] = s.elastic_left_cauchy_green[a][b];
+      ++n;
+    }
+  v[12] = s.equivalent_plastic_strain;
+  v[13] = s.plastic_work;
+  return v;
+}
+
+inline MaterialState unpack_state(const std::array<double, material_state_doubles>& v) {
+  MaterialState s;
+  unsigned int n = 0;
+  for (unsigned int a = 0; a < 3; ++a)
+    for (unsigned int b = a; b < 3; ++b) {
+      s.plastic_strain[a][b] = v[n];
+      s.elastic_left_cauchy_green[a][b] = v[n + 6];
+      ++n;
+    }
+  s.equivalent_plastic_strain = v[12];
+  s.plastic_work = v[13];
+  return s;
+}
+
+} // namespace spinesim::materials
+
+#endif
