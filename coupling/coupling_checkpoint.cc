@@ -46,20 +46,17 @@ void CouplingCheckpoint<dim>::save(const std::string& file) const {
       all.insert(all.end(), part.begin(), part.end());
     broken = std::move(all);
   }
-  // The method's material history of the families centred on the particles each rank owns
-  // (ghost families included: they continue the FEM's history), as flat rows.
+  // The method's material history of every family a rank holds: its own particles' and the
+  // partner rows it keeps (a ghost's row may live only on a rank that does not own it). Two
+  // ranks holding the same family hold the same state, so the duplicates agree.
   std::vector<double> history;
-  if (state.method) {
-    std::vector<std::uint8_t> owned(particles.size());
-    for (unsigned int i = 0; i < particles.size(); ++i)
-      owned[i] = state.is_owned(i) ? 1 : 0;
-    for (const auto& r : state.method->history(owned)) {
+  if (state.method)
+    for (const auto& r : state.method->history({})) {
       history.push_back(r.particle);
       history.push_back(r.neighbour);
       const auto flat = pack_state(r.state);
       history.insert(history.end(), flat.begin(), flat.end());
     }
-  }
   const auto histories = Utilities::MPI::gather(state.fem.mpi_communicator(), history, 0);
   if (Utilities::MPI::this_mpi_process(state.fem.mpi_communicator()) != 0)
     return;
