@@ -41,6 +41,25 @@ void CoupledIntegrator<dim>::step(double dt) {
 }
 
 template <int dim>
+void CoupledIntegrator<dim>::share_bond_breaks() {
+  // A method whose breaks reshape its neighbours' rows (SPG) must break a pair on every rank
+  // holding a row of either end; the owner of a free particle decides (it holds the rows of
+  // the particle and all its partners), the others follow before the next force pass.
+  const MPI_Comm comm = state_.fem.mpi_communicator();
+  if (!state_.prm.damage || !state_.method->shares_bond_breaks() ||
+      Utilities::MPI::n_mpi_processes(comm) == 1) {
+    if (state_.prm.damage && state_.method->shares_bond_breaks())
+      state_.method->take_broken_pairs(); // one rank holds every row already
+    return;
+  }
+  std::vector<std::pair<unsigned int, unsigned int>> all;
+  for (const auto& part : Utilities::MPI::all_gather(comm, state_.method->take_broken_pairs()))
+    all.insert(all.end(), part.begin(), part.end());
+  if (!all.empty())
+    state_.method->break_pairs(state_.particles, state_.bonds, all);
+}
+
+template <int dim>
 void CoupledIntegrator<dim>::advance(double dt, double a, double load_time, bool first,
                                      RelaxationSums* sums) {
   // Central differences on both sides, all forces from the state at t_n:
@@ -56,6 +75,7 @@ void CoupledIntegrator<dim>::advance(double dt, double a, double load_time, bool
     fracture_.before_forces();
     broken_last_step_ = state_.method->compute_forces(particles, state_.bonds, state_.prm.damage);
     fracture_.after_forces(broken_last_step_);
+    share_bond_breaks();
     // Explicit steps commit the material history every step, as the FEM does; a relaxation
     // commits both models once, at equilibrium (relax()), so the pseudo-dynamics leave no
     // plastic trace (MechanicsSolver::relaxation_step).

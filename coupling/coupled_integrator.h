@@ -56,6 +56,8 @@ class CoupledIntegrator {
   // load_time; with `sums`, a relaxation step (the time is held) that adds up the free
   // residual, reactions and stiffness estimate of this rank.
   void advance(double dt, double a, double load_time, bool first, RelaxationSums* sums);
+  // Pairs broken on one rank, for methods that share breaks (ParticleMethod::shares_bond_breaks).
+  void share_bond_breaks();
 
   CouplingState<dim>& state_;
   GhostLayer<dim>& ghosts_;

@@ -250,6 +250,19 @@ std::string FemParticleCoupling<dim>::write_output(const std::string& directory,
   const std::string name = "particles_" + Utilities::int_to_string(cycle, 4) + ".vtu";
   halo_.synchronise(); // collective: damage and states of every particle on every rank
   const auto plastic = equivalent_plastic_strains(); // collective
+  // Physical displacements from their owners (SPG's unknowns are RK coefficients; the others'
+  // are the displacements themselves).
+  std::vector<double> u(dim * particles.size(), 0.0);
+  {
+    const auto physical = state_.method ? state_.method->physical_displacements(particles)
+                                        : particles.displacements();
+    for (unsigned int i = 0; i < particles.size(); ++i)
+      if (state_.free[i] && state_.is_owned(i))
+        for (unsigned int d = 0; d < dim; ++d)
+          u[dim * i + d] = physical[i][d];
+    if (Utilities::MPI::n_mpi_processes(state_.fem.mpi_communicator()) > 1)
+      Utilities::MPI::sum(u, state_.fem.mpi_communicator(), u);
+  }
   if (Utilities::MPI::this_mpi_process(state_.fem.mpi_communicator()) != 0)
     return name;
   meshfree::ParticleSet<dim> out(particles.thickness());
@@ -258,7 +271,8 @@ std::string FemParticleCoupling<dim>::write_output(const std::string& directory,
   for (unsigned int i = 0; i < particles.size(); ++i)
     if (state_.free[i]) {
       const unsigned int k = out.add_particle(particles.reference_position(i), particles.volume(i));
-      out.displacement(k) = particles.displacement(i);
+      for (unsigned int d = 0; d < dim; ++d)
+        out.displacement(k)[d] = u[dim * i + d];
       out.velocity(k) = particles.velocity(i);
       out.density(k) = particles.density(i);
       out.damage(k) = particles.damage(i);

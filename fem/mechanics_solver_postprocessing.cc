@@ -135,20 +135,13 @@ double MechanicsSolver<dim>::strain_energy() const {
       fe_values.reinit(cell);
       const auto data = quadrature_point_data(cell);
       const auto& law = cell_material(cell);
-      if (prm_.kinematics == "small_strain" &&
-          dynamic_cast<const materials::J2Plasticity*>(&law) != nullptr) {
-        // Small-strain J2 on isotropic linear elasticity: the stored energy is ½ σ : C⁻¹ : σ =
-        // s:s/(4μ) + p²/(2K). Work minus plastic work, integrated over the load steps, is
-        // only that in the limit of small steps (a step across yield adds trapezoid work
-        // against backward-Euler dissipation).
-        const double E = law.youngs_modulus(), nu = law.poisson_ratio();
-        const double mu = E / (2.0 * (1.0 + nu)), K = E / (3.0 * (1.0 - 2.0 * nu));
-        for (unsigned int q = 0; q < quadrature_.size(); ++q) {
-          const auto& sigma = data[q].cauchy_stress;
-          const double p = dealii::trace(sigma) / 3.0;
-          const auto dev = dealii::deviator(sigma);
-          e += (dev * dev / (4.0 * mu) + p * p / (2.0 * K)) * fe_values.JxW(q);
-        }
+      const auto* j2 = dynamic_cast<const materials::J2Plasticity*>(&law);
+      if (prm_.kinematics == "small_strain" && j2 != nullptr) {
+        // Work minus plastic work, integrated over the load steps, is the stored energy only
+        // in the limit of small steps (a step across yield adds trapezoid work against
+        // backward-Euler dissipation): take it from the stress.
+        for (unsigned int q = 0; q < quadrature_.size(); ++q)
+          e += j2->stored_energy_density(data[q].cauchy_stress) * fe_values.JxW(q);
         continue;
       }
       for (unsigned int q = 0; q < quadrature_.size(); ++q)

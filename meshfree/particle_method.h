@@ -146,6 +146,29 @@ class ParticleMethod {
   virtual void load(std::istream&) {}
   // Messages for the run log since the last call (e.g. particles that lost their family).
   virtual std::vector<std::string> take_messages() { return {}; }
+
+  // Whether a bond that breaks changes forces beyond its two ends' rows, so every rank holding
+  // a row of either end must learn of it (SPG: the pair leaves both RK shape-function rows,
+  // which shape the forces on every particle of their support). A coupled run on several
+  // ranks then gathers take_broken_pairs() after each force pass and hands the pairs to
+  // break_pairs() everywhere.
+  virtual bool shares_bond_breaks() const { return false; }
+  // Pairs (i, j) broken by compute_forces since the last call.
+  virtual std::vector<std::pair<unsigned int, unsigned int>> take_broken_pairs() { return {}; }
+  // Breaks these pairs (decided by another rank) in `bonds` and in the method's rows.
+  virtual void break_pairs(ParticleSet<dim>& particles, BondList<dim>& bonds,
+                           const std::vector<std::pair<unsigned int, unsigned int>>& pairs) {
+    (void)particles;
+    (void)bonds;
+    (void)pairs;
+  }
+  // Physical displacements u_i [m] of the particles with rows here (what output shows): the
+  // particle displacements themselves, except for methods whose unknowns are generalised
+  // (SPG: RK coefficients d_J, u_I = Σ_J Ψ_J(X_I) d_J).
+  virtual std::vector<dealii::Tensor<1, dim>>
+  physical_displacements(const ParticleSet<dim>& particles) const {
+    return particles.displacements();
+  }
 };
 
 // A method whose parameters are read, waiting for its material: a coupled run learns E, ν and

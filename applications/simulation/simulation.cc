@@ -102,14 +102,6 @@ Simulation<dim>::Simulation(const ScenarioFactoryArgs& args)
                        "converted particles must stay coupled to the FEM bulk",
                        "false, or set Effects/Coupling = true as well");
   if (effects_.coupling) {
-    // SPG's unknowns are RK coefficients, not displacements: the interface would have to fit
-    // and drive coefficients (see docs/coupling.md), which it does not do yet.
-    if (effects_.particles_method == "spg")
-      throw InvalidInput("Effects/Particles method",
-                         "'spg' particles are not coupled to the FEM yet (their unknowns are "
-                         "reproducing-kernel coefficients, the interface drives displacements)",
-                         "nosb or bond_based with Effects/Coupling = true; spg runs in the spg_* "
-                         "validation scenarios");
     parse_section(prm_, "Coupling", coupling_prm_, effects_.particles_method);
     coupling_prm_.damage = effects_.damage;
   }

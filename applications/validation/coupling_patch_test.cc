@@ -287,12 +287,12 @@ class CouplingPatchTest : public Scenario {
 
 } // namespace
 
-SPINESIM_REGISTER_SCENARIO(coupling_patch_test, "coupling_patch_test",
-                           "Uniform strain across a mixed FEM / particle domain: no ghost forces, "
-                           "conserved mass and momentum at conversion",
-                           "mechanics|particles:bond_based|particles:nosb|conversion|coupling",
-                           create_for_dimension<CouplingPatchTest>, sections::geometry(),
-                           sections::material(), sections::mechanics(), sections::coupling(),
-                           {"Patch test", PatchParameters::declare})
+SPINESIM_REGISTER_SCENARIO(
+    coupling_patch_test, "coupling_patch_test",
+    "Uniform strain across a mixed FEM / particle domain: no ghost forces, "
+    "conserved mass and momentum at conversion",
+    "mechanics|particles:bond_based|particles:nosb|particles:spg|conversion|coupling",
+    create_for_dimension<CouplingPatchTest>, sections::geometry(), sections::material(),
+    sections::mechanics(), sections::coupling(), {"Patch test", PatchParameters::declare})
 
 } // namespace spinesim::applications

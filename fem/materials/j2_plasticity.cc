@@ -57,4 +57,10 @@ SPINESIM_REGISTER_MATERIAL_MODEL(j2_plasticity, "j2_plasticity",
                                                           p.saturation_exponent));
                                  })
 
+double J2Plasticity::stored_energy_density(const SymTensor2& stress) const {
+  const double p = dealii::trace(stress) / 3.0;
+  const auto s = dealii::deviator(stress);
+  return s * s / (4.0 * mu_) + p * p / (2.0 * K_);
+}
+
 } // namespace spinesim::materials

@@ -29,6 +29,10 @@ class J2Plasticity : public ConstitutiveLaw {
   double density() const override { return rho_; }
   double thermal_expansion() const { return alpha_; }
   const IsotropicHardening& hardening() const { return hardening_; }
+  // Stored (elastic) energy density at stress σ [J/m^3]: ½ σ : C⁻¹ : σ = s:s/(4μ) + p²/(2K),
+  // s the deviator and p the mean stress. Integrating the stress along the path from the
+  // undeformed state would count the plastic strain as stored.
+  double stored_energy_density(const SymTensor2& stress) const;
 
  private:
   double E_, nu_, rho_, alpha_;

@@ -594,8 +594,7 @@ double NosbPD<dim>::family_energy(unsigned int e, const ParticleSet<dim>& partic
   const auto F = fam.deformation_gradient(e, particles.displacements());
   if (const auto* j2 = dynamic_cast<const materials::J2Plasticity*>(law_.get())) {
     // Small-strain J2 on isotropic linear elasticity: the path integral from F = I would
-    // count the plastic strain as stored; the stored energy is ½ σ : C⁻¹ : σ = s:s/(4μ) +
-    // p²/(2K) (MechanicsSolver::strain_energy computes the same).
+    // count the plastic strain as stored (J2Plasticity::stored_energy_density).
     materials::Tensor2 F3 = dealii::unit_symmetric_tensor<3>();
     for (unsigned int r = 0; r < dim; ++r)
       for (unsigned int c = 0; c < dim; ++c)
@@ -603,11 +602,7 @@ double NosbPD<dim>::family_energy(unsigned int e, const ParticleSet<dim>& partic
     const double dT = particles.temperature(fam.centre(e)) - reference_temperature_;
     const auto sigma = dealii::symmetrize(
         law_->finite_strain(F3, dT, committed_[fam.history_index(e)]).first_piola);
-    const double E = j2->youngs_modulus(), nu = j2->poisson_ratio();
-    const double mu = E / (2.0 * (1.0 + nu)), K = E / (3.0 * (1.0 - 2.0 * nu));
-    const double p = dealii::trace(sigma) / 3.0;
-    const auto dev = dealii::deviator(sigma);
-    return fam.weight(e) * (dev * dev / (4.0 * mu) + p * p / (2.0 * K));
+    return fam.weight(e) * j2->stored_energy_density(sigma);
   }
   const dealii::Tensor<2, dim> H = F - dealii::Tensor<2, dim>(dealii::unit_symmetric_tensor<dim>());
   double W = 0;

@@ -49,9 +49,10 @@ BondList<dim> RKShapeFunctions<dim>::build_bonds(const std::vector<dealii::Point
 
 template <int dim>
 void RKShapeFunctions<dim>::compute(const std::vector<dealii::Point<dim>>& points,
-                                    const std::vector<double>& volumes,
-                                    const BondList<dim>& bonds) {
+                                    const std::vector<double>& volumes, const BondList<dim>& bonds,
+                                    const std::vector<std::uint8_t>* rows) {
   const unsigned int n = points.size();
+  const auto has_row = [rows](unsigned int i) { return !rows || (*rows)[i] != 0; };
   self_value.assign(n, 0.0);
   self_gradient.assign(n, dealii::Tensor<1, dim>());
   value.assign(bonds.n_bonds(), 0.0);
@@ -59,21 +60,26 @@ void RKShapeFunctions<dim>::compute(const std::vector<dealii::Point<dim>>& point
   shepard.assign(n, 0);
   condition_number.assign(n, 0.0);
   reverse.assign(bonds.n_bonds(), 0);
-  // Reverse index by binary search in the sorted row of the neighbour.
+  // Reverse index: binary search in a sorted row, else a scan (rows hold tens of bonds).
   for_each_bond(bonds, [&](unsigned int i, std::size_t k, unsigned int j) {
     const auto first = bonds.neighbor.begin() + bonds.begin(j);
     const auto last = bonds.neighbor.begin() + bonds.end(j);
-    const auto it = std::lower_bound(first, last, i);
-    reverse[k] = (it != last && *it == i) ? static_cast<std::size_t>(it - bonds.neighbor.begin())
-                                          : bonds.n_bonds();
+    auto it = std::lower_bound(first, last, i);
+    if (it == last || *it != i)
+      it = std::find(first, last, i);
+    reverse[k] =
+        it != last ? static_cast<std::size_t>(it - bonds.neighbor.begin()) : bonds.n_bonds();
   });
-  for (std::size_t k = 0; k < bonds.n_bonds(); ++k)
-    if (reverse[k] >= bonds.n_bonds())
-      throw InvalidInput("RKShapeFunctions::compute", "the bond list is not symmetric",
-                         "bonds stored from both ends (build_bonds)");
+  for (unsigned int i = 0; i < bonds.n_particles(); ++i)
+    for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k)
+      if (reverse[k] >= bonds.n_bonds() && has_row(bonds.neighbor[k]))
+        throw InvalidInput("RKShapeFunctions::compute", "the bond list is not symmetric",
+                           "bonds stored from both ends (build_bonds)");
   long failed = -1;
 #pragma omp parallel for schedule(dynamic, 256) if (n > parallel_particle_threshold)
   for (long ii = 0; ii < long(n); ++ii) {
+    if (!has_row(ii))
+      continue;
     const int status = compute_row(ii, points, volumes, bonds);
     if (status != 0) {
 #pragma omp critical(spg_rk_fail)

@@ -41,9 +41,11 @@ class RKShapeFunctions {
   static BondList<dim> build_bonds(const std::vector<dealii::Point<dim>>& points, double radius);
 
   // All rows at the kernel centres `points` with volumes V_J; bonds from build_bonds (or any
-  // symmetric sorted CSR list) — broken ones are excluded.
+  // symmetric CSR list) — broken ones are excluded. With `rows`, only the rows with
+  // rows[i] != 0 exist (a coupled run keeps the rows it needs, coupling/bond_rows.h): the others
+  // are left zero, and a bond whose partner has no row gets reverse = n_bonds().
   void compute(const std::vector<dealii::Point<dim>>& points, const std::vector<double>& volumes,
-               const BondList<dim>& bonds);
+               const BondList<dim>& bonds, const std::vector<std::uint8_t>* rows = nullptr);
   // Row i only (after a bond of i broke).
   void recompute_row(unsigned int i, const std::vector<dealii::Point<dim>>& points,
                      const std::vector<double>& volumes, const BondList<dim>& bonds);

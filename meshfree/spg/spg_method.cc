@@ -1,15 +1,19 @@
 #include "meshfree/spg/spg_method.h"
 
 #include "base/exceptions.h"
+#include "fem/materials/j2_plasticity.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace spinesim::meshfree {
 
 template <int dim>
 SpgMethod<dim>::SpgMethod(const Parameters& parameters, const ParticleMaterial& material)
-    : prm_(parameters.solver), law_(material.law), thickness_(parameters.thickness) {
+    : prm_(parameters.solver), law_(material.law), thickness_(parameters.thickness),
+      reference_temperature_(material.reference_temperature) {
   if (!law_)
     throw InvalidInput("SPG", "no constitutive law", "a law from the Material section");
 }
@@ -42,7 +46,10 @@ SPGSolver<dim>& SpgMethod<dim>::solver() {
 template <int dim>
 typename NeighborSearch<dim>::Options SpgMethod<dim>::neighbor_options(double spacing) const {
   typename NeighborSearch<dim>::Options o;
-  o.horizon = prm_.dilation * spacing;
+  // The kernel's search radius (a√dim for cubic supports), so a coupled run's rows hold the
+  // whole support.
+  o.horizon = RKKernel<dim>::from_names(prm_.kernel, prm_.support_shape)
+                  .search_radius(prm_.dilation * spacing);
   o.partial_volume = false;
   o.surface_correction = false;
   return o;
@@ -59,11 +66,24 @@ void SpgMethod<dim>::initialise(const ParticleSet<dim>& particles, const BondLis
   if (!(bonds.horizon > 0.0))
     throw InvalidInput("SPG", "bond list without a search radius",
                        "bonds searched with SpgMethod::neighbor_options");
-  solver_ = std::make_unique<SPGSolver<dim>>(prm_, *law_, particles, bonds.horizon / prm_.dilation);
+  const double per_spacing =
+      RKKernel<dim>::from_names(prm_.kernel, prm_.support_shape).search_radius(prm_.dilation);
+  if (solver_)
+    kept_ = solver_->committed_states();
+  const bool coupled = std::find(driven_.begin(), driven_.end(), std::uint8_t(1)) != driven_.end();
+  solver_ = std::make_unique<SPGSolver<dim>>(prm_, *law_, particles, bonds.horizon / per_spacing,
+                                             coupled ? &bonds : nullptr);
+  solver_->set_deferred_commit(true);
+  solver_->set_reference_temperature(reference_temperature_);
+  if (coupled)
+    solver_->set_driven(driven_);
+  for (unsigned int i = 0; i < kept_.size() && i < particles.size(); ++i)
+    solver_->set_state(i, kept_[i]);
+  kept_.clear();
 }
 
 template <int dim>
-std::size_t SpgMethod<dim>::compute_forces(ParticleSet<dim>& particles, BondList<dim>&,
+std::size_t SpgMethod<dim>::compute_forces(ParticleSet<dim>& particles, BondList<dim>& bonds,
                                            bool allow_breaking) {
   if (!allow_breaking && (prm_.critical_stretch > 0.0 || prm_.critical_plastic_strain > 0.0))
     throw InvalidInput("SPG/Critical stretch, SPG/Critical plastic strain",
@@ -71,19 +91,48 @@ std::size_t SpgMethod<dim>::compute_forces(ParticleSet<dim>& particles, BondList
                        "0 for both, or Effects/Damage = true");
   const std::size_t before = solver().n_broken_bonds();
   solver_->compute_forces(particles);
-  return solver_->n_broken_bonds() - before;
+  const std::size_t broken = solver_->n_broken_bonds() - before;
+  // The caller's rows carry the breaks too (same layout in a coupled run).
+  if (broken > 0 && solver_->bonds().n_bonds() == bonds.n_bonds())
+    bonds.broken = solver_->bonds().broken;
+  return broken;
+}
+
+template <int dim>
+std::vector<std::pair<unsigned int, unsigned int>> SpgMethod<dim>::take_broken_pairs() {
+  return solver().take_broken_pairs();
+}
+
+template <int dim>
+void SpgMethod<dim>::break_pairs(ParticleSet<dim>& particles, BondList<dim>& bonds,
+                                 const std::vector<std::pair<unsigned int, unsigned int>>& pairs) {
+  solver().break_pairs(particles, pairs);
+  if (solver_->bonds().n_bonds() == bonds.n_bonds())
+    bonds.broken = solver_->bonds().broken;
+}
+
+template <int dim>
+std::vector<dealii::Tensor<1, dim>>
+SpgMethod<dim>::physical_displacements(const ParticleSet<dim>& particles) const {
+  if (!solver_)
+    return particles.displacements();
+  return solver_->smoothed(particles.displacements());
 }
 
 template <int dim>
 std::vector<double> SpgMethod<dim>::stiffness_bound(const ParticleSet<dim>& particles,
                                                     const BondList<dim>&) {
-  return solver().stiffness_bound(particles);
+  if (!solver_) // no particles yet (a coupled run before its first conversion)
+    return std::vector<double>(particles.size(), 0.0);
+  return solver_->stiffness_bound(particles);
 }
 
 template <int dim>
 double SpgMethod<dim>::stable_time_step(const ParticleSet<dim>&, const BondList<dim>&,
                                         double safety) {
-  return safety * solver().stable_time_step();
+  if (!solver_)
+    return std::numeric_limits<double>::infinity();
+  return safety * solver_->stable_time_step();
 }
 
 template <int dim>
@@ -97,6 +146,17 @@ double SpgMethod<dim>::energy_density(unsigned int i, const ParticleSet<dim>& pa
   const double t[4] = {0.5 * (1 - b), 0.5 * (1 - a), 0.5 * (1 + a), 0.5 * (1 + b)};
   const double w[4] = {0.5 * wb, 0.5 * wa, 0.5 * wa, 0.5 * wb};
   const auto& F = solver_->deformation_gradients()[i];
+  const double dT = particles.temperature(i) - reference_temperature_;
+  if (const auto* j2 = dynamic_cast<const materials::J2Plasticity*>(law_.get())) {
+    // The stored energy of small-strain J2, not the path integral (which would count the
+    // plastic strain as stored): the FEM and NOSB-PD take the same.
+    materials::Tensor2 F3 = dealii::unit_symmetric_tensor<3>();
+    for (unsigned int r = 0; r < dim; ++r)
+      for (unsigned int c = 0; c < dim; ++c)
+        F3[r][c] = F[r][c];
+    return j2->stored_energy_density(dealii::symmetrize(
+        law_->finite_strain(F3, dT, solver_->committed_states()[i]).first_piola));
+  }
   materials::Tensor2 H;
   for (unsigned int r = 0; r < dim; ++r)
     for (unsigned int c = 0; c < dim; ++c)
@@ -104,7 +164,7 @@ double SpgMethod<dim>::energy_density(unsigned int i, const ParticleSet<dim>& pa
   double W = 0;
   for (unsigned int q = 0; q < 4; ++q) {
     const materials::Tensor2 Ft = materials::Tensor2(dealii::unit_symmetric_tensor<3>()) + t[q] * H;
-    const auto r = law_->finite_strain(Ft, particles.temperature(i), solver_->states()[i]);
+    const auto r = law_->finite_strain(Ft, dT, solver_->committed_states()[i]);
     W += w[q] * dealii::scalar_product(r.first_piola, H);
   }
   return W;
@@ -114,7 +174,7 @@ template <int dim>
 std::vector<double> SpgMethod<dim>::strain_energy_density(const ParticleSet<dim>& particles,
                                                           const BondList<dim>&) const {
   std::vector<double> W(particles.size(), 0.0);
-  for (unsigned int i = 0; i < particles.size(); ++i)
+  for (unsigned int i = 0; solver_ && i < particles.size(); ++i)
     W[i] = energy_density(i, particles);
   return W;
 }
@@ -148,9 +208,57 @@ template <int dim>
 void SpgMethod<dim>::update_damage(ParticleSet<dim>&, const BondList<dim>&) const {}
 
 template <int dim>
+void SpgMethod<dim>::commit_state() {
+  if (solver_)
+    solver_->commit_state();
+}
+
+template <int dim>
 void SpgMethod<dim>::rollback_state() {
-  throw std::logic_error("SPG commits its material history at every force evaluation; a "
-                         "step cannot be rolled back");
+  if (solver_)
+    solver_->rollback_state();
+}
+
+template <int dim>
+std::vector<HistoryRecord> SpgMethod<dim>::history(const std::vector<std::uint8_t>& which) const {
+  std::vector<HistoryRecord> records;
+  if (!solver_)
+    return records;
+  const auto& states = solver_->committed_states();
+  const materials::MaterialState virgin;
+  for (unsigned int i = 0; i < states.size(); ++i) {
+    if (!which.empty() && (i >= which.size() || !which[i]))
+      continue;
+    const auto& s = states[i];
+    if (s.equivalent_plastic_strain == 0 && s.plastic_work == 0 &&
+        s.plastic_strain == virgin.plastic_strain &&
+        s.elastic_left_cauchy_green == virgin.elastic_left_cauchy_green)
+      continue; // a virgin state needs no record
+    records.push_back({i, i, s});
+  }
+  return records;
+}
+
+template <int dim>
+void SpgMethod<dim>::set_history(const std::vector<HistoryRecord>& records) {
+  for (const auto& r : records)
+    if (solver_ && r.particle == r.neighbour && r.particle < solver_->committed_states().size())
+      solver_->set_state(r.particle, r.state);
+}
+
+template <int dim>
+void SpgMethod<dim>::set_particle_states(
+    const std::vector<std::pair<unsigned int, materials::MaterialState>>& states) {
+  for (const auto& [i, s] : states)
+    if (solver_ && i < solver_->committed_states().size())
+      solver_->set_state(i, s);
+}
+
+template <int dim>
+materials::MaterialState SpgMethod<dim>::particle_state(unsigned int i) const {
+  if (!solver_ || i >= solver_->committed_states().size())
+    return {};
+  return solver_->committed_states()[i];
 }
 
 template <int dim>

@@ -10,13 +10,20 @@
 //  * SPG keeps its own neighbour list (the kernel support a = Dilation × h, from
 //    neighbor_options()), and breaks bonds in it by its own criteria (Critical stretch,
 //    Critical plastic strain) inside every force evaluation; damage is written then.
-//  * The material history is committed at every force evaluation (explicit dynamics), so a
-//    step cannot be rolled back.
+//  * In a coupled run (set_driven() with driven particles) the solver works on the caller's
+//    rows (coupling/bond_rows.h) with a total Lagrangian kernel, and the driven (ghost)
+//    particles' coefficients are set to the FEM displacement at their positions: exact for
+//    affine fields by linear reproduction, O(a² ∇²u) otherwise (docs/coupling.md).
+//  * The material history follows the interface: a trial state per force evaluation,
+//    commit_state() accepts it, rollback_state() discards it; history is kept per particle.
 
 #include "meshfree/particle_method.h"
 #include "meshfree/spg/spg_solver.h"
 
+#include <cstdint>
 #include <memory>
+#include <utility>
+#include <vector>
 
 namespace spinesim::meshfree {
 
@@ -38,9 +45,20 @@ class SpgMethod : public ParticleMethod<dim> {
   std::string name() const override { return "spg"; }
   bool carries_material_state() const override { return true; }
   double thickness() const override { return thickness_; }
+  // The force on a coefficient gathers the stresses of every particle in its support.
+  bool needs_neighbour_rows() const override { return true; }
+  void set_driven(std::vector<std::uint8_t> driven) override { driven_ = std::move(driven); }
+  bool shares_bond_breaks() const override { return true; }
+  std::vector<std::pair<unsigned int, unsigned int>> take_broken_pairs() override;
+  void break_pairs(ParticleSet<dim>& particles, BondList<dim>& bonds,
+                   const std::vector<std::pair<unsigned int, unsigned int>>& pairs) override;
+  std::vector<dealii::Tensor<1, dim>>
+  physical_displacements(const ParticleSet<dim>& particles) const override;
   typename NeighborSearch<dim>::Options neighbor_options(double spacing) const override;
   // Builds the RK shape functions; the particle spacing is the bond list's horizon over the
-  // dilation (the list was searched with neighbor_options()).
+  // kernel's search radius per spacing (the list was searched with neighbor_options()).
+  // Stand-alone, the solver searches its own neighbours; with driven particles it uses these
+  // rows. Committed states of particles seen before are kept.
   void initialise(const ParticleSet<dim>& particles, const BondList<dim>& bonds) override;
   // InvalidInput if bonds may not break but a breaking criterion is set.
   std::size_t compute_forces(ParticleSet<dim>& particles, BondList<dim>& bonds,
@@ -62,15 +80,24 @@ class SpgMethod : public ParticleMethod<dim> {
   // Damage is written by the solver when bonds break (the broken fraction of each particle's
   // support bonds); nothing else to update.
   void update_damage(ParticleSet<dim>& particles, const BondList<dim>& bonds) const override;
-  // std::logic_error: SPG has committed its history already (see above).
+  void commit_state() override;
   void rollback_state() override;
+  std::vector<HistoryRecord> history(const std::vector<std::uint8_t>& which) const override;
+  void set_history(const std::vector<HistoryRecord>& records) override;
+  void set_particle_states(
+      const std::vector<std::pair<unsigned int, materials::MaterialState>>& states) override;
+  materials::MaterialState particle_state(unsigned int i) const override;
 
+  // u_I of the last force evaluation.
   const std::vector<dealii::Tensor<1, dim>>& physical_displacements() const;
 
  private:
   typename SPGSolver<dim>::Parameters prm_;
   std::shared_ptr<const materials::ConstitutiveLaw> law_;
-  double thickness_ = 1.0;
+  double thickness_ = 1.0, reference_temperature_ = 0;
+  std::vector<std::uint8_t> driven_;
+  // Committed states set before the solver exists (or across a re-initialisation).
+  std::vector<materials::MaterialState> kept_;
   std::unique_ptr<SPGSolver<dim>> solver_;
   double energy_density(unsigned int i, const ParticleSet<dim>& particles) const; // W_i [J/m^3]
 };

@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <stdexcept>
+#include <utility>
 
 namespace spinesim::meshfree {
 
@@ -114,7 +116,8 @@ typename SPGSolver<dim>::KernelUpdate SPGSolver<dim>::Parameters::update_mode() 
 
 template <int dim>
 SPGSolver<dim>::SPGSolver(const Parameters& parameters, const materials::ConstitutiveLaw& law,
-                          const ParticleSet<dim>& particles, double spacing)
+                          const ParticleSet<dim>& particles, double spacing,
+                          const BondList<dim>* rows)
     : prm_(parameters), mode_(parameters.update_mode()), law_(law),
       kernel_(RKKernel<dim>::from_names(parameters.kernel, parameters.support_shape)) {
   prm_.validate();
@@ -147,9 +150,37 @@ SPGSolver<dim>::SPGSolver(const Parameters& parameters, const materials::Constit
   P_.assign(n, Matrix());
   stress_.assign(n, Matrix());
   state_.assign(n, materials::MaterialState());
+  committed_ = state_;
   kappa_.resize(n);
   for (unsigned int i = 0; i < n; ++i)
     kappa_[i] = prm_.stabilisation * modulus_ * volume_[i] / (a_ * a_);
+  has_row_.assign(n, 1);
+  complete_.assign(n, 1);
+  if (rows) {
+    if (mode_ != KernelUpdate::total_lagrangian)
+      throw InvalidInput("SPG/Kernel update", "'" + prm_.kernel_update + "' with given rows",
+                         "total_lagrangian (the rows of a coupled run are fixed)");
+    if (rows->n_particles() != n)
+      throw InvalidInput("SPG rows",
+                         "rows for " + std::to_string(rows->n_particles()) + " particles, " +
+                             std::to_string(n) + " particles",
+                         "one (possibly empty) row per particle");
+    if (rows->horizon < kernel_.search_radius(a_) * (1 - 1e-12))
+      throw InvalidInput("SPG rows", "searched within " + num(rows->horizon) + " m",
+                         ">= the kernel's search radius " + num(kernel_.search_radius(a_)) + " m");
+    external_rows_ = true;
+    bonds_ = *rows;
+    for (unsigned int i = 0; i < n; ++i)
+      has_row_[i] = bonds_.end(i) > bonds_.begin(i) ? 1 : 0;
+    for (unsigned int i = 0; i < n; ++i) {
+      complete_[i] = has_row_[i];
+      for (std::size_t k = bonds_.begin(i); k < bonds_.end(i) && complete_[i]; ++k)
+        complete_[i] = has_row_[bonds_.neighbor[k]];
+    }
+    rk_ = std::make_unique<RKShapeFunctions<dim>>(kernel_, a_, prm_.max_condition_number);
+    rk_->compute(Xr_, rk_volume_, bonds_, &has_row_);
+    return;
+  }
   rebuild_kernel(Xr_);
 }
 
@@ -235,10 +266,16 @@ void SPGSolver<dim>::compute_forces(ParticleSet<dim>& p) {
   std::vector<double> work(n), sigma(n), rel(n);
   long failed = -1;
   std::string failure;
-  // Pass 1, per particle N: smoothed value, F, stress.
+  const auto& temperature = p.temperatures();
+  const bool has_temperature = temperature.size() == n;
+  // Pass 1, per particle N with a row: smoothed value, F, stress.
 #pragma omp parallel for schedule(static) if (parallel)
   for (long nn = 0; nn < long(n); ++nn) {
     const unsigned int N = nn;
+    if (!has_row_[N]) {
+      sigma[N] = 1e300;
+      continue;
+    }
     const Vector eN = d[N] - dref_[N];
     Vector ubar = rk.self_value[N] * eN;
     Matrix Frel = outer_product(eN, rk.self_gradient[N]);
@@ -259,8 +296,11 @@ void SPGSolver<dim>::compute_forces(ParticleSet<dim>& p) {
         F3[i][j] = F[i][j];
     Matrix P;
     try {
-      const auto r = law_.finite_strain(F3, 0.0, state_[N]);
+      const double dT = has_temperature ? temperature[N] - reference_temperature_ : 0.0;
+      const auto r = law_.finite_strain(F3, dT, committed_[N]);
       state_[N] = r.state;
+      if (!deferred_commit_)
+        committed_[N] = r.state;
       for (unsigned int i = 0; i < dim; ++i)
         for (unsigned int j = 0; j < dim; ++j)
           P[i][j] = r.first_piola[i][j];
@@ -345,6 +385,10 @@ void SPGSolver<dim>::compute_forces(ParticleSet<dim>& p) {
 #pragma omp parallel for schedule(static) if (parallel)
   for (long ii = 0; ii < long(n); ++ii) {
     const unsigned int I = ii;
+    if (!complete_[I]) { // driven from outside
+      force[I] = Vector();
+      continue;
+    }
     Vector f = -(stress_[I] * rk.self_gradient[I]);
     for (std::size_t k = off[I]; k < off[I + 1]; ++k)
       f -= stress_[nb[k]] * grad[rev[k]];
@@ -387,10 +431,13 @@ void SPGSolver<dim>::break_bonds(ParticleSet<dim>& p) {
   const auto& rk = *rk_;
   std::vector<unsigned int> affected;
   const double ec = prm_.critical_plastic_strain, sc = prm_.critical_stretch;
-  for (unsigned int i = 0; i < n; ++i)
+  const bool any_driven = !driven_.empty();
+  for (unsigned int i = 0; i < n; ++i) {
+    if (!has_row_[i])
+      continue;
     for (std::size_t k = bonds_.begin(i); k < bonds_.end(i); ++k) {
       const unsigned int j = bonds_.neighbor[k];
-      if (j < i || bonds_.broken[k])
+      if (j < i || bonds_.broken[k] || !has_row_[j] || (any_driven && driven_[i] && driven_[j]))
         continue;
       bool brk = false;
       if (ec > 0.0 &&
@@ -406,16 +453,25 @@ void SPGSolver<dim>::break_bonds(ParticleSet<dim>& p) {
         bonds_.broken[k] = 1;
         bonds_.broken[rk.reverse[k]] = 1;
         broken_pairs_.push_back((static_cast<unsigned long long>(i) << 32) | j);
+        newly_broken_.emplace_back(i, j);
         affected.push_back(i);
         affected.push_back(j);
       }
     }
+  }
   if (affected.empty())
     return;
   std::sort(broken_pairs_.begin(), broken_pairs_.end());
   std::sort(affected.begin(), affected.end());
   affected.erase(std::unique(affected.begin(), affected.end()), affected.end());
+  after_breaks(p, affected);
+}
+
+template <int dim>
+void SPGSolver<dim>::after_breaks(ParticleSet<dim>& p, const std::vector<unsigned int>& affected) {
   for (const unsigned int i : affected) {
+    if (!has_row_[i])
+      continue;
     rk_->recompute_row(i, Xr_, rk_volume_, bonds_);
     unsigned int b = 0, t = 0;
     for (std::size_t k = bonds_.begin(i); k < bonds_.end(i); ++k, ++t)
@@ -425,6 +481,57 @@ void SPGSolver<dim>::break_bonds(ParticleSet<dim>& p) {
       if (constraints_.is_constrained(i, c))
         constraints_ready_ = false;
   }
+}
+
+template <int dim>
+std::vector<std::pair<unsigned int, unsigned int>> SPGSolver<dim>::take_broken_pairs() {
+  return std::exchange(newly_broken_, {});
+}
+
+template <int dim>
+void SPGSolver<dim>::break_pairs(ParticleSet<dim>& p,
+                                 const std::vector<std::pair<unsigned int, unsigned int>>& pairs) {
+  std::vector<unsigned int> affected;
+  const auto cut = [&](unsigned int i, unsigned int j) {
+    if (!has_row_[i])
+      return;
+    for (std::size_t k = bonds_.begin(i); k < bonds_.end(i); ++k)
+      if (bonds_.neighbor[k] == j && !bonds_.broken[k]) {
+        bonds_.broken[k] = 1;
+        affected.push_back(i);
+      }
+  };
+  for (const auto& [i, j] : pairs) {
+    cut(i, j);
+    cut(j, i);
+    broken_pairs_.push_back((static_cast<unsigned long long>(std::min(i, j)) << 32) |
+                            std::max(i, j));
+  }
+  std::sort(broken_pairs_.begin(), broken_pairs_.end());
+  broken_pairs_.erase(std::unique(broken_pairs_.begin(), broken_pairs_.end()), broken_pairs_.end());
+  std::sort(affected.begin(), affected.end());
+  affected.erase(std::unique(affected.begin(), affected.end()), affected.end());
+  after_breaks(p, affected);
+}
+
+template <int dim>
+std::vector<dealii::Tensor<1, dim>>
+SPGSolver<dim>::smoothed(const std::vector<dealii::Tensor<1, dim>>& d) const {
+  if (mode_ != KernelUpdate::total_lagrangian)
+    throw std::logic_error("SPGSolver::smoothed: total Lagrangian kernels only");
+  const auto& rk = *rk_;
+  std::vector<Vector> u(d.size());
+  for (unsigned int i = 0; i < d.size(); ++i) {
+    if (!has_row_[i]) {
+      u[i] = d[i];
+      continue;
+    }
+    Vector s = rk.self_value[i] * d[i];
+    for (std::size_t k = bonds_.begin(i); k < bonds_.end(i); ++k)
+      s += rk.value[k] * d[bonds_.neighbor[k]];
+    u[i] = s;
+  }
+  return u;
 }
 
 template <int dim>
@@ -447,6 +554,8 @@ std::vector<double> SPGSolver<dim>::stiffness_bound(const ParticleSet<dim>& p) c
   // Row sums G_N = Σ_J |∇Ψ_J(X_N)| and R_N = Σ_J |δ_NJ − Ψ_J(X_N)|.
   std::vector<double> G(n), R(n);
   for (unsigned int N = 0; N < n; ++N) {
+    if (!has_row_[N])
+      continue;
     G[N] = rk.self_gradient[N].norm();
     R[N] = std::abs(1.0 - rk.self_value[N]);
     for (std::size_t k = bonds_.begin(N); k < bonds_.end(N); ++k) {
@@ -456,6 +565,8 @@ std::vector<double> SPGSolver<dim>::stiffness_bound(const ParticleSet<dim>& p) c
   }
   std::vector<double> S(n);
   for (unsigned int I = 0; I < n; ++I) {
+    if (!complete_[I])
+      continue;
     double s = volume_[I] * rk.self_gradient[I].norm() * G[I] * modulus_;
     double t = kappa_[I] * std::abs(1.0 - rk.self_value[I]) * R[I];
     for (std::size_t k = bonds_.begin(I); k < bonds_.end(I); ++k) {

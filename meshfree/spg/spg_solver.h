@@ -59,6 +59,16 @@
 //
 // Loops are over particles (OpenMP, static schedule), each gathering over its own CSR row with
 // the reverse-bond index, so the results do not depend on the thread count.
+//
+// Rows given from outside (a coupled run, coupling/bond_rows.h): the solver then works on the
+// caller's neighbour rows, which exist only for the particles it must move and their partners.
+// F, stress and the smoothed value are evaluated on every row that exists; the force only on
+// the rows whose partners all have rows (the others are driven from outside and get none).
+// Bonds break only where both ends have rows (the physical positions need both).
+//
+// Material history: the law is evaluated from the committed state; by default every force
+// evaluation commits (one call = one explicit step). With deferred commits the new state is a
+// trial until commit_state(): dynamic relaxation commits once at equilibrium.
 
 #include "fem/materials/constitutive_law.h"
 #include "meshfree/bond_list.h"
@@ -71,8 +81,10 @@
 #include <deal.II/base/parameter_handler.h>
 #include <deal.II/base/tensor.h>
 
+#include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace spinesim::meshfree {
@@ -107,8 +119,11 @@ class SPGSolver {
 
   // `spacing` h [m] is the nominal particle spacing: support a = dilation·h. The law must
   // outlive the solver. Builds bonds and shape functions at the reference positions.
+  // With `rows` (a symmetric CSR list searched within the kernel's search radius, rows only
+  // where needed), the solver uses those rows instead of searching all particles; only the
+  // total Lagrangian kernel is allowed then.
   SPGSolver(const Parameters& parameters, const materials::ConstitutiveLaw& law,
-            const ParticleSet<dim>& particles, double spacing);
+            const ParticleSet<dim>& particles, double spacing, const BondList<dim>* rows = nullptr);
 
   // --- setup
   EssentialBoundary<dim>& essential_boundary() { return constraints_; }
@@ -116,6 +131,31 @@ class SPGSolver {
   void constrain(ParticleSet<dim>& particles, unsigned int i, unsigned int component, double value);
   void add_obstacle(const RigidObstacle<dim>& obstacle) { obstacles_.push_back(obstacle); }
   void set_time(double t) { time_ = t; }
+  // The law sees particles.temperature() minus this [K] (0: temperatures are changes).
+  void set_reference_temperature(double t) { reference_temperature_ = t; }
+  // Particles whose coefficients are prescribed from outside: a bond between two never breaks.
+  void set_driven(std::vector<std::uint8_t> driven) { driven_ = std::move(driven); }
+  // Deferred commits: compute_forces() keeps the new material state as a trial.
+  void set_deferred_commit(bool deferred) { deferred_commit_ = deferred; }
+  void commit_state() { committed_ = state_; }
+  void rollback_state() { state_ = committed_; }
+  // Sets particle i's committed (and trial) state.
+  void set_state(unsigned int i, const materials::MaterialState& state) {
+    committed_[i] = state_[i] = state;
+  }
+  const std::vector<materials::MaterialState>& committed_states() const { return committed_; }
+  // Pairs (i < j) broken since the last call.
+  std::vector<std::pair<unsigned int, unsigned int>> take_broken_pairs();
+  // Breaks these pairs where this solver holds them (another owner decided) and recomputes the
+  // rows they touch; particles.damage() of those rows is updated.
+  void break_pairs(ParticleSet<dim>& particles,
+                   const std::vector<std::pair<unsigned int, unsigned int>>& pairs);
+  // Whether particle i has a row (always, unless rows were given) / a force.
+  bool has_row(unsigned int i) const { return has_row_[i] != 0; }
+  bool has_force(unsigned int i) const { return complete_[i] != 0; }
+  // u(X_I) = Σ_J Ψ_J(X_I) d_J for the coefficients `d` at every particle with a row (the
+  // coefficient itself elsewhere) [m]; total Lagrangian kernels.
+  std::vector<dealii::Tensor<1, dim>> smoothed(const std::vector<dealii::Tensor<1, dim>>& d) const;
 
   // --- the force model: particles.force() [N] (internal + stabilisation + contact, condensed
   // for the constraints). One call = one step (the material history is committed).
@@ -131,6 +171,7 @@ class SPGSolver {
   dealii::Point<dim> current_position(unsigned int i) const { return X0_[i] + uh_[i]; }
   const std::vector<dealii::Tensor<2, dim>>& deformation_gradients() const { return F_; }
   const std::vector<dealii::Tensor<2, dim>>& first_piola_stresses() const { return P_; }
+  // The state of the last force evaluation (a trial with deferred commits).
   const std::vector<materials::MaterialState>& states() const { return state_; }
   double internal_work() const { return internal_work_; }      // ∫ Σ V P:Ḟ dt [J]
   double plastic_work() const;                                 // Σ V w_p [J]
@@ -165,7 +206,11 @@ class SPGSolver {
   std::vector<double> rk_volume_;      // RK weights' volumes (J^r V after a reset)
   std::vector<Vector> dref_, shift_, uh_, stab_force_, residual_, contact_, d_last_;
   std::vector<Matrix> F_, P_, Fr_, stress_;
-  std::vector<materials::MaterialState> state_;
+  std::vector<materials::MaterialState> state_, committed_;
+  std::vector<std::uint8_t> has_row_, complete_, driven_;
+  bool external_rows_ = false, deferred_commit_ = false;
+  double reference_temperature_ = 0;
+  std::vector<std::pair<unsigned int, unsigned int>> newly_broken_;
   std::vector<double> kappa_;
   EssentialBoundary<dim> constraints_;
   bool constraints_ready_ = false;
@@ -180,6 +225,8 @@ class SPGSolver {
   void reset_reference(const ParticleSet<dim>& particles);
   void rebuild_kernel(const std::vector<dealii::Point<dim>>& centres);
   void break_bonds(ParticleSet<dim>& particles);
+  // Recomputes the rows of `affected` (sorted, unique) after breaks; their damage.
+  void after_breaks(ParticleSet<dim>& particles, const std::vector<unsigned int>& affected);
 };
 
 } // namespace spinesim::meshfree

@@ -147,8 +147,15 @@ spinesim_add_hostile_test(particle_plane_model_mismatch
   ARGS check ${PROJECT_SOURCE_DIR}/applications/scenes/default.prm
        --set "Mechanics/Plane stress=false"
   MATCH "Mechanics/Plane stress.*particles \\(bond_based\\) are plane stress but the FEM is plane strain")
-# SPG's unknowns are RK coefficients: the interface cannot drive them yet, and says so.
-spinesim_add_hostile_test(spg_coupled_refused
+# A coupled run fixes the particles' neighbour rows (coupling/bond_rows.h): SPG kernels that
+# reset their reference configuration cannot run there, and the error says which to use.
+spinesim_add_hostile_test(spg_coupled_kernel_update
+  ARGS check ${PROJECT_SOURCE_DIR}/applications/scenes/default.prm
+       --set "Effects/Particles method=spg" --set "Mechanics/Plane stress=false"
+       --set "Coupling/SPG/Kernel update=updated_lagrangian"
+  MATCH "SPG/Kernel update.*'updated_lagrangian' with given rows.*total_lagrangian")
+# SPG is plane strain: a plane-stress FEM bulk is refused.
+spinesim_add_hostile_test(spg_plane_model_mismatch
   ARGS check ${PROJECT_SOURCE_DIR}/applications/scenes/default.prm
        --set "Effects/Particles method=spg"
-  MATCH "'spg' particles are not coupled to the FEM yet.*nosb or bond_based")
+  MATCH "Coupling/SPG.*the particles \\(spg\\) are plane strain but the FEM is plane stress.*Mechanics/Plane stress = false")
