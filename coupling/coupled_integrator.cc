@@ -7,6 +7,7 @@
 #include <deal.II/base/mpi.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 
@@ -73,7 +74,12 @@ void CoupledIntegrator<dim>::advance(double dt, double a, double load_time, bool
     // With heat, bonds breaking in this force pass release their energy (at the state of t_n)
     // into their particle's heat account.
     fracture_.before_forces();
+    const auto start = std::chrono::steady_clock::now();
     broken_last_step_ = state_.method->compute_forces(particles, state_.bonds, state_.prm.damage);
+    particle_force_seconds_ +=
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    for (unsigned int i = 0; i < particles.size(); ++i)
+      particle_updates_ += state_.free[i] && state_.is_owned(i);
     fracture_.after_forces(broken_last_step_);
     share_bond_breaks();
     // Explicit steps commit the material history every step, as the FEM does; a relaxation

@@ -50,6 +50,11 @@ class CoupledIntegrator {
   double time() const { return time_; }
   void set_time(double time) { time_ = time; } // a checkpoint's
 
+  // The particle method's share of the run on this rank: wall time in its force passes [s]
+  // and the particle updates they served (owned free particles summed over force passes).
+  double particle_force_seconds() const { return particle_force_seconds_; }
+  double particle_updates() const { return particle_updates_; }
+
  private:
   using RelaxationSums = typename fem::MechanicsSolver<dim>::RelaxationSums;
   // One central-difference step of both models with damping a [1/s] and the loads of
@@ -68,6 +73,7 @@ class CoupledIntegrator {
   CellConverter<dim>& converter_;
   double time_ = 0;
   std::size_t broken_last_step_ = 0; // bond ends broken by this rank in the last step
+  double particle_force_seconds_ = 0, particle_updates_ = 0;
   // Net accelerations of the free particle components at the last relaxation step [m/s²].
   std::vector<double> relax_acceleration_;
 };

@@ -133,6 +133,19 @@ Tensor<1, dim> FemParticleCoupling<dim>::reaction_force(types::boundary_id id) c
 }
 
 template <int dim>
+double FemParticleCoupling<dim>::particle_force_seconds() const {
+  return Utilities::MPI::max(integrator_.particle_force_seconds(), state_.fem.mpi_communicator());
+}
+
+template <int dim>
+double FemParticleCoupling<dim>::particle_updates_per_second() const {
+  const double updates =
+      Utilities::MPI::sum(integrator_.particle_updates(), state_.fem.mpi_communicator());
+  const double seconds = particle_force_seconds();
+  return seconds > 0 ? updates / seconds : 0.0;
+}
+
+template <int dim>
 std::size_t FemParticleCoupling<dim>::n_broken_bonds() const {
   return coupling::n_broken_bonds(state_);
 }

@@ -95,6 +95,10 @@ class FemParticleCoupling {
   void step(double dt);
   // Whether bonds broke anywhere in the last step (collective; see CoupledIntegrator).
   bool bonds_broke_in_last_step() const { return integrator_.bonds_broke_in_last_step(); }
+  // Particle updates per second of the particle method's force passes, over all ranks
+  // (updates summed, wall time of the slowest rank) [1/s]; 0 before any. Collective.
+  double particle_updates_per_second() const;
+  double particle_force_seconds() const; // slowest rank [s], collective
 
   // Quasi-static: adaptive dynamic relaxation of both models to equilibrium under the loads of
   // `time` (see CoupledIntegrator::relax); bonds break on the way and, with `with_conversion`,

@@ -140,6 +140,9 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
     s.set_figure("broken_bonds", double(coupled_->n_broken_bonds()), "-");
     s.set_figure("max_damage", coupled_->max_damage(), "-");
     s.set_figure("explicit_steps", explicit_steps_, "iterations");
+    // The particle method's own cost: its force passes (relaxation pseudo-steps included).
+    s.set_figure("particle_force_time_s", coupled_->particle_force_seconds(), "s");
+    s.set_figure("particle_updates_per_s", coupled_->particle_updates_per_second(), "1/s");
     const ConversionExtremes c = conversion_extremes();
     s.set_figure("conversion_mass_change_relative", c.mass, "-");
     s.set_figure("conversion_momentum_change_relative", c.momentum, "-");

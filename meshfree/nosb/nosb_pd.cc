@@ -253,7 +253,10 @@ template <int dim>
 void NosbPD<dim>::compute_particle_gradients(const ParticleSet<dim>& particles) {
   const auto& u = particles.displacements();
   F_particle_.assign(particles.size(), dealii::unit_symmetric_tensor<dim>());
-  for (unsigned int e = 0; e < particle_families_.n_families(); ++e)
+  const long n = particle_families_.n_families();
+  // One family per particle: the writes never meet.
+#pragma omp parallel for schedule(static) if (n > parallel_particle_threshold)
+  for (long e = 0; e < n; ++e)
     F_particle_[particle_families_.centre(e)] = particle_families_.deformation_gradient(e, u);
 }
 
@@ -303,7 +306,10 @@ void NosbPD<dim>::compute_forces(ParticleSet<dim>& particles, const BondList<dim
   if (prm_.stabilization == Stabilization::penalty && prm_.stabilization_coefficient > 0) {
     const auto& V = particles.volumes();
     const double Gc = prm_.stabilization_coefficient * c_;
-    for (unsigned int i = 0; i < particles.size(); ++i) {
+    const long n = particles.size();
+    // Each particle adds to its own force only (same order as serially).
+#pragma omp parallel for schedule(static) if (n > parallel_particle_threshold)
+    for (long i = 0; i < n; ++i) {
       if (failed(i))
         continue;
       for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
@@ -539,7 +545,10 @@ std::vector<double> NosbPD<dim>::stiffness_row_bound(const ParticleSet<dim>& par
         gsum[pfam.centre(e)] += pfam.gradient(q).norm();
     const auto& V = particles.volumes();
     const double Gc = prm_.stabilization_coefficient * c_;
-    for (unsigned int i = 0; i < particles.size(); ++i) {
+    const long n = particles.size();
+    // Each particle adds to its own force only (same order as serially).
+#pragma omp parallel for schedule(static) if (n > parallel_particle_threshold)
+    for (long i = 0; i < n; ++i) {
       if (failed(i))
         continue;
       double r = 0;

@@ -70,12 +70,16 @@ void SpgMethod<dim>::initialise(const ParticleSet<dim>& particles, const BondLis
       RKKernel<dim>::from_names(prm_.kernel, prm_.support_shape).search_radius(prm_.dilation);
   if (solver_)
     kept_ = solver_->committed_states();
-  const bool coupled = std::find(driven_.begin(), driven_.end(), std::uint8_t(1)) != driven_.end();
+  // The caller's rows carry its pre-cracks and breaks; a kernel that resets its reference
+  // searches its own (SPGSolver refuses given rows for it, so a coupled run must be total
+  // Lagrangian).
+  const bool driven = std::find(driven_.begin(), driven_.end(), std::uint8_t(1)) != driven_.end();
+  const bool use_rows = driven || prm_.kernel_update == "total_lagrangian";
   solver_ = std::make_unique<SPGSolver<dim>>(prm_, *law_, particles, bonds.horizon / per_spacing,
-                                             coupled ? &bonds : nullptr);
+                                             use_rows ? &bonds : nullptr);
   solver_->set_deferred_commit(true);
   solver_->set_reference_temperature(reference_temperature_);
-  if (coupled)
+  if (driven)
     solver_->set_driven(driven_);
   for (unsigned int i = 0; i < kept_.size() && i < particles.size(); ++i)
     solver_->set_state(i, kept_[i]);
@@ -92,7 +96,7 @@ std::size_t SpgMethod<dim>::compute_forces(ParticleSet<dim>& particles, BondList
   const std::size_t before = solver().n_broken_bonds();
   solver_->compute_forces(particles);
   const std::size_t broken = solver_->n_broken_bonds() - before;
-  // The caller's rows carry the breaks too (same layout in a coupled run).
+  // The caller's rows carry the breaks too (the same rows, unless the kernel searched its own).
   if (broken > 0 && solver_->bonds().n_bonds() == bonds.n_bonds())
     bonds.broken = solver_->bonds().broken;
   return broken;

@@ -57,8 +57,8 @@ class SpgMethod : public ParticleMethod<dim> {
   typename NeighborSearch<dim>::Options neighbor_options(double spacing) const override;
   // Builds the RK shape functions; the particle spacing is the bond list's horizon over the
   // kernel's search radius per spacing (the list was searched with neighbor_options()).
-  // Stand-alone, the solver searches its own neighbours; with driven particles it uses these
-  // rows. Committed states of particles seen before are kept.
+  // A total Lagrangian kernel works on these rows (with their pre-cracks and breaks); the
+  // others search their own neighbours. Committed states of particles seen before are kept.
   void initialise(const ParticleSet<dim>& particles, const BondList<dim>& bonds) override;
   // InvalidInput if bonds may not break but a breaking criterion is set.
   std::size_t compute_forces(ParticleSet<dim>& particles, BondList<dim>& bonds,
