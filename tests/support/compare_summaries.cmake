@@ -1,4 +1,4 @@
-# Compares every numeric figure (except timings [s] and solver [iterations]) of two
+# Compares every numeric figure (except timings [s], rates [1/s] and solver [iterations]) of two
 # summary.json files: |a - b| <= TOL * max(|a|, |b|); figures with max(|a|, |b|) < FLOOR
 # count as zero (round-off measures such as balance errors). Text labels must be equal.
 # A figure that is null (non-finite) in either file, or missing in B, fails (figures.cmake).
@@ -26,8 +26,8 @@ foreach(_i RANGE ${_last})
   endif()
   spinesim_numeric_figure("${_a}" ${_name} _va ${A})
   spinesim_numeric_figure("${_b}" ${_name} _vb ${B})
-  if(_unit STREQUAL "s" OR _unit STREQUAL "iterations")
-    continue() # timings and solver iteration counts legitimately differ (but must be finite)
+  if(_unit STREQUAL "s" OR _unit STREQUAL "1/s" OR _unit STREQUAL "iterations")
+    continue() # timings, rates and solver iteration counts legitimately differ (but are finite)
   endif()
   set(_m "((${_va})^2 > (${_vb})^2 ? (${_va})^2 : (${_vb})^2)")
   spinesim_awk_true("${_m} < (${FLOOR})^2 || (${_va} - ${_vb})^2 <= (${TOL})^2 * ${_m}" _ok)
