@@ -63,6 +63,8 @@ class CoupledIntegrator {
   void advance(double dt, double a, double load_time, bool first, RelaxationSums* sums);
   // Pairs broken on one rank, for methods that share breaks (ParticleMethod::shares_bond_breaks).
   void share_bond_breaks();
+  // NumericalFailure naming the particle if a free particle outruns the P wave (divergence).
+  void check_particle_speeds() const;
 
   CouplingState<dim>& state_;
   GhostLayer<dim>& ghosts_;

@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <sstream>
+#include <string>
 
 namespace spinesim::coupling {
 
@@ -87,6 +89,36 @@ void CouplingState<dim>::prepare() {
     if (cell.state() == IteratorState::valid &&
         cell->minimum_vertex_distance() <= 1.5 * spacing * prm.particles_per_direction)
       lattice_cells.push_back(cell);
+
+  // The particles of a cell sit on its sub-cell centres: one spacing serves the lattice only if
+  // the cells that can convert are cubes (squares); others give an anisotropic lattice whose
+  // horizon, volumes and interface fit are wrong (the patch test fails by percents).
+  double worst = 1;
+  std::string worst_shape;
+  for (const auto& cell : lattice_cells) {
+    double lo = cell->extent_in_direction(0), hi = lo;
+    for (unsigned int d = 1; d < dim; ++d) {
+      lo = std::min(lo, cell->extent_in_direction(d));
+      hi = std::max(hi, cell->extent_in_direction(d));
+    }
+    if (hi / lo > worst) {
+      worst = hi / lo;
+      std::ostringstream shape_text;
+      for (unsigned int d = 0; d < dim; ++d)
+        shape_text << (d ? " x " : "") << cell->extent_in_direction(d);
+      worst_shape = shape_text.str();
+    }
+  }
+  const double worst_all = Utilities::MPI::max(worst, comm);
+  if (worst_all > 1.01) {
+    if (worst != worst_all)
+      worst_shape = "cells";
+    throw InvalidInput("Geometry/Subdivisions",
+                       "the cells particles are made from are not cubes (" + worst_shape +
+                           " m, aspect ratio " + std::to_string(worst_all) + ")",
+                       "cubic (2-D: square) cells where particles can appear: Subdivisions in "
+                       "proportion to Lengths");
+  }
 
   shape.reinit(points.size(), fe.n_dofs_per_cell());
   for (unsigned int q = 0; q < points.size(); ++q)

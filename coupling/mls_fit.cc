@@ -1,5 +1,6 @@
 #include "coupling/mls_fit.h"
 
+#include <deal.II/base/exceptions.h>
 #include <deal.II/lac/full_matrix.h>
 
 #include <array>
@@ -39,7 +40,13 @@ mls_linear_weights(const dealii::Point<dim>& X, const std::vector<dealii::Point<
   double trace = 0;
   for (unsigned int a = 0; a <= dim; ++a)
     trace += A(a, a);
-  if (!(std::abs(A.determinant()) > 1e-10 * std::pow(trace / (dim + 1), dim + 1)))
+  double determinant = 0;
+  try { // deal.II's 4 x 4 determinant is an LU factorisation that throws on a singular matrix
+    determinant = A.determinant();
+  } catch (const dealii::ExceptionBase&) {
+    return std::nullopt;
+  }
+  if (!(std::abs(determinant) > 1e-10 * std::pow(trace / (dim + 1), dim + 1)))
     return std::nullopt;
   dealii::FullMatrix<double> Ainv(dim + 1, dim + 1);
   Ainv.invert(A);

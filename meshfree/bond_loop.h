@@ -8,6 +8,8 @@
 
 #include "meshfree/bond_list.h"
 
+#include <exception>
+
 namespace spinesim::meshfree {
 
 // Below this many bonds a loop runs on one thread: a parallel region costs microseconds (and
@@ -15,6 +17,29 @@ namespace spinesim::meshfree {
 // small loop itself.
 constexpr std::size_t parallel_bond_threshold = 20000;
 constexpr long parallel_particle_threshold = 5000;
+
+// body(i) for i in [0, n), on threads when n > threshold. Exceptions must not leave a parallel
+// region (std::terminate): the one of the lowest index is rethrown after the loop, so the error
+// names the same particle whatever the thread count.
+template <class Body>
+void parallel_for_rethrow(long n, long threshold, Body&& body) {
+  std::exception_ptr failure;
+  long failed = n;
+#pragma omp parallel for schedule(static) if (n > threshold)
+  for (long i = 0; i < n; ++i) {
+    try {
+      body(i);
+    } catch (...) {
+#pragma omp critical(spinesim_parallel_for_rethrow)
+      if (i < failed) {
+        failed = i;
+        failure = std::current_exception();
+      }
+    }
+  }
+  if (failure)
+    std::rethrow_exception(failure);
+}
 
 // body(i, k, j) for every bond k = (i → j).
 template <int dim, class Body>

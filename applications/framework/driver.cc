@@ -233,7 +233,9 @@ int run_command(const RunOptions& options) {
   } catch (const NumericalFailure& e) {
     code = record_failure(ctx, e.report(), e.report());
   } catch (const dealii::ExceptionBase& e) {
+    // Where and which condition, not only the additional information (often "(none)").
     std::ostringstream msg;
+    e.print_exc_data(msg);
     e.print_info(msg);
     code = record_failure(ctx, "run failed: " + msg.str(), msg.str());
   } catch (const std::exception& e) {

@@ -109,8 +109,8 @@ template <int dim>
 void CrackPath<dim>::add_figures(framework::Summary& s,
                                  const std::vector<dealii::Point<dim>>& positions,
                                  const std::vector<double>& damage,
-                                 const std::vector<std::uint8_t>& counted) const {
-  add_direction_figures(s, positions, damage, counted);
+                                 const std::vector<std::uint8_t>& counted, MPI_Comm comm) const {
+  add_direction_figures(s, positions, damage, counted, comm);
   if (along_ < 0)
     return;
   double lo = 0, hi = 0, path_sq = 0;
@@ -134,15 +134,29 @@ template <int dim>
 void CrackPath<dim>::add_direction_figures(framework::Summary& s,
                                            const std::vector<dealii::Point<dim>>& positions,
                                            const std::vector<double>& damage,
-                                           const std::vector<std::uint8_t>& counted) const {
+                                           const std::vector<std::uint8_t>& counted,
+                                           MPI_Comm comm) const {
+  const auto times = gathered(comm); // every rank's particles
+  std::vector<dealii::Point<dim>> cracked, grown;
+  for (unsigned int i = 0; i < positions.size(); ++i)
+    if (counted[i] && damage[i] >= prm_.damage_threshold) {
+      cracked.push_back(positions[i]);
+      // Cracked after the start: not part of a pre-crack (its failure time is 0).
+      const auto it = times.find(i);
+      if (it == times.end() || it->second > 0.0)
+        grown.push_back(positions[i]);
+    }
+  direction_figures(s, "crack_", cracked);
+  direction_figures(s, "grown_crack_", grown);
+}
+
+template <int dim>
+void CrackPath<dim>::direction_figures(framework::Summary& s, const std::string& prefix,
+                                       const std::vector<dealii::Point<dim>>& cracked) const {
   // The principal axis of the cracked particles (largest eigenvalue of their covariance in
   // the x-y plane): a straight crack's direction whatever it is; the tips are the extreme
   // cracked particles along it.
-  std::vector<dealii::Point<dim>> cracked;
-  for (unsigned int i = 0; i < positions.size(); ++i)
-    if (counted[i] && damage[i] >= prm_.damage_threshold)
-      cracked.push_back(positions[i]);
-  s.set_figure("crack_particles", double(cracked.size()), "-");
+  s.set_figure(prefix + "particles", double(cracked.size()), "-");
   if (cracked.size() < 2)
     return;
   dealii::Point<dim> mean;
@@ -170,11 +184,11 @@ void CrackPath<dim>::add_direction_figures(framework::Summary& s,
       tip_hi = cracked[k];
     }
   }
-  s.set_figure("crack_angle_deg", angle * 180.0 / M_PI, "degree");
-  s.set_figure("crack_length_m", hi - lo, "m");
+  s.set_figure(prefix + "angle_deg", angle * 180.0 / M_PI, "degree");
+  s.set_figure(prefix + "length_m", hi - lo, "m");
   for (unsigned int d = 0; d < dim; ++d) {
-    s.set_figure(std::string("crack_tip_1_") + axes[d] + "_m", tip_lo[d], "m");
-    s.set_figure(std::string("crack_tip_2_") + axes[d] + "_m", tip_hi[d], "m");
+    s.set_figure(prefix + "tip_1_" + axes[d] + "_m", tip_lo[d], "m");
+    s.set_figure(prefix + "tip_2_" + axes[d] + "_m", tip_hi[d], "m");
   }
 }
 

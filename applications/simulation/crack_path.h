@@ -50,22 +50,27 @@ class CrackPath {
                   const std::vector<double>& damage, MPI_Comm comm) const;
   // With a crack line: crack_extent_min_<along>_m, crack_extent_max_<along>_m and
   // crack_path_rms_<across>_m over the counted particles at or past the threshold now.
+  // Collective (the grown_crack_ figures need every rank's failure times).
   void add_figures(framework::Summary& summary, const std::vector<dealii::Point<dim>>& positions,
-                   const std::vector<double>& damage,
-                   const std::vector<std::uint8_t>& counted) const;
+                   const std::vector<double>& damage, const std::vector<std::uint8_t>& counted,
+                   MPI_Comm comm) const;
   // Whatever the crack's direction: crack_particles, and for two or more cracked particles
   // crack_angle_deg (principal axis of the cracked particles in the x-y plane, from the x
-  // axis, in (−90, 90]), crack_length_m along it and the tips crack_tip_{1,2}_<axis>_m.
+  // axis, in (−90, 90]), crack_length_m along it and the tips crack_tip_{1,2}_<axis>_m. The
+  // same with the prefix grown_crack_ over the particles that cracked during the run (not at
+  // t = 0 by a pre-crack): the direction a crack took from its notch.
   void add_direction_figures(framework::Summary& summary,
                              const std::vector<dealii::Point<dim>>& positions,
                              const std::vector<double>& damage,
-                             const std::vector<std::uint8_t>& counted) const;
+                             const std::vector<std::uint8_t>& counted, MPI_Comm comm) const;
   // Failure times of every rank (collective), for checkpoints; from_json takes them all.
   nlohmann::json to_json(MPI_Comm comm) const;
   void from_json(const nlohmann::json& j);
 
  private:
   CrackOutputParameters prm_;
+  void direction_figures(framework::Summary& summary, const std::string& prefix,
+                         const std::vector<dealii::Point<dim>>& cracked) const;
   int along_ = -1, across_ = -1;                // coordinate indices of the crack line, -1 = none
   double offset_ = 0;                           // the line's value of the across coordinate [m]
   std::map<unsigned int, double> failure_time_; // particle -> first time at threshold [s]

@@ -124,8 +124,8 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
     particles_->add_figures(ctx);
   if (crack_ && (coupled_ || particles_)) {
     const auto view = crack_view<dim>(coupled_.get(), particles_.get(), false);
-    crack_->add_figures(s, view.positions, view.damage, view.counted);
-    const std::string csv = crack_->csv(view.positions, view.damage, ctx.comm()); // collective
+    crack_->add_figures(s, view.positions, view.damage, view.counted, ctx.comm()); // collective
+    const std::string csv = crack_->csv(view.positions, view.damage, ctx.comm());  // collective
     if (ctx.is_root())
       ctx.output().write_atomic("crack_path.csv", csv);
   }

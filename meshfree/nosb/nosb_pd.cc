@@ -193,6 +193,26 @@ void NosbPD<dim>::update_families(const ParticleSet<dim>& particles, const BondL
 }
 
 template <int dim>
+void NosbPD<dim>::build_gather_index(unsigned int n_particles) {
+  const auto& fam = families();
+  const std::size_t n_entries = fam.n_families() ? fam.end(fam.n_families() - 1) : 0;
+  entry_family_.assign(n_entries, 0);
+  gather_offsets_.assign(n_particles + 1, 0);
+  for (unsigned int e = 0; e < fam.n_families(); ++e)
+    for (std::size_t q = fam.begin(e); q < fam.end(e); ++q) {
+      entry_family_[q] = e;
+      ++gather_offsets_[fam.node(q) + 1];
+    }
+  for (unsigned int m = 0; m < n_particles; ++m)
+    gather_offsets_[m + 1] += gather_offsets_[m];
+  gather_entries_.assign(n_entries, 0);
+  std::vector<std::size_t> next(gather_offsets_.begin(), gather_offsets_.end() - 1);
+  for (std::size_t q = 0; q < n_entries; ++q) // ascending q: the scatter's order
+    gather_entries_[next[fam.node(q)]++] = q;
+  gather_version_ = families_version_;
+}
+
+template <int dim>
 void NosbPD<dim>::log_failed(const ParticleSet<dim>& particles,
                              const std::vector<unsigned int>& newly) {
   for (const unsigned int i : newly) {
@@ -275,33 +295,25 @@ void NosbPD<dim>::compute_forces(ParticleSet<dim>& particles, const BondList<dim
   const auto& fam = families();
   const long n_fam = fam.n_families();
   std::vector<dealii::Tensor<2, dim>> P(n_fam);
-  bool failed_eval = false;
-  std::string failure_what, failure_where, failure_hint;
-#pragma omp parallel for schedule(static) if (n_fam > parallel_particle_threshold)
-  for (long e = 0; e < n_fam; ++e) {
-    try {
-      const auto F = fam.deformation_gradient(e, u);
-      P[e] = evaluate(e, F, particles, &trial_[fam.history_index(e)]).P;
-    } catch (const NumericalFailure& x) {
-#pragma omp critical
-      {
-        if (!failed_eval) {
-          failed_eval = true;
-          failure_what = x.what_failed();
-          failure_where = x.location();
-          failure_hint = x.hint();
-        }
-      }
+  parallel_for_rethrow(n_fam, parallel_particle_threshold, [&](long e) {
+    const auto F = fam.deformation_gradient(e, u);
+    P[e] = evaluate(e, F, particles, &trial_[fam.history_index(e)]).P;
+  });
+  // f_m = −Σ_e w_e P_e G_m: each family's forces sum to zero (Σ_m G_m = 0). Gathered per
+  // particle over its family entries in ascending order: the sums of a scatter over families,
+  // bit for bit, on any number of threads.
+  if (gather_version_ != families_version_)
+    build_gather_index(particles.size());
+  const long n_particles = particles.size();
+  parallel_for_rethrow(n_particles, parallel_particle_threshold, [&](long m) {
+    Vec fm;
+    for (std::size_t k = gather_offsets_[m]; k < gather_offsets_[m + 1]; ++k) {
+      const std::size_t q = gather_entries_[k];
+      const unsigned int e = entry_family_[q];
+      fm -= fam.weight(e) * (P[e] * fam.gradient(q));
     }
-  }
-  if (failed_eval)
-    throw NumericalFailure(failure_what, failure_where, failure_hint);
-  // f_m = −Σ_e w_e P_e G_m: each family's forces sum to zero (Σ_m G_m = 0).
-  for (long e = 0; e < n_fam; ++e) {
-    const double w = fam.weight(e);
-    for (std::size_t q = fam.begin(e); q < fam.end(e); ++q)
-      f[fam.node(q)] -= w * (P[e] * fam.gradient(q));
-  }
+    f[m] = fm;
+  });
 
   if (prm_.stabilization == Stabilization::penalty && prm_.stabilization_coefficient > 0) {
     const auto& V = particles.volumes();
@@ -507,8 +519,7 @@ std::vector<double> NosbPD<dim>::stiffness_row_bound(const ParticleSet<dim>& par
   const long n_fam = fam.n_families();
   // Per family: B[a][J] = Σ_b Σ_L |A_aJbL| Σ_p |G_p,L|; rows m get w_e Σ_J |G_m,J| B[a][J].
   std::vector<dealii::Tensor<2, dim>> B(n_fam);
-#pragma omp parallel for schedule(static) if (n_fam > parallel_particle_threshold)
-  for (long e = 0; e < n_fam; ++e) {
+  parallel_for_rethrow(n_fam, parallel_particle_threshold, [&](long e) {
     const Response r = evaluate(e, fam.deformation_gradient(e, u), particles, nullptr);
     dealii::Tensor<1, dim> g;
     for (std::size_t q = fam.begin(e); q < fam.end(e); ++q)
@@ -519,7 +530,7 @@ std::vector<double> NosbPD<dim>::stiffness_row_bound(const ParticleSet<dim>& par
         for (unsigned int b = 0; b < dim; ++b)
           for (unsigned int L = 0; L < dim; ++L)
             B[e][a][J] += std::abs(r.A[a][J][b][L]) * g[L];
-  }
+  });
   std::vector<dealii::Tensor<1, dim>> rows(particles.size());
   for (long e = 0; e < n_fam; ++e) {
     const double w = fam.weight(e);

@@ -209,6 +209,12 @@ class NosbPD {
   std::vector<std::uint8_t> driven_;
   std::vector<std::string> messages_;
   unsigned long families_version_ = 0, pattern_version_ = ~0ul;
+  // Transpose of the families' node lists for the force gather: per particle, the entries q
+  // with node(q) = m in ascending order (CSR), and each entry's family.
+  std::vector<std::size_t> gather_offsets_, gather_entries_;
+  std::vector<unsigned int> entry_family_;
+  unsigned long gather_version_ = ~0ul;
+  void build_gather_index(unsigned int n_particles);
 };
 
 } // namespace spinesim::meshfree

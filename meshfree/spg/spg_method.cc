@@ -149,7 +149,12 @@ double SpgMethod<dim>::energy_density(unsigned int i, const ParticleSet<dim>& pa
   const double wa = (18.0 + std::sqrt(30.0)) / 36.0, wb = (18.0 - std::sqrt(30.0)) / 36.0;
   const double t[4] = {0.5 * (1 - b), 0.5 * (1 - a), 0.5 * (1 + a), 0.5 * (1 + b)};
   const double w[4] = {0.5 * wb, 0.5 * wa, 0.5 * wa, 0.5 * wb};
-  const auto& F = solver_->deformation_gradients()[i];
+  // F from the coefficients now (a restored checkpoint has not evaluated forces yet).
+  const auto F =
+      solver_->parameters().update_mode() == SPGSolver<dim>::KernelUpdate::total_lagrangian
+          ? (solver_->has_row(i) ? solver_->deformation_gradient(i, particles.displacements())
+                                 : dealii::Tensor<2, dim>(dealii::unit_symmetric_tensor<dim>()))
+          : solver_->deformation_gradients()[i];
   const double dT = particles.temperature(i) - reference_temperature_;
   if (const auto* j2 = dynamic_cast<const materials::J2Plasticity*>(law_.get())) {
     // The stored energy of small-strain J2, not the path integral (which would count the

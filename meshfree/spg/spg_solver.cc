@@ -515,6 +515,21 @@ void SPGSolver<dim>::break_pairs(ParticleSet<dim>& p,
 }
 
 template <int dim>
+dealii::Tensor<2, dim>
+SPGSolver<dim>::deformation_gradient(unsigned int i,
+                                     const std::vector<dealii::Tensor<1, dim>>& d) const {
+  if (mode_ != KernelUpdate::total_lagrangian)
+    throw std::logic_error("SPGSolver::deformation_gradient: total Lagrangian kernels only");
+  const auto& rk = *rk_;
+  Matrix F = outer_product(d[i], rk.self_gradient[i]);
+  for (std::size_t k = bonds_.begin(i); k < bonds_.end(i); ++k)
+    F += outer_product(d[bonds_.neighbor[k]], rk.gradient[k]);
+  for (unsigned int r = 0; r < dim; ++r)
+    F[r][r] += 1.0;
+  return F;
+}
+
+template <int dim>
 std::vector<dealii::Tensor<1, dim>>
 SPGSolver<dim>::smoothed(const std::vector<dealii::Tensor<1, dim>>& d) const {
   if (mode_ != KernelUpdate::total_lagrangian)

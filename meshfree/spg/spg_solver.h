@@ -156,6 +156,10 @@ class SPGSolver {
   // u(X_I) = Σ_J Ψ_J(X_I) d_J for the coefficients `d` at every particle with a row (the
   // coefficient itself elsewhere) [m]; total Lagrangian kernels.
   std::vector<dealii::Tensor<1, dim>> smoothed(const std::vector<dealii::Tensor<1, dim>>& d) const;
+  // F at particle i (with a row) for the coefficients `d`: I + Σ_J d_J ⊗ ∇Ψ_J(X_i); total
+  // Lagrangian kernels.
+  dealii::Tensor<2, dim> deformation_gradient(unsigned int i,
+                                              const std::vector<dealii::Tensor<1, dim>>& d) const;
 
   // --- the force model: particles.force() [N] (internal + stabilisation + contact, condensed
   // for the constraints). One call = one step (the material history is committed).
