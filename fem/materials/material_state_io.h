@@ -12,6 +12,15 @@ namespace spinesim::materials {
 
 constexpr unsigned int material_state_doubles = 14;
 
+// Whether s is the state of untouched material (a new family or particle starts from it, so a
+// checkpoint need not write it).
+inline bool is_virgin(const MaterialState& s) {
+  const MaterialState virgin;
+  return s.equivalent_plastic_strain == 0 && s.plastic_work == 0 &&
+         s.plastic_strain == virgin.plastic_strain &&
+         s.elastic_left_cauchy_green == virgin.elastic_left_cauchy_green;
+}
+
 inline std::array<double, material_state_doubles> pack_state(const MaterialState& s) {
   std::array<double, material_state_doubles> v{};
   unsigned int n = 0;

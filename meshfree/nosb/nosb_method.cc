@@ -60,18 +60,12 @@ std::vector<HistoryRecord> NosbMethod<dim>::history(const std::vector<std::uint8
   const auto& keys = pd_.history_keys();
   const auto& states = pd_.committed_states();
   std::vector<HistoryRecord> records;
-  const materials::MaterialState virgin;
   for (std::size_t h = 0; h < keys.size() && h < states.size(); ++h) {
     const auto [i, j] = keys[h];
     if (!which.empty() && (i >= which.size() || !which[i]))
       continue;
-    const auto& s = states[h];
-    // Virgin states need no record (a new family starts from one).
-    if (s.equivalent_plastic_strain == 0 && s.plastic_work == 0 &&
-        s.plastic_strain == virgin.plastic_strain &&
-        s.elastic_left_cauchy_green == virgin.elastic_left_cauchy_green)
-      continue;
-    records.push_back({i, j, s});
+    if (!materials::is_virgin(states[h]))
+      records.push_back({i, j, states[h]});
   }
   return records;
 }

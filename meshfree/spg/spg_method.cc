@@ -2,6 +2,7 @@
 
 #include "base/exceptions.h"
 #include "fem/materials/j2_plasticity.h"
+#include "fem/materials/material_state_io.h"
 
 #include <algorithm>
 #include <cmath>
@@ -234,17 +235,9 @@ std::vector<HistoryRecord> SpgMethod<dim>::history(const std::vector<std::uint8_
   if (!solver_)
     return records;
   const auto& states = solver_->committed_states();
-  const materials::MaterialState virgin;
-  for (unsigned int i = 0; i < states.size(); ++i) {
-    if (!which.empty() && (i >= which.size() || !which[i]))
-      continue;
-    const auto& s = states[i];
-    if (s.equivalent_plastic_strain == 0 && s.plastic_work == 0 &&
-        s.plastic_strain == virgin.plastic_strain &&
-        s.elastic_left_cauchy_green == virgin.elastic_left_cauchy_green)
-      continue; // a virgin state needs no record
-    records.push_back({i, i, s});
-  }
+  for (unsigned int i = 0; i < states.size(); ++i)
+    if ((which.empty() || (i < which.size() && which[i])) && !materials::is_virgin(states[i]))
+      records.push_back({i, i, states[i]});
   return records;
 }
 

@@ -19,47 +19,59 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <string>
 
 namespace spinesim::coupling {
 namespace {
 
+// A unit square (cube) of 8 x 8 (4 x 4 x 4) explicit Q1 cells with a particle block in
+// [0.25, 0.75]^dim: linear elastic with nu = 0.25 (bond-based PD's in 3-D and plane strain), or
+// J2 yielding at a strain of 6e-5 with `plastic` (the imposed fields below are plastic).
+template <int dim>
+struct CoupledSetup {
+  CoupledSetup(const std::string& method, bool plastic) : tria(MPI_COMM_WORLD) {
+    fem::MeshParameters mesh;
+    mesh.origin = {0, 0, 0};
+    mesh.lengths = {1, 1, 1};
+    mesh.subdivisions = {dim == 2 ? 8u : 4u, dim == 2 ? 8u : 4u, 4u};
+    fem::build_mesh(mesh, tria);
+    typename fem::MechanicsSolver<dim>::Parameters mech;
+    mech.time_integration = "explicit";
+    solver = std::make_unique<fem::MechanicsSolver<dim>>(tria, mech);
+    materials::LawParameters law;
+    law.poisson_ratio = 0.25;
+    if (plastic) {
+      law.model = "j2_plasticity";
+      law.yield_stress = 1e6;
+      law.hardening_modulus = 1e8;
+    }
+    solver->set_material(0, materials::create_law(law));
+    solver->setup();
+    dealii::ParameterHandler prm;
+    meshfree::declare_particle_method_sections(prm);
+    prm.enter_subsection("Bond based");
+    prm.set("Plane model", "plane_strain"); // the FEM's
+    prm.leave_subsection();
+    prm.enter_subsection("NOSB");
+    prm.set("Horizon ratio", "2.015"); // small families keep the 3-D case quick
+    prm.leave_subsection();
+    parameters.particles_method = method;
+    parameters.make_method = meshfree::particle_method_maker<dim>(method, prm, "test");
+    parameters.region_lower = std::vector<double>(dim, 0.25);
+    parameters.region_upper = std::vector<double>(dim, 0.75);
+  }
+  dealii::parallel::distributed::Triangulation<dim> tria;
+  std::unique_ptr<fem::MechanicsSolver<dim>> solver;
+  typename FemParticleCoupling<dim>::Parameters parameters;
+};
+
 template <int dim>
 void checkpoint_round_trip(const std::string& method) {
   const MPI_Comm comm = MPI_COMM_WORLD;
-  fem::MeshParameters mesh;
-  mesh.origin = {0, 0, 0};
-  mesh.lengths = {1, 1, 1};
-  mesh.subdivisions = {dim == 2 ? 8u : 4u, dim == 2 ? 8u : 4u, 4u};
-  dealii::parallel::distributed::Triangulation<dim> tria(comm);
-  fem::build_mesh(mesh, tria);
-  typename fem::MechanicsSolver<dim>::Parameters mech;
-  mech.time_integration = "explicit";
-  fem::MechanicsSolver<dim> solver(tria, mech);
-  materials::LawParameters law;
-  law.poisson_ratio = 0.25; // bond-based PD's, in 3-D and plane strain
-  if (method == "nosb" || method == "spg") {
-    // Yield at a strain of 6e-5: the imposed field below (1e-4 to 3e-4) is plastic.
-    law.model = "j2_plasticity";
-    law.yield_stress = 1e6;
-    law.hardening_modulus = 1e8;
-  }
-  solver.set_material(0, materials::create_law(law));
-  solver.setup();
-
-  dealii::ParameterHandler prm;
-  meshfree::declare_particle_method_sections(prm);
-  prm.enter_subsection("Bond based");
-  prm.set("Plane model", "plane_strain"); // the FEM's
-  prm.leave_subsection();
-  prm.enter_subsection("NOSB");
-  prm.set("Horizon ratio", "2.015"); // small families keep the 3-D case quick
-  prm.leave_subsection();
-  typename FemParticleCoupling<dim>::Parameters cp;
-  cp.particles_method = method;
-  cp.make_method = meshfree::particle_method_maker<dim>(method, prm, "test");
-  cp.region_lower = std::vector<double>(dim, 0.25);
-  cp.region_upper = std::vector<double>(dim, 0.75);
+  CoupledSetup<dim> setup(method, method == "nosb" || method == "spg");
+  auto& solver = *setup.solver;
+  const auto& cp = setup.parameters;
 
   FemParticleCoupling<dim> a(cp, solver);
   a.initialise();
@@ -116,30 +128,9 @@ void checkpoint_round_trip(const std::string& method) {
 // step stops the run once a particle outruns the material's P wave, before anything is NaN.
 template <int dim>
 void divergence_is_caught() {
-  const MPI_Comm comm = MPI_COMM_WORLD;
-  fem::MeshParameters mesh;
-  mesh.origin = {0, 0, 0};
-  mesh.lengths = {1, 1, 1};
-  mesh.subdivisions = {dim == 2 ? 8u : 4u, dim == 2 ? 8u : 4u, 4u};
-  dealii::parallel::distributed::Triangulation<dim> tria(comm);
-  fem::build_mesh(mesh, tria);
-  typename fem::MechanicsSolver<dim>::Parameters mech;
-  mech.time_integration = "explicit";
-  fem::MechanicsSolver<dim> solver(tria, mech);
-  materials::LawParameters law;
-  law.poisson_ratio = 0.25;
-  solver.set_material(0, materials::create_law(law));
-  solver.setup();
-  dealii::ParameterHandler prm;
-  meshfree::declare_particle_method_sections(prm);
-  prm.enter_subsection("Bond based");
-  prm.set("Plane model", "plane_strain");
-  prm.leave_subsection();
-  typename FemParticleCoupling<dim>::Parameters cp;
-  cp.particles_method = "bond_based";
-  cp.make_method = meshfree::particle_method_maker<dim>("bond_based", prm, "test");
-  cp.region_lower = std::vector<double>(dim, 0.25);
-  cp.region_upper = std::vector<double>(dim, 0.75);
+  CoupledSetup<dim> setup("bond_based", false);
+  auto& solver = *setup.solver;
+  const auto& cp = setup.parameters;
   FemParticleCoupling<dim> c(cp, solver);
   c.initialise();
   dealii::Tensor<2, dim> H;

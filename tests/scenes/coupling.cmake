@@ -177,48 +177,40 @@ spinesim_add_comparison_test(benchmark.cracked_plate_speedup_2_threads
   CHECKS "wall_time_s:ratio:3" REQUIRES "plate_coupled_2_threads;plate_all_particles_2_threads"
   LABELS "benchmark")
 
-# NOSB-PD particles in the same patch test (plane strain, nu = 0.3: any Poisson ratio). Ghosts
-# within a horizon of the free particles carry families too, whose forces reach the free
-# ones; on an affine field every family has the same F and P, so all of it cancels to
-# round-off: 2.4e-15 (2-D), 2.7e-15 (2 ranks), 1.2e-15 (3-D) measured, bound 1e-8 as above. The quasi-static
-# and drift bounds are those of bond-based PD (measured 1.3e-9 to 1.6e-9 and 2e-14 to 5e-14).
-set(_nosb "Effects/Particles method=nosb" "Mechanics/Plane stress=false" "Material/Poisson ratio=0.3")
-spinesim_add_scene_test(coupling.patch_test_nosb_2d SCENE ${_val}/coupling_patch_test.prm
-  SET ${_nosb} EXPECT "${_patch}" LABELS "scene;validation;coupling")
-spinesim_add_scene_test(coupling.patch_test_nosb_2d_2ranks SCENE ${_val}/coupling_patch_test.prm
-  RANKS 2 SET ${_nosb} EXPECT "${_patch}" LABELS "scene;validation;coupling;mpi")
-spinesim_add_scene_test(coupling.patch_test_nosb_2d_fine SCENE ${_val}/coupling_patch_test.prm
-  SET ${_nosb} "Coupling/Particles per cell direction=2" EXPECT "${_patch_fine}"
-  LABELS "scene;validation;coupling")
-# 3-D on a 12^3 mesh with the smaller horizon 2.015 h: bond-associated families of a 3.015 h
-# horizon cost about 40 s here, and the interface property does not depend on the horizon.
-spinesim_add_scene_test(coupling.patch_test_nosb_3d SCENE ${_val}/coupling_patch_test.prm
-  SET ${_nosb} "Dimension=3" "Geometry/Subdivisions=12,12,12" "Coupling/NOSB/Horizon ratio=2.015"
-      "Coupling/Initial region lower corner=0.42,0.42,0.42"
-      "Coupling/Initial region upper corner=0.58,0.58,0.58"
-      "Patch test/Conversion block lower corner=0.34,0.34,0.34"
-      "Patch test/Conversion block upper corner=0.66,0.66,0.66"
-  EXPECT "${_patch}" LABELS "scene;validation;coupling")
-
-# SPG particles in the same patch test. The ghosts' RK coefficients are the FEM displacement at
-# their positions, which linear reproduction turns into the exact affine field (docs/coupling.md);
-# the interface fits the free coefficients. Measured 7.1e-15 (2-D), 8.2e-15 (2 ranks), 4.3e-15
-# (2 particles per cell direction), 1.2e-15 (3-D); bounds as above.
-set(_spg "Effects/Particles method=spg" "Mechanics/Plane stress=false" "Material/Poisson ratio=0.3")
-spinesim_add_scene_test(coupling.patch_test_spg_2d SCENE ${_val}/coupling_patch_test.prm
-  SET ${_spg} EXPECT "${_patch}" LABELS "scene;validation;coupling")
-spinesim_add_scene_test(coupling.patch_test_spg_2d_2ranks SCENE ${_val}/coupling_patch_test.prm
-  RANKS 2 SET ${_spg} EXPECT "${_patch}" LABELS "scene;validation;coupling;mpi")
-spinesim_add_scene_test(coupling.patch_test_spg_2d_fine SCENE ${_val}/coupling_patch_test.prm
-  SET ${_spg} "Coupling/Particles per cell direction=2" EXPECT "${_patch_fine}"
-  LABELS "scene;validation;coupling")
-spinesim_add_scene_test(coupling.patch_test_spg_3d SCENE ${_val}/coupling_patch_test.prm
-  SET ${_spg} "Dimension=3" "Geometry/Subdivisions=12,12,12"
-      "Coupling/Initial region lower corner=0.42,0.42,0.42"
-      "Coupling/Initial region upper corner=0.58,0.58,0.58"
-      "Patch test/Conversion block lower corner=0.34,0.34,0.34"
-      "Patch test/Conversion block upper corner=0.66,0.66,0.66"
-  EXPECT "${_patch}" LABELS "scene;validation;coupling")
+# NOSB-PD and SPG particles in the same patch test (plane strain, nu = 0.3: any Poisson ratio).
+# NOSB-PD: ghosts within a horizon of the free particles carry families too, whose forces reach
+# the free ones; on an affine field every family has the same F and P, so all of it cancels to
+# round-off: 2.4e-15 (2-D), 2.7e-15 (2 ranks), 1.2e-15 (3-D) measured. SPG: the ghosts' RK
+# coefficients are the FEM displacement at their positions, which linear reproduction turns
+# into the exact affine field (docs/coupling.md); the interface fits the free coefficients:
+# 7.1e-15 (2-D), 8.2e-15 (2 ranks), 4.3e-15 (2 particles per cell direction), 1.2e-15 (3-D).
+# Bounds 1e-8 as above; the quasi-static and drift bounds are those of bond-based PD (measured
+# 1.3e-9 to 1.7e-9 and 1e-14 to 5e-14). 3-D on a 12^3 mesh; NOSB-PD with the smaller horizon
+# 2.015 h (bond-associated families of a 3.015 h horizon cost about 40 s here, and the
+# interface property does not depend on the horizon).
+foreach(_m nosb spg)
+  set(_method "Effects/Particles method=${_m}" "Mechanics/Plane stress=false"
+      "Material/Poisson ratio=0.3")
+  spinesim_add_scene_test(coupling.patch_test_${_m}_2d SCENE ${_val}/coupling_patch_test.prm
+    SET ${_method} EXPECT "${_patch}" LABELS "scene;validation;coupling")
+  spinesim_add_scene_test(coupling.patch_test_${_m}_2d_2ranks
+    SCENE ${_val}/coupling_patch_test.prm RANKS 2 SET ${_method} EXPECT "${_patch}"
+    LABELS "scene;validation;coupling;mpi")
+  spinesim_add_scene_test(coupling.patch_test_${_m}_2d_fine SCENE ${_val}/coupling_patch_test.prm
+    SET ${_method} "Coupling/Particles per cell direction=2" EXPECT "${_patch_fine}"
+    LABELS "scene;validation;coupling")
+  set(_small_horizon)
+  if(_m STREQUAL "nosb")
+    set(_small_horizon "Coupling/NOSB/Horizon ratio=2.015")
+  endif()
+  spinesim_add_scene_test(coupling.patch_test_${_m}_3d SCENE ${_val}/coupling_patch_test.prm
+    SET ${_method} "Dimension=3" "Geometry/Subdivisions=12,12,12" ${_small_horizon}
+        "Coupling/Initial region lower corner=0.42,0.42,0.42"
+        "Coupling/Initial region upper corner=0.58,0.58,0.58"
+        "Patch test/Conversion block lower corner=0.34,0.34,0.34"
+        "Patch test/Conversion block upper corner=0.66,0.66,0.66"
+    EXPECT "${_patch}" LABELS "scene;validation;coupling")
+endforeach()
 
 # Material state across a conversion (applications/validation/coupling_plastic_conversion.prm):
 # a uniformly yielding J2 plate whose central plastic cells turn into NOSB particles at an
