@@ -324,18 +324,13 @@ void NosbPD<dim>::compute_forces(ParticleSet<dim>& particles, const BondList<dim
     for (long i = 0; i < n; ++i) {
       if (failed(i))
         continue;
-      for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
-        const unsigned int j = bonds.neighbor[k];
-        if (bonds.broken[k] || failed(j))
-          continue;
+      for_each_penalty_bond(bonds, i, Gc, [&](std::size_t k, unsigned int j, double kappa) {
         const Vec& xi = bonds.xi[k];
         const Vec eta = u[j] - u[i];
         // z_ij − z_ji = 2η − (F_i − I)ξ − (F_j − I)ξ
         const Vec dz = 2.0 * eta - (F_particle_[i] * xi - xi) - (F_particle_[j] * xi - xi);
-        const double kappa =
-            0.5 * Gc * bonds.influence[k] * bonds.volume_factor(k) / bonds.length[k];
         f[i] += (kappa * V[i] * V[j]) * dz;
-      }
+      });
     }
   }
   for (unsigned int i = 0; i < particles.size(); ++i)
@@ -557,20 +552,15 @@ std::vector<double> NosbPD<dim>::stiffness_row_bound(const ParticleSet<dim>& par
     const auto& V = particles.volumes();
     const double Gc = prm_.stabilization_coefficient * c_;
     const long n = particles.size();
-    // Each particle adds to its own force only (same order as serially).
+    // Each particle adds to its own row bound only (same order as serially).
 #pragma omp parallel for schedule(static) if (n > parallel_particle_threshold)
     for (long i = 0; i < n; ++i) {
       if (failed(i))
         continue;
       double r = 0;
-      for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
-        const unsigned int j = bonds.neighbor[k];
-        if (bonds.broken[k] || failed(j))
-          continue;
-        const double kappa =
-            0.5 * Gc * bonds.influence[k] * bonds.volume_factor(k) / bonds.length[k];
+      for_each_penalty_bond(bonds, i, Gc, [&](std::size_t k, unsigned int j, double kappa) {
         r += kappa * V[i] * V[j] * (4.0 + bonds.length[k] * (gsum[i] + gsum[j]));
-      }
+      });
       R[i] += r;
     }
   }

@@ -155,6 +155,18 @@ class NosbPD {
   const CorrespondenceFamilies<dim>& particle_families() const { return particle_families_; }
   const CorrespondenceFamilies<dim>& families() const;
   bool failed(unsigned int i) const { return particle_families_.failed(i); }
+  // body(k, j, κ) for every intact bond k = (i → j) whose far end has a family, with the
+  // penalty stiffness κ = ½ G_s c ω β / |ξ| of the hourglass force (Silling 2017), Gc = G_s c.
+  template <class Body>
+  void for_each_penalty_bond(const BondList<dim>& bonds, unsigned int i, double Gc,
+                             Body&& body) const {
+    for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
+      const unsigned int j = bonds.neighbor[k];
+      if (bonds.broken[k] || failed(j))
+        continue;
+      body(k, j, 0.5 * Gc * bonds.influence[k] * bonds.volume_factor(k) / bonds.length[k]);
+    }
+  }
   // Messages about failed particles since the last call (for the run log).
   std::vector<std::string> take_messages();
 
