@@ -2,6 +2,7 @@
 
 #include "base/exceptions.h"
 #include "fem/materials/j2_plasticity.h"
+#include "fem/materials/plane_strain_embedding.h"
 #include "meshfree/bond_based_pd.h"
 #include "meshfree/bond_loop.h"
 
@@ -243,10 +244,7 @@ NosbPD<dim>::evaluate(unsigned int e, const dealii::Tensor<2, dim>& F,
                       const ParticleSet<dim>& particles, materials::MaterialState* trial) const {
   const auto& fam = families();
   const unsigned int i = fam.centre(e);
-  materials::Tensor2 F3 = dealii::unit_symmetric_tensor<3>();
-  for (unsigned int a = 0; a < dim; ++a)
-    for (unsigned int b = 0; b < dim; ++b)
-      F3[a][b] = F[a][b];
+  const materials::Tensor2 F3 = materials::embed_plane_strain(F);
   materials::FiniteStrainResponse r;
   try {
     r = law_->finite_strain(F3, particles.temperature(i) - reference_temperature_,
@@ -605,13 +603,10 @@ double NosbPD<dim>::family_energy(unsigned int e, const ParticleSet<dim>& partic
   if (const auto* j2 = dynamic_cast<const materials::J2Plasticity*>(law_.get())) {
     // Small-strain J2 on isotropic linear elasticity: the path integral from F = I would
     // count the plastic strain as stored (J2Plasticity::stored_energy_density).
-    materials::Tensor2 F3 = dealii::unit_symmetric_tensor<3>();
-    for (unsigned int r = 0; r < dim; ++r)
-      for (unsigned int c = 0; c < dim; ++c)
-        F3[r][c] = F[r][c];
     const double dT = particles.temperature(fam.centre(e)) - reference_temperature_;
     const auto sigma = dealii::symmetrize(
-        law_->finite_strain(F3, dT, committed_[fam.history_index(e)]).first_piola);
+        law_->finite_strain(materials::embed_plane_strain(F), dT, committed_[fam.history_index(e)])
+            .first_piola);
     return fam.weight(e) * j2->stored_energy_density(sigma);
   }
   const dealii::Tensor<2, dim> H = F - dealii::Tensor<2, dim>(dealii::unit_symmetric_tensor<dim>());

@@ -3,6 +3,7 @@
 #include "base/exceptions.h"
 #include "fem/materials/j2_plasticity.h"
 #include "fem/materials/material_state_io.h"
+#include "fem/materials/plane_strain_embedding.h"
 
 #include <algorithm>
 #include <cmath>
@@ -45,12 +46,17 @@ SPGSolver<dim>& SpgMethod<dim>::solver() {
 }
 
 template <int dim>
+double SpgMethod<dim>::search_radius(double spacing) const {
+  return RKKernel<dim>::from_names(prm_.kernel, prm_.support_shape)
+      .search_radius(prm_.dilation * spacing);
+}
+
+template <int dim>
 typename NeighborSearch<dim>::Options SpgMethod<dim>::neighbor_options(double spacing) const {
   typename NeighborSearch<dim>::Options o;
   // The kernel's search radius (a√dim for cubic supports), so a coupled run's rows hold the
   // whole support.
-  o.horizon = RKKernel<dim>::from_names(prm_.kernel, prm_.support_shape)
-                  .search_radius(prm_.dilation * spacing);
+  o.horizon = search_radius(spacing);
   o.partial_volume = false;
   o.surface_correction = false;
   return o;
@@ -67,8 +73,6 @@ void SpgMethod<dim>::initialise(const ParticleSet<dim>& particles, const BondLis
   if (!(bonds.horizon > 0.0))
     throw InvalidInput("SPG", "bond list without a search radius",
                        "bonds searched with SpgMethod::neighbor_options");
-  const double per_spacing =
-      RKKernel<dim>::from_names(prm_.kernel, prm_.support_shape).search_radius(prm_.dilation);
   if (solver_)
     kept_ = solver_->committed_states();
   // The caller's rows carry its pre-cracks and breaks; a kernel that resets its reference
@@ -76,8 +80,8 @@ void SpgMethod<dim>::initialise(const ParticleSet<dim>& particles, const BondLis
   // Lagrangian).
   const bool driven = std::find(driven_.begin(), driven_.end(), std::uint8_t(1)) != driven_.end();
   const bool use_rows = driven || prm_.kernel_update == "total_lagrangian";
-  solver_ = std::make_unique<SPGSolver<dim>>(prm_, *law_, particles, bonds.horizon / per_spacing,
-                                             use_rows ? &bonds : nullptr);
+  solver_ = std::make_unique<SPGSolver<dim>>(
+      prm_, *law_, particles, bonds.horizon / search_radius(1.0), use_rows ? &bonds : nullptr);
   solver_->set_deferred_commit(true);
   solver_->set_reference_temperature(reference_temperature_);
   if (driven)
@@ -160,12 +164,9 @@ double SpgMethod<dim>::energy_density(unsigned int i, const ParticleSet<dim>& pa
   if (const auto* j2 = dynamic_cast<const materials::J2Plasticity*>(law_.get())) {
     // The stored energy of small-strain J2, not the path integral (which would count the
     // plastic strain as stored): the FEM and NOSB-PD take the same.
-    materials::Tensor2 F3 = dealii::unit_symmetric_tensor<3>();
-    for (unsigned int r = 0; r < dim; ++r)
-      for (unsigned int c = 0; c < dim; ++c)
-        F3[r][c] = F[r][c];
     return j2->stored_energy_density(dealii::symmetrize(
-        law_->finite_strain(F3, dT, solver_->committed_states()[i]).first_piola));
+        law_->finite_strain(materials::embed_plane_strain(F), dT, solver_->committed_states()[i])
+            .first_piola));
   }
   materials::Tensor2 H;
   for (unsigned int r = 0; r < dim; ++r)

@@ -100,6 +100,8 @@ class SpgMethod : public ParticleMethod<dim> {
   std::vector<materials::MaterialState> kept_;
   std::unique_ptr<SPGSolver<dim>> solver_;
   double energy_density(unsigned int i, const ParticleSet<dim>& particles) const; // W_i [J/m^3]
+  // The kernel's neighbour search radius for particle spacing h [m] (a√dim for cubic supports).
+  double search_radius(double spacing) const;
 };
 
 } // namespace spinesim::meshfree

@@ -1,6 +1,7 @@
 #include "meshfree/spg/spg_solver.h"
 
 #include "base/exceptions.h"
+#include "fem/materials/plane_strain_embedding.h"
 #include "meshfree/bond_loop.h"
 
 #include <algorithm>
@@ -289,11 +290,7 @@ void SPGSolver<dim>::compute_forces(ParticleSet<dim>& p) {
     uh_[N] = shift_[N] + ubar;
     residual_[N] = eN - ubar;
     const Matrix F = tl ? Frel : Frel * Fr_[N];
-    materials::Tensor2 F3;
-    F3[2][2] = 1.0;
-    for (unsigned int i = 0; i < dim; ++i)
-      for (unsigned int j = 0; j < dim; ++j)
-        F3[i][j] = F[i][j];
+    const materials::Tensor2 F3 = materials::embed_plane_strain(F);
     Matrix P;
     try {
       const double dT = has_temperature ? temperature[N] - reference_temperature_ : 0.0;
