@@ -117,8 +117,7 @@ class ThickCylinder : public Scenario {
       throw InvalidInput("Mechanics/Plane stress", "the Lamé solution here is plane strain",
                          "false");
     if (law_.model != "linear_elastic")
-      throw InvalidInput("Material/Model", "the Lamé solution is linear elastic",
-                         "linear_elastic");
+      throw InvalidInput("Material/Model", "the Lamé solution is linear elastic", "linear_elastic");
   }
 
   void run(RunContext& ctx) override {
@@ -164,9 +163,8 @@ class ThickCylinder : public Scenario {
       for (const unsigned int v : cell->vertex_indices()) {
         const dealii::Point<dim> x = cell->vertex(v);
         const double r = std::hypot(x[0], x[1]);
-        const double ur = (u(cell->vertex_dof_index(v, 0)) * x[0] +
-                           u(cell->vertex_dof_index(v, 1)) * x[1]) /
-                          r;
+        const double ur =
+            (u(cell->vertex_dof_index(v, 0)) * x[0] + u(cell->vertex_dof_index(v, 1)) * x[1]) / r;
         const double e = std::abs(ur - lame.radial_displacement(r)) / u_ref;
         nodal_error = std::max(nodal_error, e);
         if (r < lame.a * (1 + 1e-9))

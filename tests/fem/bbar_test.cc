@@ -118,8 +118,8 @@ void patch_test() {
       for (const auto& d : mech.quadrature_point_data(cell))
         for (unsigned int i = 0; i < 3; ++i)
           for (unsigned int j = 0; j < 3; ++j) {
-            const double e = (i < dim && j < dim) ? 0.5 * (Affine<dim>::G[i][j] + Affine<dim>::G[j][i])
-                                                   : 0.0;
+            const double e =
+                (i < dim && j < dim) ? 0.5 * (Affine<dim>::G[i][j] + Affine<dim>::G[j][i]) : 0.0;
             worst = std::max(worst, std::abs(d.strain[i][j] - e));
           }
   worst = Utilities::MPI::max(worst, comm());
@@ -254,7 +254,9 @@ void explicit_paths() {
              standard = explicit_run<dim>("none", false);
   ASSERT_EQ(linear.first.size(), general.first.size());
   ASSERT_EQ(linear.second.size(), general.second.size());
-  const auto as_vector = [](const Vector<double>& v) { return std::vector<double>(v.begin(), v.end()); };
+  const auto as_vector = [](const Vector<double>& v) {
+    return std::vector<double>(v.begin(), v.end());
+  };
   const double du = relative_difference(as_vector(general.first), as_vector(linear.first));
   const double ds = relative_difference(general.second, linear.second);
   const double d_standard = relative_difference(general.second, standard.second);
@@ -303,8 +305,8 @@ double lame_error(const std::string& locking, double nu, unsigned int refinement
     return (1 + nu) * p * a * a / (E * (b * b - a * a)) * ((1 - 2 * nu) * r + b * b / r) * x[c] / r;
   };
   Vector<float> err(tria.n_active_cells()), ref(tria.n_active_cells());
-  FunctionFromFunctionObjects<2> exact_function(
-      {[&](const Point<2>& x) { return exact(x, 0); }, [&](const Point<2>& x) { return exact(x, 1); }});
+  FunctionFromFunctionObjects<2> exact_function({[&](const Point<2>& x) { return exact(x, 0); },
+                                                 [&](const Point<2>& x) { return exact(x, 1); }});
   VectorTools::integrate_difference(mech.mapping(), mech.dof_handler(), mech.displacement(),
                                     exact_function, err, QGauss<2>(4), VectorTools::L2_norm);
   TrilinosWrappers::MPI::Vector zero(mech.dof_handler().locally_owned_dofs(), comm());
@@ -340,7 +342,8 @@ TEST(Bbar, AgreesWithStandardElementAtNu03) {
 
 // What B-bar rejects, named by its entry.
 TEST(Bbar, RejectsFiniteStrainAndPlaneStress) {
-  for (const std::string extra : {"set Kinematics = finite_strain\n", "set Plane stress = true\n"}) {
+  for (const std::string extra :
+       {"set Kinematics = finite_strain\n", "set Plane stress = true\n"}) {
     ParameterHandler ph;
     MechanicsSolver<2>::Parameters::declare(ph);
     ph.parse_input_from_string("set Volumetric locking = bbar\n" + extra);
