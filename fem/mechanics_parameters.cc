@@ -14,6 +14,14 @@ void MechanicsParameters<dim>::declare(ParameterHandler& prm) {
                     "Linearised strain or total-Lagrangian finite strain [-].");
   prm.declare_entry("Plane stress", "false", Patterns::Bool(),
                     "2-D only, small strain: sigma_zz = 0 instead of plane strain [-].");
+  prm.declare_entry(
+      "Volumetric locking", "none", Patterns::Selection("none|bbar"),
+      "Treatment of volumetric locking [-]: none (standard displacement element) or bbar "
+      "(B-bar by mean dilatation, Hughes 1980: every quadrature point of a cell takes the "
+      "cell-average volumetric strain, the deviatoric strain stays point-wise). Switch it on "
+      "for nearly incompressible materials (Poisson ratio above about 0.45, e.g. soft tissue, "
+      "or J2 plastic flow), where the standard Q1 element is far too stiff. Small strain, "
+      "plane strain or 3-D only.");
   prm.declare_entry("Time integration", "quasi_static",
                     Patterns::Selection("quasi_static|explicit"),
                     "Implicit quasi-static Newton or explicit central differences [-].");
@@ -50,6 +58,7 @@ void MechanicsParameters<dim>::parse(const ParameterHandler& prm) {
   fe_degree = prm.get_integer("Finite element degree");
   kinematics = prm.get("Kinematics");
   plane_stress = prm.get_bool("Plane stress");
+  volumetric_locking = prm.get("Volumetric locking");
   time_integration = prm.get("Time integration");
   load_steps = prm.get_integer("Load steps");
   newton_tolerance = prm.get_double("Newton tolerance");
@@ -74,11 +83,31 @@ void MechanicsParameters<dim>::parse(const ParameterHandler& prm) {
   if (plane_stress && kinematics != "small_strain")
     throw InvalidInput("Plane stress", "plane stress is only implemented for small strain",
                        "false, or Kinematics = small_strain");
+  check_volumetric_locking(*this);
   // prm is const, so the boundary slots are read by path below the current subsection.
   boundary_conditions.parse(prm, {"Boundary conditions"});
 }
 
+template <int dim>
+void check_volumetric_locking(const MechanicsParameters<dim>& p) {
+  if (p.volumetric_locking != "none" && p.volumetric_locking != "bbar")
+    throw InvalidInput("Volumetric locking", "unknown '" + p.volumetric_locking + "'", "none|bbar");
+  if (p.volumetric_locking == "bbar" && p.kinematics != "small_strain")
+    throw InvalidInput("Volumetric locking",
+                       "bbar is the small-strain mean dilatation; Kinematics = " + p.kinematics +
+                           " (laws j2_finite_strain, neo_hookean) would need F-bar, which is "
+                           "not implemented",
+                       "none, or Kinematics = small_strain");
+  if (p.volumetric_locking == "bbar" && p.plane_stress)
+    throw InvalidInput("Volumetric locking",
+                       "plane stress does not lock (the out-of-plane strain is free), and bbar "
+                       "replaces the 3-D dilatation of plane strain",
+                       "none with Plane stress = true");
+}
+
 template struct MechanicsParameters<2>;
 template struct MechanicsParameters<3>;
+template void check_volumetric_locking(const MechanicsParameters<2>&);
+template void check_volumetric_locking(const MechanicsParameters<3>&);
 
 } // namespace spinesim::fem

@@ -19,6 +19,7 @@ struct MechanicsParameters {
   std::string kinematics = "small_strain";       // small_strain | finite_strain
   std::string time_integration = "quasi_static"; // quasi_static | explicit
   bool plane_stress = false;                     // 2-D small strain only
+  std::string volumetric_locking = "none";       // none | bbar (mean dilatation)
   unsigned int load_steps = 1;
   double newton_tolerance = 1e-8;
   unsigned int max_newton_iterations = 25;
@@ -34,6 +35,11 @@ struct MechanicsParameters {
   static void declare(dealii::ParameterHandler& prm);
   void parse(const dealii::ParameterHandler& prm);
 };
+
+// Throws InvalidInput for a Volumetric locking value the other entries exclude (parse() and
+// the solver's constructor call it).
+template <int dim>
+void check_volumetric_locking(const MechanicsParameters<dim>& parameters);
 
 } // namespace spinesim::fem
 

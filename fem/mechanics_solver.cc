@@ -35,6 +35,7 @@ MechanicsSolver<dim>::MechanicsSolver(parallel::distributed::Triangulation<dim>&
                        "small_strain|finite_strain");
   if (prm_.linear_solver != "cg" && prm_.linear_solver != "gmres" && prm_.linear_solver != "direct")
     throw InvalidInput("Linear solver", "unknown '" + prm_.linear_solver + "'", "cg|gmres|direct");
+  check_volumetric_locking(prm_);
   bcs_.add(prm_.boundary_conditions);
 }
 

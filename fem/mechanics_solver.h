@@ -158,6 +158,9 @@ class MechanicsSolver {
   // Internal minus external force at the current state (no history update) [N]; also what
   // reaction_force() sums afterwards.
   const VectorType& evaluate_residual();
+  // The tangent d(f_int − f_ext)/du at the current state (no history update), assembled with
+  // the hanging-node constraints only (no boundary values): what Newton solves with.
+  const MatrixType& evaluate_tangent();
 
   double time() const { return time_; }
   const VectorType& displacement() const { return u_ghost_; } // ghosted

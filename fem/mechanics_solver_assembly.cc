@@ -5,6 +5,7 @@
 
 #include "base/exceptions.h"
 #include "base/scoped_time.h"
+#include "fem/mean_dilatation.h"
 
 #include <deal.II/fe/fe_values.h>
 
@@ -56,6 +57,13 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
     comp[i] = fe_.system_to_component_index(i).first;
   std::vector<std::array<double, dim * dim>> w(n); // w_i[d][L] = Σ_J ∇N_i,J A(c_i,J,d,L) JxW
   double A[3][3][3][3];
+  // B-bar (mean_dilatation.h): H̄ at the points, δH̄_i = g_i ⊗ e_{c_i} + β_i I₃ in the force
+  // and W_i = δH̄_i : A JxW (3×3, with zz in plane strain) in the tangent.
+  const bool bbar = prm_.volumetric_locking == "bbar";
+  MeanDilatation<dim> mean_dilatation;
+  double average_dilatation = 0;
+  std::vector<double> beta(n);
+  std::vector<std::array<double, 9>> wb(bbar ? n : 0);
 
   for (const auto& cell : dof_handler_.active_cell_iterators()) {
     if (!cell->is_locally_owned() ||
@@ -67,6 +75,10 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
     cell_fint = 0;
     cell_fext = 0;
     fe_values[displacements].get_function_gradients(u_ghost_, grads);
+    if (bbar) {
+      mean_dilatation.reinit(fe_values, comp);
+      average_dilatation = mean_dilatation.average_dilatation(grads);
+    }
 
     for (unsigned int q = 0; q < nq; ++q) {
       const std::size_t idx = cell->active_cell_index() * nq + q;
@@ -83,6 +95,8 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
       for (unsigned int i = 0; i < dim; ++i)
         for (unsigned int j = 0; j < dim; ++j)
           H[i][j] = grads[q][i][j];
+      if (bbar)
+        MeanDilatation<dim>::project(H, average_dilatation);
 
       Tensor2 S; // stress conjugate to ∇u: σ or P
       try {
@@ -95,15 +109,35 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
       if (body_force_)
         for (unsigned int c = 0; c < dim; ++c)
           body[c] = load_blend(*body_force_, xq, c, load_factor);
+      if (bbar)
+        for (unsigned int i = 0; i < n; ++i)
+          beta[i] = mean_dilatation.beta(i, q);
+      const double trace_S = bbar ? S[0][0] + S[1][1] + S[2][2] : 0.0;
+      double trace_A[3][3] = {}; // Σ_a A(a,a,k,l)
+      if (bbar && with_matrix)
+        for (unsigned int k = 0; k < 3; ++k)
+          for (unsigned int l = 0; l < 3; ++l)
+            for (unsigned int a = 0; a < 3; ++a)
+              trace_A[k][l] += A[a][a][k][l];
       for (unsigned int i = 0; i < n; ++i) {
         const unsigned int ci = comp[i];
         const Tensor<1, dim>& g = fe_values.shape_grad(i, q);
         double f = 0;
         for (unsigned int J = 0; J < dim; ++J)
           f += S[ci][J] * g[J];
+        if (bbar)
+          f += beta[i] * trace_S;
         cell_fint(i) += f * JxW;
         cell_fext(i) += body[ci] * fe_values.shape_value(i, q) * JxW;
-        if (with_matrix)
+        if (with_matrix && bbar)
+          for (unsigned int k = 0; k < 3; ++k)
+            for (unsigned int l = 0; l < 3; ++l) {
+              double s = beta[i] * trace_A[k][l];
+              for (unsigned int J = 0; J < dim; ++J)
+                s += g[J] * A[ci][J][k][l];
+              wb[i][3 * k + l] = s * JxW;
+            }
+        else if (with_matrix)
           for (unsigned int d = 0; d < dim; ++d)
             for (unsigned int L = 0; L < dim; ++L) {
               double s = 0;
@@ -112,7 +146,18 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
               w[i][d * dim + L] = s * JxW;
             }
       }
-      if (with_matrix)
+      if (with_matrix && bbar)
+        for (unsigned int i = 0; i < n; ++i) {
+          const double trace_w = wb[i][0] + wb[i][4] + wb[i][8];
+          for (unsigned int j = 0; j < n; ++j) {
+            const Tensor<1, dim>& g = fe_values.shape_grad(j, q);
+            double s = beta[j] * trace_w;
+            for (unsigned int L = 0; L < dim; ++L)
+              s += wb[i][3 * comp[j] + L] * g[L];
+            cell_matrix(i, j) += s;
+          }
+        }
+      else if (with_matrix)
         for (unsigned int i = 0; i < n; ++i)
           for (unsigned int j = 0; j < n; ++j) {
             const Tensor<1, dim>& g = fe_values.shape_grad(j, q);
@@ -195,6 +240,19 @@ const typename MechanicsSolver<dim>::VectorType& MechanicsSolver<dim>::evaluate_
   return raw_residual_;
 }
 
+template <int dim>
+const typename MechanicsSolver<dim>::MatrixType& MechanicsSolver<dim>::evaluate_tangent() {
+  if (!is_setup_)
+    setup();
+  target_time_ = time_;
+  loaded_ = false;
+  if (temperature_field_)
+    evaluate_temperature_field(dT_target_);
+  assemble(true, 1.0, hanging_);
+  trial_ = committed_;
+  return matrix_;
+}
+
 // Explicit instantiation of the members defined in this file.
 #define SPINESIM_INSTANTIATE(dim)                                                                  \
   template double MechanicsSolver<dim>::load_blend(Function<dim>&, const Point<dim>&,              \
@@ -202,7 +260,9 @@ const typename MechanicsSolver<dim>::VectorType& MechanicsSolver<dim>::evaluate_
   template typename MechanicsSolver<dim>::AssemblyNorms MechanicsSolver<dim>::assemble(            \
       bool, double, const AffineConstraints<double>&);                                             \
   template const typename MechanicsSolver<dim>::VectorType&                                        \
-  MechanicsSolver<dim>::evaluate_residual();
+  MechanicsSolver<dim>::evaluate_residual();                                                       \
+  template const typename MechanicsSolver<dim>::MatrixType&                                        \
+  MechanicsSolver<dim>::evaluate_tangent();
 SPINESIM_INSTANTIATE(2)
 SPINESIM_INSTANTIATE(3)
 #undef SPINESIM_INSTANTIATE

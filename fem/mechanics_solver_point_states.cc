@@ -4,6 +4,7 @@
 #include "fem/mechanics_solver.h"
 
 #include "base/exceptions.h"
+#include "fem/mean_dilatation.h"
 
 #include <deal.II/fe/fe_values.h>
 
@@ -59,7 +60,13 @@ void MechanicsSolver<dim>::refresh_states() const {
   std::exception_ptr failure; // the first one; exceptions must not leave a parallel region
 #pragma omp parallel if (n > 256)
   {
-    FEValues<dim> fe_values(*mapping_, fe_, quadrature_, update_gradients);
+    const bool bbar = prm_.volumetric_locking == "bbar"; // H̄ as assemble() forms it
+    FEValues<dim> fe_values(*mapping_, fe_, quadrature_,
+                            bbar ? update_gradients | update_JxW_values : update_gradients);
+    MeanDilatation<dim> mean_dilatation;
+    std::vector<unsigned int> comp(fe_.n_dofs_per_cell());
+    for (unsigned int i = 0; i < comp.size(); ++i)
+      comp[i] = fe_.system_to_component_index(i).first;
     const FEValuesExtractors::Vector displacements(0);
     std::vector<Tensor<2, dim>> grads(nq);
     std::vector<double> local;
@@ -70,6 +77,11 @@ void MechanicsSolver<dim>::refresh_states() const {
         fe_values.reinit(cell);
         get_cell_values(u_ghost_, cell, local);
         fe_values[displacements].get_function_gradients_from_local_dof_values(local, grads);
+        double average_dilatation = 0;
+        if (bbar) {
+          mean_dilatation.reinit(fe_values, comp);
+          average_dilatation = mean_dilatation.average_dilatation(grads);
+        }
         const materials::ConstitutiveLaw& law = cell_material(cell);
         for (unsigned int q = 0; q < nq; ++q) {
           const std::size_t idx = cell->active_cell_index() * nq + q;
@@ -77,6 +89,8 @@ void MechanicsSolver<dim>::refresh_states() const {
           for (unsigned int i = 0; i < dim; ++i)
             for (unsigned int j = 0; j < dim; ++j)
               H[i][j] = grads[q][i][j];
+          if (bbar)
+            MeanDilatation<dim>::project(H, average_dilatation);
           try {
             point_update_(law, H, 0.0, committed_[idx], trial[idx], nullptr);
           } catch (const NumericalFailure& e) {
