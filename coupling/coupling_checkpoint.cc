@@ -10,7 +10,9 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <set>
@@ -113,21 +115,43 @@ void CouplingCheckpoint<dim>::load(const std::string& file) {
       (version >= 3 && !(in >> nh)))
     throw InvalidInput(file, "missing or unreadable coupling checkpoint",
                        "a file written by FemParticleCoupling::save (versions 1 to 3)");
+  // The manifest guards against damage, not against a file edited and re-hashed: every count
+  // is bounded by what the file can hold (each number takes at least two bytes with its
+  // separator) before a loop runs or a vector is sized by it, and every record is checked.
+  std::error_code size_error;
+  const std::uintmax_t bytes = std::filesystem::file_size(file, size_error);
+  const auto fits = [&](std::size_t count, std::size_t numbers_per_record) {
+    return !size_error && count <= bytes / (2 * numbers_per_record);
+  };
+  if (!fits(n, 7 + 3 * dim) || !fits(nc, 2) || !fits(nb, 2) || !fits(nh, 2 + state_doubles))
+    throw InvalidInput(file,
+                       "header counts (" + std::to_string(n) + " particles, " + std::to_string(nc) +
+                           " converted cells, " + std::to_string(nb) + " broken bonds, " +
+                           std::to_string(nh) + " history records) exceed what its " +
+                           std::to_string(bytes) + " bytes can hold",
+                       "a complete checkpoint written by FemParticleCoupling::save");
+  const auto require = [&](bool ok, const std::string& what, std::size_t k) {
+    if (!ok)
+      throw InvalidInput(file,
+                         "unreadable or out-of-range " + what + " " + std::to_string(k) +
+                             " (truncated or edited checkpoint)",
+                         "a complete checkpoint written by FemParticleCoupling::save");
+  };
   p_.integrator.set_time(time);
   p_.fracture.restore(dissipation, heat); // version 1: none
   std::map<std::string, unsigned int> converted;
   for (std::size_t k = 0; k < nc; ++k) {
     std::string id;
-    unsigned int batch;
-    in >> id >> batch;
+    unsigned int batch = 0;
+    require(static_cast<bool>(in >> id >> batch), "converted cell", k);
     converted[id] = batch;
   }
   state.clear_particles();
   for (std::size_t i = 0; i < n; ++i) {
     std::string id;
-    unsigned int q, slots;
-    int fr;
-    double V, rho, T;
+    unsigned int q = 0, slots = 0;
+    int fr = 0;
+    double V = 0, rho = 0, T = 0;
     Point<dim> x;
     Tensor<1, dim> u, v;
     in >> id >> q >> fr >> slots >> V >> rho >> T;
@@ -135,6 +159,10 @@ void CouplingCheckpoint<dim>::load(const std::string& file) {
       in >> x[d];
     for (unsigned int d = 0; d < dim; ++d)
       in >> u[d] >> v[d];
+    require(in && (fr == 0 || fr == 1) && q < state.points.size() && V > 0 && rho > 0 &&
+                std::isfinite(V) && std::isfinite(rho) && std::isfinite(T) &&
+                std::isfinite(x.norm()) && std::isfinite(u.norm()) && std::isfinite(v.norm()),
+            "particle", i);
     const unsigned int k = state.add_particle(id, q, x, V);
     particles.density(k) = rho;
     particles.temperature(k) = T;
@@ -144,22 +172,22 @@ void CouplingCheckpoint<dim>::load(const std::string& file) {
     state.fixed_slots[k] = slots;
   }
   std::vector<std::pair<unsigned int, unsigned int>> broken;
+  broken.reserve(nb);
   for (std::size_t k = 0; k < nb; ++k) {
-    unsigned int i, j;
-    if (!(in >> i >> j))
-      break;
+    unsigned int i = 0, j = 0;
+    require(static_cast<bool>(in >> i >> j) && i < n && j < n, "broken bond", k);
     broken.emplace_back(i, j);
   }
   std::vector<meshfree::HistoryRecord> history(nh);
-  for (auto& r : history) {
+  for (std::size_t k = 0; k < nh; ++k) {
+    auto& r = history[k];
     std::array<double, state_doubles> flat;
     in >> r.particle >> r.neighbour;
-    for (auto& v : flat)
-      in >> v;
+    for (auto& value : flat)
+      in >> value;
+    require(in && r.particle < n && r.neighbour < n, "history record", k);
     r.state = unpack_state(flat);
   }
-  if (!in && !in.eof())
-    throw InvalidInput(file, "truncated coupling checkpoint", "a complete checkpoint");
   p_.converter.restore(std::move(converted));
   // Rebuild with the saved broken pairs (broken before the method builds its families), then
   // the method's history.

@@ -83,6 +83,8 @@ class CtToParticles : public Scenario {
       model = fem::build_ct_model(ct_, tria);
     }
     ctx.log() << "  image: " << ct_.image_file << "\n  " << model.summary() << "\n";
+    for (const auto& warning : model.warnings)
+      ctx.warn(warning);
     if (conversion_.refinements > 0)
       tria.refine_global(conversion_.refinements);
 

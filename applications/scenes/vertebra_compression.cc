@@ -112,6 +112,8 @@ class VertebraCompression : public Scenario {
       model = fem::build_ct_model(ct_, tria);
     }
     ctx.log() << "  image: " << ct_.image_file << "\n  " << model.summary() << "\n";
+    for (const auto& warning : model.warnings)
+      ctx.warn(warning);
     if (model.end_faces.lower == 0 || model.end_faces.upper == 0)
       throw InvalidInput("Caps/Labels", "no end faces found on the caps",
                          "the labels of the lower and upper cap");

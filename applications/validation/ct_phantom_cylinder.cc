@@ -193,6 +193,8 @@ class CtPhantomCylinder : public Scenario {
       model = fem::build_ct_model(p, tria);
     }
     ctx.log() << "  " << model.summary() << "\n";
+    for (const auto& warning : model.warnings)
+      ctx.warn(warning);
     // Pin (id 6): the lower end face nearest the axis, x and y held.
     const dealii::Point<3> axis = volume.point(ic, jc, 0);
     double best = std::numeric_limits<double>::max();

@@ -1,5 +1,6 @@
 #include "fem/ct/ct_model.h"
 
+#include "fem/ct/ct_value_check.h"
 #include "fem/ct/ct_volume.h"
 #include "fem/ct/density_calibration.h"
 #include "fem/ct/density_modulus_law.h"
@@ -24,6 +25,7 @@ std::string CtModel::summary() const {
 
 CtModel build_ct_model(const CtParameters& p, dealii::Triangulation<3>& triangulation) {
   const CtVolume image = read_ct_volume(p.image_file);
+  check_image_values(image);
   std::unique_ptr<LabelVolume> labels;
   if (!p.labels.empty())
     labels = std::make_unique<LabelVolume>(read_label_volume(p.label_file));
@@ -63,6 +65,7 @@ CtModel build_ct_model(const CtParameters& p, dealii::Triangulation<3>& triangul
   for (std::size_t n = 0; n < law_cell.size(); ++n)
     model.cell_modulus[law_cell[n]] = evaluation.modulus[n];
   model.floored_cells = evaluation.floored_cells;
+  model.warnings = bone_density_warnings(law_density, p.image_file);
   model.cell_label = std::move(material);
   model.poisson_ratio = p.poisson_ratio;
   if (p.mark_end_faces)

@@ -24,6 +24,9 @@ struct CtModel {
   unsigned int floored_cells = 0;   // cells where the density or modulus floor acted
   EndFaceCount end_faces;           // coarse faces given ids 4 / 5 (Mark end faces)
   double poisson_ratio = 0.3;       // [-]
+  // Suspicious calibrated densities of the law's cells (ct_value_check.h), for the run's
+  // warnings.
+  std::vector<std::string> warnings;
 
   template <class CellIterator>
   double modulus(const CellIterator& cell) const {

@@ -19,8 +19,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <memory>
+#include <sstream>
 #include <string>
+#include <vector>
 
 namespace spinesim::coupling {
 namespace {
@@ -149,6 +152,86 @@ void divergence_is_caught() {
   }
 }
 
+// The manifest catches damage; a checkpoint edited and re-hashed reaches the loader. Cut in
+// half, with a particle count no file could hold (a loop or vector sized by it would run for
+// hours or exhaust memory), or with a particle's free flag out of range: each is InvalidInput
+// naming the file, before any particle of it is used.
+template <int dim>
+void damaged_checkpoint_is_invalid_input() {
+  const MPI_Comm comm = MPI_COMM_WORLD;
+  CoupledSetup<dim> setup("nosb", true);
+  FemParticleCoupling<dim> a(setup.parameters, *setup.solver);
+  a.initialise();
+  dealii::Tensor<2, dim> H;
+  for (unsigned int r = 0; r < dim; ++r)
+    H[r][r] = 1e-4 * (r + 1);
+  a.impose_affine(H);
+  a.step(a.stable_time_step());
+  const std::string base =
+      std::string(SPINESIM_TEST_SCRATCH_DIR) + "/damaged_checkpoint_" + std::to_string(dim) + "d";
+  a.save(base + ".txt");
+  MPI_Barrier(comm);
+  std::ifstream in(base + ".txt");
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(in, line);)
+    lines.push_back(line);
+  ASSERT_GT(lines.size(), 3u);
+  std::istringstream header(lines[1]);
+  std::vector<std::string> counts;
+  for (std::string token; header >> token;)
+    counts.push_back(token);
+  ASSERT_EQ(counts.size(),
+            7u); // time, particles, converted cells, broken, dissipation, heat, history
+  const std::size_t first_particle = 2 + std::stoul(counts[2]);
+  ASSERT_LT(first_particle, lines.size());
+
+  const auto joined = [](const std::vector<std::string>& l, std::size_t n) {
+    std::string text;
+    for (std::size_t k = 0; k < n; ++k)
+      text += l[k] + "\n";
+    return text;
+  };
+  std::vector<std::string> variants;
+  const std::string whole = joined(lines, lines.size());
+  variants.push_back(whole.substr(0, whole.size() / 2)); // cut in half
+  auto edited = lines;
+  counts[1] = "1000000000000";
+  edited[1].clear();
+  for (const auto& c : counts)
+    edited[1] += c + " ";
+  variants.push_back(joined(edited, edited.size()));
+  edited = lines;
+  std::istringstream particle(lines[first_particle]);
+  std::vector<std::string> fields;
+  for (std::string token; particle >> token;)
+    fields.push_back(token);
+  fields[2] = "7"; // the free flag: 0 or 1
+  edited[first_particle].clear();
+  for (const auto& f : fields)
+    edited[first_particle] += f + " ";
+  variants.push_back(joined(edited, edited.size()));
+
+  for (std::size_t v = 0; v < variants.size(); ++v) {
+    const std::string file = base + "_" + std::to_string(v) + ".txt";
+    if (dealii::Utilities::MPI::this_mpi_process(comm) == 0)
+      std::ofstream(file) << variants[v];
+    MPI_Barrier(comm);
+    FemParticleCoupling<dim> b(setup.parameters, *setup.solver);
+    try {
+      b.load(file);
+      ADD_FAILURE() << "variant " << v << " loaded";
+    } catch (const InvalidInput& e) {
+      EXPECT_EQ(e.where(), file) << "variant " << v;
+    }
+  }
+}
+
+TEST(CouplingCheckpoint, DamagedFileIsInvalidInput2D) {
+  damaged_checkpoint_is_invalid_input<2>();
+}
+TEST(CouplingCheckpoint, DamagedFileIsInvalidInput3D) {
+  damaged_checkpoint_is_invalid_input<3>();
+}
 TEST(CoupledStep, DivergenceIsCaught2D) {
   divergence_is_caught<2>();
 }

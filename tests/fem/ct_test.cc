@@ -6,6 +6,7 @@
 #include "fem/ct/ct_cell_laws.h"
 #include "fem/ct/ct_model.h"
 #include "fem/ct/ct_parameters.h"
+#include "fem/ct/ct_value_check.h"
 #include "fem/ct/ct_volume.h"
 #include "fem/ct/density_calibration.h"
 #include "fem/ct/density_modulus_law.h"
@@ -25,6 +26,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <set>
@@ -181,6 +183,49 @@ TEST(CtDensityCalibration, DensityAndHounsfieldUnits) {
     EXPECT_DOUBLE_EQ(hu.density(v), 0.968731 + 0.000893 * v);
   EXPECT_THROW(DensityCalibration(DensityCalibration::ValueType::hu, 0, -1), InvalidInput);
   EXPECT_THROW(DensityCalibration::parse_value_type("grey"), InvalidInput);
+}
+
+// A complete file that holds nothing usable is bad input naming the file and the voxel; a
+// volume with contrast passes.
+TEST(CtValueCheck, BlankOrNonFiniteImagesAreInvalidInput) {
+  CtVolume image;
+  image.file_name = "scan.nii";
+  image.size = {{3, 2, 2}};
+  image.values.assign(12, 0.0);
+  try {
+    check_image_values(image);
+    FAIL() << "a blank image passed";
+  } catch (const InvalidInput& e) {
+    EXPECT_EQ(e.where(), "CT/Image file");
+    EXPECT_NE(e.problem().find("scan.nii: all 12 voxels hold the value 0"), std::string::npos)
+        << e.problem();
+  }
+  image.values[7] = 250.0;
+  EXPECT_NO_THROW(check_image_values(image));
+  image.values[10] = std::numeric_limits<double>::quiet_NaN(); // voxel (1, 1, 1)
+  try {
+    check_image_values(image);
+    FAIL() << "a NaN voxel passed";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(e.problem().find("voxel (1, 1, 1) holds nan"), std::string::npos) << e.problem();
+  }
+}
+
+// Densities bone can have give no warning; each implausible pattern gives its own.
+TEST(CtValueCheck, ImplausibleBoneDensitiesAreWarnings) {
+  // Trabecular to cortical (g/cm^3), a few noisy cells below zero: plausible.
+  EXPECT_TRUE(bone_density_warnings({-0.02, 0.08, 0.15, 0.3, 1.1, 1.9}, "a.nii").empty());
+  EXPECT_TRUE(bone_density_warnings({}, "a.nii").empty());
+  const auto dense = bone_density_warnings({0.1, 0.2, 2.5, 9.0}, "a.nii");
+  ASSERT_EQ(dense.size(), 1u);
+  EXPECT_NE(dense[0].find("2 of 4 bone cells (50 %) are denser than 2.2 g/cm^3"), std::string::npos)
+      << dense[0];
+  const auto negative = bone_density_warnings({-0.3, -0.2, -0.1, 0.2}, "a.nii");
+  ASSERT_EQ(negative.size(), 1u);
+  EXPECT_NE(negative[0].find("3 of 4 bone cells (75 %) have a negative"), std::string::npos);
+  const auto flat = bone_density_warnings({0.969, 0.970, 0.971}, "a.nii");
+  ASSERT_EQ(flat.size(), 1u);
+  EXPECT_NE(flat[0].find("no bone contrast"), std::string::npos);
 }
 
 // Each law at a few densities against its formula written out here (MPa -> Pa).
@@ -506,6 +551,8 @@ TEST(CtParameters, ParseResolveAndBuildVerse004Model) {
   parallel::distributed::Triangulation<3> tria(MPI_COMM_WORLD);
   const CtModel model = build_ct_model(p, tria);
   EXPECT_EQ(model.cell_modulus.size(), tria.n_cells(0));
+  // A real calibrated vertebra raises none of the value warnings.
+  EXPECT_TRUE(model.warnings.empty()) << model.warnings.front();
   // PMMA end caps: label 5 at low z (voxels k = 23..30), label 6 at high z (k = 52..59); the
   // posterior elements reach beyond them (k = 14..62), so the caps' own extremes are used.
   EXPECT_GT(model.end_faces.lower, 0u);

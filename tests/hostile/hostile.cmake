@@ -90,6 +90,15 @@ spinesim_add_hostile_test(ct_truncated_nii PREPARE gunzip:${_im}
 spinesim_add_hostile_test(ct_complete_nii EXIT 0 PREPARE gunzip:${_im}
   ARGS check ${_vertebra} --set "CT/Image file=@KEEP@/sub-verse004_0000_vertebra_21_im.nii"
   MATCH "model built up to the first step")
+# A complete file can still hold nothing usable: a blank (zero-filled) image is bad input, and
+# calibrated densities beyond compact cortical bone (here mg/cm^3 read as HU with ten times
+# the slope) are a warning in the report.
+spinesim_add_hostile_test(ct_blank_image
+  ARGS check ${_vertebra} --set "CT/Image file=${_h}/data/blank.mha"
+  MATCH "blank.mha: all 64 voxels hold the value 0")
+spinesim_add_hostile_test(warn_ct_denser_than_bone EXIT 0
+  ARGS check ${_vertebra} --set "CT/Value type=hu" --set "CT/Calibration slope=0.01"
+  MATCH "warning: .*bone cells .* are denser than 2.2 g/cm")
 
 # SIGTERM after step 7 of the default scene (coupled cracked plate, checkpoints every 5 steps,
 # so the interrupt writes its own), then --restart: exit 143 with status "interrupted", and

@@ -85,6 +85,26 @@ spinesim_add_scene_test(coupling.wave_fine SCENE ${_val}/coupling_wave.prm
   EXPECT "status==ok;reflected_energy_relative<=0.01;energy_balance_relative>=-0.01"
   LABELS "scene;validation")
 
+# Stability over 10^5 explicit steps (coupling_energy_drift.prm: a strip vibrating freely in
+# its first longitudinal mode, nothing loads or damps it, so E = K + U must stay at E(0)).
+# All FEM (Wave/Interface beyond the strip): central differences conserve a shadow energy;
+# the measured E mixes u^(n+1) with v^(n+1/2), an oscillation below omega dt / 2 = 0.8 % for
+# this mode (omega dt = 0.0157); 1.0e-3 measured, required <= 1 %.
+spinesim_add_scene_test(stability.fem_energy_drift_1e5_steps
+  SCENE ${_val}/coupling_energy_drift.prm SET "Wave/Interface=2"
+  EXPECT "status==ok;steps>=100000;energy_drift_max_relative<=0.01"
+  LABELS "scene;validation;stability")
+# The same strip with the particles beyond x = 0.5 m: the coupled run must keep its energy too
+# (required <= 1 %). It does not yet: E holds to 2 % for about 5000 steps, then grows
+# exponentially (x3.5 per 1000 steps at Time step safety 0.8, and faster per unit time at
+# smaller steps) until the divergence check stops the run near step 40000. Known failure,
+# excluded from the default run (label known_failure); docs/coupling.md, "Energy of a long
+# coupled run".
+spinesim_add_scene_test(stability.coupled_energy_drift_1e5_steps
+  SCENE ${_val}/coupling_energy_drift.prm
+  EXPECT "status==ok;steps>=100000;energy_drift_max_relative<=0.01"
+  LABELS "scene;validation;stability;known_failure")
+
 # Particle heat sources back into the FEM: the energy of every broken bond heats its host
 # cell one macro step later. What the heat solver supplied is the fracture heat it was handed
 # (the same numbers summed: round-off); what the insulated body gained is what was supplied,
