@@ -9,6 +9,7 @@
 #include <deal.II/lac/dynamic_sparsity_pattern.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -159,12 +160,13 @@ void NosbPD<dim>::initialise(const ParticleSet<dim>& particles, const BondList<d
   // indices of particle i are its bond row.
   history_keys_.resize(n_history);
   particle_history_begin_.assign(particles.size() + 1, 0);
-  for (unsigned int i = 0; i < particles.size(); ++i) {
-    if (prm_.stabilization == Stabilization::bond_associated) {
-      for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k)
-        history_keys_[k] = {i, bonds.neighbor[k]};
-      particle_history_begin_[i + 1] = bonds.end(i);
-    } else {
+  if (prm_.stabilization == Stabilization::bond_associated) {
+    for_each_bond(bonds, [&](unsigned int i, std::size_t k, unsigned int j) {
+      history_keys_[k] = {i, j};
+    });
+    std::copy_n(bonds.offsets.begin() + 1, particles.size(), particle_history_begin_.begin() + 1);
+  } else {
+    for (unsigned int i = 0; i < particles.size(); ++i) {
       history_keys_[i] = {i, i};
       particle_history_begin_[i + 1] = i + 1;
     }
@@ -348,18 +350,18 @@ std::size_t NosbPD<dim>::break_bonds(ParticleSet<dim>& particles, BondList<dim>&
   if (!std::isfinite(s0_))
     return 0;
   const auto& u = particles.displacements();
-  std::size_t n_broken = 0;
   const bool any_driven = !driven_.empty();
-  for (unsigned int i = 0; i < particles.size(); ++i)
-    for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
-      if (bonds.broken[k] || (any_driven && driven_[i] && driven_[bonds.neighbor[k]]))
-        continue;
-      const auto y = bonds.xi[k] + (u[bonds.neighbor[k]] - u[i]);
-      if (y.norm() > (1.0 + s0_) * bonds.length[k]) {
-        bonds.broken[k] = 1;
-        ++n_broken;
-      }
+  // Each bond decides alone (the reversed bond sees the same stretch bit for bit): a map.
+  std::atomic<std::size_t> n_broken{0};
+  for_each_bond(bonds, [&](unsigned int i, std::size_t k, unsigned int j) {
+    if (bonds.broken[k] || (any_driven && driven_[i] && driven_[j]))
+      return;
+    const auto y = bonds.xi[k] + (u[j] - u[i]);
+    if (y.norm() > (1.0 + s0_) * bonds.length[k]) {
+      bonds.broken[k] = 1;
+      n_broken.fetch_add(1, std::memory_order_relaxed);
     }
+  });
   if (n_broken > 0) {
     update_families(particles, bonds);
     update_damage(particles, bonds);
@@ -406,15 +408,15 @@ void NosbPD<dim>::assemble_tangent(const ParticleSet<dim>& particles, const Bond
     for (unsigned int i = 0; i < n; ++i) {
       nodes.add(i, i); // every particle keeps a diagonal (failed ones get an identity row)
       if (penalty && pfam_of[i] >= 0)
-        for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
-          const int ej = pfam_of[bonds.neighbor[k]];
+        for_each_bond_of(bonds, i, [&](std::size_t, unsigned int j) {
+          const int ej = pfam_of[j];
           if (ej < 0)
-            continue;
+            return;
           for (std::size_t q = pfam.begin(ej); q < pfam.end(ej); ++q)
             nodes.add(i, pfam.node(q));
           for (std::size_t q = pfam.begin(pfam_of[i]); q < pfam.end(pfam_of[i]); ++q)
             nodes.add(i, pfam.node(q));
-        }
+        });
     }
     dealii::DynamicSparsityPattern dofs(n * dim, n * dim);
     for (unsigned int m = 0; m < n; ++m)
@@ -471,10 +473,9 @@ void NosbPD<dim>::assemble_tangent(const ParticleSet<dim>& particles, const Bond
     for (unsigned int i = 0; i < n; ++i) {
       if (pfam_of[i] < 0)
         continue;
-      for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
-        const unsigned int j = bonds.neighbor[k];
+      for_each_bond_of(bonds, i, [&](std::size_t k, unsigned int j) {
         if (bonds.broken[k] || pfam_of[j] < 0)
-          continue;
+          return;
         const Vec& xi = bonds.xi[k];
         const double kappa =
             0.5 * Gc * bonds.influence[k] * bonds.volume_factor(k) / bonds.length[k] * V[i] * V[j];
@@ -483,7 +484,7 @@ void NosbPD<dim>::assemble_tangent(const ParticleSet<dim>& particles, const Bond
         for (const int e : {pfam_of[i], pfam_of[j]})
           for (std::size_t q = pfam.begin(e); q < pfam.end(e); ++q)
             add_scalar(i, pfam.node(q), kappa * (pfam.gradient(q) * xi));
-      }
+      });
     }
   }
 }
@@ -729,13 +730,13 @@ typename NosbPD<dim>::HourglassMeasure NosbPD<dim>::hourglass(const ParticleSet<
     F[pfam.centre(e)] = pfam.deformation_gradient(e, u);
   HourglassMeasure h;
   double z2 = 0, eta2 = 0;
+  // Sums over all bonds in one fixed order (serial): the order fixes the result.
   for (unsigned int i = 0; i < particles.size(); ++i) {
     if (failed(i))
       continue;
-    for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
-      const unsigned int j = bonds.neighbor[k];
+    for_each_bond_of(bonds, i, [&](std::size_t k, unsigned int j) {
       if (bonds.broken[k] || failed(j))
-        continue;
+        return;
       const Vec& xi = bonds.xi[k];
       const Vec eta = u[j] - u[i];
       const Vec z = eta - (F[i] * xi - xi);
@@ -745,7 +746,7 @@ typename NosbPD<dim>::HourglassMeasure NosbPD<dim>::hourglass(const ParticleSet<
       z2 += wb * z.norm_square() / (L * L);
       eta2 += wb * eta.norm_square() / (L * L);
       h.max_nonuniform = std::max(h.max_nonuniform, z.norm());
-    }
+    });
   }
   h.relative_norm = eta2 > 0 ? std::sqrt(z2 / eta2) : 0.0;
   return h;
@@ -754,16 +755,20 @@ typename NosbPD<dim>::HourglassMeasure NosbPD<dim>::hourglass(const ParticleSet<
 template <int dim>
 void NosbPD<dim>::update_damage(ParticleSet<dim>& particles, const BondList<dim>& bonds) const {
   const auto& V = particles.volumes();
-  for (unsigned int i = 0; i < particles.size(); ++i) {
+  struct Weights {
     double intact = 0, all = 0;
-    for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
-      const double w = bonds.influence[k] * bonds.volume_factor(k) * V[bonds.neighbor[k]];
-      all += w;
-      if (!bonds.broken[k])
-        intact += w;
-    }
-    particles.damage(i) = failed(i) ? 1.0 : (all > 0.0 ? 1.0 - intact / all : 0.0);
-  }
+  };
+  accumulate_over_bonds(
+      bonds, [](unsigned int) { return Weights(); },
+      [&](unsigned int, std::size_t k, unsigned int j, Weights& w) {
+        const double wk = bonds.influence[k] * bonds.volume_factor(k) * V[j];
+        w.all += wk;
+        if (!bonds.broken[k])
+          w.intact += wk;
+      },
+      [&](unsigned int i, const Weights& w) {
+        particles.damage(i) = failed(i) ? 1.0 : (w.all > 0.0 ? 1.0 - w.intact / w.all : 0.0);
+      });
 }
 
 template class NosbPD<2>;

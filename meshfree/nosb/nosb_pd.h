@@ -33,6 +33,7 @@
 
 #include "fem/materials/constitutive_law.h"
 #include "meshfree/bond_list.h"
+#include "meshfree/bond_loop.h"
 #include "meshfree/influence_function.h"
 #include "meshfree/neighbor_search.h"
 #include "meshfree/nosb/correspondence_families.h"
@@ -160,12 +161,11 @@ class NosbPD {
   template <class Body>
   void for_each_penalty_bond(const BondList<dim>& bonds, unsigned int i, double Gc,
                              Body&& body) const {
-    for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
-      const unsigned int j = bonds.neighbor[k];
+    for_each_bond_of(bonds, i, [&](std::size_t k, unsigned int j) {
       if (bonds.broken[k] || failed(j))
-        continue;
+        return;
       body(k, j, 0.5 * Gc * bonds.influence[k] * bonds.volume_factor(k) / bonds.length[k]);
-    }
+    });
   }
   // Messages about failed particles since the last call (for the run log).
   std::vector<std::string> take_messages();

@@ -4,6 +4,7 @@
 #include "fem/materials/j2_plasticity.h"
 #include "fem/materials/material_state_io.h"
 #include "fem/materials/plane_strain_embedding.h"
+#include "meshfree/bond_loop.h"
 
 #include <algorithm>
 #include <cmath>
@@ -207,9 +208,10 @@ double SpgMethod<dim>::bond_energy(const ParticleSet<dim>& particles, const Bond
     return 0.0;
   const auto& V = particles.volumes();
   double all = 0;
-  for (std::size_t b = bonds.begin(i); b < bonds.end(i); ++b)
+  for_each_bond_of(bonds, i, [&](std::size_t b, unsigned int j) {
     if (!bonds.broken[b])
-      all += bonds.volume_factor(b) * V[bonds.neighbor[b]];
+      all += bonds.volume_factor(b) * V[j];
+  });
   if (!(all > 0.0))
     return 0.0;
   return bonds.volume_factor(k) * V[bonds.neighbor[k]] / all * energy_density(i, particles) * V[i];
