@@ -46,8 +46,7 @@ struct RelaxationSums {
   // The damping for the next step [1/s]: critical for the lowest mode of the estimate,
   // c = 2 sqrt(uᵀK¹u / uᵀu), at most 2/dt (so 1 − c dt/2 ≥ 0); 0 without a positive estimate.
   double damping(double dt) const {
-    const double q =
-        stiffness_denominator > 0 ? stiffness_numerator / stiffness_denominator : 0.0;
+    const double q = stiffness_denominator > 0 ? stiffness_numerator / stiffness_denominator : 0.0;
     return q > 0 ? std::min(2.0 * std::sqrt(q), 2.0 / dt) : 0.0;
   }
 };

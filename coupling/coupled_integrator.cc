@@ -186,10 +186,10 @@ RelaxationReport<dim> CoupledIntegrator<dim>::relax(double time, bool with_conve
   // Kilic & Madenci 2010 for PD; base/dynamic_relaxation.h): central differences in
   // pseudo-time with the real lumped and particle masses at the common stable step, and the
   // damping c = 2 sqrt(uᵀ k u / uᵀ u) from the local stiffness estimates of both models
-  // (critical for the lowest mode, updated every step, one step late). Converged when ‖free residual‖ ≤ tolerance × max(‖reactions‖,
-  // largest ‖free residual‖ of this relaxation). Bonds break as the state relaxes; cells
-  // convert at equilibrium, and the state relaxes again after a conversion. Velocities are
-  // pseudo-velocities and end at zero.
+  // (critical for the lowest mode, updated every step, one step late). Converged when ‖free
+  // residual‖ ≤ tolerance × max(‖reactions‖, largest ‖free residual‖ of this relaxation). Bonds
+  // break as the state relaxes; cells convert at equilibrium, and the state relaxes again after a
+  // conversion. Velocities are pseudo-velocities and end at zero.
   const MPI_Comm comm = state_.fem.mpi_communicator();
   RelaxationReport<dim> report;
   double dt = stable_time_step();

@@ -63,8 +63,8 @@ std::size_t n_broken_bonds(const CouplingState<dim>& s) {
   std::size_t n = 0;
   for (unsigned int i = 0; i < s.bonds.n_particles(); ++i)
     if (s.free[i] && s.is_owned(i))
-      meshfree::for_each_bond_of(s.bonds, i,
-                                 [&](std::size_t k, unsigned int) { n += s.bonds.broken[k] ? 1 : 0; });
+      meshfree::for_each_bond_of(
+          s.bonds, i, [&](std::size_t k, unsigned int) { n += s.bonds.broken[k] ? 1 : 0; });
   return Utilities::MPI::sum(n, s.fem.mpi_communicator());
 }
 

@@ -18,13 +18,13 @@
 // quasi_static (Newton and load stepping), explicit (central differences and dynamic
 // relaxation), postprocessing (reactions, energies, cell fields, output) and checkpoint.
 
+#include "base/dynamic_relaxation.h"
 #include "fem/boundary_conditions.h"
 #include "fem/hanging_node_lines.h"
 #include "fem/materials/constitutive_law.h"
 #include "fem/mechanics_parameters.h"
 #include "fem/point_update.h"
 #include "fem/quadrature_point_data.h"
-#include "base/dynamic_relaxation.h"
 
 #include <deal.II/base/array_view.h>
 #include <deal.II/base/function.h>

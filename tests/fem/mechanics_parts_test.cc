@@ -2,11 +2,11 @@
 // stress, finite strain, failures), the flat checkpoint layout of a point, and the
 // dynamic-relaxation sums (Kilic & Madenci 2010 stiffness estimate).
 
+#include "base/dynamic_relaxation.h"
 #include "base/exceptions.h"
 #include "fem/materials/linear_elastic.h"
 #include "fem/point_update.h"
 #include "fem/quadrature_point_data.h"
-#include "base/dynamic_relaxation.h"
 
 #include <gtest/gtest.h>
 
