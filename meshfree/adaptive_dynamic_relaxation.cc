@@ -10,16 +10,14 @@
 
 namespace spinesim::meshfree {
 
-template <int dim>
-void AdaptiveDynamicRelaxation<dim>::Parameters::declare(dealii::ParameterHandler& prm) {
+void AdaptiveDynamicRelaxationParameters::declare(dealii::ParameterHandler& prm) {
   prm.declare_entry("Maximum iterations", "100000", dealii::Patterns::Integer(1),
                     "Iteration limit of adaptive dynamic relaxation [-].");
   prm.declare_entry("Tolerance", "1e-8", dealii::Patterns::Double(0.0),
                     "Relative residual norm at which the relaxation stops [-].");
 }
 
-template <int dim>
-void AdaptiveDynamicRelaxation<dim>::Parameters::parse(const dealii::ParameterHandler& prm) {
+void AdaptiveDynamicRelaxationParameters::parse(const dealii::ParameterHandler& prm) {
   max_iterations = prm.get_integer("Maximum iterations");
   tolerance = prm.get_double("Tolerance");
   if (!(tolerance > 0.0 && tolerance < 1.0))

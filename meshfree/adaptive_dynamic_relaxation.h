@@ -22,18 +22,21 @@
 
 namespace spinesim::meshfree {
 
+// The relaxation's limits, the same in 2-D and 3-D.
+struct AdaptiveDynamicRelaxationParameters {
+  unsigned int max_iterations = 100000;
+  double tolerance = 1e-8;
+
+  static void declare(dealii::ParameterHandler& prm);
+  void parse(const dealii::ParameterHandler& prm);
+};
+
 template <int dim>
 class AdaptiveDynamicRelaxation {
  public:
   using ForceFunction = std::function<void(ParticleSet<dim>&)>;
 
-  struct Parameters {
-    unsigned int max_iterations = 100000;
-    double tolerance = 1e-8;
-
-    static void declare(dealii::ParameterHandler& prm);
-    void parse(const dealii::ParameterHandler& prm);
-  };
+  using Parameters = AdaptiveDynamicRelaxationParameters;
 
   struct Result {
     bool converged = false;

@@ -41,7 +41,7 @@ NosbMethod<dim>::parse_parameters(const dealii::ParameterHandler& section) {
 
 template <int dim>
 void NosbMethod<dim>::declare(dealii::ParameterHandler& prm) {
-  NosbPD<dim>::Parameters::declare(prm);
+  NosbParameters::declare(prm);
 }
 
 template <int dim>

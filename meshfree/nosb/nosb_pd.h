@@ -37,6 +37,7 @@
 #include "meshfree/influence_function.h"
 #include "meshfree/neighbor_search.h"
 #include "meshfree/nosb/correspondence_families.h"
+#include "meshfree/nosb/nosb_parameters.h"
 #include "meshfree/particle_set.h"
 
 #include <deal.II/base/parameter_handler.h>
@@ -55,25 +56,8 @@ namespace spinesim::meshfree {
 template <int dim>
 class NosbPD {
  public:
-  enum class Stabilization { none, penalty, bond_associated };
-
-  struct Parameters {
-    double horizon_ratio = 3.015; // δ/h [-]
-    std::string influence_function = "constant";
-    double alpha = 0.0; // fractional kernel order [-]
-    Stabilization stabilization = Stabilization::bond_associated;
-    double stabilization_coefficient = 0.1; // G_s [-], penalty only
-    double critical_stretch = 0.0;          // [-], 0 = from the fracture energy
-    double fracture_energy = 0.0;           // G_c [J/m^2]; both 0 = bonds never break
-    double max_condition_number = 1e4;      // of K_i [-]
-    bool partial_volume_correction = true;
-    double thickness = 1.0; // 2-D out-of-plane thickness [m]
-
-    static void declare(dealii::ParameterHandler& prm);
-    void parse(const dealii::ParameterHandler& prm);
-    static Stabilization stabilization_from_name(const std::string& name);
-    static std::string name(Stabilization s);
-  };
+  using Stabilization = NosbStabilization;
+  using Parameters = NosbParameters;
 
   // What the hourglass (zero-energy-mode) diagnostics measure, over intact bonds between
   // non-failed particles, with z_ij = (y_j − y_i) − F_i ξ_ij (F_i of the particle family):

@@ -34,7 +34,7 @@ SpgMethod<dim>::parse_parameters(const dealii::ParameterHandler& section) {
 
 template <int dim>
 void SpgMethod<dim>::declare(dealii::ParameterHandler& prm) {
-  SPGSolver<dim>::Parameters::declare(prm);
+  SpgParameters::declare(prm);
   prm.declare_entry("Thickness", "1", dealii::Patterns::Double(0.0),
                     "Out-of-plane thickness of a 2-D body (plane strain) [m].");
 }
@@ -157,7 +157,7 @@ double SpgMethod<dim>::energy_density(unsigned int i, const ParticleSet<dim>& pa
   const double w[4] = {0.5 * wb, 0.5 * wa, 0.5 * wa, 0.5 * wb};
   // F from the coefficients now (a restored checkpoint has not evaluated forces yet).
   const auto F =
-      solver_->parameters().update_mode() == SPGSolver<dim>::KernelUpdate::total_lagrangian
+      solver_->parameters().update_mode() == SpgKernelUpdate::total_lagrangian
           ? (solver_->has_row(i) ? solver_->deformation_gradient(i, particles.displacements())
                                  : dealii::Tensor<2, dim>(dealii::unit_symmetric_tensor<dim>()))
           : solver_->deformation_gradients()[i];
