@@ -24,7 +24,7 @@ inline framework::ScenarioSection mechanics() {
   return {"Mechanics", fem::MechanicsSolver<2>::Parameters::declare};
 }
 inline framework::ScenarioSection spg() {
-  return {"SPG", meshfree::SPGSolver<3>::Parameters::declare};
+  return {"SPG", meshfree::SpgParameters::declare};
 }
 inline framework::ScenarioSection coupling() {
   return {"Coupling", coupling::FemParticleCoupling<2>::Parameters::declare};

@@ -1,5 +1,6 @@
 #include "coupling/bond_rows.h"
 
+#include "meshfree/bond_loop.h"
 #include "meshfree/neighbor_search.h"
 #include "meshfree/pre_crack.h"
 
@@ -21,10 +22,10 @@ void BondRows<dim>::rebuild() {
   // Broken pairs survive a rebuild (particle indices never change). Sorted pairs (i < j).
   std::vector<std::pair<unsigned int, unsigned int>> broken;
   for (unsigned int i = 0; i < state_.bonds.n_particles(); ++i)
-    for (std::size_t k = state_.bonds.begin(i); k < state_.bonds.end(i); ++k)
+    meshfree::for_each_bond_of(state_.bonds, i, [&](std::size_t k, unsigned int j) {
       if (state_.bonds.broken[k])
-        broken.emplace_back(std::min(i, state_.bonds.neighbor[k]),
-                            std::max(i, state_.bonds.neighbor[k]));
+        broken.emplace_back(std::min(i, j), std::max(i, j));
+    });
   if (Utilities::MPI::n_mpi_processes(state_.fem.mpi_communicator()) > 1) {
     // Rows live with their owners: every rank learns every broken pair (a particle that turns
     // from ghost to free inherits the breaks its partners recorded).

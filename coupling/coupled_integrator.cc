@@ -118,11 +118,9 @@ void CoupledIntegrator<dim>::advance(double dt, double a, double load_time, bool
     if (sums && (first || previous.size() != dim * particles.size()))
       previous.assign(dim * particles.size(), std::numeric_limits<double>::quiet_NaN());
     // The damped central-difference update of one component, in both loops below.
-    const double keep = 1.0 - 0.5 * a * dt, denominator = 1.0 + 0.5 * a * dt;
+    const DampedCentralDifference step(dt, a);
     const auto advance_component = [&](unsigned int i, unsigned int d, double acc) {
-      double& vi = particles.velocity(i)[d];
-      vi = (keep * vi + dt * acc) / denominator;
-      particles.displacement(i)[d] += dt * vi;
+      step.advance(particles.velocity(i)[d], particles.displacement(i)[d], acc);
     };
     if (!sums) {
       // Independent particles: the threads share them (the relaxation sums below keep one
@@ -185,13 +183,13 @@ void CoupledIntegrator<dim>::advance(double dt, double a, double load_time, bool
 template <int dim>
 RelaxationReport<dim> CoupledIntegrator<dim>::relax(double time, bool with_conversion) {
   // Adaptive dynamic relaxation of the coupled system at the load of `time` (Underwood 1983;
-  // Kilic & Madenci 2010 for PD): central differences in pseudo-time with the real lumped and
-  // particle masses at the common stable step, and the damping c = 2 sqrt(uᵀ k u / uᵀ u) from
-  // the local stiffness estimates of both models (critical for the lowest mode, updated every
-  // step, one step late). Converged when ‖free residual‖ ≤ tolerance × max(‖reactions‖,
-  // largest ‖free residual‖ of this relaxation). Bonds break as the state relaxes; cells
-  // convert at equilibrium, and the state relaxes again after a conversion. Velocities are
-  // pseudo-velocities and end at zero.
+  // Kilic & Madenci 2010 for PD; base/dynamic_relaxation.h): central differences in
+  // pseudo-time with the real lumped and particle masses at the common stable step, and the
+  // damping c = 2 sqrt(uᵀ k u / uᵀ u) from the local stiffness estimates of both models
+  // (critical for the lowest mode, updated every step, one step late). Converged when ‖free
+  // residual‖ ≤ tolerance × max(‖reactions‖, largest ‖free residual‖ of this relaxation). Bonds
+  // break as the state relaxes; cells convert at equilibrium, and the state relaxes again after a
+  // conversion. Velocities are pseudo-velocities and end at zero.
   const MPI_Comm comm = state_.fem.mpi_communicator();
   RelaxationReport<dim> report;
   double dt = stable_time_step();
@@ -205,7 +203,13 @@ RelaxationReport<dim> CoupledIntegrator<dim>::relax(double time, bool with_conve
     double values[4] = {local.stiffness_numerator, local.stiffness_denominator,
                         local.residual_square, local.reaction_square};
     Utilities::MPI::sum(ArrayView<const double>(values, 4), comm, ArrayView<double>(values, 4));
-    const double residual = std::sqrt(values[2]), reaction = std::sqrt(values[3]);
+    RelaxationSums sums;
+    sums.stiffness_numerator = values[0];
+    sums.stiffness_denominator = values[1];
+    sums.residual_square = values[2];
+    sums.reaction_square = values[3];
+    const double residual = std::sqrt(sums.residual_square);
+    const double reaction = std::sqrt(sums.reaction_square);
     peak_residual = std::max(peak_residual, residual);
     const double scale = std::max(reaction, peak_residual);
     report.iterations = it;
@@ -242,8 +246,7 @@ RelaxationReport<dim> CoupledIntegrator<dim>::relax(double time, bool with_conve
       c = 0;
       continue;
     }
-    const double q = values[1] > 0 ? values[0] / values[1] : 0.0;
-    c = q > 0 ? std::min(2.0 * std::sqrt(q), 2.0 / dt) : 0.0; // c dt ≤ 2 keeps 1 − c dt/2 ≥ 0
+    c = sums.damping(dt);
     report.damping = c;
   }
   // Quasi-static: the pseudo-velocities go.

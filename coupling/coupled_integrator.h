@@ -5,6 +5,7 @@
 // step (the smaller of the FEM CFL and the PD bound), or quasi-static steps by adaptive
 // dynamic relaxation of both models to equilibrium.
 
+#include "base/dynamic_relaxation.h"
 #include "coupling/cell_converter.h"
 #include "coupling/coupling_state.h"
 #include "coupling/fracture_heat.h"
@@ -56,7 +57,7 @@ class CoupledIntegrator {
   double particle_updates() const { return particle_updates_; }
 
  private:
-  using RelaxationSums = typename fem::MechanicsSolver<dim>::RelaxationSums;
+  using RelaxationSums = spinesim::RelaxationSums;
   // One central-difference step of both models with damping a [1/s] and the loads of
   // load_time; with `sums`, a relaxation step (the time is held) that adds up the free
   // residual, reactions and stiffness estimate of this rank.

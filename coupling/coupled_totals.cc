@@ -1,5 +1,7 @@
 #include "coupling/coupled_totals.h"
 
+#include "meshfree/bond_loop.h"
+
 #include <deal.II/base/mpi.h>
 
 #include <algorithm>
@@ -61,8 +63,8 @@ std::size_t n_broken_bonds(const CouplingState<dim>& s) {
   std::size_t n = 0;
   for (unsigned int i = 0; i < s.bonds.n_particles(); ++i)
     if (s.free[i] && s.is_owned(i))
-      for (std::size_t k = s.bonds.begin(i); k < s.bonds.end(i); ++k)
-        n += s.bonds.broken[k] ? 1 : 0;
+      meshfree::for_each_bond_of(
+          s.bonds, i, [&](std::size_t k, unsigned int) { n += s.bonds.broken[k] ? 1 : 0; });
   return Utilities::MPI::sum(n, s.fem.mpi_communicator());
 }
 

@@ -2,6 +2,7 @@
 
 #include "base/exceptions.h"
 #include "fem/materials/material_state_io.h"
+#include "meshfree/bond_loop.h"
 
 #include <deal.II/base/mpi.h>
 
@@ -38,10 +39,11 @@ void CouplingCheckpoint<dim>::save(const std::string& file) const {
   p_.halo.synchronise();
   const double dissipation = p_.fracture.dissipation();
   std::vector<std::pair<unsigned int, unsigned int>> broken;
-  for (unsigned int i = 0; i < bonds.n_particles(); ++i)
-    for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k)
+  for (unsigned int i = 0; i < bonds.n_particles(); ++i) // a list in row order: serial
+    meshfree::for_each_bond_of(bonds, i, [&](std::size_t k, unsigned int j) {
       if (bonds.broken[k])
-        broken.emplace_back(i, bonds.neighbor[k]);
+        broken.emplace_back(i, j);
+    });
   if (Utilities::MPI::n_mpi_processes(state.fem.mpi_communicator()) > 1) {
     std::vector<std::pair<unsigned int, unsigned int>> all;
     for (const auto& part : Utilities::MPI::all_gather(state.fem.mpi_communicator(), broken))

@@ -1,5 +1,7 @@
 #include "coupling/fracture_heat.h"
 
+#include "meshfree/bond_loop.h"
+
 #include <deal.II/base/mpi.h>
 
 #include <algorithm>
@@ -29,15 +31,17 @@ void FractureHeat<dim>::after_forces(std::size_t newly_broken) {
     energy_.resize(particles.size(), 0.0);
   // Rows of the free particles owned here: ghost rows and other ranks' rows (kept for
   // methods that gather neighbour families) are counted by nobody, or by their owners.
+  // Serial: the order of the bonds fixes the sum of the dissipation.
   for (unsigned int i = 0; i < particles.size(); ++i) {
     if (!state_.free[i] || !state_.is_owned(i))
       continue;
-    for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k)
+    meshfree::for_each_bond_of(bonds, i, [&](std::size_t k, unsigned int) {
       if (bonds.broken[k] && !broken_before_[k]) {
         const double e = state_.method->bond_energy(particles, bonds, i, k);
         energy_[i] += e;
         dissipation_ += e;
       }
+    });
   }
 }
 

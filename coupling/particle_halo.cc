@@ -1,5 +1,7 @@
 #include "coupling/particle_halo.h"
 
+#include "meshfree/bond_loop.h"
+
 #include <deal.II/base/exceptions.h>
 #include <deal.II/base/mpi.h>
 
@@ -30,9 +32,10 @@ void ParticleHalo<dim>::plan(const MlsInterface<dim>& interface) {
   // rank's interface nodes.
   std::set<unsigned int> needed;
   for (unsigned int i = 0; i < state_.bonds.n_particles(); ++i)
-    for (std::size_t k = state_.bonds.begin(i); k < state_.bonds.end(i); ++k)
-      if (!state_.is_owned(state_.bonds.neighbor[k]))
-        needed.insert(state_.bonds.neighbor[k]);
+    meshfree::for_each_bond_of(state_.bonds, i, [&](std::size_t, unsigned int j) {
+      if (!state_.is_owned(j))
+        needed.insert(j);
+    });
   for (const auto& entry : interface.dofs())
     for (const auto& [p, w] : entry.weights)
       if (!state_.is_owned(p))

@@ -14,8 +14,7 @@ namespace spinesim::fem {
 
 using namespace dealii;
 
-template <int dim>
-void CellIndicators<dim>::Parameters::declare(ParameterHandler& prm) {
+void CellIndicatorsParameters::declare(ParameterHandler& prm) {
   prm.declare_entry("Critical principal strain", "0.02", Patterns::Double(0),
                     "Maximum principal strain at which a cell counts as failed [-].");
   prm.declare_entry("Critical principal stress", "100e6", Patterns::Double(0),
@@ -24,8 +23,7 @@ void CellIndicators<dim>::Parameters::declare(ParameterHandler& prm) {
                     "Fraction of the CFL limit reported as the cell's stable step [-].");
 }
 
-template <int dim>
-void CellIndicators<dim>::Parameters::parse(const ParameterHandler& prm) {
+void CellIndicatorsParameters::parse(const ParameterHandler& prm) {
   critical_principal_strain = prm.get_double("Critical principal strain");
   critical_principal_stress = prm.get_double("Critical principal stress");
   cfl_safety_factor = prm.get_double("CFL safety factor");

@@ -13,16 +13,19 @@
 
 namespace spinesim::fem {
 
+// The failure thresholds, the same in 2-D and 3-D.
+struct CellIndicatorsParameters {
+  double critical_principal_strain = 0.02;  // [-]
+  double critical_principal_stress = 100e6; // [Pa]
+  double cfl_safety_factor = 0.5;           // [-]
+  static void declare(dealii::ParameterHandler& prm);
+  void parse(const dealii::ParameterHandler& prm);
+};
+
 template <int dim>
 class CellIndicators {
  public:
-  struct Parameters {
-    double critical_principal_strain = 0.02;  // [-]
-    double critical_principal_stress = 100e6; // [Pa]
-    double cfl_safety_factor = 0.5;           // [-]
-    static void declare(dealii::ParameterHandler& prm);
-    void parse(const dealii::ParameterHandler& prm);
-  };
+  using Parameters = CellIndicatorsParameters;
 
   explicit CellIndicators(const Parameters& parameters = Parameters()) : prm_(parameters) {}
 

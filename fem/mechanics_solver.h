@@ -18,13 +18,13 @@
 // quasi_static (Newton and load stepping), explicit (central differences and dynamic
 // relaxation), postprocessing (reactions, energies, cell fields, output) and checkpoint.
 
+#include "base/dynamic_relaxation.h"
 #include "fem/boundary_conditions.h"
 #include "fem/hanging_node_lines.h"
 #include "fem/materials/constitutive_law.h"
 #include "fem/mechanics_parameters.h"
 #include "fem/point_update.h"
 #include "fem/quadrature_point_data.h"
-#include "fem/relaxation_sums.h"
 
 #include <deal.II/base/array_view.h>
 #include <deal.II/base/function.h>
@@ -135,7 +135,7 @@ class MechanicsSolver {
   // pseudo-step evaluates the laws from the history committed before the relaxation (one
   // backward-Euler step over the load step, as Newton takes); committing every pseudo-step
   // would follow the overshoot of the pseudo-dynamics into plastic flow and unloading.
-  using RelaxationSums = fem::RelaxationSums;
+  using RelaxationSums = spinesim::RelaxationSums;
   RelaxationSums relaxation_step(double dt, double damping, double time, bool first);
   // Accepts the point history of the relaxed state (at equilibrium).
   void commit_relaxation();

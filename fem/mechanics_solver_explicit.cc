@@ -3,6 +3,7 @@
 
 #include "fem/mechanics_solver.h"
 
+#include "base/dynamic_relaxation.h"
 #include "base/exceptions.h"
 #include "base/scoped_time.h"
 #include "fem/sparse_product.h"
@@ -139,10 +140,8 @@ void MechanicsSolver<dim>::central_difference(double dt, double a, double bc_tim
                               "explicit step", "every material needs a positive density");
     };
     // The damped central-difference update of one DoF, in both loops below.
-    const auto advance_dof = [&](std::size_t k, double acc) {
-      v[k] = ((1.0 - 0.5 * a * dt) * v[k] + dt * acc) / (1.0 + 0.5 * a * dt);
-      u[k] += dt * v[k];
-    };
+    const DampedCentralDifference step(dt, a);
+    const auto advance_dof = [&](std::size_t k, double acc) { step.advance(v[k], u[k], acc); };
     if (!sums) {
       // Independent DoFs, split among the threads as the sparse product splits its rows (the
       // same static partition of the same local order: each thread reads what it wrote).

@@ -1,22 +1,23 @@
 #include "meshfree/adaptive_dynamic_relaxation.h"
 
+#include "base/dynamic_relaxation.h"
 #include "base/exceptions.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 namespace spinesim::meshfree {
 
-template <int dim>
-void AdaptiveDynamicRelaxation<dim>::Parameters::declare(dealii::ParameterHandler& prm) {
+void AdaptiveDynamicRelaxationParameters::declare(dealii::ParameterHandler& prm) {
   prm.declare_entry("Maximum iterations", "100000", dealii::Patterns::Integer(1),
                     "Iteration limit of adaptive dynamic relaxation [-].");
   prm.declare_entry("Tolerance", "1e-8", dealii::Patterns::Double(0.0),
                     "Relative residual norm at which the relaxation stops [-].");
 }
 
-template <int dim>
-void AdaptiveDynamicRelaxation<dim>::Parameters::parse(const dealii::ParameterHandler& prm) {
+void AdaptiveDynamicRelaxationParameters::parse(const dealii::ParameterHandler& prm) {
   max_iterations = prm.get_integer("Maximum iterations");
   tolerance = prm.get_double("Tolerance");
   if (!(tolerance > 0.0 && tolerance < 1.0))
@@ -47,33 +48,38 @@ AdaptiveDynamicRelaxation<dim>::solve(ParticleSet<dim>& p,
   const auto& f = p.forces();
   const auto& fe = p.external_forces();
   const auto& V = p.volumes();
-  std::vector<dealii::Tensor<1, dim>> b(n), b_old(n);
+  // The pseudo-acceleration a = b/λ of each component (b = (f + f_ext)/V the force density)
+  // and that of the previous iteration for the stiffness estimate (NaN: none yet).
+  std::vector<double> acceleration(dim * n, 0.0);
+  std::vector<double> previous(dim * n, std::numeric_limits<double>::quiet_NaN());
 
-  auto evaluate = [&](double& residual, double& scale) {
+  // Forces at the current state; the sums of the free components (residual, stiffness
+  // estimate) and of the fixed ones (reactions), and ‖f_ext‖.
+  auto evaluate = [&](RelaxationSums& sums, double& external) {
     compute_forces_(p);
-    double r2 = 0, s_ext = 0, s_reac = 0;
+    double s_ext = 0;
     for (unsigned int i = 0; i < n; ++i)
       for (unsigned int d = 0; d < dim; ++d) {
         s_ext += fe[i][d] * fe[i][d];
         if (p.is_fixed(i, d)) {
-          s_reac += f[i][d] * f[i][d];
-          b[i][d] = 0;
-        } else {
-          const double r = f[i][d] + fe[i][d];
-          r2 += r * r;
-          b[i][d] = r / V[i];
+          sums.reaction_square += f[i][d] * f[i][d];
+          continue;
         }
+        const double r = f[i][d] + fe[i][d];
+        const double a = r / V[i] / lambda[i];
+        acceleration[dim * i + d] = a;
+        sums.add_free(r, a, previous[dim * i + d], u[i][d], v[i][d], 1.0);
       }
-    residual = std::sqrt(r2);
-    scale = std::max(std::sqrt(s_ext), std::sqrt(s_reac));
-    if (!std::isfinite(residual)) {
+    external = std::sqrt(s_ext);
+    if (!std::isfinite(sums.residual_square)) {
       for (unsigned int i = 0; i < n; ++i)
-        if (!std::isfinite(b[i].norm())) {
-          std::ostringstream where;
-          where << "particle " << i << " at (" << p.reference_position(i) << ")";
-          throw NumericalFailure("non-finite force in dynamic relaxation", where.str(),
-                                 "check the stiffness bound passed to the relaxation");
-        }
+        for (unsigned int d = 0; d < dim; ++d)
+          if (!p.is_fixed(i, d) && !std::isfinite(acceleration[dim * i + d])) {
+            std::ostringstream where;
+            where << "particle " << i << " at (" << p.reference_position(i) << ")";
+            throw NumericalFailure("non-finite force in dynamic relaxation", where.str(),
+                                   "check the stiffness bound passed to the relaxation");
+          }
     }
   };
 
@@ -82,11 +88,14 @@ AdaptiveDynamicRelaxation<dim>::solve(ParticleSet<dim>& p,
   for (unsigned int i = 0; i < n; ++i)
     v[i] = 0;
   for (unsigned int it = 0;; ++it) {
-    double residual, scale;
-    evaluate(residual, scale);
+    RelaxationSums sums;
+    double external;
+    evaluate(sums, external);
+    const double residual = std::sqrt(sums.residual_square);
     if (it == 0)
       initial_residual = residual;
-    scale = std::max(scale, initial_residual);
+    const double scale =
+        std::max(std::max(external, std::sqrt(sums.reaction_square)), initial_residual);
     result.iterations = it;
     result.relative_residual = scale > 0 ? residual / scale : 0.0;
     if (result.relative_residual <= prm_.tolerance) {
@@ -95,33 +104,17 @@ AdaptiveDynamicRelaxation<dim>::solve(ParticleSet<dim>& p,
     }
     if (it == prm_.max_iterations)
       break;
-    double c = 0;
-    if (it > 0) {
-      double num = 0, den = 0;
-      for (unsigned int i = 0; i < n; ++i)
-        for (unsigned int d = 0; d < dim; ++d) {
-          if (p.is_fixed(i, d))
-            continue;
-          den += u[i][d] * u[i][d];
-          if (v[i][d] != 0.0) {
-            const double k_local = -(b[i][d] - b_old[i][d]) / (lambda[i] * v[i][d]);
-            num += u[i][d] * k_local * u[i][d];
-          }
-        }
-      if (num > 0 && den > 0)
-        c = std::min(2.0, 2.0 * std::sqrt(num / den));
-    }
+    // Δt = 1: the damping of this iteration's estimate (none on the first), from rest first.
+    const DampedCentralDifference step(1.0, sums.damping(1.0));
     for (unsigned int i = 0; i < n; ++i)
       for (unsigned int d = 0; d < dim; ++d) {
         if (p.is_fixed(i, d))
           continue;
         if (it == 0)
-          v[i][d] = 0.5 * b[i][d] / lambda[i];
+          step.start(v[i][d], u[i][d], acceleration[dim * i + d]);
         else
-          v[i][d] = ((2.0 - c) * v[i][d] + 2.0 * b[i][d] / lambda[i]) / (2.0 + c);
-        u[i][d] += v[i][d];
+          step.advance(v[i][d], u[i][d], acceleration[dim * i + d]);
       }
-    std::swap(b, b_old);
   }
   for (unsigned int i = 0; i < n; ++i)
     for (unsigned int d = 0; d < dim; ++d)

@@ -6,7 +6,9 @@
 // the stiffness (so Δt = 1 is stable) and a damping coefficient from the Rayleigh quotient
 //   c_n = 2 sqrt(uᵀ K¹ u / uᵀu),  K¹_ii = −(b_i^n − b_i^{n−1}) / (λ_i Δt v_i^{n−½}),
 // updated every iteration. b is the force density (force + external_force)/V.
-//   v^{n+½} = ((2 − c_n) v^{n−½} + 2 b^n/λ) / (2 + c_n),  u^{n+1} = u^n + v^{n+½}.
+//   v^{n+½} = ((2 − c_n) v^{n−½} + 2 b^n/λ) / (2 + c_n),  u^{n+1} = u^n + v^{n+½},
+// which is the shared update of base/dynamic_relaxation.h with dt = 1 and a = b/λ (halving
+// numerator and denominator is exact in floating point).
 // Converged when ‖residual‖ over the free components is below `tolerance` times the scale
 // max(‖external force‖, ‖internal force on fixed components‖, ‖initial residual‖): the load,
 // the reactions (displacement-driven problems) or, unloaded, the initial imbalance.
@@ -20,18 +22,21 @@
 
 namespace spinesim::meshfree {
 
+// The relaxation's limits, the same in 2-D and 3-D.
+struct AdaptiveDynamicRelaxationParameters {
+  unsigned int max_iterations = 100000;
+  double tolerance = 1e-8;
+
+  static void declare(dealii::ParameterHandler& prm);
+  void parse(const dealii::ParameterHandler& prm);
+};
+
 template <int dim>
 class AdaptiveDynamicRelaxation {
  public:
   using ForceFunction = std::function<void(ParticleSet<dim>&)>;
 
-  struct Parameters {
-    unsigned int max_iterations = 100000;
-    double tolerance = 1e-8;
-
-    static void declare(dealii::ParameterHandler& prm);
-    void parse(const dealii::ParameterHandler& prm);
-  };
+  using Parameters = AdaptiveDynamicRelaxationParameters;
 
   struct Result {
     bool converged = false;

@@ -14,7 +14,7 @@ BondBasedMethod<dim>::BondBasedMethod(const Parameters& parameters,
     : pd_(parameters, material.youngs_modulus, material.poisson_ratio) {
   const auto model = parameters.plane_model;
   const std::string model_name =
-      model == BondBasedPD<dim>::PlaneModel::plane_stress ? "plane stress" : "plane strain";
+      model == PlaneModel::plane_stress ? "plane stress" : "plane strain";
   const double implied = implied_poisson_ratio(model), nu = material.poisson_ratio;
   // 1e-6: scenes write 1/3 to ten digits or more; any real mismatch is far larger.
   if (std::abs(nu - implied) <= 1e-6 * implied)
@@ -38,7 +38,7 @@ BondBasedMethod<dim>::BondBasedMethod(const Parameters& parameters,
 
 template <int dim>
 void BondBasedMethod<dim>::declare(dealii::ParameterHandler& prm) {
-  BondBasedPD<dim>::Parameters::declare(prm);
+  BondBasedParameters::declare(prm);
   prm.declare_entry("Accept Poisson ratio mismatch", "false", dealii::Patterns::Bool(),
                     "Bond-based PD represents nu = 1/4 (3-D, plane strain) or 1/3 (plane "
                     "stress): a material with another Poisson ratio is refused unless this is "
@@ -55,15 +55,14 @@ BondBasedMethod<dim>::parse_parameters(const dealii::ParameterHandler& section) 
 }
 
 template <int dim>
-double BondBasedMethod<dim>::shear_modulus_error(typename BondBasedPD<dim>::PlaneModel model,
-                                                 double nu) {
+double BondBasedMethod<dim>::shear_modulus_error(PlaneModel model, double nu) {
   // G over the calibration modulus: 3-D G/K = 3(1−2ν)/(2(1+ν)); plane stress
   // G/k' = (1−ν)/(1+ν) with k' = E/(2(1−ν)); plane strain G/k' = 1−2ν with
   // k' = E/(2(1+ν)(1−2ν)).
   const auto ratio = [&](double v) {
     if (dim == 3)
       return 3.0 * (1.0 - 2.0 * v) / (2.0 * (1.0 + v));
-    if (model == BondBasedPD<dim>::PlaneModel::plane_stress)
+    if (model == PlaneModel::plane_stress)
       return (1.0 - v) / (1.0 + v);
     return 1.0 - 2.0 * v;
   };
@@ -71,11 +70,10 @@ double BondBasedMethod<dim>::shear_modulus_error(typename BondBasedPD<dim>::Plan
 }
 
 template <int dim>
-double
-BondBasedMethod<dim>::implied_poisson_ratio(typename BondBasedPD<dim>::PlaneModel plane_model) {
+double BondBasedMethod<dim>::implied_poisson_ratio(PlaneModel plane_model) {
   // Pairwise central forces give C12 = C66 (Cauchy relation): ν = 1/4 in 3-D and plane
   // strain, 1/3 in plane stress (Gerstle, Sau & Silling 2007; Silling & Askari 2005).
-  if (dim == 2 && plane_model == BondBasedPD<dim>::PlaneModel::plane_stress)
+  if (dim == 2 && plane_model == PlaneModel::plane_stress)
     return 1.0 / 3.0;
   return 0.25;
 }

@@ -11,13 +11,15 @@
 
 namespace spinesim::meshfree {
 
+struct BondBasedMethodParameters : BondBasedParameters {
+  // A material Poisson ratio other than implied_poisson_ratio() is bad input unless set.
+  bool accept_poisson_mismatch = false;
+};
+
 template <int dim>
 class BondBasedMethod : public ParticleMethod<dim> {
  public:
-  struct Parameters : BondBasedPD<dim>::Parameters {
-    // A material Poisson ratio other than implied_poisson_ratio() is bad input unless set.
-    bool accept_poisson_mismatch = false;
-  };
+  using Parameters = BondBasedMethodParameters;
   // E and ν of `material` calibrate the micromodulus. InvalidInput if ν differs from the
   // implied ratio (unless accepted: then a message states the shear-modulus error).
   BondBasedMethod(const Parameters& parameters, const ParticleMaterial& material);
@@ -25,10 +27,10 @@ class BondBasedMethod : public ParticleMethod<dim> {
   static Parameters parse_parameters(const dealii::ParameterHandler& section);
 
   // The Poisson ratio bond-based PD represents for this dimension and plane model [-].
-  static double implied_poisson_ratio(typename BondBasedPD<dim>::PlaneModel plane_model);
+  static double implied_poisson_ratio(PlaneModel plane_model);
   // G_PD / G − 1 [-]: the shear-modulus error of bond-based PD calibrated to the bulk (2-D:
   // in-plane bulk) modulus of a material with Poisson ratio ν.
-  static double shear_modulus_error(typename BondBasedPD<dim>::PlaneModel plane_model, double nu);
+  static double shear_modulus_error(PlaneModel plane_model, double nu);
 
   const BondBasedPD<dim>& model() const { return pd_; }
 
@@ -36,7 +38,7 @@ class BondBasedMethod : public ParticleMethod<dim> {
   bool carries_material_state() const override { return false; }
   double thickness() const override { return pd_.parameters().thickness; }
   bool plane_stress() const override {
-    return dim == 2 && pd_.parameters().plane_model == BondBasedPD<dim>::PlaneModel::plane_stress;
+    return dim == 2 && pd_.parameters().plane_model == PlaneModel::plane_stress;
   }
   std::optional<double> implied_poisson_ratio() const override {
     return implied_poisson_ratio(pd_.parameters().plane_model);

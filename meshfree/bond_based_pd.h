@@ -16,12 +16,11 @@
 // Bond-based PD has a fixed Poisson ratio (1/4 in 3-D and plane strain, 1/3 in plane stress);
 // the micromodulus is calibrated to the bulk modulus (isotropic extension), as in Jo & Ha (2021).
 
+#include "meshfree/bond_based_parameters.h"
 #include "meshfree/bond_list.h"
 #include "meshfree/influence_function.h"
 #include "meshfree/neighbor_search.h"
 #include "meshfree/particle_set.h"
-
-#include <deal.II/base/parameter_handler.h>
 
 #include <string>
 #include <vector>
@@ -31,22 +30,8 @@ namespace spinesim::meshfree {
 template <int dim>
 class BondBasedPD {
  public:
-  enum class PlaneModel { plane_stress, plane_strain };
-
-  struct Parameters {
-    double horizon_ratio = 3.015; // δ/h [-]
-    std::string influence_function = "constant";
-    double alpha = 0.0;            // fractional kernel order [-]
-    double critical_stretch = 0.0; // [-], 0 = from the fracture energy
-    double fracture_energy = 0.0;  // G_c [J/m^2]; both 0 = bonds never break
-    PlaneModel plane_model = PlaneModel::plane_stress;
-    double thickness = 1.0; // 2-D out-of-plane thickness [m]
-    bool surface_correction = true;
-    bool partial_volume_correction = true;
-
-    static void declare(dealii::ParameterHandler& prm);
-    void parse(const dealii::ParameterHandler& prm);
-  };
+  using PlaneModel = meshfree::PlaneModel;
+  using Parameters = BondBasedParameters;
 
   // E [Pa], ν [-] from the material; InvalidInput if out of range.
   BondBasedPD(const Parameters& parameters, double youngs_modulus, double poisson_ratio);

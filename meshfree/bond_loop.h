@@ -41,6 +41,26 @@ void parallel_for_rethrow(long n, long threshold, Body&& body) {
     std::rethrow_exception(failure);
 }
 
+// body(k, j) for every bond k = (i → j) of the one particle i, in row order, on the calling
+// thread: the row walk of a loop over particles that is not a plain map (one particle, a
+// subset, a loop that builds a list or whose order fixes a global sum).
+template <int dim, class Body>
+void for_each_bond_of(const BondList<dim>& bonds, unsigned int i, Body&& body) {
+  const unsigned int* nb = bonds.neighbor.data();
+  for (std::size_t k = bonds.begin(i), end = bonds.end(i); k < end; ++k)
+    body(k, nb[k]);
+}
+
+// body(i) for every particle i of the bond list: a per-particle map whose body walks its own
+// row (for_each_bond_of) beside other per-particle work. Threads as for_each_bond, exceptions
+// as parallel_for_rethrow.
+template <int dim, class Body>
+void for_each_particle(const BondList<dim>& bonds, Body&& body) {
+  const long n = static_cast<long>(bonds.n_particles());
+  parallel_for_rethrow(n, bonds.n_bonds() > parallel_bond_threshold ? 0 : n,
+                       [&](long i) { body(static_cast<unsigned int>(i)); });
+}
+
 // body(i, k, j) for every bond k = (i → j).
 template <int dim, class Body>
 void for_each_bond(const BondList<dim>& bonds, Body&& body) {

@@ -14,6 +14,11 @@
 
 namespace spinesim::meshfree {
 
+// The names from_name() takes, as a parameter selection (the same in 2-D and 3-D).
+inline std::string influence_function_names() {
+  return "constant|fractional|gaussian|cubic spline";
+}
+
 template <int dim>
 class InfluenceFunction {
  public:
@@ -23,7 +28,7 @@ class InfluenceFunction {
   // Names: "constant", "fractional", "gaussian", "cubic spline". InvalidInput otherwise,
   // or if α >= 2 for the fractional kernel (the horizon integrals diverge).
   static InfluenceFunction from_name(const std::string& name, double alpha = 0.0);
-  static std::string names() { return "constant|fractional|gaussian|cubic spline"; }
+  static std::string names() { return influence_function_names(); }
 
   Kind kind() const { return kind_; }
   double alpha() const { return alpha_; }

@@ -293,22 +293,20 @@ void NeighborSearch<dim>::apply_surface_correction(const ParticleSet<dim>& parti
   const double bulk = n4_mean * full;
 
   std::vector<dealii::Tensor<1, dim>> g(n);
-  const long nl = n;
-#pragma omp parallel for schedule(static) if (nl > parallel_particle_threshold)
-  for (long ii = 0; ii < nl; ++ii) {
-    const unsigned int i = static_cast<unsigned int>(ii);
-    dealii::Tensor<1, dim> sum;
-    for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
-      const double w = bonds.influence[k] * bonds.volume_factor(k) * bonds.length[k] *
-                       particles.volume(bonds.neighbor[k]);
-      for (unsigned int d = 0; d < dim; ++d) {
-        const double nd = bonds.xi[k][d] / bonds.length[k];
-        sum[d] += w * nd * nd * nd * nd;
-      }
-    }
-    for (unsigned int d = 0; d < dim; ++d)
-      g[i][d] = sum[d] > 0.0 ? bulk / sum[d] : 0.0;
-  }
+  accumulate_over_bonds(
+      bonds, [](unsigned int) { return dealii::Tensor<1, dim>(); },
+      [&](unsigned int, std::size_t k, unsigned int j, dealii::Tensor<1, dim>& sum) {
+        const double w =
+            bonds.influence[k] * bonds.volume_factor(k) * bonds.length[k] * particles.volume(j);
+        for (unsigned int d = 0; d < dim; ++d) {
+          const double nd = bonds.xi[k][d] / bonds.length[k];
+          sum[d] += w * nd * nd * nd * nd;
+        }
+      },
+      [&](unsigned int i, const dealii::Tensor<1, dim>& sum) {
+        for (unsigned int d = 0; d < dim; ++d)
+          g[i][d] = sum[d] > 0.0 ? bulk / sum[d] : 0.0;
+      });
   // Checked outside the parallel region: exceptions must not cross it.
   for (unsigned int i = 0; i < n; ++i)
     for (unsigned int d = 0; d < dim; ++d)
@@ -320,20 +318,15 @@ void NeighborSearch<dim>::apply_surface_correction(const ParticleSet<dim>& parti
                                    std::to_string(d) + "; increase the horizon ratio");
       }
   bonds.surface_factor.resize(bonds.n_bonds());
-#pragma omp parallel for schedule(static) if (nl > parallel_particle_threshold)
-  for (long ii = 0; ii < nl; ++ii) {
-    const unsigned int i = static_cast<unsigned int>(ii);
-    for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
-      const unsigned int j = bonds.neighbor[k];
-      double s = 0;
-      for (unsigned int d = 0; d < dim; ++d) {
-        const double nd = bonds.xi[k][d] / bonds.length[k];
-        const double gm = 0.5 * (g[i][d] + g[j][d]);
-        s += (nd / gm) * (nd / gm);
-      }
-      bonds.surface_factor[k] = 1.0 / std::sqrt(s);
+  for_each_bond(bonds, [&](unsigned int i, std::size_t k, unsigned int j) {
+    double s = 0;
+    for (unsigned int d = 0; d < dim; ++d) {
+      const double nd = bonds.xi[k][d] / bonds.length[k];
+      const double gm = 0.5 * (g[i][d] + g[j][d]);
+      s += (nd / gm) * (nd / gm);
     }
-  }
+    bonds.surface_factor[k] = 1.0 / std::sqrt(s);
+  });
 }
 
 template class NeighborSearch<2>;

@@ -133,7 +133,7 @@ class PdExplicitThroughput : public Scenario {
     auto particles = ParticleSet<3>::lattice(dealii::Point<3>(), dealii::Point<3>(L, L, L), h);
     particles.set_density(b_.density);
 
-    BondBasedPD<3>::Parameters pd_prm;
+    meshfree::BondBasedParameters pd_prm;
     pd_prm.horizon_ratio = b_.horizon_ratio;
     pd_prm.influence_function = "constant";
     pd_prm.critical_stretch = b_.critical_stretch;

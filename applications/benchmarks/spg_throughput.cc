@@ -106,7 +106,7 @@ class Throughput : public Scenario {
 
  private:
   materials::LawParameters law_;
-  meshfree::SPGSolver<3>::Parameters spg_;
+  meshfree::SpgParameters spg_;
   BenchmarkParameters bench_;
 };
 

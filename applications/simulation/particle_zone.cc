@@ -53,7 +53,7 @@ void ParticleZoneParameters::declare(dealii::ParameterHandler& prm) {
   // One subsection per registered particle method ("Bond based", "NOSB", ...).
   meshfree::declare_particle_method_sections(prm);
   prm.enter_subsection("Quasi-static");
-  meshfree::AdaptiveDynamicRelaxation<2>::Parameters::declare(prm);
+  meshfree::AdaptiveDynamicRelaxationParameters::declare(prm);
   prm.leave_subsection();
   for (unsigned int k = 1; k <= n_region_slots; ++k) {
     prm.enter_subsection("Region " + std::to_string(k));
@@ -131,7 +131,7 @@ struct ParticleZone<dim>::Impl {
 
   ParticleZoneParameters prm;
   materials::LawParameters law;
-  typename meshfree::AdaptiveDynamicRelaxation<dim>::Parameters adr_prm;
+  meshfree::AdaptiveDynamicRelaxationParameters adr_prm;
   bool damage = false;
 
   meshfree::ParticleSet<dim> particles;

@@ -128,7 +128,7 @@ class NosbQuasistatic : public Scenario {
     }
     ctx.log() << "  particles: " << particles.size() << ", bonds: " << bonds.n_bonds() / 2
               << ", horizon " << bonds.horizon << " m, stabilization "
-              << NosbPD<dim>::Parameters::name(model_.stabilization) << "\n";
+              << meshfree::NosbParameters::name(model_.stabilization) << "\n";
     for (const auto& m : model.take_messages())
       ctx.log() << "  " << m << "\n";
     auto load = [&](ParticleSet<dim>& p, double lambda) {
@@ -264,7 +264,7 @@ class NosbQuasistatic : public Scenario {
               << "; top reaction PD " << reaction_pd << " N, FEM " << reaction_fem << " N\n";
     Summary& s = ctx.summary();
     s.set_label("solver_kind", result.solver);
-    s.set_label("stabilization", NosbPD<dim>::Parameters::name(model_.stabilization));
+    s.set_label("stabilization", meshfree::NosbParameters::name(model_.stabilization));
     s.set_figure("final_relative_residual", result.relative_residual, "-");
     s.set_figure("iterations_to_tolerance", result.iterations, "iterations");
     s.set_figure("load_step_cuts", result.cuts, "-");
@@ -287,14 +287,14 @@ class NosbQuasistatic : public Scenario {
  private:
   materials::LawParameters law_;
   typename fem::MechanicsSolver<dim>::Parameters mech_;
-  typename meshfree::NosbPD<dim>::Parameters model_;
-  typename meshfree::NosbQuasiStatic<dim>::Parameters solver_;
+  meshfree::NosbParameters model_;
+  meshfree::NosbQuasiStaticParameters solver_;
   ColumnParameters column_;
 };
 
 void declare_nosb(dealii::ParameterHandler& prm) {
-  meshfree::NosbPD<2>::Parameters::declare(prm);
-  meshfree::NosbQuasiStatic<2>::Parameters::declare(prm);
+  meshfree::NosbParameters::declare(prm);
+  meshfree::NosbQuasiStaticParameters::declare(prm);
 }
 
 } // namespace

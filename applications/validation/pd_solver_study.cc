@@ -198,14 +198,13 @@ class PDSolverStudy : public Scenario {
 
   void run_case(RunContext& ctx, int k, double R, double alpha, std::vector<Row>& rows) {
     const double h = std::ldexp(1.0, -k), delta = R * h;
-    typename BondBasedPD<2>::Parameters mp;
+    meshfree::BondBasedParameters mp;
     mp.horizon_ratio = R;
     mp.influence_function = "fractional";
     mp.alpha = alpha;
     mp.thickness = study_.thickness;
-    mp.plane_model = study_.plane_model == "plane_strain"
-                         ? BondBasedPD<2>::PlaneModel::plane_strain
-                         : BondBasedPD<2>::PlaneModel::plane_stress;
+    mp.plane_model = study_.plane_model == "plane_strain" ? meshfree::PlaneModel::plane_strain
+                                                          : meshfree::PlaneModel::plane_stress;
     mp.partial_volume_correction = study_.partial_volume;
     mp.surface_correction = study_.surface_correction;
     BondBasedPD<2> model(mp, study_.E, study_.nu);
@@ -257,7 +256,7 @@ class PDSolverStudy : public Scenario {
     double kappa = std::numeric_limits<double>::quiet_NaN();
     const std::size_t first = rows.size();
     for (const std::string& name : study_.solvers) {
-      typename PDLinearSolver<2>::Parameters lp;
+      meshfree::PDLinearSolverParameters lp;
       lp.solver = name;
       lp.tolerance = study_.tolerance;
       lp.max_iterations = study_.max_iterations;

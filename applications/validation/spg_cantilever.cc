@@ -34,7 +34,7 @@ namespace {
 struct CantileverParameters {
   double length = 48, depth = 12, load = 1000, spacing = 1.0, mode_velocity = 1e-3;
   unsigned int mode_steps = 120, mode_patch = 160;
-  meshfree::AdaptiveDynamicRelaxation<2>::Parameters adr;
+  meshfree::AdaptiveDynamicRelaxationParameters adr;
 
   static void declare(dealii::ParameterHandler& prm) {
     using namespace dealii::Patterns;
@@ -51,7 +51,7 @@ struct CantileverParameters {
                       "Spacings per side of the square checkerboard patch of the spurious-mode "
                       "runs (same spacing as the beam) [-].");
     prm.enter_subsection("Relaxation");
-    meshfree::AdaptiveDynamicRelaxation<2>::Parameters::declare(prm);
+    meshfree::AdaptiveDynamicRelaxationParameters::declare(prm);
     prm.leave_subsection();
   }
   void parse(dealii::ParameterHandler& prm) {
@@ -315,7 +315,7 @@ class Cantilever : public Scenario {
 
  private:
   materials::LawParameters law_;
-  meshfree::SPGSolver<2>::Parameters spg_;
+  meshfree::SpgParameters spg_;
   CantileverParameters beam_;
 };
 

@@ -174,7 +174,7 @@ class PatchTest : public Scenario {
 
  private:
   materials::LawParameters law_;
-  typename meshfree::SPGSolver<dim>::Parameters spg_;
+  meshfree::SpgParameters spg_;
   PatchParameters patch_;
 };
 

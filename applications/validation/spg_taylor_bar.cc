@@ -299,7 +299,7 @@ class TaylorBar : public Scenario {
 
  private:
   materials::LawParameters law_;
-  meshfree::SPGSolver<3>::Parameters spg_;
+  meshfree::SpgParameters spg_;
   TaylorParameters bar_;
 };
 

@@ -1,6 +1,7 @@
 #include "meshfree/implicit/bond_based_tangent.h"
 
 #include "base/exceptions.h"
+#include "meshfree/bond_loop.h"
 
 #include <deal.II/base/index_set.h>
 #include <deal.II/lac/dynamic_sparsity_pattern.h>
@@ -30,9 +31,10 @@ void BondBasedTangent<dim>::reinit(const ParticleSet<dim>& particles, const Bond
   for (unsigned int i = 0; i < n_particles_; ++i) {
     row.clear();
     row.emplace_back(i, static_cast<std::size_t>(-1));
-    for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k)
+    for_each_bond_of(bonds, i, [&](std::size_t k, unsigned int j) {
       if (!bonds.broken[k])
-        row.emplace_back(bonds.neighbor[k], k);
+        row.emplace_back(j, k);
+    });
     std::sort(row.begin(), row.end());
     const std::size_t start = row_particles_.size();
     for (std::size_t s = 0; s < row.size(); ++s) {
@@ -78,18 +80,15 @@ void BondBasedTangent<dim>::assemble(const ParticleSet<dim>& particles, const Bo
   // its own rows), the diagonal for the scaling of the constrained rows.
   std::vector<double> values((row_offsets_.back()) * dim * dim);
   std::vector<double> diag(n_dofs_, 0.0);
-#pragma omp parallel for schedule(static) if (bonds.n_bonds() > 20000)
-  for (long ii = 0; ii < static_cast<long>(n_particles_); ++ii) {
-    const unsigned int i = static_cast<unsigned int>(ii);
+  for_each_particle(bonds, [&](unsigned int i) {
     const std::size_t row_begin = row_offsets_[i];
     const std::size_t width = (row_offsets_[i + 1] - row_begin) * dim;
     double* rows = values.data() + row_begin * dim * dim; // dim rows of `width` entries
     std::fill(rows, rows + dim * width, 0.0);
     dealii::Tensor<2, dim> self;
-    for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
+    for_each_bond_of(bonds, i, [&](std::size_t k, unsigned int j) {
       if (bonds.broken[k] || bond_slot_[k] < 0)
-        continue;
-      const unsigned int j = bonds.neighbor[k];
+        return;
       const Vec y = bonds.xi[k] + (u[j] - u[i]);
       const double l = y.norm();
       const Vec n = y / l;
@@ -104,14 +103,14 @@ void BondBasedTangent<dim>::assemble(const ParticleSet<dim>& particles, const Bo
       for (unsigned int r = 0; r < dim; ++r)
         for (unsigned int c = 0; c < dim; ++c)
           rows[r * width + slot * dim + c] = -B[r][c];
-    }
+    });
     const std::size_t s = self_slot_[i];
     for (unsigned int r = 0; r < dim; ++r) {
       for (unsigned int c = 0; c < dim; ++c)
         rows[r * width + s * dim + c] = self[r][c];
       diag[dof(i, r)] = self[r][r];
     }
-  }
+  });
 
   // Constrained and isolated components; the scale of their diagonal.
   double sum = 0, maxd = 0;

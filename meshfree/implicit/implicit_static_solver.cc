@@ -7,8 +7,7 @@
 
 namespace spinesim::meshfree {
 
-template <int dim>
-void ImplicitStaticSolver<dim>::Parameters::declare(dealii::ParameterHandler& prm) {
+void ImplicitStaticSolverParameters::declare(dealii::ParameterHandler& prm) {
   using namespace dealii::Patterns;
   prm.declare_entry("Load steps", "1", Integer(1), "Equal load increments to the full load [-].");
   prm.declare_entry("Max Newton iterations", "25", Integer(1),
@@ -24,11 +23,10 @@ void ImplicitStaticSolver<dim>::Parameters::declare(dealii::ParameterHandler& pr
                     "Re-solves of one load step while bonds keep breaking [-].");
   prm.declare_entry("Geometric stiffness", "true", Bool(),
                     "Include the (e/l)(I - n n) part of the tangent (exact Newton) [-].");
-  PDLinearSolver<dim>::Parameters::declare(prm);
+  PDLinearSolverParameters::declare(prm);
 }
 
-template <int dim>
-void ImplicitStaticSolver<dim>::Parameters::parse(const dealii::ParameterHandler& prm) {
+void ImplicitStaticSolverParameters::parse(const dealii::ParameterHandler& prm) {
   load_steps = prm.get_integer("Load steps");
   max_newton_iterations = prm.get_integer("Max Newton iterations");
   displacement_tolerance = prm.get_double("Displacement tolerance");

@@ -21,22 +21,25 @@
 
 namespace spinesim::meshfree {
 
+// Load stepping, Newton and breaking limits, the same in 2-D and 3-D.
+struct ImplicitStaticSolverParameters {
+  unsigned int load_steps = 1;
+  unsigned int max_newton_iterations = 25;
+  double displacement_tolerance = 1e-8; // ‖δu‖/‖u‖ [-]
+  double residual_tolerance = 1e-8;     // ‖r‖/max(‖f_ext‖, ‖reactions‖) [-]
+  unsigned int max_cutbacks = 6;
+  unsigned int max_breaking_passes = 100;
+  bool geometric_stiffness = true;
+  PDLinearSolverParameters linear;
+
+  static void declare(dealii::ParameterHandler& prm); // includes the linear-solver entries
+  void parse(const dealii::ParameterHandler& prm);
+};
+
 template <int dim>
 class ImplicitStaticSolver {
  public:
-  struct Parameters {
-    unsigned int load_steps = 1;
-    unsigned int max_newton_iterations = 25;
-    double displacement_tolerance = 1e-8; // ‖δu‖/‖u‖ [-]
-    double residual_tolerance = 1e-8;     // ‖r‖/max(‖f_ext‖, ‖reactions‖) [-]
-    unsigned int max_cutbacks = 6;
-    unsigned int max_breaking_passes = 100;
-    bool geometric_stiffness = true;
-    typename PDLinearSolver<dim>::Parameters linear;
-
-    static void declare(dealii::ParameterHandler& prm); // includes the linear-solver entries
-    void parse(const dealii::ParameterHandler& prm);
-  };
+  using Parameters = ImplicitStaticSolverParameters;
 
   struct NewtonResult {
     bool converged = false;

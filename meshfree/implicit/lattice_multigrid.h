@@ -41,7 +41,7 @@ class LatticeMultigrid {
     dealii::Point<dim> lo, hi;
     double spacing = 0; // h [m]
     double thickness = 1.0;
-    typename BondBasedPD<dim>::Parameters model; // horizon ratio = fine R
+    BondBasedParameters model; // horizon ratio = fine R
     double youngs_modulus = 0, poisson_ratio = 0;
     std::vector<PreCrack<dim>> pre_cracks;
   };

@@ -21,8 +21,7 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 }
 } // namespace
 
-template <int dim>
-void PDLinearSolver<dim>::Parameters::declare(dealii::ParameterHandler& prm) {
+void PDLinearSolverParameters::declare(dealii::ParameterHandler& prm) {
   prm.declare_entry("Linear solver", "amg", dealii::Patterns::Selection(names()),
                     "Solver for the tangent systems [-]: cg (no preconditioner), jacobi "
                     "(diagonal PCG), amg (CG + ML smoothed aggregation with rigid-body modes), "
@@ -50,8 +49,7 @@ void PDLinearSolver<dim>::Parameters::declare(dealii::ParameterHandler& prm) {
                     "least this [-].");
 }
 
-template <int dim>
-void PDLinearSolver<dim>::Parameters::parse(const dealii::ParameterHandler& prm) {
+void PDLinearSolverParameters::parse(const dealii::ParameterHandler& prm) {
   solver = prm.get("Linear solver");
   tolerance = prm.get_double("Linear tolerance");
   max_iterations = prm.get_integer("Max linear iterations");

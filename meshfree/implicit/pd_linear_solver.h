@@ -22,25 +22,29 @@
 
 namespace spinesim::meshfree {
 
+// The linear solver's choices and limits, the same in 2-D and 3-D.
+struct PDLinearSolverParameters {
+  std::string solver = "amg";
+  double tolerance = 1e-6; // relative residual [-]
+  unsigned int max_iterations = 20000;
+  unsigned int amg_smoother_sweeps = 2;
+  double amg_aggregation_threshold = 1e-4;
+  unsigned int mg_smoother_degree = 3;
+  double mg_smoothing_range = 5;
+  unsigned int mg_eigenvalue_steps = 8;
+  double mg_min_horizon_ratio = 2;
+
+  static std::string names() { return "cg|jacobi|amg|mg"; } // the solvers
+  static void declare(dealii::ParameterHandler& prm);
+  void parse(const dealii::ParameterHandler& prm);
+};
+
 template <int dim>
 class PDLinearSolver {
  public:
   using VectorType = dealii::TrilinosWrappers::MPI::Vector;
 
-  struct Parameters {
-    std::string solver = "amg";
-    double tolerance = 1e-6; // relative residual [-]
-    unsigned int max_iterations = 20000;
-    unsigned int amg_smoother_sweeps = 2;
-    double amg_aggregation_threshold = 1e-4;
-    unsigned int mg_smoother_degree = 3;
-    double mg_smoothing_range = 5;
-    unsigned int mg_eigenvalue_steps = 8;
-    double mg_min_horizon_ratio = 2;
-
-    static void declare(dealii::ParameterHandler& prm);
-    void parse(const dealii::ParameterHandler& prm);
-  };
+  using Parameters = PDLinearSolverParameters;
 
   struct Result {
     unsigned int iterations = 0;
@@ -50,7 +54,7 @@ class PDLinearSolver {
     typename LatticeMultigrid<dim>::Timings mg_setup; // `mg` only: where setup_seconds went
   };
 
-  static std::string names() { return "cg|jacobi|amg|mg"; }
+  static std::string names() { return Parameters::names(); }
 
   explicit PDLinearSolver(const Parameters& parameters);
   ~PDLinearSolver();

@@ -1,5 +1,7 @@
 #include "meshfree/nosb/correspondence_families.h"
 
+#include "meshfree/bond_loop.h"
+
 #include <deal.II/base/symmetric_tensor.h>
 
 #include <algorithm>
@@ -78,13 +80,13 @@ std::vector<unsigned int> CorrespondenceFamilies<dim>::build(const ParticleSet<d
     members.clear();
     Mat K;
     double all_weight = 0;
-    for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
+    for_each_bond_of(bonds, i, [&](std::size_t k, unsigned int) {
       if (bonds.broken[k])
-        continue;
+        return;
       members.push_back(k);
       K += bond_weight(k) * dealii::outer_product(bonds.xi[k], bonds.xi[k]);
       all_weight += bond_weight(k);
-    }
+    });
     condition_[i] =
         members.size() >= dim ? condition_number(K) : std::numeric_limits<double>::infinity();
     if (!(condition_[i] <= options.max_condition_number)) {

@@ -2,6 +2,7 @@
 
 #include "base/exceptions.h"
 #include "fem/materials/material_state_io.h"
+#include "meshfree/bond_loop.h"
 
 #include <array>
 #include <cmath>
@@ -40,7 +41,7 @@ NosbMethod<dim>::parse_parameters(const dealii::ParameterHandler& section) {
 
 template <int dim>
 void NosbMethod<dim>::declare(dealii::ParameterHandler& prm) {
-  NosbPD<dim>::Parameters::declare(prm);
+  NosbParameters::declare(prm);
 }
 
 template <int dim>
@@ -139,9 +140,10 @@ double NosbMethod<dim>::bond_energy(const ParticleSet<dim>& particles, const Bon
     return 0.0;
   const auto& V = particles.volumes();
   double all = 0;
-  for (std::size_t b = bonds.begin(i); b < bonds.end(i); ++b)
+  for_each_bond_of(bonds, i, [&](std::size_t b, unsigned int j) {
     if (!bonds.broken[b])
-      all += bonds.influence[b] * bonds.volume_factor(b) * V[bonds.neighbor[b]];
+      all += bonds.influence[b] * bonds.volume_factor(b) * V[j];
+  });
   if (!(all > 0.0))
     return 0.0;
   const double share = bonds.influence[k] * bonds.volume_factor(k) * V[bonds.neighbor[k]] / all;

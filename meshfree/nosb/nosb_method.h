@@ -13,7 +13,7 @@ namespace spinesim::meshfree {
 template <int dim>
 class NosbMethod : public ParticleMethod<dim> {
  public:
-  using Parameters = typename NosbPD<dim>::Parameters;
+  using Parameters = NosbParameters;
   // The particles run material.law; InvalidInput without one.
   NosbMethod(const Parameters& parameters, const ParticleMaterial& material);
   static void declare(dealii::ParameterHandler& prm);

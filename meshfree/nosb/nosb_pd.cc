@@ -9,6 +9,7 @@
 #include <deal.II/lac/dynamic_sparsity_pattern.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -16,8 +17,6 @@
 namespace spinesim::meshfree {
 
 namespace {
-const char* const stabilization_names = "none|penalty|bond_associated";
-
 template <int dim>
 std::string where(const ParticleSet<dim>& p, unsigned int i) {
   std::ostringstream s;
@@ -25,84 +24,6 @@ std::string where(const ParticleSet<dim>& p, unsigned int i) {
   return s.str();
 }
 } // namespace
-
-template <int dim>
-void NosbPD<dim>::Parameters::declare(dealii::ParameterHandler& prm) {
-  using namespace dealii::Patterns;
-  prm.declare_entry("Horizon ratio", "3.015", Double(0.0),
-                    "Horizon over particle spacing, delta/h [-]. Must exceed 1.");
-  prm.declare_entry("Influence function", "constant", Selection(InfluenceFunction<dim>::names()),
-                    "Weight omega of the bonds in the shape tensor and force state [-]: constant, "
-                    "fractional, gaussian, cubic spline (see the bond-based section).");
-  prm.declare_entry("Alpha", "0", Double(), "Order alpha of the fractional kernel [-]; alpha < 2.");
-  prm.declare_entry("Stabilization", "bond_associated", Selection(stabilization_names),
-                    "Zero-energy-mode control [-]: none; penalty (hourglass force on the "
-                    "non-uniform deformation state, Silling 2017, scaled by the Stabilization "
-                    "coefficient); bond_associated (bond-associated deformation gradients, "
-                    "Chen 2018 / Breitzman & Dayal 2018, no coefficient).");
-  prm.declare_entry("Stabilization coefficient", "0.1", Double(0.0),
-                    "Penalty coefficient G_s [-] times the bond-based micromodulus; only for "
-                    "Stabilization = penalty.");
-  prm.declare_entry("Critical stretch", "0", Double(0.0),
-                    "Critical bond stretch s0 [-]; 0 = computed from the fracture energy.");
-  prm.declare_entry("Fracture energy", "0", Double(0.0),
-                    "Critical energy release rate Gc used when the critical stretch is 0 "
-                    "[J/m^2]; both 0 = bonds never break.");
-  prm.declare_entry("Maximum shape tensor condition number", "1e4", Double(1.0),
-                    "A particle whose shape tensor K has a larger condition number (or fewer "
-                    "than dim intact bonds) is flagged failed: no stress, damage 1 [-].");
-  prm.declare_entry("Partial volume correction", "true", Bool(),
-                    "Count only the share of a neighbour's volume inside the horizon [-].");
-  prm.declare_entry("Thickness", "1", Double(0.0), "Out-of-plane thickness of a 2-D body [m].");
-}
-
-template <int dim>
-typename NosbPD<dim>::Stabilization
-NosbPD<dim>::Parameters::stabilization_from_name(const std::string& name) {
-  if (name == "none")
-    return Stabilization::none;
-  if (name == "penalty")
-    return Stabilization::penalty;
-  if (name == "bond_associated")
-    return Stabilization::bond_associated;
-  throw InvalidInput("Stabilization", "unknown value '" + name + "'", stabilization_names);
-}
-
-template <int dim>
-std::string NosbPD<dim>::Parameters::name(Stabilization s) {
-  switch (s) {
-  case Stabilization::none:
-    return "none";
-  case Stabilization::penalty:
-    return "penalty";
-  default:
-    return "bond_associated";
-  }
-}
-
-template <int dim>
-void NosbPD<dim>::Parameters::parse(const dealii::ParameterHandler& prm) {
-  horizon_ratio = prm.get_double("Horizon ratio");
-  influence_function = prm.get("Influence function");
-  alpha = prm.get_double("Alpha");
-  stabilization = stabilization_from_name(prm.get("Stabilization"));
-  stabilization_coefficient = prm.get_double("Stabilization coefficient");
-  critical_stretch = prm.get_double("Critical stretch");
-  fracture_energy = prm.get_double("Fracture energy");
-  max_condition_number = prm.get_double("Maximum shape tensor condition number");
-  partial_volume_correction = prm.get_bool("Partial volume correction");
-  thickness = prm.get_double("Thickness");
-  if (!(horizon_ratio > 1.0))
-    throw InvalidInput("Horizon ratio", "= " + std::to_string(horizon_ratio),
-                       "> 1 (the horizon must reach the nearest neighbours)");
-  if (!(thickness > 0.0))
-    throw InvalidInput("Thickness", "= " + std::to_string(thickness), "> 0 [m]");
-  if (!(max_condition_number >= 1.0))
-    throw InvalidInput("Maximum shape tensor condition number",
-                       "= " + std::to_string(max_condition_number), ">= 1");
-  if (influence_function == "fractional" && !(alpha < 2.0))
-    throw InvalidInput("Alpha", "= " + std::to_string(alpha), "alpha < 2");
-}
 
 template <int dim>
 NosbPD<dim>::NosbPD(const Parameters& parameters,
@@ -159,12 +80,13 @@ void NosbPD<dim>::initialise(const ParticleSet<dim>& particles, const BondList<d
   // indices of particle i are its bond row.
   history_keys_.resize(n_history);
   particle_history_begin_.assign(particles.size() + 1, 0);
-  for (unsigned int i = 0; i < particles.size(); ++i) {
-    if (prm_.stabilization == Stabilization::bond_associated) {
-      for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k)
-        history_keys_[k] = {i, bonds.neighbor[k]};
-      particle_history_begin_[i + 1] = bonds.end(i);
-    } else {
+  if (prm_.stabilization == Stabilization::bond_associated) {
+    for_each_bond(bonds, [&](unsigned int i, std::size_t k, unsigned int j) {
+      history_keys_[k] = {i, j};
+    });
+    std::copy_n(bonds.offsets.begin() + 1, particles.size(), particle_history_begin_.begin() + 1);
+  } else {
+    for (unsigned int i = 0; i < particles.size(); ++i) {
       history_keys_[i] = {i, i};
       particle_history_begin_[i + 1] = i + 1;
     }
@@ -348,18 +270,18 @@ std::size_t NosbPD<dim>::break_bonds(ParticleSet<dim>& particles, BondList<dim>&
   if (!std::isfinite(s0_))
     return 0;
   const auto& u = particles.displacements();
-  std::size_t n_broken = 0;
   const bool any_driven = !driven_.empty();
-  for (unsigned int i = 0; i < particles.size(); ++i)
-    for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
-      if (bonds.broken[k] || (any_driven && driven_[i] && driven_[bonds.neighbor[k]]))
-        continue;
-      const auto y = bonds.xi[k] + (u[bonds.neighbor[k]] - u[i]);
-      if (y.norm() > (1.0 + s0_) * bonds.length[k]) {
-        bonds.broken[k] = 1;
-        ++n_broken;
-      }
+  // Each bond decides alone (the reversed bond sees the same stretch bit for bit): a map.
+  std::atomic<std::size_t> n_broken{0};
+  for_each_bond(bonds, [&](unsigned int i, std::size_t k, unsigned int j) {
+    if (bonds.broken[k] || (any_driven && driven_[i] && driven_[j]))
+      return;
+    const auto y = bonds.xi[k] + (u[j] - u[i]);
+    if (y.norm() > (1.0 + s0_) * bonds.length[k]) {
+      bonds.broken[k] = 1;
+      n_broken.fetch_add(1, std::memory_order_relaxed);
     }
+  });
   if (n_broken > 0) {
     update_families(particles, bonds);
     update_damage(particles, bonds);
@@ -406,15 +328,15 @@ void NosbPD<dim>::assemble_tangent(const ParticleSet<dim>& particles, const Bond
     for (unsigned int i = 0; i < n; ++i) {
       nodes.add(i, i); // every particle keeps a diagonal (failed ones get an identity row)
       if (penalty && pfam_of[i] >= 0)
-        for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
-          const int ej = pfam_of[bonds.neighbor[k]];
+        for_each_bond_of(bonds, i, [&](std::size_t, unsigned int j) {
+          const int ej = pfam_of[j];
           if (ej < 0)
-            continue;
+            return;
           for (std::size_t q = pfam.begin(ej); q < pfam.end(ej); ++q)
             nodes.add(i, pfam.node(q));
           for (std::size_t q = pfam.begin(pfam_of[i]); q < pfam.end(pfam_of[i]); ++q)
             nodes.add(i, pfam.node(q));
-        }
+        });
     }
     dealii::DynamicSparsityPattern dofs(n * dim, n * dim);
     for (unsigned int m = 0; m < n; ++m)
@@ -471,10 +393,9 @@ void NosbPD<dim>::assemble_tangent(const ParticleSet<dim>& particles, const Bond
     for (unsigned int i = 0; i < n; ++i) {
       if (pfam_of[i] < 0)
         continue;
-      for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
-        const unsigned int j = bonds.neighbor[k];
+      for_each_bond_of(bonds, i, [&](std::size_t k, unsigned int j) {
         if (bonds.broken[k] || pfam_of[j] < 0)
-          continue;
+          return;
         const Vec& xi = bonds.xi[k];
         const double kappa =
             0.5 * Gc * bonds.influence[k] * bonds.volume_factor(k) / bonds.length[k] * V[i] * V[j];
@@ -483,7 +404,7 @@ void NosbPD<dim>::assemble_tangent(const ParticleSet<dim>& particles, const Bond
         for (const int e : {pfam_of[i], pfam_of[j]})
           for (std::size_t q = pfam.begin(e); q < pfam.end(e); ++q)
             add_scalar(i, pfam.node(q), kappa * (pfam.gradient(q) * xi));
-      }
+      });
     }
   }
 }
@@ -729,13 +650,13 @@ typename NosbPD<dim>::HourglassMeasure NosbPD<dim>::hourglass(const ParticleSet<
     F[pfam.centre(e)] = pfam.deformation_gradient(e, u);
   HourglassMeasure h;
   double z2 = 0, eta2 = 0;
+  // Sums over all bonds in one fixed order (serial): the order fixes the result.
   for (unsigned int i = 0; i < particles.size(); ++i) {
     if (failed(i))
       continue;
-    for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
-      const unsigned int j = bonds.neighbor[k];
+    for_each_bond_of(bonds, i, [&](std::size_t k, unsigned int j) {
       if (bonds.broken[k] || failed(j))
-        continue;
+        return;
       const Vec& xi = bonds.xi[k];
       const Vec eta = u[j] - u[i];
       const Vec z = eta - (F[i] * xi - xi);
@@ -745,7 +666,7 @@ typename NosbPD<dim>::HourglassMeasure NosbPD<dim>::hourglass(const ParticleSet<
       z2 += wb * z.norm_square() / (L * L);
       eta2 += wb * eta.norm_square() / (L * L);
       h.max_nonuniform = std::max(h.max_nonuniform, z.norm());
-    }
+    });
   }
   h.relative_norm = eta2 > 0 ? std::sqrt(z2 / eta2) : 0.0;
   return h;
@@ -754,16 +675,20 @@ typename NosbPD<dim>::HourglassMeasure NosbPD<dim>::hourglass(const ParticleSet<
 template <int dim>
 void NosbPD<dim>::update_damage(ParticleSet<dim>& particles, const BondList<dim>& bonds) const {
   const auto& V = particles.volumes();
-  for (unsigned int i = 0; i < particles.size(); ++i) {
+  struct Weights {
     double intact = 0, all = 0;
-    for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
-      const double w = bonds.influence[k] * bonds.volume_factor(k) * V[bonds.neighbor[k]];
-      all += w;
-      if (!bonds.broken[k])
-        intact += w;
-    }
-    particles.damage(i) = failed(i) ? 1.0 : (all > 0.0 ? 1.0 - intact / all : 0.0);
-  }
+  };
+  accumulate_over_bonds(
+      bonds, [](unsigned int) { return Weights(); },
+      [&](unsigned int, std::size_t k, unsigned int j, Weights& w) {
+        const double wk = bonds.influence[k] * bonds.volume_factor(k) * V[j];
+        w.all += wk;
+        if (!bonds.broken[k])
+          w.intact += wk;
+      },
+      [&](unsigned int i, const Weights& w) {
+        particles.damage(i) = failed(i) ? 1.0 : (w.all > 0.0 ? 1.0 - w.intact / w.all : 0.0);
+      });
 }
 
 template class NosbPD<2>;

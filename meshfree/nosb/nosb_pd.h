@@ -33,9 +33,11 @@
 
 #include "fem/materials/constitutive_law.h"
 #include "meshfree/bond_list.h"
+#include "meshfree/bond_loop.h"
 #include "meshfree/influence_function.h"
 #include "meshfree/neighbor_search.h"
 #include "meshfree/nosb/correspondence_families.h"
+#include "meshfree/nosb/nosb_parameters.h"
 #include "meshfree/particle_set.h"
 
 #include <deal.II/base/parameter_handler.h>
@@ -54,25 +56,8 @@ namespace spinesim::meshfree {
 template <int dim>
 class NosbPD {
  public:
-  enum class Stabilization { none, penalty, bond_associated };
-
-  struct Parameters {
-    double horizon_ratio = 3.015; // δ/h [-]
-    std::string influence_function = "constant";
-    double alpha = 0.0; // fractional kernel order [-]
-    Stabilization stabilization = Stabilization::bond_associated;
-    double stabilization_coefficient = 0.1; // G_s [-], penalty only
-    double critical_stretch = 0.0;          // [-], 0 = from the fracture energy
-    double fracture_energy = 0.0;           // G_c [J/m^2]; both 0 = bonds never break
-    double max_condition_number = 1e4;      // of K_i [-]
-    bool partial_volume_correction = true;
-    double thickness = 1.0; // 2-D out-of-plane thickness [m]
-
-    static void declare(dealii::ParameterHandler& prm);
-    void parse(const dealii::ParameterHandler& prm);
-    static Stabilization stabilization_from_name(const std::string& name);
-    static std::string name(Stabilization s);
-  };
+  using Stabilization = NosbStabilization;
+  using Parameters = NosbParameters;
 
   // What the hourglass (zero-energy-mode) diagnostics measure, over intact bonds between
   // non-failed particles, with z_ij = (y_j − y_i) − F_i ξ_ij (F_i of the particle family):
@@ -160,12 +145,11 @@ class NosbPD {
   template <class Body>
   void for_each_penalty_bond(const BondList<dim>& bonds, unsigned int i, double Gc,
                              Body&& body) const {
-    for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
-      const unsigned int j = bonds.neighbor[k];
+    for_each_bond_of(bonds, i, [&](std::size_t k, unsigned int j) {
       if (bonds.broken[k] || failed(j))
-        continue;
+        return;
       body(k, j, 0.5 * Gc * bonds.influence[k] * bonds.volume_factor(k) / bonds.length[k]);
-    }
+    });
   }
   // Messages about failed particles since the last call (for the run log).
   std::vector<std::string> take_messages();

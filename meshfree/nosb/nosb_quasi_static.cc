@@ -18,8 +18,7 @@
 
 namespace spinesim::meshfree {
 
-template <int dim>
-void NosbQuasiStatic<dim>::Parameters::declare(dealii::ParameterHandler& prm) {
+void NosbQuasiStaticParameters::declare(dealii::ParameterHandler& prm) {
   using namespace dealii::Patterns;
   prm.declare_entry("Quasi-static solver", "newton", Selection("newton|adr"),
                     "Equilibrium solver [-]: newton (consistent analytic tangent, Trilinos "
@@ -42,8 +41,7 @@ void NosbQuasiStatic<dim>::Parameters::declare(dealii::ParameterHandler& prm) {
                     "gmres_amg (GMRES with Trilinos ML algebraic multigrid).");
 }
 
-template <int dim>
-void NosbQuasiStatic<dim>::Parameters::parse(const dealii::ParameterHandler& prm) {
+void NosbQuasiStaticParameters::parse(const dealii::ParameterHandler& prm) {
   solver = prm.get("Quasi-static solver");
   tolerance = prm.get_double("Tolerance");
   max_newton_iterations = prm.get_integer("Maximum Newton iterations");
@@ -169,7 +167,7 @@ bool NosbQuasiStatic<dim>::relaxation_step(ParticleSet<dim>& p, BondList<dim>& b
   const auto bound = model_.relaxation_stiffness_bound(p, bonds, 1.0);
   unsigned int used = 0;
   while (true) {
-    typename AdaptiveDynamicRelaxation<dim>::Parameters ap;
+    AdaptiveDynamicRelaxationParameters ap;
     ap.max_iterations = prm_.max_relaxation_iterations - used;
     ap.tolerance = prm_.tolerance;
     AdaptiveDynamicRelaxation<dim> adr(

@@ -28,24 +28,27 @@
 
 namespace spinesim::meshfree {
 
+// The solver's choices and limits, the same in 2-D and 3-D.
+struct NosbQuasiStaticParameters {
+  std::string solver = "newton"; // newton | adr
+  double tolerance = 1e-10;      // relative residual [-]
+  unsigned int max_newton_iterations = 30;
+  unsigned int max_relaxation_iterations = 100000;
+  unsigned int load_steps = 1;
+  unsigned int max_load_step_cuts = 8;
+  unsigned int max_bonds_broken_per_step = 0; // 0 = no limit
+  std::string linear_solver = "direct";       // direct | gmres_amg
+
+  static void declare(dealii::ParameterHandler& prm);
+  void parse(const dealii::ParameterHandler& prm);
+};
+
 template <int dim>
 class NosbQuasiStatic {
  public:
   using LoadFunction = std::function<void(ParticleSet<dim>&, double)>;
 
-  struct Parameters {
-    std::string solver = "newton"; // newton | adr
-    double tolerance = 1e-10;      // relative residual [-]
-    unsigned int max_newton_iterations = 30;
-    unsigned int max_relaxation_iterations = 100000;
-    unsigned int load_steps = 1;
-    unsigned int max_load_step_cuts = 8;
-    unsigned int max_bonds_broken_per_step = 0; // 0 = no limit
-    std::string linear_solver = "direct";       // direct | gmres_amg
-
-    static void declare(dealii::ParameterHandler& prm);
-    void parse(const dealii::ParameterHandler& prm);
-  };
+  using Parameters = NosbQuasiStaticParameters;
 
   struct Result {
     bool converged = false;

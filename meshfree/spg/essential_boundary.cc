@@ -1,6 +1,7 @@
 #include "meshfree/spg/essential_boundary.h"
 
 #include "base/exceptions.h"
+#include "meshfree/bond_loop.h"
 
 #include <Eigen/Sparse>
 #include <Eigen/SparseLU>
@@ -101,11 +102,10 @@ void EssentialBoundary<dim>::setup(unsigned int n_particles, const RKShapeFuncti
     for (int r = 0; r < nb; ++r) {
       const unsigned int i = comp.nodes[r];
       t.emplace_back(r, r, rk.self_value[i]);
-      for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
-        const unsigned int j = bonds.neighbor[k];
+      for_each_bond_of(bonds, i, [&](std::size_t k, unsigned int j) {
         const double psi = rk.value[k];
         if (psi == 0.0)
-          continue;
+          return;
         if (comp.local[j] >= 0)
           t.emplace_back(r, comp.local[j], psi);
         else {
@@ -113,7 +113,7 @@ void EssentialBoundary<dim>::setup(unsigned int n_particles, const RKShapeFuncti
           comp.bf_col.push_back(j);
           comp.bf_value.push_back(psi);
         }
-      }
+      });
     }
     comp.lambda_bb.resize(nb, nb);
     comp.lambda_bb.setFromTriplets(t.begin(), t.end());

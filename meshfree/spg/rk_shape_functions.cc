@@ -71,10 +71,11 @@ void RKShapeFunctions<dim>::compute(const std::vector<dealii::Point<dim>>& point
         it != last ? static_cast<std::size_t>(it - bonds.neighbor.begin()) : bonds.n_bonds();
   });
   for (unsigned int i = 0; i < bonds.n_particles(); ++i)
-    for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k)
-      if (reverse[k] >= bonds.n_bonds() && has_row(bonds.neighbor[k]))
+    for_each_bond_of(bonds, i, [&](std::size_t k, unsigned int j) {
+      if (reverse[k] >= bonds.n_bonds() && has_row(j))
         throw InvalidInput("RKShapeFunctions::compute", "the bond list is not symmetric",
                            "bonds stored from both ends (build_bonds)");
+    });
   long failed = -1;
 #pragma omp parallel for schedule(dynamic, 256) if (n > parallel_particle_threshold)
   for (long ii = 0; ii < long(n); ++ii) {

@@ -4,6 +4,7 @@
 #include "fem/materials/j2_plasticity.h"
 #include "fem/materials/material_state_io.h"
 #include "fem/materials/plane_strain_embedding.h"
+#include "meshfree/bond_loop.h"
 
 #include <algorithm>
 #include <cmath>
@@ -33,7 +34,7 @@ SpgMethod<dim>::parse_parameters(const dealii::ParameterHandler& section) {
 
 template <int dim>
 void SpgMethod<dim>::declare(dealii::ParameterHandler& prm) {
-  SPGSolver<dim>::Parameters::declare(prm);
+  SpgParameters::declare(prm);
   prm.declare_entry("Thickness", "1", dealii::Patterns::Double(0.0),
                     "Out-of-plane thickness of a 2-D body (plane strain) [m].");
 }
@@ -156,7 +157,7 @@ double SpgMethod<dim>::energy_density(unsigned int i, const ParticleSet<dim>& pa
   const double w[4] = {0.5 * wb, 0.5 * wa, 0.5 * wa, 0.5 * wb};
   // F from the coefficients now (a restored checkpoint has not evaluated forces yet).
   const auto F =
-      solver_->parameters().update_mode() == SPGSolver<dim>::KernelUpdate::total_lagrangian
+      solver_->parameters().update_mode() == SpgKernelUpdate::total_lagrangian
           ? (solver_->has_row(i) ? solver_->deformation_gradient(i, particles.displacements())
                                  : dealii::Tensor<2, dim>(dealii::unit_symmetric_tensor<dim>()))
           : solver_->deformation_gradients()[i];
@@ -207,9 +208,10 @@ double SpgMethod<dim>::bond_energy(const ParticleSet<dim>& particles, const Bond
     return 0.0;
   const auto& V = particles.volumes();
   double all = 0;
-  for (std::size_t b = bonds.begin(i); b < bonds.end(i); ++b)
+  for_each_bond_of(bonds, i, [&](std::size_t b, unsigned int j) {
     if (!bonds.broken[b])
-      all += bonds.volume_factor(b) * V[bonds.neighbor[b]];
+      all += bonds.volume_factor(b) * V[j];
+  });
   if (!(all > 0.0))
     return 0.0;
   return bonds.volume_factor(k) * V[bonds.neighbor[k]] / all * energy_density(i, particles) * V[i];

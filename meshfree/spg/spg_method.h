@@ -27,13 +27,15 @@
 
 namespace spinesim::meshfree {
 
+struct SpgMethodParameters {
+  SpgParameters solver;
+  double thickness = 1.0; // out-of-plane thickness of a 2-D body [m]
+};
+
 template <int dim>
 class SpgMethod : public ParticleMethod<dim> {
  public:
-  struct Parameters {
-    typename SPGSolver<dim>::Parameters solver;
-    double thickness = 1.0; // out-of-plane thickness of a 2-D body [m]
-  };
+  using Parameters = SpgMethodParameters;
   // The particles run material.law; InvalidInput without one.
   SpgMethod(const Parameters& parameters, const ParticleMaterial& material);
   static void declare(dealii::ParameterHandler& prm);
@@ -92,7 +94,7 @@ class SpgMethod : public ParticleMethod<dim> {
   const std::vector<dealii::Tensor<1, dim>>& physical_displacements() const;
 
  private:
-  typename SPGSolver<dim>::Parameters prm_;
+  SpgParameters prm_;
   std::shared_ptr<const materials::ConstitutiveLaw> law_;
   double thickness_ = 1.0, reference_temperature_ = 0;
   std::vector<std::uint8_t> driven_;

@@ -12,109 +12,6 @@
 
 namespace spinesim::meshfree {
 
-namespace {
-std::string num(double x) {
-  std::ostringstream s;
-  s << x;
-  return s.str();
-}
-} // namespace
-
-template <int dim>
-void SPGSolver<dim>::Parameters::declare(dealii::ParameterHandler& prm) {
-  using namespace dealii::Patterns;
-  prm.declare_entry("Kernel", "cubic_bspline", Selection(RKKernel<dim>::type_names()),
-                    "RK kernel: cubic_bspline (SPG) or quartic (1 − r²)^4 [-].");
-  prm.declare_entry(
-      "Support shape", "spherical", Selection(RKKernel<dim>::support_names()),
-      "Kernel support: spherical (|z| < a) or cubic (tensor product, |z_k| < a) [-].");
-  prm.declare_entry("Dilation", "1.5", Double(0.0),
-                    "Support size over particle spacing a/h, 1.1 .. 2.5 [-].");
-  prm.declare_entry("Maximum condition number", "1e10", Double(1.0),
-                    "Largest accepted condition number of the RK moment matrix [-].");
-  prm.declare_entry("Stabilisation", "0.1", Double(0.0),
-                    "Displacement-smoothing stabilisation parameter eta (0 = plain nodal "
-                    "integration; 0.05 .. 0.5 recommended) [-].");
-  prm.declare_entry("Smoothing interval", "1", Integer(1),
-                    "Re-evaluate the smoothing (stabilisation) force every n steps [steps].");
-  prm.declare_entry("Kernel update", "total_lagrangian",
-                    Selection("total_lagrangian|updated_lagrangian|adaptive_lagrangian"),
-                    "Kernel reference: total_lagrangian, updated_lagrangian (periodic reset) "
-                    "or adaptive_lagrangian (chain rule, reset on deformation) [-].");
-  prm.declare_entry("Reset interval", "50", Integer(1),
-                    "Steps between reference resets (updated_lagrangian) [steps].");
-  prm.declare_entry("Adaptive threshold", "0.2", Double(0.0),
-                    "Reset when max |F_rel − I| exceeds this (adaptive_lagrangian) [-].");
-  prm.declare_entry("CFL", "0.4", Double(0.0),
-                    "Courant number of the stable step dt = CFL h sigma_min / c_p [-].");
-  prm.declare_entry("Critical plastic strain", "0", Double(0.0),
-                    "Bond breaks when the mean effective plastic strain of its ends exceeds "
-                    "this (0 = off) [-].");
-  prm.declare_entry("Critical stretch", "0", Double(0.0),
-                    "Bond breaks when its stretch exceeds this (0 = off) [-].");
-  prm.declare_entry("Contact penalty factor", "1", Double(0.0),
-                    "Contact penalty over the particle stiffness rho c_p^2 h^(dim-2) [-].");
-  prm.declare_entry("Contact offset", "0", Double(0.0),
-                    "Contact distance from the particle centre over the spacing [-].");
-}
-
-template <int dim>
-void SPGSolver<dim>::Parameters::parse(const dealii::ParameterHandler& prm) {
-  kernel = prm.get("Kernel");
-  support_shape = prm.get("Support shape");
-  dilation = prm.get_double("Dilation");
-  max_condition_number = prm.get_double("Maximum condition number");
-  stabilisation = prm.get_double("Stabilisation");
-  smoothing_interval = prm.get_integer("Smoothing interval");
-  kernel_update = prm.get("Kernel update");
-  reset_interval = prm.get_integer("Reset interval");
-  adaptive_threshold = prm.get_double("Adaptive threshold");
-  cfl = prm.get_double("CFL");
-  critical_plastic_strain = prm.get_double("Critical plastic strain");
-  critical_stretch = prm.get_double("Critical stretch");
-  contact_penalty_factor = prm.get_double("Contact penalty factor");
-  contact_offset = prm.get_double("Contact offset");
-  validate();
-}
-
-template <int dim>
-void SPGSolver<dim>::Parameters::validate() const {
-  RKKernel<dim>::from_names(kernel, support_shape);
-  if (!(dilation >= 1.1 && dilation <= 2.5))
-    throw InvalidInput("Dilation", "= " + num(dilation), "1.1 .. 2.5 (support over spacing)");
-  if (!(stabilisation >= 0.0 && stabilisation <= 10.0))
-    throw InvalidInput("Stabilisation", "= " + num(stabilisation), "0 .. 10 (0.05 .. 0.5 usual)");
-  if (smoothing_interval < 1)
-    throw InvalidInput("Smoothing interval", "= 0", ">= 1 [steps]");
-  update_mode();
-  if (reset_interval < 1)
-    throw InvalidInput("Reset interval", "= 0", ">= 1 [steps]");
-  if (!(adaptive_threshold > 0.0))
-    throw InvalidInput("Adaptive threshold", "= " + num(adaptive_threshold), "> 0");
-  if (!(cfl > 0.0 && cfl <= 1.0))
-    throw InvalidInput("CFL", "= " + num(cfl), "0 < CFL <= 1");
-  if (!(critical_plastic_strain >= 0.0) || !(critical_stretch >= 0.0))
-    throw InvalidInput("Critical plastic strain / Critical stretch", "negative", ">= 0 (0 = off)");
-  if (!(contact_penalty_factor >= 0.0 && contact_penalty_factor <= 100.0))
-    throw InvalidInput("Contact penalty factor", "= " + num(contact_penalty_factor), "0 .. 100");
-  if (!(contact_offset >= 0.0 && contact_offset <= 1.0))
-    throw InvalidInput("Contact offset", "= " + num(contact_offset), "0 .. 1");
-  if (!(max_condition_number > 1.0))
-    throw InvalidInput("Maximum condition number", "= " + num(max_condition_number), "> 1");
-}
-
-template <int dim>
-typename SPGSolver<dim>::KernelUpdate SPGSolver<dim>::Parameters::update_mode() const {
-  if (kernel_update == "total_lagrangian")
-    return KernelUpdate::total_lagrangian;
-  if (kernel_update == "updated_lagrangian")
-    return KernelUpdate::updated_lagrangian;
-  if (kernel_update == "adaptive_lagrangian")
-    return KernelUpdate::adaptive_lagrangian;
-  throw InvalidInput("Kernel update", "'" + kernel_update + "'",
-                     "total_lagrangian|updated_lagrangian|adaptive_lagrangian");
-}
-
 template <int dim>
 SPGSolver<dim>::SPGSolver(const Parameters& parameters, const materials::ConstitutiveLaw& law,
                           const ParticleSet<dim>& particles, double spacing,
@@ -123,7 +20,7 @@ SPGSolver<dim>::SPGSolver(const Parameters& parameters, const materials::Constit
       kernel_(RKKernel<dim>::from_names(parameters.kernel, parameters.support_shape)) {
   prm_.validate();
   if (!(spacing > 0.0))
-    throw InvalidInput("SPG spacing", "= " + num(spacing), "> 0 [m]");
+    throw InvalidInput("SPG spacing", "= " + spg_number(spacing), "> 0 [m]");
   if (particles.size() == 0)
     throw InvalidInput("SPG particles", "no particles", "at least one particle");
   h_ = spacing;
@@ -167,17 +64,20 @@ SPGSolver<dim>::SPGSolver(const Parameters& parameters, const materials::Constit
                              std::to_string(n) + " particles",
                          "one (possibly empty) row per particle");
     if (rows->horizon < kernel_.search_radius(a_) * (1 - 1e-12))
-      throw InvalidInput("SPG rows", "searched within " + num(rows->horizon) + " m",
-                         ">= the kernel's search radius " + num(kernel_.search_radius(a_)) + " m");
+      throw InvalidInput("SPG rows", "searched within " + spg_number(rows->horizon) + " m",
+                         ">= the kernel's search radius " + spg_number(kernel_.search_radius(a_)) +
+                             " m");
     external_rows_ = true;
     bonds_ = *rows;
     for (unsigned int i = 0; i < n; ++i)
       has_row_[i] = bonds_.end(i) > bonds_.begin(i) ? 1 : 0;
-    for (unsigned int i = 0; i < n; ++i) {
-      complete_[i] = has_row_[i];
-      for (std::size_t k = bonds_.begin(i); k < bonds_.end(i) && complete_[i]; ++k)
-        complete_[i] = has_row_[bonds_.neighbor[k]];
-    }
+    // Complete: a row, and every partner has one.
+    accumulate_over_bonds(
+        bonds_, [&](unsigned int i) { return bool(has_row_[i]); },
+        [&](unsigned int, std::size_t, unsigned int j, bool& complete) {
+          complete = complete && has_row_[j];
+        },
+        [&](unsigned int i, bool complete) { complete_[i] = complete ? 1 : 0; });
     rk_ = std::make_unique<RKShapeFunctions<dim>>(kernel_, a_, prm_.max_condition_number);
     rk_->compute(Xr_, rk_volume_, bonds_, &has_row_);
     return;
@@ -190,13 +90,11 @@ void SPGSolver<dim>::rebuild_kernel(const std::vector<dealii::Point<dim>>& centr
   bonds_ = RKShapeFunctions<dim>::build_bonds(centres, kernel_.search_radius(a_));
   // Pairs broken before stay broken.
   if (!broken_pairs_.empty())
-    for (unsigned int i = 0; i < bonds_.n_particles(); ++i)
-      for (std::size_t k = bonds_.begin(i); k < bonds_.end(i); ++k) {
-        const unsigned long long lo = std::min(i, bonds_.neighbor[k]);
-        const unsigned long long hi = std::max(i, bonds_.neighbor[k]);
-        if (std::binary_search(broken_pairs_.begin(), broken_pairs_.end(), (lo << 32) | hi))
-          bonds_.broken[k] = 1;
-      }
+    for_each_bond(bonds_, [&](unsigned int i, std::size_t k, unsigned int j) {
+      const unsigned long long lo = std::min(i, j), hi = std::max(i, j);
+      if (std::binary_search(broken_pairs_.begin(), broken_pairs_.end(), (lo << 32) | hi))
+        bonds_.broken[k] = 1;
+    });
   rk_ = std::make_unique<RKShapeFunctions<dim>>(kernel_, a_, prm_.max_condition_number);
   rk_->compute(centres, rk_volume_, bonds_);
   constraints_ready_ = false;
@@ -255,36 +153,30 @@ void SPGSolver<dim>::compute_forces(ParticleSet<dim>& p) {
   }
 
   const auto& rk = *rk_;
-  const std::size_t* off = bonds_.offsets.data();
-  const unsigned int* nb = bonds_.neighbor.data();
   const double* psi = rk.value.data();
   const Vector* grad = rk.gradient.data();
   const std::size_t* rev = rk.reverse.data();
   const bool tl = mode_ == KernelUpdate::total_lagrangian;
   const bool adaptive = mode_ == KernelUpdate::adaptive_lagrangian;
-  const bool parallel = bonds_.n_bonds() > parallel_bond_threshold;
 
   std::vector<double> work(n), sigma(n), rel(n);
-  long failed = -1;
-  std::string failure;
   const auto& temperature = p.temperatures();
   const bool has_temperature = temperature.size() == n;
-  // Pass 1, per particle N with a row: smoothed value, F, stress.
-#pragma omp parallel for schedule(static) if (parallel)
-  for (long nn = 0; nn < long(n); ++nn) {
-    const unsigned int N = nn;
+  // Pass 1, per particle N with a row: smoothed value, F, stress. A failed material update
+  // names the particle of the lowest index, whatever the thread count.
+  for_each_particle(bonds_, [&](unsigned int N) {
     if (!has_row_[N]) {
       sigma[N] = 1e300;
-      continue;
+      return;
     }
     const Vector eN = d[N] - dref_[N];
     Vector ubar = rk.self_value[N] * eN;
     Matrix Frel = outer_product(eN, rk.self_gradient[N]);
-    for (std::size_t k = off[N]; k < off[N + 1]; ++k) {
-      const Vector e = d[nb[k]] - dref_[nb[k]];
+    for_each_bond_of(bonds_, N, [&](std::size_t k, unsigned int j) {
+      const Vector e = d[j] - dref_[j];
       ubar += psi[k] * e;
       Frel += outer_product(e, grad[k]);
-    }
+    });
     for (unsigned int i = 0; i < dim; ++i)
       Frel[i][i] += 1.0;
     uh_[N] = shift_[N] + ubar;
@@ -302,12 +194,11 @@ void SPGSolver<dim>::compute_forces(ParticleSet<dim>& p) {
         for (unsigned int j = 0; j < dim; ++j)
           P[i][j] = r.first_piola[i][j];
     } catch (const std::exception& e) {
-#pragma omp critical(spg_law_fail)
-      if (failed < 0 || nn < failed) {
-        failed = nn;
-        failure = e.what();
-      }
-      continue;
+      std::ostringstream where;
+      where << "particle " << N << " at (" << current_position(N) << ")";
+      throw NumericalFailure(std::string("material update failed: ") + e.what(), where.str(),
+                             "the particle is inverted or the motion diverged: reduce the CFL "
+                             "number, raise the stabilisation or refine the particles");
     }
     // Stress power V P:ΔF (trapezoidal in time).
     work[N] = 0.5 * volume_[N] * scalar_product(P + P_[N], F - F_[N]);
@@ -331,14 +222,7 @@ void SPGSolver<dim>::compute_forces(ParticleSet<dim>& p) {
     for (unsigned int i = 0; i < dim; ++i)
       dF[i][i] -= 1.0;
     rel[N] = dF.norm();
-  }
-  if (failed >= 0) {
-    std::ostringstream where;
-    where << "particle " << failed << " at (" << current_position(failed) << ")";
-    throw NumericalFailure("material update failed: " + failure, where.str(),
-                           "the particle is inverted or the motion diverged: reduce the CFL "
-                           "number, raise the stabilisation or refine the particles");
-  }
+  });
   double min_sigma = 1e300, max_rel = 0;
   for (unsigned int N = 0; N < n; ++N) {
     internal_work_ += work[N];
@@ -379,32 +263,31 @@ void SPGSolver<dim>::compute_forces(ParticleSet<dim>& p) {
 
   // Pass 2, per particle I: gather f_I = −Σ_N S_N ∇Ψ_I(X_N) + stabilisation + contact.
   auto& force = p.forces();
-#pragma omp parallel for schedule(static) if (parallel)
-  for (long ii = 0; ii < long(n); ++ii) {
-    const unsigned int I = ii;
+  for_each_particle(bonds_, [&](unsigned int I) {
     if (!complete_[I]) { // driven from outside
       force[I] = Vector();
-      continue;
+      return;
     }
     Vector f = -(stress_[I] * rk.self_gradient[I]);
-    for (std::size_t k = off[I]; k < off[I + 1]; ++k)
-      f -= stress_[nb[k]] * grad[rev[k]];
+    for_each_bond_of(bonds_, I,
+                     [&](std::size_t k, unsigned int N) { f -= stress_[N] * grad[rev[k]]; });
     if (refresh) {
       Vector s = (rk.self_value[I] - 1.0) * kappa_[I] * residual_[I];
-      for (std::size_t k = off[I]; k < off[I + 1]; ++k)
-        s += (kappa_[nb[k]] * psi[rev[k]]) * residual_[nb[k]];
+      for_each_bond_of(bonds_, I, [&](std::size_t k, unsigned int N) {
+        s += (kappa_[N] * psi[rev[k]]) * residual_[N];
+      });
       stab_force_[I] = s;
     }
     if (stabilise)
       f += stab_force_[I];
     if (has_contact) {
       Vector c = rk.self_value[I] * contact_[I];
-      for (std::size_t k = off[I]; k < off[I + 1]; ++k)
-        c += psi[rev[k]] * contact_[nb[k]];
+      for_each_bond_of(bonds_, I,
+                       [&](std::size_t k, unsigned int N) { c += psi[rev[k]] * contact_[N]; });
       f += c;
     }
     force[I] = f;
-  }
+  });
 
   if (!constraints_.empty()) {
     const auto& fe = p.external_forces();
@@ -432,10 +315,10 @@ void SPGSolver<dim>::break_bonds(ParticleSet<dim>& p) {
   for (unsigned int i = 0; i < n; ++i) {
     if (!has_row_[i])
       continue;
-    for (std::size_t k = bonds_.begin(i); k < bonds_.end(i); ++k) {
-      const unsigned int j = bonds_.neighbor[k];
+    // Serial: a break writes the reversed bond in j's row and appends to the lists in order.
+    for_each_bond_of(bonds_, i, [&](std::size_t k, unsigned int j) {
       if (j < i || bonds_.broken[k] || !has_row_[j] || (any_driven && driven_[i] && driven_[j]))
-        continue;
+        return;
       bool brk = false;
       if (ec > 0.0 &&
           0.5 * (state_[i].equivalent_plastic_strain + state_[j].equivalent_plastic_strain) > ec)
@@ -454,7 +337,7 @@ void SPGSolver<dim>::break_bonds(ParticleSet<dim>& p) {
         affected.push_back(i);
         affected.push_back(j);
       }
-    }
+    });
   }
   if (affected.empty())
     return;
@@ -471,8 +354,10 @@ void SPGSolver<dim>::after_breaks(ParticleSet<dim>& p, const std::vector<unsigne
       continue;
     rk_->recompute_row(i, Xr_, rk_volume_, bonds_);
     unsigned int b = 0, t = 0;
-    for (std::size_t k = bonds_.begin(i); k < bonds_.end(i); ++k, ++t)
+    for_each_bond_of(bonds_, i, [&](std::size_t k, unsigned int) {
       b += bonds_.broken[k];
+      ++t;
+    });
     p.damage(i) = t ? double(b) / t : 0.0;
     for (unsigned int c = 0; c < dim; ++c)
       if (constraints_.is_constrained(i, c))
@@ -492,11 +377,12 @@ void SPGSolver<dim>::break_pairs(ParticleSet<dim>& p,
   const auto cut = [&](unsigned int i, unsigned int j) {
     if (!has_row_[i])
       return;
-    for (std::size_t k = bonds_.begin(i); k < bonds_.end(i); ++k)
-      if (bonds_.neighbor[k] == j && !bonds_.broken[k]) {
+    for_each_bond_of(bonds_, i, [&](std::size_t k, unsigned int partner) {
+      if (partner == j && !bonds_.broken[k]) {
         bonds_.broken[k] = 1;
         affected.push_back(i);
       }
+    });
   };
   for (const auto& [i, j] : pairs) {
     cut(i, j);
@@ -519,8 +405,8 @@ SPGSolver<dim>::deformation_gradient(unsigned int i,
     throw std::logic_error("SPGSolver::deformation_gradient: total Lagrangian kernels only");
   const auto& rk = *rk_;
   Matrix F = outer_product(d[i], rk.self_gradient[i]);
-  for (std::size_t k = bonds_.begin(i); k < bonds_.end(i); ++k)
-    F += outer_product(d[bonds_.neighbor[k]], rk.gradient[k]);
+  for_each_bond_of(
+      bonds_, i, [&](std::size_t k, unsigned int j) { F += outer_product(d[j], rk.gradient[k]); });
   for (unsigned int r = 0; r < dim; ++r)
     F[r][r] += 1.0;
   return F;
@@ -533,16 +419,16 @@ SPGSolver<dim>::smoothed(const std::vector<dealii::Tensor<1, dim>>& d) const {
     throw std::logic_error("SPGSolver::smoothed: total Lagrangian kernels only");
   const auto& rk = *rk_;
   std::vector<Vector> u(d.size());
-  for (unsigned int i = 0; i < d.size(); ++i) {
+  parallel_for_rethrow(long(d.size()), parallel_particle_threshold, [&](long ii) {
+    const unsigned int i = static_cast<unsigned int>(ii);
     if (!has_row_[i]) {
       u[i] = d[i];
-      continue;
+      return;
     }
     Vector s = rk.self_value[i] * d[i];
-    for (std::size_t k = bonds_.begin(i); k < bonds_.end(i); ++k)
-      s += rk.value[k] * d[bonds_.neighbor[k]];
+    for_each_bond_of(bonds_, i, [&](std::size_t k, unsigned int j) { s += rk.value[k] * d[j]; });
     u[i] = s;
-  }
+  });
   return u;
 }
 
@@ -565,31 +451,32 @@ std::vector<double> SPGSolver<dim>::stiffness_bound(const ParticleSet<dim>& p) c
   const auto& rk = *rk_;
   // Row sums G_N = Σ_J |∇Ψ_J(X_N)| and R_N = Σ_J |δ_NJ − Ψ_J(X_N)|.
   std::vector<double> G(n), R(n);
-  for (unsigned int N = 0; N < n; ++N) {
+  parallel_for_rethrow(long(n), parallel_particle_threshold, [&](long NN) {
+    const unsigned int N = static_cast<unsigned int>(NN);
     if (!has_row_[N])
-      continue;
+      return;
     G[N] = rk.self_gradient[N].norm();
     R[N] = std::abs(1.0 - rk.self_value[N]);
-    for (std::size_t k = bonds_.begin(N); k < bonds_.end(N); ++k) {
+    for_each_bond_of(bonds_, N, [&](std::size_t k, unsigned int) {
       G[N] += rk.gradient[k].norm();
       R[N] += std::abs(rk.value[k]);
-    }
-  }
+    });
+  });
   std::vector<double> S(n);
-  for (unsigned int I = 0; I < n; ++I) {
+  parallel_for_rethrow(long(n), parallel_particle_threshold, [&](long II) {
+    const unsigned int I = static_cast<unsigned int>(II);
     if (!complete_[I])
-      continue;
+      return;
     double s = volume_[I] * rk.self_gradient[I].norm() * G[I] * modulus_;
     double t = kappa_[I] * std::abs(1.0 - rk.self_value[I]) * R[I];
-    for (std::size_t k = bonds_.begin(I); k < bonds_.end(I); ++k) {
-      const unsigned int N = bonds_.neighbor[k];
+    for_each_bond_of(bonds_, I, [&](std::size_t k, unsigned int N) {
       s += volume_[N] * rk.gradient[rk.reverse[k]].norm() * G[N] * modulus_;
       t += kappa_[N] * std::abs(rk.value[rk.reverse[k]]) * R[N];
-    }
+    });
     // ×2: the block rows of an isotropic C are bounded by (λ+2μ)|∇Ψ_I||∇Ψ_J| per component
     // pair only up to a factor; the bound must stay above the true row sum for stability.
     S[I] = 2.0 * (s + (prm_.stabilisation > 0 ? t : 0.0)) / volume_[I];
-  }
+  });
   return S;
 }
 

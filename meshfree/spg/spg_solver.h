@@ -77,6 +77,7 @@
 #include "meshfree/spg/rigid_obstacle.h"
 #include "meshfree/spg/rk_kernel.h"
 #include "meshfree/spg/rk_shape_functions.h"
+#include "meshfree/spg/spg_parameters.h"
 
 #include <deal.II/base/parameter_handler.h>
 #include <deal.II/base/tensor.h>
@@ -92,30 +93,8 @@ namespace spinesim::meshfree {
 template <int dim>
 class SPGSolver {
  public:
-  enum class KernelUpdate { total_lagrangian, updated_lagrangian, adaptive_lagrangian };
-
-  struct Parameters {
-    std::string kernel = "cubic_bspline";    // cubic_bspline|quartic
-    std::string support_shape = "spherical"; // spherical|cubic
-    double dilation = 1.5;                   // a / h [-], 1.1 .. 2.5
-    double max_condition_number = 1e10;      // RK moment matrix guard [-]
-    double stabilisation = 0.1;              // η [-], 0 = plain DNI
-    unsigned int smoothing_interval = 1;     // [steps]
-    std::string kernel_update = "total_lagrangian";
-    unsigned int reset_interval = 50;    // [steps] (updated_lagrangian)
-    double adaptive_threshold = 0.2;     // max |F_rel − I| before a reset (adaptive) [-]
-    double cfl = 0.4;                    // [-]
-    double critical_plastic_strain = 0;  // ε_crit [-], 0 = off
-    double critical_stretch = 0;         // s_crit [-], 0 = off
-    double contact_penalty_factor = 1.0; // k_c / (ρ c_p² h^(dim−2)) [-]
-    double contact_offset = 0.0;         // contact distance / h [-]
-
-    static void declare(dealii::ParameterHandler& prm);
-    void parse(const dealii::ParameterHandler& prm);
-    // InvalidInput naming the entry.
-    void validate() const;
-    KernelUpdate update_mode() const;
-  };
+  using KernelUpdate = SpgKernelUpdate;
+  using Parameters = SpgParameters;
 
   // `spacing` h [m] is the nominal particle spacing: support a = dilation·h. The law must
   // outlive the solver. Builds bonds and shape functions at the reference positions.

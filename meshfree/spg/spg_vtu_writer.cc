@@ -1,6 +1,7 @@
 #include "meshfree/spg/spg_vtu_writer.h"
 
 #include "base/exceptions.h"
+#include "meshfree/bond_loop.h"
 #include "meshfree/particle_output.h"
 
 #include <deal.II/base/data_out_base.h>
@@ -54,8 +55,8 @@ ParticleSet<dim> SPGVtuWriter<dim>::physical_particles(const SPGSolver<dim>& s,
     out.displacement(i) = uh[i];
     // The velocity is the time derivative of u_h = Σ Ψ_J(X^r_I) d_J (+ a constant shift).
     dealii::Tensor<1, dim> v = rk.self_value[i] * p.velocity(i);
-    for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k)
-      v += rk.value[k] * p.velocity(bonds.neighbor[k]);
+    for_each_bond_of(bonds, i,
+                     [&](std::size_t k, unsigned int j) { v += rk.value[k] * p.velocity(j); });
     out.velocity(i) = v;
     out.damage(i) = p.damage(i);
     eps[i] = s.states()[i].equivalent_plastic_strain;

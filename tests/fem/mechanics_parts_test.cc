@@ -2,11 +2,11 @@
 // stress, finite strain, failures), the flat checkpoint layout of a point, and the
 // dynamic-relaxation sums (Kilic & Madenci 2010 stiffness estimate).
 
+#include "base/dynamic_relaxation.h"
 #include "base/exceptions.h"
 #include "fem/materials/linear_elastic.h"
 #include "fem/point_update.h"
 #include "fem/quadrature_point_data.h"
-#include "fem/relaxation_sums.h"
 
 #include <gtest/gtest.h>
 
@@ -112,4 +112,56 @@ TEST(RelaxationSums, StiffnessEstimateNeedsAPreviousAcceleration) {
   total += sums;
   EXPECT_EQ(total.residual_square, 10.0);
   EXPECT_DOUBLE_EQ(total.stiffness_numerator, 5.0);
+}
+
+TEST(DynamicRelaxation, DampingIsCriticalForTheEstimateAndCapped) {
+  RelaxationSums sums;
+  sums.stiffness_numerator = 4.0 * 0.25; // k = 4 [1/s²] on u² = 0.25
+  sums.stiffness_denominator = 0.25;
+  // Critical damping of ü = −k u is c = 2 sqrt(k) = 4; c dt ≤ 2 caps it at 2/dt.
+  EXPECT_EQ(sums.damping(0.1), 4.0);
+  EXPECT_EQ(sums.damping(1.0), 2.0);
+  // No positive estimate (none yet, or a softening one): undamped.
+  EXPECT_EQ(RelaxationSums().damping(0.1), 0.0);
+  sums.stiffness_numerator = -1.0;
+  EXPECT_EQ(sums.damping(0.1), 0.0);
+}
+
+TEST(DynamicRelaxation, UnitStepUpdateIsKilicMadenciFormBitwise) {
+  // Kilic & Madenci (2010) write the update with Δt = 1 as ((2 − c) v + 2 b/λ) / (2 + c); the
+  // shared form halves numerator and denominator, exact in binary floating point, so both
+  // give the same bits (the particle relaxation relies on it).
+  for (const double c : {0.0, 0.3, 1.7, 2.0})
+    for (const double v : {0.0, 1e-3, -2.5})
+      for (const double b : {7.0, -0.1, 3e5}) {
+        const double lambda = 1.3e4;
+        double vv = v, u = 0.25;
+        DampedCentralDifference(1.0, c).advance(vv, u, b / lambda);
+        const double expected = ((2.0 - c) * v + 2.0 * b / lambda) / (2.0 + c);
+        EXPECT_EQ(vv, expected);
+        EXPECT_EQ(u, 0.25 + expected);
+        double v0 = 0, u0 = 0;
+        DampedCentralDifference(1.0, c).start(v0, u0, b / lambda);
+        EXPECT_EQ(v0, 0.5 * b / lambda); // from rest: half a step
+      }
+}
+
+TEST(DynamicRelaxation, SpringRelaxesToItsStaticDisplacement) {
+  // m ü = f − k u with m = 1 kg, k = 4 N/m, f = 8 N: static u = f/k = 2 m. dt = 0.5 s is
+  // stable (dt < 2/sqrt(k/m) = 1 s); the estimate finds k, so c is critical for the mode.
+  const double m = 1, k = 4, f = 8, dt = 0.5;
+  double u = 0, v = 0, a_previous = std::numeric_limits<double>::quiet_NaN(), c = 0;
+  unsigned int steps = 0;
+  for (; steps < 200; ++steps) {
+    const double r = f - k * u;
+    if (std::abs(r) <= 1e-12 * f)
+      break;
+    RelaxationSums sums;
+    sums.add_free(r, r / m, a_previous, u, v, dt);
+    DampedCentralDifference(dt, c).advance(v, u, r / m);
+    c = sums.damping(dt);
+  }
+  EXPECT_NEAR(u, f / k, 1e-12 * f / k); // the residual test above, divided by k
+  // Critically damped: a few tens of steps, where the undamped spring would never settle.
+  EXPECT_LT(steps, 60u);
 }

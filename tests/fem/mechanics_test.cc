@@ -521,7 +521,7 @@ TEST(Mechanics, CellIndicatorsOnUniformStretch) {
   parallel::distributed::Triangulation<3> tria(comm());
   auto mech = uniaxial<3>(tria, eps, false);
   mech->solve_quasi_static(1.0);
-  CellIndicators<3>::Parameters ip;
+  CellIndicatorsParameters ip;
   ip.critical_principal_strain = 0.5e-3; // half the applied strain: every cell fails
   ip.critical_principal_stress = 1e12;
   CellIndicators<3> ind(ip);

@@ -22,9 +22,9 @@ using namespace spinesim::meshfree;
 namespace {
 
 template <int dim>
-typename BondBasedPD<dim>::Parameters pd_parameters(const std::string& kernel, double alpha,
-                                                    double ratio, bool surface, bool partial) {
-  typename BondBasedPD<dim>::Parameters prm;
+BondBasedParameters pd_parameters(const std::string& kernel, double alpha, double ratio,
+                                  bool surface, bool partial) {
+  BondBasedParameters prm;
   prm.influence_function = kernel;
   prm.alpha = alpha;
   prm.horizon_ratio = ratio;
@@ -79,7 +79,7 @@ TEST(BondBasedPD, MicromodulusClosedForms2D) {
   // The model picks k' from the plane model.
   auto prm = pd_parameters<2>("fractional", 0.5, 3.0, false, false);
   prm.thickness = T;
-  prm.plane_model = BondBasedPD<2>::PlaneModel::plane_strain;
+  prm.plane_model = PlaneModel::plane_strain;
   EXPECT_NEAR(BondBasedPD<2>(prm, E, nu).micromodulus(delta) /
                   (4 * kpe * 1.5 / (M_PI * T * std::pow(delta, 1.5))),
               1, tol);
@@ -613,7 +613,7 @@ TEST(BondBasedPD, FusedVerletStepIsThePlainStep3D) {
 TEST(BondBasedPD, ParametersDeclareParse) {
   dealii::ParameterHandler prm;
   prm.enter_subsection("Peridynamics");
-  BondBasedPD<2>::Parameters::declare(prm);
+  BondBasedParameters::declare(prm);
   prm.leave_subsection();
   prm.parse_input_from_string("subsection Peridynamics\n"
                               "  set Horizon ratio = 4.015\n"
@@ -625,14 +625,14 @@ TEST(BondBasedPD, ParametersDeclareParse) {
                               "  set Surface correction = false\n"
                               "end\n");
   prm.enter_subsection("Peridynamics");
-  BondBasedPD<2>::Parameters p;
+  BondBasedParameters p;
   p.parse(prm);
   EXPECT_EQ(p.horizon_ratio, 4.015);
   EXPECT_EQ(p.influence_function, "fractional");
   EXPECT_EQ(p.alpha, 0.5);
   EXPECT_EQ(p.fracture_energy, 250);
   EXPECT_EQ(p.critical_stretch, 0);
-  EXPECT_EQ(p.plane_model, BondBasedPD<2>::PlaneModel::plane_strain);
+  EXPECT_EQ(p.plane_model, PlaneModel::plane_strain);
   EXPECT_EQ(p.thickness, 0.002);
   EXPECT_FALSE(p.surface_correction);
   EXPECT_TRUE(p.partial_volume_correction);
@@ -642,13 +642,13 @@ TEST(BondBasedPD, ParametersDeclareParse) {
   prm.set("Alpha", "2.5");
   EXPECT_THROW(p.parse(prm), InvalidInput);
   prm.leave_subsection();
-  EXPECT_THROW(BondBasedPD<3>(BondBasedPD<3>::Parameters(), 1e9, 0.5), InvalidInput);
-  EXPECT_THROW(BondBasedPD<3>(BondBasedPD<3>::Parameters(), -1e9, 0.2), InvalidInput);
+  EXPECT_THROW(BondBasedPD<3>(BondBasedParameters(), 1e9, 0.5), InvalidInput);
+  EXPECT_THROW(BondBasedPD<3>(BondBasedParameters(), -1e9, 0.2), InvalidInput);
 }
 
 TEST(BondBasedPD, ThicknessMismatchIsInvalidInput) {
   auto p = ParticleSet<2>::lattice(dealii::Point<2>(0, 0), dealii::Point<2>(1, 1), 0.25, 0.5);
-  BondBasedPD<2> pd(BondBasedPD<2>::Parameters(), 1e9, 0.3); // thickness 1
+  BondBasedPD<2> pd(BondBasedParameters(), 1e9, 0.3); // thickness 1
   auto bonds = NeighborSearch<2>(pd.neighbor_options(0.25)).build(p);
   EXPECT_THROW(pd.initialise(p, bonds), InvalidInput);
 }

@@ -30,8 +30,7 @@ struct Body {
   ParticleSet<dim> p;
   BondBasedPD<dim> pd;
   BondList<dim> bonds;
-  Body(const unsigned int (&n)[dim], double h, const typename BondBasedPD<dim>::Parameters& prm,
-       double E, double nu)
+  Body(const unsigned int (&n)[dim], double h, const BondBasedParameters& prm, double E, double nu)
       : p(test::box<dim>(n, h, prm.thickness)), pd(prm, E, nu) {
     bonds = NeighborSearch<dim>(pd.neighbor_options(h)).build(p);
     pd.initialise(p, bonds);
@@ -39,8 +38,8 @@ struct Body {
 };
 
 template <int dim>
-typename BondBasedPD<dim>::Parameters fractional(double alpha, double R) {
-  typename BondBasedPD<dim>::Parameters prm;
+BondBasedParameters fractional(double alpha, double R) {
+  BondBasedParameters prm;
   prm.influence_function = "fractional";
   prm.alpha = alpha;
   prm.horizon_ratio = R;
@@ -153,7 +152,7 @@ TEST(ImplicitPD, NewtonConvergesQuadratically) {
   const unsigned int n[2] = {16, 4};
   const double h = 1e-3;
   Bar<2> bar(n, h, 70e9 * 0.01 * 4 * h * 1.0);
-  typename ImplicitStaticSolver<2>::Parameters prm;
+  ImplicitStaticSolverParameters prm;
   prm.linear.solver = "jacobi";
   prm.linear.tolerance = 1e-13;
   prm.displacement_tolerance = 0; // residual criterion only, to see the whole sequence
@@ -193,14 +192,14 @@ template <int dim>
 void check_bar_against_adr(const unsigned int (&n)[dim]) {
   const double h = 1e-3, force = 2e3;
   Bar<dim> a(n, h, force), b(n, h, force);
-  typename ImplicitStaticSolver<dim>::Parameters prm;
+  ImplicitStaticSolverParameters prm;
   prm.linear.solver = "amg";
   prm.linear.tolerance = 1e-10;
   prm.residual_tolerance = 1e-10;
   ImplicitStaticSolver<dim> solver(prm, a.pd);
   const auto reports = solver.solve(a.p, a.bonds);
   ASSERT_EQ(reports.size(), 1u);
-  typename AdaptiveDynamicRelaxation<dim>::Parameters aprm;
+  AdaptiveDynamicRelaxationParameters aprm;
   aprm.tolerance = 1e-10;
   aprm.max_iterations = 200000;
   AdaptiveDynamicRelaxation<dim> adr(aprm,
@@ -255,7 +254,7 @@ TEST(ImplicitPD, ConditionEstimateMatchesDenseEigenvalues) {
     lmin = std::min(lmin, A.eigenvalue(k).real());
     lmax = std::max(lmax, A.eigenvalue(k).real());
   }
-  typename PDLinearSolver<2>::Parameters lp;
+  PDLinearSolverParameters lp;
   lp.solver = "cg";
   lp.tolerance = 1e-12; // run CG (Lanczos) long enough for the extreme Ritz values to settle
   PDLinearSolver<2> solver(lp);
@@ -375,7 +374,7 @@ TEST(ImplicitPD, LinearSolversAgreeOnCrackedPlate) {
   g.pre_cracks = options.pre_cracks;
   std::map<std::string, unsigned int> its;
   for (const std::string name : {"cg", "jacobi", "amg", "mg"}) {
-    typename PDLinearSolver<2>::Parameters lp;
+    PDLinearSolverParameters lp;
     lp.solver = name;
     lp.tolerance = 1e-10;
     PDLinearSolver<2> solver(lp);

@@ -51,7 +51,7 @@ Body<dim> make_body(unsigned int n, typename NosbPD<dim>::Stabilization stab, un
   for (unsigned int d = 0; d < dim; ++d)
     b.L[d] = cells[d] * h;
   b.particles.set_density(rho);
-  typename NosbPD<dim>::Parameters prm;
+  NosbParameters prm;
   prm.horizon_ratio = dim == 2 ? 3.015 : 2.015;
   prm.stabilization = stab;
   prm.stabilization_coefficient = gs;
@@ -246,7 +246,7 @@ void check_newton_third_law(Stab s) {
     torque += dealii::cross_product_3d(y3, f3);
   }
   // Each family's (and each penalty pair's) forces cancel exactly up to round-off.
-  EXPECT_LT(total.norm(), 1e-13 * sum_abs) << NosbPD<dim>::Parameters::name(cast<dim>(s));
+  EXPECT_LT(total.norm(), 1e-13 * sum_abs) << NosbParameters::name(cast<dim>(s));
   // Angular momentum: Σ y × f = Σ_e w_e skew(P_e F_eᵀ) = 0 for an objective law. The penalty
   // force is along z, not along the bond, so it is exempt.
   if (s != Stab::penalty) {
@@ -298,7 +298,7 @@ void check_tangent(Stab s) {
   }
   // Central differences: truncation ~ eps² |f'''| and cancellation ~ 1e-16 |f|/eps; both
   // far below 1e-6 of the largest entry at strains of a few per cent.
-  EXPECT_LT(max_err, 1e-6 * max_entry) << NosbPD<dim>::Parameters::name(cast<dim>(s));
+  EXPECT_LT(max_err, 1e-6 * max_entry) << NosbParameters::name(cast<dim>(s));
   EXPECT_GT(max_entry, 0.0);
 }
 TEST(Nosb, TangentMatchesFiniteDifferences2D) {
@@ -352,7 +352,7 @@ void check_zero_energy_mode() {
     }
     ASSERT_GT(interior, 0u);
     restoring[static_cast<int>(s)] = min_ratio;
-    std::cout << dim << "-D checkerboard, " << NosbPD<dim>::Parameters::name(cast<dim>(s))
+    std::cout << dim << "-D checkerboard, " << NosbParameters::name(cast<dim>(s))
               << ": restoring force / E(a/h)h^(d-1) in [" << min_ratio << ", " << max_ratio
               << "], hourglass relative norm "
               << b.model->hourglass(b.particles, b.bonds).relative_norm << "\n";
@@ -523,8 +523,8 @@ void check_energy_conservation(Stab s) {
   const double t_end =
       (dim == 2 ? 100 : 50) * probe.model->stable_time_step(probe.particles, probe.bonds, 1.0);
   const double d1 = run(0.5, t_end).first, d2 = run(0.25, t_end).first;
-  std::cout << dim << "-D " << NosbPD<dim>::Parameters::name(cast<dim>(s)) << ": energy deviation "
-            << d1 << " (dt = dt_s/2), " << d2 << " (dt_s/4)\n";
+  std::cout << dim << "-D " << NosbParameters::name(cast<dim>(s)) << ": energy deviation " << d1
+            << " (dt = dt_s/2), " << d2 << " (dt_s/4)\n";
   // Velocity Verlet with conservative forces: the energy error is bounded and O(dt²), so
   // halving the step divides it by ~4 (0.3 allows for the modes' different (ω dt)² terms);
   // a non-conservative force would leave a drift that does not shrink like dt².
@@ -559,7 +559,7 @@ void compress(Body<dim>& b, ParticleSet<dim>& p, double lambda) {
 template <int dim>
 void check_quasi_static() {
   auto b = make_body<dim>(dim == 2 ? 6 : 5, cast<dim>(Stab::bond_associated), dim == 2 ? 14 : 9);
-  typename NosbQuasiStatic<dim>::Parameters prm;
+  NosbQuasiStaticParameters prm;
   prm.tolerance = 1e-10;
   NosbQuasiStatic<dim> newton(prm, *b.model);
   auto load = [&](ParticleSet<dim>& p, double l) { compress(b, p, l); };
@@ -606,7 +606,7 @@ void check_bone_breaking(const std::string& preset) {
   materials::LawParameters lp;
   lp.preset = preset;
   lp.apply_preset();
-  typename NosbPD<dim>::Parameters prm;
+  NosbParameters prm;
   prm.horizon_ratio = dim == 2 ? 3.015 : 2.015;
   prm.fracture_energy = preset == "cortical_bone" ? 1000.0 : 500.0; // [J/m^2], order of bone Gc
   NosbPD<dim> model(prm, materials::create_law(lp));

@@ -79,11 +79,10 @@ TEST(ParticleMethodRegistry, ListsTheThreeMethodsWithTheirSections) {
 
 TEST(ParticleMethodRegistry, BondBasedImpliedPoissonRatio) {
   // Cauchy relation of pairwise central forces (Gerstle, Sau & Silling 2007).
-  using PM = BondBasedPD<2>::PlaneModel;
+  using PM = PlaneModel;
   EXPECT_DOUBLE_EQ(BondBasedMethod<2>::implied_poisson_ratio(PM::plane_stress), 1.0 / 3.0);
   EXPECT_DOUBLE_EQ(BondBasedMethod<2>::implied_poisson_ratio(PM::plane_strain), 0.25);
-  EXPECT_DOUBLE_EQ(
-      BondBasedMethod<3>::implied_poisson_ratio(BondBasedPD<3>::PlaneModel::plane_strain), 0.25);
+  EXPECT_DOUBLE_EQ(BondBasedMethod<3>::implied_poisson_ratio(PlaneModel::plane_strain), 0.25);
 }
 
 // u = H x: every method reproduces linear fields, so interior particles feel no force. SPG's

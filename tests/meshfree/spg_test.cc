@@ -160,7 +160,7 @@ TEST(SpgShapeFunctions, SingularMomentMatrixNamesTheParticle) {
 }
 
 TEST(SpgSolver, DilationOutsideRangeIsInvalidInput) {
-  SPGSolver<2>::Parameters p;
+  SpgParameters p;
   p.dilation = 1.0;
   EXPECT_THROW(p.validate(), InvalidInput);
   p.dilation = 2.6;
@@ -176,7 +176,7 @@ void check_linear_field(const std::string& mode) {
   const double h = 0.1;
   auto p = jittered_box<dim>(dim == 2 ? 6 : 4, h, 0.2);
   auto law = elastic_law();
-  typename SPGSolver<dim>::Parameters prm;
+  SpgParameters prm;
   prm.kernel_update = mode;
   prm.reset_interval = 2;
   prm.adaptive_threshold = 1e-4;
@@ -223,7 +223,7 @@ TEST(SpgSolver, CheckerboardIsZeroEnergyForDniOnly) {
   auto p = jittered_box<2>(10, h, 0.0);
   auto law = elastic_law();
   for (double eta : {0.0, 0.1}) {
-    SPGSolver<2>::Parameters prm;
+    SpgParameters prm;
     prm.stabilisation = eta;
     SPGSolver<2> spg(prm, *law, p, h);
     for (unsigned int i = 0; i < p.size(); ++i) {
@@ -256,7 +256,7 @@ TEST(SpgSolver, BondFailureConservesMomentum) {
   const double h = 0.1;
   auto p = jittered_box<2>(8, h, 0.2);
   auto law = copper_law();
-  SPGSolver<2>::Parameters prm;
+  SpgParameters prm;
   prm.critical_stretch = 0.02;
   SPGSolver<2> spg(prm, *law, p, h);
   std::mt19937 gen(3);
@@ -290,7 +290,7 @@ TEST(SpgSolver, EssentialBoundaryByTransformation) {
   const double h = 0.1;
   auto p = jittered_box<2>(8, h, 0.1);
   auto law = elastic_law();
-  SPGSolver<2>::Parameters prm;
+  SpgParameters prm;
   SPGSolver<2> spg(prm, *law, p, h);
   std::vector<unsigned int> left;
   for (unsigned int i = 0; i < p.size(); ++i)
@@ -316,7 +316,7 @@ TEST(SpgSolver, ExplicitEnergyBalanceWithContact) {
   const double h = 0.1;
   auto p = jittered_box<3>(4, h, 0.15);
   auto law = elastic_law();
-  SPGSolver<3>::Parameters prm;
+  SpgParameters prm;
   prm.cfl = 0.3;
   SPGSolver<3> spg(prm, *law, p, h);
   spg.add_obstacle(
@@ -351,7 +351,7 @@ void check_vtu_output() {
   const double h = 0.1;
   auto p = jittered_box<dim>(dim == 2 ? 5 : 3, h, 0.2);
   auto law = copper_law();
-  typename SPGSolver<dim>::Parameters prm;
+  SpgParameters prm;
   SPGSolver<dim> spg(prm, *law, p, h);
   const auto dir = std::filesystem::temp_directory_path() /
                    ("spg_vtu_test_" + std::to_string(dim) + "_" + std::to_string(::getpid()));

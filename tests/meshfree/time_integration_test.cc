@@ -23,8 +23,8 @@ struct Body {
   BondBasedPD<dim> pd;
   BondList<dim> bonds;
 
-  Body(const unsigned int (&n)[dim], double h, const typename BondBasedPD<dim>::Parameters& prm,
-       double E, double nu, double rho)
+  Body(const unsigned int (&n)[dim], double h, const BondBasedParameters& prm, double E, double nu,
+       double rho)
       : p(test::box<dim>(n, h, prm.thickness)), pd(prm, E, nu) {
     p.set_density(rho);
     bonds = NeighborSearch<dim>(pd.neighbor_options(h)).build(p);
@@ -36,8 +36,8 @@ struct Body {
 };
 
 template <int dim>
-typename BondBasedPD<dim>::Parameters corrected() {
-  typename BondBasedPD<dim>::Parameters prm;
+BondBasedParameters corrected() {
+  BondBasedParameters prm;
   prm.horizon_ratio = 3.015;
   return prm; // surface and partial-volume corrections on by default
 }
@@ -191,7 +191,7 @@ void check_bar_tension(const unsigned int (&n)[dim], double gauge_tol, double en
   for (unsigned int i : right)
     b.p.external_force(i)[0] = sigma * A / right.size();
 
-  typename AdaptiveDynamicRelaxation<dim>::Parameters aprm;
+  AdaptiveDynamicRelaxationParameters aprm;
   aprm.tolerance = 1e-7;
   aprm.max_iterations = 50000;
   AdaptiveDynamicRelaxation<dim> adr(aprm, b.forces());
@@ -251,7 +251,7 @@ TEST(TimeIntegration, AdrRelaxesDisturbance2D) {
       for (unsigned int d = 0; d < 2; ++d)
         b.p.displacement(i)[d] = U(gen);
   }
-  typename AdaptiveDynamicRelaxation<2>::Parameters aprm;
+  AdaptiveDynamicRelaxationParameters aprm;
   aprm.tolerance = 1e-6;
   AdaptiveDynamicRelaxation<2> adr(aprm, b.forces());
   b.pd.compute_forces(b.p, b.bonds);
