@@ -101,6 +101,8 @@ void CoupledIntegrator<dim>::advance(double dt, double a, double load_time, bool
     // With heat, bonds breaking in this force pass release their energy (at the state of t_n)
     // into their particle's heat account.
     fracture_.before_forces();
+    if (!sums)
+      energy_.before_forces();
     const auto start = std::chrono::steady_clock::now();
     broken_last_step_ = state_.method->compute_forces(particles, state_.bonds, state_.prm.damage);
     particle_force_seconds_ +=
@@ -109,6 +111,8 @@ void CoupledIntegrator<dim>::advance(double dt, double a, double load_time, bool
       particle_updates_ += state_.free[i] && state_.is_owned(i);
     fracture_.after_forces(broken_last_step_);
     share_bond_breaks();
+    if (!sums)
+      energy_.after_forces(); // the stored energy the breaks of this pass released
     // Explicit steps commit the material history every step, as the FEM does; a relaxation
     // commits both models once, at equilibrium (relax()), so the pseudo-dynamics leave no
     // plastic trace (MechanicsSolver::relaxation_step).
@@ -157,9 +161,13 @@ void CoupledIntegrator<dim>::advance(double dt, double a, double load_time, bool
       }
     }
     boundary_.apply(load_time, dt);
+    if (!sums)
+      energy_.after_update(time_, dt, a);
     halo_.exchange(); // partners and interface stencils at t_{n+1}
     interface_.update();
   }
+  if (!sums && state_.n_free_particles() == 0)
+    energy_.after_update(time_, dt, a); // no particles (yet): their share is zero
   if (sums) {
     *sums += state_.fem.relaxation_step(dt, a, load_time, first);
   } else {

@@ -12,6 +12,7 @@
 #include "coupling/ghost_layer.h"
 #include "coupling/mls_interface.h"
 #include "coupling/particle_boundary.h"
+#include "coupling/particle_energy.h"
 #include "coupling/particle_halo.h"
 
 #include <vector>
@@ -35,7 +36,7 @@ class CoupledIntegrator {
                     ParticleBoundary<dim>& boundary, FractureHeat<dim>& fracture,
                     CellConverter<dim>& converter)
       : state_(state), ghosts_(ghosts), interface_(interface), halo_(halo), boundary_(boundary),
-        fracture_(fracture), converter_(converter) {}
+        fracture_(fracture), converter_(converter), energy_(state) {}
 
   double stable_time_step() const; // min(FEM CFL step, PD step) [s]
   // One central-difference step of both models (see advance()).
@@ -55,6 +56,9 @@ class CoupledIntegrator {
   // and the particle updates they served (owned free particles summed over force passes).
   double particle_force_seconds() const { return particle_force_seconds_; }
   double particle_updates() const { return particle_updates_; }
+  // The particle side of the energy account of explicit steps (off unless switched on).
+  ParticleEnergy<dim>& energy() { return energy_; }
+  const ParticleEnergy<dim>& energy() const { return energy_; }
 
  private:
   using RelaxationSums = spinesim::RelaxationSums;
@@ -74,6 +78,7 @@ class CoupledIntegrator {
   ParticleBoundary<dim>& boundary_;
   FractureHeat<dim>& fracture_;
   CellConverter<dim>& converter_;
+  ParticleEnergy<dim> energy_;
   double time_ = 0;
   std::size_t broken_last_step_ = 0; // bond ends broken by this rank in the last step
   double particle_force_seconds_ = 0, particle_updates_ = 0;

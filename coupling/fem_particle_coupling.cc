@@ -123,6 +123,29 @@ double FemParticleCoupling<dim>::kinetic_energy() const {
 }
 
 template <int dim>
+void FemParticleCoupling<dim>::set_energy_account(bool on) {
+  state_.fem.set_energy_account(on);
+  integrator_.energy().set_on(on);
+}
+
+template <int dim>
+fem::EnergyBalance FemParticleCoupling<dim>::energy_balance() const {
+  const MPI_Comm comm = state_.fem.mpi_communicator();
+  const auto& particles = integrator_.energy();
+  auto b = fem::sum_energy({&state_.fem.energy_account(), &particles.account()},
+                           particles.fracture_dissipation(), comm);
+  const auto p = fem::sum_energy({&particles.account()}, particles.fracture_dissipation(), comm);
+  b.interface_work_particles = p.strain_energy + p.kinetic_energy_central + p.fracture_dissipation +
+                               p.damping_dissipation - p.external_work;
+  return b;
+}
+
+template <int dim>
+double FemParticleCoupling<dim>::energy_account_seconds() const {
+  return Utilities::MPI::max(integrator_.energy().seconds(), state_.fem.mpi_communicator());
+}
+
+template <int dim>
 double FemParticleCoupling<dim>::strain_energy() const {
   return coupling::strain_energy(state_);
 }

@@ -118,6 +118,12 @@ class FemParticleCoupling {
   dealii::Tensor<1, dim> total_momentum() const;
   double kinetic_energy() const;
   double strain_energy() const; // FEM + PD (bonds of free particles) [J]
+  // The energy account of explicit steps (fem/explicit_energy.h, coupling/particle_energy.h):
+  // switches it on for the FEM and the particles. energy_balance() gives it at the last
+  // step's force pass (t − dt), over all ranks (collective).
+  void set_energy_account(bool on);
+  fem::EnergyBalance energy_balance() const;
+  double energy_account_seconds() const; // particle stored-energy passes, slowest rank [s]
   // Reaction on a boundary id: FEM reaction + fixed particles of converted boundary cells [N].
   dealii::Tensor<1, dim> reaction_force(dealii::types::boundary_id id) const;
 

@@ -20,6 +20,7 @@
 
 #include "base/dynamic_relaxation.h"
 #include "fem/boundary_conditions.h"
+#include "fem/explicit_energy.h"
 #include "fem/hanging_node_lines.h"
 #include "fem/materials/constitutive_law.h"
 #include "fem/mechanics_parameters.h"
@@ -125,6 +126,12 @@ class MechanicsSolver {
   // Explicit: the CFL-limited stable step [s] and one central-difference step of size dt.
   double stable_time_step() const;
   void explicit_step(double dt);
+  // The energy account of explicit steps (fem/explicit_energy.h): off by default; on, every
+  // explicit_step() adds to it (a pass over the owned DoFs). energy_account() is this rank's
+  // share at the last step's force pass (t − dt).
+  void set_energy_account(bool on) { energy_account_on_ = on; }
+  bool energy_account_on() const { return energy_account_on_; }
+  const ExplicitEnergy& energy_account() const { return energy_; }
 
   // Dynamic relaxation towards the quasi-static state at `time` (coupled quasi-static runs):
   // one central-difference step of pseudo-time dt with mass damping `damping` [1/s], loads and
@@ -262,6 +269,9 @@ class MechanicsSolver {
   // The owned Dirichlet DoFs per condition with their support points (dirichlet_dofs_).
   void cache_dirichlet_dofs();
   void build_step_tables();
+  // Adds step dt (damping a) to energy_ from the state before the step (u_previous_,
+  // v_previous_, the net forces of central_difference) and the state after it.
+  void account_energy(double dt, double a, bool linear);
 
   MPI_Comm comm_;
   dealii::parallel::distributed::Triangulation<dim>& tria_;
@@ -321,6 +331,11 @@ class MechanicsSolver {
   std::vector<double> relax_acceleration_; // previous net acceleration per owned DoF [m/s²]
   std::vector<int> driven_slot_;
   std::vector<double> u_previous_;
+  // Energy account: on/off, the sums, v_{n−½} of the step, and f_ext of the last assembly.
+  bool energy_account_on_ = false;
+  ExplicitEnergy energy_;
+  std::vector<double> v_previous_;
+  VectorType external_force_;
   HangingNodeLines hanging_lines_; // hanging_ on the owned arrays of an explicit step
   bool step_tables_ready_ = false;
   unsigned int n_active_cells_ = 0; // global count of active cells

@@ -38,7 +38,9 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
   if (with_matrix && !assembly_cells_)
     matrix = 0;
   rhs_ = 0;
-  VectorType f_int(owned_, comm_), f_ext(owned_, comm_);
+  VectorType f_int(owned_, comm_);
+  external_force_.reinit(owned_, comm_); // kept for the energy account
+  VectorType& f_ext = external_force_;
 
   const unsigned int nq = quadrature_.size(), n = fe_.n_dofs_per_cell();
   FEValues<dim> fe_values(*mapping_, fe_, quadrature_,

@@ -49,6 +49,15 @@ void MechanicsSolver<dim>::explicit_step(double dt) {
     // Every cell converted: the FEM has no unknowns left, its step only advances time.
     raw_residual_ = 0;
     rhs_ = 0;
+    if (energy_account_on_) { // nothing moves: the works stay, the energies are zero
+      energy_.time = time_;
+      energy_.external.add(0, 0);
+      energy_.interface.add(0, 0);
+      energy_.damping.add(0, 0);
+      energy_.internal.add(0, 0);
+      energy_.kinetic = energy_.kinetic_central = energy_.strain = 0;
+      energy_.valid = true;
+    }
     time_ += dt;
     return;
   }
@@ -132,6 +141,10 @@ void MechanicsSolver<dim>::central_difference(double dt, double a, double bc_tim
     const double* mass = lumped_mass_.begin();
     const std::size_t n = owned_.n_elements();
     std::copy(u, u + n, u_previous_.begin());
+    if (!sums && energy_account_on_) {
+      v_previous_.resize(n);
+      std::copy(v, v + n, v_previous_.begin());
+    }
     if (sums && relax_acceleration_.size() != n)
       relax_acceleration_.assign(n, std::numeric_limits<double>::quiet_NaN());
     const auto zero_mass = [&](std::size_t k) {
@@ -202,6 +215,8 @@ void MechanicsSolver<dim>::central_difference(double dt, double a, double bc_tim
   v_.compress(VectorOperation::insert);
   hanging_lines_.distribute(u_);
   hanging_lines_.distribute(v_);
+  if (!sums && energy_account_on_)
+    account_energy(dt, a, linear);
   // NaN must not pass silently: the first non-finite owned entry (a scan of the local array;
   // Epetra's norm is a serial, scaled BLAS call), then every rank learns of any.
   const double* uu = u_.begin();
@@ -220,6 +235,66 @@ void MechanicsSolver<dim>::central_difference(double dt, double a, double bc_tim
                  ? ", first at DoF " + std::to_string(owned_.nth_index_in_set(first_bad))
                  : std::string(", on another rank")),
         "reduce the time step (CFL safety factor) or check the materials");
+}
+
+namespace {
+// The back halves of a step's sums were formed with dt; the previous step had dt_back.
+inline void scale_back(ExplicitEnergy::Step& step, double ratio) {
+  step.external_back *= ratio;
+  step.prescribed_back *= ratio;
+  step.damping_back *= ratio;
+}
+} // namespace
+
+template <int dim>
+void MechanicsSolver<dim>::account_energy(double dt, double a, bool linear) {
+  // Per unknown (fem/explicit_energy.h): the net force F of the update (−K u on the linear
+  // path, the condensed f_ext − f_int else), the raw load f_ext and f_int = raw residual +
+  // f_ext on the nonlinear path. Hanging DoFs (after distribute, so their u and v are
+  // current) carry raw loads only: their condensed F and their mass live on the masters.
+  const std::size_t n = owned_.n_elements();
+  const double* v_new = v_.begin();
+  const double* mass = lumped_mass_.begin();
+  const double* r = linear ? raw_residual_.begin() : rhs_.begin();
+  const double* raw = raw_residual_.begin();
+  const double* f_ext = linear ? nullptr : external_force_.begin();
+  const double sign = linear ? -1.0 : 1.0;
+  ExplicitEnergy::Step supported, driven; // Dirichlet and free DoFs; driven DoFs
+  // u_n − u_{n−1} = dt_back v_{n−½}: steps differ where a run lands on its output times.
+  const double dt_back = energy_.valid && time_ > energy_.time ? time_ - energy_.time : dt;
+  double internal_back = 0, internal_forward = 0, stored2 = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double vo = v_previous_[k], vn = v_new[k], fe = f_ext ? f_ext[k] : 0.0;
+    const double back = 0.5 * dt_back * vo, forward = 0.5 * dt * vn;
+    if (!linear) {
+      const double f_int = raw[k] + fe;
+      internal_back += f_int * back;
+      internal_forward += f_int * forward;
+    }
+    if (step_skip_[k]) {
+      supported.external_back += fe * back;
+      supported.external_forward += fe * forward;
+      continue;
+    }
+    if (linear)
+      stored2 += u_previous_[k] * r[k];
+    const bool is_driven = step_driven_[k] && !step_dirichlet_[k];
+    (is_driven ? driven : supported)
+        .add(mass[k], vo, vn, dt, sign * r[k], fe, step_dirichlet_[k] || is_driven, a);
+  }
+  scale_back(supported, dt_back / dt);
+  scale_back(driven, dt_back / dt);
+  energy_.time = time_;
+  energy_.external.add(supported.external_back + supported.prescribed_back + driven.external_back,
+                       supported.external_forward + supported.prescribed_forward +
+                           driven.external_forward);
+  energy_.interface.add(driven.prescribed_back, driven.prescribed_forward);
+  energy_.damping.add(supported.damping_back, supported.damping_forward);
+  energy_.internal.add(internal_back, internal_forward);
+  energy_.kinetic = supported.kinetic + driven.kinetic;
+  energy_.kinetic_central = supported.kinetic_central + driven.kinetic_central;
+  energy_.strain = linear ? 0.5 * stored2 : std::numeric_limits<double>::quiet_NaN();
+  energy_.valid = true;
 }
 
 template <int dim>
@@ -314,7 +389,8 @@ void MechanicsSolver<dim>::build_step_tables() {
   template bool MechanicsSolver<dim>::linear_explicit() const;                                     \
   template void MechanicsSolver<dim>::assemble_explicit_matrix();                                  \
   template void MechanicsSolver<dim>::cache_dirichlet_dofs();                                      \
-  template void MechanicsSolver<dim>::build_step_tables();
+  template void MechanicsSolver<dim>::build_step_tables();                                         \
+  template void MechanicsSolver<dim>::account_energy(double, double, bool);
 SPINESIM_INSTANTIATE(2)
 SPINESIM_INSTANTIATE(3)
 #undef SPINESIM_INSTANTIATE

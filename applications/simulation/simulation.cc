@@ -41,6 +41,13 @@ void SimulationParameters::declare(dealii::ParameterHandler& prm) {
   prm.declare_entry("Stop after step", "0", Integer(0),
                     "End the run after this step with a checkpoint, for staged runs that "
                     "continue with `spinesim run --restart`; 0 = run to the end [-].");
+  prm.declare_entry("Energy account", "false", Bool(),
+                    "Explicit mechanics (FEM alone or coupled): keep the energy account at "
+                    "every step, external work = strain + kinetic energy + fracture and "
+                    "damping dissipation, by the trapezoidal rule (docs/coupling.md). "
+                    "summary.json and history.csv then carry external_work_J, strain_energy_J, "
+                    "kinetic_energy_J, fracture_dissipation_J, damping_dissipation_J and "
+                    "energy_balance_error_relative [-].");
   CrackOutputParameters::declare(prm);
 }
 
@@ -54,6 +61,7 @@ void SimulationParameters::parse(const dealii::ParameterHandler& prm) {
   critical_load_estimate = prm.get_double("Critical load estimate");
   reference_temperature = prm.get_double("Reference temperature");
   stop_after_step = prm.get_integer("Stop after step");
+  energy_account = prm.get_bool("Energy account");
   crack.parse(prm);
   if (end_time <= 0)
     throw InvalidInput("Simulation/End time", "must be positive", "a time > 0 [s]");
@@ -91,6 +99,11 @@ Simulation<dim>::Simulation(const ScenarioFactoryArgs& args)
   }
   if (effects_.heat)
     parse_section(prm_, "Heat", heat_prm_);
+  if (sim_.energy_account && (!effects_.mechanics || quasi_static_))
+    throw InvalidInput("Simulation/Energy account",
+                       "true, but the account follows explicit central-difference steps",
+                       "false unless Effects/Mechanics is on with Mechanics/Time integration = "
+                       "explicit");
   // Contact is not among the effects this scenario registers (the driver rejects it).
   if (effects_.damage && !effects_.particles())
     throw InvalidInput("Effects/Damage",
@@ -176,6 +189,11 @@ void Simulation<dim>::build(RunContext& ctx) {
       });
     if (!ctx.restarting())
       mechanics_->setup();
+    mechanics_->set_energy_account(sim_.energy_account);
+    if (sim_.energy_account && ctx.restarting())
+      ctx.warn("Simulation/Energy account starts again at the restart: the works and "
+               "dissipations before it are not in the checkpoint, so the balance figures do "
+               "not hold for a restarted run");
   }
   if (effects_.coupling) {
     coupled_ = std::make_unique<FemParticleCoupling<dim>>(coupling_prm_, *mechanics_, heat_.get());
@@ -187,6 +205,7 @@ void Simulation<dim>::build(RunContext& ctx) {
                 << coupled_->horizon() << " m\n";
       log_coupling_messages(ctx);
     }
+    coupled_->set_energy_account(sim_.energy_account);
   }
   if (coupled_ && !ctx.restarting())
     warn_outside_body(ctx);

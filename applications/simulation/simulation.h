@@ -26,6 +26,7 @@ struct SimulationParameters {
   double critical_load_estimate = 0;     // [N, N/m in 2-D], 0 = none (griffith_ratio)
   double reference_temperature = 310.15; // [K] stress-free temperature
   unsigned int stop_after_step = 0;      // end early after this step (0 = never): staged runs
+  bool energy_account = false;           // external work, energies, dissipations per step
   CrackOutputParameters crack;           // crack_path.csv and crack-line figures
 
   static void declare(dealii::ParameterHandler& prm);

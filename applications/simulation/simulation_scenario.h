@@ -57,6 +57,8 @@ class Simulation : public framework::Scenario {
   void fem_quasi_static(unsigned int step, double time, double dt, framework::RunContext& ctx);
   void advance_particles(unsigned int step, double time, double dt, framework::RunContext& ctx);
   void record(unsigned int step, double time, framework::RunContext& ctx);
+  // The energy account at the last explicit step's force pass (collective).
+  fem::EnergyBalance energy_balance() const;
   void write_output(unsigned int step, double time, framework::RunContext& ctx);
   void write_checkpoint(unsigned int step, double time, framework::RunContext& ctx);
   // Returns the step to continue after.

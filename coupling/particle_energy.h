@@ -1,0 +1,60 @@
+#ifndef SPINESIM_COUPLING_PARTICLE_ENERGY_H
+#define SPINESIM_COUPLING_PARTICLE_ENERGY_H
+
+// The particle side of the energy account of explicit coupled steps (fem/explicit_energy.h
+// for the sums): the owned free particles' kinetic energy, the work of their external forces
+// and of the supports of their fixed components, mass damping, their stored energy at the
+// force pass, and the fracture dissipation measured at fixed displacement: in a force pass
+// where bonds break, the stored energy of the owned free particles just before the pass
+// minus just after it (the displacements do not change in between), ΔU_break ≥ 0 expected.
+// That measure is independent of the per-bond bookkeeping (ParticleMethod::bond_energy).
+// Cost: one stored-energy pass per step, two in steps where bonds break.
+
+#include "coupling/coupling_state.h"
+#include "fem/explicit_energy.h"
+
+#include <deal.II/base/tensor.h>
+
+#include <cstdint>
+#include <vector>
+
+namespace spinesim::coupling {
+
+template <int dim>
+class ParticleEnergy {
+ public:
+  explicit ParticleEnergy(CouplingState<dim>& state) : state_(state) {}
+
+  void set_on(bool on) { on_ = on; }
+  bool on() const { return on_; }
+
+  // Before the force pass at t_n: stored energy, broken flags and velocities v_{n−½}.
+  void before_forces();
+  // After the force pass (and breaks shared from other ranks): the energy released by the
+  // bonds that broke in it.
+  void after_forces();
+  // After the particle update and the fixed components' motion to t_{n+1}: the step's sums.
+  void after_update(double time, double dt, double damping);
+
+  // This rank's share at the last force pass [J] (2-D: J/m).
+  const fem::ExplicitEnergy& account() const { return account_; }
+  double fracture_dissipation() const { return fracture_; } // this rank, so far [J]
+  unsigned int breaking_passes() const { return breaking_passes_; }
+  double seconds() const { return seconds_; } // wall time of the stored-energy passes [s]
+
+ private:
+  double stored_energy() const; // Σ W_i V_i over the owned free particles [J]
+
+  CouplingState<dim>& state_;
+  bool on_ = false;
+  fem::ExplicitEnergy account_;
+  double stored_before_ = 0, stored_ = 0, fracture_ = 0;
+  mutable double seconds_ = 0;
+  unsigned int breaking_passes_ = 0;
+  std::vector<std::uint8_t> broken_before_;
+  std::vector<dealii::Tensor<1, dim>> velocity_before_;
+};
+
+} // namespace spinesim::coupling
+
+#endif
