@@ -48,6 +48,7 @@
 #include <deal.II/grid/cell_id.h>
 #include <deal.II/lac/vector.h>
 
+#include <complex>
 #include <string>
 #include <utility>
 #include <vector>
@@ -106,6 +107,16 @@ class FemParticleCoupling {
   // flagged. Ends with zero velocities. Not converged within Relaxation max iterations (all
   // relaxations of the step together): converged = false (the caller decides).
   RelaxationReport relax(double time, bool with_conversion);
+
+  // The eigenvalues μ of the one-step map of the explicit coupled scheme, (u^n, v^{n−½}) →
+  // (u^{n+1}, v^{n+½}) at step dt, linearised about the current state: one probed step per
+  // unknown (differences from an unperturbed step at the same time), then a dense eigenvalue
+  // solve (LAPACK). Stability of the scheme at dt is |μ| ≤ 1 for every μ; the FEM alone gives
+  // |μ| = 1 (central differences below the CFL step conserve a shadow energy). The probes commit
+  // the material history like any step, so linearise about an elastic state. One MPI rank, at
+  // most `max_unknowns` unknowns (FEM DoFs + particle components); the state and the clocks
+  // are restored.
+  std::vector<std::complex<double>> step_spectrum(double dt, unsigned int max_unknowns);
 
   // Sets every free DoF and free particle to the affine field u = H x (for the patch test).
   void impose_affine(const dealii::Tensor<2, dim>& H);

@@ -170,6 +170,8 @@ class MechanicsSolver {
   const MatrixType& evaluate_tangent();
 
   double time() const { return time_; }
+  // Sets the clock of explicit steps [s] (a probe that repeats one step from the same time).
+  void set_time(double time) { time_ = previous_time_ = target_time_ = time; }
   const VectorType& displacement() const { return u_ghost_; } // ghosted
   const VectorType& velocity() const { return v_ghost_; }     // ghosted, at t - dt/2
   // Force the supports exert on the body on boundary `id` (sum of f_int − f_ext over the
