@@ -99,11 +99,12 @@ Simulation<dim>::Simulation(const ScenarioFactoryArgs& args)
   }
   if (effects_.heat)
     parse_section(prm_, "Heat", heat_prm_);
-  if (sim_.energy_account && (!effects_.mechanics || quasi_static_))
+  if (sim_.energy_account && (effects_.mechanics ? quasi_static_ : !effects_.particles()))
     throw InvalidInput("Simulation/Energy account",
                        "true, but the account follows explicit central-difference steps",
                        "false unless Effects/Mechanics is on with Mechanics/Time integration = "
-                       "explicit");
+                       "explicit, or a particle zone alone (Effects/Particles method, "
+                       "Particles/Integration = explicit)");
   // Contact is not among the effects this scenario registers (the driver rejects it).
   if (effects_.damage && !effects_.particles())
     throw InvalidInput("Effects/Damage",
@@ -121,6 +122,15 @@ Simulation<dim>::Simulation(const ScenarioFactoryArgs& args)
   if (effects_.particles() && !effects_.coupling) // reads its sections and makes the method
     particles_ =
         std::make_unique<ParticleZone<dim>>(prm_, effects_.particles_method, effects_.damage);
+  if (particles_ && sim_.energy_account) {
+    if (effects_.mechanics)
+      throw InvalidInput("Simulation/Energy account",
+                         "true with both FEM mechanics and a stand-alone particle zone: the "
+                         "account covers one of them",
+                         "false, or one model (Effects/Mechanics = false for the particle zone, "
+                         "or Effects/Coupling = true to join them)");
+    particles_->set_energy_account(true);
+  }
   if (effects_.particles())
     crack_ = std::make_unique<CrackPath<dim>>(sim_.crack);
 }
