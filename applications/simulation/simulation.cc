@@ -42,10 +42,12 @@ void SimulationParameters::declare(dealii::ParameterHandler& prm) {
                     "End the run after this step with a checkpoint, for staged runs that "
                     "continue with `spinesim run --restart`; 0 = run to the end [-].");
   prm.declare_entry("Energy account", "false", Bool(),
-                    "Explicit mechanics (FEM alone or coupled): keep the energy account at "
-                    "every step, external work = strain + kinetic energy + fracture and "
-                    "damping dissipation, by the trapezoidal rule (docs/coupling.md). "
-                    "summary.json and history.csv then carry external_work_J, strain_energy_J, "
+                    "Explicit mechanics (FEM alone or coupled) or an explicit particle zone "
+                    "alone: keep the energy account at every step, external work + initial "
+                    "energy (kinetic energy of an initial velocity field plus stored energy at "
+                    "t = 0) = strain + kinetic energy + fracture and damping dissipation, by "
+                    "the trapezoidal rule (docs/coupling.md). summary.json and history.csv then "
+                    "carry external_work_J, initial_energy_J, strain_energy_J, "
                     "kinetic_energy_J, fracture_dissipation_J, damping_dissipation_J and "
                     "energy_balance_error_relative [-].");
   CrackOutputParameters::declare(prm);
