@@ -174,7 +174,7 @@ struct ParticleZone<dim>::Impl {
   bool account = false;
   ZoneEnergy<dim> energy;
   std::vector<dealii::Tensor<1, dim>> forces_before; // of the last force pass, before breaks
-  double max_speed = 0; // over the run [m/s]
+  double max_speed = 0;                              // over the run [m/s]
   std::size_t broke_since_step_check = 0; // bond ends broken since the stable step was taken
   unsigned int explicit_steps = 0, relaxation_iterations = 0;
   std::size_t broken_initially = 0;
@@ -248,7 +248,8 @@ struct ParticleZone<dim>::Impl {
     try {
       v.initialize(dim == 2 ? "x,y" : "x,y,z", expressions, {{"pi", M_PI}});
     } catch (...) {
-      throw InvalidInput("Particles/Initial velocity", "cannot parse '" + prm.initial_velocity + "'",
+      throw InvalidInput("Particles/Initial velocity",
+                         "cannot parse '" + prm.initial_velocity + "'",
                          "expressions in x, y, z [m/s]");
     }
     dealii::Vector<double> value(dim);
@@ -503,8 +504,7 @@ void ParticleZone<dim>::add_figures(RunContext& ctx) const {
   if (z.prm.integration == "explicit") {
     s.set_figure("particle_explicit_steps", z.explicit_steps, "-");
     s.set_figure("max_particle_speed", z.max_speed, "m/s");
-  }
-  else
+  } else
     s.set_figure("relaxation_iterations", z.relaxation_iterations, "iterations");
   if (z.prm.reaction_region > 0)
     s.set_figure("particle_reaction_norm", z.reaction().norm(), "N");
@@ -514,10 +514,11 @@ void ParticleZone<dim>::add_figures(RunContext& ctx) const {
 template <int dim>
 void ParticleZone<dim>::set_energy_account(bool on) {
   if (on && impl_->prm.integration != "explicit")
-    throw InvalidInput("Simulation/Energy account",
-                       "true, but the account follows explicit steps and Particles/Integration is " +
-                           impl_->prm.integration,
-                       "false, or Particles/Integration = explicit");
+    throw InvalidInput(
+        "Simulation/Energy account",
+        "true, but the account follows explicit steps and Particles/Integration is " +
+            impl_->prm.integration,
+        "false, or Particles/Integration = explicit");
   impl_->account = on;
 }
 

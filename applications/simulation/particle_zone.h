@@ -42,7 +42,7 @@ struct ParticleZoneParameters {
   // The lattice points of the box kept: all (box), those with inner <= r <= outer from the
   // centre, r in the x-y plane (annulus; 3-D: a tube along z) or in space (spherical_shell).
   std::string shape = "box";
-  std::vector<double> centre{0, 0, 0}; // [m]
+  std::vector<double> centre{0, 0, 0};       // [m]
   double inner_radius = 0, outer_radius = 0; // [m]
   std::string initial_velocity; // dim ';'-separated expressions in x, y, z; empty = at rest
   std::string integration = "explicit";

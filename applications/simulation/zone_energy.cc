@@ -39,8 +39,7 @@ void ZoneEnergy<dim>::force_pass(const meshfree::ParticleSet<dim>& p, double sto
   double lost_work = 0; // ½ (f_before − f_after) · (u_{n+1} − u_n); 0 at t = 0 (no step yet)
   if (forces_before && u_before_.size() == p.size())
     for (unsigned int i = 0; i < p.size(); ++i)
-      lost_work +=
-          0.5 * ((*forces_before)[i] - p.force(i)) * (p.displacement(i) - u_before_[i]);
+      lost_work += 0.5 * ((*forces_before)[i] - p.force(i)) * (p.displacement(i) - u_before_[i]);
   balance_.fracture_dissipation += stored_before - stored_after + lost_work;
   balance_.strain_energy = stored_after;
 }

@@ -65,5 +65,9 @@ void check_fragments() {
 
 } // namespace
 
-TEST(Fragments, CutLattice2d) { check_fragments<2>(); }
-TEST(Fragments, CutLattice3d) { check_fragments<3>(); }
+TEST(Fragments, CutLattice2d) {
+  check_fragments<2>();
+}
+TEST(Fragments, CutLattice3d) {
+  check_fragments<3>();
+}
