@@ -176,6 +176,7 @@ struct ParticleZone<dim>::Impl {
   std::vector<dealii::Tensor<1, dim>> forces_before; // of the last force pass, before breaks
   double max_speed = 0;                              // over the run [m/s]
   std::size_t broke_since_step_check = 0; // bond ends broken since the stable step was taken
+  bool account_restored = true;           // false: a restart from a checkpoint without the account
   unsigned int explicit_steps = 0, relaxation_iterations = 0;
   std::size_t broken_initially = 0;
 
@@ -523,6 +524,11 @@ void ParticleZone<dim>::set_energy_account(bool on) {
 }
 
 template <int dim>
+bool ParticleZone<dim>::energy_account_restored() const {
+  return impl_->account_restored;
+}
+
+template <int dim>
 fem::EnergyBalance ParticleZone<dim>::energy_balance() const {
   return impl_->energy.balance();
 }
@@ -553,6 +559,8 @@ void ParticleZone<dim>::save(const std::string& file) const {
     write(field->data(), field->size() * sizeof(dealii::Tensor<1, dim>));
   write(z.bonds.broken.data(), nb);
   z.method->save(out);
+  z.energy.save(out); // the account and the run's top speed, so a restart continues them
+  out.write(reinterpret_cast<const char*>(&z.max_speed), sizeof z.max_speed);
   if (!out)
     throw std::runtime_error("cannot write particle checkpoint " + file);
 }
@@ -581,6 +589,8 @@ void ParticleZone<dim>::load(const std::string& file) {
     throw InvalidInput(file, "particle checkpoint is truncated", "a complete checkpoint");
   z.method->initialise(z.particles, z.bonds); // families from the restored intact bonds
   z.method->load(in);
+  z.account_restored = z.energy.load(in);
+  in.read(reinterpret_cast<char*>(&z.max_speed), sizeof z.max_speed);
   z.verlet->initialise(z.particles);
 }
 

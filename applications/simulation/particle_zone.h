@@ -75,6 +75,8 @@ class ParticleZone {
   void add_figures(RunContext& ctx) const;
   // The energy account at the end of the last step (zone_energy.h); not valid before one.
   fem::EnergyBalance energy_balance() const;
+  // After load(): whether the checkpoint held the account (older ones do not).
+  bool energy_account_restored() const;
   // The zone's particles (damage as of the last add_history).
   const meshfree::ParticleSet<dim>& particles() const;
   // Writes particles_<cycle>.vtu (rank 0); returns the file name.

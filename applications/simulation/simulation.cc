@@ -142,11 +142,6 @@ void Simulation<dim>::build(RunContext& ctx) {
   dealii::TimerOutput::Scope scope(ctx.timer(), "setup");
   if (particles_) {
     particles_->setup(ctx);
-    if (sim_.energy_account && ctx.restarting())
-      ctx.warn("Simulation/Energy account starts again at the restart: the particle zone's "
-               "works, dissipations and initial energy before it are not in the checkpoint, "
-               "so the balance figures (and max_particle_speed) cover this segment only and "
-               "do not hold for the whole run");
     if (particles_->particles().size() == 1)
       ctx.warn("the particle zone holds a single particle: it has no bonds, so no internal "
                "force and an infinite stable step (Particles/Spacing against the box)");

@@ -1,5 +1,8 @@
 #include "applications/simulation/zone_energy.h"
 
+#include <istream>
+#include <ostream>
+
 namespace spinesim::applications {
 
 template <int dim>
@@ -63,6 +66,40 @@ void ZoneEnergy<dim>::after_step(const meshfree::ParticleSet<dim>& p, double tim
   balance_.kinetic_energy_central = kinetic - 0.125 * dt * dt * a2;
   balance_.damping_dissipation += damped;
   balance_.valid = true;
+}
+
+template <int dim>
+void ZoneEnergy<dim>::save(std::ostream& out) const {
+  const fem::EnergyBalance& b = balance_;
+  const double v[] = {b.time,
+                      b.external_work,
+                      b.strain_energy,
+                      b.kinetic_energy,
+                      b.kinetic_energy_central,
+                      b.fracture_dissipation,
+                      b.damping_dissipation,
+                      b.initial_energy,
+                      b.valid ? 1.0 : 0.0};
+  out.write(reinterpret_cast<const char*>(v), sizeof v);
+}
+
+template <int dim>
+bool ZoneEnergy<dim>::load(std::istream& in) {
+  double v[9];
+  in.read(reinterpret_cast<char*>(v), sizeof v);
+  if (!in)
+    return false;
+  fem::EnergyBalance& b = balance_;
+  b.time = v[0];
+  b.external_work = v[1];
+  b.strain_energy = v[2];
+  b.kinetic_energy = v[3];
+  b.kinetic_energy_central = v[4];
+  b.fracture_dissipation = v[5];
+  b.damping_dissipation = v[6];
+  b.initial_energy = v[7];
+  b.valid = v[8] != 0;
+  return true;
 }
 
 template class ZoneEnergy<2>;

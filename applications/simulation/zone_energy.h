@@ -24,6 +24,7 @@
 #include "fem/explicit_energy.h"
 #include "meshfree/particle_set.h"
 
+#include <iosfwd>
 #include <vector>
 
 namespace spinesim::applications {
@@ -44,6 +45,10 @@ class ZoneEnergy {
   void after_step(const meshfree::ParticleSet<dim>& p, double time, double dt, double damped);
 
   fem::EnergyBalance balance() const { return balance_; }
+  // The account for a checkpoint (binary, after the zone's own data); load() returns false
+  // when the stream ends first (a checkpoint written without it).
+  void save(std::ostream& out) const;
+  bool load(std::istream& in);
 
  private:
   fem::EnergyBalance balance_;

@@ -106,3 +106,19 @@ spinesim_add_scene_test(stability.sphere_fragmentation_bond_based_3d
 spinesim_add_scene_test(stability.ring_fragmentation_nosb_2d SCENE ${_ring}
   SET "Effects/Particles method=nosb"
   EXPECT "${_ring_2d}" LABELS "scene;particles;validation;stability;known_failure" TIMEOUT 120)
+# Stopped after step 20 of 50 and continued with --restart, the ring ends with the
+# uninterrupted run's figures, the energy account included (the zone's checkpoint carries the
+# account and the top speed; the loops are deterministic: measured identical).
+spinesim_add_scene_test(stability.ring_fragmentation_restart_first_half SCENE ${_ring}
+  OUT ${_ring_runs}/restart SET "Simulation/Stop after step=20"
+  EXPECT "status==ok;last_step~20:0" FIXTURE ring_half LABELS "scene;particles;stability")
+spinesim_add_scene_test(stability.ring_fragmentation_restart_second_half
+  ARGS "run;--restart;${_ring_runs}/restart;--set;Simulation/Stop after step=0;--progress;lines"
+  OUT ${_ring_runs}/restart EXPECT "status==ok;last_step~50:0;${_ring_2d}"
+  LABELS "scene;particles;stability")
+set_tests_properties(stability.ring_fragmentation_restart_second_half PROPERTIES
+                     FIXTURES_REQUIRED ring_half FIXTURES_SETUP ring_restarted)
+spinesim_add_comparison_test(stability.ring_fragmentation_restart_matches
+  A ${_ring_runs}/bond_based_2d_1/summary.json B ${_ring_runs}/restart/summary.json
+  CHECKS "energy_balance_error_relative:rel:1e-12;fracture_dissipation_J:rel:1e-12;kinetic_energy_J:rel:1e-12;max_particle_speed:rel:1e-12;broken_bonds:abs:0;fragments:abs:0"
+  REQUIRES "ring_2d_1;ring_restarted" LABELS "scene;particles;stability")
