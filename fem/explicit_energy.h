@@ -92,6 +92,9 @@ struct EnergyBalance {
   double kinetic_energy_central = 0; // K* = ½ Σ m v_{n−½} v_{n+½}
   double fracture_dissipation = 0;   // Σ ΔU_break (particles)
   double damping_dissipation = 0;    // mass-proportional damping
+  // E0 = K(0) + U(0), the energy the body starts with (an initial velocity field); the balance
+  // is W_ext + E0 = U + K + D. 0 for a body that starts at rest and undeformed.
+  double initial_energy = 0;
   // Coupled runs: what the particle zone took in through its ghosts, U_P + K*_P + D_P −
   // W_ext,P (its own balance's defect). With interface_work it is what the splice made:
   // interface_work + interface_work_particles = −defect_central().
@@ -101,16 +104,17 @@ struct EnergyBalance {
   double stored_and_dissipated() const {
     return strain_energy + kinetic_energy + fracture_dissipation + damping_dissipation;
   }
-  // |W_ext − (U + K + D)| / max(|W_ext|, |U + K + D|); 0 when both vanish.
+  double supplied() const { return external_work + initial_energy; } // W_ext + E0
+  // |W_ext + E0 − (U + K + D)| / max(|W_ext + E0|, |U + K + D|); 0 when both vanish.
   double error_relative() const {
-    const double in = external_work, out = stored_and_dissipated();
+    const double in = supplied(), out = stored_and_dissipated();
     const double scale = std::max(std::abs(in), std::abs(out));
     return scale > 0 ? std::abs(in - out) / scale : 0.0;
   }
-  // W_ext − (U + K* + D): zero to round-off for a linear, symmetric, undamped model; what
-  // remains is energy made or lost other than by the time integration.
+  // W_ext + E0 − (U + K* + D): zero to round-off for a linear, symmetric, undamped model;
+  // what remains is energy made or lost other than by the time integration.
   double defect_central() const {
-    return external_work -
+    return supplied() -
            (strain_energy + kinetic_energy_central + fracture_dissipation + damping_dissipation);
   }
 };

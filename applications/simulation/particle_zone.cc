@@ -2,10 +2,12 @@
 
 #include "applications/framework/parse_section.h"
 #include "applications/framework/run_context.h"
+#include "applications/simulation/zone_energy.h"
 #include "base/exceptions.h"
 #include "base/list_parsing.h"
 #include "fem/materials/law_parameters.h"
 #include "meshfree/adaptive_dynamic_relaxation.h"
+#include "meshfree/fragments.h"
 #include "meshfree/neighbor_search.h"
 #include "meshfree/particle_method.h"
 #include "meshfree/particle_output.h"
@@ -41,6 +43,22 @@ void ParticleZoneParameters::declare(dealii::ParameterHandler& prm) {
   prm.declare_entry("Upper corner", "0.5, 0.5, 0.5", Anything(),
                     "Upper corner of the particle lattice box (dim values) [m].");
   prm.declare_entry("Spacing", "0.05", Double(0), "Lattice spacing h [m].");
+  prm.declare_entry("Shape", "box", Selection("box|annulus|spherical_shell"),
+                    "Which lattice points of the box make the body [-]: box (all); annulus "
+                    "(Inner radius <= r <= Outer radius, r the distance from Centre in the x-y "
+                    "plane: a ring in 2-D, a tube along z in 3-D); spherical_shell (r the "
+                    "distance in space). The lattice stays uniform (spacing h), which keeps "
+                    "bond-based PD's calibration.");
+  prm.declare_entry("Centre", "0, 0, 0", Anything(),
+                    "Centre of the annulus or shell (dim values) [m].");
+  prm.declare_entry("Inner radius", "0", Double(0), "Inner radius of the annulus or shell [m].");
+  prm.declare_entry("Outer radius", "0", Double(0),
+                    "Outer radius of the annulus or shell; must exceed the inner radius [m].");
+  prm.declare_entry("Initial velocity", "", Anything(),
+                    "Velocity at t = 0 of the free components, dim ';'-separated expressions "
+                    "in x, y, z (reference position), e.g. the radial field v0 x/r; v0 y/r; "
+                    "empty = at rest [m/s]. Its kinetic energy enters the energy account as "
+                    "the initial energy (Simulation/Energy account).");
   prm.declare_entry("Integration", "explicit", Selection("explicit|quasi_static"),
                     "explicit: velocity Verlet sub-stepped at the stable step; quasi_static: "
                     "adaptive dynamic relaxation to equilibrium at every step [-].");
@@ -88,6 +106,18 @@ void ParticleZoneParameters::parse(dealii::ParameterHandler& prm) {
       throw InvalidInput("Particles/Upper corner",
                          "not above Particles/Lower corner in direction " + std::to_string(d),
                          "an upper corner above the lower one in every direction [m]");
+  shape = prm.get("Shape");
+  inner_radius = prm.get_double("Inner radius");
+  outer_radius = prm.get_double("Outer radius");
+  if (shape != "box") {
+    centre = doubles(prm.get("Centre"), "Particles/Centre", 2);
+    if (!(outer_radius > inner_radius))
+      throw InvalidInput("Particles/Outer radius",
+                         std::to_string(outer_radius) + " is not above the Inner radius " +
+                             std::to_string(inner_radius),
+                         "an outer radius above the inner radius for Shape = " + shape + " [m]");
+  }
+  initial_velocity = prm.get("Initial velocity");
   integration = prm.get("Integration");
   time_step_safety = prm.get_double("Time step safety");
   damping = prm.get_double("Damping");
@@ -141,10 +171,101 @@ struct ParticleZone<dim>::Impl {
   std::vector<PrescribedRegion> regions;
   std::vector<double> stiffness_bound;
   double time = 0, dt_stable = 0;
+  bool account = false;
+  ZoneEnergy<dim> energy;
+  std::vector<dealii::Tensor<1, dim>> forces_before; // of the last force pass, before breaks
+  double max_speed = 0;                              // over the run [m/s]
+  std::size_t broke_since_step_check = 0; // bond ends broken since the stable step was taken
+  bool account_restored = true;           // false: a restart from a checkpoint without the account
   unsigned int explicit_steps = 0, relaxation_iterations = 0;
   std::size_t broken_initially = 0;
 
-  void compute_forces(meshfree::ParticleSet<dim>& p) { method->compute_forces(p, bonds, damage); }
+  void compute_forces(meshfree::ParticleSet<dim>& p) {
+    if (!account) {
+      broke_since_step_check += method->compute_forces(p, bonds, damage);
+      return;
+    }
+    // The breaks of this pass release the stored energy they take away at these displacements
+    // and the forces they remove (zone_energy.h): a pass without breaking gives the forces
+    // before them (the price: two force passes a step with Damage on).
+    const double before = method->strain_energy(p, bonds);
+    if (damage) {
+      method->compute_forces(p, bonds, false);
+      forces_before = p.forces();
+    }
+    const std::size_t broke = method->compute_forces(p, bonds, damage);
+    broke_since_step_check += broke;
+    if (broke > 0)
+      energy.force_pass(p, before, method->strain_energy(p, bonds), &forces_before);
+    else
+      energy.force_pass(p, before, before, nullptr);
+  }
+
+  // The lattice points of the box inside the shape.
+  meshfree::ParticleSet<dim> body() const {
+    dealii::Point<dim> lo, hi, c;
+    for (unsigned int d = 0; d < dim; ++d) {
+      lo[d] = prm.lower[d];
+      hi[d] = prm.upper[d];
+    }
+    auto lattice = meshfree::ParticleSet<dim>::lattice(lo, hi, prm.spacing, method->thickness());
+    if (prm.shape == "box")
+      return lattice;
+    if (prm.centre.size() < dim)
+      throw InvalidInput("Particles/Centre", "needs one coordinate per dimension",
+                         std::to_string(dim) + " comma-separated values [m]");
+    for (unsigned int d = 0; d < dim; ++d)
+      c[d] = prm.centre[d];
+    const unsigned int radial_dims = prm.shape == "annulus" ? 2 : dim;
+    std::vector<dealii::Point<dim>> points;
+    std::vector<double> volumes;
+    for (unsigned int i = 0; i < lattice.size(); ++i) {
+      const auto& x = lattice.reference_position(i);
+      double r2 = 0;
+      for (unsigned int d = 0; d < radial_dims; ++d)
+        r2 += (x[d] - c[d]) * (x[d] - c[d]);
+      const double r = std::sqrt(r2);
+      if (r >= prm.inner_radius && r <= prm.outer_radius) {
+        points.push_back(x);
+        volumes.push_back(lattice.volume(i));
+      }
+    }
+    if (points.empty())
+      throw InvalidInput("Particles/Shape", prm.shape + " holds no lattice point of the box",
+                         "radii and a centre that put the shape inside the box");
+    return meshfree::ParticleSet<dim>::from_points(points, volumes, method->thickness());
+  }
+
+  void set_initial_velocity() {
+    if (prm.initial_velocity.empty())
+      return;
+    const auto expressions = dealii::Utilities::split_string_list(prm.initial_velocity, ';');
+    if (expressions.size() != dim)
+      throw InvalidInput("Particles/Initial velocity",
+                         "'" + prm.initial_velocity + "' has " +
+                             std::to_string(expressions.size()) + " expressions",
+                         std::to_string(dim) + " ';'-separated expressions in x, y, z [m/s]");
+    dealii::FunctionParser<dim> v(dim);
+    try {
+      v.initialize(dim == 2 ? "x,y" : "x,y,z", expressions, {{"pi", M_PI}});
+    } catch (...) {
+      throw InvalidInput("Particles/Initial velocity",
+                         "cannot parse '" + prm.initial_velocity + "'",
+                         "expressions in x, y, z [m/s]");
+    }
+    dealii::Vector<double> value(dim);
+    for (unsigned int i = 0; i < particles.size(); ++i) {
+      v.vector_value(particles.reference_position(i), value);
+      for (unsigned int d = 0; d < dim; ++d) {
+        if (!std::isfinite(value[d]))
+          throw InvalidInput("Particles/Initial velocity",
+                             "not finite at a particle (e.g. x/r at r = 0)",
+                             "expressions finite at every particle of the body [m/s]");
+        if (!particles.is_fixed(i, d))
+          particles.velocities()[i][d] = value[d];
+      }
+    }
+  }
 
   void prescribe(double t) {
     for (auto& r : regions) {
@@ -215,7 +336,7 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
     lo[d] = z.prm.lower[d];
     hi[d] = z.prm.upper[d];
   }
-  z.particles = meshfree::ParticleSet<dim>::lattice(lo, hi, z.prm.spacing, z.method->thickness());
+  z.particles = z.body();
   z.particles.set_density(z.law.density);
   auto options = z.method->neighbor_options(z.prm.spacing);
   for (std::size_t k = 0; k < z.prm.cracks.size(); ++k) {
@@ -281,6 +402,12 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
   z.verlet = std::make_unique<meshfree::VelocityVerlet<dim>>(
       [&z](meshfree::ParticleSet<dim>& p) { z.compute_forces(p); });
   z.prescribe(0.0);
+  z.set_initial_velocity();
+  if (z.prm.integration == "explicit") {
+    if (z.account)
+      z.energy.start(z.particles, z.method->strain_energy(z.particles, z.bonds));
+    z.verlet->initialise(z.particles); // forces and accelerations at t = 0
+  }
   ctx.log() << "  particles: " << z.particles.size() << " on a lattice of spacing " << z.prm.spacing
             << " m, " << z.bonds.n_bonds() / 2 << " bonds (" << z.broken_initially / 2
             << " cut by pre-cracks), stable step " << z.dt_stable << " s, method "
@@ -310,16 +437,33 @@ void ParticleZone<dim>::advance_to(double time) {
   }
   while (z.time < time * (1 - 1e-12)) {
     const double dt = std::min(z.dt_stable, time - z.time);
+    if (z.account)
+      z.energy.before_step(z.particles);
     z.prescribe(z.time + dt);
     z.verlet->step(z.particles, dt);
     z.method->commit_state();
+    double damped = 0; // the kinetic energy the decay takes out [J]
     if (z.prm.damping > 0) {
       const double factor = std::exp(-z.prm.damping * dt);
-      for (auto& v : z.particles.velocities())
-        v *= factor;
+      for (unsigned int i = 0; i < z.particles.size(); ++i) {
+        damped += 0.5 * z.particles.mass(i) * (1 - factor * factor) *
+                  z.particles.velocity(i).norm_square();
+        z.particles.velocity(i) *= factor;
+      }
+    }
+    for (const auto& v : z.particles.velocities())
+      z.max_speed = std::max(z.max_speed, v.norm());
+    // A broken bond can stiffen a NOSB-PD family (its shape tensor shrinks), so the stable
+    // step may only get smaller after breaks (bond-based PD: its bound never falls).
+    if (z.broke_since_step_check > 0) {
+      z.dt_stable = std::min(
+          z.dt_stable, z.method->stable_time_step(z.particles, z.bonds, z.prm.time_step_safety));
+      z.broke_since_step_check = 0;
     }
     z.time += dt;
     ++z.explicit_steps;
+    if (z.account)
+      z.energy.after_step(z.particles, z.time, dt, damped);
   }
 }
 
@@ -334,6 +478,7 @@ void ParticleZone<dim>::add_history(std::vector<std::pair<std::string, double>>&
   row.emplace_back("particle_strain_energy", z.method->strain_energy(z.particles, z.bonds));
   row.emplace_back("broken_bonds", double(z.bonds.n_broken() - z.broken_initially) / 2);
   row.emplace_back("max_damage", max_damage);
+  row.emplace_back("fragments", meshfree::count_fragments(z.bonds).fragments);
   if (z.prm.reaction_region > 0) {
     const auto r = z.reaction();
     const char* names[] = {"particle_reaction_x", "particle_reaction_y", "particle_reaction_z"};
@@ -353,13 +498,39 @@ void ParticleZone<dim>::add_figures(RunContext& ctx) const {
   s.set_figure("particle_strain_energy", z.method->strain_energy(z.particles, z.bonds), "J");
   s.set_figure("particle_kinetic_energy", z.particles.kinetic_energy(), "J");
   s.set_figure("particle_stable_time_step", z.dt_stable, "s");
-  if (z.prm.integration == "explicit")
+  const auto pieces = meshfree::count_fragments(z.bonds);
+  s.set_figure("fragments", pieces.fragments, "-");
+  s.set_figure("isolated_particles", pieces.isolated, "-");
+  s.set_figure("largest_fragment_particles", pieces.largest, "-");
+  if (z.prm.integration == "explicit") {
     s.set_figure("particle_explicit_steps", z.explicit_steps, "-");
-  else
+    s.set_figure("max_particle_speed", z.max_speed, "m/s");
+  } else
     s.set_figure("relaxation_iterations", z.relaxation_iterations, "iterations");
   if (z.prm.reaction_region > 0)
     s.set_figure("particle_reaction_norm", z.reaction().norm(), "N");
   (void)per;
+}
+
+template <int dim>
+void ParticleZone<dim>::set_energy_account(bool on) {
+  if (on && impl_->prm.integration != "explicit")
+    throw InvalidInput(
+        "Simulation/Energy account",
+        "true, but the account follows explicit steps and Particles/Integration is " +
+            impl_->prm.integration,
+        "false, or Particles/Integration = explicit");
+  impl_->account = on;
+}
+
+template <int dim>
+bool ParticleZone<dim>::energy_account_restored() const {
+  return impl_->account_restored;
+}
+
+template <int dim>
+fem::EnergyBalance ParticleZone<dim>::energy_balance() const {
+  return impl_->energy.balance();
 }
 
 template <int dim>
@@ -388,6 +559,8 @@ void ParticleZone<dim>::save(const std::string& file) const {
     write(field->data(), field->size() * sizeof(dealii::Tensor<1, dim>));
   write(z.bonds.broken.data(), nb);
   z.method->save(out);
+  z.energy.save(out); // the account and the run's top speed, so a restart continues them
+  out.write(reinterpret_cast<const char*>(&z.max_speed), sizeof z.max_speed);
   if (!out)
     throw std::runtime_error("cannot write particle checkpoint " + file);
 }
@@ -416,6 +589,8 @@ void ParticleZone<dim>::load(const std::string& file) {
     throw InvalidInput(file, "particle checkpoint is truncated", "a complete checkpoint");
   z.method->initialise(z.particles, z.bonds); // families from the restored intact bonds
   z.method->load(in);
+  z.account_restored = z.energy.load(in);
+  in.read(reinterpret_cast<char*>(&z.max_speed), sizeof z.max_speed);
   z.verlet->initialise(z.particles);
 }
 

@@ -9,6 +9,7 @@
 // MPI: the particle zone is not distributed yet: every rank holds and advances the whole
 // zone identically (the loops are deterministic), and rank 0 writes its output.
 
+#include "fem/explicit_energy.h"
 #include "meshfree/particle_set.h"
 
 #include <deal.II/base/parameter_handler.h>
@@ -38,6 +39,12 @@ struct ParticleZoneParameters {
 
   std::vector<double> lower{-0.5, -0.5, -0.5}, upper{0.5, 0.5, 0.5};
   double spacing = 0.05; // [m]
+  // The lattice points of the box kept: all (box), those with inner <= r <= outer from the
+  // centre, r in the x-y plane (annulus; 3-D: a tube along z) or in space (spherical_shell).
+  std::string shape = "box";
+  std::vector<double> centre{0, 0, 0};       // [m]
+  double inner_radius = 0, outer_radius = 0; // [m]
+  std::string initial_velocity; // dim ';'-separated expressions in x, y, z; empty = at rest
   std::string integration = "explicit";
   double time_step_safety = 0.8;
   double damping = 0;              // [1/s]
@@ -57,6 +64,8 @@ class ParticleZone {
   ParticleZone(dealii::ParameterHandler& prm, const std::string& method, bool damage);
   ~ParticleZone();
 
+  // Explicit integration only (InvalidInput otherwise); before setup().
+  void set_energy_account(bool on);
   void setup(RunContext& ctx);
   // Advances from the zone's time to `time` [s].
   void advance_to(double time);
@@ -64,6 +73,10 @@ class ParticleZone {
   // Updates the particles' damage, then adds the zone's columns.
   void add_history(std::vector<std::pair<std::string, double>>& row);
   void add_figures(RunContext& ctx) const;
+  // The energy account at the end of the last step (zone_energy.h); not valid before one.
+  fem::EnergyBalance energy_balance() const;
+  // After load(): whether the checkpoint held the account (older ones do not).
+  bool energy_account_restored() const;
   // The zone's particles (damage as of the last add_history).
   const meshfree::ParticleSet<dim>& particles() const;
   // Writes particles_<cycle>.vtu (rank 0); returns the file name.

@@ -42,10 +42,12 @@ void SimulationParameters::declare(dealii::ParameterHandler& prm) {
                     "End the run after this step with a checkpoint, for staged runs that "
                     "continue with `spinesim run --restart`; 0 = run to the end [-].");
   prm.declare_entry("Energy account", "false", Bool(),
-                    "Explicit mechanics (FEM alone or coupled): keep the energy account at "
-                    "every step, external work = strain + kinetic energy + fracture and "
-                    "damping dissipation, by the trapezoidal rule (docs/coupling.md). "
-                    "summary.json and history.csv then carry external_work_J, strain_energy_J, "
+                    "Explicit mechanics (FEM alone or coupled) or an explicit particle zone "
+                    "alone: keep the energy account at every step, external work + initial "
+                    "energy (kinetic energy of an initial velocity field plus stored energy at "
+                    "t = 0) = strain + kinetic energy + fracture and damping dissipation, by "
+                    "the trapezoidal rule (docs/coupling.md). summary.json and history.csv then "
+                    "carry external_work_J, initial_energy_J, strain_energy_J, "
                     "kinetic_energy_J, fracture_dissipation_J, damping_dissipation_J and "
                     "energy_balance_error_relative [-].");
   CrackOutputParameters::declare(prm);
@@ -99,11 +101,12 @@ Simulation<dim>::Simulation(const ScenarioFactoryArgs& args)
   }
   if (effects_.heat)
     parse_section(prm_, "Heat", heat_prm_);
-  if (sim_.energy_account && (!effects_.mechanics || quasi_static_))
+  if (sim_.energy_account && (effects_.mechanics ? quasi_static_ : !effects_.particles()))
     throw InvalidInput("Simulation/Energy account",
                        "true, but the account follows explicit central-difference steps",
                        "false unless Effects/Mechanics is on with Mechanics/Time integration = "
-                       "explicit");
+                       "explicit, or a particle zone alone (Effects/Particles method, "
+                       "Particles/Integration = explicit)");
   // Contact is not among the effects this scenario registers (the driver rejects it).
   if (effects_.damage && !effects_.particles())
     throw InvalidInput("Effects/Damage",
@@ -121,6 +124,15 @@ Simulation<dim>::Simulation(const ScenarioFactoryArgs& args)
   if (effects_.particles() && !effects_.coupling) // reads its sections and makes the method
     particles_ =
         std::make_unique<ParticleZone<dim>>(prm_, effects_.particles_method, effects_.damage);
+  if (particles_ && sim_.energy_account) {
+    if (effects_.mechanics)
+      throw InvalidInput("Simulation/Energy account",
+                         "true with both FEM mechanics and a stand-alone particle zone: the "
+                         "account covers one of them",
+                         "false, or one model (Effects/Mechanics = false for the particle zone, "
+                         "or Effects/Coupling = true to join them)");
+    particles_->set_energy_account(true);
+  }
   if (effects_.particles())
     crack_ = std::make_unique<CrackPath<dim>>(sim_.crack);
 }

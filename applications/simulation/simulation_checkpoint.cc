@@ -117,8 +117,12 @@ unsigned int Simulation<dim>::load_checkpoint(RunContext& ctx) {
   try {
     if (triangulation_)
       triangulation_->load(mesh_file);
-    if (particles_)
+    if (particles_) {
       particles_->load((dir / "particles.bin").string());
+      if (sim_.energy_account && !particles_->energy_account_restored())
+        ctx.warn("Simulation/Energy account: the checkpoint was written without the particle "
+                 "zone's account, so the balance figures after this restart do not hold");
+    }
     if (heat_) {
       heat_->deserialize();
       heat_->set_time(state["time"].get<double>(), state.value("heat_supplied_energy", 0.0));

@@ -43,6 +43,8 @@ template <int dim>
 fem::EnergyBalance Simulation<dim>::energy_balance() const {
   if (coupled_)
     return coupled_->energy_balance();
+  if (particles_ && !mechanics_) // not distributed: every rank holds the whole account
+    return particles_->energy_balance();
   return fem::sum_energy({&mechanics_->energy_account()}, 0.0, mechanics_->mpi_communicator());
 }
 
@@ -93,6 +95,8 @@ void Simulation<dim>::record(unsigned int step, double time, RunContext& ctx) {
     const auto value = [](double x) { return x; };
     row.emplace_back("energy_time", value(b.time));
     row.emplace_back("external_work_J", value(b.external_work));
+    if (particles_)
+      row.emplace_back("initial_energy_J", value(b.initial_energy));
     row.emplace_back("strain_energy_J", value(b.strain_energy));
     row.emplace_back("kinetic_energy_J", value(b.kinetic_energy));
     row.emplace_back("fracture_dissipation_J", value(b.fracture_dissipation));
@@ -205,33 +209,36 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
                               : mechanics_->reaction_force(sim_.reaction_boundary_id);
       s.set_figure("reaction_force_norm", r.norm(), dim == 2 ? "N/m" : "N");
     }
-    if (sim_.energy_account) {
-      // The account at the last force pass (one explicit step before the end); 2-D plane
-      // models per unit thickness. Not valid (no step yet): NaN, which fails every check.
-      const auto b = energy_balance();
-      const char* unit = dim == 2 ? "J/m" : "J";
-      const double nan = std::numeric_limits<double>::quiet_NaN();
-      const auto value = [&](double x) { return b.valid ? x : nan; };
-      s.set_figure("energy_time_s", value(b.time), "s");
-      s.set_figure("external_work_J", value(b.external_work), unit);
-      s.set_figure("strain_energy_J", value(b.strain_energy), unit);
-      s.set_figure("kinetic_energy_J", value(b.kinetic_energy), unit);
-      s.set_figure("fracture_dissipation_J", value(b.fracture_dissipation), unit);
-      s.set_figure("damping_dissipation_J", value(b.damping_dissipation), unit);
-      s.set_figure("energy_balance_error_relative", value(b.error_relative()), "-");
-      s.set_figure("energy_defect_central_J", value(b.defect_central()), unit);
-      s.set_figure("energy_defect_central_relative",
-                   value(std::abs(b.defect_central()) /
-                         std::max(std::abs(b.external_work), b.stored_and_dissipated())),
-                   "-");
-      if (coupled_) {
-        s.set_figure("interface_work_fem_J", value(b.interface_work), unit);
-        s.set_figure("interface_work_particles_J", value(b.interface_work_particles), unit);
-        s.set_figure("energy_account_time_s", coupled_->energy_account_seconds(), "s");
-      }
-    }
     s.set_figure("newton_iterations", newton_iterations_, "iterations");
     s.set_figure("linear_iterations", linear_iterations_, "iterations");
+  }
+  if (sim_.energy_account) {
+    // FEM and coupled runs: the account at the last force pass (one explicit step before the
+    // end); a particle zone: at the end of its last step. 2-D plane models per unit thickness
+    // (a particle zone: per its Thickness). Not valid (no step yet): NaN, which fails every
+    // check.
+    const auto b = energy_balance();
+    const char* unit = dim == 2 ? "J/m" : "J";
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    const auto value = [&](double x) { return b.valid ? x : nan; };
+    s.set_figure("energy_time_s", value(b.time), "s");
+    s.set_figure("external_work_J", value(b.external_work), unit);
+    s.set_figure("initial_energy_J", value(b.initial_energy), unit);
+    s.set_figure("strain_energy_J", value(b.strain_energy), unit);
+    s.set_figure("kinetic_energy_J", value(b.kinetic_energy), unit);
+    s.set_figure("fracture_dissipation_J", value(b.fracture_dissipation), unit);
+    s.set_figure("damping_dissipation_J", value(b.damping_dissipation), unit);
+    s.set_figure("energy_balance_error_relative", value(b.error_relative()), "-");
+    s.set_figure("energy_defect_central_J", value(b.defect_central()), unit);
+    s.set_figure("energy_defect_central_relative",
+                 value(std::abs(b.defect_central()) /
+                       std::max(std::abs(b.supplied()), b.stored_and_dissipated())),
+                 "-");
+    if (coupled_) {
+      s.set_figure("interface_work_fem_J", value(b.interface_work), unit);
+      s.set_figure("interface_work_particles_J", value(b.interface_work_particles), unit);
+      s.set_figure("energy_account_time_s", coupled_->energy_account_seconds(), "s");
+    }
   }
   if (heat_) {
     s.set_figure("heat_dofs", heat_->dof_handler().n_dofs(), "-");

@@ -176,3 +176,16 @@ spinesim_add_hostile_test(coupling_non_cubic_cells
        --set "Material/Poisson ratio=0.25" --set "Mechanics/Plane stress=false"
        --set "Coupling/Bond based/Plane model=plane_strain"
   MATCH "Geometry/Subdivisions.*not cubes \\(0.125 x 0.125 x 0.25 m, aspect ratio 2.0+\\).*Subdivisions in proportion to Lengths")
+# Particle bodies cut from the lattice and their initial velocity: a ring with its radii
+# swapped, a velocity field with one expression in 2-D, and an energy account asked of a
+# quasi-static particle zone are bad input naming the parameter.
+set(_ring_scene ${PROJECT_SOURCE_DIR}/applications/validation/ring_fragmentation.prm)
+spinesim_add_hostile_test(particle_annulus_radii_swapped
+  ARGS check ${_ring_scene} --set "Particles/Outer radius=0.04"
+  MATCH "Particles/Outer radius.*not above the Inner radius")
+spinesim_add_hostile_test(particle_initial_velocity_one_expression
+  ARGS check ${_ring_scene} --set "Particles/Initial velocity=1"
+  MATCH "Particles/Initial velocity.*has 1 expressions")
+spinesim_add_hostile_test(particle_energy_account_quasi_static
+  ARGS check ${_ring_scene} --set "Particles/Integration=quasi_static"
+  MATCH "Simulation/Energy account.*Particles/Integration is quasi_static")
