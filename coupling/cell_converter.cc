@@ -320,11 +320,22 @@ ConversionReport<dim> CellConverter<dim>::convert(const std::vector<CellId>& cel
   if (todo.empty())
     return report;
   const MPI_Comm comm = state_.fem.mpi_communicator();
+  // The energy account books what the conversion adds (FemParticleCoupling::energy_balance).
+  const bool account = state_.fem.energy_account_on();
+  double particles_before = 0, fem_before = 0;
+  const auto fem_energy = [&] {
+    const double stored = state_.fem.linear_stored_energy();
+    return (std::isnan(stored) ? 0.0 : stored) + state_.fem.kinetic_energy();
+  };
   {
     ScopedTime time(state_.timings.totals);
     report.mass_before = total_mass(state_);
     report.momentum_before = total_momentum(state_);
     report.kinetic_before = kinetic_energy(state_);
+    if (account) {
+      particles_before = particle_strain_energy(state_) + particle_kinetic_energy(state_);
+      fem_before = fem_energy();
+    }
   }
   std::optional<ScopedTime> records_time(state_.timings.records);
   report.carries_state = state_.carries_state();
@@ -405,8 +416,29 @@ ConversionReport<dim> CellConverter<dim>::convert(const std::vector<CellId>& cel
   report.mass_after = total_mass(state_);
   report.momentum_after = total_momentum(state_);
   report.kinetic_after = kinetic_energy(state_);
+  if (account) {
+    report.energy_change_particles =
+        particle_strain_energy(state_) + particle_kinetic_energy(state_) - particles_before;
+    report.energy_change_fem = fem_energy() - fem_before;
+  }
   reports_.push_back(report);
   return report;
+}
+
+template <int dim>
+double CellConverter<dim>::energy_change_particles() const {
+  double sum = 0;
+  for (const auto& r : reports_)
+    sum += r.energy_change_particles;
+  return sum;
+}
+
+template <int dim>
+double CellConverter<dim>::energy_change_fem() const {
+  double sum = 0;
+  for (const auto& r : reports_)
+    sum += r.energy_change_fem;
+  return sum;
 }
 
 template <int dim>

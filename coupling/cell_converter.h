@@ -40,6 +40,11 @@ struct ConversionReport {
   // Quasi-static: ‖reactions‖ at the equilibrium before the conversion and at the next one,
   // under the same load [N] (CoupledIntegrator::relax); 0 when not measured.
   double reaction_before = 0, reaction_after = 0;
+  // With the energy account on (explicit runs): the U + K this conversion added to the
+  // particles and to the FEM (negative: lost), at the state it happened in [J] (2-D: J/m).
+  // The FEM's U is ½ uᵀ K u on the linear path; on the internal-work path a conversion does not
+  // change what the account holds for the FEM, so only its kinetic energy counts.
+  double energy_change_particles = 0, energy_change_fem = 0;
   double plastic_strain_change_relative() const; // over ∫ ε̄_p dV (absolute if that is 0)
   double reaction_jump_relative() const;
   double mass_change_relative() const;
@@ -73,6 +78,9 @@ class CellConverter {
   // From a checkpoint: these cells are converted, and out of the FEM.
   void restore(std::map<std::string, unsigned int> converted);
   const std::vector<ConversionReport<dim>>& reports() const { return reports_; }
+  // Sums of energy_change_particles and energy_change_fem over the conversions so far [J].
+  double energy_change_particles() const;
+  double energy_change_fem() const;
   // The latest report, for measures taken after the conversion (CoupledIntegrator::relax).
   ConversionReport<dim>& last_report() { return reports_.back(); }
 

@@ -36,16 +36,21 @@ Tensor<1, dim> total_momentum(const CouplingState<dim>& s) {
 }
 
 template <int dim>
-double kinetic_energy(const CouplingState<dim>& s) {
+double particle_kinetic_energy(const CouplingState<dim>& s) {
   double e = 0;
   for (unsigned int i = 0; i < s.particles.size(); ++i)
     if (s.free[i] && s.is_owned(i))
       e += 0.5 * s.particles.mass(i) * s.particles.velocity(i).norm_square();
-  return Utilities::MPI::sum(e, s.fem.mpi_communicator()) + s.fem.kinetic_energy();
+  return Utilities::MPI::sum(e, s.fem.mpi_communicator());
 }
 
 template <int dim>
-double strain_energy(const CouplingState<dim>& s) {
+double kinetic_energy(const CouplingState<dim>& s) {
+  return particle_kinetic_energy(s) + s.fem.kinetic_energy();
+}
+
+template <int dim>
+double particle_strain_energy(const CouplingState<dim>& s) {
   // The stored energy of the owned free particles (rows of ghosts are not the particles').
   const auto w =
       s.method ? s.method->strain_energy_density(s.particles, s.bonds) : std::vector<double>();
@@ -53,7 +58,12 @@ double strain_energy(const CouplingState<dim>& s) {
   for (unsigned int i = 0; i < w.size(); ++i)
     if (s.free[i] && s.is_owned(i))
       e += w[i] * s.particles.volume(i);
-  return Utilities::MPI::sum(e, s.fem.mpi_communicator()) + s.fem.strain_energy();
+  return Utilities::MPI::sum(e, s.fem.mpi_communicator());
+}
+
+template <int dim>
+double strain_energy(const CouplingState<dim>& s) {
+  return particle_strain_energy(s) + s.fem.strain_energy();
 }
 
 template <int dim>
@@ -89,6 +99,10 @@ template double kinetic_energy(const CouplingState<2>&);
 template double kinetic_energy(const CouplingState<3>&);
 template double strain_energy(const CouplingState<2>&);
 template double strain_energy(const CouplingState<3>&);
+template double particle_kinetic_energy(const CouplingState<2>&);
+template double particle_kinetic_energy(const CouplingState<3>&);
+template double particle_strain_energy(const CouplingState<2>&);
+template double particle_strain_energy(const CouplingState<3>&);
 template std::size_t n_broken_bonds(const CouplingState<2>&);
 template std::size_t n_broken_bonds(const CouplingState<3>&);
 template double max_damage(const CouplingState<2>&);

@@ -20,6 +20,11 @@ template <int dim>
 double kinetic_energy(const CouplingState<dim>& state); // [J]
 template <int dim>
 double strain_energy(const CouplingState<dim>& state); // FEM + PD (bonds of free particles) [J]
+// The free particles' shares (owners count) [J].
+template <int dim>
+double particle_kinetic_energy(const CouplingState<dim>& state);
+template <int dim>
+double particle_strain_energy(const CouplingState<dim>& state);
 template <int dim>
 std::size_t n_broken_bonds(const CouplingState<dim>& state);
 // Updates the damage of the owned rows on the way (the particle set is a cache of it).

@@ -135,8 +135,12 @@ fem::EnergyBalance FemParticleCoupling<dim>::energy_balance() const {
   auto b = fem::sum_energy({&state_.fem.energy_account(), &particles.account()},
                            particles.fracture_dissipation(), comm);
   const auto p = fem::sum_energy({&particles.account()}, particles.fracture_dissipation(), comm);
+  // Conversions move energy into the particles (and out of the FEM) without the interface:
+  // booked apart, so the interface works stay what the splice did.
+  b.conversion_energy = converter_.energy_change_particles() + converter_.energy_change_fem();
   b.interface_work_particles = p.strain_energy + p.kinetic_energy_central + p.fracture_dissipation +
-                               p.damping_dissipation - p.external_work;
+                               p.damping_dissipation - p.external_work -
+                               converter_.energy_change_particles();
   return b;
 }
 

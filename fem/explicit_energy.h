@@ -93,8 +93,14 @@ struct EnergyBalance {
   double fracture_dissipation = 0;   // Σ ΔU_break (particles)
   double damping_dissipation = 0;    // mass-proportional damping
   // E0 = K(0) + U(0), the energy the body starts with (an initial velocity field); the balance
-  // is W_ext + E0 = U + K + D. 0 for a body that starts at rest and undeformed.
+  // is W_ext + E0 + E_conv = U + K + D. 0 for a body that starts at rest and undeformed.
   double initial_energy = 0;
+  // Coupled runs with conversion: the U + K the conversions added at the states they happened
+  // in (the particles' gain less the FEM's loss; coupling/cell_converter.h). A converted cell's
+  // energy leaves the FEM's stored energy (½ uᵀ K u on the linear path; on the internal-work
+  // path it stays in the FEM's work) and reappears as the particles' stored energy of the
+  // inherited field, which the particle model computes differently.
+  double conversion_energy = 0;
   // Coupled runs: what the particle zone took in through its ghosts, U_P + K*_P + D_P −
   // W_ext,P (its own balance's defect). With interface_work it is what the splice made:
   // interface_work + interface_work_particles = −defect_central().
@@ -104,7 +110,8 @@ struct EnergyBalance {
   double stored_and_dissipated() const {
     return strain_energy + kinetic_energy + fracture_dissipation + damping_dissipation;
   }
-  double supplied() const { return external_work + initial_energy; } // W_ext + E0
+  // W_ext + E0 + E_conv
+  double supplied() const { return external_work + initial_energy + conversion_energy; }
   // |W_ext + E0 − (U + K + D)| / max(|W_ext + E0|, |U + K + D|); 0 when both vanish.
   double error_relative() const {
     const double in = supplied(), out = stored_and_dissipated();

@@ -132,6 +132,10 @@ class MechanicsSolver {
   void set_energy_account(bool on) { energy_account_on_ = on; }
   bool energy_account_on() const { return energy_account_on_; }
   const ExplicitEnergy& energy_account() const { return energy_; }
+  // ½ uᵀ K u of the active cells at the current displacement on the linear explicit path (the
+  // stored energy the account reports there) [J]; NaN on other paths, whose account holds the
+  // internal work instead. Collective.
+  double linear_stored_energy();
 
   // Dynamic relaxation towards the quasi-static state at `time` (coupled quasi-static runs):
   // one central-difference step of pseudo-time dt with mass damping `damping` [1/s], loads and

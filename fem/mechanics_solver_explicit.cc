@@ -237,6 +237,21 @@ void MechanicsSolver<dim>::central_difference(double dt, double a, double bc_tim
         "reduce the time step (CFL safety factor) or check the materials");
 }
 
+template <int dim>
+double MechanicsSolver<dim>::linear_stored_energy() {
+  if (!is_setup_ || n_active_cells() == 0 || !linear_explicit())
+    return n_active_cells() == 0 && is_setup_ ? 0.0 : std::numeric_limits<double>::quiet_NaN();
+  if (!explicit_matrix_ready_)
+    assemble_explicit_matrix();
+  VectorType Ku(u_);
+  explicit_matrix_.vmult(Ku, u_);
+  double stored2 = 0;
+  for (const auto dof : owned_)
+    if (!hanging_.is_constrained(dof)) // their rows live on the masters
+      stored2 += u_(dof) * Ku(dof);
+  return 0.5 * Utilities::MPI::sum(stored2, comm_);
+}
+
 namespace {
 // The back halves of a step's sums were formed with dt; the previous step had dt_back.
 inline void scale_back(ExplicitEnergy::Step& step, double ratio) {
@@ -390,7 +405,8 @@ void MechanicsSolver<dim>::build_step_tables() {
   template void MechanicsSolver<dim>::assemble_explicit_matrix();                                  \
   template void MechanicsSolver<dim>::cache_dirichlet_dofs();                                      \
   template void MechanicsSolver<dim>::build_step_tables();                                         \
-  template void MechanicsSolver<dim>::account_energy(double, double, bool);
+  template void MechanicsSolver<dim>::account_energy(double, double, bool);                        \
+  template double MechanicsSolver<dim>::linear_stored_energy();
 SPINESIM_INSTANTIATE(2)
 SPINESIM_INSTANTIATE(3)
 #undef SPINESIM_INSTANTIATE

@@ -45,9 +45,10 @@ void SimulationParameters::declare(dealii::ParameterHandler& prm) {
                     "Explicit mechanics (FEM alone or coupled) or an explicit particle zone "
                     "alone: keep the energy account at every step, external work + initial "
                     "energy (kinetic energy of an initial velocity field plus stored energy at "
-                    "t = 0) = strain + kinetic energy + fracture and damping dissipation, by "
-                    "the trapezoidal rule (docs/coupling.md). summary.json and history.csv then "
-                    "carry external_work_J, initial_energy_J, strain_energy_J, "
+                    "t = 0) + the energy conversions add = strain + kinetic energy + fracture "
+                    "and damping dissipation, by the trapezoidal rule (docs/coupling.md). "
+                    "summary.json and history.csv then carry external_work_J, "
+                    "initial_energy_J, conversion_energy_J (coupled runs), strain_energy_J, "
                     "kinetic_energy_J, fracture_dissipation_J, damping_dissipation_J and "
                     "energy_balance_error_relative [-].");
   CrackOutputParameters::declare(prm);

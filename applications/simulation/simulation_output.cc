@@ -106,6 +106,7 @@ void Simulation<dim>::record(unsigned int step, double time, RunContext& ctx) {
     if (coupled_) {
       row.emplace_back("interface_work_fem_J", value(b.interface_work));
       row.emplace_back("interface_work_particles_J", value(b.interface_work_particles));
+      row.emplace_back("conversion_energy_J", value(b.conversion_energy));
     }
   }
   if (crack_ && (coupled_ || particles_)) { // damage is current: max_damage / add_history
@@ -237,6 +238,7 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
     if (coupled_) {
       s.set_figure("interface_work_fem_J", value(b.interface_work), unit);
       s.set_figure("interface_work_particles_J", value(b.interface_work_particles), unit);
+      s.set_figure("conversion_energy_J", value(b.conversion_energy), unit);
       s.set_figure("energy_account_time_s", coupled_->energy_account_seconds(), "s");
     }
   }

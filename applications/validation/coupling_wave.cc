@@ -303,7 +303,7 @@ class CouplingWave : public Scenario {
 
 SPINESIM_REGISTER_SCENARIO(coupling_wave, "coupling_wave",
                            "A longitudinal pulse crossing the FEM / particle interface: reflected "
-                           "energy",
+                           "energy; or the spectrum of the explicit coupled step (stability)",
                            "mechanics|particles:bond_based|particles:nosb|particles:spg|coupling",
                            create_for_dimension<CouplingWave>, sections::geometry(),
                            sections::material(), sections::mechanics(), sections::coupling(),
