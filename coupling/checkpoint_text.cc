@@ -94,10 +94,11 @@ CheckpointContents read_checkpoint_text(std::istream& in, std::uintmax_t bytes, 
     c.converted[id] = batch;
   }
 
-  c.particles.resize(n);
+  // Records are appended as they are read: memory follows what the file holds, not what its
+  // header claims.
   std::set<std::pair<std::string, unsigned int>> sites;
   for (std::size_t i = 0; i < n; ++i) {
-    auto& p = c.particles[i];
+    auto& p = c.particles.emplace_back();
     int free = 0;
     bool ok = in >> p.cell && is_cell_id(p.cell, dim) && read_number(in, p.point) &&
               p.point < n_points && read_number(in, free) && (free == 0 || free == 1) &&
@@ -113,15 +114,13 @@ CheckpointContents read_checkpoint_text(std::istream& in, std::uintmax_t bytes, 
     require(sites.emplace(p.cell, p.point).second, "particle (repeated site)", i);
   }
 
-  c.broken.resize(nb);
   for (std::size_t k = 0; k < nb; ++k) {
-    auto& [i, j] = c.broken[k];
+    auto& [i, j] = c.broken.emplace_back();
     require(read_number(in, i) && read_number(in, j) && i < n && j < n && i != j, "broken bond", k);
   }
 
-  c.history.resize(nh);
   for (std::size_t k = 0; k < nh; ++k) {
-    auto& r = c.history[k];
+    auto& r = c.history.emplace_back();
     bool ok = read_number(in, r.particle) && read_number(in, r.neighbour) && r.particle < n &&
               r.neighbour < n;
     for (auto& value : r.state)
