@@ -1,3 +1,12 @@
+# SPINESIM_SANITIZE: the project's own targets built with AddressSanitizer and
+# UndefinedBehaviorSanitizer (GCC or clang), -O1 -g for usable stacks; deal.II, Trilinos and MPI
+# stay as installed (not instrumented). Tests of such a build carry the label `sanitize` and the
+# sanitizer options of tests/support/sanitize_env.cmake. A build directory of its own:
+#   cmake -S . -B build-san -DSPINESIM_SANITIZE=ON && ctest --test-dir build-san -L sanitize
+option(SPINESIM_SANITIZE "Build the project's code with -fsanitize=address,undefined" OFF)
+set(SPINESIM_SANITIZE_FLAGS -fsanitize=address,undefined -fno-sanitize-recover=undefined
+                            -fno-omit-frame-pointer)
+
 # spinesim_setup_target(<target>): deal.II flags and libraries and warnings for the project's
 # own code. No include directory of the project: each module exposes its own (below).
 function(spinesim_setup_target target)
@@ -9,6 +18,11 @@ function(spinesim_setup_target target)
   target_compile_options(${target} PRIVATE -Wall -Wextra -Wno-unused-parameter
                          -Wno-deprecated-copy -Wno-misleading-indentation)
   target_link_libraries(${target} OpenMP::OpenMP_CXX)
+  if(SPINESIM_SANITIZE)
+    # After the build type's -O3: the last -O wins.
+    target_compile_options(${target} PRIVATE ${SPINESIM_SANITIZE_FLAGS} -O1 -g)
+    target_link_options(${target} PRIVATE ${SPINESIM_SANITIZE_FLAGS})
+  endif()
 endfunction()
 
 # spinesim_module_includes(<target> <folder>): the target (and whatever links it) may include

@@ -1,5 +1,7 @@
 #include "coupling/coupling_checkpoint.h"
 
+#include "coupling/checkpoint_text.h"
+
 #include "base/exceptions.h"
 #include "fem/materials/material_state_io.h"
 #include "meshfree/bond_loop.h"
@@ -101,100 +103,52 @@ void CouplingCheckpoint<dim>::save(const std::string& file) const {
 
 template <int dim>
 void CouplingCheckpoint<dim>::load(const std::string& file) {
+  static_assert(checkpoint_state_doubles == state_doubles, "history records: one layout");
   auto& state = p_.state;
   auto& particles = state.particles;
   auto& bonds = state.bonds;
   state.prepare();
-  p_.bond_rows.forget_search(); // the particles are replaced: search them afresh
-  p_.ghosts.forget_search();    // every loaded free particle is searched around afresh
-  std::ifstream in(file, std::ios::binary);
-  std::string tag;
-  int version = 0;
-  std::size_t n = 0, nc = 0, nb = 0, nh = 0;
-  double time = 0, dissipation = 0, heat = 0;
-  if (!(in >> tag >> version >> time >> n >> nc >> nb) || tag != "spinesim_coupling" ||
-      version < 1 || version > 3 || (version >= 2 && !(in >> dissipation >> heat)) ||
-      (version >= 3 && !(in >> nh)))
-    throw InvalidInput(file, "missing or unreadable coupling checkpoint",
-                       "a file written by FemParticleCoupling::save (versions 1 to 3)");
-  // The manifest guards against damage, not against a file edited and re-hashed: every count
-  // is bounded by what the file can hold (each number takes at least two bytes with its
-  // separator) before a loop runs or a vector is sized by it, and every record is checked.
+  // The manifest guards against damage, not against a file edited and re-hashed: the whole
+  // file is read and checked (checkpoint_text.h) before any of it is used.
   std::error_code size_error;
   const std::uintmax_t bytes = std::filesystem::file_size(file, size_error);
-  const auto fits = [&](std::size_t count, std::size_t numbers_per_record) {
-    return !size_error && count <= bytes / (2 * numbers_per_record);
-  };
-  if (!fits(n, 7 + 3 * dim) || !fits(nc, 2) || !fits(nb, 2) || !fits(nh, 2 + state_doubles))
-    throw InvalidInput(file,
-                       "header counts (" + std::to_string(n) + " particles, " + std::to_string(nc) +
-                           " converted cells, " + std::to_string(nb) + " broken bonds, " +
-                           std::to_string(nh) + " history records) exceed what its " +
-                           std::to_string(bytes) + " bytes can hold",
-                       "a complete checkpoint written by FemParticleCoupling::save");
-  const auto require = [&](bool ok, const std::string& what, std::size_t k) {
-    if (!ok)
-      throw InvalidInput(file,
-                         "unreadable or out-of-range " + what + " " + std::to_string(k) +
-                             " (truncated or edited checkpoint)",
-                         "a complete checkpoint written by FemParticleCoupling::save");
-  };
-  p_.integrator.set_time(time);
-  p_.fracture.restore(dissipation, heat); // version 1: none
-  std::map<std::string, unsigned int> converted;
-  for (std::size_t k = 0; k < nc; ++k) {
-    std::string id;
-    unsigned int batch = 0;
-    require(static_cast<bool>(in >> id >> batch), "converted cell", k);
-    converted[id] = batch;
-  }
+  std::ifstream in(file, std::ios::binary);
+  if (size_error || !in)
+    throw InvalidInput(file, "unreadable coupling checkpoint", "a readable file");
+  auto c = read_checkpoint_text(in, bytes, dim, state.points.size(), file);
+
+  p_.bond_rows.forget_search(); // the particles are replaced: search them afresh
+  p_.ghosts.forget_search();    // every loaded free particle is searched around afresh
+  p_.integrator.set_time(c.time);
+  p_.fracture.restore(c.dissipation, c.heat); // version 1: none
   state.clear_particles();
-  for (std::size_t i = 0; i < n; ++i) {
-    std::string id;
-    unsigned int q = 0, slots = 0;
-    int fr = 0;
-    double V = 0, rho = 0, T = 0;
+  for (const auto& r : c.particles) {
     Point<dim> x;
     Tensor<1, dim> u, v;
-    in >> id >> q >> fr >> slots >> V >> rho >> T;
-    for (unsigned int d = 0; d < dim; ++d)
-      in >> x[d];
-    for (unsigned int d = 0; d < dim; ++d)
-      in >> u[d] >> v[d];
-    require(in && (fr == 0 || fr == 1) && q < state.points.size() && V > 0 && rho > 0 &&
-                std::isfinite(V) && std::isfinite(rho) && std::isfinite(T) &&
-                std::isfinite(x.norm()) && std::isfinite(u.norm()) && std::isfinite(v.norm()),
-            "particle", i);
-    const unsigned int k = state.add_particle(id, q, x, V);
-    particles.density(k) = rho;
-    particles.temperature(k) = T;
+    for (unsigned int d = 0; d < dim; ++d) {
+      x[d] = r.position[d];
+      u[d] = r.displacement[d];
+      v[d] = r.velocity[d];
+    }
+    const unsigned int k = state.add_particle(r.cell, r.point, x, r.volume);
+    particles.density(k) = r.density;
+    particles.temperature(k) = r.temperature;
     particles.displacement(k) = u;
     particles.velocity(k) = v;
-    state.free[k] = static_cast<std::uint8_t>(fr);
-    state.fixed_slots[k] = slots;
+    state.free[k] = static_cast<std::uint8_t>(r.free);
+    state.fixed_slots[k] = r.fixed_slots;
   }
-  std::vector<std::pair<unsigned int, unsigned int>> broken;
-  broken.reserve(nb);
-  for (std::size_t k = 0; k < nb; ++k) {
-    unsigned int i = 0, j = 0;
-    require(static_cast<bool>(in >> i >> j) && i < n && j < n, "broken bond", k);
-    broken.emplace_back(i, j);
+  std::vector<meshfree::HistoryRecord> history(c.history.size());
+  for (std::size_t k = 0; k < history.size(); ++k) {
+    history[k].particle = c.history[k].particle;
+    history[k].neighbour = c.history[k].neighbour;
+    history[k].state = unpack_state(c.history[k].state);
   }
-  std::vector<meshfree::HistoryRecord> history(nh);
-  for (std::size_t k = 0; k < nh; ++k) {
-    auto& r = history[k];
-    std::array<double, state_doubles> flat;
-    in >> r.particle >> r.neighbour;
-    for (auto& value : flat)
-      in >> value;
-    require(in && r.particle < n && r.neighbour < n, "history record", k);
-    r.state = unpack_state(flat);
-  }
-  p_.converter.restore(std::move(converted));
+  p_.converter.restore(std::move(c.converted));
   // Rebuild with the saved broken pairs (broken before the method builds its families), then
   // the method's history.
   bonds = meshfree::BondList<dim>();
-  p_.bond_rows.restore_broken(std::move(broken));
+  p_.bond_rows.restore_broken(std::move(c.broken));
   state.pending_states.clear();
   p_.rebuild_layers();
   if (state.method)

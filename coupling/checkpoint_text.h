@@ -1,0 +1,60 @@
+#ifndef SPINESIM_COUPLING_CHECKPOINT_TEXT_H
+#define SPINESIM_COUPLING_CHECKPOINT_TEXT_H
+
+// The bytes of a coupling checkpoint ("spinesim_coupling 1" to "3", written by
+// CouplingCheckpoint::save) read into plain records, with every check a file from outside
+// needs: counts bounded by the file's size before anything is sized by them, every record
+// complete, in range and finite, nothing after the last record. No deal.II: the loader turns
+// the records into particles, and the fuzz target (tests/fuzz) feeds it arbitrary bytes.
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <istream>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace spinesim::coupling {
+
+// Numbers of one material state in a history record (materials::material_state_doubles; the
+// loader checks that the two agree).
+constexpr unsigned int checkpoint_state_doubles = 14;
+
+// One particle's line: host cell (deal.II CellId text) and quadrature point, free flag,
+// Dirichlet slots, volume, density, temperature, reference position, displacement, velocity
+// (the first `dim` entries of the arrays are used).
+struct CheckpointParticle {
+  std::string cell;
+  unsigned int point = 0;
+  bool free = false;
+  std::uint32_t fixed_slots = 0;
+  double volume = 0, density = 0, temperature = 0;
+  std::array<double, 3> position{}, displacement{}, velocity{};
+};
+
+// The material history of the family of `particle` towards `neighbour`.
+struct CheckpointHistory {
+  unsigned int particle = 0, neighbour = 0;
+  std::array<double, checkpoint_state_doubles> state{};
+};
+
+struct CheckpointContents {
+  int version = 0;
+  double time = 0, dissipation = 0, heat = 0;    // version 1: no fracture-heat totals
+  std::map<std::string, unsigned int> converted; // cell id -> conversion batch
+  std::vector<CheckpointParticle> particles;
+  std::vector<std::pair<unsigned int, unsigned int>> broken; // particle index pairs
+  std::vector<CheckpointHistory> history;                    // version 3
+};
+
+// Reads a checkpoint of a `dim`-dimensional run whose coupling has `n_points` candidate
+// particle sites (quadrature points), from `in` holding `bytes` bytes. Throws InvalidInput
+// naming `file` for anything save() would not have written.
+CheckpointContents read_checkpoint_text(std::istream& in, std::uintmax_t bytes, unsigned int dim,
+                                        std::size_t n_points, const std::string& file);
+
+} // namespace spinesim::coupling
+
+#endif

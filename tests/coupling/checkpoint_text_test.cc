@@ -1,0 +1,147 @@
+// The text reader of coupling checkpoints (coupling/checkpoint_text.h) on hand-written files:
+// a version-3 file in 2-D and 3-D and a version-1 file come back field for field (decimal
+// numbers read exactly as the same literals compiled), and every one-token edit that save()
+// could not have written is InvalidInput naming the file.
+#include "base/exceptions.h"
+#include "coupling/checkpoint_text.h"
+
+#include <gtest/gtest.h>
+
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace spinesim::coupling {
+namespace {
+
+const std::string file = "restart/coupling.txt";
+
+// Two particles of cell 3_1:2 (2-D) at quadrature points 0 and 5 of 8, one broken bond and a
+// history record of each kind (own family, bond family).
+std::string valid_2d() {
+  return "spinesim_coupling 3\n"
+         "0.125 2 1 1 0.5 0.25 2\n"
+         "3_1:2 4\n"
+         "3_1:2 0 1 5 0.001 1850 310.5 0.1 0.2 1e-05 -2 -3e-06 4\n"
+         "3_1:2 5 0 0 0.002 1900 311 0.3 0.4 0 0 0 0\n"
+         "1 0\n"
+         "0 0 1 2 3 4 5 6 7 8 9 10 11 12 13 14\n"
+         "1 0 0 0 0 0 0 0 1 0 0 1 0 1 0.5 2\n";
+}
+
+CheckpointContents read(const std::string& text, unsigned int dim = 2) {
+  std::istringstream in(text);
+  return read_checkpoint_text(in, text.size(), dim, 8, file);
+}
+
+// Replaces the `token`-th whitespace-separated token of `text` (from 0).
+std::string edit(const std::string& text, std::size_t token, const std::string& value) {
+  std::istringstream in(text);
+  std::vector<std::string> tokens;
+  for (std::string t; in >> t;)
+    tokens.push_back(t);
+  tokens.at(token) = value;
+  std::string out;
+  for (const auto& t : tokens)
+    out += t + " ";
+  return out;
+}
+
+TEST(CheckpointText, Version3FileReadBack2D) {
+  const auto c = read(valid_2d());
+  EXPECT_EQ(c.version, 3);
+  EXPECT_EQ(c.time, 0.125);
+  EXPECT_EQ(c.dissipation, 0.5);
+  EXPECT_EQ(c.heat, 0.25);
+  ASSERT_EQ(c.converted.size(), 1u);
+  EXPECT_EQ(c.converted.at("3_1:2"), 4u);
+  ASSERT_EQ(c.particles.size(), 2u);
+  const auto& p = c.particles[0];
+  EXPECT_EQ(p.cell, "3_1:2");
+  EXPECT_EQ(p.point, 0u);
+  EXPECT_TRUE(p.free);
+  EXPECT_EQ(p.fixed_slots, 5u);
+  EXPECT_EQ(p.volume, 0.001);
+  EXPECT_EQ(p.density, 1850);
+  EXPECT_EQ(p.temperature, 310.5);
+  EXPECT_EQ(p.position[0], 0.1);
+  EXPECT_EQ(p.position[1], 0.2);
+  EXPECT_EQ(p.displacement[0], 1e-05); // u and v interleaved per component, as save() writes
+  EXPECT_EQ(p.velocity[0], -2);
+  EXPECT_EQ(p.displacement[1], -3e-06);
+  EXPECT_EQ(p.velocity[1], 4);
+  EXPECT_FALSE(c.particles[1].free);
+  EXPECT_EQ(c.particles[1].point, 5u);
+  ASSERT_EQ(c.broken.size(), 1u);
+  EXPECT_EQ(c.broken[0], std::make_pair(1u, 0u));
+  ASSERT_EQ(c.history.size(), 2u);
+  EXPECT_EQ(c.history[0].neighbour, 0u);
+  EXPECT_EQ(c.history[0].state[0], 1);
+  EXPECT_EQ(c.history[0].state[13], 14);
+  EXPECT_EQ(c.history[1].particle, 1u);
+  EXPECT_EQ(c.history[1].state[13], 2);
+}
+
+TEST(CheckpointText, Version3FileReadBack3D) {
+  // Cell 0_2:71 (child digits up to 7 in 3-D), one particle, no bonds, no history.
+  const std::string text = "spinesim_coupling 3\n1 1 1 0 0 0 0\n0_2:71 1\n"
+                           "0_2:71 7 1 0 1e-09 1000 300 1 2 3 4 5 6 7 8 9\n";
+  const auto c = read(text, 3);
+  ASSERT_EQ(c.particles.size(), 1u);
+  EXPECT_EQ(c.particles[0].position[2], 3);
+  EXPECT_EQ(c.particles[0].displacement[2], 8);
+  EXPECT_EQ(c.particles[0].velocity[2], 9);
+  // The same file read as 2-D: "71" is no 2-D child path and the particle has 3 numbers too many.
+  EXPECT_THROW(read(text, 2), InvalidInput);
+}
+
+TEST(CheckpointText, Version1FileHasNoTotals) {
+  const auto c = read("spinesim_coupling 1\n2 0 0 0\n");
+  EXPECT_EQ(c.version, 1);
+  EXPECT_EQ(c.time, 2);
+  EXPECT_EQ(c.dissipation, 0);
+  EXPECT_TRUE(c.particles.empty());
+}
+
+TEST(CheckpointText, EditsSaveCannotWriteAreInvalidInput) {
+  // Token positions in valid_2d(): 0 tag, 1 version, 2 time, 3-5 counts, 6-7 totals,
+  // 8 history count, 9-10 converted cell, 11-23 particle 0, 24-36 particle 1, 37-38 bond,
+  // 39-54 and 55-70 history.
+  const std::vector<std::pair<std::size_t, std::string>> edits = {
+      {0, "spinesim_coupling2"}, // tag
+      {1, "4"},                  // a version this code does not know
+      {2, "-1"},                 // negative time
+      {3, "-1"},                 // a count with a sign: no wrap-around to 2^64 - 1
+      {3, "1000"},               // more particles than the 200 bytes can hold
+      {4, "1.5"},                // a fractional count
+      {6, "1e999"},              // beyond double
+      {9, "3_2:2"},              // cell id: two levels announced, one given
+      {9, "3_1:4"},              // cell id: child 4 in 2-D
+      {12, "8"},                 // quadrature point 8 of 8
+      {13, "7"},                 // free flag 0 or 1
+      {14, "-5"},                // Dirichlet slots: unsigned
+      {15, "0"},                 // zero volume
+      {16, "nan"},               // density
+      {25, "0"},                 // particle 1 on the site of particle 0
+      {37, "0"},                 // a bond of particle 0 with itself
+      {38, "2"},                 // a bond to particle 2 of 2
+      {39, "2"},                 // history of particle 2 of 2
+      {54, "inf"},               // history state
+  };
+  for (const auto& [token, value] : edits) {
+    try {
+      read(edit(valid_2d(), token, value));
+      ADD_FAILURE() << "token " << token << " = " << value << " accepted";
+    } catch (const InvalidInput& e) {
+      EXPECT_EQ(e.where(), file);
+    }
+  }
+  // Cut before the last number, and one token after the last record.
+  const std::string text = valid_2d();
+  EXPECT_THROW(read(text.substr(0, text.rfind(' '))), InvalidInput);
+  EXPECT_THROW(read(text + "0\n"), InvalidInput);
+}
+
+} // namespace
+} // namespace spinesim::coupling

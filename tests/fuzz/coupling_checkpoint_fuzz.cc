@@ -1,0 +1,63 @@
+// Fuzz target: the reader of coupling checkpoints (coupling/checkpoint_text.h), which the
+// loader runs over a restart file before any of it is used. The input is the file; it is read
+// as a 2-D and as a 3-D checkpoint. Bad files must end in InvalidInput; anything else (another
+// exception, a crash, a hang, unbounded memory) is a finding, and so is an accepted file
+// breaking what the loader relies on (checked below, abort on violation).
+#include "base/exceptions.h"
+#include "coupling/checkpoint_text.h"
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstdlib>
+#include <sstream>
+#include <string>
+
+namespace {
+
+// More candidate sites than the seed runs have quadrature points, so their files are accepted.
+constexpr std::size_t n_points = 1u << 16;
+
+void require(bool ok) {
+  if (!ok)
+    std::abort();
+}
+
+void check_accepted(const spinesim::coupling::CheckpointContents& c, unsigned int dim,
+                    std::size_t size) {
+  const std::size_t n = c.particles.size();
+  require(c.version >= 1 && c.version <= 3 && std::isfinite(c.time) && c.time >= 0);
+  require(std::isfinite(c.dissipation) && std::isfinite(c.heat));
+  // The size bound: each number of a record takes at least two bytes.
+  require(n * 2 * (7 + 3 * dim) <= size && c.broken.size() * 4 <= size);
+  for (const auto& p : c.particles) {
+    require(p.point < n_points && p.volume > 0 && p.density > 0 && std::isfinite(p.volume) &&
+            std::isfinite(p.density) && std::isfinite(p.temperature));
+    for (unsigned int d = 0; d < 3; ++d)
+      require(std::isfinite(p.position[d]) && std::isfinite(p.displacement[d]) &&
+              std::isfinite(p.velocity[d]) &&
+              (d < dim || (p.position[d] == 0 && p.displacement[d] == 0 && p.velocity[d] == 0)));
+  }
+  for (const auto& [i, j] : c.broken)
+    require(i < n && j < n && i != j);
+  for (const auto& r : c.history) {
+    require(r.particle < n && r.neighbour < n);
+    for (const double v : r.state)
+      require(std::isfinite(v));
+  }
+}
+
+} // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const std::string bytes(reinterpret_cast<const char*>(data), size);
+  for (const unsigned int dim : {2u, 3u}) {
+    std::istringstream in(bytes);
+    try {
+      check_accepted(spinesim::coupling::read_checkpoint_text(in, size, dim, n_points, "fuzz.txt"),
+                     dim, size);
+    } catch (const spinesim::InvalidInput&) {
+    }
+  }
+  return 0;
+}
