@@ -126,6 +126,21 @@ void CoupledIntegrator<dim>::advance(double dt, double a, double load_time, bool
     auto& previous = relax_acceleration_;
     if (sums && (first || previous.size() != dim * particles.size()))
       previous.assign(dim * particles.size(), std::numeric_limits<double>::quiet_NaN());
+  }
+  // The particle update to t_{n+1}. The overlap splice makes it now; the energy splice inside
+  // the FEM's force hook, once the FEM's forces on the interface DoFs of t_n are known.
+  const bool energy_splice = splice_.on() && state_.n_free_particles() > 0;
+  if (energy_splice)
+    splice_.take_particle_forces();
+  bool moved = false;
+  const auto move_particles = [&](bool with_splice) {
+    moved = true;
+    const auto* extra = with_splice ? &splice_.splice_forces() : nullptr;
+    const auto force_on = [&](unsigned int i, unsigned int d) {
+      return particles.force(i)[d] + particles.external_force(i)[d] +
+             (extra ? (*extra)[i][d] : 0.0);
+    };
+    auto& previous = relax_acceleration_;
     // The damped central-difference update of one component, in both loops below.
     const DampedCentralDifference step(dt, a);
     const auto advance_component = [&](unsigned int i, unsigned int d, double acc) {
@@ -145,7 +160,7 @@ void CoupledIntegrator<dim>::advance(double dt, double a, double load_time, bool
         for (unsigned int d = 0; d < dim; ++d) {
           if (particles.is_fixed(i, d))
             continue;
-          advance_component(i, d, (particles.force(i)[d] + particles.external_force(i)[d]) / m);
+          advance_component(i, d, force_on(i, d) / m);
         }
       }
     }
@@ -154,7 +169,7 @@ void CoupledIntegrator<dim>::advance(double dt, double a, double load_time, bool
         continue;
       const double m = particles.mass(i);
       for (unsigned int d = 0; d < dim; ++d) {
-        const double f = particles.force(i)[d] + particles.external_force(i)[d];
+        const double f = force_on(i, d);
         if (particles.is_fixed(i, d)) {
           sums->reaction_square += f * f;
           continue;
@@ -170,14 +185,31 @@ void CoupledIntegrator<dim>::advance(double dt, double a, double load_time, bool
       energy_.after_update(time_, dt, a);
     halo_.exchange(); // partners and interface stencils at t_{n+1}
     interface_.update();
-  }
+  };
+  if (state_.n_free_particles() > 0 && !energy_splice)
+    move_particles(false);
   if (!sums && state_.n_free_particles() == 0)
     energy_.after_update(time_, dt, a); // no particles (yet): their share is zero
-  if (sums) {
-    *sums += state_.fem.relaxation_step(dt, a, load_time, first);
-  } else {
-    state_.fem.explicit_step(dt);
+  {
+    // The hook lives for this step only (also when the step throws).
+    struct HookGuard {
+      fem::MechanicsSolver<dim>& fem;
+      ~HookGuard() { fem.set_step_force_hook({}); }
+    } guard{state_.fem};
+    if (energy_splice)
+      state_.fem.set_step_force_hook(
+          [&](const typename fem::MechanicsSolver<dim>::StepForces& forces) {
+            splice_.on_fem_forces(forces);
+            move_particles(true);
+          });
+    if (sums) {
+      *sums += state_.fem.relaxation_step(dt, a, load_time, first);
+    } else {
+      state_.fem.explicit_step(dt);
+    }
   }
+  if (energy_splice && !moved)
+    move_particles(false); // every cell converted: the FEM step had no forces to hand over
   if (state_.n_ghost_particles() > 0)
     ghosts_.update();
   if (state_.heat && state_.n_free_particles() > 0) {

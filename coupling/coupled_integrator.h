@@ -8,6 +8,7 @@
 #include "base/dynamic_relaxation.h"
 #include "coupling/cell_converter.h"
 #include "coupling/coupling_state.h"
+#include "coupling/energy_splice.h"
 #include "coupling/fracture_heat.h"
 #include "coupling/ghost_layer.h"
 #include "coupling/mls_interface.h"
@@ -34,9 +35,9 @@ class CoupledIntegrator {
   CoupledIntegrator(CouplingState<dim>& state, GhostLayer<dim>& ghosts,
                     MlsInterface<dim>& interface, ParticleHalo<dim>& halo,
                     ParticleBoundary<dim>& boundary, FractureHeat<dim>& fracture,
-                    CellConverter<dim>& converter)
+                    CellConverter<dim>& converter, EnergySplice<dim>& splice)
       : state_(state), ghosts_(ghosts), interface_(interface), halo_(halo), boundary_(boundary),
-        fracture_(fracture), converter_(converter), energy_(state) {}
+        fracture_(fracture), converter_(converter), splice_(splice), energy_(state) {}
 
   double stable_time_step() const; // min(FEM CFL step, PD step) [s]
   // One central-difference step of both models (see advance()).
@@ -78,6 +79,7 @@ class CoupledIntegrator {
   ParticleBoundary<dim>& boundary_;
   FractureHeat<dim>& fracture_;
   CellConverter<dim>& converter_;
+  EnergySplice<dim>& splice_;
   ParticleEnergy<dim> energy_;
   double time_ = 0;
   std::size_t broken_last_step_ = 0; // bond ends broken by this rank in the last step

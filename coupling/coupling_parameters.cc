@@ -37,6 +37,15 @@ void CouplingParameters<dim>::declare(ParameterHandler& prm) {
   prm.declare_entry("Interface radius", "2.5", Double(1.5),
                     "Support radius of the moving-least-squares fit that drives interface FEM "
                     "nodes from the free particles, in particle spacings [-].");
+  prm.declare_entry(
+      "Splice", "overlap", Selection("overlap|energy"),
+      "How the FEM and the particles join [-]. overlap: ghost particles driven by the FEM and "
+      "interface nodes driven by a moving-least-squares fit of the particles; exact for affine "
+      "fields at any strain, but not energy-conserving: some modes grow slowly in long explicit "
+      "runs (docs/coupling.md, stability of the splice). energy: the same layers, forces "
+      "passed back through the transposes of both maps, so explicit steps conserve an energy; "
+      "a symmetric low-rank correction makes affine fields exact in the linear (small-strain) "
+      "limit. energy runs on one MPI rank.");
   prm.declare_entry("Time step safety", "0.8", Double(0, 1),
                     "Factor on the PD stable time step (Silling & Askari 2005) [-].");
   prm.declare_entry("All particles", "false", Bool(),
@@ -109,6 +118,7 @@ void CouplingParameters<dim>::parse(ParameterHandler& prm, const std::string& me
   particles_per_direction = prm.get_integer("Particles per cell direction");
   ghost_layer = prm.get_double("Ghost layer");
   interface_radius = prm.get_double("Interface radius");
+  splice = prm.get("Splice");
   time_step_safety = prm.get_double("Time step safety");
   all_particles = prm.get_bool("All particles");
   region_lower =

@@ -18,7 +18,11 @@ struct CouplingParameters {
   unsigned int particles_per_direction = 1; // particles per cell = this^dim
   double ghost_layer = 2.0;                 // ghost layer width [horizons]
   double interface_radius = 2.5;            // MLS support of interface nodes [spacings]
-  double time_step_safety = 0.8;            // PD stable step factor [-]
+  // overlap: Dirichlet–Dirichlet overlap (patch test exact at any strain, not energy
+  // conserving); energy: energy-conserving splice with a consistency correction (exact for
+  // affine fields in the linear limit); coupling/energy_splice.h.
+  std::string splice = "overlap";
+  double time_step_safety = 0.8; // PD stable step factor [-]
   bool all_particles = false;
   std::vector<double> region_lower, region_upper;   // particles from t = 0 (empty = none)
   double principal_strain_threshold = 0;            // [-], 0 = off

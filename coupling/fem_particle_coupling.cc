@@ -26,9 +26,9 @@ FemParticleCoupling<dim>::FemParticleCoupling(const Parameters& parameters,
                                               fem::MechanicsSolver<dim>& mechanics,
                                               const fem::HeatSolver<dim>* heat)
     : state_(parameters, mechanics, heat), halo_(state_), ghosts_(state_, halo_),
-      bond_rows_(state_), boundary_(state_), interface_(state_), fracture_(state_),
-      converter_(state_, [this] { rebuild_layers(); }),
-      integrator_(state_, ghosts_, interface_, halo_, boundary_, fracture_, converter_),
+      bond_rows_(state_), boundary_(state_), interface_(state_), splice_(state_, interface_),
+      fracture_(state_), converter_(state_, [this] { rebuild_layers(); }),
+      integrator_(state_, ghosts_, interface_, halo_, boundary_, fracture_, converter_, splice_),
       checkpoint_({state_, converter_, integrator_, fracture_, halo_, bond_rows_, ghosts_,
                    [this] { rebuild_layers(); }}) {}
 
@@ -65,6 +65,7 @@ void FemParticleCoupling<dim>::rebuild_layers() {
   halo_.plan(interface_);
   ghosts_.update(); // owned ghosts from the FEM, then the halo (free particles included)
   interface_.update();
+  splice_.rebuild();
 }
 
 template <int dim>
@@ -249,9 +250,43 @@ std::pair<double, double> FemParticleCoupling<dim>::max_free_forces() {
     for (const auto i : s)
       excluded.insert(i);
   }
+  const std::set<types::global_dof_index> on_dirichlet = excluded;
   for (const auto& e : interface_.dofs())
     excluded.insert(e.dof);
   double ff = 0;
+  if (splice_.on() && state_.n_free_particles() > 0) {
+    // The energy splice's forces at this state: the step's hook on the net forces −r with the
+    // same split of the DoFs (free, driven, the rest), then the largest free force on each side.
+    splice_.take_particle_forces();
+    const auto& owned = solver.locally_owned_dofs();
+    const std::size_t n = owned.n_elements();
+    std::vector<double> net(n);
+    std::vector<std::uint8_t> skip(n, 0), dirichlet(n, 0), driven(n, 0);
+    std::set<types::global_dof_index> interface;
+    for (const auto& e : interface_.dofs())
+      interface.insert(e.dof);
+    std::size_t k = 0;
+    for (const auto i : owned) {
+      net[k] = -r(i);
+      skip[k] = solver.hanging_constraints().is_constrained(i) || !(solver.lumped_mass()(i) > 0);
+      driven[k] = interface.count(i) ? 1 : 0;
+      dirichlet[k] = on_dirichlet.count(i) ? 1 : 0;
+      ++k;
+    }
+    const typename fem::MechanicsSolver<dim>::StepForces forces(net.data(), 1.0, skip.data(),
+                                                                dirichlet.data(), driven.data());
+    splice_.on_fem_forces(forces);
+    fp = 0;
+    for (unsigned int i = 0; i < particles.size(); ++i)
+      if (state_.free[i] && state_.is_owned(i))
+        for (unsigned int d = 0; d < dim; ++d)
+          if (!particles.is_fixed(i, d))
+            fp = std::max(fp, std::abs(particles.force(i)[d] + splice_.splice_forces()[i][d]));
+    for (std::size_t j = 0; j < n; ++j)
+      if (forces.is_free(j))
+        ff = std::max(ff, std::abs(forces.force(j)));
+    return {fp, ff};
+  }
   for (const auto i : r.locally_owned_elements())
     if (!excluded.count(i) && solver.lumped_mass()(i) > 0)
       ff = std::max(ff, std::abs(r(i)));

@@ -124,6 +124,14 @@ class FemParticleCoupling {
   // over free FEM DoFs (neither Dirichlet nor driven) [N].
   std::pair<double, double> max_free_forces();
 
+  // With Coupling/Splice = energy: the energy its explicit steps conserve (kinetic energy of
+  // the free particles and free FEM DoFs, stored energy of the active cells, the particle
+  // method's splice energy and the correction's) [J], NaN off the FEM's linear path; and the
+  // largest ghost force of an affine field the correction removes, over the largest force of
+  // a replaced cell [-] (coupling/energy_splice.h).
+  double splice_energy() { return splice_.energy(); }
+  double splice_ghost_force_relative() const { return splice_.ghost_force_relative(); }
+
   // Totals over both models (FEM lumped mass, particle masses) [kg], [kg m/s], [J].
   double total_mass() const;
   dealii::Tensor<1, dim> total_momentum() const;
@@ -191,6 +199,7 @@ class FemParticleCoupling {
   BondRows<dim> bond_rows_;
   ParticleBoundary<dim> boundary_;
   MlsInterface<dim> interface_;
+  EnergySplice<dim> splice_;
   FractureHeat<dim> fracture_;
   CellConverter<dim> converter_;
   CoupledIntegrator<dim> integrator_;

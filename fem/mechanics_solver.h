@@ -137,6 +137,36 @@ class MechanicsSolver {
   // internal work instead. Collective.
   double linear_stored_energy();
 
+  // Forces from outside the FEM in every central-difference step (explicit and relaxation):
+  // an energy-conserving coupling adds the reactions of what the FEM drives and takes the
+  // forces on the DoFs driven by it. The hook runs after the net forces of the current state
+  // are formed and before any DoF moves; it may add forces, read the net force on the driven
+  // DoFs and call set_driven_values() for the end of the step. Empty: no hook.
+  class StepForces {
+   public:
+    StepForces(double* net, double sign, const std::uint8_t* skip, const std::uint8_t* dirichlet,
+               const std::uint8_t* driven)
+        : net_(net), sign_(sign), skip_(skip), dirichlet_(dirichlet), driven_(driven) {}
+    // Net force on the owned DoF of local index k (the order of the owned DoFs) [N].
+    double force(std::size_t k) const { return sign_ * net_[k]; }
+    void add(std::size_t k, double f) const { net_[k] += sign_ * f; }
+    // An unknown of the step (neither hanging, orphaned, Dirichlet nor driven).
+    bool is_free(std::size_t k) const { return !skip_[k] && !dirichlet_[k] && !driven_[k]; }
+    // A driven DoF whose value the step takes from set_driven_values().
+    bool is_driven(std::size_t k) const { return driven_[k] && !skip_[k] && !dirichlet_[k]; }
+    // A DoF with a prescribed value (Dirichlet; it wins over driven).
+    bool is_prescribed(std::size_t k) const { return dirichlet_[k] && !skip_[k]; }
+
+   private:
+    double* net_;
+    double sign_; // the linear path holds K u: net force = −K u
+    const std::uint8_t *skip_, *dirichlet_, *driven_;
+  };
+  void set_step_force_hook(std::function<void(const StepForces&)> hook) {
+    step_force_hook_ = std::move(hook);
+  }
+  const dealii::IndexSet& locally_owned_dofs() const { return owned_; }
+
   // Dynamic relaxation towards the quasi-static state at `time` (coupled quasi-static runs):
   // one central-difference step of pseudo-time dt with mass damping `damping` [1/s], loads and
   // Dirichlet values of `time`; the solver's time becomes `time` and does not advance. `first`
@@ -339,6 +369,7 @@ class MechanicsSolver {
   std::vector<double> u_previous_;
   // Energy account: on/off, the sums, v_{n−½} of the step, and f_ext of the last assembly.
   bool energy_account_on_ = false;
+  std::function<void(const StepForces&)> step_force_hook_;
   ExplicitEnergy energy_;
   std::vector<double> v_previous_;
   VectorType external_force_;

@@ -147,6 +147,9 @@ void MechanicsSolver<dim>::central_difference(double dt, double a, double bc_tim
     }
     if (sums && relax_acceleration_.size() != n)
       relax_acceleration_.assign(n, std::numeric_limits<double>::quiet_NaN());
+    if (step_force_hook_)
+      step_force_hook_(StepForces(linear ? raw_residual_.begin() : rhs_.begin(), sign,
+                                  step_skip_.data(), step_dirichlet_.data(), step_driven_.data()));
     const auto zero_mass = [&](std::size_t k) {
       return NumericalFailure("zero lumped mass at dof " +
                                   std::to_string(owned_.nth_index_in_set(k)),

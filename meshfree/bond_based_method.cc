@@ -132,6 +132,55 @@ void BondBasedMethod<dim>::update_damage(ParticleSet<dim>& particles,
   pd_.update_damage(particles, bonds);
 }
 
+template <int dim>
+std::optional<std::vector<dealii::Tensor<1, dim>>>
+BondBasedMethod<dim>::driven_reactions(const ParticleSet<dim>& particles,
+                                       const BondList<dim>& bonds) const {
+  // The splice counts every bond with a free end whole (w = ½ V_i k_ij e², both halves): the
+  // force on its driven end is the negative of the force on its free end, as in the kernel
+  // (ξ recomputed from the reference positions, meshfree/pmb_force_rows_body.h).
+  std::vector<dealii::Tensor<1, dim>> r(particles.size());
+  if (driven_.size() != particles.size())
+    return r;
+  const auto& k = pd_.bond_stiffness();
+  for (unsigned int i = 0; i < particles.size(); ++i) {
+    if (driven_[i])
+      continue;
+    for (std::size_t b = bonds.begin(i); b < bonds.end(i); ++b) {
+      const unsigned int j = bonds.neighbor[b];
+      if (!driven_[j] || bonds.broken[b])
+        continue;
+      const dealii::Tensor<1, dim> y =
+          (particles.reference_position(j) - particles.reference_position(i)) +
+          (particles.displacement(j) - particles.displacement(i));
+      const double l = y.norm();
+      r[j] -= (particles.volume(i) * k[b] * ((l - bonds.length[b]) / l)) * y;
+    }
+  }
+  return r;
+}
+
+template <int dim>
+std::optional<double> BondBasedMethod<dim>::splice_strain_energy(const ParticleSet<dim>& particles,
+                                                                 const BondList<dim>& bonds) const {
+  // ½ V_i k_ij e² per counted bond: a quarter from each row of a bond between two rows, half
+  // from the one row of a bond to a driven particle.
+  const auto& k = pd_.bond_stiffness();
+  const bool any_driven = driven_.size() == particles.size();
+  double E = 0;
+  for (unsigned int i = 0; i < particles.size(); ++i)
+    for (std::size_t b = bonds.begin(i); b < bonds.end(i); ++b) {
+      if (bonds.broken[b])
+        continue;
+      const unsigned int j = bonds.neighbor[b];
+      const double e =
+          (bonds.xi[b] + (particles.displacement(j) - particles.displacement(i))).norm() -
+          bonds.length[b];
+      E += (any_driven && driven_[j] ? 0.5 : 0.25) * particles.volume(i) * k[b] * e * e;
+    }
+  return E;
+}
+
 template class BondBasedMethod<2>;
 template class BondBasedMethod<3>;
 

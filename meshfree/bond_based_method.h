@@ -63,9 +63,15 @@ class BondBasedMethod : public ParticleMethod<dim> {
   double bond_energy(const ParticleSet<dim>& particles, const BondList<dim>& bonds, unsigned int i,
                      std::size_t k) const override;
   void update_damage(ParticleSet<dim>& particles, const BondList<dim>& bonds) const override;
+  void set_driven(std::vector<std::uint8_t> driven) override { driven_ = std::move(driven); }
+  std::optional<std::vector<dealii::Tensor<1, dim>>>
+  driven_reactions(const ParticleSet<dim>& particles, const BondList<dim>& bonds) const override;
+  std::optional<double> splice_strain_energy(const ParticleSet<dim>& particles,
+                                             const BondList<dim>& bonds) const override;
 
  private:
   BondBasedPD<dim> pd_;
+  std::vector<std::uint8_t> driven_; // set_driven()
   std::vector<std::string> messages_;
 };
 

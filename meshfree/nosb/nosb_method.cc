@@ -180,6 +180,27 @@ void NosbMethod<dim>::load(std::istream& in) {
   pd_.set_committed_states(states);
 }
 
+template <int dim>
+std::optional<std::vector<dealii::Tensor<1, dim>>>
+NosbMethod<dim>::driven_reactions(const ParticleSet<dim>& particles, const BondList<dim>&) const {
+  // compute_forces() gathers f_m = −Σ_e w_e P_e G_m over every family with a row, on every
+  // member m: on a driven particle that is the gradient of the counted energy already.
+  std::vector<dealii::Tensor<1, dim>> r(particles.size());
+  for (unsigned int i = 0; i < particles.size() && driven_.size() == particles.size(); ++i)
+    if (driven_[i])
+      r[i] = particles.force(i);
+  return r;
+}
+
+template <int dim>
+std::optional<double> NosbMethod<dim>::splice_strain_energy(const ParticleSet<dim>& particles,
+                                                            const BondList<dim>&) const {
+  if (pd_.parameters().stabilization == NosbStabilization::penalty &&
+      pd_.parameters().stabilization_coefficient > 0)
+    return std::nullopt; // the hourglass force is not the gradient of an energy
+  return pd_.strain_energy(particles);
+}
+
 template class NosbMethod<2>;
 template class NosbMethod<3>;
 

@@ -52,7 +52,14 @@ class NosbMethod : public ParticleMethod<dim> {
   std::vector<std::string> take_messages() override { return pd_.take_messages(); }
   // A particle's force gathers the families of its neighbours (f_m = −Σ_e w_e P_e G_m).
   bool needs_neighbour_rows() const override { return true; }
-  void set_driven(std::vector<std::uint8_t> driven) override { pd_.set_driven(std::move(driven)); }
+  void set_driven(std::vector<std::uint8_t> driven) override {
+    driven_ = driven;
+    pd_.set_driven(std::move(driven));
+  }
+  std::optional<std::vector<dealii::Tensor<1, dim>>>
+  driven_reactions(const ParticleSet<dim>& particles, const BondList<dim>& bonds) const override;
+  std::optional<double> splice_strain_energy(const ParticleSet<dim>& particles,
+                                             const BondList<dim>& bonds) const override;
   std::vector<HistoryRecord> history(const std::vector<std::uint8_t>& which) const override;
   void set_history(const std::vector<HistoryRecord>& records) override;
   void set_particle_states(
@@ -63,6 +70,7 @@ class NosbMethod : public ParticleMethod<dim> {
 
  private:
   NosbPD<dim> pd_;
+  std::vector<std::uint8_t> driven_; // set_driven()
 };
 
 } // namespace spinesim::meshfree

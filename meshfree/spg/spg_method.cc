@@ -273,6 +273,26 @@ const std::vector<dealii::Tensor<1, dim>>& SpgMethod<dim>::physical_displacement
   return solver_->physical_displacements();
 }
 
+template <int dim>
+std::optional<std::vector<dealii::Tensor<1, dim>>>
+SpgMethod<dim>::driven_reactions(const ParticleSet<dim>& particles, const BondList<dim>&) const {
+  if (!solver_ || driven_.size() != particles.size())
+    return std::vector<dealii::Tensor<1, dim>>(particles.size());
+  return solver_->driven_forces(driven_);
+}
+
+template <int dim>
+std::optional<double> SpgMethod<dim>::splice_strain_energy(const ParticleSet<dim>& particles,
+                                                           const BondList<dim>& bonds) const {
+  if (!solver_)
+    return 0.0;
+  // The smoothing force is refreshed every `Smoothing interval` steps: only with 1 is it the
+  // gradient of the stabilisation energy.
+  if (prm_.stabilisation > 0.0 && prm_.smoothing_interval != 1)
+    return std::nullopt;
+  return strain_energy(particles, bonds) + solver_->stabilisation_energy();
+}
+
 template class SpgMethod<2>;
 template class SpgMethod<3>;
 

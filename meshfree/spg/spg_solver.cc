@@ -480,6 +480,37 @@ std::vector<double> SPGSolver<dim>::stiffness_bound(const ParticleSet<dim>& p) c
   return S;
 }
 
+template <int dim>
+std::vector<dealii::Tensor<1, dim>>
+SPGSolver<dim>::driven_forces(const std::vector<std::uint8_t>& driven) const {
+  // The gather of compute_forces, f_I −= S_N ∇Ψ_I(X_N) over the rows N of I's support, read
+  // from each row N to the driven particles of its support (the bond k of N's row to I holds
+  // ∇Ψ_I(X_N)); the stabilisation force the same way from W_stab = Σ_N ½ κ_N |r_N|².
+  const unsigned int n = static_cast<unsigned int>(driven.size());
+  std::vector<Vector> f(n);
+  if (!rk_ || n != X0_.size())
+    return f;
+  const auto& rk = *rk_;
+  const bool stabilise = prm_.stabilisation > 0.0;
+  for (unsigned int N = 0; N < n; ++N) {
+    if (!has_row_[N])
+      continue;
+    if (driven[N]) {
+      f[N] -= stress_[N] * rk.self_gradient[N];
+      if (stabilise)
+        f[N] += ((rk.self_value[N] - 1.0) * kappa_[N]) * residual_[N];
+    }
+    for_each_bond_of(bonds_, N, [&](std::size_t k, unsigned int I) {
+      if (!driven[I])
+        return;
+      f[I] -= stress_[N] * rk.gradient[k];
+      if (stabilise)
+        f[I] += (kappa_[N] * rk.value[k]) * residual_[N];
+    });
+  }
+  return f;
+}
+
 template class SPGSolver<2>;
 template class SPGSolver<3>;
 

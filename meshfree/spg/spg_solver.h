@@ -132,6 +132,10 @@ class SPGSolver {
   // Whether particle i has a row (always, unless rows were given) / a force.
   bool has_row(unsigned int i) const { return has_row_[i] != 0; }
   bool has_force(unsigned int i) const { return complete_[i] != 0; }
+  // After compute_forces(): the forces on the particles with driven[i] != 0 from the stress
+  // and stabilisation energy of the rows (scattered from each row N to every particle of its
+  // support: −S_N ∇Ψ_I(X_N), the gather of compute_forces read the other way) [N].
+  std::vector<dealii::Tensor<1, dim>> driven_forces(const std::vector<std::uint8_t>& driven) const;
   // u(X_I) = Σ_J Ψ_J(X_I) d_J for the coefficients `d` at every particle with a row (the
   // coefficient itself elsewhere) [m]; total Lagrangian kernels.
   std::vector<dealii::Tensor<1, dim>> smoothed(const std::vector<dealii::Tensor<1, dim>>& d) const;

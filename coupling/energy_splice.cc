@@ -1,0 +1,549 @@
+#include "coupling/energy_splice.h"
+
+#include "coupling/mls_fit.h"
+#include "coupling/point_bins.h"
+
+#include "base/exceptions.h"
+#include "fem/materials/constitutive_law.h"
+
+#include <deal.II/base/index_set.h>
+#include <deal.II/base/mpi.h>
+#include <deal.II/dofs/dof_tools.h>
+#include <deal.II/fe/fe_values.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <iostream>
+#include <limits>
+#include <map>
+#include <sstream>
+
+namespace spinesim::coupling {
+
+using namespace dealii;
+
+template <int dim>
+std::array<double, EnergySplice<dim>::n_modes>
+EnergySplice<dim>::modes(const Point<dim>& x, unsigned int component) const {
+  std::array<double, n_modes> a{};
+  a[component] = 1.0;
+  for (unsigned int b = 0; b < dim; ++b)
+    a[dim + component * dim + b] = x[b] - centre_[b];
+  return a;
+}
+
+template <int dim>
+void EnergySplice<dim>::check() const {
+  const MPI_Comm comm = state_.fem.mpi_communicator();
+  if (Utilities::MPI::n_mpi_processes(comm) > 1)
+    throw InvalidInput("Coupling/Splice",
+                       "= energy on " + std::to_string(Utilities::MPI::n_mpi_processes(comm)) +
+                           " MPI ranks",
+                       "energy on one rank, or overlap on several");
+  const auto& m = *state_.method;
+  if (!m.driven_reactions(state_.particles, state_.bonds) ||
+      !m.splice_strain_energy(state_.particles, state_.bonds))
+    throw InvalidInput("Coupling/Splice",
+                       "= energy with particle method '" + m.name() +
+                           "' as configured (its forces are not the gradient of an energy: "
+                           "NOSB-PD's penalty stabilisation, SPG smoothing every n > 1 steps)",
+                       "bond_associated stabilisation (NOSB-PD), Smoothing interval = 1 (SPG), "
+                       "or Coupling/Splice = overlap");
+}
+
+template <int dim>
+void EnergySplice<dim>::spread_to_fem(const std::vector<Vector>& ghost_forces) {
+  // Nᵀ: each ghost owned here hands its force to the DoFs of its host cell with the weights
+  // that interpolated it (GhostLayer::update), through the hanging-node constraints.
+  auto& fem = state_.fem;
+  const auto& fe = fem.fe();
+  const unsigned int n = fe.n_dofs_per_cell();
+  fem_reactions_ = 0;
+  dealii::Vector<double> cell_force(n);
+  std::vector<types::global_dof_index> dofs(n);
+  std::map<int, std::vector<unsigned int>> by_cell; // active cell index -> ghosts
+  for (unsigned int i = 0; i < ghost_forces.size(); ++i)
+    if (!state_.free[i] && state_.host_index[i] >= 0 && ghost_forces[i].norm_square() > 0)
+      by_cell[state_.host_index[i]].push_back(i);
+  for (const auto& [c, ghosts] : by_cell) {
+    const auto& cell = state_.owned_by_index[c];
+    cell_force = 0;
+    for (const unsigned int i : ghosts) {
+      const unsigned int q = state_.host_point[i];
+      for (unsigned int j = 0; j < n; ++j)
+        cell_force[j] +=
+            state_.shape(q, j) * ghost_forces[i][fe.system_to_component_index(j).first];
+    }
+    cell->get_dof_indices(dofs);
+    fem.hanging_constraints().distribute_local_to_global(cell_force, dofs, fem_reactions_);
+  }
+  fem_reactions_.compress(VectorOperation::add);
+  const double* v = fem_reactions_.begin();
+  fem_reaction_values_.assign(v, v + fem.locally_owned_dofs().n_elements());
+}
+
+template <int dim>
+void EnergySplice<dim>::rebuild() {
+  if (!on())
+    return;
+  check();
+  ready_ = false;
+  built_ = true;
+  auto& fem = state_.fem;
+  auto& particles = state_.particles;
+  const unsigned int n = particles.size();
+  const MPI_Comm comm = fem.mpi_communicator();
+  const auto& owned = fem.locally_owned_dofs();
+  const auto& dh = fem.dof_handler();
+  const auto& fe = fem.fe();
+  const unsigned int n_cell_dofs = fe.n_dofs_per_cell();
+  const auto& unit = fe.get_unit_support_points();
+
+  // Support points and components of the owned DoFs.
+  dof_point_.assign(owned.n_elements(), Point<dim>());
+  dof_component_.assign(owned.n_elements(), 0);
+  std::vector<types::global_dof_index> dofs(n_cell_dofs);
+  for (const auto& cell : dh.active_cell_iterators())
+    if (cell->is_locally_owned()) {
+      cell->get_dof_indices(dofs);
+      for (unsigned int i = 0; i < n_cell_dofs; ++i)
+        if (owned.is_element(dofs[i])) {
+          const auto k = owned.index_within_set(dofs[i]);
+          dof_point_[k] = fem.mapping().transform_unit_to_real_cell(cell, unit[i]);
+          dof_component_[k] = fe.system_to_component_index(i).first;
+        }
+    }
+  IndexSet relevant;
+  DoFTools::extract_locally_relevant_dofs(dh, relevant);
+  fem_reactions_.reinit(owned, relevant, comm, true);
+  fem_reaction_values_.assign(owned.n_elements(), 0.0);
+
+  // The affine modes about the centre of the free particles (conditioning of Aᵀ M A).
+  centre_ = Point<dim>();
+  unsigned int n_free = 0;
+  for (unsigned int i = 0; i < n; ++i)
+    if (state_.free[i]) {
+      centre_ += particles.reference_position(i);
+      ++n_free;
+    }
+  if (n_free > 0)
+    centre_ /= n_free;
+
+  // G = K A − T per gradient mode (translations create no force in either model), in the
+  // K u = −f convention: the method's forces for u = ±ε H (x − c) (central differences, O(ε²)
+  // from the tangent; ε = 1e-6 keeps the round-off of the forces at 1e-10 of G).
+  std::vector<std::array<std::array<double, n_modes>, dim>> gp(n);
+  std::vector<std::array<double, n_modes>> gf(owned.n_elements());
+  {
+    const double eps = 1e-6;
+    const auto saved = particles.displacements();
+    auto& method = *state_.method;
+    std::vector<Vector> ghost_g(n);
+    for (unsigned int a = 0; a < dim; ++a)
+      for (unsigned int b = 0; b < dim; ++b) {
+        const unsigned int mode = dim + a * dim + b;
+        std::fill(ghost_g.begin(), ghost_g.end(), Vector());
+        for (const double sign : {1.0, -1.0}) {
+          for (unsigned int i = 0; i < n; ++i) {
+            Vector u;
+            u[a] = sign * eps * (particles.reference_position(i)[b] - centre_[b]);
+            particles.displacement(i) = u;
+          }
+          method.compute_forces(particles, state_.bonds, false);
+          const auto reactions = *method.driven_reactions(particles, state_.bonds);
+          const double w = -sign / (2 * eps);
+          for (unsigned int i = 0; i < n; ++i) {
+            if (state_.free[i] && state_.is_owned(i))
+              for (unsigned int d = 0; d < dim; ++d)
+                gp[i][d][mode] += w * particles.force(i)[d];
+            else if (!state_.free[i])
+              ghost_g[i] += w * reactions[i];
+          }
+        }
+        spread_to_fem(ghost_g);
+        for (std::size_t k = 0; k < gf.size(); ++k)
+          gf[k][mode] = fem_reaction_values_[k];
+      }
+    for (unsigned int i = 0; i < n; ++i)
+      particles.displacement(i) = saved[i];
+    method.compute_forces(particles, state_.bonds, false);
+    method.rollback_state();
+    fem_reaction_values_.assign(owned.n_elements(), 0.0);
+  }
+
+  // T: the converted cells' FEM forces for each affine mode, at their nodes, handed to the
+  // particles by the fits of those nodes (the interface DoFs' own fits, new ones elsewhere).
+  auto& fits = fits_;
+  fits.clear();
+  replaced_.clear();
+  for (const auto& entry : interface_.dofs())
+    fits[entry.dof] = entry.weights;
+  std::vector<Point<dim>> free_points;
+  std::vector<unsigned int> free_index;
+  for (unsigned int i = 0; i < n; ++i)
+    if (state_.free[i]) {
+      free_points.push_back(particles.reference_position(i));
+      free_index.push_back(i);
+    }
+  PointBins<dim> bins(free_points, state_.prm.interface_radius * state_.spacing * 4);
+  const auto fit_at = [&](const Point<dim>& X) {
+    for (unsigned int attempt = 0; attempt < 3; ++attempt) {
+      const double r = state_.prm.interface_radius * state_.spacing * (1.0 + 0.5 * attempt);
+      if (const auto w =
+              mls_linear_weights<dim>(X, free_points, bins.within(X, r), r, state_.spacing)) {
+        std::vector<std::pair<unsigned int, double>> out;
+        for (const auto& [k, phi] : *w)
+          out.emplace_back(free_index[k], phi);
+        return out;
+      }
+    }
+    std::ostringstream where;
+    where << "node at (" << X << ") of a converted cell";
+    throw NumericalFailure("singular moving-least-squares fit for the splice correction",
+                           where.str(),
+                           "convert larger blocks (Coupling/Buffer), use more particles per cell "
+                           "direction or a larger Coupling/Interface radius");
+  };
+  FEValues<dim> fe_values(fem.mapping(), fe, fem.quadrature(),
+                          update_gradients | update_JxW_values);
+  double t_scale = 0;
+  for (const auto& cell : dh.active_cell_iterators()) {
+    if (!cell->is_locally_owned() || fem.is_active(cell))
+      continue;
+    fe_values.reinit(cell);
+    cell->get_dof_indices(dofs);
+    // The elastic tangent of the cell's law, condensed to plane stress like the FEM's points.
+    const auto C3 = fem.cell_material(cell).small_strain(materials::SymTensor2(), 0.0, {}).tangent;
+    for (unsigned int a = 0; a < dim; ++a)
+      for (unsigned int b = 0; b < dim; ++b) {
+        const unsigned int mode = dim + a * dim + b;
+        materials::SymTensor2 strain; // sym(e_a ⊗ e_b) (one stored entry for a ≠ b)
+        strain[a][b] = a == b ? 1.0 : 0.5;
+        materials::SymTensor2 sigma = C3 * strain;
+        if (dim == 2 && fem.parameters().plane_stress) {
+          // σ_zz = 0: ε_zz = −C_zz:ε / C_zzzz, then σ = C:(ε + ε_zz e_z ⊗ e_z).
+          materials::SymTensor2 ez;
+          ez[2][2] = 1.0;
+          const double ezz = -(ez * (C3 * strain)) / (ez * (C3 * ez));
+          sigma = C3 * (strain + ezz * ez);
+        }
+        for (unsigned int i = 0; i < n_cell_dofs; ++i) {
+          const unsigned int c = fe.system_to_component_index(i).first;
+          double f = 0;
+          for (unsigned int q = 0; q < fe_values.n_quadrature_points; ++q) {
+            const auto grad = fe_values.shape_grad_component(i, q, c);
+            for (unsigned int j = 0; j < dim; ++j)
+              f += sigma[c][j] * grad[j] * fe_values.JxW(q);
+          }
+          if (f == 0)
+            continue;
+          t_scale = std::max(t_scale, std::abs(f));
+          if (!fits.count(dofs[i])) {
+            const Point<dim> X = fem.mapping().transform_unit_to_real_cell(cell, unit[i]);
+            fits.emplace(dofs[i], fit_at(X));
+          }
+          replaced_[dofs[i]][mode] += f;
+        }
+      }
+  }
+
+  // Rows of R = −G without T (every component of the free particles, every owned DoF):
+  // finalise() adds T and the driven DoFs' shares once the FEM's split of its DoFs is known.
+  particle_rows_.clear();
+  for (unsigned int i = 0; i < n; ++i)
+    if (state_.free[i])
+      for (unsigned int d = 0; d < dim; ++d) {
+        Row row{i, d, {}};
+        for (unsigned int l = 0; l < n_modes; ++l)
+          row.r[l] = -gp[i][d][l];
+        particle_rows_.push_back(row);
+      }
+  dof_rows_all_.clear();
+  for (std::size_t k = 0; k < gf.size(); ++k) {
+    Row row{static_cast<unsigned int>(k), 0, {}};
+    for (unsigned int l = 0; l < n_modes; ++l)
+      row.r[l] = -gf[k][l];
+    dof_rows_all_.push_back(row);
+  }
+  t_scale_ = t_scale;
+  splice_forces_.assign(n, Vector());
+  ghost_reactions_.assign(n, Vector());
+}
+
+template <int dim>
+void EnergySplice<dim>::finalise(const StepForces& forces) {
+  auto& fem = state_.fem;
+  const auto& particles = state_.particles;
+  const auto& owned = fem.locally_owned_dofs();
+  const std::size_t n_owned = owned.n_elements();
+  // Rows by key: particle (i, d) and owned DoF k.
+  std::map<std::pair<unsigned int, unsigned int>, std::size_t> particle_row;
+  for (std::size_t r = 0; r < particle_rows_.size(); ++r)
+    particle_row[{particle_rows_[r].index, particle_rows_[r].component}] = r;
+  const auto add_to_particles = [&](const std::vector<std::pair<unsigned int, double>>& fit,
+                                    unsigned int component, const std::array<double, n_modes>& r,
+                                    double factor) {
+    for (const auto& [p, phi] : fit) {
+      auto& row = particle_rows_[particle_row.at({p, component})].r;
+      for (unsigned int l = 0; l < n_modes; ++l)
+        row[l] += factor * phi * r[l];
+    }
+  };
+  // The ghosts' reactions on driven DoFs reach the particles through Φᵀ, like every force on
+  // those DoFs: so does their share of G.
+  for (const auto& entry : interface_.dofs()) {
+    if (!owned.is_element(entry.dof))
+      continue;
+    const auto k = owned.index_within_set(entry.dof);
+    if (forces.is_driven(k))
+      add_to_particles(entry.weights, entry.component, dof_rows_all_[k].r, 1.0);
+  }
+  // T (R = −G = T − K A): the replaced cells' forces stay on prescribed DoFs; on the others
+  // (driven, hanging, orphaned: none moves by itself) they go to the particles through the
+  // node's fit.
+  std::vector<std::array<double, n_modes>> prescribed_t(n_owned);
+  for (const auto& [dof, t] : replaced_) {
+    if (!owned.is_element(dof))
+      continue;
+    const auto k = owned.index_within_set(dof);
+    if (forces.is_prescribed(k))
+      for (unsigned int l = 0; l < n_modes; ++l)
+        prescribed_t[k][l] += t[l];
+    else
+      add_to_particles(fits_.at(dof), dof_component_[k], t, 1.0);
+  }
+  dof_rows_.clear();
+  free_dofs_.clear();
+  row_dofs_.clear();
+  for (std::size_t k = 0; k < n_owned; ++k) {
+    if (!forces.is_free(k) && !forces.is_prescribed(k))
+      continue;
+    row_dofs_.push_back(static_cast<unsigned int>(k));
+    if (forces.is_free(k))
+      free_dofs_.push_back(static_cast<unsigned int>(k));
+    Row row = dof_rows_all_[k];
+    for (unsigned int l = 0; l < n_modes; ++l)
+      row.r[l] += prescribed_t[k][l];
+    dof_rows_.push_back(row);
+  }
+  // Drop the rows without any entry (most of them: the correction is local).
+  double r_max = 0;
+  for (const auto* rows : {&particle_rows_, &dof_rows_})
+    for (const auto& row : *rows)
+      for (const double r : row.r)
+        r_max = std::max(r_max, std::abs(r));
+  ghost_force_relative_ = t_scale_ > 0 ? r_max / t_scale_ : 0.0;
+  const auto prune = [&](std::vector<Row>& rows) {
+    rows.erase(std::remove_if(rows.begin(), rows.end(),
+                              [&](const Row& row) {
+                                for (const double r : row.r)
+                                  if (std::abs(r) > 1e-14 * r_max)
+                                    return false;
+                                return true;
+                              }),
+               rows.end());
+  };
+  prune(particle_rows_);
+  prune(dof_rows_);
+
+  // Aᵀ M A over the unknowns, and sym(RᵀA).
+  FullMatrix<double> AMA(n_modes, n_modes), RA(n_modes, n_modes);
+  const double* mass = fem.lumped_mass().begin();
+  const auto add_mass = [&](double m, const std::array<double, n_modes>& a) {
+    for (unsigned int i = 0; i < n_modes; ++i)
+      for (unsigned int j = 0; j < n_modes; ++j)
+        AMA(i, j) += m * a[i] * a[j];
+  };
+  for (unsigned int i = 0; i < particles.size(); ++i)
+    if (state_.free[i] && state_.is_owned(i))
+      for (unsigned int d = 0; d < dim; ++d)
+        add_mass(particles.mass(i), modes(particles.reference_position(i), d));
+  for (const unsigned int k : row_dofs_)
+    add_mass(mass[k], modes(dof_point_[k], dof_component_[k]));
+  const auto add_row = [&](const Row& row, const std::array<double, n_modes>& a) {
+    for (unsigned int i = 0; i < n_modes; ++i)
+      for (unsigned int j = 0; j < n_modes; ++j)
+        RA(i, j) += row.r[i] * a[j];
+  };
+  for (const auto& row : particle_rows_)
+    add_row(row, modes(particles.reference_position(row.index), row.component));
+  for (const auto& row : dof_rows_)
+    add_row(row, modes(dof_point_[row.index], dof_component_[row.index]));
+  Q_.reinit(n_modes, n_modes);
+  Q_.invert(AMA);
+  S_.reinit(n_modes, n_modes);
+  for (unsigned int i = 0; i < n_modes; ++i)
+    for (unsigned int j = 0; j < n_modes; ++j)
+      S_(i, j) = 0.5 * (RA(i, j) + RA(j, i));
+  if (std::getenv("SPLICE_DEBUG")) {
+    double asym = 0, norm = 0;
+    for (unsigned int i = 0; i < n_modes; ++i)
+      for (unsigned int j = 0; j < n_modes; ++j) {
+        asym = std::max(asym, std::abs(RA(i, j) - RA(j, i)));
+        norm = std::max(norm, std::abs(RA(i, j)));
+      }
+    std::cerr << "splice: rows " << particle_rows_.size() << " + " << dof_rows_.size()
+              << ", ghost force relative " << ghost_force_relative_ << ", RA asym " << asym / norm
+              << "\n";
+    for (unsigned int i = 0; i < n_modes; ++i) {
+      for (unsigned int j = 0; j < n_modes; ++j)
+        std::cerr << RA(i, j) << " ";
+      std::cerr << "\n";
+    }
+  }
+  if (std::getenv("SPLICE_DEBUG_NO_CORRECTION")) {
+    particle_rows_.clear();
+    dof_rows_.clear();
+    S_ = 0;
+    Q_ = 0;
+  }
+  ready_ = true;
+}
+
+template <int dim>
+void EnergySplice<dim>::take_particle_forces() {
+  const auto r = state_.method->driven_reactions(state_.particles, state_.bonds);
+  ghost_reactions_ = *r;
+  spread_to_fem(ghost_reactions_);
+}
+
+template <int dim>
+void EnergySplice<dim>::on_fem_forces(const StepForces& forces) {
+  if (!ready_)
+    finalise(forces);
+  auto& fem = state_.fem;
+  const auto& particles = state_.particles;
+  const auto& owned = fem.locally_owned_dofs();
+  std::fill(splice_forces_.begin(), splice_forces_.end(), Vector());
+  // The ghosts' reactions on every DoF that moves (free or driven).
+  for (std::size_t k = 0; k < fem_reaction_values_.size(); ++k)
+    if (fem_reaction_values_[k] != 0 && (forces.is_free(k) || forces.is_driven(k)))
+      forces.add(k, fem_reaction_values_[k]);
+  // The correction −C u = −R α − M A Q (β − S α), α = Pᵀu = Q Aᵀ M u, β = Rᵀu.
+  const double* u_fem = fem.displacement().trilinos_vector()[0]; // one rank: owned order
+  const double* mass = fem.lumped_mass().begin();
+  dealii::Vector<double> moment(n_modes), alpha(n_modes), beta(n_modes), gamma(n_modes), t(n_modes);
+  for (unsigned int i = 0; i < particles.size(); ++i)
+    if (state_.free[i])
+      for (unsigned int d = 0; d < dim; ++d) {
+        const auto a = modes(particles.reference_position(i), d);
+        const double mu = particles.mass(i) * particles.displacement(i)[d];
+        for (unsigned int l = 0; l < n_modes; ++l)
+          moment[l] += a[l] * mu;
+      }
+  for (const unsigned int k : row_dofs_) {
+    const auto a = modes(dof_point_[k], dof_component_[k]);
+    const double mu = mass[k] * u_fem[k];
+    for (unsigned int l = 0; l < n_modes; ++l)
+      moment[l] += a[l] * mu;
+  }
+  Q_.vmult(alpha, moment);
+  for (const auto& row : particle_rows_)
+    for (unsigned int l = 0; l < n_modes; ++l)
+      beta[l] += row.r[l] * particles.displacement(row.index)[row.component];
+  for (const auto& row : dof_rows_)
+    for (unsigned int l = 0; l < n_modes; ++l)
+      beta[l] += row.r[l] * u_fem[row.index];
+  S_.vmult(t, alpha);
+  correction_energy_ = beta * alpha - 0.5 * (alpha * t);
+  t.sadd(-1.0, 1.0, beta); // β − S α
+  Q_.vmult(gamma, t);
+  for (unsigned int i = 0; i < particles.size(); ++i)
+    if (state_.free[i])
+      for (unsigned int d = 0; d < dim; ++d) {
+        const auto a = modes(particles.reference_position(i), d);
+        double f = 0;
+        for (unsigned int l = 0; l < n_modes; ++l)
+          f -= a[l] * gamma[l];
+        splice_forces_[i][d] += particles.mass(i) * f; // on a fixed component: a reaction
+      }
+  for (const auto& row : particle_rows_) {
+    double f = 0;
+    for (unsigned int l = 0; l < n_modes; ++l)
+      f -= row.r[l] * alpha[l];
+    splice_forces_[row.index][row.component] += f;
+  }
+  {
+    std::vector<double> f(owned.n_elements(), 0.0);
+    for (const unsigned int k : free_dofs_) {
+      const auto a = modes(dof_point_[k], dof_component_[k]);
+      double g = 0;
+      for (unsigned int l = 0; l < n_modes; ++l)
+        g -= a[l] * gamma[l];
+      f[k] = mass[k] * g;
+    }
+    for (const auto& row : dof_rows_)
+      for (unsigned int l = 0; l < n_modes; ++l)
+        f[row.index] -= row.r[l] * alpha[l];
+    for (const unsigned int k : free_dofs_)
+      forces.add(k, f[k]);
+  }
+  // The net forces on the driven DoFs (FEM and reactions) to the particles: Φᵀ.
+  for (const auto& entry : interface_.dofs()) {
+    if (!owned.is_element(entry.dof))
+      continue;
+    const auto k = owned.index_within_set(entry.dof);
+    if (!forces.is_driven(k))
+      continue;
+    const double F = forces.force(k);
+    for (const auto& [p, phi] : entry.weights)
+      splice_forces_[p][entry.component] += phi * F;
+  }
+}
+
+template <int dim>
+double EnergySplice<dim>::energy() {
+  auto& fem = state_.fem;
+  const auto& particles = state_.particles;
+  const double stored_fem = fem.linear_stored_energy();
+  double kinetic = 0;
+  for (unsigned int i = 0; i < particles.size(); ++i)
+    if (state_.free[i])
+      kinetic += 0.5 * particles.mass(i) * particles.velocity(i).norm_square();
+  // The FEM's kinetic energy without the interface DoFs (they follow the particles and carry
+  // no inertia in this splice).
+  kinetic += fem.kinetic_energy();
+  const double* v = fem.velocity().trilinos_vector()[0]; // one rank: owned order
+  const double* mass = fem.lumped_mass().begin();
+  const auto& owned = fem.locally_owned_dofs();
+  for (const auto& entry : interface_.dofs())
+    if (owned.is_element(entry.dof)) {
+      const auto k = owned.index_within_set(entry.dof);
+      kinetic -= 0.5 * mass[k] * v[k] * v[k];
+    }
+  const auto pd = state_.method->splice_strain_energy(particles, state_.bonds);
+  // ½ uᵀ C u at the current state.
+  double correction = 0;
+  if (ready_) {
+    const double* u_fem = fem.displacement().trilinos_vector()[0];
+    dealii::Vector<double> moment(n_modes), alpha(n_modes), beta(n_modes), t(n_modes);
+    for (unsigned int i = 0; i < particles.size(); ++i)
+      if (state_.free[i])
+        for (unsigned int d = 0; d < dim; ++d) {
+          const auto a = modes(particles.reference_position(i), d);
+          for (unsigned int l = 0; l < n_modes; ++l)
+            moment[l] += a[l] * particles.mass(i) * particles.displacement(i)[d];
+        }
+    for (const unsigned int k : row_dofs_) {
+      const auto a = modes(dof_point_[k], dof_component_[k]);
+      for (unsigned int l = 0; l < n_modes; ++l)
+        moment[l] += a[l] * mass[k] * u_fem[k];
+    }
+    Q_.vmult(alpha, moment);
+    for (const auto& row : particle_rows_)
+      for (unsigned int l = 0; l < n_modes; ++l)
+        beta[l] += row.r[l] * particles.displacement(row.index)[row.component];
+    for (const auto& row : dof_rows_)
+      for (unsigned int l = 0; l < n_modes; ++l)
+        beta[l] += row.r[l] * u_fem[row.index];
+    S_.vmult(t, alpha);
+    correction = beta * alpha - 0.5 * (alpha * t);
+  }
+  return kinetic + stored_fem + (pd ? *pd : std::numeric_limits<double>::quiet_NaN()) + correction;
+}
+
+template class EnergySplice<2>;
+template class EnergySplice<3>;
+
+} // namespace spinesim::coupling

@@ -1,0 +1,120 @@
+#ifndef SPINESIM_COUPLING_ENERGY_SPLICE_H
+#define SPINESIM_COUPLING_ENERGY_SPLICE_H
+
+// The energy-conserving splice (Coupling/Splice = energy). The layers are those of the overlap
+// splice: ghost particles follow the FEM, u_G = N u, and the interface DoFs follow the moving-
+// least-squares fit of the free particles, u_I = Φ u_P. The forces, however, all derive from
+// one energy,
+//     E(u_P, u_F) = E_FEM(active cells; u_F, Φ u_P) + E_PD(u_P, N u) + ½ uᵀ C u,
+// with E_PD what the free particles' forces are computed from
+// (ParticleMethod::splice_strain_energy): the ghosts' reactions go to the FEM through Nᵀ, the
+// FEM's net forces on the interface DoFs go to the particles through Φᵀ, and the interface DoFs
+// have no inertia of their own. The coupled stiffness is then symmetric and central differences
+// conserve a shadow energy: no mode grows (the overlap splice's operator is not symmetric and
+// some of its modes do; docs/coupling.md, stability of the splice).
+//
+// Without C this splice has ghost forces: the overlap band is counted by both models and the
+// particles' surfaces differ from the cells they replaced. For an affine field u = A a they are
+// linear in a: G = K A − T, where T is what the replaced cells would feel (their FEM forces for
+// the affine field, handed to the particles through the Φ fits of their nodes; the active cells'
+// share cancels because Φ reproduces affine fields). AᵀKA and AᵀT are both symmetric, so AᵀG
+// is, and the symmetric correction of rank 2m
+//     C = R Pᵀ + P Rᵀ − P (RᵀA) Pᵀ,   R = −G,   P = M A (Aᵀ M A)⁻¹
+// (A the m = dim + dim² affine modes over the unknowns, M their lumped masses) satisfies
+// C A = R, so (K + C) A = T: affine fields are exact again. C is made once per split from the
+// method's forces for small affine fields (central differences, so exact in the linear limit;
+// at a strain ε the ghost force left is O(ε) of the uncorrected one). P spreads over every
+// unknown, which keeps C small next to K (a 2-D prototype of this splice with P on the
+// particles only had a negative stiffness in some layouts; with the mass weighting over all
+// unknowns none was found).
+//
+// One MPI rank (the reactions and the correction's sums are gathered on the rank that owns
+// everything).
+
+#include "coupling/coupling_state.h"
+#include "coupling/mls_interface.h"
+
+#include <deal.II/lac/full_matrix.h>
+
+#include <array>
+#include <map>
+#include <vector>
+
+namespace spinesim::coupling {
+
+template <int dim>
+class EnergySplice {
+ public:
+  using Vector = dealii::Tensor<1, dim>;
+  using StepForces = typename fem::MechanicsSolver<dim>::StepForces;
+  static constexpr unsigned int n_modes = dim + dim * dim;
+
+  EnergySplice(CouplingState<dim>& state, MlsInterface<dim>& interface)
+      : state_(state), interface_(interface) {}
+
+  bool on() const { return state_.prm.splice == "energy"; }
+  // InvalidInput unless this run can use it (one rank, a method that provides its energy).
+  void check() const;
+  // After the split changed (conversion, restart): the correction for the new split. Leaves
+  // the particles' displacements, forces and trial states as they were.
+  void rebuild();
+  // After the particle force pass of a step: the ghosts' reactions, spread to the FEM DoFs.
+  void take_particle_forces();
+  // The FEM's hook at the same state: reactions and correction onto the free FEM DoFs, the
+  // net forces of the driven DoFs onto the particles (splice_forces()).
+  void on_fem_forces(const StepForces& forces);
+  // Per particle: the force of the FEM and of the correction at the last hook [N].
+  const std::vector<Vector>& splice_forces() const { return splice_forces_; }
+  // ½ uᵀ C u at the last hook [J].
+  double correction_energy() const { return correction_energy_; }
+  // The conserved energy at the current state (collective): kinetic energy of the free
+  // particles and of the free FEM DoFs, FEM stored energy (linear path) and the particle and
+  // correction energies [J]. NaN where the FEM is not on its linear path.
+  double energy();
+  // max |G a| / max |T a| over the affine modes before the correction (what it removes) [-].
+  double ghost_force_relative() const { return ghost_force_relative_; }
+
+ private:
+  struct Row {
+    unsigned int index;            // particle, or owned local DoF index
+    unsigned int component;        // particle component (0 for DoFs)
+    std::array<double, n_modes> r; // R = −G, one entry per mode
+  };
+  // The affine mode values at a point: mode d (d < dim) translates along d, mode dim + a dim + b
+  // is the gradient e_a ⊗ e_b about centre_.
+  std::array<double, n_modes> modes(const dealii::Point<dim>& x, unsigned int component) const;
+  // Nᵀ of per-particle forces on the ghosts owned here, into fem_reactions_ (owned DoFs).
+  void spread_to_fem(const std::vector<Vector>& ghost_forces);
+  // The rows of the unknowns, their masses and the correction matrices (needs the FEM's
+  // step tables: called from the first hook after a rebuild).
+  void finalise(const StepForces& forces);
+
+  CouplingState<dim>& state_;
+  MlsInterface<dim>& interface_;
+  std::vector<Vector> ghost_reactions_, splice_forces_;
+  dealii::TrilinosWrappers::MPI::Vector fem_reactions_; // owned, writable ghosts
+  std::vector<double> fem_reaction_values_;             // owned local order
+  dealii::Point<dim> centre_;
+  // Owned DoFs: support point and component (local order of the owned set).
+  std::vector<dealii::Point<dim>> dof_point_;
+  std::vector<unsigned int> dof_component_;
+  // R = −G: particle rows (every component of the free particles, fixed ones too) and
+  // owned-DoF rows (before finalise(): every DoF's share of the ghosts' reactions; after: the
+  // free and prescribed DoFs'). The affine identity C A = R needs every row whose value the
+  // energy reads, prescribed ones included (their forces are reactions and go nowhere).
+  std::vector<Row> particle_rows_, dof_rows_all_;
+  std::vector<Row> dof_rows_;
+  // The replaced cells' forces for the affine modes per node DoF (T, K u sign) and the fits of
+  // those nodes; finalise() hands them to the particles (driven, hanging and orphaned DoFs) or
+  // keeps them on prescribed DoFs.
+  std::map<dealii::types::global_dof_index, std::array<double, n_modes>> replaced_;
+  std::map<dealii::types::global_dof_index, std::vector<std::pair<unsigned int, double>>> fits_;
+  std::vector<unsigned int> free_dofs_, row_dofs_; // owned local indices: free; free + prescribed
+  dealii::FullMatrix<double> Q_, S_;               // (Aᵀ M A)⁻¹ and sym(RᵀA)
+  bool ready_ = false, built_ = false;
+  double correction_energy_ = 0, ghost_force_relative_ = 0, t_scale_ = 0;
+};
+
+} // namespace spinesim::coupling
+
+#endif
