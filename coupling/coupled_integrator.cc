@@ -19,15 +19,24 @@ using namespace dealii;
 template <int dim>
 double CoupledIntegrator<dim>::stable_time_step() const {
   const auto& particles = state_.particles;
-  double dt = state_.fem.stable_time_step();
+  const MPI_Comm comm = state_.fem.mpi_communicator(); // rows live with their owners
+  const double dt_fem = state_.fem.stable_time_step();
+  double dt_pd = std::numeric_limits<double>::infinity();
   if (state_.n_free_particles() > 0) {
     const auto S = state_.method->stiffness_bound(particles, state_.bonds);
     for (unsigned int i = 0; i < particles.size(); ++i)
       if (state_.free[i] && S[i] > 0)
-        dt = std::min(dt,
-                      state_.prm.time_step_safety * std::sqrt(2.0 * particles.density(i) / S[i]));
+        dt_pd = std::min(dt_pd, state_.prm.time_step_safety *
+                                    std::sqrt(2.0 * particles.density(i) / S[i]));
   }
-  return Utilities::MPI::min(dt, state_.fem.mpi_communicator()); // rows live with their owners
+  dt_pd = Utilities::MPI::min(dt_pd, comm);
+  if (!(splice_.on() && state_.n_free_particles() > 0))
+    return std::min(dt_fem, dt_pd);
+  // The energy splice adds the two models' stiffnesses where they overlap (the ghost band
+  // counts in both) and passes the FEM's interface stiffness to the particles: by Weyl's
+  // inequality the coupled ω_max² is at most the sum of the parts' ω², ω = 2 / Δt for each
+  // part's safe step, plus the correction's.
+  return splice_.limit_step(1.0 / std::sqrt(1.0 / (dt_fem * dt_fem) + 1.0 / (dt_pd * dt_pd)));
 }
 
 template <int dim>

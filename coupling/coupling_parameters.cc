@@ -3,6 +3,8 @@
 #include "base/exceptions.h"
 #include "base/list_parsing.h"
 
+#include <deal.II/base/mpi.h>
+
 namespace spinesim::coupling {
 
 using namespace dealii;
@@ -119,6 +121,12 @@ void CouplingParameters<dim>::parse(ParameterHandler& prm, const std::string& me
   ghost_layer = prm.get_double("Ghost layer");
   interface_radius = prm.get_double("Interface radius");
   splice = prm.get("Splice");
+  if (splice == "energy" && Utilities::MPI::n_mpi_processes(MPI_COMM_WORLD) > 1)
+    throw InvalidInput("Coupling/Splice",
+                       "= energy on " +
+                           std::to_string(Utilities::MPI::n_mpi_processes(MPI_COMM_WORLD)) +
+                           " MPI ranks (its reactions and correction are gathered on one rank)",
+                       "energy on one rank, or overlap on several");
   time_step_safety = prm.get_double("Time step safety");
   all_particles = prm.get_bool("All particles");
   region_lower =

@@ -10,11 +10,10 @@
 #include <deal.II/base/mpi.h>
 #include <deal.II/dofs/dof_tools.h>
 #include <deal.II/fe/fe_values.h>
+#include <deal.II/lac/lapack_full_matrix.h>
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
-#include <iostream>
 #include <limits>
 #include <map>
 #include <sstream>
@@ -84,7 +83,7 @@ void EnergySplice<dim>::spread_to_fem(const std::vector<Vector>& ghost_forces) {
 }
 
 template <int dim>
-void EnergySplice<dim>::rebuild() {
+void EnergySplice<dim>::rebuild(const StepForces& split) {
   if (!on())
     return;
   check();
@@ -267,6 +266,7 @@ void EnergySplice<dim>::rebuild() {
     dof_rows_all_.push_back(row);
   }
   t_scale_ = t_scale;
+  finalise(split);
   splice_forces_.assign(n, Vector());
   ghost_reactions_.assign(n, Vector());
 }
@@ -376,29 +376,53 @@ void EnergySplice<dim>::finalise(const StepForces& forces) {
   for (unsigned int i = 0; i < n_modes; ++i)
     for (unsigned int j = 0; j < n_modes; ++j)
       S_(i, j) = 0.5 * (RA(i, j) + RA(j, i));
-  if (std::getenv("SPLICE_DEBUG")) {
-    double asym = 0, norm = 0;
-    for (unsigned int i = 0; i < n_modes; ++i)
-      for (unsigned int j = 0; j < n_modes; ++j) {
-        asym = std::max(asym, std::abs(RA(i, j) - RA(j, i)));
-        norm = std::max(norm, std::abs(RA(i, j)));
+  // The correction's spectrum: C = U B Uᵀ with U = [R, P], B = [[−S, I], [I, 0]] (in the
+  // order (P, R)); the nonzero eigenvalues of M⁻¹C are those of B (Uᵀ M⁻¹ U), a 2m × 2m matrix:
+  // Pᵀ M⁻¹ P = Q, Pᵀ M⁻¹ R = Q Aᵀ R, Rᵀ M⁻¹ R = Σ r rᵀ / m.
+  {
+    const unsigned int m = n_modes;
+    FullMatrix<double> gram(2 * m, 2 * m), B(2 * m, 2 * m), BG(2 * m, 2 * m);
+    FullMatrix<double> QAR(m, m);
+    for (unsigned int i = 0; i < m; ++i)
+      for (unsigned int j = 0; j < m; ++j)
+        for (unsigned int k = 0; k < m; ++k)
+          QAR(i, j) += Q_(i, k) * RA(j, k); // (Q Aᵀ R)_ij = Σ_k Q_ik (RᵀA)_jk
+    const auto add_rr = [&](const Row& row, double mass) {
+      for (unsigned int i = 0; i < m; ++i)
+        for (unsigned int j = 0; j < m; ++j)
+          gram(m + i, m + j) += row.r[i] * row.r[j] / mass;
+    };
+    for (const auto& row : particle_rows_)
+      add_rr(row, particles.mass(row.index));
+    for (const auto& row : dof_rows_)
+      add_rr(row, mass[row.index]);
+    for (unsigned int i = 0; i < m; ++i)
+      for (unsigned int j = 0; j < m; ++j) {
+        gram(i, j) = Q_(i, j);
+        gram(i, m + j) = QAR(i, j);
+        gram(m + j, i) = QAR(i, j);
+        B(i, j) = -S_(i, j);
       }
-    std::cerr << "splice: rows " << particle_rows_.size() << " + " << dof_rows_.size()
-              << ", ghost force relative " << ghost_force_relative_ << ", RA asym " << asym / norm
-              << "\n";
-    for (unsigned int i = 0; i < n_modes; ++i) {
-      for (unsigned int j = 0; j < n_modes; ++j)
-        std::cerr << RA(i, j) << " ";
-      std::cerr << "\n";
+    for (unsigned int i = 0; i < m; ++i) {
+      B(i, m + i) = 1.0;
+      B(m + i, i) = 1.0;
     }
-  }
-  if (std::getenv("SPLICE_DEBUG_NO_CORRECTION")) {
-    particle_rows_.clear();
-    dof_rows_.clear();
-    S_ = 0;
-    Q_ = 0;
+    B.mmult(BG, gram);
+    LAPACKFullMatrix<double> lapack(2 * m, 2 * m);
+    lapack = BG;
+    lapack.compute_eigenvalues();
+    max_frequency_squared_ = 0;
+    for (unsigned int i = 0; i < 2 * m; ++i)
+      max_frequency_squared_ = std::max(max_frequency_squared_, lapack.eigenvalue(i).real());
   }
   ready_ = true;
+}
+
+template <int dim>
+double EnergySplice<dim>::limit_step(double dt) const {
+  if (!on() || !ready_ || !(max_frequency_squared_ > 0) || !std::isfinite(dt))
+    return dt;
+  return dt / std::sqrt(1.0 + max_frequency_squared_ * dt * dt / 4.0);
 }
 
 template <int dim>
@@ -410,8 +434,7 @@ void EnergySplice<dim>::take_particle_forces() {
 
 template <int dim>
 void EnergySplice<dim>::on_fem_forces(const StepForces& forces) {
-  if (!ready_)
-    finalise(forces);
+  Assert(ready_, ExcMessage("EnergySplice::rebuild() before the first step"));
   auto& fem = state_.fem;
   const auto& particles = state_.particles;
   const auto& owned = fem.locally_owned_dofs();
@@ -479,6 +502,16 @@ void EnergySplice<dim>::on_fem_forces(const StepForces& forces) {
     for (const unsigned int k : free_dofs_)
       forces.add(k, f[k]);
   }
+  if (measure_) {
+    // u^n and v^{n−½}: nothing has moved yet.
+    measure_ = false;
+    const auto pd = state_.method->splice_strain_energy(particles, state_.bonds);
+    measured_stored_ = fem.linear_stored_energy() + correction_energy_ +
+                       (pd ? *pd : std::numeric_limits<double>::quiet_NaN());
+    measured_particle_v_ = particles.velocities();
+    const double* v = fem.velocity().trilinos_vector()[0];
+    measured_fem_v_.assign(v, v + owned.n_elements());
+  }
   // The net forces on the driven DoFs (FEM and reactions) to the particles: Φᵀ.
   for (const auto& entry : interface_.dofs()) {
     if (!owned.is_element(entry.dof))
@@ -541,6 +574,33 @@ double EnergySplice<dim>::energy() {
     correction = beta * alpha - 0.5 * (alpha * t);
   }
   return kinetic + stored_fem + (pd ? *pd : std::numeric_limits<double>::quiet_NaN()) + correction;
+}
+
+template <int dim>
+double EnergySplice<dim>::centred_energy() {
+  const auto& particles = state_.particles;
+  if (measured_particle_v_.size() != particles.size())
+    return std::numeric_limits<double>::quiet_NaN();
+  auto& fem = state_.fem;
+  double kinetic = 0;
+  for (unsigned int i = 0; i < particles.size(); ++i)
+    if (state_.free[i])
+      kinetic += 0.125 * particles.mass(i) *
+                 (particles.velocity(i) + measured_particle_v_[i]).norm_square();
+  const double* v = fem.velocity().trilinos_vector()[0];
+  const double* mass = fem.lumped_mass().begin();
+  const auto& owned = fem.locally_owned_dofs();
+  std::vector<std::uint8_t> interface(owned.n_elements(), 0);
+  for (const auto& entry : interface_.dofs())
+    if (owned.is_element(entry.dof))
+      interface[owned.index_within_set(entry.dof)] = 1;
+  for (std::size_t k = 0; k < owned.n_elements(); ++k)
+    if (!interface[k]) {
+      const double vc = 0.5 * (v[k] + measured_fem_v_[k]);
+      kinetic += 0.5 * mass[k] * vc * vc;
+    }
+  measured_particle_v_.clear();
+  return kinetic + measured_stored_;
 }
 
 template class EnergySplice<2>;

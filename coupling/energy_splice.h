@@ -55,9 +55,14 @@ class EnergySplice {
   bool on() const { return state_.prm.splice == "energy"; }
   // InvalidInput unless this run can use it (one rank, a method that provides its energy).
   void check() const;
-  // After the split changed (conversion, restart): the correction for the new split. Leaves
-  // the particles' displacements, forces and trial states as they were.
-  void rebuild();
+  // After the split changed (conversion, restart): the correction for the new split, with the
+  // FEM's split of its owned DoFs (`split`: which are free, prescribed and driven, as its step
+  // will see them; only the flags are read). Leaves the particles' displacements, forces and
+  // trial states as they were.
+  void rebuild(const StepForces& split);
+  // The explicit step with the correction from the step `dt` [s] without it: the correction's
+  // largest frequency squared ω_C² added to (2 / dt)² (Weyl's bound on the sum's spectrum).
+  double limit_step(double dt) const;
   // After the particle force pass of a step: the ghosts' reactions, spread to the FEM DoFs.
   void take_particle_forces();
   // The FEM's hook at the same state: reactions and correction onto the free FEM DoFs, the
@@ -71,6 +76,12 @@ class EnergySplice {
   // particles and of the free FEM DoFs, FEM stored energy (linear path) and the particle and
   // correction energies [J]. NaN where the FEM is not on its linear path.
   double energy();
+  // The same energy with the step-centred velocities v^n = (v^{n−½} + v^{n+½}) / 2, whose
+  // measurement does not swing with ω Δt as the half-step kinetic energy does: call
+  // measure_next_step() before a step and centred_energy() after it [J] (NaN if no step
+  // measured).
+  void measure_next_step() { measure_ = true; }
+  double centred_energy();
   // max |G a| / max |T a| over the affine modes before the correction (what it removes) [-].
   double ghost_force_relative() const { return ghost_force_relative_; }
 
@@ -85,8 +96,7 @@ class EnergySplice {
   std::array<double, n_modes> modes(const dealii::Point<dim>& x, unsigned int component) const;
   // Nᵀ of per-particle forces on the ghosts owned here, into fem_reactions_ (owned DoFs).
   void spread_to_fem(const std::vector<Vector>& ghost_forces);
-  // The rows of the unknowns, their masses and the correction matrices (needs the FEM's
-  // step tables: called from the first hook after a rebuild).
+  // The rows of the unknowns, their masses, the correction matrices and its largest frequency.
   void finalise(const StepForces& forces);
 
   CouplingState<dim>& state_;
@@ -112,7 +122,13 @@ class EnergySplice {
   std::vector<unsigned int> free_dofs_, row_dofs_; // owned local indices: free; free + prescribed
   dealii::FullMatrix<double> Q_, S_;               // (Aᵀ M A)⁻¹ and sym(RᵀA)
   bool ready_ = false, built_ = false;
+  // measure_next_step(): the stored energy and the velocities at the hook of that step.
+  bool measure_ = false;
+  double measured_stored_ = 0;
+  std::vector<Vector> measured_particle_v_;
+  std::vector<double> measured_fem_v_;
   double correction_energy_ = 0, ghost_force_relative_ = 0, t_scale_ = 0;
+  double max_frequency_squared_ = 0; // largest eigenvalue of M⁻¹C [1/s²]
 };
 
 } // namespace spinesim::coupling

@@ -65,7 +65,35 @@ void FemParticleCoupling<dim>::rebuild_layers() {
   halo_.plan(interface_);
   ghosts_.update(); // owned ghosts from the FEM, then the halo (free particles included)
   interface_.update();
-  splice_.rebuild();
+  if (splice_.on()) {
+    auto split = dof_split();
+    const typename fem::MechanicsSolver<dim>::StepForces flags(
+        nullptr, 1.0, split.skip.data(), split.dirichlet.data(), split.driven.data());
+    splice_.rebuild(flags);
+  }
+}
+
+template <int dim>
+typename FemParticleCoupling<dim>::DofSplit FemParticleCoupling<dim>::dof_split() const {
+  auto& solver = state_.fem;
+  const auto& owned = solver.locally_owned_dofs();
+  std::set<types::global_dof_index> dirichlet, driven;
+  for (const auto& d : solver.boundary_conditions().dirichlet()) {
+    const IndexSet s =
+        DoFTools::extract_boundary_dofs(solver.dof_handler(), d.mask, {d.boundary_id});
+    for (const auto i : s)
+      dirichlet.insert(i);
+  }
+  for (const auto& e : interface_.dofs())
+    driven.insert(e.dof);
+  DofSplit split;
+  for (const auto i : owned) {
+    split.skip.push_back(solver.hanging_constraints().is_constrained(i) ||
+                         !(solver.lumped_mass()(i) > 0));
+    split.dirichlet.push_back(dirichlet.count(i) ? 1 : 0);
+    split.driven.push_back(driven.count(i) ? 1 : 0);
+  }
+  return split;
 }
 
 template <int dim>
@@ -250,7 +278,6 @@ std::pair<double, double> FemParticleCoupling<dim>::max_free_forces() {
     for (const auto i : s)
       excluded.insert(i);
   }
-  const std::set<types::global_dof_index> on_dirichlet = excluded;
   for (const auto& e : interface_.dofs())
     excluded.insert(e.dof);
   double ff = 0;
@@ -261,20 +288,12 @@ std::pair<double, double> FemParticleCoupling<dim>::max_free_forces() {
     const auto& owned = solver.locally_owned_dofs();
     const std::size_t n = owned.n_elements();
     std::vector<double> net(n);
-    std::vector<std::uint8_t> skip(n, 0), dirichlet(n, 0), driven(n, 0);
-    std::set<types::global_dof_index> interface;
-    for (const auto& e : interface_.dofs())
-      interface.insert(e.dof);
     std::size_t k = 0;
-    for (const auto i : owned) {
-      net[k] = -r(i);
-      skip[k] = solver.hanging_constraints().is_constrained(i) || !(solver.lumped_mass()(i) > 0);
-      driven[k] = interface.count(i) ? 1 : 0;
-      dirichlet[k] = on_dirichlet.count(i) ? 1 : 0;
-      ++k;
-    }
-    const typename fem::MechanicsSolver<dim>::StepForces forces(net.data(), 1.0, skip.data(),
-                                                                dirichlet.data(), driven.data());
+    for (const auto i : owned)
+      net[k++] = -r(i);
+    auto split = dof_split();
+    const typename fem::MechanicsSolver<dim>::StepForces forces(
+        net.data(), 1.0, split.skip.data(), split.dirichlet.data(), split.driven.data());
     splice_.on_fem_forces(forces);
     fp = 0;
     for (unsigned int i = 0; i < particles.size(); ++i)

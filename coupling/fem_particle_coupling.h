@@ -130,6 +130,10 @@ class FemParticleCoupling {
   // largest ghost force of an affine field the correction removes, over the largest force of
   // a replaced cell [-] (coupling/energy_splice.h).
   double splice_energy() { return splice_.energy(); }
+  // The same with step-centred velocities (EnergySplice::centred_energy): call
+  // measure_splice_energy() before a step and centred_splice_energy() after it.
+  void measure_splice_energy() { splice_.measure_next_step(); }
+  double centred_splice_energy() { return splice_.centred_energy(); }
   double splice_ghost_force_relative() const { return splice_.ghost_force_relative(); }
 
   // Totals over both models (FEM lumped mass, particle masses) [kg], [kg m/s], [J].
@@ -191,6 +195,12 @@ class FemParticleCoupling {
   // After the particles changed: ghosts, fixed particles, bonds, interface DoFs, halo plan,
   // and the first update of ghosts and interface values.
   void rebuild_layers();
+  // The FEM's owned DoFs as its explicit step splits them (hanging or orphaned, Dirichlet,
+  // driven by the interface), for the energy splice outside a step.
+  struct DofSplit {
+    std::vector<std::uint8_t> skip, dirichlet, driven;
+  };
+  DofSplit dof_split() const;
 
   // Declared in dependency order: each piece refers only to those above it.
   CouplingState<dim> state_;
