@@ -146,6 +146,7 @@ void CouplingState<dim>::prepare() {
   meshfree::ParticleMaterial material{youngs, poisson, density, law};
   material.reference_temperature = fem.reference_temperature();
   method = prm.make_method(material);
+  particle_material = material;
   for (auto& m : method->take_messages())
     messages.push_back(std::move(m));
   const std::string section =

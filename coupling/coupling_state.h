@@ -91,6 +91,8 @@ struct CouplingState {
   std::vector<DoFCell> lattice_cells;
   double spacing = 0, youngs = 0, poisson = 0, density = 0;
   std::unique_ptr<meshfree::ParticleMethod<dim>> method;
+  // What `method` was made for (EnergySplice makes a second one for its probes).
+  meshfree::ParticleMaterial particle_material;
   // Per particle point of a cell: the nearest quadrature point of the FEM (cell_state()).
   std::vector<unsigned int> nearest_quadrature_point;
   // States carried into particles since the last bond-row rebuild (conversions, new ghosts):

@@ -130,14 +130,27 @@ void EnergySplice<dim>::rebuild(const StepForces& split) {
     centre_ /= n_free;
 
   // G = K A − T per gradient mode (translations create no force in either model), in the
-  // K u = −f convention: the method's forces for u = ±ε H (x − c) (central differences, O(ε²)
-  // from the tangent; ε = 1e-6 keeps the round-off of the forces at 1e-10 of G).
+  // K u = −f convention: the forces for u = ±ε H (x − c) (central differences, O(ε²) from the
+  // tangent; ε = 1e-6 keeps the round-off of the forces at 1e-10 of G). The probes run on a
+  // second instance of the method, made for the same material, on the same rows with every
+  // bond intact and no history: the correction is that of the splice of the intact material,
+  // so it neither heals cracks nor depends on where they are (what the particles do with a
+  // crack or a surface is theirs), and the run's method keeps its state.
   std::vector<std::array<std::array<double, n_modes>, dim>> gp(n);
   std::vector<std::array<double, n_modes>> gf(owned.n_elements());
   {
     const double eps = 1e-6;
-    const auto saved = particles.displacements();
-    auto& method = *state_.method;
+    const auto saved_u = particles.displacements();
+    const auto saved_f = particles.forces();
+    meshfree::BondList<dim> intact = state_.bonds;
+    std::fill(intact.broken.begin(), intact.broken.end(), std::uint8_t(0));
+    auto probe = state_.prm.make_method(state_.particle_material);
+    std::vector<std::uint8_t> driven(n);
+    for (unsigned int i = 0; i < n; ++i)
+      driven[i] = state_.free[i] ? 0 : 1;
+    probe->set_driven(std::move(driven));
+    probe->initialise(particles, intact);
+    probe->take_messages();
     std::vector<Vector> ghost_g(n);
     for (unsigned int a = 0; a < dim; ++a)
       for (unsigned int b = 0; b < dim; ++b) {
@@ -149,8 +162,8 @@ void EnergySplice<dim>::rebuild(const StepForces& split) {
             u[a] = sign * eps * (particles.reference_position(i)[b] - centre_[b]);
             particles.displacement(i) = u;
           }
-          method.compute_forces(particles, state_.bonds, false);
-          const auto reactions = *method.driven_reactions(particles, state_.bonds);
+          probe->compute_forces(particles, intact, false);
+          const auto reactions = *probe->driven_reactions(particles, intact);
           const double w = -sign / (2 * eps);
           for (unsigned int i = 0; i < n; ++i) {
             if (state_.free[i] && state_.is_owned(i))
@@ -164,10 +177,8 @@ void EnergySplice<dim>::rebuild(const StepForces& split) {
         for (std::size_t k = 0; k < gf.size(); ++k)
           gf[k][mode] = fem_reaction_values_[k];
       }
-    for (unsigned int i = 0; i < n; ++i)
-      particles.displacement(i) = saved[i];
-    method.compute_forces(particles, state_.bonds, false);
-    method.rollback_state();
+    particles.displacements() = saved_u;
+    particles.forces() = saved_f;
     fem_reaction_values_.assign(owned.n_elements(), 0.0);
   }
 
