@@ -73,12 +73,10 @@ void CoupledIntegrator<dim>::check_particle_speeds() const {
                              "energy grew without bound. Where a crack or fragments reach the "
                              "FEM/particle interface: widen the conversion region and Coupling/"
                              "Buffer so the crack stays inside the particles. In a long run "
-                             "without that: the FEM/particle splice is not energy-conserving and "
-                             "some of its modes grow slowly; a smaller time step does not cure "
-                             "it, fewer steps (a coarser lattice, a shorter run) or a fully "
-                             "particle or fully FEM run do (docs/coupling.md, stability of the "
-                             "splice; measure it with the coupling_wave scenario's Analysis = "
-                             "step_spectrum)");
+                             "without that, with Coupling/Splice = overlap: that splice is not "
+                             "energy-conserving and some of its modes grow slowly (a smaller "
+                             "time step does not cure it); Coupling/Splice = energy conserves "
+                             "energy (one MPI rank; docs/coupling.md, the energy splice)");
     }
 }
 

@@ -148,6 +148,7 @@ void EnergySplice<dim>::rebuild(const StepForces& split) {
     std::vector<std::uint8_t> driven(n);
     for (unsigned int i = 0; i < n; ++i)
       driven[i] = state_.free[i] ? 0 : 1;
+    probe->disable_breaking();
     probe->set_driven(std::move(driven));
     probe->initialise(particles, intact);
     probe->take_messages();

@@ -117,6 +117,10 @@ class ParticleMethod {
   // Damage φ_i ∈ [0, 1] into particles.damage().
   virtual void update_damage(ParticleSet<dim>& particles, const BondList<dim>& bonds) const = 0;
 
+  // For a probe of the intact material (coupling/energy_splice.h): from now on no bond breaks,
+  // whatever the failure criteria, and compute_forces(..., false) is no error.
+  virtual void disable_breaking() {}
+
   virtual void commit_state() {}
   virtual void rollback_state() {}
   // The committed material history of the families centred on the particles with

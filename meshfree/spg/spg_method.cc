@@ -84,6 +84,7 @@ void SpgMethod<dim>::initialise(const ParticleSet<dim>& particles, const BondLis
   solver_ = std::make_unique<SPGSolver<dim>>(
       prm_, *law_, particles, bonds.horizon / search_radius(1.0), use_rows ? &bonds : nullptr);
   solver_->set_deferred_commit(true);
+  solver_->set_breaking(breaking_);
   solver_->set_reference_temperature(reference_temperature_);
   if (driven)
     solver_->set_driven(driven_);
@@ -95,7 +96,8 @@ void SpgMethod<dim>::initialise(const ParticleSet<dim>& particles, const BondLis
 template <int dim>
 std::size_t SpgMethod<dim>::compute_forces(ParticleSet<dim>& particles, BondList<dim>& bonds,
                                            bool allow_breaking) {
-  if (!allow_breaking && (prm_.critical_stretch > 0.0 || prm_.critical_plastic_strain > 0.0))
+  if (breaking_ && !allow_breaking &&
+      (prm_.critical_stretch > 0.0 || prm_.critical_plastic_strain > 0.0))
     throw InvalidInput("SPG/Critical stretch, SPG/Critical plastic strain",
                        "bonds may not break in this run (Effects/Damage = false)",
                        "0 for both, or Effects/Damage = true");

@@ -76,6 +76,11 @@ class SpgMethod : public ParticleMethod<dim> {
                                             const BondList<dim>& bonds) const override;
   double strain_energy(const ParticleSet<dim>& particles,
                        const BondList<dim>& bonds) const override;
+  void disable_breaking() override {
+    breaking_ = false;
+    if (solver_)
+      solver_->set_breaking(false);
+  }
   std::optional<std::vector<dealii::Tensor<1, dim>>>
   driven_reactions(const ParticleSet<dim>& particles, const BondList<dim>& bonds) const override;
   // Σ W_N V_N over the particles with rows plus the stabilisation energy.
@@ -103,6 +108,7 @@ class SpgMethod : public ParticleMethod<dim> {
   std::shared_ptr<const materials::ConstitutiveLaw> law_;
   double thickness_ = 1.0, reference_temperature_ = 0;
   std::vector<std::uint8_t> driven_;
+  bool breaking_ = true; // disable_breaking()
   // Committed states set before the solver exists (or across a re-initialisation).
   std::vector<materials::MaterialState> kept_;
   std::unique_ptr<SPGSolver<dim>> solver_;

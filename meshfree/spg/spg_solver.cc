@@ -298,7 +298,7 @@ void SPGSolver<dim>::compute_forces(ParticleSet<dim>& p) {
     for (unsigned int i = 0; i < n; ++i)
       force[i] = total[i] - fe[i];
   }
-  if (prm_.critical_plastic_strain > 0.0 || prm_.critical_stretch > 0.0)
+  if (breaking_ && (prm_.critical_plastic_strain > 0.0 || prm_.critical_stretch > 0.0))
     break_bonds(p);
   if (mode_ != KernelUpdate::total_lagrangian)
     d_last_ = d;

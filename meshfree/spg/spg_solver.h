@@ -116,6 +116,8 @@ class SPGSolver {
   void set_driven(std::vector<std::uint8_t> driven) { driven_ = std::move(driven); }
   // Deferred commits: compute_forces() keeps the new material state as a trial.
   void set_deferred_commit(bool deferred) { deferred_commit_ = deferred; }
+  // Off: no bond breaks whatever the criteria (a probe of the intact material).
+  void set_breaking(bool on) { breaking_ = on; }
   void commit_state() { committed_ = state_; }
   void rollback_state() { state_ = committed_; }
   // Sets particle i's committed (and trial) state.
@@ -195,7 +197,7 @@ class SPGSolver {
   std::vector<Matrix> F_, P_, Fr_, stress_;
   std::vector<materials::MaterialState> state_, committed_;
   std::vector<std::uint8_t> has_row_, complete_, driven_;
-  bool external_rows_ = false, deferred_commit_ = false;
+  bool external_rows_ = false, deferred_commit_ = false, breaking_ = true;
   double reference_temperature_ = 0;
   std::vector<std::pair<unsigned int, unsigned int>> newly_broken_;
   std::vector<double> kappa_;
