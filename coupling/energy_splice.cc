@@ -88,7 +88,6 @@ void EnergySplice<dim>::rebuild(const StepForces& split) {
     return;
   check();
   ready_ = false;
-  built_ = true;
   auto& fem = state_.fem;
   auto& particles = state_.particles;
   const unsigned int n = particles.size();
@@ -280,7 +279,6 @@ void EnergySplice<dim>::rebuild(const StepForces& split) {
   t_scale_ = t_scale;
   finalise(split);
   splice_forces_.assign(n, Vector());
-  ghost_reactions_.assign(n, Vector());
 }
 
 template <int dim>
@@ -439,26 +437,19 @@ double EnergySplice<dim>::limit_step(double dt) const {
 
 template <int dim>
 void EnergySplice<dim>::take_particle_forces() {
-  const auto r = state_.method->driven_reactions(state_.particles, state_.bonds);
-  ghost_reactions_ = *r;
-  spread_to_fem(ghost_reactions_);
+  spread_to_fem(*state_.method->driven_reactions(state_.particles, state_.bonds));
 }
 
 template <int dim>
-void EnergySplice<dim>::on_fem_forces(const StepForces& forces) {
-  Assert(ready_, ExcMessage("EnergySplice::rebuild() before the first step"));
-  auto& fem = state_.fem;
+void EnergySplice<dim>::correction_sums(dealii::Vector<double>& alpha,
+                                        dealii::Vector<double>& beta) const {
+  // α = Pᵀu = Q Aᵀ M u and β = Rᵀu over the rows, at the current displacements.
   const auto& particles = state_.particles;
-  const auto& owned = fem.locally_owned_dofs();
-  std::fill(splice_forces_.begin(), splice_forces_.end(), Vector());
-  // The ghosts' reactions on every DoF that moves (free or driven).
-  for (std::size_t k = 0; k < fem_reaction_values_.size(); ++k)
-    if (fem_reaction_values_[k] != 0 && (forces.is_free(k) || forces.is_driven(k)))
-      forces.add(k, fem_reaction_values_[k]);
-  // The correction −C u = −R α − M A Q (β − S α), α = Pᵀu = Q Aᵀ M u, β = Rᵀu.
-  const double* u_fem = fem.displacement().trilinos_vector()[0]; // one rank: owned order
-  const double* mass = fem.lumped_mass().begin();
-  dealii::Vector<double> moment(n_modes), alpha(n_modes), beta(n_modes), gamma(n_modes), t(n_modes);
+  const double* u_fem = state_.fem.displacement().trilinos_vector()[0]; // one rank: owned order
+  const double* mass = state_.fem.lumped_mass().begin();
+  dealii::Vector<double> moment(n_modes);
+  alpha = 0;
+  beta = 0;
   for (unsigned int i = 0; i < particles.size(); ++i)
     if (state_.free[i])
       for (unsigned int d = 0; d < dim; ++d) {
@@ -480,6 +471,23 @@ void EnergySplice<dim>::on_fem_forces(const StepForces& forces) {
   for (const auto& row : dof_rows_)
     for (unsigned int l = 0; l < n_modes; ++l)
       beta[l] += row.r[l] * u_fem[row.index];
+}
+
+template <int dim>
+void EnergySplice<dim>::on_fem_forces(const StepForces& forces) {
+  Assert(ready_, ExcMessage("EnergySplice::rebuild() before the first step"));
+  auto& fem = state_.fem;
+  const auto& particles = state_.particles;
+  const auto& owned = fem.locally_owned_dofs();
+  std::fill(splice_forces_.begin(), splice_forces_.end(), Vector());
+  // The ghosts' reactions on every DoF that moves (free or driven).
+  for (std::size_t k = 0; k < fem_reaction_values_.size(); ++k)
+    if (fem_reaction_values_[k] != 0 && (forces.is_free(k) || forces.is_driven(k)))
+      forces.add(k, fem_reaction_values_[k]);
+  // The correction −C u = −R α − M A Q (β − S α), α = Pᵀu = Q Aᵀ M u, β = Rᵀu.
+  const double* mass = fem.lumped_mass().begin();
+  dealii::Vector<double> alpha(n_modes), beta(n_modes), gamma(n_modes), t(n_modes);
+  correction_sums(alpha, beta);
   S_.vmult(t, alpha);
   correction_energy_ = beta * alpha - 0.5 * (alpha * t);
   t.sadd(-1.0, 1.0, beta); // β − S α
@@ -561,27 +569,8 @@ double EnergySplice<dim>::energy() {
   // ½ uᵀ C u at the current state.
   double correction = 0;
   if (ready_) {
-    const double* u_fem = fem.displacement().trilinos_vector()[0];
-    dealii::Vector<double> moment(n_modes), alpha(n_modes), beta(n_modes), t(n_modes);
-    for (unsigned int i = 0; i < particles.size(); ++i)
-      if (state_.free[i])
-        for (unsigned int d = 0; d < dim; ++d) {
-          const auto a = modes(particles.reference_position(i), d);
-          for (unsigned int l = 0; l < n_modes; ++l)
-            moment[l] += a[l] * particles.mass(i) * particles.displacement(i)[d];
-        }
-    for (const unsigned int k : row_dofs_) {
-      const auto a = modes(dof_point_[k], dof_component_[k]);
-      for (unsigned int l = 0; l < n_modes; ++l)
-        moment[l] += a[l] * mass[k] * u_fem[k];
-    }
-    Q_.vmult(alpha, moment);
-    for (const auto& row : particle_rows_)
-      for (unsigned int l = 0; l < n_modes; ++l)
-        beta[l] += row.r[l] * particles.displacement(row.index)[row.component];
-    for (const auto& row : dof_rows_)
-      for (unsigned int l = 0; l < n_modes; ++l)
-        beta[l] += row.r[l] * u_fem[row.index];
+    dealii::Vector<double> alpha(n_modes), beta(n_modes), t(n_modes);
+    correction_sums(alpha, beta);
     S_.vmult(t, alpha);
     correction = beta * alpha - 0.5 * (alpha * t);
   }

@@ -35,6 +35,7 @@
 #include "coupling/mls_interface.h"
 
 #include <deal.II/lac/full_matrix.h>
+#include <deal.II/lac/vector.h>
 
 #include <array>
 #include <map>
@@ -96,12 +97,14 @@ class EnergySplice {
   std::array<double, n_modes> modes(const dealii::Point<dim>& x, unsigned int component) const;
   // Nᵀ of per-particle forces on the ghosts owned here, into fem_reactions_ (owned DoFs).
   void spread_to_fem(const std::vector<Vector>& ghost_forces);
+  // α = Pᵀu and β = Rᵀu at the current displacements (the correction's two projections).
+  void correction_sums(dealii::Vector<double>& alpha, dealii::Vector<double>& beta) const;
   // The rows of the unknowns, their masses, the correction matrices and its largest frequency.
   void finalise(const StepForces& forces);
 
   CouplingState<dim>& state_;
   MlsInterface<dim>& interface_;
-  std::vector<Vector> ghost_reactions_, splice_forces_;
+  std::vector<Vector> splice_forces_;
   dealii::TrilinosWrappers::MPI::Vector fem_reactions_; // owned, writable ghosts
   std::vector<double> fem_reaction_values_;             // owned local order
   dealii::Point<dim> centre_;
@@ -121,7 +124,7 @@ class EnergySplice {
   std::map<dealii::types::global_dof_index, std::vector<std::pair<unsigned int, double>>> fits_;
   std::vector<unsigned int> free_dofs_, row_dofs_; // owned local indices: free; free + prescribed
   dealii::FullMatrix<double> Q_, S_;               // (Aᵀ M A)⁻¹ and sym(RᵀA)
-  bool ready_ = false, built_ = false;
+  bool ready_ = false;
   // measure_next_step(): the stored energy and the velocities at the hook of that step.
   bool measure_ = false;
   double measured_stored_ = 0;
