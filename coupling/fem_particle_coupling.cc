@@ -259,56 +259,48 @@ template <int dim>
 std::pair<double, double> FemParticleCoupling<dim>::max_free_forces() {
   auto& solver = state_.fem;
   auto& particles = state_.particles;
-  double fp = 0;
-  if (state_.n_free_particles() > 0) {
-    state_.method->compute_forces(particles, state_.bonds, false);
+  // The largest force on a free particle component, with `extra` per particle if given.
+  const auto max_particle_force = [&](const std::vector<Tensor<1, dim>>* extra) {
+    double fp = 0;
     for (unsigned int i = 0; i < particles.size(); ++i)
       if (state_.free[i] && state_.is_owned(i))
         for (unsigned int d = 0; d < dim; ++d)
           if (!particles.is_fixed(i, d))
-            fp = std::max(fp, std::abs(particles.force(i)[d]));
+            fp = std::max(fp, std::abs(particles.force(i)[d] + (extra ? (*extra)[i][d] : 0.0)));
+    return fp;
+  };
+  double fp = 0;
+  if (state_.n_free_particles() > 0) {
+    state_.method->compute_forces(particles, state_.bonds, false);
+    fp = max_particle_force(nullptr);
   }
   fp = Utilities::MPI::max(fp, solver.mpi_communicator());
   const auto& r = solver.evaluate_residual();
-  // Free FEM DoFs: neither on a Dirichlet boundary, nor driven, nor orphaned (zero mass).
-  std::set<types::global_dof_index> excluded;
-  for (const auto& d : solver.boundary_conditions().dirichlet()) {
-    const IndexSet s =
-        DoFTools::extract_boundary_dofs(solver.dof_handler(), d.mask, {d.boundary_id});
-    for (const auto i : s)
-      excluded.insert(i);
-  }
-  for (const auto& e : interface_.dofs())
-    excluded.insert(e.dof);
+  const auto& owned = solver.locally_owned_dofs();
+  auto split = dof_split();
   double ff = 0;
   if (splice_.on() && state_.n_free_particles() > 0) {
     // The energy splice's forces at this state: the step's hook on the net forces −r with the
     // same split of the DoFs (free, driven, the rest), then the largest free force on each side.
     splice_.take_particle_forces();
-    const auto& owned = solver.locally_owned_dofs();
-    const std::size_t n = owned.n_elements();
-    std::vector<double> net(n);
-    std::size_t k = 0;
+    std::vector<double> net;
     for (const auto i : owned)
-      net[k++] = -r(i);
-    auto split = dof_split();
+      net.push_back(-r(i));
     const typename fem::MechanicsSolver<dim>::StepForces forces(
         net.data(), 1.0, split.skip.data(), split.dirichlet.data(), split.driven.data());
     splice_.on_fem_forces(forces);
-    fp = 0;
-    for (unsigned int i = 0; i < particles.size(); ++i)
-      if (state_.free[i] && state_.is_owned(i))
-        for (unsigned int d = 0; d < dim; ++d)
-          if (!particles.is_fixed(i, d))
-            fp = std::max(fp, std::abs(particles.force(i)[d] + splice_.splice_forces()[i][d]));
-    for (std::size_t j = 0; j < n; ++j)
-      if (forces.is_free(j))
-        ff = std::max(ff, std::abs(forces.force(j)));
-    return {fp, ff};
+    for (std::size_t k = 0; k < net.size(); ++k)
+      if (forces.is_free(k))
+        ff = std::max(ff, std::abs(forces.force(k)));
+    return {max_particle_force(&splice_.splice_forces()), ff};
   }
-  for (const auto i : r.locally_owned_elements())
-    if (!excluded.count(i) && solver.lumped_mass()(i) > 0)
+  // Free FEM DoFs: neither on a Dirichlet boundary, nor driven, nor orphaned (zero mass).
+  std::size_t k = 0;
+  for (const auto i : owned) {
+    if (!split.dirichlet[k] && !split.driven[k] && solver.lumped_mass()(i) > 0)
       ff = std::max(ff, std::abs(r(i)));
+    ++k;
+  }
   return {fp, Utilities::MPI::max(ff, solver.mpi_communicator())};
 }
 
