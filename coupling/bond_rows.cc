@@ -94,6 +94,27 @@ void BondRows<dim>::rebuild() {
           partners[all.neighbor[k]] = 1;
     keep = std::move(partners);
   }
+  if (state_.prm.splice == "energy" &&
+      Utilities::MPI::n_mpi_processes(state_.fem.mpi_communicator()) > 1) {
+    // The energy splice hands a ghost's reaction to the FEM on the rank owning its host cell
+    // (EnergySplice::take_particle_forces), so that rank holds every row whose forces reach
+    // the ghost: the rows held anywhere (free particles; with neighbour rows also their
+    // partners) among the ghost's partners, and the ghost's own. Copies of a row on several
+    // ranks compute the same forces; the splice counts each row's energy on its owner.
+    std::vector<std::uint8_t> anywhere = state_.free;
+    if (state_.method->needs_neighbour_rows())
+      for (unsigned int i = 0; i < all.n_particles(); ++i)
+        if (state_.free[i])
+          for (std::size_t k = all.begin(i); k < all.end(i); ++k)
+            anywhere[all.neighbor[k]] = 1;
+    for (unsigned int i = 0; i < all.n_particles(); ++i)
+      if (!state_.free[i] && mine[i]) {
+        keep[i] = keep[i] || anywhere[i];
+        for (std::size_t k = all.begin(i); k < all.end(i); ++k)
+          if (anywhere[all.neighbor[k]])
+            keep[all.neighbor[k]] = 1;
+      }
+  }
   meshfree::BondList<dim> kept;
   kept.horizon = all.horizon;
   kept.offsets.assign(all.n_particles() + 1, 0);

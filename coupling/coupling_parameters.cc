@@ -3,8 +3,6 @@
 #include "base/exceptions.h"
 #include "base/list_parsing.h"
 
-#include <deal.II/base/mpi.h>
-
 namespace spinesim::coupling {
 
 using namespace dealii;
@@ -47,7 +45,7 @@ void CouplingParameters<dim>::declare(ParameterHandler& prm) {
       "runs (docs/coupling.md, stability of the splice). energy: the same layers, forces "
       "passed back through the transposes of both maps, so explicit steps conserve an energy; "
       "a symmetric low-rank correction makes affine fields exact in the linear (small-strain) "
-      "limit. energy runs on one MPI rank.");
+      "limit.");
   prm.declare_entry("Time step safety", "0.8", Double(0, 1),
                     "Factor on the PD stable time step (Silling & Askari 2005) [-].");
   prm.declare_entry("All particles", "false", Bool(),
@@ -121,12 +119,6 @@ void CouplingParameters<dim>::parse(ParameterHandler& prm, const std::string& me
   ghost_layer = prm.get_double("Ghost layer");
   interface_radius = prm.get_double("Interface radius");
   splice = prm.get("Splice");
-  if (splice == "energy" && Utilities::MPI::n_mpi_processes(MPI_COMM_WORLD) > 1)
-    throw InvalidInput("Coupling/Splice",
-                       "= energy on " +
-                           std::to_string(Utilities::MPI::n_mpi_processes(MPI_COMM_WORLD)) +
-                           " MPI ranks (its reactions and correction are gathered on one rank)",
-                       "energy on one rank, or overlap on several");
   time_step_safety = prm.get_double("Time step safety");
   all_particles = prm.get_bool("All particles");
   region_lower =

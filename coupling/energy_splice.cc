@@ -34,21 +34,27 @@ EnergySplice<dim>::modes(const Point<dim>& x, unsigned int component) const {
 
 template <int dim>
 void EnergySplice<dim>::check() const {
-  const MPI_Comm comm = state_.fem.mpi_communicator();
-  if (Utilities::MPI::n_mpi_processes(comm) > 1)
-    throw InvalidInput("Coupling/Splice",
-                       "= energy on " + std::to_string(Utilities::MPI::n_mpi_processes(comm)) +
-                           " MPI ranks",
-                       "energy on one rank, or overlap on several");
   const auto& m = *state_.method;
   if (!m.driven_reactions(state_.particles, state_.bonds) ||
-      !m.splice_strain_energy(state_.particles, state_.bonds))
+      !m.splice_energy_by_row(state_.particles, state_.bonds))
     throw InvalidInput("Coupling/Splice",
                        "= energy with particle method '" + m.name() +
                            "' as configured (its forces are not the gradient of an energy: "
                            "NOSB-PD's penalty stabilisation, SPG smoothing every n > 1 steps)",
                        "bond_associated stabilisation (NOSB-PD), Smoothing interval = 1 (SPG), "
                        "or Coupling/Splice = overlap");
+}
+
+template <int dim>
+double EnergySplice<dim>::owned_particle_energy() const {
+  const auto E = state_.method->splice_energy_by_row(state_.particles, state_.bonds);
+  if (!E)
+    return std::numeric_limits<double>::quiet_NaN();
+  double sum = 0;
+  for (unsigned int i = 0; i < E->size(); ++i)
+    if (state_.is_owned(i))
+      sum += (*E)[i];
+  return sum;
 }
 
 template <int dim>
@@ -114,6 +120,17 @@ void EnergySplice<dim>::rebuild(const StepForces& split) {
     }
   IndexSet relevant;
   DoFTools::extract_locally_relevant_dofs(dh, relevant);
+  // Where each owned DoF sits in the FEM's ghosted vectors (their maps are in global order,
+  // ghosts included, so owned entries are not first).
+  {
+    const auto& map = fem.displacement().trilinos_vector().Map();
+    AssertThrow(map.SameAs(fem.velocity().trilinos_vector().Map()),
+                ExcMessage("the FEM's displacement and velocity vectors differ in layout"));
+    ghosted_lid_.resize(owned.n_elements());
+    for (std::size_t k = 0; k < owned.n_elements(); ++k)
+      ghosted_lid_[k] =
+          map.LID(static_cast<TrilinosWrappers::types::int_type>(owned.nth_index_in_set(k)));
+  }
   fem_reactions_.reinit(owned, relevant, comm, true);
   fem_reaction_values_.assign(owned.n_elements(), 0.0);
 
@@ -217,6 +234,11 @@ void EnergySplice<dim>::rebuild(const StepForces& split) {
   };
   FEValues<dim> fe_values(fem.mapping(), fe, fem.quadrature(),
                           update_gradients | update_JxW_values);
+  // Per mode, summed onto the owners of the DoFs (a replaced cell's node may be owned by a
+  // neighbouring rank).
+  std::vector<TrilinosWrappers::MPI::Vector> t_modes(n_modes);
+  for (auto& v : t_modes)
+    v.reinit(owned, relevant, comm, true);
   double t_scale = 0;
   for (const auto& cell : dh.active_cell_iterators()) {
     if (!cell->is_locally_owned() || fem.is_active(cell))
@@ -249,15 +271,27 @@ void EnergySplice<dim>::rebuild(const StepForces& split) {
           if (f == 0)
             continue;
           t_scale = std::max(t_scale, std::abs(f));
-          if (!fits.count(dofs[i])) {
-            const Point<dim> X = fem.mapping().transform_unit_to_real_cell(cell, unit[i]);
-            fits.emplace(dofs[i], fit_at(X));
-          }
-          replaced_[dofs[i]][mode] += f;
+          t_modes[mode](dofs[i]) += f;
         }
       }
   }
-
+  for (auto& v : t_modes)
+    v.compress(VectorOperation::add);
+  for (std::size_t k = 0; k < owned.n_elements(); ++k) {
+    const auto dof = owned.nth_index_in_set(k);
+    std::array<double, n_modes> t{};
+    bool any = false;
+    for (unsigned int l = dim; l < n_modes; ++l) {
+      t[l] = t_modes[l](dof);
+      any = any || t[l] != 0;
+    }
+    if (!any)
+      continue;
+    replaced_[dof] = t;
+    if (!fits.count(dof))
+      fits.emplace(dof, fit_at(dof_point_[k]));
+  }
+  t_scale = Utilities::MPI::max(t_scale, comm);
   // Rows of R = −G without T (every component of the free particles, every owned DoF):
   // finalise() adds T and the driven DoFs' shares once the FEM's split of its DoFs is known.
   particle_rows_.clear();
@@ -323,6 +357,23 @@ void EnergySplice<dim>::finalise(const StepForces& forces) {
     else
       add_to_particles(fits_.at(dof), dof_component_[k], t, 1.0);
   }
+  // The particle rows are replicated until here: each rank added what its DoFs hand over.
+  // Their sums go to the owners, who keep them.
+  const MPI_Comm comm = fem.mpi_communicator();
+  if (Utilities::MPI::n_mpi_processes(comm) > 1) {
+    std::vector<double> flat;
+    flat.reserve(n_modes * particle_rows_.size());
+    for (const auto& row : particle_rows_)
+      flat.insert(flat.end(), row.r.begin(), row.r.end());
+    Utilities::MPI::sum(flat, comm, flat);
+    for (std::size_t r = 0; r < particle_rows_.size(); ++r)
+      std::copy(flat.begin() + n_modes * r, flat.begin() + n_modes * (r + 1),
+                particle_rows_[r].r.begin());
+    particle_rows_.erase(
+        std::remove_if(particle_rows_.begin(), particle_rows_.end(),
+                       [&](const Row& row) { return !state_.is_owned(row.index); }),
+        particle_rows_.end());
+  }
   dof_rows_.clear();
   free_dofs_.clear();
   row_dofs_.clear();
@@ -343,6 +394,7 @@ void EnergySplice<dim>::finalise(const StepForces& forces) {
     for (const auto& row : *rows)
       for (const double r : row.r)
         r_max = std::max(r_max, std::abs(r));
+  r_max = Utilities::MPI::max(r_max, comm);
   ghost_force_relative_ = t_scale_ > 0 ? r_max / t_scale_ : 0.0;
   const auto prune = [&](std::vector<Row>& rows) {
     rows.erase(std::remove_if(rows.begin(), rows.end(),
@@ -380,6 +432,15 @@ void EnergySplice<dim>::finalise(const StepForces& forces) {
     add_row(row, modes(particles.reference_position(row.index), row.component));
   for (const auto& row : dof_rows_)
     add_row(row, modes(dof_point_[row.index], dof_component_[row.index]));
+  const auto sum_matrix = [&](FullMatrix<double>& A) {
+    if (Utilities::MPI::n_mpi_processes(comm) == 1)
+      return;
+    std::vector<double> flat(A.begin(), A.end());
+    Utilities::MPI::sum(flat, comm, flat);
+    std::copy(flat.begin(), flat.end(), A.begin());
+  };
+  sum_matrix(AMA);
+  sum_matrix(RA);
   Q_.reinit(n_modes, n_modes);
   Q_.invert(AMA);
   S_.reinit(n_modes, n_modes);
@@ -406,6 +467,7 @@ void EnergySplice<dim>::finalise(const StepForces& forces) {
       add_rr(row, particles.mass(row.index));
     for (const auto& row : dof_rows_)
       add_rr(row, mass[row.index]);
+    sum_matrix(gram); // only the R block is filled yet
     for (unsigned int i = 0; i < m; ++i)
       for (unsigned int j = 0; j < m; ++j) {
         gram(i, j) = Q_(i, j);
@@ -445,13 +507,13 @@ void EnergySplice<dim>::correction_sums(dealii::Vector<double>& alpha,
                                         dealii::Vector<double>& beta) const {
   // α = Pᵀu = Q Aᵀ M u and β = Rᵀu over the rows, at the current displacements.
   const auto& particles = state_.particles;
-  const double* u_fem = state_.fem.displacement().trilinos_vector()[0]; // one rank: owned order
+  const double* u_fem = state_.fem.displacement().trilinos_vector()[0]; // ghosted_lid_ order
   const double* mass = state_.fem.lumped_mass().begin();
   dealii::Vector<double> moment(n_modes);
   alpha = 0;
   beta = 0;
   for (unsigned int i = 0; i < particles.size(); ++i)
-    if (state_.free[i])
+    if (state_.free[i] && state_.is_owned(i))
       for (unsigned int d = 0; d < dim; ++d) {
         const auto a = modes(particles.reference_position(i), d);
         const double mu = particles.mass(i) * particles.displacement(i)[d];
@@ -460,17 +522,25 @@ void EnergySplice<dim>::correction_sums(dealii::Vector<double>& alpha,
       }
   for (const unsigned int k : row_dofs_) {
     const auto a = modes(dof_point_[k], dof_component_[k]);
-    const double mu = mass[k] * u_fem[k];
+    const double mu = mass[k] * u_fem[ghosted_lid_[k]];
     for (unsigned int l = 0; l < n_modes; ++l)
       moment[l] += a[l] * mu;
   }
-  Q_.vmult(alpha, moment);
   for (const auto& row : particle_rows_)
     for (unsigned int l = 0; l < n_modes; ++l)
       beta[l] += row.r[l] * particles.displacement(row.index)[row.component];
   for (const auto& row : dof_rows_)
     for (unsigned int l = 0; l < n_modes; ++l)
-      beta[l] += row.r[l] * u_fem[row.index];
+      beta[l] += row.r[l] * u_fem[ghosted_lid_[row.index]];
+  const MPI_Comm comm = state_.fem.mpi_communicator();
+  if (Utilities::MPI::n_mpi_processes(comm) > 1) {
+    std::vector<double> sums(moment.begin(), moment.end());
+    sums.insert(sums.end(), beta.begin(), beta.end());
+    Utilities::MPI::sum(sums, comm, sums);
+    std::copy(sums.begin(), sums.begin() + n_modes, moment.begin());
+    std::copy(sums.begin() + n_modes, sums.end(), beta.begin());
+  }
+  Q_.vmult(alpha, moment);
 }
 
 template <int dim>
@@ -493,7 +563,7 @@ void EnergySplice<dim>::on_fem_forces(const StepForces& forces) {
   t.sadd(-1.0, 1.0, beta); // β − S α
   Q_.vmult(gamma, t);
   for (unsigned int i = 0; i < particles.size(); ++i)
-    if (state_.free[i])
+    if (state_.free[i] && state_.is_owned(i))
       for (unsigned int d = 0; d < dim; ++d) {
         const auto a = modes(particles.reference_position(i), d);
         double f = 0;
@@ -525,12 +595,13 @@ void EnergySplice<dim>::on_fem_forces(const StepForces& forces) {
   if (measure_) {
     // u^n and v^{n−½}: nothing has moved yet.
     measure_ = false;
-    const auto pd = state_.method->splice_strain_energy(particles, state_.bonds);
     measured_stored_ = fem.linear_stored_energy() + correction_energy_ +
-                       (pd ? *pd : std::numeric_limits<double>::quiet_NaN());
+                       Utilities::MPI::sum(owned_particle_energy(), fem.mpi_communicator());
     measured_particle_v_ = particles.velocities();
     const double* v = fem.velocity().trilinos_vector()[0];
-    measured_fem_v_.assign(v, v + owned.n_elements());
+    measured_fem_v_.resize(owned.n_elements());
+    for (std::size_t k = 0; k < owned.n_elements(); ++k)
+      measured_fem_v_[k] = v[ghosted_lid_[k]];
   }
   // The net forces on the driven DoFs (FEM and reactions) to the particles: Φᵀ.
   for (const auto& entry : interface_.dofs()) {
@@ -543,6 +614,7 @@ void EnergySplice<dim>::on_fem_forces(const StepForces& forces) {
     for (const auto& [p, phi] : entry.weights)
       splice_forces_[p][entry.component] += phi * F;
   }
+  halo_.add_to_owners(splice_forces_); // stencil particles owned elsewhere
 }
 
 template <int dim>
@@ -550,22 +622,25 @@ double EnergySplice<dim>::energy() {
   auto& fem = state_.fem;
   const auto& particles = state_.particles;
   const double stored_fem = fem.linear_stored_energy();
-  double kinetic = 0;
+  // This rank's share: kinetic energy of its free particles and particle energy of its rows,
+  // less the kinetic energy of its interface DoFs (they follow the particles and carry no
+  // inertia in this splice), which the FEM's kinetic energy below includes.
+  double local = 0;
   for (unsigned int i = 0; i < particles.size(); ++i)
-    if (state_.free[i])
-      kinetic += 0.5 * particles.mass(i) * particles.velocity(i).norm_square();
-  // The FEM's kinetic energy without the interface DoFs (they follow the particles and carry
-  // no inertia in this splice).
-  kinetic += fem.kinetic_energy();
-  const double* v = fem.velocity().trilinos_vector()[0]; // one rank: owned order
+    if (state_.free[i] && state_.is_owned(i))
+      local += 0.5 * particles.mass(i) * particles.velocity(i).norm_square();
+  const double* v = fem.velocity().trilinos_vector()[0]; // ghosted_lid_ order
   const double* mass = fem.lumped_mass().begin();
   const auto& owned = fem.locally_owned_dofs();
   for (const auto& entry : interface_.dofs())
     if (owned.is_element(entry.dof)) {
       const auto k = owned.index_within_set(entry.dof);
-      kinetic -= 0.5 * mass[k] * v[k] * v[k];
+      const double vk = v[ghosted_lid_[k]];
+      local -= 0.5 * mass[k] * vk * vk;
     }
-  const auto pd = state_.method->splice_strain_energy(particles, state_.bonds);
+  local += owned_particle_energy();
+  const double shared = Utilities::MPI::sum(local, fem.mpi_communicator());
+  const double kinetic_fem = fem.kinetic_energy();
   // ½ uᵀ C u at the current state.
   double correction = 0;
   if (ready_) {
@@ -574,7 +649,7 @@ double EnergySplice<dim>::energy() {
     S_.vmult(t, alpha);
     correction = beta * alpha - 0.5 * (alpha * t);
   }
-  return kinetic + stored_fem + (pd ? *pd : std::numeric_limits<double>::quiet_NaN()) + correction;
+  return shared + kinetic_fem + stored_fem + correction;
 }
 
 template <int dim>
@@ -585,10 +660,10 @@ double EnergySplice<dim>::centred_energy() {
   auto& fem = state_.fem;
   double kinetic = 0;
   for (unsigned int i = 0; i < particles.size(); ++i)
-    if (state_.free[i])
+    if (state_.free[i] && state_.is_owned(i))
       kinetic += 0.125 * particles.mass(i) *
                  (particles.velocity(i) + measured_particle_v_[i]).norm_square();
-  const double* v = fem.velocity().trilinos_vector()[0];
+  const double* v = fem.velocity().trilinos_vector()[0]; // ghosted_lid_ order
   const double* mass = fem.lumped_mass().begin();
   const auto& owned = fem.locally_owned_dofs();
   std::vector<std::uint8_t> interface(owned.n_elements(), 0);
@@ -597,11 +672,11 @@ double EnergySplice<dim>::centred_energy() {
       interface[owned.index_within_set(entry.dof)] = 1;
   for (std::size_t k = 0; k < owned.n_elements(); ++k)
     if (!interface[k]) {
-      const double vc = 0.5 * (v[k] + measured_fem_v_[k]);
+      const double vc = 0.5 * (v[ghosted_lid_[k]] + measured_fem_v_[k]);
       kinetic += 0.5 * mass[k] * vc * vc;
     }
   measured_particle_v_.clear();
-  return kinetic + measured_stored_;
+  return Utilities::MPI::sum(kinetic, fem.mpi_communicator()) + measured_stored_;
 }
 
 template class EnergySplice<2>;

@@ -28,11 +28,15 @@
 // particles only had a negative stiffness in some layouts; with the mass weighting over all
 // unknowns none was found).
 //
-// One MPI rank (the reactions and the correction's sums are gathered on the rank that owns
-// everything).
+// On several MPI ranks each unknown's row of the correction lives with its owner (particles:
+// the owner of the host cell; DoFs: the owned ones); the correction's sums (Aᵀ M A, Rᵀ A, the
+// 2m projections per step) are all-reduced, the FEM's forces handed to particles owned
+// elsewhere go back through the halo, and each ghost's reaction is computed whole on the rank
+// owning its host cell (BondRows keeps the rows that reach it there).
 
 #include "coupling/coupling_state.h"
 #include "coupling/mls_interface.h"
+#include "coupling/particle_halo.h"
 
 #include <deal.II/lac/full_matrix.h>
 #include <deal.II/lac/vector.h>
@@ -50,11 +54,12 @@ class EnergySplice {
   using StepForces = typename fem::MechanicsSolver<dim>::StepForces;
   static constexpr unsigned int n_modes = dim + dim * dim;
 
-  EnergySplice(CouplingState<dim>& state, MlsInterface<dim>& interface)
-      : state_(state), interface_(interface) {}
+  EnergySplice(CouplingState<dim>& state, MlsInterface<dim>& interface,
+               const ParticleHalo<dim>& halo)
+      : state_(state), interface_(interface), halo_(halo) {}
 
   bool on() const { return state_.prm.splice == "energy"; }
-  // InvalidInput unless this run can use it (one rank, a method that provides its energy).
+  // InvalidInput unless this run can use it (a method that provides its energy).
   void check() const;
   // After the split changed (conversion, restart): the correction for the new split, with the
   // FEM's split of its owned DoFs (`split`: which are free, prescribed and driven, as its step
@@ -69,7 +74,7 @@ class EnergySplice {
   // The FEM's hook at the same state: reactions and correction onto the free FEM DoFs, the
   // net forces of the driven DoFs onto the particles (splice_forces()).
   void on_fem_forces(const StepForces& forces);
-  // Per particle: the force of the FEM and of the correction at the last hook [N].
+  // Per particle owned here: the force of the FEM and of the correction at the last hook [N].
   const std::vector<Vector>& splice_forces() const { return splice_forces_; }
   // ½ uᵀ C u at the last hook [J].
   double correction_energy() const { return correction_energy_; }
@@ -97,13 +102,19 @@ class EnergySplice {
   std::array<double, n_modes> modes(const dealii::Point<dim>& x, unsigned int component) const;
   // Nᵀ of per-particle forces on the ghosts owned here, into fem_reactions_ (owned DoFs).
   void spread_to_fem(const std::vector<Vector>& ghost_forces);
-  // α = Pᵀu and β = Rᵀu at the current displacements (the correction's two projections).
+  // α = Pᵀu and β = Rᵀu at the current displacements (the correction's two projections;
+  // collective).
   void correction_sums(dealii::Vector<double>& alpha, dealii::Vector<double>& beta) const;
   // The rows of the unknowns, their masses, the correction matrices and its largest frequency.
   void finalise(const StepForces& forces);
 
+  // The energy of the particle rows whose centre this rank owns [J] (NaN if the method has
+  // none); not summed over ranks.
+  double owned_particle_energy() const;
+
   CouplingState<dim>& state_;
   MlsInterface<dim>& interface_;
+  const ParticleHalo<dim>& halo_;
   std::vector<Vector> splice_forces_;
   dealii::TrilinosWrappers::MPI::Vector fem_reactions_; // owned, writable ghosts
   std::vector<double> fem_reaction_values_;             // owned local order
@@ -111,7 +122,8 @@ class EnergySplice {
   // Owned DoFs: support point and component (local order of the owned set).
   std::vector<dealii::Point<dim>> dof_point_;
   std::vector<unsigned int> dof_component_;
-  // R = −G: particle rows (every component of the free particles, fixed ones too) and
+  std::vector<int> ghosted_lid_; // owned DoF -> its entry in the FEM's ghosted vectors
+  // R = −G: particle rows (every component of the free particles owned here, fixed ones too) and
   // owned-DoF rows (before finalise(): every DoF's share of the ghosts' reactions; after: the
   // free and prescribed DoFs'). The affine identity C A = R needs every row whose value the
   // energy reads, prescribed ones included (their forces are reactions and go nowhere).

@@ -26,7 +26,7 @@ FemParticleCoupling<dim>::FemParticleCoupling(const Parameters& parameters,
                                               fem::MechanicsSolver<dim>& mechanics,
                                               const fem::HeatSolver<dim>* heat)
     : state_(parameters, mechanics, heat), halo_(state_), ghosts_(state_, halo_),
-      bond_rows_(state_), boundary_(state_), interface_(state_), splice_(state_, interface_),
+      bond_rows_(state_), boundary_(state_), interface_(state_), splice_(state_, interface_, halo_),
       fracture_(state_), converter_(state_, [this] { rebuild_layers(); }),
       integrator_(state_, ghosts_, interface_, halo_, boundary_, fracture_, converter_, splice_),
       checkpoint_({state_, converter_, integrator_, fracture_, halo_, bond_rows_, ghosts_,

@@ -98,6 +98,46 @@ void ParticleHalo<dim>::exchange() {
 }
 
 template <int dim>
+void ParticleHalo<dim>::add_to_owners(std::vector<Tensor<1, dim>>& values) const {
+  const MPI_Comm comm = state_.fem.mpi_communicator();
+  if (Utilities::MPI::n_mpi_processes(comm) == 1)
+    return;
+  constexpr int tag = 7302;
+  std::vector<std::vector<double>> out, in;
+  std::vector<MPI_Request> requests;
+  requests.reserve(send_.size() + recv_.size());
+  in.reserve(send_.size());
+  out.reserve(recv_.size());
+  for (const auto& [rank, list] : send_) {
+    in.emplace_back(dim * list.size());
+    requests.emplace_back();
+    MPI_Irecv(in.back().data(), static_cast<int>(in.back().size()), MPI_DOUBLE,
+              static_cast<int>(rank), tag, comm, &requests.back());
+  }
+  for (const auto& [rank, list] : recv_) {
+    out.emplace_back();
+    auto& b = out.back();
+    b.reserve(dim * list.size());
+    for (const unsigned int i : list) {
+      for (unsigned int d = 0; d < dim; ++d)
+        b.push_back(values[i][d]);
+      values[i] = Tensor<1, dim>();
+    }
+    requests.emplace_back();
+    MPI_Isend(b.data(), static_cast<int>(b.size()), MPI_DOUBLE, static_cast<int>(rank), tag, comm,
+              &requests.back());
+  }
+  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
+  std::size_t k = 0;
+  for (const auto& [rank, list] : send_) {
+    const auto& b = in[k++];
+    for (std::size_t m = 0; m < list.size(); ++m)
+      for (unsigned int d = 0; d < dim; ++d)
+        values[list[m]][d] += b[dim * m + d];
+  }
+}
+
+template <int dim>
 void ParticleHalo<dim>::synchronise() const {
   auto& p = state_.particles; // the replicated set: a cache that every rank refreshes
   if (state_.method && state_.n_free_particles() > 0)

@@ -23,6 +23,10 @@ class ParticleHalo {
   // own, and which of its own the others read.
   void plan(const MlsInterface<dim>& interface);
   void exchange(); // u, v of halo particles from their owners
+  // The reverse of exchange(): what this rank computed for halo particles (forces on the
+  // partners and stencil particles it reads) is added to their owners' entries and zeroed here
+  // (collective). `values` has one entry per particle.
+  void add_to_owners(std::vector<dealii::Tensor<1, dim>>& values) const;
   // Every rank's copy of u, v, damage and temperature of all particles from their owners
   // (collective; output, checkpoints and figures read the replicated set).
   void synchronise() const;

@@ -161,13 +161,14 @@ BondBasedMethod<dim>::driven_reactions(const ParticleSet<dim>& particles,
 }
 
 template <int dim>
-std::optional<double> BondBasedMethod<dim>::splice_strain_energy(const ParticleSet<dim>& particles,
-                                                                 const BondList<dim>& bonds) const {
+std::optional<std::vector<double>>
+BondBasedMethod<dim>::splice_energy_by_row(const ParticleSet<dim>& particles,
+                                           const BondList<dim>& bonds) const {
   // ½ V_i k_ij e² per counted bond: a quarter from each row of a bond between two rows, half
   // from the one row of a bond to a driven particle.
   const auto& k = pd_.bond_stiffness();
   const bool any_driven = driven_.size() == particles.size();
-  double E = 0;
+  std::vector<double> E(particles.size(), 0.0);
   for (unsigned int i = 0; i < particles.size(); ++i)
     for (std::size_t b = bonds.begin(i); b < bonds.end(i); ++b) {
       if (bonds.broken[b])
@@ -176,7 +177,7 @@ std::optional<double> BondBasedMethod<dim>::splice_strain_energy(const ParticleS
       const double e =
           (bonds.xi[b] + (particles.displacement(j) - particles.displacement(i))).norm() -
           bonds.length[b];
-      E += (any_driven && driven_[j] ? 0.5 : 0.25) * particles.volume(i) * k[b] * e * e;
+      E[i] += (any_driven && driven_[j] ? 0.5 : 0.25) * particles.volume(i) * k[b] * e * e;
     }
   return E;
 }

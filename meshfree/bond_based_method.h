@@ -66,8 +66,9 @@ class BondBasedMethod : public ParticleMethod<dim> {
   void set_driven(std::vector<std::uint8_t> driven) override { driven_ = std::move(driven); }
   std::optional<std::vector<dealii::Tensor<1, dim>>>
   driven_reactions(const ParticleSet<dim>& particles, const BondList<dim>& bonds) const override;
-  std::optional<double> splice_strain_energy(const ParticleSet<dim>& particles,
-                                             const BondList<dim>& bonds) const override;
+  std::optional<std::vector<double>>
+  splice_energy_by_row(const ParticleSet<dim>& particles,
+                       const BondList<dim>& bonds) const override;
 
  private:
   BondBasedPD<dim> pd_;

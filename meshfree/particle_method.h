@@ -168,19 +168,21 @@ class ParticleMethod {
   }
   // The energy-conserving splice of a coupled run (coupling/energy_splice.h) counts the
   // stored energy of everything the free particles' forces are computed from: every bond with
-  // a free end (bond-based PD), every family with a row here (NOSB-PD, SPG: the free particles
-  // and the driven ones within a horizon of them). driven_reactions(): after compute_forces()
-  // at the same state, the forces that energy puts on the driven particles of set_driven()
-  // [N] (zero for the others); splice_strain_energy(): the energy [J]. Nothing from a method
-  // that cannot provide them (the splice then refuses it).
+  // a free end (bond-based PD), every family with a row (NOSB-PD, SPG: the free particles and
+  // the driven ones within a horizon of them). driven_reactions(): after compute_forces() at
+  // the same state, the forces that energy puts on the driven particles of set_driven() [N]
+  // (zero for the others; complete where every row within a horizon of the particle is here).
+  // splice_energy_by_row(): that energy by the row (family centre) that holds it [J], so that
+  // ranks holding copies of a row count it once. Nothing from a method that cannot provide
+  // them (the splice then refuses it).
   virtual std::optional<std::vector<dealii::Tensor<1, dim>>>
   driven_reactions(const ParticleSet<dim>& particles, const BondList<dim>& bonds) const {
     (void)particles;
     (void)bonds;
     return std::nullopt;
   }
-  virtual std::optional<double> splice_strain_energy(const ParticleSet<dim>& particles,
-                                                     const BondList<dim>& bonds) const {
+  virtual std::optional<std::vector<double>>
+  splice_energy_by_row(const ParticleSet<dim>& particles, const BondList<dim>& bonds) const {
     (void)particles;
     (void)bonds;
     return std::nullopt;

@@ -193,12 +193,16 @@ NosbMethod<dim>::driven_reactions(const ParticleSet<dim>& particles, const BondL
 }
 
 template <int dim>
-std::optional<double> NosbMethod<dim>::splice_strain_energy(const ParticleSet<dim>& particles,
-                                                            const BondList<dim>&) const {
+std::optional<std::vector<double>>
+NosbMethod<dim>::splice_energy_by_row(const ParticleSet<dim>& particles,
+                                      const BondList<dim>&) const {
   if (pd_.parameters().stabilization == NosbStabilization::penalty &&
       pd_.parameters().stabilization_coefficient > 0)
     return std::nullopt; // the hourglass force is not the gradient of an energy
-  return pd_.strain_energy(particles);
+  auto E = pd_.strain_energy_density(particles); // by family centre, per volume
+  for (unsigned int i = 0; i < particles.size(); ++i)
+    E[i] *= particles.volume(i);
+  return E;
 }
 
 template class NosbMethod<2>;

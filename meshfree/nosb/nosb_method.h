@@ -58,8 +58,9 @@ class NosbMethod : public ParticleMethod<dim> {
   }
   std::optional<std::vector<dealii::Tensor<1, dim>>>
   driven_reactions(const ParticleSet<dim>& particles, const BondList<dim>& bonds) const override;
-  std::optional<double> splice_strain_energy(const ParticleSet<dim>& particles,
-                                             const BondList<dim>& bonds) const override;
+  std::optional<std::vector<double>>
+  splice_energy_by_row(const ParticleSet<dim>& particles,
+                       const BondList<dim>& bonds) const override;
   std::vector<HistoryRecord> history(const std::vector<std::uint8_t>& which) const override;
   void set_history(const std::vector<HistoryRecord>& records) override;
   void set_particle_states(

@@ -284,15 +284,19 @@ SpgMethod<dim>::driven_reactions(const ParticleSet<dim>& particles, const BondLi
 }
 
 template <int dim>
-std::optional<double> SpgMethod<dim>::splice_strain_energy(const ParticleSet<dim>& particles,
-                                                           const BondList<dim>& bonds) const {
+std::optional<std::vector<double>>
+SpgMethod<dim>::splice_energy_by_row(const ParticleSet<dim>& particles,
+                                     const BondList<dim>& bonds) const {
   if (!solver_)
-    return 0.0;
+    return std::vector<double>(particles.size(), 0.0);
   // The smoothing force is refreshed every `Smoothing interval` steps: only with 1 is it the
   // gradient of the stabilisation energy.
   if (prm_.stabilisation > 0.0 && prm_.smoothing_interval != 1)
     return std::nullopt;
-  return strain_energy(particles, bonds) + solver_->stabilisation_energy();
+  auto E = strain_energy_density(particles, bonds);
+  for (unsigned int i = 0; i < particles.size(); ++i)
+    E[i] = E[i] * particles.volume(i) + solver_->stabilisation_energy(i);
+  return E;
 }
 
 template class SpgMethod<2>;

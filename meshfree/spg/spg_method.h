@@ -83,9 +83,10 @@ class SpgMethod : public ParticleMethod<dim> {
   }
   std::optional<std::vector<dealii::Tensor<1, dim>>>
   driven_reactions(const ParticleSet<dim>& particles, const BondList<dim>& bonds) const override;
-  // Σ W_N V_N over the particles with rows plus the stabilisation energy.
-  std::optional<double> splice_strain_energy(const ParticleSet<dim>& particles,
-                                             const BondList<dim>& bonds) const override;
+  // W_N V_N plus the stabilisation energy ½ κ_N |r_N|² of each row N.
+  std::optional<std::vector<double>>
+  splice_energy_by_row(const ParticleSet<dim>& particles,
+                       const BondList<dim>& bonds) const override;
   // W_i V_i shared among the intact bonds of i by their weight β V_j.
   double bond_energy(const ParticleSet<dim>& particles, const BondList<dim>& bonds, unsigned int i,
                      std::size_t k) const override;

@@ -165,7 +165,13 @@ class SPGSolver {
   double internal_work() const { return internal_work_; }      // ∫ Σ V P:Ḟ dt [J]
   double plastic_work() const;                                 // Σ V w_p [J]
   double stabilisation_energy() const { return stab_energy_; } // W_stab [J]
-  double contact_energy() const { return contact_energy_; }    // ½ Σ k g² [J]
+  // Row N's share ½ κ_N |r_N|² of W_stab at the last force pass [J] (0 without a row).
+  double stabilisation_energy(unsigned int N) const {
+    return prm_.stabilisation > 0.0 && N < kappa_.size() && N < residual_.size()
+               ? 0.5 * kappa_[N] * residual_[N].norm_square()
+               : 0.0;
+  }
+  double contact_energy() const { return contact_energy_; } // ½ Σ k g² [J]
   dealii::Tensor<1, dim> contact_force(unsigned int obstacle) const { return reaction_[obstacle]; }
   // max |d_I − ū_I| over particles [m]: the amplitude of the non-smooth (checkerboard) part.
   double max_smoothing_residual() const { return max_residual_; }
