@@ -6,7 +6,14 @@
 
 #include <deal.II/base/timer.h>
 
+#include <chrono>
+
 namespace spinesim {
+
+// Wall time since t0 [s].
+inline double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
 
 class ScopedTime {
  public:

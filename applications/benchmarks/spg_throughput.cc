@@ -22,7 +22,7 @@ using namespace framework;
 
 namespace {
 
-struct BenchmarkParameters {
+struct SpgThroughputParameters {
   unsigned int particles_per_edge = 20, steps = 50, max_threads = 2;
   double spacing = 1e-3, velocity = 100;
 
@@ -107,7 +107,7 @@ class Throughput : public Scenario {
  private:
   materials::LawParameters law_;
   meshfree::SpgParameters spg_;
-  BenchmarkParameters bench_;
+  SpgThroughputParameters bench_;
 };
 
 } // namespace
@@ -117,6 +117,6 @@ SPINESIM_REGISTER_SCENARIO(spg_throughput, "spg_throughput",
                            "threads, J2 copper block hitting a wall.",
                            "particles:spg|contact", create_scenario<Throughput>,
                            sections::material(), sections::spg(),
-                           {"SPG benchmark", BenchmarkParameters::declare})
+                           {"SPG benchmark", SpgThroughputParameters::declare})
 
 } // namespace spinesim::applications

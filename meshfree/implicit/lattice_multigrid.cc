@@ -1,6 +1,7 @@
 #include "meshfree/implicit/lattice_multigrid.h"
 
 #include "base/exceptions.h"
+#include "base/scoped_time.h"
 #include "meshfree/implicit/block_csr_matrix.h"
 #include "meshfree/neighbor_search.h"
 
@@ -16,12 +17,6 @@
 #include <string>
 
 namespace spinesim::meshfree {
-
-namespace {
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-} // namespace
 
 template <int dim>
 struct LatticeMultigrid<dim>::Level {

@@ -1,6 +1,7 @@
 #include "meshfree/implicit/pd_linear_solver.h"
 
 #include "base/exceptions.h"
+#include "base/scoped_time.h"
 
 #include <deal.II/lac/precondition.h>
 #include <deal.II/lac/solver_cg.h>
@@ -14,12 +15,6 @@
 #include <cmath>
 
 namespace spinesim::meshfree {
-
-namespace {
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-} // namespace
 
 void PDLinearSolverParameters::declare(dealii::ParameterHandler& prm) {
   prm.declare_entry("Linear solver", "amg", dealii::Patterns::Selection(names()),
