@@ -332,7 +332,9 @@ ConversionReport<dim> CellConverter<dim>::convert(const std::vector<CellId>& cel
     report.mass_before = total_mass(state_);
     report.momentum_before = total_momentum(state_);
     report.kinetic_before = kinetic_energy(state_);
-    if (account) {
+    if (account && splice_energy_) {
+      particles_before = splice_energy_();
+    } else if (account) {
       particles_before = particle_strain_energy(state_) + particle_kinetic_energy(state_);
       fem_before = fem_energy();
     }
@@ -416,7 +418,9 @@ ConversionReport<dim> CellConverter<dim>::convert(const std::vector<CellId>& cel
   report.mass_after = total_mass(state_);
   report.momentum_after = total_momentum(state_);
   report.kinetic_after = kinetic_energy(state_);
-  if (account) {
+  if (account && splice_energy_) {
+    report.energy_change_particles = splice_energy_() - particles_before;
+  } else if (account) {
     report.energy_change_particles =
         particle_strain_energy(state_) + particle_kinetic_energy(state_) - particles_before;
     report.energy_change_fem = fem_energy() - fem_before;

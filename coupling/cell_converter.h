@@ -73,6 +73,11 @@ class CellConverter {
   // Checks the criteria and converts; cells = 0 if nothing converted.
   ConversionReport<dim> convert_flagged();
 
+  // The energy splice's conserved energy (EnergySplice::energy, collective): the account then
+  // books the jump of that energy across a conversion (as energy_change_particles; the FEM's
+  // share is in it) instead of the two models' stored and kinetic energies.
+  void set_splice_energy(std::function<double()> energy) { splice_energy_ = std::move(energy); }
+
   // CellId -> conversion batch.
   const std::map<std::string, unsigned int>& converted() const { return converted_; }
   // From a checkpoint: these cells are converted, and out of the FEM.
@@ -96,6 +101,7 @@ class CellConverter {
 
   CouplingState<dim>& state_;
   std::function<void()> rebuild_layers_;
+  std::function<double()> splice_energy_;
   std::map<std::string, unsigned int> converted_;
   std::vector<ConversionReport<dim>> reports_;
 };

@@ -83,6 +83,10 @@ class CoupledIntegrator {
   ParticleEnergy<dim> energy_;
   double time_ = 0;
   std::size_t broken_last_step_ = 0; // bond ends broken by this rank in the last step
+  // The energy splice's stored energy is checked every few steps once bonds are broken
+  // (EnergySplice::check_stored_energy).
+  bool any_broken_ = false;
+  unsigned int steps_since_splice_check_ = 0;
   double particle_force_seconds_ = 0, particle_updates_ = 0;
   // Net accelerations of the free particle components at the last relaxation step [m/s²].
   std::vector<double> relax_acceleration_;

@@ -58,6 +58,44 @@ double EnergySplice<dim>::owned_particle_energy() const {
 }
 
 template <int dim>
+double EnergySplice<dim>::account_stored_energy() const {
+  double e = owned_particle_energy();
+  if (ready_) {
+    dealii::Vector<double> alpha(n_modes), beta(n_modes), t(n_modes);
+    correction_sums(alpha, beta);
+    S_.vmult(t, alpha);
+    if (state_.rank == 0)
+      e += beta * alpha - 0.5 * (alpha * t);
+  }
+  return e;
+}
+
+template <int dim>
+void EnergySplice<dim>::check_stored_energy() {
+  if (!ready_)
+    return;
+  auto& fem = state_.fem;
+  const double models = fem.linear_stored_energy() +
+                        Utilities::MPI::sum(owned_particle_energy(), fem.mpi_communicator());
+  dealii::Vector<double> alpha(n_modes), beta(n_modes), t(n_modes);
+  correction_sums(alpha, beta);
+  S_.vmult(t, alpha);
+  const double correction = beta * alpha - 0.5 * (alpha * t);
+  // Round-off of the sums is ~1e-12 of the models' energy; an indefinite mode grows past them.
+  if (models + correction < -1e-6 * std::abs(models)) {
+    std::ostringstream what;
+    what << "the energy splice's stored energy is negative (FEM and particles " << models
+         << " J, consistency correction " << correction << " J): a mode without stiffness grows";
+    throw NumericalFailure(what.str(), "the FEM/particle interface",
+                           "the correction was made for the intact material, and a crack that "
+                           "cuts the body next to the interface can leave it without positive "
+                           "stiffness; keep cracks inside the particles, away from the interface "
+                           "(a wider Coupling/Initial region or Conversion region, Coupling/"
+                           "Buffer), or use Coupling/Splice = overlap (docs/coupling.md)");
+  }
+}
+
+template <int dim>
 void EnergySplice<dim>::spread_to_fem(const std::vector<Vector>& ghost_forces) {
   // Nᵀ: each ghost owned here hands its force to the DoFs of its host cell with the weights
   // that interpolated it (GhostLayer::update), through the hanging-node constraints.
@@ -375,14 +413,11 @@ void EnergySplice<dim>::finalise(const StepForces& forces) {
         particle_rows_.end());
   }
   dof_rows_.clear();
-  free_dofs_.clear();
   row_dofs_.clear();
   for (std::size_t k = 0; k < n_owned; ++k) {
     if (!forces.is_free(k) && !forces.is_prescribed(k))
       continue;
     row_dofs_.push_back(static_cast<unsigned int>(k));
-    if (forces.is_free(k))
-      free_dofs_.push_back(static_cast<unsigned int>(k));
     Row row = dof_rows_all_[k];
     for (unsigned int l = 0; l < n_modes; ++l)
       row.r[l] += prescribed_t[k][l];
@@ -550,9 +585,11 @@ void EnergySplice<dim>::on_fem_forces(const StepForces& forces) {
   const auto& particles = state_.particles;
   const auto& owned = fem.locally_owned_dofs();
   std::fill(splice_forces_.begin(), splice_forces_.end(), Vector());
-  // The ghosts' reactions on every DoF that moves (free or driven).
+  // The ghosts' reactions on every DoF: those that move (free or driven) and the prescribed
+  // ones, whose reactions (and the supports' work in the energy account) they are part of.
   for (std::size_t k = 0; k < fem_reaction_values_.size(); ++k)
-    if (fem_reaction_values_[k] != 0 && (forces.is_free(k) || forces.is_driven(k)))
+    if (fem_reaction_values_[k] != 0 &&
+        (forces.is_free(k) || forces.is_driven(k) || forces.is_prescribed(k)))
       forces.add(k, fem_reaction_values_[k]);
   // The correction −C u = −R α − M A Q (β − S α), α = Pᵀu = Q Aᵀ M u, β = Rᵀu.
   const double* mass = fem.lumped_mass().begin();
@@ -578,8 +615,9 @@ void EnergySplice<dim>::on_fem_forces(const StepForces& forces) {
     splice_forces_[row.index][row.component] += f;
   }
   {
+    // On the free DoFs and, as reactions, on the prescribed ones.
     std::vector<double> f(owned.n_elements(), 0.0);
-    for (const unsigned int k : free_dofs_) {
+    for (const unsigned int k : row_dofs_) {
       const auto a = modes(dof_point_[k], dof_component_[k]);
       double g = 0;
       for (unsigned int l = 0; l < n_modes; ++l)
@@ -589,7 +627,7 @@ void EnergySplice<dim>::on_fem_forces(const StepForces& forces) {
     for (const auto& row : dof_rows_)
       for (unsigned int l = 0; l < n_modes; ++l)
         f[row.index] -= row.r[l] * alpha[l];
-    for (const unsigned int k : free_dofs_)
+    for (const unsigned int k : row_dofs_)
       forces.add(k, f[k]);
   }
   if (measure_) {

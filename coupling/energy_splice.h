@@ -88,6 +88,13 @@ class EnergySplice {
   // measured).
   void measure_next_step() { measure_ = true; }
   double centred_energy();
+  // This rank's share of the splice's stored energy for the energy account (collective): the
+  // particle energy of the rows it owns, and on rank 0 the correction's ½ uᵀ C u [J].
+  double account_stored_energy() const;
+  // NumericalFailure if the stored energy E_FEM + E_PD + ½ uᵀ C u has turned negative
+  // (collective): C was made for the intact material, and a crack that cuts the body next to
+  // the interface can leave the sum without positive stiffness.
+  void check_stored_energy();
   // max |G a| / max |T a| over the affine modes before the correction (what it removes) [-].
   double ghost_force_relative() const { return ghost_force_relative_; }
 
@@ -134,8 +141,8 @@ class EnergySplice {
   // keeps them on prescribed DoFs.
   std::map<dealii::types::global_dof_index, std::array<double, n_modes>> replaced_;
   std::map<dealii::types::global_dof_index, std::vector<std::pair<unsigned int, double>>> fits_;
-  std::vector<unsigned int> free_dofs_, row_dofs_; // owned local indices: free; free + prescribed
-  dealii::FullMatrix<double> Q_, S_;               // (Aᵀ M A)⁻¹ and sym(RᵀA)
+  std::vector<unsigned int> row_dofs_; // owned local indices of the free and prescribed DoFs
+  dealii::FullMatrix<double> Q_, S_;   // (Aᵀ M A)⁻¹ and sym(RᵀA)
   bool ready_ = false;
   // measure_next_step(): the stored energy and the velocities at the hook of that step.
   bool measure_ = false;

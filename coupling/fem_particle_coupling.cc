@@ -30,7 +30,16 @@ FemParticleCoupling<dim>::FemParticleCoupling(const Parameters& parameters,
       fracture_(state_), converter_(state_, [this] { rebuild_layers(); }),
       integrator_(state_, ghosts_, interface_, halo_, boundary_, fracture_, converter_, splice_),
       checkpoint_({state_, converter_, integrator_, fracture_, halo_, bond_rows_, ghosts_,
-                   [this] { rebuild_layers(); }}) {}
+                   [this] { rebuild_layers(); }}) {
+  if (splice_.on()) {
+    // The energy account books the splice's energy (coupling/energy_splice.h): the interface
+    // DoFs carry no inertia, the particles' stored energy is that of the counted rows plus the
+    // correction, and a conversion books the jump of the whole.
+    mechanics.set_massless_driven(true);
+    integrator_.energy().book_splice([this] { return splice_.account_stored_energy(); });
+    converter_.set_splice_energy([this] { return splice_.energy(); });
+  }
+}
 
 template <int dim>
 FemParticleCoupling<dim>::~FemParticleCoupling() = default;
@@ -170,6 +179,8 @@ fem::EnergyBalance FemParticleCoupling<dim>::energy_balance() const {
   b.interface_work_particles = p.strain_energy + p.kinetic_energy_central + p.fracture_dissipation +
                                p.damping_dissipation - p.external_work -
                                converter_.energy_change_particles();
+  if (splice_.on())
+    b.interface_work_particles = 0; // the energy splice's exchange is inside its energy
   return b;
 }
 

@@ -18,11 +18,15 @@ double ParticleEnergy<dim>::stored_energy() const {
   if (!state_.method || state_.n_free_particles() == 0)
     return 0;
   const auto start = std::chrono::steady_clock::now();
-  const auto w = state_.method->strain_energy_density(state_.particles, state_.bonds);
   double e = 0; // rows of ghosts and of other ranks' particles are not this rank's
-  for (unsigned int i = 0; i < w.size(); ++i)
-    if (state_.free[i] && state_.is_owned(i))
-      e += w[i] * state_.particles.volume(i);
+  if (splice_stored_) {
+    e = splice_stored_();
+  } else {
+    const auto w = state_.method->strain_energy_density(state_.particles, state_.bonds);
+    for (unsigned int i = 0; i < w.size(); ++i)
+      if (state_.free[i] && state_.is_owned(i))
+        e += w[i] * state_.particles.volume(i);
+  }
   seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return e;
 }
@@ -34,6 +38,19 @@ void ParticleEnergy<dim>::before_forces() {
   stored_before_ = stored_energy();
   broken_before_ = state_.bonds.broken;
   velocity_before_ = state_.particles.velocities();
+  std::swap(u_last_, u_now_);
+  u_now_ = state_.particles.displacements();
+  forces_before_.clear();
+  reactions_before_.clear();
+}
+
+template <int dim>
+void ParticleEnergy<dim>::record_forces_before_breaks() {
+  if (!on_)
+    return;
+  forces_before_ = state_.particles.forces();
+  if (splice_stored_)
+    reactions_before_ = *state_.method->driven_reactions(state_.particles, state_.bonds);
 }
 
 template <int dim>
@@ -43,7 +60,23 @@ void ParticleEnergy<dim>::after_forces() {
   stored_ = stored_before_;
   if (state_.bonds.broken != broken_before_) { // the same displacements, fewer bonds
     stored_ = stored_energy();
-    fracture_ += stored_before_ - stored_;
+    double lost_work = 0;
+    const auto& p = state_.particles;
+    if (forces_before_.size() == p.size() && u_last_.size() == p.size()) {
+      std::vector<dealii::Tensor<1, dim>> reactions;
+      if (reactions_before_.size() == p.size())
+        reactions = *state_.method->driven_reactions(p, state_.bonds);
+      for (unsigned int i = 0; i < p.size(); ++i) {
+        if (!state_.is_owned(i))
+          continue;
+        const auto du = u_now_[i] - u_last_[i];
+        if (state_.free[i])
+          lost_work += 0.5 * ((forces_before_[i] - p.force(i)) * du);
+        else if (!reactions.empty())
+          lost_work += 0.5 * ((reactions_before_[i] - reactions[i]) * du);
+      }
+    }
+    fracture_ += stored_before_ - stored_ + lost_work;
     ++breaking_passes_;
   }
 }

@@ -16,6 +16,7 @@
 #include <deal.II/base/tensor.h>
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace spinesim::coupling {
@@ -27,11 +28,21 @@ class ParticleEnergy {
 
   void set_on(bool on) { on_ = on; }
   bool on() const { return on_; }
+  // The energy splice: the stored energy this rank books instead of Σ W_i V_i over its owned
+  // free particles (its counted rows and correction; collective) [J], and the ghosts'
+  // reactions are part of the forces breaks remove (after_forces).
+  void book_splice(std::function<double()> stored) { splice_stored_ = std::move(stored); }
 
   // Before the force pass at t_n: stored energy, broken flags and velocities v_{n−½}.
   void before_forces();
+  // With damage: the forces of the particles (and the ghosts' reactions under the energy
+  // splice) at t_n with the bonds before the pass that may break some (a pass without breaking
+  // made just before).
+  void record_forces_before_breaks();
   // After the force pass (and breaks shared from other ranks): the energy released by the
-  // bonds that broke in it.
+  // bonds that broke in it, U_before − U_after at the same displacements plus the work the
+  // motion did not pay: central differences applied the removed forces over half of the last
+  // step only, ½ (f_before − f_after) · (u_n − u_{n−1}) (docs/coupling.md, Energy account).
   void after_forces();
   // After the particle update and the fixed components' motion to t_{n+1}: the step's sums.
   void after_update(double time, double dt, double damping);
@@ -43,9 +54,10 @@ class ParticleEnergy {
   double seconds() const { return seconds_; } // wall time of the stored-energy passes [s]
 
  private:
-  double stored_energy() const; // Σ W_i V_i over the owned free particles [J]
+  double stored_energy() const; // Σ W_i V_i over the owned free particles, or splice_stored_ [J]
 
   CouplingState<dim>& state_;
+  std::function<double()> splice_stored_;
   bool on_ = false;
   fem::ExplicitEnergy account_;
   double stored_before_ = 0, stored_ = 0, fracture_ = 0;
@@ -53,6 +65,8 @@ class ParticleEnergy {
   unsigned int breaking_passes_ = 0;
   std::vector<std::uint8_t> broken_before_;
   std::vector<dealii::Tensor<1, dim>> velocity_before_;
+  // u_n and u_{n−1} at the last two force passes; forces (and reactions) before breaks.
+  std::vector<dealii::Tensor<1, dim>> u_now_, u_last_, forces_before_, reactions_before_;
 };
 
 } // namespace spinesim::coupling

@@ -131,6 +131,10 @@ class MechanicsSolver {
   // share at the last step's force pass (t − dt).
   void set_energy_account(bool on) { energy_account_on_ = on; }
   bool energy_account_on() const { return energy_account_on_; }
+  // Driven DoFs without inertia of their own (the energy splice of a coupled run hands their
+  // net force on through the step force hook): the account gives them no kinetic energy and
+  // books no interface work through them.
+  void set_massless_driven(bool on) { massless_driven_ = on; }
   const ExplicitEnergy& energy_account() const { return energy_; }
   // ½ uᵀ K u of the active cells at the current displacement on the linear explicit path (the
   // stored energy the account reports there) [J]; NaN on other paths, whose account holds the
@@ -369,6 +373,10 @@ class MechanicsSolver {
   std::vector<double> u_previous_;
   // Energy account: on/off, the sums, v_{n−½} of the step, and f_ext of the last assembly.
   bool energy_account_on_ = false;
+  bool massless_driven_ = false;
+  // Σ u·(K u) over the step's DoFs before the step force hook adds forces of other models:
+  // the account's stored energy is the FEM's own.
+  double account_stored2_ = 0;
   std::function<void(const StepForces&)> step_force_hook_;
   ExplicitEnergy energy_;
   std::vector<double> v_previous_;

@@ -147,6 +147,12 @@ void MechanicsSolver<dim>::central_difference(double dt, double a, double bc_tim
     }
     if (sums && relax_acceleration_.size() != n)
       relax_acceleration_.assign(n, std::numeric_limits<double>::quiet_NaN());
+    if (!sums && energy_account_on_ && linear) {
+      account_stored2_ = 0;
+      for (std::size_t k = 0; k < n; ++k)
+        if (!step_skip_[k])
+          account_stored2_ += u[k] * r[k];
+    }
     if (step_force_hook_)
       step_force_hook_(StepForces(linear ? raw_residual_.begin() : rhs_.begin(), sign,
                                   step_skip_.data(), step_dirichlet_.data(), step_driven_.data()));
@@ -280,7 +286,7 @@ void MechanicsSolver<dim>::account_energy(double dt, double a, bool linear) {
   ExplicitEnergy::Step supported, driven; // Dirichlet and free DoFs; driven DoFs
   // u_n − u_{n−1} = dt_back v_{n−½}: steps differ where a run lands on its output times.
   const double dt_back = energy_.valid && time_ > energy_.time ? time_ - energy_.time : dt;
-  double internal_back = 0, internal_forward = 0, stored2 = 0;
+  double internal_back = 0, internal_forward = 0;
   for (std::size_t k = 0; k < n; ++k) {
     const double vo = v_previous_[k], vn = v_new[k], fe = f_ext ? f_ext[k] : 0.0;
     const double back = 0.5 * dt_back * vo, forward = 0.5 * dt * vn;
@@ -294,11 +300,11 @@ void MechanicsSolver<dim>::account_energy(double dt, double a, bool linear) {
       supported.external_forward += fe * forward;
       continue;
     }
-    if (linear)
-      stored2 += u_previous_[k] * r[k];
     const bool is_driven = step_driven_[k] && !step_dirichlet_[k];
+    const bool massless = is_driven && massless_driven_; // only its loads' work is booked
     (is_driven ? driven : supported)
-        .add(mass[k], vo, vn, dt, sign * r[k], fe, step_dirichlet_[k] || is_driven, a);
+        .add(massless ? 0.0 : mass[k], vo, vn, dt, sign * r[k], fe,
+             step_dirichlet_[k] || (is_driven && !massless), a);
   }
   scale_back(supported, dt_back / dt);
   scale_back(driven, dt_back / dt);
@@ -311,7 +317,7 @@ void MechanicsSolver<dim>::account_energy(double dt, double a, bool linear) {
   energy_.internal.add(internal_back, internal_forward);
   energy_.kinetic = supported.kinetic + driven.kinetic;
   energy_.kinetic_central = supported.kinetic_central + driven.kinetic_central;
-  energy_.strain = linear ? 0.5 * stored2 : std::numeric_limits<double>::quiet_NaN();
+  energy_.strain = linear ? 0.5 * account_stored2_ : std::numeric_limits<double>::quiet_NaN();
   energy_.valid = true;
 }
 

@@ -36,6 +36,7 @@ class BondBasedMethod : public ParticleMethod<dim> {
 
   std::string name() const override { return "bond_based"; }
   bool carries_material_state() const override { return false; }
+  bool forces_derive_from_energy() const override { return true; }
   double thickness() const override { return pd_.parameters().thickness; }
   bool plane_stress() const override {
     return dim == 2 && pd_.parameters().plane_model == PlaneModel::plane_stress;

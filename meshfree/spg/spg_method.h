@@ -49,6 +49,9 @@ class SpgMethod : public ParticleMethod<dim> {
   double thickness() const override { return thickness_; }
   // The force on a coefficient gathers the stresses of every particle in its support.
   bool needs_neighbour_rows() const override { return true; }
+  bool forces_derive_from_energy() const override {
+    return !(prm_.stabilisation > 0.0) || prm_.smoothing_interval == 1;
+  }
   void set_driven(std::vector<std::uint8_t> driven) override { driven_ = std::move(driven); }
   bool shares_bond_breaks() const override { return true; }
   std::vector<std::pair<unsigned int, unsigned int>> take_broken_pairs() override;
