@@ -423,6 +423,54 @@ void EnergySplice<dim>::finalise(const StepForces& forces) {
       row.r[l] += prescribed_t[k][l];
     dof_rows_.push_back(row);
   }
+  {
+    // interface_mass_ratio(): the largest eigenvalue of M_p⁻¹ Φᵀ M_I Φ over the free particles'
+    // components (M_I the lumped masses of the driven DoFs), by 60 power iterations with the
+    // Rayleigh quotient (which approaches it from below; hence the factor 1.1).
+    const double* m = fem.lumped_mass().begin();
+    const unsigned int n = particles.size();
+    std::vector<std::pair<std::size_t, const typename MlsInterface<dim>::Dof*>> driven;
+    for (const auto& entry : interface_.dofs())
+      if (owned.is_element(entry.dof)) {
+        const auto k = owned.index_within_set(entry.dof);
+        if (forces.is_driven(k))
+          driven.emplace_back(k, &entry);
+      }
+    std::vector<double> x(dim * n, 0.0), y(dim * n);
+    for (unsigned int i = 0; i < n; ++i)
+      if (state_.free[i])
+        for (unsigned int d = 0; d < dim; ++d)
+          x[dim * i + d] = 1.0 + 0.5 * std::sin(1.0 + 7.0 * i + 3.0 * d); // not an eigenvector
+    double lambda = 0;
+    for (unsigned int it = 0; it < 60; ++it) {
+      std::fill(y.begin(), y.end(), 0.0);
+      for (const auto& [k, entry] : driven) {
+        double u = 0;
+        for (const auto& [p, phi] : entry->weights)
+          u += phi * x[dim * p + entry->component];
+        for (const auto& [p, phi] : entry->weights)
+          y[dim * p + entry->component] += phi * m[k] * u;
+      }
+      if (Utilities::MPI::n_mpi_processes(comm) > 1)
+        Utilities::MPI::sum(y, comm, y);
+      // y = M_p⁻¹ Φᵀ M_I Φ x; λ ≈ xᵀ M_p y / xᵀ M_p x, then x = y / max |y|.
+      double num = 0, den = 0, top = 0;
+      for (unsigned int i = 0; i < n; ++i)
+        for (unsigned int d = 0; d < dim; ++d) {
+          auto& v = y[dim * i + d];
+          v = state_.free[i] && particles.mass(i) > 0 ? v / particles.mass(i) : 0.0;
+          num += particles.mass(i) * x[dim * i + d] * v;
+          den += particles.mass(i) * x[dim * i + d] * x[dim * i + d];
+          top = std::max(top, std::abs(v));
+        }
+      lambda = den > 0 ? num / den : 0.0;
+      if (!(top > 0))
+        break;
+      for (std::size_t j = 0; j < y.size(); ++j)
+        x[j] = y[j] / top;
+    }
+    interface_mass_ratio_ = 1.1 * lambda;
+  }
   // Drop the rows without any entry (most of them: the correction is local).
   double r_max = 0;
   for (const auto* rows : {&particle_rows_, &dof_rows_})

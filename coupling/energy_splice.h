@@ -69,6 +69,11 @@ class EnergySplice {
   // The explicit step with the correction from the step `dt` [s] without it: the correction's
   // largest frequency squared ω_C² added to (2 / dt)² (Weyl's bound on the sum's spectrum).
   double limit_step(double dt) const;
+  // The interface DoFs' inertia is the particles' in this splice: their stiffness acts on the
+  // particles of their fits, ω² ≤ λ_max(M_p⁻¹ Φᵀ M_I Φ) ω²_FEM. This factor λ_max (M_I the
+  // lumped masses of the driven DoFs) is small on a straight interface and grows where fits
+  // extrapolate on a jagged one [-].
+  double interface_mass_ratio() const { return interface_mass_ratio_; }
   // After the particle force pass of a step: the ghosts' reactions, spread to the FEM DoFs.
   void take_particle_forces();
   // The FEM's hook at the same state: reactions and correction onto the free FEM DoFs, the
@@ -151,6 +156,7 @@ class EnergySplice {
   std::vector<double> measured_fem_v_;
   double correction_energy_ = 0, ghost_force_relative_ = 0, t_scale_ = 0;
   double max_frequency_squared_ = 0; // largest eigenvalue of M⁻¹C [1/s²]
+  double interface_mass_ratio_ = 0;
 };
 
 } // namespace spinesim::coupling
