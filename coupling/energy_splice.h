@@ -96,6 +96,9 @@ class EnergySplice {
   // This rank's share of the splice's stored energy for the energy account (collective): the
   // particle energy of the rows it owns, and on rank 0 the correction's ½ uᵀ C u [J].
   double account_stored_energy() const;
+  // The energy of the particle rows whose centre this rank owns [J] (NaN if the method has
+  // none); not summed over ranks.
+  double owned_particle_energy() const;
   // NumericalFailure if the stored energy E_FEM + E_PD + ½ uᵀ C u has turned negative
   // (collective): C was made for the intact material, and a crack that cuts the body next to
   // the interface can leave the sum without positive stiffness.
@@ -119,10 +122,6 @@ class EnergySplice {
   void correction_sums(dealii::Vector<double>& alpha, dealii::Vector<double>& beta) const;
   // The rows of the unknowns, their masses, the correction matrices and its largest frequency.
   void finalise(const StepForces& forces);
-
-  // The energy of the particle rows whose centre this rank owns [J] (NaN if the method has
-  // none); not summed over ranks.
-  double owned_particle_energy() const;
 
   CouplingState<dim>& state_;
   MlsInterface<dim>& interface_;

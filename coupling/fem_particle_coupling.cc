@@ -36,7 +36,8 @@ FemParticleCoupling<dim>::FemParticleCoupling(const Parameters& parameters,
     // DoFs carry no inertia, the particles' stored energy is that of the counted rows plus the
     // correction, and a conversion books the jump of the whole.
     mechanics.set_massless_driven(true);
-    integrator_.energy().book_splice([this] { return splice_.account_stored_energy(); });
+    integrator_.energy().book_splice([this] { return splice_.account_stored_energy(); },
+                                     [this] { return splice_.owned_particle_energy(); });
     converter_.set_splice_energy([this] { return splice_.energy(); });
   }
 }

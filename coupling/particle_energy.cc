@@ -36,6 +36,8 @@ void ParticleEnergy<dim>::before_forces() {
   if (!on_)
     return;
   stored_before_ = stored_energy();
+  if (splice_rows_)
+    rows_before_ = splice_rows_();
   broken_before_ = state_.bonds.broken;
   velocity_before_ = state_.particles.velocities();
   std::swap(u_last_, u_now_);
@@ -59,7 +61,8 @@ void ParticleEnergy<dim>::after_forces() {
     return;
   stored_ = stored_before_;
   if (state_.bonds.broken != broken_before_) { // the same displacements, fewer bonds
-    stored_ = stored_energy();
+    // Only this rank's rows changed (with the splice the rest of its energy is collective).
+    stored_ = splice_rows_ ? stored_before_ - rows_before_ + splice_rows_() : stored_energy();
     double lost_work = 0;
     const auto& p = state_.particles;
     if (forces_before_.size() == p.size() && u_last_.size() == p.size()) {

@@ -29,9 +29,13 @@ class ParticleEnergy {
   void set_on(bool on) { on_ = on; }
   bool on() const { return on_; }
   // The energy splice: the stored energy this rank books instead of Σ W_i V_i over its owned
-  // free particles (its counted rows and correction; collective) [J], and the ghosts'
-  // reactions are part of the forces breaks remove (after_forces).
-  void book_splice(std::function<double()> stored) { splice_stored_ = std::move(stored); }
+  // free particles (its counted rows and correction; collective) and the part of it that breaks
+  // change (its counted rows; not collective, breaks are local) [J]; the ghosts' reactions are
+  // part of the forces breaks remove (after_forces).
+  void book_splice(std::function<double()> stored, std::function<double()> rows) {
+    splice_stored_ = std::move(stored);
+    splice_rows_ = std::move(rows);
+  }
 
   // Before the force pass at t_n: stored energy, broken flags and velocities v_{n−½}.
   void before_forces();
@@ -57,7 +61,8 @@ class ParticleEnergy {
   double stored_energy() const; // Σ W_i V_i over the owned free particles, or splice_stored_ [J]
 
   CouplingState<dim>& state_;
-  std::function<double()> splice_stored_;
+  std::function<double()> splice_stored_, splice_rows_;
+  double rows_before_ = 0; // splice_rows_() before the force pass
   bool on_ = false;
   fem::ExplicitEnergy account_;
   double stored_before_ = 0, stored_ = 0, fracture_ = 0;
