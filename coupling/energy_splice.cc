@@ -60,14 +60,18 @@ double EnergySplice<dim>::owned_particle_energy() const {
 template <int dim>
 double EnergySplice<dim>::account_stored_energy() const {
   double e = owned_particle_energy();
-  if (ready_) {
-    dealii::Vector<double> alpha(n_modes), beta(n_modes), t(n_modes);
-    correction_sums(alpha, beta);
-    S_.vmult(t, alpha);
-    if (state_.rank == 0)
-      e += beta * alpha - 0.5 * (alpha * t);
-  }
-  return e;
+  const double correction = current_correction_energy(); // collective
+  return state_.rank == 0 ? e + correction : e;
+}
+
+template <int dim>
+double EnergySplice<dim>::current_correction_energy() const {
+  if (!ready_)
+    return 0.0;
+  dealii::Vector<double> alpha(n_modes), beta(n_modes), t(n_modes);
+  correction_sums(alpha, beta);
+  S_.vmult(t, alpha);
+  return beta * alpha - 0.5 * (alpha * t);
 }
 
 template <int dim>
@@ -77,10 +81,7 @@ void EnergySplice<dim>::check_stored_energy() {
   auto& fem = state_.fem;
   const double models = fem.linear_stored_energy() +
                         Utilities::MPI::sum(owned_particle_energy(), fem.mpi_communicator());
-  dealii::Vector<double> alpha(n_modes), beta(n_modes), t(n_modes);
-  correction_sums(alpha, beta);
-  S_.vmult(t, alpha);
-  const double correction = beta * alpha - 0.5 * (alpha * t);
+  const double correction = current_correction_energy();
   // Round-off of the sums is ~1e-12 of the models' energy; an indefinite mode grows past them.
   if (models + correction < -1e-6 * std::abs(models)) {
     std::ostringstream what;
@@ -728,13 +729,7 @@ double EnergySplice<dim>::energy() {
   const double shared = Utilities::MPI::sum(local, fem.mpi_communicator());
   const double kinetic_fem = fem.kinetic_energy();
   // ½ uᵀ C u at the current state.
-  double correction = 0;
-  if (ready_) {
-    dealii::Vector<double> alpha(n_modes), beta(n_modes), t(n_modes);
-    correction_sums(alpha, beta);
-    S_.vmult(t, alpha);
-    correction = beta * alpha - 0.5 * (alpha * t);
-  }
+  const double correction = current_correction_energy();
   return shared + kinetic_fem + stored_fem + correction;
 }
 

@@ -120,6 +120,8 @@ class EnergySplice {
   // α = Pᵀu and β = Rᵀu at the current displacements (the correction's two projections;
   // collective).
   void correction_sums(dealii::Vector<double>& alpha, dealii::Vector<double>& beta) const;
+  // ½ uᵀ C u at the current displacements (collective; 0 before the first rebuild) [J].
+  double current_correction_energy() const;
   // The rows of the unknowns, their masses, the correction matrices and its largest frequency.
   void finalise(const StepForces& forces);
 
