@@ -193,6 +193,8 @@ int run_command(const RunOptions& options) {
     ctx.output().write_atomic("parameters.prm", scene.resolved_prm());
   ctx.summary().set_scene(scene.source_name(), scene.description());
   ctx.summary().set_effects(effects.active_names());
+  // What ran where: studies compare runs by these (unknowns per dimension, cost per rank).
+  ctx.summary().set_run(scene.dimension(), ctx.n_ranks(), omp_get_max_threads());
   ctx.log() << "spinesim " << SPINESIM_VERSION
             << (ctx.restarting() ? ": restarting " : ": running ") << scene.source_name()
             << "\n  scenario: " << scene.scenario() << ", " << scene.dimension() << "-D, "

@@ -55,9 +55,6 @@ void Effects::check_consistency() const {
   if (damage && !(mechanics || particles()))
     throw InvalidInput("Effects/Damage", "damage needs something that deforms",
                        "false, or switch Mechanics or a Particles method on");
-  if (!mechanics && !heat && !particles())
-    throw InvalidInput("Effects", "the scene switches every effect off",
-                       "at least one of Mechanics, Heat or a Particles method");
 }
 
 std::vector<EffectStatus> Effects::statuses() const {

@@ -63,8 +63,16 @@ void check_scenario_effects(const ScenarioEntry& scenario, const Effects& effect
       throw InvalidInput(
           "Effects/" + (particles ? std::string("Particles method") : entry.at(effect)),
           "the " + scenario.name + " scenario does not run " + effect,
-          "a scene for " + scenario.name + " switches on what it runs: " + scenario.effects);
+          "a scene for " + scenario.name + " switches on " +
+              (scenario.effects.empty() ? std::string("no effect (it runs other scenes: set "
+                                                      "Effects/Mechanics = false)")
+                                        : "what it runs: " + scenario.effects));
     }
+  // A scenario that simulates needs something to simulate; one that runs no effect of its
+  // own (a study driving other scenes) needs the scene to switch them all off.
+  if (!scenario.effects.empty() && effects.active_names().empty())
+    throw InvalidInput("Effects", "the scene switches every effect off",
+                       "at least one of Mechanics, Heat or a Particles method");
 }
 
 } // namespace spinesim::framework

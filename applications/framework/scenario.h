@@ -61,7 +61,8 @@ struct ScenarioEntry {
   std::string description;
   // The effects the scenario runs, '|'-separated in the words of Effects::active_names():
   // mechanics, heat, thermal expansion, damage, particles:<method> (particles:* = any method),
-  // conversion, coupling, contact. A scene that switches on anything else is bad input.
+  // conversion, coupling, contact. A scene that switches on anything else is bad input. Empty:
+  // the scenario runs no effect itself (a study of other scenes); every effect must be off.
   std::string effects;
   std::function<std::unique_ptr<Scenario>(const ScenarioFactoryArgs&)> create;
   // The sections the scenario reads; a section shared with other scenarios is declared once.

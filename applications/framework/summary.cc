@@ -27,6 +27,12 @@ void Summary::set_effects(const std::vector<std::string>& effects) {
   effects_ = effects;
 }
 
+void Summary::set_run(unsigned int dimension, unsigned int ranks, unsigned int threads_per_rank) {
+  dimension_ = dimension;
+  ranks_ = ranks;
+  threads_ = threads_per_rank;
+}
+
 void Summary::set_status(bool ok, const std::string& message) {
   status_ = ok ? "ok" : "failed";
   message_ = message;
@@ -57,6 +63,8 @@ std::string Summary::json() const {
   j["timings"] = nlohmann::ordered_json::object();
   for (const auto& [phase, s] : timings_)
     j["timings"][phase] = s;
+  if (ranks_ > 0)
+    j["run"] = {{"dimension", dimension_}, {"mpi_ranks", ranks_}, {"threads_per_rank", threads_}};
   j["effects"] = effects_;
   j["warnings"] = warnings_;
   return j.dump(2) + "\n";

@@ -17,6 +17,9 @@ class Summary {
   void set_label(const std::string& name, const std::string& value);
   void add_timing(const std::string& phase, double seconds);
   void set_effects(const std::vector<std::string>& effects);
+  // Where the run ran ("run": dimension, MPI ranks, threads per rank): what studies need to
+  // compare runs, kept apart from the figures, which must agree between rank counts.
+  void set_run(unsigned int dimension, unsigned int ranks, unsigned int threads_per_rank);
   // Something suspicious that did not stop the run (listed under "warnings").
   void add_warning(const std::string& text) { warnings_.push_back(text); }
   const std::vector<std::string>& warnings() const { return warnings_; }
@@ -34,6 +37,7 @@ class Summary {
   std::map<std::string, std::string> labels_;
   std::map<std::string, double> timings_;
   std::vector<std::string> effects_;
+  unsigned int dimension_ = 0, ranks_ = 0, threads_ = 0;
   std::vector<std::string> warnings_;
 };
 

@@ -16,6 +16,7 @@
 #include "fem/ct/ct_cell_laws.h"
 #include "fem/ct/ct_model.h"
 #include "fem/ct/end_faces.h"
+#include "fem/displacement_error.h"
 #include "fem/mechanics_solver.h"
 
 #include <deal.II/base/mpi.h>
@@ -231,6 +232,8 @@ class VertebraCompression : public Scenario {
         bone_mass += 1000.0 * model.mesh.cell_density[c] * model.mesh.cell_volume[c];
     sum.set_figure("bone_mass_g", bone_mass * 1e3, "g");
     sum.set_figure("cells", tria.n_global_active_cells(), "-");
+    sum.set_figure("max_cell_diameter_m",
+                   dealii::Utilities::MPI::max(fem::max_cell_diameter(solver), ctx.comm()), "m");
     sum.set_figure("mechanics_dofs", solver.dof_handler().n_dofs(), "-");
     sum.set_figure("newton_iterations", newton, "iterations");
     sum.set_figure("solve_time", solve_time, "s");

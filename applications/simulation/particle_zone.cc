@@ -493,6 +493,11 @@ void ParticleZone<dim>::add_figures(RunContext& ctx) const {
   Summary& s = ctx.summary();
   const std::string per = dim == 2 ? "/m" : "";
   s.set_figure("particles", z.particles.size(), "-");
+  s.set_figure("particle_spacing_m", z.prm.spacing, "m");
+  unsigned int free = 0; // the particles the method solves for (no prescribed component)
+  for (unsigned int i = 0; i < z.particles.size(); ++i)
+    free += !z.particles.is_fixed(i);
+  s.set_figure("free_particles", free, "-");
   s.set_figure("bonds", z.bonds.n_bonds() / 2, "-");
   s.set_figure("broken_bonds", double(z.bonds.n_broken() - z.broken_initially) / 2, "-");
   s.set_figure("particle_strain_energy", z.method->strain_energy(z.particles, z.bonds), "J");

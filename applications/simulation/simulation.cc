@@ -51,6 +51,13 @@ void SimulationParameters::declare(dealii::ParameterHandler& prm) {
                     "initial_energy_J, conversion_energy_J (coupled runs), strain_energy_J, "
                     "kinetic_energy_J, fracture_dissipation_J, damping_dissipation_J and "
                     "energy_balance_error_relative [-].");
+  prm.declare_entry(
+      "Exact displacement", "", dealii::Patterns::Anything(),
+      "A known solution of the scene (analytic or manufactured), dim ';'-separated expressions "
+      "in x, y, z and t [m]: summary.json then has displacement_l2_error_relative = "
+      "||u_h - u|| / ||u|| at the end time, in the L2 norm over the FEM cells (Gauss rule of "
+      "degree + 2) and the particles the method solves for (nodal integration, prescribed "
+      "particles left out), with fem_ and particle_ parts when both exist; empty = none [m].");
   CrackOutputParameters::declare(prm);
 }
 
@@ -65,6 +72,7 @@ void SimulationParameters::parse(const dealii::ParameterHandler& prm) {
   reference_temperature = prm.get_double("Reference temperature");
   stop_after_step = prm.get_integer("Stop after step");
   energy_account = prm.get_bool("Energy account");
+  exact_displacement = prm.get("Exact displacement");
   crack.parse(prm);
   if (end_time <= 0)
     throw InvalidInput("Simulation/End time", "must be positive", "a time > 0 [s]");
@@ -136,6 +144,23 @@ Simulation<dim>::Simulation(const ScenarioFactoryArgs& args)
   }
   if (effects_.particles())
     crack_ = std::make_unique<CrackPath<dim>>(sim_.crack);
+  if (!sim_.exact_displacement.empty()) {
+    const auto expressions = dealii::Utilities::split_string_list(sim_.exact_displacement, ';');
+    if (expressions.size() != dim)
+      throw InvalidInput("Simulation/Exact displacement",
+                         "'" + sim_.exact_displacement + "' has " +
+                             std::to_string(expressions.size()) + " expressions",
+                         std::to_string(dim) + " ';'-separated expressions in x, y, z, t [m]");
+    exact_displacement_ = std::make_unique<dealii::FunctionParser<dim>>(dim);
+    try {
+      exact_displacement_->initialize(dim == 2 ? "x,y,t" : "x,y,z,t", expressions, {{"pi", M_PI}},
+                                      true);
+    } catch (...) {
+      throw InvalidInput("Simulation/Exact displacement",
+                         "cannot parse '" + sim_.exact_displacement + "'",
+                         "expressions in x, y, z and t [m]");
+    }
+  }
 }
 
 template <int dim>

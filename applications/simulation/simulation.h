@@ -28,6 +28,7 @@ struct SimulationParameters {
   unsigned int stop_after_step = 0;      // end early after this step (0 = never): staged runs
   bool energy_account = false;           // external work, energies, dissipations per step
   CrackOutputParameters crack;           // crack_path.csv and crack-line figures
+  std::string exact_displacement;        // dim ';'-separated expressions; empty = none
 
   static void declare(dealii::ParameterHandler& prm);
   void parse(const dealii::ParameterHandler& prm);

@@ -1,5 +1,10 @@
 #include "applications/simulation/simulation_scenario.h"
 
+#include "fem/displacement_error.h"
+#include "meshfree/displacement_error.h"
+
+#include <deal.II/base/mpi.h>
+
 #include <algorithm>
 #include <limits>
 
@@ -51,6 +56,7 @@ fem::EnergyBalance Simulation<dim>::energy_balance() const {
 template <int dim>
 void Simulation<dim>::record(unsigned int step, double time, RunContext& ctx) {
   dealii::TimerOutput::Scope scope(ctx.timer(), "history");
+  last_recorded_time_ = time;
   History::Row row{{"step", step}, {"time", time}, {"load_factor", time / sim_.end_time}};
   if (mechanics_) {
     if (sim_.reaction_boundary_id >= 0) {
@@ -242,6 +248,8 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
       s.set_figure("energy_account_time_s", coupled_->energy_account_seconds(), "s");
     }
   }
+  if (exact_displacement_)
+    report_exact_error(ctx);
   if (heat_) {
     s.set_figure("heat_dofs", heat_->dof_handler().n_dofs(), "-");
     s.set_figure("max_temperature", heat_->max_temperature(), "K");
@@ -315,6 +323,52 @@ template void Simulation<2>::record(unsigned int, double, RunContext&);
 template void Simulation<3>::record(unsigned int, double, RunContext&);
 template void Simulation<2>::write_output(unsigned int, double, RunContext&);
 template void Simulation<3>::write_output(unsigned int, double, RunContext&);
+template <int dim>
+void Simulation<dim>::report_exact_error(RunContext& ctx) {
+  exact_displacement_->set_time(last_recorded_time_);
+  ErrorSums fem, particles;
+  bool has_fem = false, has_particles = false;
+  if (mechanics_) {
+    fem = fem::displacement_error_sums(*mechanics_, *exact_displacement_);
+    has_fem = mechanics_->n_active_cells() > 0;
+    ctx.summary().set_figure(
+        "max_cell_diameter_m",
+        dealii::Utilities::MPI::max(fem::max_cell_diameter(*mechanics_), ctx.comm()), "m");
+  }
+  if (coupled_) {
+    const auto& p = coupled_->particles();
+    // Free particles on their owners: ghosts and fixed particles are the FEM's or prescribed.
+    particles = meshfree::displacement_error_sums(p, *exact_displacement_, [&](unsigned int i) {
+      return coupled_->is_free(i) && coupled_->is_owned(i) && !p.is_fixed(i);
+    });
+    has_particles = coupled_->n_free_particles() > 0;
+  } else if (particles_) {
+    // Every rank holds the whole zone: rank 0's sums count once.
+    const auto& p = particles_->particles();
+    if (ctx.is_root())
+      particles = meshfree::displacement_error_sums(p, *exact_displacement_,
+                                                    [&](unsigned int i) { return !p.is_fixed(i); });
+    has_particles = true;
+  }
+  const auto sum = [&](ErrorSums e) {
+    e.error_squared = dealii::Utilities::MPI::sum(e.error_squared, ctx.comm());
+    e.reference_squared = dealii::Utilities::MPI::sum(e.reference_squared, ctx.comm());
+    return e;
+  };
+  fem = sum(fem);
+  particles = sum(particles);
+  ErrorSums all = fem;
+  all += particles;
+  Summary& s = ctx.summary();
+  s.set_figure("displacement_l2_error_relative", all.relative(), "-");
+  if (has_fem && has_particles) {
+    s.set_figure("fem_displacement_l2_error_relative", fem.relative(), "-");
+    s.set_figure("particle_displacement_l2_error_relative", particles.relative(), "-");
+  }
+}
+
+template void Simulation<2>::report_exact_error(RunContext&);
+template void Simulation<3>::report_exact_error(RunContext&);
 template void Simulation<2>::report_figures(RunContext&);
 template void Simulation<3>::report_figures(RunContext&);
 

@@ -17,6 +17,7 @@
 #include "fem/mechanics_solver.h"
 #include "fem/mesh.h"
 
+#include <deal.II/base/function_parser.h>
 #include <deal.II/distributed/tria.h>
 
 #include <nlohmann/json.hpp>
@@ -64,6 +65,9 @@ class Simulation : public framework::Scenario {
   // Returns the step to continue after.
   unsigned int load_checkpoint(framework::RunContext& ctx);
   void report_figures(framework::RunContext& ctx);
+  // displacement_l2_error_relative (and its fem_/particle_ parts) against the scene's exact
+  // displacement at the end time (collective).
+  void report_exact_error(framework::RunContext& ctx);
 
   dealii::ParameterHandler& prm_;
   const framework::Effects& effects_;
@@ -111,6 +115,8 @@ class Simulation : public framework::Scenario {
   };
   ConversionExtremes conversion_extremes() const; // restored ∪ this segment's conversions
   ConversionExtremes restored_conversion_extremes_;
+  std::unique_ptr<dealii::FunctionParser<dim>> exact_displacement_; // Simulation/Exact displacement
+  double last_recorded_time_ = 0;                                   // [s] of the last history row
 };
 
 } // namespace spinesim::applications

@@ -297,6 +297,7 @@ class Cantilever : public Scenario {
     s.set_figure("tip_deflection_relative_error",
                  std::abs(tip_num - tip_exact) / std::abs(tip_exact), "-");
     s.set_figure("displacement_l2_relative_error", std::sqrt(l2 / l2ref), "-");
+    s.set_figure("particle_spacing_m", h, "m");
     s.set_figure("relaxation_iterations", r.iterations, "iterations");
     s.set_figure("relaxation_converged", r.converged ? 1 : 0, "-");
     s.set_figure("spurious_mode_growth_unstabilised", plain.growth, "-");

@@ -13,6 +13,7 @@
 #include "applications/framework/run_context.h"
 #include "applications/framework/scenario.h"
 #include "base/exceptions.h"
+#include "fem/displacement_error.h"
 #include "fem/materials/law_parameters.h"
 #include "fem/mechanics_solver.h"
 #include "fem/mesh.h"
@@ -232,6 +233,9 @@ class ThickCylinder : public Scenario {
     summary.set_figure("linear_iterations", linear, "iterations");
     summary.set_figure("mechanics_dofs", solver.dof_handler().n_dofs(), "-");
     summary.set_figure("cells", tria.n_global_active_cells(), "-");
+    summary.set_figure("max_cell_diameter_m",
+                       dealii::Utilities::MPI::max(fem::max_cell_diameter(solver), ctx.comm()),
+                       "m");
   }
 
  private:

@@ -189,3 +189,9 @@ spinesim_add_hostile_test(particle_initial_velocity_one_expression
 spinesim_add_hostile_test(particle_energy_account_quasi_static
   ARGS check ${_ring_scene} --set "Particles/Integration=quasi_static"
   MATCH "Simulation/Energy account.*Particles/Integration is quasi_static")
+# An accuracy-versus-cost study whose case spinesim check refuses (a Q7 element): bad input of
+# the study, found before any run starts; the earlier study stays as it was.
+spinesim_add_hostile_test(study_bad_case PREPARE run:${_quick}
+  ARGS run ${PROJECT_SOURCE_DIR}/applications/studies/accuracy_cost_quick.prm --output @KEEP@
+       --force --set "Accuracy study/Case 1/Settings=Mechanics/Finite element degree=7"
+  MATCH "Accuracy study/Case 1.*spinesim check.*Finite element degree")

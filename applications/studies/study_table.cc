@@ -1,0 +1,121 @@
+#include "applications/studies/study_table.h"
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <limits>
+#include <sstream>
+
+namespace spinesim::applications {
+
+double median(std::vector<double> values) {
+  if (values.empty())
+    return std::numeric_limits<double>::quiet_NaN();
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+double StudyRow::wall_time() const {
+  return median(wall_times);
+}
+
+double StudyRow::time_spread() const {
+  if (wall_times.empty())
+    return std::numeric_limits<double>::quiet_NaN();
+  const auto [lo, hi] = std::minmax_element(wall_times.begin(), wall_times.end());
+  return (*hi - *lo) / wall_time();
+}
+
+double StudyRow::process_time() const {
+  return median(process_times);
+}
+double StudyRow::peak_rss() const {
+  return median(peak_rss_mb);
+}
+double StudyRow::load() const {
+  return median(loads);
+}
+
+bool StudyRow::finite() const {
+  return status == "ok" && std::isfinite(error) && error > 0 && std::isfinite(h) && h > 0 &&
+         std::isfinite(wall_time());
+}
+
+void mark_pareto_fronts(std::vector<StudyRow>& rows) {
+  for (auto& r : rows) {
+    r.pareto = false;
+    if (!r.finite())
+      continue;
+    bool dominated = false;
+    for (const auto& s : rows)
+      if (&s != &r && s.problem == r.problem && s.finite() && s.wall_time() <= r.wall_time() &&
+          s.error <= r.error && (s.wall_time() < r.wall_time() || s.error < r.error)) {
+        dominated = true;
+        break;
+      }
+    r.pareto = !dominated;
+  }
+}
+
+RateFit fit_rate(std::vector<const StudyRow*> rows) {
+  RateFit fit;
+  rows.erase(
+      std::remove_if(rows.begin(), rows.end(), [](const StudyRow* r) { return !r->finite(); }),
+      rows.end());
+  std::sort(rows.begin(), rows.end(),
+            [](const StudyRow* a, const StudyRow* b) { return a->h > b->h; });
+  fit.points = rows.size();
+  if (rows.empty()) {
+    fit.order = fit.finest_error = std::numeric_limits<double>::quiet_NaN();
+    return fit;
+  }
+  fit.finest_error = rows.back()->error;
+  fit.errors_fall = rows.size() >= 2;
+  for (std::size_t i = 1; i < rows.size(); ++i)
+    fit.errors_fall =
+        fit.errors_fall && rows[i]->error < rows[i - 1]->error && rows[i]->h < rows[i - 1]->h;
+  if (rows.size() < 2) {
+    fit.order = std::numeric_limits<double>::quiet_NaN();
+    return fit;
+  }
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (const auto* r : rows) {
+    const double x = std::log(r->h), y = std::log(r->error);
+    sx += x;
+    sy += y;
+    sxx += x * x;
+    sxy += x * y;
+  }
+  const double n = rows.size(), denominator = n * sxx - sx * sx;
+  fit.order = denominator > 0 ? (n * sxy - sx * sy) / denominator
+                              : std::numeric_limits<double>::quiet_NaN();
+  return fit;
+}
+
+std::string study_csv(const std::vector<StudyRow>& rows) {
+  std::ostringstream out;
+  out << std::setprecision(8);
+  out << "problem,method,case,resolution_parameter,resolution_value,h,h_unit,cells,particles,"
+         "unknowns,quantity,error,wall_time_s,wall_time_min_s,wall_time_max_s,wall_time_spread_"
+         "relative,"
+         "repetitions,process_wall_time_s,peak_rss_MiB,threads,ranks,load_average_1min,status,"
+         "pareto,run_directory\n";
+  for (const auto& r : rows) {
+    const auto [lo, hi] = r.wall_times.empty()
+                              ? std::pair<double, double>{NAN, NAN}
+                              : std::pair<double, double>{
+                                    *std::min_element(r.wall_times.begin(), r.wall_times.end()),
+                                    *std::max_element(r.wall_times.begin(), r.wall_times.end())};
+    out << r.problem << ',' << r.method << ',' << r.case_index << ",\"" << r.parameter << "\",\""
+        << r.value << "\"," << r.h << ',' << r.h_unit << ',' << r.cells << ',' << r.particles << ','
+        << r.unknowns << ',' << r.quantity << ',' << r.error << ',' << r.wall_time() << ',' << lo
+        << ',' << hi << ',' << r.time_spread() << ',' << r.wall_times.size() << ','
+        << r.process_time() << ',' << r.peak_rss() << ',' << r.threads << ',' << r.ranks << ','
+        << r.load() << ',' << r.status << ',' << (r.pareto ? 1 : 0) << ',' << r.run_directory
+        << '\n';
+  }
+  return out.str();
+}
+
+} // namespace spinesim::applications
