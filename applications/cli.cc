@@ -58,6 +58,10 @@ int run_cli(int argc, char** argv) {
   auto* check_cmd = app.add_subcommand("check", "Validate a scene without running it.");
   check_cmd->add_option("SCENE", check_scene, "Scene file (.prm or .json)")->required();
   check_cmd->add_option("-s,--set", check_source.overrides, "Override a parameter")->take_all();
+  bool estimate = false;
+  check_cmd->add_flag("--estimate", estimate,
+                      "Also print the model's size and the predicted wall time and peak memory "
+                      "of the run (from the cost table the accuracy_cost study fits)");
 
   // convert: the ct_to_particles scenario on a scene's CT, Bone and Caps sections (a CT
   // scene such as vertebra_compression.prm), through the same run path as `run`.
@@ -119,7 +123,7 @@ int run_cli(int argc, char** argv) {
     return run_command(convert);
   }
   check_source.file = check_scene;
-  return check_command(check_source);
+  return check_command(check_source, estimate);
 }
 
 } // namespace spinesim

@@ -164,6 +164,8 @@ class FemParticleCoupling {
     return static_cast<unsigned int>(converter_.converted().size());
   }
   std::size_t n_broken_bonds() const;
+  // Bond ends held by this rank (each bond counted from both ends, ghosts' included).
+  std::size_t n_bond_ends() const { return state_.bonds.n_bonds(); }
   double max_damage() const;
   double particle_spacing() const { return state_.spacing; }
   double horizon() const { return state_.horizon(); }

@@ -10,6 +10,8 @@
 #include <deal.II/base/exceptions.h>
 #include <deal.II/base/multithread_info.h>
 
+#include <sys/resource.h>
+
 #include <chrono>
 #include <csignal>
 #include <exception>
@@ -87,7 +89,7 @@ namespace {
 struct CheckReachedFirstStep {};
 } // namespace
 
-int check_command(const SceneSource& source) {
+int check_command(const SceneSource& source, bool estimate) {
   try {
     Scene scene;
     load(scene, source);
@@ -97,6 +99,8 @@ int check_command(const SceneSource& source) {
     // The scenario reads and checks its sections as `run` does before its first step.
     auto scenario = entry.create({scene.dimension(), scene.prm(), effects});
     std::vector<std::string> warnings;
+    RunCost cost;
+    std::optional<CostPrediction> prediction;
     if (scenario->check_by_building()) {
       // ... and builds its model as `run` does, in a scratch directory that is never
       // published, stopping where the first step would begin.
@@ -117,6 +121,8 @@ int check_command(const SceneSource& source) {
           failure = std::current_exception();
         }
         warnings = ctx.summary().warnings();
+        cost = ctx.summary().cost();
+        prediction = ctx.summary().prediction();
       }
       if (failure)
         std::rethrow_exception(failure);
@@ -130,6 +136,25 @@ int check_command(const SceneSource& source) {
         std::cout << "  " << (s.active ? "[on]  " : "[off] ") << s.name << ": " << s.reason << "\n";
       for (const auto& w : warnings)
         std::cout << "  warning: " << w << "\n";
+      if (estimate) {
+        if (cost.kind.empty())
+          std::cout << "  estimate:  the " << scene.scenario()
+                    << " scenario states no work to predict from\n";
+        else {
+          std::cout << "  estimate:  " << cost.kind << ", " << cost.work << " work units, "
+                    << cost.state << " unknowns and bonds\n";
+          if (prediction)
+            std::cout << "             predicted wall time " << prediction->wall_time
+                      << " s (plus about 1 s of start-up), peak memory " << prediction->peak_memory
+                      << " MiB per process; cost table fitted on " << prediction->law->runs
+                      << " runs"
+                      << (prediction->extrapolated ? ", this run is outside their range" : "")
+                      << "\n";
+          else
+            std::cout << "             the cost table has no measurement of " << cost.kind
+                      << " (run applications/studies/accuracy_cost.prm to refresh it)\n";
+        }
+      }
     }
     return exit_ok;
   } catch (const InvalidInput& e) {
@@ -242,6 +267,11 @@ int run_command(const RunOptions& options) {
     code = record_failure(ctx, "run failed: " + msg.str(), msg.str());
   } catch (const std::exception& e) {
     code = record_failure(ctx, std::string("run failed: ") + e.what(), e.what());
+  }
+  {
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    ctx.summary().set_peak_memory(usage.ru_maxrss / 1024.0); // kB on Linux
   }
   ctx.summary().add_timing(
       "total",

@@ -28,7 +28,8 @@ struct RunOptions {
 };
 
 int run_command(const RunOptions& options);
-int check_command(const SceneSource& scene);
+// `estimate`: also print the run's stated work and the cost table's prediction.
+int check_command(const SceneSource& scene, bool estimate = false);
 int params_command(const SceneSource& scene, const std::string& format);
 
 } // namespace spinesim::framework

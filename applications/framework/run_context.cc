@@ -39,6 +39,18 @@ void RunContext::start() {
     log_.open_file((output_.path() / "log.txt").string(), true);
 }
 
+void RunContext::set_cost(const RunCost& cost) {
+  const auto prediction = CostModel::built_in().predict(cost);
+  summary_.set_cost(cost, prediction);
+  log_ << "  cost: " << cost.kind << ", " << cost.work << " work units, state " << cost.state;
+  if (prediction)
+    log_ << "; predicted " << prediction->wall_time << " s, " << prediction->peak_memory
+         << " MiB (cost table: " << prediction->law->runs << " runs"
+         << (prediction->extrapolated ? ", extrapolated" : "") << ")\n";
+  else
+    log_ << "; the cost table has no measurement of this kind\n";
+}
+
 void RunContext::warn(const std::string& text) {
   log_ << "  warning: " << text << "\n";
   summary_.add_warning(text);

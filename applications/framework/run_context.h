@@ -61,6 +61,10 @@ class RunContext {
   // and an entry of summary.json's "warnings".
   void warn(const std::string& text);
 
+  // The scenario's statement of its work, once the model is built (before progress().start()):
+  // summary.json records it with the built-in cost table's prediction, and the log says it.
+  void set_cost(const RunCost& cost);
+
   // Rewrites history.csv (atomically, rank 0); a restart not yet started writes nothing.
   void flush_history();
   // Rewrites summary.json with the phase timings so far (atomically, rank 0); a restart not

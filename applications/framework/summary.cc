@@ -33,6 +33,11 @@ void Summary::set_run(unsigned int dimension, unsigned int ranks, unsigned int t
   threads_ = threads_per_rank;
 }
 
+void Summary::set_cost(const RunCost& cost, const std::optional<CostPrediction>& prediction) {
+  cost_ = cost;
+  prediction_ = prediction;
+}
+
 void Summary::set_status(bool ok, const std::string& message) {
   status_ = ok ? "ok" : "failed";
   message_ = message;
@@ -63,8 +68,19 @@ std::string Summary::json() const {
   j["timings"] = nlohmann::ordered_json::object();
   for (const auto& [phase, s] : timings_)
     j["timings"][phase] = s;
-  if (ranks_ > 0)
+  if (ranks_ > 0) {
     j["run"] = {{"dimension", dimension_}, {"mpi_ranks", ranks_}, {"threads_per_rank", threads_}};
+    if (!cost_.kind.empty())
+      j["run"].update(
+          {{"cost_kind", cost_.kind}, {"work_units", cost_.work}, {"state_size", cost_.state}});
+    if (peak_memory_ > 0)
+      j["run"]["peak_memory_MiB"] = peak_memory_;
+  }
+  if (prediction_)
+    j["predicted"] = {{"wall_time_s", prediction_->wall_time},
+                      {"peak_memory_MiB", prediction_->peak_memory},
+                      {"fitted_runs", prediction_->law->runs},
+                      {"extrapolated", prediction_->extrapolated}};
   j["effects"] = effects_;
   j["warnings"] = warnings_;
   return j.dump(2) + "\n";

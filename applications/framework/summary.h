@@ -3,7 +3,10 @@
 
 // summary.json: the run's key figures with units, phase timings, status and effects.
 
+#include "applications/framework/cost_model.h"
+
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -20,6 +23,13 @@ class Summary {
   // Where the run ran ("run": dimension, MPI ranks, threads per rank): what studies need to
   // compare runs, kept apart from the figures, which must agree between rank counts.
   void set_run(unsigned int dimension, unsigned int ranks, unsigned int threads_per_rank);
+  // The work the run states once its model is built and what the cost table predicts for it
+  // ("run": cost_kind, work_units, state_size; "predicted": wall_time_s, peak_memory_MiB).
+  void set_cost(const RunCost& cost, const std::optional<CostPrediction>& prediction);
+  const RunCost& cost() const { return cost_; }
+  const std::optional<CostPrediction>& prediction() const { return prediction_; }
+  // Peak resident memory of this process at the end [MiB] (rank 0's on several ranks).
+  void set_peak_memory(double mib) { peak_memory_ = mib; }
   // Something suspicious that did not stop the run (listed under "warnings").
   void add_warning(const std::string& text) { warnings_.push_back(text); }
   const std::vector<std::string>& warnings() const { return warnings_; }
@@ -38,6 +48,9 @@ class Summary {
   std::map<std::string, double> timings_;
   std::vector<std::string> effects_;
   unsigned int dimension_ = 0, ranks_ = 0, threads_ = 0;
+  RunCost cost_;
+  std::optional<CostPrediction> prediction_;
+  double peak_memory_ = 0;
   std::vector<std::string> warnings_;
 };
 

@@ -161,6 +161,9 @@ class VertebraCompression : public Scenario {
     unsigned int newton = 0, peak_step = 0;
     ctx.history().add(
         {{"displacement_mm", 0.0}, {"reaction_force_N", 0.0}, {"plastic_volume_fraction", 0.0}});
+    // Cost table kind: a CT model solved quasi-statically, W = DoFs × load steps.
+    const double dofs = solver.dof_handler().n_dofs();
+    ctx.set_cost({"ct_fem_quasi_static", dofs * n, dofs});
     ctx.progress().start("vertebra compression", n, 1.0);
     for (unsigned int step = 1; step <= n; ++step) {
       const double t = double(step) / n;

@@ -488,6 +488,16 @@ void ParticleZone<dim>::add_history(std::vector<std::pair<std::string, double>>&
 }
 
 template <int dim>
+std::size_t ParticleZone<dim>::n_bonds() const {
+  return impl_->bonds.n_bonds() / 2;
+}
+
+template <int dim>
+double ParticleZone<dim>::stable_time_step() const {
+  return impl_->dt_stable;
+}
+
+template <int dim>
 void ParticleZone<dim>::add_figures(RunContext& ctx) const {
   const Impl& z = *impl_;
   Summary& s = ctx.summary();

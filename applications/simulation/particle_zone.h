@@ -77,6 +77,8 @@ class ParticleZone {
   fem::EnergyBalance energy_balance() const;
   // After load(): whether the checkpoint held the account (older ones do not).
   bool energy_account_restored() const;
+  std::size_t n_bonds() const;     // bonds, each counted once
+  double stable_time_step() const; // of its explicit steps [s]
   // The zone's particles (damage as of the last add_history).
   const meshfree::ParticleSet<dim>& particles() const;
   // Writes particles_<cycle>.vtu (rank 0); returns the file name.

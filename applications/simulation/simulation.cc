@@ -338,6 +338,52 @@ void Simulation<dim>::plan_step_modules(RunContext& ctx) {
 }
 
 template <int dim>
+RunCost Simulation<dim>::planned_cost() const {
+  // Work units: FEM DoFs per solve or per explicit step, bonds per particle step; explicit
+  // steps from the stable step of the model as built (conversions may shorten it later).
+  RunCost cost;
+  const double dofs = mechanics_ ? mechanics_->dof_handler().n_dofs() : 0;
+  const std::string method = effects_.particles_method;
+  if (coupled_) {
+    const double bonds = dealii::Utilities::MPI::sum(double(coupled_->n_bond_ends()),
+                                                     mechanics_->mpi_communicator()) /
+                         2;
+    const double particles = coupled_->n_free_particles();
+    cost.state = dofs + dim * particles + bonds;
+    if (quasi_static_) {
+      cost.kind = "coupled_quasi_static:" + method;
+      cost.work = (dofs + bonds) * sim_.steps;
+    } else {
+      cost.kind = "coupled_explicit:" + method;
+      cost.work = (dofs + bonds) * std::ceil(sim_.end_time / coupled_->stable_time_step());
+    }
+  } else if (mechanics_) {
+    cost.state = dofs;
+    if (quasi_static_) {
+      cost.kind = "fem_quasi_static";
+      cost.work = dofs * sim_.steps * mech_prm_.load_steps;
+    } else {
+      cost.kind = "fem_explicit";
+      cost.work = dofs * std::ceil(sim_.end_time / mechanics_->stable_time_step());
+    }
+  } else if (particles_) {
+    const double bonds = particles_->n_bonds();
+    cost.state = dim * particles_->particles().size() + bonds;
+    const bool explicit_steps =
+        particles_->stable_time_step() > 0 &&
+        prm_.get(std::vector<std::string>{"Particles"}, "Integration") == "explicit";
+    cost.kind = (explicit_steps ? "particles_explicit:" : "particles_quasi_static:") + method;
+    cost.work = explicit_steps ? bonds * std::ceil(sim_.end_time / particles_->stable_time_step())
+                               : bonds * sim_.steps;
+  }
+  if (heat_ && !cost.kind.empty()) {
+    cost.kind += "+heat";
+    cost.state += heat_->dof_handler().n_dofs();
+  }
+  return cost;
+}
+
+template <int dim>
 void Simulation<dim>::advance_heat(unsigned int, double, double dt, RunContext&) {
   // The heat solver's own step bounds accuracy; sub-step to land exactly on `time`.
   const unsigned int n =
@@ -452,6 +498,8 @@ void Simulation<dim>::run(RunContext& ctx) {
   unsigned int last_step = sim_.steps;
   if (sim_.stop_after_step > 0 && sim_.stop_after_step < last_step)
     last_step = sim_.stop_after_step;
+  if (!ctx.restarting())
+    ctx.set_cost(planned_cost());
   ctx.progress().start("simulation", sim_.steps, sim_.end_time);
   for (unsigned int step = first_step; step <= last_step; ++step) {
     const double time = step * dt;

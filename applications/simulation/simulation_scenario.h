@@ -46,6 +46,8 @@ class Simulation : public framework::Scenario {
     Advance advance;
   };
   void plan_step_modules(framework::RunContext& ctx);
+  // The run's work for the cost table (framework/cost_model.h), once the model is built.
+  framework::RunCost planned_cost() const;
   void warn_outside_body(framework::RunContext& ctx) const;
   // Messages of the coupling and its particle method for the run log.
   void log_coupling_messages(framework::RunContext& ctx);

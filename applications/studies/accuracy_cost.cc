@@ -98,7 +98,8 @@ struct AccuracyCostParameters {
                         "Its values, coarse to fine, comma-separated: one run each [-].");
       prm.declare_entry("Error figure", "displacement_l2_error_relative", Anything(),
                         "Figure of the run's summary.json holding the error against the "
-                        "reference [-].");
+                        "reference; none: the runs only calibrate the cost table "
+                        "(cost_model.json) [-].");
       prm.declare_entry("Size figure", "max_cell_diameter_m", Anything(),
                         "Figure of summary.json holding the resolution's length h, the "
                         "abscissa of the fitted order [m].");
@@ -282,6 +283,7 @@ class AccuracyCost : public Scenario {
                          {"load_average", r.load()},
                          {"pareto", r.pareto ? 1.0 : 0.0}});
     ctx.output().write_atomic("accuracy_cost.csv", study_csv(rows));
+    write_cost_model(ctx, rows);
     const double png_valid = study_.plot ? plot(ctx, rows) : std::nan("");
     report(ctx, rows, png_valid,
            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
@@ -373,7 +375,7 @@ class AccuracyCost : public Scenario {
     const ChildRunResult result = run_child(argv, console, study_.time_limit);
 
     std::string status = "ok";
-    nlohmann::json figures, where;
+    nlohmann::json figures, where, predicted;
     double run_time = std::nan("");
     if (result.timed_out)
       status = "timed out";
@@ -387,6 +389,7 @@ class AccuracyCost : public Scenario {
         const auto summary = nlohmann::json::parse(in);
         figures = summary.at("figures");
         where = summary.value("run", nlohmann::json::object());
+        predicted = summary.value("predicted", nlohmann::json::object());
         if (summary.contains("timings") && summary["timings"].contains("total"))
           run_time = summary["timings"]["total"].get<double>();
         if (summary.at("status") != "ok")
@@ -402,13 +405,13 @@ class AccuracyCost : public Scenario {
       return fallback;
     };
     const double nan = std::nan("");
-    if (status == "ok") {
+    r.cost_only = c.error_figure == "none";
+    if (status == "ok" && !r.cost_only)
       for (const auto& name : {c.error_figure, c.size_figure})
         if (!std::isfinite(figure(name, nan)))
           status = "no " + name;
-      if (!std::isfinite(run_time))
-        status = "no timings/total";
-    }
+    if (status == "ok" && !std::isfinite(run_time))
+      status = "no timings/total";
     r.status = status;
     if (status != "ok") {
       r.error = nan;
@@ -416,6 +419,11 @@ class AccuracyCost : public Scenario {
                "): " + status + "; its console output ends\n" + console_tail(console, 8));
       return;
     }
+    r.cost_kind = where.value("cost_kind", "");
+    r.work = where.value("work_units", 0.0);
+    r.state = where.value("state_size", 0.0);
+    if (predicted.contains("wall_time_s"))
+      r.predicted_times.push_back(predicted["wall_time_s"].get<double>());
     r.quantity = figure(c.error_figure, nan);
     r.error = c.reference == StudyCase::Reference::value
                   ? std::abs(r.quantity - c.reference_value) / std::abs(c.reference_value)
@@ -438,6 +446,22 @@ class AccuracyCost : public Scenario {
               << result.load_average << "\n";
   }
 
+  // cost_model.json: the laws of each kind of work these runs measured, in the format of the
+  // table compiled into spinesim (applications/studies/cost_model.json; copy it there to
+  // refresh the predictions of `spinesim check --estimate`).
+  void write_cost_model(RunContext& ctx, const std::vector<StudyRow>& rows) const {
+    CostModel model;
+    for (const auto& [kind, law] : CostFit::fit(rows)) {
+      model.set(kind, law);
+      ctx.log() << "  cost of " << kind << ": t = " << law.time_coefficient << " W^"
+                << law.time_exponent << " s, memory " << law.memory_base << " + "
+                << law.memory_per_state << " N MiB (" << law.runs << " runs, W " << law.work_min
+                << " .. " << law.work_max << ")\n";
+    }
+    ctx.output().write_atomic("cost_model.json", model.to_json());
+    ctx.summary().set_figure("cost_kinds", model.laws().size(), "-");
+  }
+
   // Returns 1 when every problem's PNG is a valid image, 0 otherwise, NaN without gnuplot.
   double plot(RunContext& ctx, const std::vector<StudyRow>& rows) const {
     if (find_in_path("gnuplot").empty()) {
@@ -447,7 +471,8 @@ class AccuracyCost : public Scenario {
     }
     std::vector<std::string> problems;
     for (const auto& c : study_.cases)
-      if (std::find(problems.begin(), problems.end(), c.problem) == problems.end())
+      if (c.error_figure != "none" &&
+          std::find(problems.begin(), problems.end(), c.problem) == problems.end())
         problems.push_back(c.problem);
     bool all_valid = true;
     for (const auto& problem : problems) {
@@ -477,7 +502,7 @@ class AccuracyCost : public Scenario {
     bool all_finite = true;
     double worst_spread = 0;
     for (const auto& r : rows) {
-      if (r.is_reference)
+      if (r.is_reference || (r.cost_only && r.status == "ok"))
         continue;
       failed += r.status != "ok";
       all_finite = all_finite && r.finite();
@@ -501,7 +526,8 @@ class AccuracyCost : public Scenario {
        << " thread(s) per rank. Memory: peak resident set of the process.\n";
     std::vector<std::string> problems;
     for (const auto& c : study_.cases)
-      if (std::find(problems.begin(), problems.end(), c.problem) == problems.end())
+      if (c.error_figure != "none" &&
+          std::find(problems.begin(), problems.end(), c.problem) == problems.end())
         problems.push_back(c.problem);
     for (const auto& problem : problems) {
       md << "\n## " << problem << "\n\n";
@@ -518,7 +544,7 @@ class AccuracyCost : public Scenario {
       md << "\n| method | observed order | expected | runs fitted | error falls at every "
             "refinement |\n|---|---|---|---|---|\n";
       for (const auto& c : study_.cases) {
-        if (c.problem != problem)
+        if (c.problem != problem || c.error_figure == "none")
           continue;
         std::vector<const StudyRow*> mine;
         for (const auto& r : rows)
@@ -537,6 +563,14 @@ class AccuracyCost : public Scenario {
                   << (fit.errors_fall ? "" : ", error does NOT fall at every refinement") << "\n";
       }
     }
+    md << "\n## Cost table\n\nPer kind of work: run time t = a W^b, peak memory m = m0 + m1 N "
+          "(cost_model.json; W work units, N unknowns and bonds).\n\n"
+          "| kind | a [s] | b | m0 [MiB] | m1 [MiB] | runs | W range |\n"
+          "|---|---|---|---|---|---|---|\n";
+    for (const auto& [kind, law] : CostFit::fit(rows))
+      md << "| " << kind << " | " << law.time_coefficient << " | " << law.time_exponent << " | "
+         << law.memory_base << " | " << law.memory_per_state << " | " << law.runs << " | "
+         << law.work_min << " .. " << law.work_max << " |\n";
     ctx.output().write_atomic("accuracy_cost.md", md.str());
   }
 

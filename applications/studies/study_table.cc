@@ -33,13 +33,17 @@ double StudyRow::process_time() const {
 double StudyRow::peak_rss() const {
   return median(peak_rss_mb);
 }
+double StudyRow::predicted_time() const {
+  return median(predicted_times);
+}
+
 double StudyRow::load() const {
   return median(loads);
 }
 
 bool StudyRow::finite() const {
-  return status == "ok" && std::isfinite(error) && error > 0 && std::isfinite(h) && h > 0 &&
-         std::isfinite(wall_time());
+  return status == "ok" && !cost_only && std::isfinite(error) && error > 0 && std::isfinite(h) &&
+         h > 0 && std::isfinite(wall_time());
 }
 
 void mark_pareto_fronts(std::vector<StudyRow>& rows) {
@@ -99,7 +103,8 @@ std::string study_csv(const std::vector<StudyRow>& rows) {
   out << "problem,method,case,resolution_parameter,resolution_value,h,h_unit,cells,particles,"
          "unknowns,quantity,error,wall_time_s,wall_time_min_s,wall_time_max_s,wall_time_spread_"
          "relative,"
-         "repetitions,process_wall_time_s,peak_rss_MiB,threads,ranks,load_average_1min,status,"
+         "repetitions,process_wall_time_s,predicted_wall_time_s,cost_kind,work_units,peak_rss_MiB,"
+         "threads,ranks,load_average_1min,status,"
          "pareto,run_directory\n";
   for (const auto& r : rows) {
     const auto [lo, hi] = r.wall_times.empty()
@@ -111,11 +116,42 @@ std::string study_csv(const std::vector<StudyRow>& rows) {
         << r.value << "\"," << r.h << ',' << r.h_unit << ',' << r.cells << ',' << r.particles << ','
         << r.unknowns << ',' << r.quantity << ',' << r.error << ',' << r.wall_time() << ',' << lo
         << ',' << hi << ',' << r.time_spread() << ',' << r.wall_times.size() << ','
-        << r.process_time() << ',' << r.peak_rss() << ',' << r.threads << ',' << r.ranks << ','
-        << r.load() << ',' << r.status << ',' << (r.pareto ? 1 : 0) << ',' << r.run_directory
-        << '\n';
+        << r.process_time() << ',' << r.predicted_time() << ',' << r.cost_kind << ',' << r.work
+        << ',' << r.peak_rss() << ',' << r.threads << ',' << r.ranks << ',' << r.load() << ','
+        << r.status << ',' << (r.pareto ? 1 : 0) << ',' << r.run_directory << '\n';
   }
   return out.str();
+}
+
+std::map<std::string, framework::CostLaw> CostFit::fit(const std::vector<StudyRow>& rows) {
+  std::map<std::string, std::vector<const StudyRow*>> by_kind;
+  for (const auto& r : rows)
+    if ((r.status == "ok" || r.is_reference) && !r.cost_kind.empty() && r.work > 0 &&
+        std::isfinite(r.wall_time()) && r.wall_time() > 0)
+      by_kind[r.cost_kind].push_back(&r);
+  std::map<std::string, framework::CostLaw> laws;
+  for (const auto& [kind, list] : by_kind) {
+    framework::CostLaw law;
+    law.runs = list.size();
+    law.work_min = law.work_max = list.front()->work;
+    // Least squares of log t = log a + b log W, and of m = m0 + m1 N.
+    double sx = 0, sy = 0, sxx = 0, sxy = 0, mx = 0, my = 0, mxx = 0, mxy = 0;
+    for (const auto* r : list) {
+      law.work_min = std::min(law.work_min, r->work);
+      law.work_max = std::max(law.work_max, r->work);
+      const double x = std::log(r->work), y = std::log(r->wall_time());
+      sx += x, sy += y, sxx += x * x, sxy += x * y;
+      mx += r->state, my += r->peak_rss(), mxx += r->state * r->state,
+          mxy += r->state * r->peak_rss();
+    }
+    const double n = list.size(), dt = n * sxx - sx * sx, dm = n * mxx - mx * mx;
+    law.time_exponent = dt > 1e-12 * n * sxx ? (n * sxy - sx * sy) / dt : 1.0;
+    law.time_coefficient = std::exp((sy - law.time_exponent * sx) / n);
+    law.memory_per_state = dm > 1e-12 * n * mxx ? (n * mxy - mx * my) / dm : 0.0;
+    law.memory_base = (my - law.memory_per_state * mx) / n;
+    laws[kind] = law;
+  }
+  return laws;
 }
 
 } // namespace spinesim::applications

@@ -82,3 +82,11 @@ spinesim_add_scene_test(cli.bad_input_keeps_previous_run
   EXIT 2 MATCH "Simulation/Crack line" LABELS "cli")
 set_tests_properties(cli.bad_input_keeps_previous_run PROPERTIES FIXTURES_REQUIRED default_run)
 set_tests_properties(cli.ranks_agree PROPERTIES DEPENDS cli.bad_input_keeps_previous_run)
+
+# check --estimate: the default scene states its work (coupled explicit steps over DoFs and
+# bonds) and the compiled cost table predicts its time and memory
+# (applications/studies/cost_model.json, fitted by the accuracy_cost study).
+spinesim_add_scene_test(cli.check_estimate_default_scene
+  ARGS "check;${PROJECT_SOURCE_DIR}/applications/scenes/default.prm;--estimate"
+  MATCH "estimate: +coupled_explicit:bond_based, [0-9.e+]+ work units.*predicted wall time [0-9.e+-]+ s.*peak memory [0-9.e+-]+ MiB"
+  LABELS "cli")

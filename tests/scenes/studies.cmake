@@ -37,3 +37,26 @@ endforeach()
 spinesim_add_scene_test(benchmark.accuracy_cost SCENE ${_studies}/accuracy_cost.prm
   EXPECT "status==ok;failed_runs<=0;all_rows_finite>=1;png_valid>=1;order_cantilever_fem_q1>=1.8;order_cantilever_fem_q2>=2.8;order_thick_cylinder_fem_q1_bbar>=1.8;errors_fall_cantilever_nosb>=1;errors_fall_cantilever_spg>=1;study_wall_time_s<=1800"
   LABELS "benchmark;study" TIMEOUT 3600)
+
+# spinesim check --estimate against what the runs measure: the default scene and the vertebra
+# (2 mm cells) within a factor 2 on the wall time and 30 % on the peak memory, with the cost
+# table the full study fitted (applications/studies/cost_model.json). Timings depend on the
+# machine and its load, hence the benchmark label.
+foreach(_case default vertebra)
+  if(_case STREQUAL "default")
+    spinesim_add_scene_test(benchmark.estimate_default_run
+      SCENE ${PROJECT_SOURCE_DIR}/applications/scenes/default.prm
+      EXPECT "status==ok" LABELS "benchmark;study" FIXTURE estimate_default)
+  else()
+    spinesim_add_scene_test(benchmark.estimate_vertebra_run
+      SCENE ${PROJECT_SOURCE_DIR}/applications/scenes/vertebra_compression.prm
+      EXPECT "status==ok" LABELS "benchmark;study" FIXTURE estimate_vertebra)
+  endif()
+  add_test(NAME benchmark.estimate_${_case}_prediction
+           COMMAND ${CMAKE_COMMAND}
+                   -DSUMMARY=${CMAKE_CURRENT_BINARY_DIR}/runs/benchmark.estimate_${_case}_run/summary.json
+                   -DTIME_FACTOR=2 -DMEMORY_REL=0.3
+                   -P ${PROJECT_SOURCE_DIR}/tests/support/check_prediction.cmake)
+  set_tests_properties(benchmark.estimate_${_case}_prediction PROPERTIES
+                       LABELS "benchmark;study" FIXTURES_REQUIRED estimate_${_case})
+endforeach()
