@@ -4,6 +4,7 @@
 #include "applications/framework/run_context.h"
 #include "applications/simulation/zone_energy.h"
 #include "base/exceptions.h"
+#include "base/expression_function.h"
 #include "base/list_parsing.h"
 #include "fem/materials/law_parameters.h"
 #include "meshfree/adaptive_dynamic_relaxation.h"
@@ -239,23 +240,11 @@ struct ParticleZone<dim>::Impl {
   void set_initial_velocity() {
     if (prm.initial_velocity.empty())
       return;
-    const auto expressions = dealii::Utilities::split_string_list(prm.initial_velocity, ';');
-    if (expressions.size() != dim)
-      throw InvalidInput("Particles/Initial velocity",
-                         "'" + prm.initial_velocity + "' has " +
-                             std::to_string(expressions.size()) + " expressions",
-                         std::to_string(dim) + " ';'-separated expressions in x, y, z [m/s]");
-    dealii::FunctionParser<dim> v(dim);
-    try {
-      v.initialize(dim == 2 ? "x,y" : "x,y,z", expressions, {{"pi", M_PI}});
-    } catch (...) {
-      throw InvalidInput("Particles/Initial velocity",
-                         "cannot parse '" + prm.initial_velocity + "'",
-                         "expressions in x, y, z [m/s]");
-    }
+    const auto v = parse_expressions<dim>(prm.initial_velocity, "Particles/Initial velocity", dim,
+                                          false, "[m/s]");
     dealii::Vector<double> value(dim);
     for (unsigned int i = 0; i < particles.size(); ++i) {
-      v.vector_value(particles.reference_position(i), value);
+      v->vector_value(particles.reference_position(i), value);
       for (unsigned int d = 0; d < dim; ++d) {
         if (!std::isfinite(value[d]))
           throw InvalidInput("Particles/Initial velocity",
@@ -373,17 +362,8 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
                            dim == 2 ? "x,y" : "x,y,z");
       region.components.push_back(pos - letters);
     }
-    const auto expressions = dealii::Utilities::split_string_list(r.values, ';');
-    if (expressions.size() != region.components.size())
-      throw InvalidInput(where + "/Values", "needs one expression per component",
-                         std::to_string(region.components.size()) + " ';'-separated expressions");
-    region.values = std::make_unique<dealii::FunctionParser<dim>>(expressions.size());
-    try {
-      region.values->initialize(dim == 2 ? "x,y,t" : "x,y,z,t", expressions, {{"pi", M_PI}}, true);
-    } catch (...) {
-      throw InvalidInput(where + "/Values", "cannot parse '" + r.values + "'",
-                         "expressions in x, y, z and t");
-    }
+    region.values = parse_expressions<dim>(r.values, where + "/Values", region.components.size(),
+                                           true, "[m], one per component");
     for (unsigned int i = 0; i < z.particles.size(); ++i) {
       const auto& x = z.particles.reference_position(i);
       bool inside = true;

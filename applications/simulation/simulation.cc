@@ -4,6 +4,7 @@
 #include "applications/framework/parse_section.h"
 #include "applications/framework/run_stops.h"
 #include "base/exceptions.h"
+#include "base/expression_function.h"
 
 #include <chrono>
 #include <cmath>
@@ -144,23 +145,9 @@ Simulation<dim>::Simulation(const ScenarioFactoryArgs& args)
   }
   if (effects_.particles())
     crack_ = std::make_unique<CrackPath<dim>>(sim_.crack);
-  if (!sim_.exact_displacement.empty()) {
-    const auto expressions = dealii::Utilities::split_string_list(sim_.exact_displacement, ';');
-    if (expressions.size() != dim)
-      throw InvalidInput("Simulation/Exact displacement",
-                         "'" + sim_.exact_displacement + "' has " +
-                             std::to_string(expressions.size()) + " expressions",
-                         std::to_string(dim) + " ';'-separated expressions in x, y, z, t [m]");
-    exact_displacement_ = std::make_unique<dealii::FunctionParser<dim>>(dim);
-    try {
-      exact_displacement_->initialize(dim == 2 ? "x,y,t" : "x,y,z,t", expressions, {{"pi", M_PI}},
-                                      true);
-    } catch (...) {
-      throw InvalidInput("Simulation/Exact displacement",
-                         "cannot parse '" + sim_.exact_displacement + "'",
-                         "expressions in x, y, z and t [m]");
-    }
-  }
+  if (!sim_.exact_displacement.empty())
+    exact_displacement_ = parse_expressions<dim>(sim_.exact_displacement,
+                                                 "Simulation/Exact displacement", dim, true, "[m]");
 }
 
 template <int dim>
