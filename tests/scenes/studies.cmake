@@ -1,16 +1,17 @@
 # Accuracy against cost (applications/studies/, docs/accuracy-cost.md).
 set(_studies ${PROJECT_SOURCE_DIR}/applications/studies)
 
-# The quick study (about 50 s on two cores): the Timoshenko cantilever with FEM Q1 (refinements
-# 2-4), Q2 (1-3) and NOSB-PD (h = 2, 1 m), three repetitions each. The exact solution is cubic
+# The quick study (about 45 s on two cores alone, 90 s as the issue of the study asks): the
+# Timoshenko cantilever with FEM Q1 (refinements 3, 4), Q2 (2, 3) and NOSB-PD (h = 2, 1 m),
+# three repetitions each. The exact solution is cubic
 # and imposed at both ends, so Q1 and Q2 show their asymptotic L2 orders 2 and 3 already on
-# these meshes (measured 1.9998 and 2.9994; bounds 1.8 and 2.8 as the issue of the study asks).
+# these meshes (measured 2.0000 and 2.9999; bounds 1.8 and 2.8 as the issue of the study asks).
 # NOSB-PD: the error must fall with h; its order (measured 2.13 between h = 2 m, where the
 # horizon is half the depth, and 1 m) is bounded below by 1, the order of the free-surface
 # error of peridynamics (Le & Bobaru 2018). Every run must finish with finite
 # figures, and the plot must be a valid PNG.
 spinesim_add_scene_test(study.accuracy_cost_quick SCENE ${_studies}/accuracy_cost_quick.prm
-  EXPECT "status==ok;runs>=8;failed_runs<=0;all_rows_finite>=1;png_valid>=1;order_cantilever_fem_q1>=1.8;order_cantilever_fem_q2>=2.8;order_cantilever_nosb>=1;errors_fall_cantilever_fem_q1>=1;errors_fall_cantilever_fem_q2>=1;errors_fall_cantilever_nosb>=1"
+  EXPECT "status==ok;runs>=6;failed_runs<=0;all_rows_finite>=1;png_valid>=1;order_cantilever_fem_q1>=1.8;order_cantilever_fem_q2>=2.8;order_cantilever_nosb>=1;errors_fall_cantilever_fem_q1>=1;errors_fall_cantilever_fem_q2>=1;errors_fall_cantilever_nosb>=1"
   LABELS "scene;study" TIMEOUT 600)
 
 # Simulation/Exact displacement against a field every method reproduces exactly: an affine
