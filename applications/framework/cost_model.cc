@@ -22,6 +22,7 @@ CostModel CostModel::from_json(const std::string& text) {
   const auto j = nlohmann::json::parse(text);
   for (const auto& [kind, e] : j.at("kinds").items()) {
     CostLaw law;
+    law.time_offset = e.value("time_offset_s", 0.0);
     law.time_coefficient = e.at("time_coefficient_s");
     law.time_exponent = e.at("time_exponent");
     law.memory_base = e.at("memory_base_MiB");
@@ -36,12 +37,13 @@ CostModel CostModel::from_json(const std::string& text) {
 
 std::string CostModel::to_json() const {
   nlohmann::ordered_json j;
-  j["about"] = "Per kind of work: wall time t = a W^b [s] (W the work units the run states), "
+  j["about"] = "Per kind of work: wall time t = t0 + a W^b [s] (W the work units the run states), "
                "peak memory m = m0 + m1 N [MiB] (N its unknowns and bonds); fitted by the "
                "accuracy_cost study on its runs (docs/accuracy-cost.md).";
   j["kinds"] = nlohmann::ordered_json::object();
   for (const auto& [kind, law] : laws_)
-    j["kinds"][kind] = {{"time_coefficient_s", law.time_coefficient},
+    j["kinds"][kind] = {{"time_offset_s", law.time_offset},
+                        {"time_coefficient_s", law.time_coefficient},
                         {"time_exponent", law.time_exponent},
                         {"memory_base_MiB", law.memory_base},
                         {"memory_per_state_MiB", law.memory_per_state},
@@ -58,7 +60,7 @@ std::optional<CostPrediction> CostModel::predict(const RunCost& cost) const {
   const CostLaw& law = it->second;
   CostPrediction p;
   p.law = &law;
-  p.wall_time = law.time_coefficient * std::pow(cost.work, law.time_exponent);
+  p.wall_time = law.time_offset + law.time_coefficient * std::pow(cost.work, law.time_exponent);
   p.peak_memory = law.memory_base + law.memory_per_state * cost.state;
   p.extrapolated = cost.work < law.work_min || cost.work > law.work_max;
   return p;

@@ -4,8 +4,9 @@
 // What a run will cost before it runs. A scenario states, once its model is built, the kind of
 // work it does (e.g. fem_quasi_static, coupled_explicit:bond_based), how much (work units:
 // DoF-solves, (DoF + bond)-steps, ...) and its state size (unknowns and bonds). The cost
-// table holds per kind a power law of the run's wall time in the work, t = a W^b, and a
-// linear law of the peak memory in the state size, m = m0 + m1 N, fitted by the
+// table holds per kind a law of the run's wall time in the work, t = t0 + a W^b (t0 the fixed
+// cost of any run of the kind), and a linear law of the peak memory in the state size,
+// m = m0 + m1 N, fitted by the
 // accuracy-versus-cost study on measured runs (applications/studies/cost_model.json,
 // compiled in; docs/accuracy-cost.md).
 
@@ -22,7 +23,8 @@ struct RunCost {
 };
 
 struct CostLaw {
-  double time_coefficient = 0, time_exponent = 1; // t = a W^b [s]
+  double time_offset = 0;                         // t0 [s]
+  double time_coefficient = 0, time_exponent = 1; // t = t0 + a W^b [s]
   double memory_base = 0, memory_per_state = 0;   // m = m0 + m1 N [MiB]
   unsigned int runs = 0;                          // measured runs the laws were fitted to
   double work_min = 0, work_max = 0;              // range of W they cover

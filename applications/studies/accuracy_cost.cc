@@ -453,10 +453,10 @@ class AccuracyCost : public Scenario {
     CostModel model;
     for (const auto& [kind, law] : CostFit::fit(rows)) {
       model.set(kind, law);
-      ctx.log() << "  cost of " << kind << ": t = " << law.time_coefficient << " W^"
-                << law.time_exponent << " s, memory " << law.memory_base << " + "
-                << law.memory_per_state << " N MiB (" << law.runs << " runs, W " << law.work_min
-                << " .. " << law.work_max << ")\n";
+      ctx.log() << "  cost of " << kind << ": t = " << law.time_offset << " + "
+                << law.time_coefficient << " W^" << law.time_exponent << " s, memory "
+                << law.memory_base << " + " << law.memory_per_state << " N MiB (" << law.runs
+                << " runs, W " << law.work_min << " .. " << law.work_max << ")\n";
     }
     ctx.output().write_atomic("cost_model.json", model.to_json());
     ctx.summary().set_figure("cost_kinds", model.laws().size(), "-");
@@ -563,14 +563,14 @@ class AccuracyCost : public Scenario {
                   << (fit.errors_fall ? "" : ", error does NOT fall at every refinement") << "\n";
       }
     }
-    md << "\n## Cost table\n\nPer kind of work: run time t = a W^b, peak memory m = m0 + m1 N "
+    md << "\n## Cost table\n\nPer kind of work: run time t = t0 + a W^b, peak memory m = m0 + m1 N "
           "(cost_model.json; W work units, N unknowns and bonds).\n\n"
-          "| kind | a [s] | b | m0 [MiB] | m1 [MiB] | runs | W range |\n"
-          "|---|---|---|---|---|---|---|\n";
+          "| kind | t0 [s] | a [s] | b | m0 [MiB] | m1 [MiB] | runs | W range |\n"
+          "|---|---|---|---|---|---|---|---|\n";
     for (const auto& [kind, law] : CostFit::fit(rows))
-      md << "| " << kind << " | " << law.time_coefficient << " | " << law.time_exponent << " | "
-         << law.memory_base << " | " << law.memory_per_state << " | " << law.runs << " | "
-         << law.work_min << " .. " << law.work_max << " |\n";
+      md << "| " << kind << " | " << law.time_offset << " | " << law.time_coefficient << " | "
+         << law.time_exponent << " | " << law.memory_base << " | " << law.memory_per_state << " | "
+         << law.runs << " | " << law.work_min << " .. " << law.work_max << " |\n";
     ctx.output().write_atomic("accuracy_cost.md", md.str());
   }
 
