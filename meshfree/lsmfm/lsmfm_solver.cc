@@ -1,0 +1,729 @@
+#include "meshfree/lsmfm/lsmfm_solver.h"
+
+#include "base/exceptions.h"
+
+#include <deal.II/base/symmetric_tensor.h>
+
+#include <Eigen/Dense>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace spinesim::meshfree {
+
+namespace {
+
+using Voigt = std::array<double, 6>;
+using Tensor3 = dealii::Tensor<2, 3>;
+
+// Voigt index of the tensor component (i, j) and back.
+constexpr unsigned int voigt_index[3][3] = {{0, 3, 5}, {3, 1, 4}, {5, 4, 2}};
+constexpr unsigned int voigt_i[6] = {0, 1, 2, 0, 1, 0};
+constexpr unsigned int voigt_j[6] = {0, 1, 2, 1, 2, 2};
+
+Tensor3 to_tensor(const Voigt& v) {
+  Tensor3 t;
+  for (unsigned int a = 0; a < 6; ++a)
+    t[voigt_i[a]][voigt_j[a]] = t[voigt_j[a]][voigt_i[a]] = v[a];
+  return t;
+}
+Voigt to_voigt(const Tensor3& t) { // stress-like: tensor components
+  Voigt v;
+  for (unsigned int a = 0; a < 6; ++a)
+    v[a] = 0.5 * (t[voigt_i[a]][voigt_j[a]] + t[voigt_j[a]][voigt_i[a]]);
+  return v;
+}
+Voigt to_engineering(const Tensor3& t) { // strain-like: 2ε on the shears (eq. 16c)
+  Voigt v = to_voigt(t);
+  for (unsigned int a = 3; a < 6; ++a)
+    v[a] *= 2.0;
+  return v;
+}
+
+// C σ with C of eq. (16i) (engineering strain out).
+Voigt compliance(const Voigt& s, double E, double nu) {
+  const double mu = E / (2.0 * (1.0 + nu));
+  Voigt e;
+  e[0] = (s[0] - nu * (s[1] + s[2])) / E;
+  e[1] = (s[1] - nu * (s[0] + s[2])) / E;
+  e[2] = (s[2] - nu * (s[0] + s[1])) / E;
+  for (unsigned int a = 3; a < 6; ++a)
+    e[a] = s[a] / mu;
+  return e;
+}
+double compliance_entry(unsigned int a, unsigned int b, double E, double nu) {
+  if (a < 3 && b < 3)
+    return a == b ? 1.0 / E : -nu / E;
+  if (a == b)
+    return 2.0 * (1.0 + nu) / E;
+  return 0.0;
+}
+// P of eq. (16f).
+double projector_entry(unsigned int a, unsigned int b) {
+  if (a < 3 && b < 3)
+    return a == b ? 2.0 / 3.0 : -1.0 / 3.0;
+  return a == b ? 2.0 : 0.0;
+}
+Voigt project(const Voigt& s) { // s̄ = P σ (eq. 16e)
+  const double mean = (s[0] + s[1] + s[2]) / 3.0;
+  return {{s[0] - mean, s[1] - mean, s[2] - mean, 2 * s[3], 2 * s[4], 2 * s[5]}};
+}
+
+std::string point_text(const double* x, int dim) {
+  std::ostringstream s;
+  s << "(";
+  for (int d = 0; d < dim; ++d)
+    s << (d ? ", " : "") << x[d];
+  s << ") m";
+  return s.str();
+}
+
+} // namespace
+
+template <int dim>
+class LsmfmSolver<dim>::LinearSystem {
+ public:
+  Eigen::SparseMatrix<double> K;
+  Eigen::VectorXd F;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
+  bool analysed = false;
+};
+
+template <int dim>
+LsmfmSolver<dim>::LsmfmSolver(const LsmfmParameters& parameters, const Material& material,
+                              std::vector<dealii::Point<dim>> nodes,
+                              const std::vector<double>& spacing,
+                              std::vector<dealii::Point<dim>> points, std::vector<double> weights)
+    : prm_(parameters), mat_(material), mls_(
+                                            nodes,
+                                            [&] {
+                                              std::vector<double> h(spacing.size());
+                                              for (unsigned int j = 0; j < h.size(); ++j)
+                                                h[j] = parameters.support_ratio * spacing[j];
+                                              return h;
+                                            }(),
+                                            parameters.max_condition_number),
+      points_(std::move(points)), weights_(std::move(weights)),
+      system_(std::make_unique<LinearSystem>()) {
+  prm_.validate();
+  if (!(mat_.youngs_modulus > 0) || !(mat_.poisson_ratio > -1 && mat_.poisson_ratio < 0.5))
+    throw InvalidInput("Material",
+                       "E = " + std::to_string(mat_.youngs_modulus) +
+                           " Pa, nu = " + std::to_string(mat_.poisson_ratio),
+                       "E > 0 and -1 < nu < 0.5");
+  if (std::isfinite(mat_.yield_stress) && !(mat_.hardening_modulus > 0))
+    throw InvalidInput("Material/Hardening modulus",
+                       "= " + std::to_string(mat_.hardening_modulus) +
+                           " Pa: the least-squares flow rule of Kwon & Youn (2005, eq. 27) has "
+                           "1/K̄ and holds no perfectly plastic solid",
+                       "a hardening modulus > 0 [Pa]");
+  if (points_.size() != weights_.size() || points_.empty())
+    throw InvalidInput("LSMFM integration",
+                       std::to_string(points_.size()) + " points, " +
+                           std::to_string(weights_.size()) + " weights",
+                       "one weight per point, at least one point");
+  if (dim == 3)
+    active_ = {0, 1, 2, 3, 4, 5};
+  else if (prm_.plane_model == "plane_stress")
+    active_ = {0, 1, 3};
+  else
+    active_ = {0, 1, 2, 3};
+  block_ = dim + active_.size();
+  n_unknowns_ = block_ * mls_.nodes().size();
+  // ℓ: the diagonal of the bounding box unless given.
+  dealii::Point<dim> lo = mls_.nodes()[0], hi = lo;
+  for (const auto& x : mls_.nodes())
+    for (unsigned int d = 0; d < dim; ++d) {
+      lo[d] = std::min(lo[d], x[d]);
+      hi[d] = std::max(hi[d], x[d]);
+    }
+  ell_ = prm_.equilibrium_length > 0 ? prm_.equilibrium_length : lo.distance(hi);
+
+  point_sites_.reserve(points_.size());
+  for (unsigned int q = 0; q < points_.size(); ++q)
+    point_sites_.push_back(make_site(points_[q], "integration point " + std::to_string(q)));
+  node_sites_.reserve(mls_.nodes().size());
+  for (unsigned int j = 0; j < mls_.nodes().size(); ++j)
+    node_sites_.push_back(make_site(mls_.nodes()[j], "node " + std::to_string(j)));
+  state_.resize(points_.size());
+  for (auto& s : state_)
+    s.F_n = dealii::unit_symmetric_tensor<3>();
+  U_.assign(n_unknowns_, 0.0);
+  U_n_ = U_;
+}
+
+template <int dim>
+LsmfmSolver<dim>::~LsmfmSolver() = default;
+
+template <int dim>
+typename LsmfmSolver<dim>::Site LsmfmSolver<dim>::make_site(const dealii::Point<dim>& x,
+                                                            const std::string& what) const {
+  typename MlsApproximation<dim>::Values v;
+  if (!mls_.evaluate(x, v)) {
+    double c[dim];
+    for (unsigned int d = 0; d < dim; ++d)
+      c[d] = x[d];
+    throw NumericalFailure(
+        "MLS moment matrix singular (" + std::to_string(v.nodes.size()) +
+            " nodes cover the point, condition number " + std::to_string(v.condition_number) + ")",
+        what + " at " + point_text(c, dim),
+        "raise LSMFM/Support ratio, or check that every integration point lies inside the "
+        "node cloud");
+  }
+  Site s;
+  s.nodes = std::move(v.nodes);
+  s.value = std::move(v.value);
+  s.gradient = std::move(v.gradient);
+  return s;
+}
+
+template <int dim>
+void LsmfmSolver<dim>::set_conditions(std::vector<DisplacementCondition> displacement,
+                                      std::vector<TractionCondition> traction) {
+  const auto same_nodes = [](const auto& a, const auto& b) {
+    if (a.size() != b.size())
+      return false;
+    for (unsigned int i = 0; i < a.size(); ++i)
+      if (a[i].node != b[i].node)
+        return false;
+    return true;
+  };
+  const bool rebuild = !system_->analysed || !same_nodes(displacement, u_conditions_) ||
+                       !same_nodes(traction, t_conditions_);
+  for (const auto& c : displacement)
+    if (c.node >= n_nodes() || !std::isfinite(c.value))
+      throw InvalidInput("LSMFM boundary conditions",
+                         "displacement condition at node " + std::to_string(c.node) +
+                             " with value " + std::to_string(c.value),
+                         "a node below " + std::to_string(n_nodes()) + " and a finite value [m]");
+  for (const auto& c : traction)
+    if (c.node >= n_nodes() || !std::isfinite(c.value))
+      throw InvalidInput("LSMFM boundary conditions",
+                         "traction condition at node " + std::to_string(c.node) + " with value " +
+                             std::to_string(c.value),
+                         "a node below " + std::to_string(n_nodes()) + " and a finite value [Pa]");
+  u_conditions_ = std::move(displacement);
+  t_conditions_ = std::move(traction);
+  if (rebuild)
+    build_pattern();
+}
+
+template <int dim>
+void LsmfmSolver<dim>::build_pattern() {
+  const unsigned int N = n_nodes();
+  std::vector<std::vector<unsigned int>> adjacency(N);
+  const auto add_site = [&](const Site& s) {
+    for (unsigned int j : s.nodes)
+      adjacency[j].insert(adjacency[j].end(), s.nodes.begin(), s.nodes.end());
+  };
+  for (const auto& s : point_sites_)
+    add_site(s);
+  for (const auto& c : u_conditions_)
+    add_site(node_sites_[c.node]);
+  for (const auto& c : t_conditions_)
+    add_site(node_sites_[c.node]);
+  for (unsigned int j = 0; j < N; ++j) {
+    auto& a = adjacency[j];
+    a.push_back(j); // keeps the diagonal block even for a node no site covers
+    std::sort(a.begin(), a.end());
+    a.erase(std::unique(a.begin(), a.end()), a.end());
+  }
+  // Column c = J·block + b holds rows I·block + a, I in adjacency[J] (ascending).
+  auto& K = system_->K;
+  K.resize(n_unknowns_, n_unknowns_);
+  Eigen::VectorXi per_column(n_unknowns_);
+  for (unsigned int j = 0; j < N; ++j)
+    for (unsigned int b = 0; b < block_; ++b)
+      per_column[j * block_ + b] = adjacency[j].size() * block_;
+  K.reserve(per_column);
+  for (unsigned int j = 0; j < N; ++j)
+    for (unsigned int b = 0; b < block_; ++b)
+      for (unsigned int i : adjacency[j])
+        for (unsigned int a = 0; a < block_; ++a)
+          K.insert(i * block_ + a, j * block_ + b) = 0.0;
+  K.makeCompressed();
+  const auto set_offsets = [&](Site& s) {
+    const unsigned int n = s.nodes.size();
+    s.pair_offset.resize(n * n);
+    for (unsigned int jl = 0; jl < n; ++jl) {
+      const auto& a = adjacency[s.nodes[jl]];
+      for (unsigned int il = 0; il < n; ++il)
+        s.pair_offset[il * n + jl] = std::lower_bound(a.begin(), a.end(), s.nodes[il]) - a.begin();
+    }
+  };
+  for (auto& s : point_sites_)
+    set_offsets(s);
+  for (auto& s : node_sites_)
+    set_offsets(s);
+  system_->F.resize(n_unknowns_);
+  system_->analysed = false;
+  system_->ldlt.analyzePattern(K);
+  system_->analysed = true;
+}
+
+template <int dim>
+dealii::Tensor<2, 3> LsmfmSolver<dim>::incremental_gradient(const Site& s,
+                                                            const std::vector<double>& U,
+                                                            const Tensor3& F_n_inverse) const {
+  // G = ∂ũ/∂x^n = Σ_J ũ_J ⊗ F_n⁻ᵀ ∇_X ψ_J.
+  Tensor3 G;
+  for (unsigned int k = 0; k < s.nodes.size(); ++k) {
+    const unsigned int base = s.nodes[k] * block_;
+    dealii::Tensor<1, 3> g;
+    for (unsigned int i = 0; i < 3; ++i)
+      for (unsigned int j = 0; j < dim; ++j)
+        g[i] += F_n_inverse[j][i] * s.gradient[k][j];
+    for (unsigned int i = 0; i < dim; ++i) {
+      const double du = U[base + i] - U_n_[base + i];
+      for (unsigned int j = 0; j < 3; ++j)
+        G[i][j] += du * g[j];
+    }
+  }
+  return G;
+}
+
+template <int dim>
+double LsmfmSolver<dim>::evaluate(const std::vector<double>& U, bool assemble,
+                                  unsigned int* plastic) {
+  const double E = mat_.youngs_modulus, nu = mat_.poisson_ratio;
+  const bool finite = prm_.finite_strain();
+  const bool can_yield = std::isfinite(mat_.yield_stress);
+  const unsigned int nr = active_.size();
+  const unsigned int rows = nr + dim;
+  auto& K = system_->K;
+  double* values = K.valuePtr();
+  const int* outer = K.outerIndexPtr();
+  if (assemble) {
+    std::fill(values, values + K.nonZeros(), 0.0);
+    system_->F.setZero();
+  }
+  if (plastic)
+    *plastic = 0;
+  // Adds W·JᵀJ and −W·Jᵀr of one site.
+  const auto scatter = [&](const Site& s, const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
+                           double W) {
+    const unsigned int n = s.nodes.size();
+    const Eigen::MatrixXd KL = W * (J.transpose() * J);
+    const Eigen::VectorXd FL = -W * (J.transpose() * r);
+    for (unsigned int jl = 0; jl < n; ++jl)
+      for (unsigned int b = 0; b < block_; ++b) {
+        const unsigned int col = s.nodes[jl] * block_ + b;
+        system_->F[col] += FL[jl * block_ + b];
+        for (unsigned int il = 0; il < n; ++il) {
+          const int offset = outer[col] + s.pair_offset[il * n + jl] * block_;
+          for (unsigned int a = 0; a < block_; ++a)
+            values[offset + a] += KL(il * block_ + a, jl * block_ + b);
+        }
+      }
+  };
+
+  double I = 0;
+  Eigen::MatrixXd J;
+  Eigen::VectorXd r(rows);
+  for (unsigned int q = 0; q < points_.size(); ++q) {
+    const Site& s = point_sites_[q];
+    const PointState& st = state_[q];
+    const unsigned int n = s.nodes.size();
+    // Stress (scaled by E) and gradients in the configuration at t_n.
+    Voigt sig{};
+    const Tensor3 Fn_inv = finite ? dealii::invert(st.F_n) : dealii::unit_symmetric_tensor<3>();
+    const double Jn = finite ? dealii::determinant(st.F_n) : 1.0;
+    std::vector<dealii::Tensor<1, 3>> g(n);
+    for (unsigned int k = 0; k < n; ++k) {
+      for (unsigned int i = 0; i < 3; ++i)
+        for (unsigned int j = 0; j < dim; ++j)
+          g[k][i] += Fn_inv[j][i] * s.gradient[k][j];
+      const unsigned int base = s.nodes[k] * block_ + dim;
+      for (unsigned int a = 0; a < nr; ++a)
+        sig[active_[a]] += s.value[k] * U[base + a];
+    }
+    // Strain residual part and its derivative in the displacement gradient H (small strain:
+    // H = ∇u, R = ε(H); finite strain: H = G = ∂ũ/∂x^n, eq. 53).
+    Voigt R{};
+    Tensor3 f_inv = dealii::unit_symmetric_tensor<3>();
+    std::array<std::array<Voigt, 3>, 3> dR_dH{};
+    if (!finite) {
+      Tensor3 H;
+      for (unsigned int k = 0; k < n; ++k) {
+        const unsigned int base = s.nodes[k] * block_;
+        for (unsigned int i = 0; i < dim; ++i)
+          for (unsigned int j = 0; j < 3; ++j)
+            H[i][j] += U[base + i] * g[k][j];
+      }
+      R = to_engineering(H);
+      const Voigt c = compliance(sig, 1.0, nu); // C σ with σ scaled by E: (E C)(σ/E)
+      for (unsigned int a = 0; a < 6; ++a)
+        R[a] -= st.ep[a] + c[a];
+      for (unsigned int i = 0; i < dim; ++i)
+        for (unsigned int j = 0; j < dim; ++j) {
+          Tensor3 e;
+          e[i][j] = 1.0;
+          dR_dH[i][j] = to_engineering(e);
+        }
+    } else {
+      const Tensor3 G = incremental_gradient(s, U, Fn_inv);
+      const Tensor3 f = dealii::unit_symmetric_tensor<3>() + G;
+      const double Jt = dealii::determinant(f);
+      if (!(Jt > 0)) {
+        double c[dim];
+        for (unsigned int d = 0; d < dim; ++d)
+          c[d] = points_[q][d];
+        throw NumericalFailure(
+            "incremental deformation inverts the material (det f = " + std::to_string(Jt) + ")",
+            "integration point " + std::to_string(q) + " at " + point_text(c, dim),
+            "take more load steps");
+      }
+      f_inv = dealii::invert(f);
+      const Tensor3 M = dealii::transpose(f_inv) * f_inv;
+      Voigt sig_n_scaled = st.sigma_n;
+      for (double& v : sig_n_scaled)
+        v /= E;
+      const Tensor3 sn = to_tensor(sig_n_scaled);
+      const Tensor3 sbar = f * sn * dealii::transpose(f);
+      R = to_engineering(0.5 * (dealii::unit_symmetric_tensor<3>() - M));
+      const Voigt c = compliance(sig, 1.0, nu);
+      const Voigt cbar = compliance(to_voigt(sbar), 1.0, nu);
+      for (unsigned int a = 0; a < 6; ++a)
+        R[a] += -c[a] + cbar[a] / Jt;
+      for (unsigned int i = 0; i < dim; ++i)
+        for (unsigned int j = 0; j < dim; ++j) {
+          Tensor3 e;
+          e[i][j] = 1.0;
+          // δε̃ = sym(M δG f⁻¹); δ(σ̄/J̃) = (δG σ_n fᵀ + f σ_n δGᵀ)/J̃ − σ̄ tr(f⁻¹δG)/J̃.
+          const Tensor3 de = M * e * f_inv;
+          const Tensor3 dsbar = e * sn * dealii::transpose(f) + f * sn * dealii::transpose(e);
+          const Tensor3 dq = dsbar / Jt - sbar * (f_inv[j][i] / Jt);
+          const Voigt dcbar = compliance(to_voigt(dq), 1.0, nu);
+          dR_dH[i][j] = to_engineering(0.5 * (de + dealii::transpose(de)));
+          for (unsigned int a = 0; a < 6; ++a)
+            dR_dH[i][j][a] += dcbar[a];
+        }
+    }
+    // Plasticity at the current stress (eqs. 40–41a) and Σ of eq. (27), scaled by E.
+    Voigt sigma;
+    for (unsigned int a = 0; a < 6; ++a)
+      sigma[a] = E * sig[a];
+    const Voigt sb = project(sigma);
+    double fnorm = 0;
+    for (unsigned int a = 0; a < 6; ++a)
+      fnorm += sigma[a] * sb[a];
+    fnorm = std::sqrt(std::max(fnorm, 0.0));
+    double gamma = 0;
+    Voigt nvec{};
+    if (can_yield && fnorm > 0) {
+      const double phi =
+          fnorm - std::sqrt(2.0 / 3.0) * (mat_.yield_stress + mat_.hardening_modulus * st.q);
+      if (phi > 0) {
+        gamma = 1.5 * phi / mat_.hardening_modulus;
+        for (unsigned int a = 0; a < 6; ++a)
+          nvec[a] = sb[a] / fnorm;
+        for (unsigned int a = 0; a < 6; ++a)
+          R[a] -= gamma * nvec[a];
+        if (plastic)
+          ++*plastic;
+      }
+    }
+    // Residual vector: active rows of R_u, then ℓ div σ / E in the current configuration.
+    for (unsigned int a = 0; a < nr; ++a)
+      r[a] = R[active_[a]];
+    std::vector<dealii::Tensor<1, 3>> gc(n); // ∇ψ in the configuration of the iterate
+    for (unsigned int k = 0; k < n; ++k)
+      for (unsigned int i = 0; i < 3; ++i)
+        for (unsigned int j = 0; j < 3; ++j)
+          gc[k][i] += f_inv[j][i] * g[k][j];
+    for (unsigned int i = 0; i < dim; ++i)
+      r[nr + i] = 0;
+    for (unsigned int k = 0; k < n; ++k) {
+      const unsigned int base = s.nodes[k] * block_ + dim;
+      for (unsigned int a = 0; a < nr; ++a) {
+        const unsigned int v = active_[a];
+        const unsigned int i = voigt_i[v], j = voigt_j[v];
+        const double c = U[base + a];
+        if (i < dim)
+          r[nr + i] += ell_ * c * gc[k][j];
+        if (i != j && j < dim)
+          r[nr + j] += ell_ * c * gc[k][i];
+      }
+    }
+    const double W = weights_[q] * Jn;
+    const double rr = r.squaredNorm();
+    if (!std::isfinite(rr)) {
+      double c[dim];
+      for (unsigned int d = 0; d < dim; ++d)
+        c[d] = points_[q][d];
+      throw NumericalFailure("least-squares residual is not finite",
+                             "integration point " + std::to_string(q) + " at " + point_text(c, dim),
+                             "check the material constants and the boundary values; take more "
+                             "load steps");
+    }
+    I += W * rr;
+    if (!assemble)
+      continue;
+
+    // Jacobian: [∂R_u/∂u, −Σ̂ ψ; 0, ℓ B_s ψ] (eqs. 26, 28), Σ̂ = E Σ.
+    double Sigma[6][6];
+    for (unsigned int a = 0; a < 6; ++a)
+      for (unsigned int b = 0; b < 6; ++b) {
+        double v = compliance_entry(a, b, 1.0, nu);
+        if (gamma > 0)
+          v += E * (1.5 / mat_.hardening_modulus * nvec[a] * nvec[b] +
+                    gamma / fnorm * (projector_entry(a, b) - nvec[a] * nvec[b]));
+        Sigma[a][b] = v;
+      }
+    J.setZero(rows, n * block_);
+    for (unsigned int k = 0; k < n; ++k) {
+      const unsigned int c0 = k * block_;
+      for (unsigned int a = 0; a < nr; ++a) {
+        const unsigned int v = active_[a];
+        for (unsigned int i = 0; i < dim; ++i) {
+          double d = 0;
+          for (unsigned int j = 0; j < dim; ++j)
+            d += dR_dH[i][j][v] * g[k][j];
+          J(a, c0 + i) = d;
+        }
+        for (unsigned int b = 0; b < nr; ++b)
+          J(a, c0 + dim + b) = -Sigma[v][active_[b]] * s.value[k];
+      }
+      for (unsigned int b = 0; b < nr; ++b) {
+        const unsigned int v = active_[b];
+        const unsigned int i = voigt_i[v], j = voigt_j[v];
+        if (i < dim)
+          J(nr + i, c0 + dim + b) += ell_ * gc[k][j];
+        if (i != j && j < dim)
+          J(nr + j, c0 + dim + b) += ell_ * gc[k][i];
+      }
+    }
+    scatter(s, J, r, W);
+  }
+
+  // Penalties from the mean diagonal of the domain part (section 5.1), fixed at the first
+  // assembly so that I keeps one meaning through the run.
+  if (alpha_u_ < 0) {
+    if (!assemble)
+      throw std::logic_error("LsmfmSolver: penalties are set by the first assembly");
+    double du = 0, ds = 0;
+    for (unsigned int c = 0; c < n_unknowns_; ++c)
+      ((c % block_) < dim ? du : ds) += K.coeff(c, c);
+    const double nn = n_nodes();
+    alpha_u_ = prm_.penalty_factor * du / (nn * dim);
+    alpha_t_ = prm_.penalty_factor * ds / (nn * active_.size());
+  }
+  for (const auto& c : u_conditions_) {
+    const Site& s = node_sites_[c.node];
+    const unsigned int n = s.nodes.size();
+    Eigen::MatrixXd Jb = Eigen::MatrixXd::Zero(1, n * block_);
+    Eigen::VectorXd rb(1);
+    double u = 0;
+    for (unsigned int k = 0; k < n; ++k)
+      for (unsigned int i = 0; i < dim; ++i) {
+        u += c.direction[i] * s.value[k] * U[s.nodes[k] * block_ + i];
+        Jb(0, k * block_ + i) = c.direction[i] * s.value[k];
+      }
+    rb[0] = u - c.value;
+    I += alpha_u_ * rb[0] * rb[0];
+    if (assemble)
+      scatter(s, Jb, rb, alpha_u_);
+  }
+  for (unsigned int t = 0; t < t_conditions_.size(); ++t) {
+    const auto& c = t_conditions_[t];
+    const Site& s = node_sites_[c.node];
+    const unsigned int n = s.nodes.size();
+    // Outward normal carried by the deformation at t_n: n ∝ F_n⁻ᵀ N.
+    dealii::Tensor<1, dim> normal = c.normal;
+    if (finite) {
+      dealii::Tensor<2, dim> F = dealii::unit_symmetric_tensor<dim>();
+      for (unsigned int k = 0; k < n; ++k)
+        for (unsigned int i = 0; i < dim; ++i)
+          for (unsigned int j = 0; j < dim; ++j)
+            F[i][j] += U_n_[s.nodes[k] * block_ + i] * s.gradient[k][j];
+      normal = dealii::transpose(dealii::invert(F)) * c.normal;
+      normal /= normal.norm();
+    }
+    Eigen::MatrixXd Jb = Eigen::MatrixXd::Zero(1, n * block_);
+    Eigen::VectorXd rb(1);
+    double t_d = 0;
+    for (unsigned int k = 0; k < n; ++k)
+      for (unsigned int b = 0; b < active_.size(); ++b) {
+        const unsigned int v = active_[b];
+        const unsigned int i = voigt_i[v], j = voigt_j[v];
+        // d·(σ n) for the unit component v: d_i n_j (+ d_j n_i off the diagonal).
+        double coef = 0;
+        if (i < dim && j < dim) {
+          coef = c.direction[i] * normal[j];
+          if (i != j)
+            coef += c.direction[j] * normal[i];
+        }
+        t_d += coef * s.value[k] * U[s.nodes[k] * block_ + dim + b];
+        Jb(0, k * block_ + dim + b) = coef * s.value[k];
+      }
+    rb[0] = t_d - c.value / E;
+    I += alpha_t_ * rb[0] * rb[0];
+    if (assemble)
+      scatter(s, Jb, rb, alpha_t_);
+  }
+  return I;
+}
+
+template <int dim>
+typename LsmfmSolver<dim>::StepResult LsmfmSolver<dim>::solve_step() {
+  ++step_;
+  if (!system_->analysed)
+    build_pattern();
+  StepResult result;
+  double g0 = 0, I_previous = std::numeric_limits<double>::infinity();
+  std::vector<double> trial(n_unknowns_);
+  for (unsigned int it = 0;; ++it) {
+    unsigned int plastic = 0;
+    const double I = evaluate(U_, true, &plastic);
+    const double g = system_->F.norm();
+    if (it == 0)
+      g0 = g;
+    result.iterations = it;
+    result.functional = I;
+    result.plastic_points = plastic;
+    result.relative_gradient = g0 > 0 ? g / g0 : 0.0;
+    // Converged: the gradient of I has fallen by the tolerance, or I no longer decreases
+    // (Gauss–Newton at a minimum with a non-zero residual) with the gradient well down.
+    const bool stalled = it > 0 && I >= I_previous * (1 - 1e-13) &&
+                         result.relative_gradient <= std::sqrt(prm_.tolerance);
+    if (g == 0 || (it > 0 && result.relative_gradient <= prm_.tolerance) || stalled)
+      break;
+    if (it == prm_.max_iterations) {
+      std::ostringstream what;
+      what << "LSMFM Newton did not converge in " << it << " iterations (|grad I| at "
+           << result.relative_gradient << " of its start, tolerance " << prm_.tolerance << ")";
+      throw NumericalFailure(what.str(), "load step " + std::to_string(step_),
+                             "take more load steps, or raise LSMFM/Max iterations");
+    }
+    auto& ldlt = system_->ldlt;
+    ldlt.factorize(system_->K);
+    if (ldlt.info() != Eigen::Success)
+      throw NumericalFailure("LSMFM system matrix is singular",
+                             "load step " + std::to_string(step_) + ", iteration " +
+                                 std::to_string(it),
+                             "every node needs integration points in its influence domain; "
+                             "raise LSMFM/Support ratio");
+    const Eigen::VectorXd dU = ldlt.solve(system_->F);
+    // Line search on I along dU (eq. 39): backtracking with a parabola through I(0), I'(0)
+    // and the rejected value; I'(0) = −2 F·dU < 0 for the Gauss–Newton direction.
+    const double slope = -2.0 * system_->F.dot(dU);
+    double alpha = 1.0;
+    for (unsigned int ls = 0;; ++ls) {
+      for (unsigned int i = 0; i < n_unknowns_; ++i)
+        trial[i] = U_[i] + alpha * dU[i];
+      double I_trial = std::numeric_limits<double>::infinity();
+      try {
+        I_trial = evaluate(trial, false, nullptr);
+      } catch (const NumericalFailure&) {
+        if (ls == 12)
+          throw;
+      }
+      if (I_trial <= I + 1e-4 * alpha * slope || ls == 12)
+        break;
+      double next = 0.5 * alpha;
+      if (std::isfinite(I_trial)) {
+        const double curvature = (I_trial - I - slope * alpha) / (alpha * alpha);
+        if (curvature > 0)
+          next = std::clamp(-slope / (2 * curvature), 0.1 * alpha, 0.5 * alpha);
+      }
+      alpha = next;
+    }
+    result.min_line_search = std::min(result.min_line_search, alpha);
+    U_.swap(trial);
+    I_previous = I;
+  }
+  commit();
+  return result;
+}
+
+template <int dim>
+void LsmfmSolver<dim>::commit() {
+  const double E = mat_.youngs_modulus;
+  const bool finite = prm_.finite_strain();
+  for (unsigned int q = 0; q < points_.size(); ++q) {
+    PointState& st = state_[q];
+    const Voigt sigma = point_stress(q);
+    if (std::isfinite(mat_.yield_stress)) {
+      const Voigt sb = project(sigma);
+      double fnorm = 0;
+      for (unsigned int a = 0; a < 6; ++a)
+        fnorm += sigma[a] * sb[a];
+      fnorm = std::sqrt(std::max(fnorm, 0.0));
+      const double phi =
+          fnorm - std::sqrt(2.0 / 3.0) * (mat_.yield_stress + mat_.hardening_modulus * st.q);
+      if (phi > 0 && fnorm > 0) {
+        const double gamma = 1.5 * phi / mat_.hardening_modulus; // eq. (41a)
+        for (unsigned int a = 0; a < 6; ++a)
+          st.ep[a] += gamma * sb[a] / fnorm;  // eq. (41b)
+        st.q += std::sqrt(2.0 / 3.0) * gamma; // eq. (13)
+      }
+    }
+    if (finite) {
+      const Tensor3 Fn_inv = dealii::invert(st.F_n);
+      const Tensor3 G = incremental_gradient(point_sites_[q], U_, Fn_inv);
+      st.F_n = (dealii::unit_symmetric_tensor<3>() + G) * st.F_n;
+      st.sigma_n = sigma;
+    }
+  }
+  (void)E;
+  U_n_ = U_;
+}
+
+template <int dim>
+typename LsmfmSolver<dim>::Voigt LsmfmSolver<dim>::point_stress(unsigned int q) const {
+  const Site& s = point_sites_[q];
+  Voigt sigma{};
+  for (unsigned int k = 0; k < s.nodes.size(); ++k)
+    for (unsigned int a = 0; a < active_.size(); ++a)
+      sigma[active_[a]] += mat_.youngs_modulus * s.value[k] * U_[s.nodes[k] * block_ + dim + a];
+  return sigma;
+}
+
+template <int dim>
+double LsmfmSolver<dim>::point_jacobian(unsigned int q) const {
+  return dealii::determinant(state_[q].F_n);
+}
+
+template <int dim>
+dealii::Tensor<1, dim> LsmfmSolver<dim>::displacement(const dealii::Point<dim>& X) const {
+  typename MlsApproximation<dim>::Values v;
+  dealii::Tensor<1, dim> u;
+  if (!mls_.evaluate(X, v))
+    return u * std::numeric_limits<double>::quiet_NaN();
+  for (unsigned int k = 0; k < v.nodes.size(); ++k)
+    for (unsigned int i = 0; i < dim; ++i)
+      u[i] += v.value[k] * U_[v.nodes[k] * block_ + i];
+  return u;
+}
+
+template <int dim>
+typename LsmfmSolver<dim>::Voigt LsmfmSolver<dim>::stress(const dealii::Point<dim>& X) const {
+  typename MlsApproximation<dim>::Values v;
+  Voigt sigma{};
+  if (!mls_.evaluate(X, v)) {
+    sigma.fill(std::numeric_limits<double>::quiet_NaN());
+    return sigma;
+  }
+  for (unsigned int k = 0; k < v.nodes.size(); ++k)
+    for (unsigned int a = 0; a < active_.size(); ++a)
+      sigma[active_[a]] += mat_.youngs_modulus * v.value[k] * U_[v.nodes[k] * block_ + dim + a];
+  return sigma;
+}
+
+template <int dim>
+double LsmfmSolver<dim>::von_mises(const Voigt& s) {
+  const Voigt sb = project(s);
+  double f = 0;
+  for (unsigned int a = 0; a < 6; ++a)
+    f += s[a] * sb[a];
+  return std::sqrt(1.5 * std::max(f, 0.0));
+}
+
+template class LsmfmSolver<2>;
+template class LsmfmSolver<3>;
+
+} // namespace spinesim::meshfree

@@ -1,0 +1,165 @@
+#ifndef SPINESIM_MESHFREE_LSMFM_LSMFM_SOLVER_H
+#define SPINESIM_MESHFREE_LSMFM_LSMFM_SOLVER_H
+
+// The least-squares meshfree method for elasto-plasticity of Kwon & Youn (2005, KSME A 29(6)).
+//
+// Unknowns: MLS coefficients of the displacement u and of the stress σ at every node
+// (eq. 34). The first-order least-squares functional (eq. 18)
+//     I(u, σ) = ∫ R_uᵀR_u + (ℓ/E)² R_σᵀR_σ dΩ + α_u Σ_A (u-condition)² + α_t Σ_A (t-condition)²
+// is minimised in each load step by Gauss–Newton (eqs. 20–33) with a line search on I
+// (eq. 39). Residuals:
+//   small strain (eq. 17):   R_u = B_e u − e^p_n − C σ − γ ∂f/∂σ,   R_σ = div σ;
+//   finite strain (eq. 53):  R_u = ε̃ − C σ + (1/J̃) C (f σ_n fᵀ) − γ ∂f/∂σ, with the
+//     incremental deformation f = ∂x^{n+1}/∂x^n, J̃ = det f and ε̃ = ½(I − f⁻ᵀf⁻¹) (eq. 46):
+//     the incrementally objective Truesdell-rate update of eq. (51).
+// J2 with linear isotropic hardening (eq. 12): f = |s|, φ̃ = f − √(2/3)(σ_Y + K̄ q_n) at the
+// current stress; γ = 3φ̃/(2K̄) where φ̃ > 0 (eq. 41a), otherwise 0 — the hardening law and
+// the yield condition hold exactly at every integration point, the flow rule and equilibrium
+// in the least-squares sense; the tangent of R_u in σ is Σ of eq. (27). K̄ must be > 0
+// (eq. 27 has 1/K̄).
+//
+// Departures from the paper, each stated where it is made:
+//  * the equilibrium residual carries the weight (ℓ/E)², which makes both residuals
+//    dimensionless (the paper works in consistent units with unit weights);
+//  * finite strain: R_u is linearised exactly in the nodal increments through
+//    f = I + ∂ũ/∂x^n, instead of the configuration freeze of eq. (57) and the operators
+//    B_e1..B_e4 of eqs. (58–65); both give the same converged state, the exact one converges
+//    faster. div σ is taken in the configuration of the current iterate, as eq. (57) does;
+//  * stress in 2-D: plane strain keeps σ_zz as an unknown (ε_zz = 0 is a row of R_u);
+//    plane stress drops σ_zz and the zz row of R_u (ε_zz is then free, so that row holds
+//    identically).
+// Boundary conditions are the paper's penalty collocation at boundary nodes (eqs. 69, 86)
+// with fixed directions: d·u(x_A) = ū (d a unit vector) and d·(σ n)(x_A) = t̄ with n the
+// outward normal, carried by the deformation (n ∝ F_n⁻ᵀN) in finite strain. The curvature
+// terms of eqs. (74–83), which move the directions with the boundary, are not needed there.
+
+#include "meshfree/lsmfm/lsmfm_parameters.h"
+#include "meshfree/lsmfm/mls_approximation.h"
+
+#include <deal.II/base/point.h>
+#include <deal.II/base/tensor.h>
+
+#include <array>
+#include <memory>
+#include <vector>
+
+namespace spinesim::meshfree {
+
+template <int dim>
+class LsmfmSolver {
+ public:
+  // Linear elasticity with J2 plasticity and linear isotropic hardening (eq. 12). A yield
+  // stress of +inf makes the solid purely elastic.
+  struct Material {
+    double youngs_modulus = 0;    // E [Pa]
+    double poisson_ratio = 0;     // ν [-]
+    double yield_stress = 0;      // σ_Y [Pa]
+    double hardening_modulus = 0; // K̄ [Pa], > 0 when σ_Y is finite
+  };
+
+  // d·u(x_A) = value [m] at node A (d: unit vector).
+  struct DisplacementCondition {
+    unsigned int node;
+    dealii::Tensor<1, dim> direction;
+    double value;
+  };
+  // d·(σ n)(x_A) = value [Pa] at node A, n the outward unit normal in the reference
+  // configuration, d a unit vector.
+  struct TractionCondition {
+    unsigned int node;
+    dealii::Tensor<1, dim> normal, direction;
+    double value;
+  };
+
+  // Voigt order of the stress and the engineering strain: 11, 22, 33, 12, 23, 13.
+  using Voigt = std::array<double, 6>;
+
+  struct StepResult {
+    unsigned int iterations = 0;
+    double functional = 0;        // I at the converged state [m^dim]
+    double relative_gradient = 0; // |∇I| over its value at the start of the step
+    unsigned int plastic_points = 0;
+    double min_line_search = 1; // smallest accepted line-search factor of the step
+  };
+
+  // nodes: x_J [m]; spacing: nodal spacing per node [m] (h_J = support ratio × spacing);
+  // points, weights: the integration points and weights of I [m, m^dim].
+  LsmfmSolver(const LsmfmParameters& parameters, const Material& material,
+              std::vector<dealii::Point<dim>> nodes, const std::vector<double>& spacing,
+              std::vector<dealii::Point<dim>> points, std::vector<double> weights);
+  ~LsmfmSolver();
+
+  // The boundary conditions (their values are those of the next step). The node lists must
+  // stay the same from step to step; only values may change.
+  void set_conditions(std::vector<DisplacementCondition> displacement,
+                      std::vector<TractionCondition> traction);
+
+  // One load step: Newton to convergence, then the plastic state is committed.
+  // NumericalFailure (with the point and a hint) if Newton fails or a value is not finite.
+  StepResult solve_step();
+
+  // Results.
+  unsigned int n_nodes() const { return mls_.nodes().size(); }
+  unsigned int n_points() const { return points_.size(); }
+  unsigned int n_unknowns() const { return n_unknowns_; }
+  const MlsApproximation<dim>& approximation() const { return mls_; }
+  // Total displacement u^h(X) and stress σ^h(X) [Pa] at a reference point (MLS evaluation).
+  dealii::Tensor<1, dim> displacement(const dealii::Point<dim>& X) const;
+  Voigt stress(const dealii::Point<dim>& X) const;
+  // At integration point q: reference position, weight, Cauchy stress [Pa], effective plastic
+  // strain q, current deformation gradient determinant.
+  const dealii::Point<dim>& point(unsigned int q) const { return points_[q]; }
+  double weight(unsigned int q) const { return weights_[q]; }
+  Voigt point_stress(unsigned int q) const;
+  double point_plastic_strain(unsigned int q) const { return state_[q].q; }
+  double point_jacobian(unsigned int q) const;
+  // Von Mises stress of a Voigt stress [Pa].
+  static double von_mises(const Voigt& s);
+
+ private:
+  struct PointState {
+    Voigt ep{};               // engineering plastic strain e^p_n (small strain)
+    double q = 0;             // effective plastic strain q_n
+    Voigt sigma_n{};          // Cauchy stress at t_n [Pa] (finite strain)
+    dealii::Tensor<2, 3> F_n; // deformation gradient at t_n (finite strain)
+  };
+  struct Site { // where residuals are evaluated
+    std::vector<unsigned int> nodes;
+    std::vector<double> value;
+    std::vector<dealii::Tensor<1, dim>> gradient; // reference gradients
+    std::vector<unsigned int> pair_offset;        // value offsets in the matrix, per node pair
+  };
+  class LinearSystem;
+
+  LsmfmParameters prm_;
+  Material mat_;
+  MlsApproximation<dim> mls_;
+  std::vector<dealii::Point<dim>> points_;
+  std::vector<double> weights_;
+  std::vector<PointState> state_;
+  std::vector<Site> point_sites_;
+  std::vector<DisplacementCondition> u_conditions_;
+  std::vector<TractionCondition> t_conditions_;
+  std::vector<Site> node_sites_;     // at every node (boundary collocation and output)
+  std::vector<unsigned int> active_; // active Voigt components of σ and rows of R_u
+  unsigned int block_ = 0;           // unknowns per node: dim + active_.size()
+  unsigned int n_unknowns_ = 0;
+  double ell_ = 0;                     // equilibrium length ℓ [m]
+  double alpha_u_ = -1, alpha_t_ = -1; // penalties (set at the first assembly)
+  std::vector<double> U_, U_n_;        // unknowns: per node [u (m), σ/E (-)]
+  std::unique_ptr<LinearSystem> system_;
+  unsigned int step_ = 0;
+
+  Site make_site(const dealii::Point<dim>& x, const std::string& what) const;
+  void build_pattern();
+  // I at the unknowns U; with `assemble` also the Gauss–Newton matrix and the right-hand side
+  // −Jᵀr. Counts plastic points.
+  double evaluate(const std::vector<double>& U, bool assemble, unsigned int* plastic);
+  void commit();
+  dealii::Tensor<2, 3> incremental_gradient(const Site& s, const std::vector<double>& U,
+                                            const dealii::Tensor<2, 3>& F_n_inverse) const;
+};
+
+} // namespace spinesim::meshfree
+
+#endif
