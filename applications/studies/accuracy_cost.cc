@@ -210,14 +210,6 @@ std::string console_tail(const fs::path& file, unsigned int lines) {
   return tail;
 }
 
-std::string find_in_path(const std::string& program) {
-  const char* path = std::getenv("PATH");
-  for (const auto& dir : dealii::Utilities::split_string_list(path ? path : "", ':'))
-    if (!dir.empty() && fs::exists(std::filesystem::path(dir) / program))
-      return (std::filesystem::path(dir) / program).string();
-  return "";
-}
-
 class AccuracyCost : public Scenario {
  public:
   explicit AccuracyCost(const ScenarioFactoryArgs& args) {

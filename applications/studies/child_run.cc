@@ -10,6 +10,7 @@
 
 #include <cerrno>
 #include <chrono>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <thread>
@@ -106,6 +107,20 @@ ChildRunResult run_child(const std::vector<std::string>& argv,
   else if (WIFSIGNALED(status))
     result.exit_code = 128 + WTERMSIG(status);
   return result;
+}
+
+std::string find_in_path(const std::string& program) {
+  const char* path = std::getenv("PATH");
+  std::string list = path ? path : "";
+  std::size_t start = 0;
+  while (start <= list.size()) {
+    const std::size_t end = std::min(list.find(':', start), list.size());
+    const std::string dir = list.substr(start, end - start);
+    if (!dir.empty() && std::filesystem::exists(std::filesystem::path(dir) / program))
+      return (std::filesystem::path(dir) / program).string();
+    start = end + 1;
+  }
+  return "";
 }
 
 } // namespace spinesim::applications

@@ -27,6 +27,9 @@ struct ChildRunResult {
 ChildRunResult run_child(const std::vector<std::string>& argv,
                          const std::filesystem::path& console_file, double time_limit);
 
+// The full path of `program` in the directories of PATH; empty when it is not there.
+std::string find_in_path(const std::string& program);
+
 // The executable of this process (/proc/self/exe).
 std::filesystem::path own_executable();
 

@@ -21,6 +21,13 @@ void LsmfmParameters::declare(dealii::ParameterHandler& prm) {
                     "nodal spacing, r of eq. (100) [-].");
   prm.declare_entry("Grid points", "4", Integer(1, 8),
                     "Background-grid integration: Gauss points per direction and cell [-].");
+  prm.declare_entry(
+      "Flow rule residual", "complementary", Selection("complementary|return_mapping"),
+      "Constitutive residual of the functional: complementary, the flow rule in the "
+      "complementary form of Kwon & Youn (eqs. 17a, 53; γ = 3φ̃/(2K̄), needs K̄ > 0 and "
+      "converges slowly when E/K̄ is large), or return_mapping, R_u = C σ_rm(e_trial) − C σ "
+      "with the J2 radial return of fem/materials (same solution, no 1/K̄; plane strain and "
+      "3-D) [-].");
   prm.declare_entry("Penalty factor", "1e4", Double(0.0),
                     "Boundary-condition penalty over the mean diagonal of the system matrix "
                     "(Kwon & Youn: 1e4 .. 1e6) [-].");
@@ -40,6 +47,7 @@ void LsmfmParameters::parse(const dealii::ParameterHandler& prm) {
   integration = prm.get("Integration");
   integration_ratio = prm.get_double("Integration ratio");
   grid_points = prm.get_integer("Grid points");
+  flow_rule = prm.get("Flow rule residual");
   penalty_factor = prm.get_double("Penalty factor");
   equilibrium_length = prm.get_double("Equilibrium length");
   tolerance = prm.get_double("Tolerance");

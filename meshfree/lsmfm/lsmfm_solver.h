@@ -33,10 +33,12 @@
 // outward normal, carried by the deformation (n ∝ F_n⁻ᵀN) in finite strain. The curvature
 // terms of eqs. (74–83), which move the directions with the boundary, are not needed there.
 
+#include "fem/materials/isotropic_hardening.h"
 #include "meshfree/lsmfm/lsmfm_parameters.h"
 #include "meshfree/lsmfm/mls_approximation.h"
 
 #include <deal.II/base/point.h>
+#include <deal.II/base/symmetric_tensor.h>
 #include <deal.II/base/tensor.h>
 
 #include <array>
@@ -79,7 +81,8 @@ class LsmfmSolver {
     double functional = 0;        // I at the converged state [m^dim]
     double relative_gradient = 0; // |∇I| over its value at the start of the step
     unsigned int plastic_points = 0;
-    double min_line_search = 1; // smallest accepted line-search factor of the step
+    double min_line_search = 1;   // smallest accepted line-search factor of the step
+    unsigned int set_updates = 0; // Newton solves repeated for a changed plastic set
   };
 
   // nodes: x_J [m]; spacing: nodal spacing per node [m] (h_J = support ratio × spacing);
@@ -113,6 +116,9 @@ class LsmfmSolver {
   Voigt point_stress(unsigned int q) const;
   double point_plastic_strain(unsigned int q) const { return state_[q].q; }
   double point_jacobian(unsigned int q) const;
+  // Deformation gradient at integration point q: I + ∇u (small strain; 2-D embedded in 3×3
+  // with F_zz = 1) or the committed F_n (finite strain).
+  dealii::Tensor<2, 3> point_deformation_gradient(unsigned int q) const;
   // Von Mises stress of a Voigt stress [Pa].
   static double von_mises(const Voigt& s);
 
@@ -130,6 +136,13 @@ class LsmfmSolver {
     std::vector<unsigned int> pair_offset;        // value offsets in the matrix, per node pair
   };
   class LinearSystem;
+  struct ReturnMapped {
+    Voigt stress{};                        // σ_rm [Pa]
+    Voigt plastic_strain{};                // Δe^p, engineering [-]
+    dealii::SymmetricTensor<4, 3> tangent; // dσ/dε_e,trial [Pa]
+    double delta_q = 0;                    // Δq [-]
+    bool plastic = false;
+  };
 
   LsmfmParameters prm_;
   Material mat_;
@@ -147,8 +160,16 @@ class LsmfmSolver {
   double ell_ = 0;                     // equilibrium length ℓ [m]
   double alpha_u_ = -1, alpha_t_ = -1; // penalties (set at the first assembly)
   std::vector<double> U_, U_n_;        // unknowns: per node [u (m), σ/E (-)]
+  std::vector<double> last_increment_; // U_n − U_{n−1}: the predictor of the next step
   std::unique_ptr<LinearSystem> system_;
   unsigned int step_ = 0;
+  bool second_order_ = true;    // assemble the Newton Hessian (else Gauss–Newton)
+  bool return_mapping_ = false; // flow-rule residual in the return-mapping form
+  bool record_ = false;         // evaluate() stores the return mappings in returned_
+  std::vector<ReturnMapped> returned_;
+  std::unique_ptr<materials::IsotropicHardening> hardening_;
+  std::vector<char> plastic_set_; // per point: flows in the current Newton solve
+  std::vector<char> flowed_;      // per point: flowed in the last committed step
 
   Site make_site(const dealii::Point<dim>& x, const std::string& what) const;
   void build_pattern();
@@ -156,6 +177,11 @@ class LsmfmSolver {
   // −Jᵀr. Counts plastic points.
   double evaluate(const std::vector<double>& U, bool assemble, unsigned int* plastic);
   void commit();
+  // J2 radial return of a trial elastic strain (engineering Voigt) at effective plastic
+  // strain q (fem/materials/j2_return_mapping.h); Hooke's law when σ_Y is infinite.
+  ReturnMapped return_map(const Voigt& trial_strain, double q) const;
+  // Newton on I with the plastic set fixed; result: iterations, I, gradient (over g0).
+  void newton(StepResult& result, double g0);
   dealii::Tensor<2, 3> incremental_gradient(const Site& s, const std::vector<double>& U,
                                             const dealii::Tensor<2, 3>& F_n_inverse) const;
 };
