@@ -101,7 +101,10 @@ struct LsmfmRunParameters {
     compare_fem = prm.get_bool("Compare with FEM");
     plastic_zone_plot = prm.get_bool("Plastic zone plot");
     const auto list = [&](const std::string& name) {
-      return parse_number_list(prm.get(name), "LSMFM run/" + name);
+      const std::string text = prm.get(name);
+      if (text.find_first_not_of(" \t") == std::string::npos)
+        return std::vector<double>();
+      return parse_number_list(text, "LSMFM run/" + name);
     };
     reference_stretch = list("Reference stretch");
     reference_flow_stress = list("Reference flow stress");
@@ -313,7 +316,8 @@ class LsmfmScenario : public Scenario {
     if (fem) {
       s.set_figure("relative_difference_vs_fem", difference_to_fem(*fem, *solver).relative(), "-");
       s.set_figure("fem_dofs", fem->dof_handler().n_dofs(), "-");
-      if (run_.plastic_zone_plot && law_.model != "linear_elastic")
+      // The plot when the LSMFM has a plastic zone to show.
+      if (run_.plastic_zone_plot && plastic > 0)
         s.set_figure("plastic_zone_png_valid", plastic_zone_plot(ctx, *fem, *solver), "-");
     }
     for (unsigned int i = 0; i < reached.size(); ++i) {
@@ -349,24 +353,30 @@ class LsmfmScenario : public Scenario {
   std::vector<double> spacing_;
   std::vector<BoundaryNode<dim>> boundary_;
 
-  // Nodes at the vertices; spacing = mean (cell measure)^(1/dim) of the cells around a
-  // vertex; boundary normals per boundary id from the faces around a boundary vertex.
+  // Nodes at the vertices; spacing = the longest mesh edge at a vertex (on graded or
+  // stretched cells the influence domain must reach the neighbour along the long edge: with
+  // the geometric mean cell size instead, h = 1.5 spacings left the perforated plate's
+  // elastic solution 1.9 % away from the FEM at 1376 nodes, 0.4 % with this choice);
+  // boundary normals per boundary id from the faces around a boundary vertex.
   void make_nodes(const dealii::Triangulation<dim>& tria) {
     std::vector<int> index(tria.n_vertices(), -1);
-    std::vector<double> sum, count;
     std::map<unsigned int, std::map<dealii::types::boundary_id, dealii::Tensor<1, dim>>> normals;
     for (const auto& cell : tria.active_cell_iterators()) {
-      const double h = std::pow(cell->measure(), 1.0 / dim);
       for (unsigned int v = 0; v < cell->n_vertices(); ++v) {
         const unsigned int g = cell->vertex_index(v);
         if (index[g] < 0) {
           index[g] = nodes_.size();
           nodes_.push_back(cell->vertex(v));
-          sum.push_back(0);
-          count.push_back(0);
+          spacing_.push_back(0);
         }
-        sum[index[g]] += h;
-        count[index[g]] += 1;
+      }
+      for (unsigned int l = 0; l < cell->n_lines(); ++l) {
+        const auto line = cell->line(l);
+        const double length = line->vertex(0).distance(line->vertex(1));
+        for (unsigned int v = 0; v < 2; ++v) {
+          double& h = spacing_[index[line->vertex_index(v)]];
+          h = std::max(h, length);
+        }
       }
       for (unsigned int f = 0; f < cell->n_faces(); ++f)
         if (cell->face(f)->at_boundary()) {
@@ -376,9 +386,6 @@ class LsmfmScenario : public Scenario {
             normals[index[cell->face(f)->vertex_index(v)]][id] += n;
         }
     }
-    spacing_.resize(nodes_.size());
-    for (unsigned int j = 0; j < nodes_.size(); ++j)
-      spacing_[j] = sum[j] / count[j];
     for (auto& [node, by_id] : normals) {
       BoundaryNode<dim> b{node, {}};
       for (auto& [id, n] : by_id)

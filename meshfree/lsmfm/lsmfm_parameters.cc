@@ -37,6 +37,10 @@ void LsmfmParameters::declare(dealii::ParameterHandler& prm) {
   prm.declare_entry("Tolerance", "1e-10", Double(0.0),
                     "Newton stops when the gradient of I falls below this fraction of its value "
                     "at the start of the load step [-].");
+  prm.declare_entry("Update tolerance", "1e-5", Double(0.0),
+                    "Newton also stops when its last update is below this fraction of the load "
+                    "step's increment (displacement and stress each) with the gradient of I "
+                    "down by 1e-4 [-].");
   prm.declare_entry("Max iterations", "40", Integer(1), "Newton iterations per load step [-].");
   prm.declare_entry("Maximum condition number", "1e12", Double(1.0),
                     "Largest accepted condition number of the MLS moment matrix [-].");
@@ -51,6 +55,7 @@ void LsmfmParameters::parse(const dealii::ParameterHandler& prm) {
   penalty_factor = prm.get_double("Penalty factor");
   equilibrium_length = prm.get_double("Equilibrium length");
   tolerance = prm.get_double("Tolerance");
+  update_tolerance = prm.get_double("Update tolerance");
   max_iterations = prm.get_integer("Max iterations");
   max_condition_number = prm.get_double("Maximum condition number");
   validate();

@@ -24,6 +24,7 @@ struct LsmfmParameters {
   double penalty_factor = 1e4;              // α over the mean diagonal [-]
   double equilibrium_length = 0;            // ℓ weighting div σ [m]; 0 = domain diagonal
   double tolerance = 1e-10;                 // on the gradient of I, relative to the step's first
+  double update_tolerance = 1e-5;           // on the Newton update over the step's increment
   unsigned int max_iterations = 40;         // Newton iterations per load step
   double max_condition_number = 1e12;       // MLS moment matrix guard [-]
 

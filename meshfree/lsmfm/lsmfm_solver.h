@@ -83,6 +83,7 @@ class LsmfmSolver {
     unsigned int plastic_points = 0;
     double min_line_search = 1;   // smallest accepted line-search factor of the step
     unsigned int set_updates = 0; // Newton solves repeated for a changed plastic set
+    unsigned int kink_stops = 0;  // solves ended as a stall at a kink of I (see newton())
   };
 
   // nodes: x_J [m]; spacing: nodal spacing per node [m] (h_J = support ratio × spacing);
@@ -137,10 +138,10 @@ class LsmfmSolver {
   };
   class LinearSystem;
   struct ReturnMapped {
-    Voigt stress{};                        // σ_rm [Pa]
-    Voigt plastic_strain{};                // Δe^p, engineering [-]
-    dealii::SymmetricTensor<4, 3> tangent; // dσ/dε_e,trial [Pa]
-    double delta_q = 0;                    // Δq [-]
+    Voigt stress{};            // σ_rm [Pa]
+    Voigt plastic_strain{};    // Δe^p, engineering [-]
+    double tangent[6][6] = {}; // dσ_a/de_b, e the engineering trial strain [Pa]
+    double delta_q = 0;        // Δq [-]
     bool plastic = false;
   };
 
@@ -163,13 +164,15 @@ class LsmfmSolver {
   std::vector<double> last_increment_; // U_n − U_{n−1}: the predictor of the next step
   std::unique_ptr<LinearSystem> system_;
   unsigned int step_ = 0;
-  bool second_order_ = true;    // assemble the Newton Hessian (else Gauss–Newton)
-  bool return_mapping_ = false; // flow-rule residual in the return-mapping form
-  bool record_ = false;         // evaluate() stores the return mappings in returned_
+  bool second_order_ = true;       // assemble the Newton Hessian (else Gauss–Newton)
+  bool return_mapping_ = false;    // flow-rule residual in the return-mapping form
+  bool record_ = false;            // evaluate() stores the return mappings and the plastic set
+  bool iterate_switching_ = false; // plastic set from the current stress at every iterate
   std::vector<ReturnMapped> returned_;
   std::unique_ptr<materials::IsotropicHardening> hardening_;
-  std::vector<char> plastic_set_; // per point: flows in the current Newton solve
-  std::vector<char> flowed_;      // per point: flowed in the last committed step
+  std::vector<char> plastic_set_;    // per point: flows in the current Newton solve
+  std::vector<double> trial_excess_; // q_tr − σ_y,n at the last evaluation [Pa]
+  std::vector<char> flowed_;         // per point: flowed in the last committed step
 
   Site make_site(const dealii::Point<dim>& x, const std::string& what) const;
   void build_pattern();
@@ -179,7 +182,9 @@ class LsmfmSolver {
   void commit();
   // J2 radial return of a trial elastic strain (engineering Voigt) at effective plastic
   // strain q (fem/materials/j2_return_mapping.h); Hooke's law when σ_Y is infinite.
-  ReturnMapped return_map(const Voigt& trial_strain, double q) const;
+  // branch: 0 decides (fem/materials' radial return), 1 elastic, 2 the plastic branch
+  // continued to Δγ < 0 (within a Newton solve on a fixed plastic set).
+  ReturnMapped return_map(const Voigt& trial_strain, double q, int branch) const;
   // Newton on I with the plastic set fixed; result: iterations, I, gradient (over g0).
   void newton(StepResult& result, double g0);
   dealii::Tensor<2, 3> incremental_gradient(const Site& s, const std::vector<double>& U,

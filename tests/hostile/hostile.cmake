@@ -195,3 +195,11 @@ spinesim_add_hostile_test(study_bad_case PREPARE run:${_quick}
   ARGS run ${PROJECT_SOURCE_DIR}/applications/studies/accuracy_cost_quick.prm --output @KEEP@
        --force --set "Accuracy study/Case 1/Settings=Mechanics/Finite element degree=7"
   MATCH "Accuracy study/Case 1.*spinesim check.*Finite element degree")
+# LSMFM: the complementary flow rule of Kwon & Youn has 1/K (eq. 27) and holds no perfectly
+# plastic solid; the scene is refused, naming the entry and the alternative (the error comes
+# while the model is built, so the earlier run must survive the staged --force).
+spinesim_add_hostile_test(lsmfm_perfect_plasticity PREPARE run:${_quick}
+  ARGS run ${PROJECT_SOURCE_DIR}/applications/validation/lsmfm_perforated_plate.prm
+       --output @KEEP@ --force --set "Material/Hardening modulus=0"
+       --set "LSMFM/Flow rule residual=complementary"
+  MATCH "Material/Hardening modulus.*return_mapping")
