@@ -28,6 +28,11 @@ void LsmfmParameters::declare(dealii::ParameterHandler& prm) {
       "converges slowly when E/K̄ is large), or return_mapping, R_u = C σ_rm(e_trial) − C σ "
       "with the J2 radial return of fem/materials (same solution, no 1/K̄; plane strain and "
       "3-D) [-].");
+  prm.declare_entry(
+      "Stress rate", "truesdell", Selection("truesdell|jaumann_log"),
+      "Finite strain: truesdell, the incrementally objective update of Kwon & Youn (eqs. 46, "
+      "50-51), or jaumann_log, the rotation-neutralised update with logarithmic strain "
+      "increments of Abaqus' hypoelastic J2 (needs Flow rule residual = return_mapping) [-].");
   prm.declare_entry("Penalty factor", "1e4", Double(0.0),
                     "Boundary-condition penalty over the mean diagonal of the system matrix "
                     "(Kwon & Youn: 1e4 .. 1e6) [-].");
@@ -52,6 +57,7 @@ void LsmfmParameters::parse(const dealii::ParameterHandler& prm) {
   integration_ratio = prm.get_double("Integration ratio");
   grid_points = prm.get_integer("Grid points");
   flow_rule = prm.get("Flow rule residual");
+  stress_rate = prm.get("Stress rate");
   penalty_factor = prm.get_double("Penalty factor");
   equilibrium_length = prm.get_double("Equilibrium length");
   tolerance = prm.get_double("Tolerance");

@@ -21,6 +21,7 @@ struct LsmfmParameters {
   std::string plane_model = "plane_strain"; // plane_strain|plane_stress (2-D)
   std::string kinematics = "small_strain";  // small_strain|finite_strain
   std::string flow_rule = "complementary";  // complementary|return_mapping
+  std::string stress_rate = "truesdell";    // truesdell|jaumann_log (finite strain)
   double penalty_factor = 1e4;              // α over the mean diagonal [-]
   double equilibrium_length = 0;            // ℓ weighting div σ [m]; 0 = domain diagonal
   double tolerance = 1e-10;                 // on the gradient of I, relative to the step's first

@@ -138,6 +138,12 @@ LsmfmSolver<dim>::LsmfmSolver(const LsmfmParameters& parameters, const Material&
     active_ = {0, 1, 2, 3};
   block_ = dim + active_.size();
   return_mapping_ = prm_.flow_rule == "return_mapping";
+  jaumann_log_ = prm_.finite_strain() && prm_.stress_rate == "jaumann_log";
+  if (jaumann_log_ && !return_mapping_)
+    throw InvalidInput("LSMFM/Stress rate",
+                       "jaumann_log with Flow rule residual = complementary: the complementary "
+                       "residual is the Truesdell form of Kwon & Youn (eq. 53)",
+                       "truesdell, or Flow rule residual = return_mapping");
   if (std::isfinite(mat_.yield_stress))
     hardening_ =
         std::make_unique<materials::IsotropicHardening>(mat_.yield_stress, mat_.hardening_modulus);
@@ -500,6 +506,43 @@ double LsmfmSolver<dim>::evaluate(const std::vector<double>& U, bool assemble,
           for (unsigned int a = 0; a < 6; ++a)
             dR_dH[i][j][a] += dcbar[a];
         }
+      if (jaumann_log_) {
+        // Rotation-neutralised update with logarithmic strain increments (the objective
+        // update of Abaqus' hypoelastic J2 with the Jaumann rate, Hughes & Winget 1980 in the
+        // polar form of Rashid 1993): e_tr = ln Ṽ + C(R̃ σ_n R̃ᵀ), f = Ṽ R̃; the derivative
+        // in G by central differences (a smooth function of G; step 1e-7).
+        const auto trial = [&](const Tensor3& Gx) {
+          const Tensor3 fx = dealii::unit_symmetric_tensor<3>() + Gx;
+          const auto eig =
+              dealii::eigenvectors(dealii::symmetrize(Tensor3(fx * dealii::transpose(fx))));
+          Tensor3 logV, Vinv;
+          for (const auto& [lambda, v] : eig) {
+            logV += 0.5 * std::log(lambda) * dealii::outer_product(v, v);
+            Vinv += (1.0 / std::sqrt(lambda)) * dealii::outer_product(v, v);
+          }
+          const Tensor3 Rx = Vinv * fx;
+          Voigt e = to_engineering(logV);
+          const Voigt cr = compliance(to_voigt(Rx * sn * dealii::transpose(Rx)), 1.0, nu);
+          for (unsigned int a = 0; a < 6; ++a)
+            e[a] += cr[a];
+          return e;
+        };
+        const Voigt c = compliance(sig, 1.0, nu);
+        const Voigt e0 = trial(G);
+        for (unsigned int a = 0; a < 6; ++a)
+          R[a] = e0[a] - c[a];
+        if (assemble)
+          for (unsigned int i = 0; i < dim; ++i)
+            for (unsigned int j = 0; j < dim; ++j) {
+              const double h = 1e-7;
+              Tensor3 Gp = G, Gm = G;
+              Gp[i][j] += h;
+              Gm[i][j] -= h;
+              const Voigt ep = trial(Gp), em = trial(Gm);
+              for (unsigned int a = 0; a < 6; ++a)
+                dR_dH[i][j][a] = (ep[a] - em[a]) / (2 * h);
+            }
+      }
     }
     // Return-mapping form: R_u = C σ_rm(e_tr) − C σ, with e_tr = R + Cσ the trial elastic
     // strain (small strain: ε − e^p_n; finite strain: ε̃ + C(f σ_n fᵀ)/J̃, eq. 51 with

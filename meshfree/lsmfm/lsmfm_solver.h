@@ -164,9 +164,11 @@ class LsmfmSolver {
   std::vector<double> last_increment_; // U_n − U_{n−1}: the predictor of the next step
   std::unique_ptr<LinearSystem> system_;
   unsigned int step_ = 0;
-  bool second_order_ = true;       // assemble the Newton Hessian (else Gauss–Newton)
-  bool return_mapping_ = false;    // flow-rule residual in the return-mapping form
-  bool record_ = false;            // evaluate() stores the return mappings and the plastic set
+  bool second_order_ = true; // assemble the Newton Hessian (else Gauss–Newton)
+  bool return_mapping_ = false;
+  bool jaumann_log_ = false; // finite strain: Jaumann-type update with log strain increments    //
+                             // flow-rule residual in the return-mapping form
+  bool record_ = false;      // evaluate() stores the return mappings and the plastic set
   bool iterate_switching_ = false; // plastic set from the current stress at every iterate
   std::vector<ReturnMapped> returned_;
   std::unique_ptr<materials::IsotropicHardening> hardening_;
