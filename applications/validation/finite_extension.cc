@@ -8,6 +8,7 @@
 #include "applications/framework/parse_section.h"
 #include "applications/framework/run_context.h"
 #include "applications/framework/scenario.h"
+#include "applications/validation/stretch_reference.h"
 #include "base/exceptions.h"
 #include "base/list_parsing.h"
 #include "fem/materials/law_parameters.h"
@@ -31,34 +32,19 @@ namespace {
 struct ExtensionParameters {
   double final_stretch = 1.10;
   unsigned int steps = 40;
-  std::vector<double> reference_stretch, reference_flow_stress, reference_plastic_strain;
+  StretchReference reference;
 
   static void declare(dealii::ParameterHandler& prm) {
     using namespace dealii::Patterns;
     prm.declare_entry("Final stretch", "1.10", Double(1.0),
                       "Stretch λx = 1 + u_x/L_x reached at the end of the run [-].");
     prm.declare_entry("Steps", "40", Integer(1), "Load steps to the final stretch [-].");
-    prm.declare_entry("Reference stretch", "", List(Double()),
-                      "Stretches λx at which the published table gives values [-].");
-    prm.declare_entry("Reference flow stress", "", List(Double()),
-                      "Published flow stress at each reference stretch [MPa].");
-    prm.declare_entry("Reference plastic strain", "", List(Double()),
-                      "Published effective plastic strain at each reference stretch [-].");
+    StretchReference::declare(prm);
   }
   void parse(const dealii::ParameterHandler& prm) {
     final_stretch = prm.get_double("Final stretch");
     steps = prm.get_integer("Steps");
-    const auto list = [&](const std::string& name) {
-      return parse_number_list(prm.get(name), "Validation/" + name);
-    };
-    reference_stretch = list("Reference stretch");
-    reference_flow_stress = list("Reference flow stress");
-    reference_plastic_strain = list("Reference plastic strain");
-    if (reference_flow_stress.size() != reference_stretch.size() ||
-        reference_plastic_strain.size() != reference_stretch.size())
-      throw InvalidInput("Validation/Reference flow stress",
-                         "the reference lists have different lengths",
-                         "one flow stress and one plastic strain per reference stretch");
+    reference.parse(prm, "Validation");
   }
 };
 
@@ -95,16 +81,6 @@ HomogeneousState average_state(const fem::MechanicsSolver<dim>& solver) {
   s.flow_stress = dealii::Utilities::MPI::sum(tau, comm) / volume;
   s.cauchy_von_mises = dealii::Utilities::MPI::sum(sigma, comm) / volume;
   s.plastic_strain = dealii::Utilities::MPI::sum(eps, comm) / volume;
-  return s;
-}
-
-std::string label(double stretch) {
-  std::ostringstream out;
-  out << std::fixed << std::setprecision(3) << stretch;
-  std::string s = out.str();
-  for (auto& c : s)
-    if (c == '.')
-      c = '_';
   return s;
 }
 
@@ -147,8 +123,8 @@ class FiniteExtension : public Scenario {
     bc.add_dirichlet(1, "x", stretch.str());
     solver.setup();
 
-    std::vector<HomogeneousState> at_reference(ext_.reference_stretch.size());
-    std::vector<bool> reached(ext_.reference_stretch.size(), false);
+    std::vector<HomogeneousState> at_reference(ext_.reference.stretch.size());
+    std::vector<bool> reached(ext_.reference.stretch.size(), false);
     ctx.history().add({{"stretch", 1.0},
                        {"flow_stress_MPa", 0.0},
                        {"cauchy_von_mises_MPa", 0.0},
@@ -173,7 +149,7 @@ class FiniteExtension : public Scenario {
                          {"cauchy_von_mises_MPa", s.cauchy_von_mises / 1e6},
                          {"eff_plastic_strain", s.plastic_strain}});
       for (unsigned int i = 0; i < reached.size(); ++i)
-        if (!reached[i] && std::abs(s.stretch - ext_.reference_stretch[i]) < 1e-9 * s.stretch) {
+        if (!reached[i] && std::abs(s.stretch - ext_.reference.stretch[i]) < 1e-9 * s.stretch) {
           reached[i] = true;
           at_reference[i] = s;
         }
@@ -186,24 +162,15 @@ class FiniteExtension : public Scenario {
     Summary& summary = ctx.summary();
     summary.set_figure("newton_iterations", newton, "iterations");
     summary.set_figure("mechanics_dofs", solver.dof_handler().n_dofs(), "-");
+    std::vector<std::array<double, 2>> values(reached.size());
     for (unsigned int i = 0; i < reached.size(); ++i) {
-      const std::string key = label(ext_.reference_stretch[i]);
-      if (!reached[i])
-        throw InvalidInput("Validation/Reference stretch",
-                           "stretch " + key + " does not fall on a load step",
-                           "stretches k (Final stretch − 1)/Steps + 1");
-      const auto& s = at_reference[i];
-      summary.set_figure("flow_stress_MPa_at_" + key, s.flow_stress / 1e6, "MPa");
-      summary.set_figure("cauchy_von_mises_MPa_at_" + key, s.cauchy_von_mises / 1e6, "MPa");
-      summary.set_figure("eff_plastic_strain_at_" + key, s.plastic_strain, "-");
-      const double ref_stress = ext_.reference_flow_stress[i];
-      summary.set_figure("flow_stress_relative_error_at_" + key,
-                         std::abs(s.flow_stress / 1e6 - ref_stress) / ref_stress, "-");
-      const double ref_strain = ext_.reference_plastic_strain[i];
-      if (ref_strain > 0)
-        summary.set_figure("eff_plastic_strain_relative_error_at_" + key,
-                           std::abs(s.plastic_strain - ref_strain) / ref_strain, "-");
+      values[i] = {{at_reference[i].flow_stress / 1e6, at_reference[i].plastic_strain}};
+      if (reached[i])
+        summary.set_figure("cauchy_von_mises_MPa_at_" +
+                               StretchReference::label(ext_.reference.stretch[i]),
+                           at_reference[i].cauchy_von_mises / 1e6, "MPa");
     }
+    ext_.reference.report(summary, values, reached, "Validation");
   }
 
  private:

@@ -22,6 +22,7 @@
 #include "applications/framework/scenario.h"
 #include "applications/studies/child_run.h"
 #include "applications/studies/study_plot.h"
+#include "applications/validation/stretch_reference.h"
 #include "base/error_sums.h"
 #include "base/exceptions.h"
 #include "base/expression_function.h"
@@ -62,7 +63,7 @@ struct LsmfmRunParameters {
   std::string exact_displacement;
   bool compare_fem = false;
   bool plastic_zone_plot = true;
-  std::vector<double> reference_stretch, reference_flow_stress, reference_plastic_strain;
+  StretchReference reference;
 
   static void declare(dealii::ParameterHandler& prm) {
     using namespace dealii::Patterns;
@@ -84,13 +85,7 @@ struct LsmfmRunParameters {
     prm.declare_entry("Plastic zone plot", "true", Bool(),
                       "With the FEM comparison, draw plastic_zone.png (gnuplot): the plastic "
                       "points of both solutions side by side [-].");
-    prm.declare_entry("Reference stretch", "", List(Double()),
-                      "Stretches λx = mean F_xx at which a published table gives the "
-                      "homogeneous response; empty = none [-].");
-    prm.declare_entry("Reference flow stress", "", List(Double()),
-                      "Published flow stress at each reference stretch [MPa].");
-    prm.declare_entry("Reference plastic strain", "", List(Double()),
-                      "Published effective plastic strain at each reference stretch [-].");
+    StretchReference::declare(prm);
   }
   void parse(const dealii::ParameterHandler& prm) {
     end_time = prm.get_double("End time");
@@ -100,34 +95,11 @@ struct LsmfmRunParameters {
     exact_displacement = prm.get("Exact displacement");
     compare_fem = prm.get_bool("Compare with FEM");
     plastic_zone_plot = prm.get_bool("Plastic zone plot");
-    const auto list = [&](const std::string& name) {
-      const std::string text = prm.get(name);
-      if (text.find_first_not_of(" \t") == std::string::npos)
-        return std::vector<double>();
-      return parse_number_list(text, "LSMFM run/" + name);
-    };
-    reference_stretch = list("Reference stretch");
-    reference_flow_stress = list("Reference flow stress");
-    reference_plastic_strain = list("Reference plastic strain");
-    if (reference_flow_stress.size() != reference_stretch.size() ||
-        reference_plastic_strain.size() != reference_stretch.size())
-      throw InvalidInput("LSMFM run/Reference flow stress",
-                         "the reference lists have different lengths",
-                         "one flow stress and one plastic strain per reference stretch");
+    reference.parse(prm, "LSMFM run");
     if (!(end_time > 0))
       throw InvalidInput("LSMFM run/End time", "must be positive", "a time > 0 [s]");
   }
 };
-
-std::string stretch_label(double stretch) {
-  std::ostringstream out;
-  out << std::fixed << std::setprecision(3) << stretch;
-  std::string s = out.str();
-  for (auto& c : s)
-    if (c == '.')
-      c = '_';
-  return s;
-}
 
 // A boundary node: its outward normal on each boundary id it lies on.
 template <int dim>
@@ -226,7 +198,7 @@ class LsmfmScenario : public Scenario {
       fem->setup();
     }
 
-    std::vector<bool> reached(run_.reference_stretch.size(), false);
+    std::vector<bool> reached(run_.reference.stretch.size(), false);
     std::vector<std::array<double, 2>> at_reference(reached.size());
     unsigned int newton = 0, max_newton = 0;
     double min_line_search = 1;
@@ -272,7 +244,7 @@ class LsmfmScenario : public Scenario {
                          {"functional", r.functional},
                          {"plastic_points", double(r.plastic_points)}});
       for (unsigned int i = 0; i < reached.size(); ++i)
-        if (!reached[i] && std::abs(avg[0] - run_.reference_stretch[i]) < 1e-6) {
+        if (!reached[i] && std::abs(avg[0] - run_.reference.stretch[i]) < 1e-6) {
           reached[i] = true;
           at_reference[i] = {{avg[1], avg[2]}};
         }
@@ -320,25 +292,9 @@ class LsmfmScenario : public Scenario {
       if (run_.plastic_zone_plot && plastic > 0)
         s.set_figure("plastic_zone_png_valid", plastic_zone_plot(ctx, *fem, *solver), "-");
     }
-    for (unsigned int i = 0; i < reached.size(); ++i) {
-      const std::string key = stretch_label(run_.reference_stretch[i]);
-      if (!reached[i])
-        throw InvalidInput("LSMFM run/Reference stretch",
-                           "stretch " + key + " is not reached at a load step",
-                           "stretches the load steps reach (mean F_xx within 1e-6)");
-      const double flow = at_reference[i][0] / 1e6, ep = at_reference[i][1];
-      s.set_figure("flow_stress_MPa_at_" + key, flow, "MPa");
-      s.set_figure("eff_plastic_strain_at_" + key, ep, "-");
-      const double ref_stress = run_.reference_flow_stress[i];
-      s.set_figure("flow_stress_relative_error_at_" + key, std::abs(flow - ref_stress) / ref_stress,
-                   "-");
-      const double ref_strain = run_.reference_plastic_strain[i];
-      if (ref_strain > 0)
-        s.set_figure("eff_plastic_strain_relative_error_at_" + key,
-                     std::abs(ep - ref_strain) / ref_strain, "-");
-      else
-        s.set_figure("eff_plastic_strain_absolute_error_at_" + key, std::abs(ep), "-");
-    }
+    for (auto& v : at_reference)
+      v[0] /= 1e6; // [MPa]
+    run_.reference.report(s, at_reference, reached, "LSMFM run");
   }
 
  private:
