@@ -1020,7 +1020,6 @@ void LsmfmSolver<dim>::newton(StepResult& result, double g0) {
 
 template <int dim>
 void LsmfmSolver<dim>::commit() {
-  const double E = mat_.youngs_modulus;
   const bool finite = prm_.finite_strain();
   returned_.assign(points_.size(), ReturnMapped());
   record_ = true;
@@ -1061,7 +1060,6 @@ void LsmfmSolver<dim>::commit() {
       st.sigma_n = sigma;
     }
   }
-  (void)E;
   last_increment_.resize(n_unknowns_);
   for (unsigned int i = 0; i < n_unknowns_; ++i)
     last_increment_[i] = U_[i] - U_n_[i];

@@ -6,17 +6,22 @@
 // Unknowns: MLS coefficients of the displacement u and of the stress σ at every node
 // (eq. 34). The first-order least-squares functional (eq. 18)
 //     I(u, σ) = ∫ R_uᵀR_u + (ℓ/E)² R_σᵀR_σ dΩ + α_u Σ_A (u-condition)² + α_t Σ_A (t-condition)²
-// is minimised in each load step by Gauss–Newton (eqs. 20–33) with a line search on I
-// (eq. 39). Residuals:
+// is minimised in each load step by Newton (eqs. 20–33: Gauss–Newton, here with the flow
+// direction's curvature added when that keeps the matrix positive definite) with a line
+// search on I (eq. 39). Residuals (LSMFM/Flow rule residual = complementary, the paper's):
 //   small strain (eq. 17):   R_u = B_e u − e^p_n − C σ − γ ∂f/∂σ,   R_σ = div σ;
 //   finite strain (eq. 53):  R_u = ε̃ − C σ + (1/J̃) C (f σ_n fᵀ) − γ ∂f/∂σ, with the
 //     incremental deformation f = ∂x^{n+1}/∂x^n, J̃ = det f and ε̃ = ½(I − f⁻ᵀf⁻¹) (eq. 46):
 //     the incrementally objective Truesdell-rate update of eq. (51).
 // J2 with linear isotropic hardening (eq. 12): f = |s|, φ̃ = f − √(2/3)(σ_Y + K̄ q_n) at the
-// current stress; γ = 3φ̃/(2K̄) where φ̃ > 0 (eq. 41a), otherwise 0 — the hardening law and
-// the yield condition hold exactly at every integration point, the flow rule and equilibrium
-// in the least-squares sense; the tangent of R_u in σ is Σ of eq. (27). K̄ must be > 0
-// (eq. 27 has 1/K̄).
+// current stress; γ = 3φ̃/(2K̄) at plastic points (eq. 41a), 0 elsewhere — the hardening law
+// and the yield condition hold exactly at every integration point, the flow rule and
+// equilibrium in the least-squares sense; the tangent of R_u in σ is Σ of eq. (27), so K̄ > 0.
+// With Flow rule residual = return_mapping, R_u = C σ_rm(e_trial) − C σ instead (the J2 radial
+// return of fem/materials on the trial elastic strain; the same solution, no 1/K̄), and in
+// finite strain Stress rate = jaumann_log replaces eq. (51) by the rotation-neutralised update
+// with logarithmic strain increments. Which points are plastic is held fixed during a Newton
+// solve and updated between solves (solve_step() says why).
 //
 // Departures from the paper, each stated where it is made:
 //  * the equilibrium residual carries the weight (ℓ/E)², which makes both residuals
