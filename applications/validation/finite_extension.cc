@@ -10,7 +10,6 @@
 #include "applications/framework/scenario.h"
 #include "applications/validation/stretch_reference.h"
 #include "base/exceptions.h"
-#include "base/list_parsing.h"
 #include "fem/materials/law_parameters.h"
 #include "fem/mechanics_solver.h"
 #include "fem/mesh.h"

@@ -26,7 +26,6 @@
 #include "base/error_sums.h"
 #include "base/exceptions.h"
 #include "base/expression_function.h"
-#include "base/list_parsing.h"
 #include "fem/materials/law_parameters.h"
 #include "fem/mechanics_solver.h"
 #include "fem/mesh.h"
@@ -44,7 +43,6 @@
 #include <deal.II/grid/grid_tools_cache.h>
 
 #include <cmath>
-#include <iomanip>
 #include <map>
 #include <random>
 #include <sstream>
