@@ -282,33 +282,38 @@ TEST(Lsmfm, UniaxialHardening3d) {
 // stress must rotate, σ_2 = Q σ_1 Qᵀ (incremental objectivity, section 4.1).
 // The same with the return-mapping residual and the Jaumann-type update with logarithmic
 // strain increments: ε̃_11 = ln λ, and the rotation again turns σ.
+template <int dim>
 void check_stretch_then_rotation(const std::string& flow_rule, const std::string& rate) {
   LsmfmParameters prm;
   prm.kinematics = "finite_strain";
   prm.flow_rule = flow_rule;
   prm.stress_rate = rate;
-  typename LsmfmSolver<2>::Material mat;
+  typename LsmfmSolver<dim>::Material mat;
   mat.youngs_modulus = 100;
   mat.poisson_ratio = 0.3;
   mat.yield_stress = std::numeric_limits<double>::infinity();
-  auto solver = box_solver<2>(4, 0.2, prm, mat);
+  auto solver = box_solver<dim>(dim == 2 ? 4 : 3, 0.2, prm, mat);
   const auto& nodes = solver.approximation().nodes();
   const double lambda = 1.05, theta = 0.3;
-  dealii::Tensor<2, 2> F, Q;
+  // Rotation by t about the z axis (in the plane in 2-D).
+  const auto rotation = [](double t) {
+    dealii::Tensor<2, dim> Q = dealii::unit_symmetric_tensor<dim>();
+    Q[0][0] = Q[1][1] = std::cos(t);
+    Q[1][0] = std::sin(t);
+    Q[0][1] = -std::sin(t);
+    return Q;
+  };
+  dealii::Tensor<2, dim> F = dealii::unit_symmetric_tensor<dim>();
   F[0][0] = lambda;
-  F[1][1] = 1.0;
-  Q[0][0] = Q[1][1] = std::cos(theta);
-  Q[1][0] = std::sin(theta);
-  Q[0][1] = -std::sin(theta);
-  const auto hold = [&](const dealii::Tensor<2, 2>& map) {
-    std::vector<LsmfmSolver<2>::DisplacementCondition> uc;
+  const auto hold = [&](const dealii::Tensor<2, dim>& map) {
+    std::vector<typename LsmfmSolver<dim>::DisplacementCondition> uc;
     for (unsigned int J = 0; J < nodes.size(); ++J) {
-      dealii::Tensor<1, 2> n;
+      dealii::Tensor<1, dim> n;
       if (!box_face(nodes[J], n))
         continue;
-      const dealii::Tensor<1, 2> u = map * nodes[J] - nodes[J];
-      for (unsigned int d = 0; d < 2; ++d) {
-        dealii::Tensor<1, 2> e;
+      const dealii::Tensor<1, dim> u = map * nodes[J] - nodes[J];
+      for (unsigned int d = 0; d < dim; ++d) {
+        dealii::Tensor<1, dim> e;
         e[d] = 1;
         uc.push_back({J, e, u[d]});
       }
@@ -320,26 +325,27 @@ void check_stretch_then_rotation(const std::string& flow_rule, const std::string
   const double E = mat.youngs_modulus, nu = mat.poisson_ratio;
   const double lame = E * nu / ((1 + nu) * (1 - 2 * nu)), mu = E / (2 * (1 + nu));
   const double e11 = rate == "truesdell" ? 0.5 * (1 - 1 / (lambda * lambda)) : std::log(lambda);
+  // Uniaxial strain: σ_11 = (λ + 2μ) ε̃_11, σ_22 = σ_33 = λ ε̃_11 (plane strain and 3-D).
   dealii::Tensor<2, 2> s1;
   s1[0][0] = (lame + 2 * mu) * e11;
   s1[1][1] = lame * e11;
-  const dealii::Tensor<2, 2> s2 = Q * s1 * dealii::transpose(Q);
+  dealii::Tensor<2, 2> Q2;
+  Q2[0][0] = Q2[1][1] = std::cos(theta);
+  Q2[1][0] = std::sin(theta);
+  Q2[0][1] = -std::sin(theta);
+  const dealii::Tensor<2, 2> s2 = Q2 * s1 * dealii::transpose(Q2);
   for (unsigned int q = 0; q < solver.n_points(); ++q) {
     const auto s = solver.point_stress(q);
     // Exact field of the approximation space: round-off of the normal equations (1e-10).
     ASSERT_NEAR(s[0], s1[0][0], 1e-10 * s1.norm());
     ASSERT_NEAR(s[1], s1[1][1], 1e-10 * s1.norm());
     ASSERT_NEAR(s[2], lame * e11, 1e-10 * s1.norm());
-    ASSERT_NEAR(s[3], 0.0, 1e-10 * s1.norm());
+    for (unsigned int a = 3; a < 6; ++a)
+      ASSERT_NEAR(s[a], 0.0, 1e-10 * s1.norm());
   }
   // The rotation in 10 increments: f = Q_k per step, σ rotates with it exactly.
   for (unsigned int k = 1; k <= 10; ++k) {
-    dealii::Tensor<2, 2> Qk;
-    const double t = theta * k / 10;
-    Qk[0][0] = Qk[1][1] = std::cos(t);
-    Qk[1][0] = std::sin(t);
-    Qk[0][1] = -std::sin(t);
-    hold(Qk * F);
+    hold(rotation(theta * k / 10) * F);
     solver.solve_step();
   }
   for (unsigned int q = 0; q < solver.n_points(); ++q) {
@@ -348,14 +354,22 @@ void check_stretch_then_rotation(const std::string& flow_rule, const std::string
     ASSERT_NEAR(s[1], s2[1][1], 1e-9 * s1.norm());
     ASSERT_NEAR(s[3], s2[0][1], 1e-9 * s1.norm());
     ASSERT_NEAR(s[2], lame * e11, 1e-9 * s1.norm()); // σ_zz is invariant under Q
+    ASSERT_NEAR(s[4], 0.0, 1e-9 * s1.norm());
+    ASSERT_NEAR(s[5], 0.0, 1e-9 * s1.norm());
   }
 }
 
-TEST(Lsmfm, FiniteStrainStretchThenRigidRotation) {
-  check_stretch_then_rotation("complementary", "truesdell");
+TEST(Lsmfm, FiniteStrainStretchThenRigidRotation2d) {
+  check_stretch_then_rotation<2>("complementary", "truesdell");
 }
-TEST(Lsmfm, FiniteStrainJaumannLogStretchThenRigidRotation) {
-  check_stretch_then_rotation("return_mapping", "jaumann_log");
+TEST(Lsmfm, FiniteStrainStretchThenRigidRotation3d) {
+  check_stretch_then_rotation<3>("complementary", "truesdell");
+}
+TEST(Lsmfm, FiniteStrainJaumannLogStretchThenRigidRotation2d) {
+  check_stretch_then_rotation<2>("return_mapping", "jaumann_log");
+}
+TEST(Lsmfm, FiniteStrainJaumannLogStretchThenRigidRotation3d) {
+  check_stretch_then_rotation<3>("return_mapping", "jaumann_log");
 }
 
 TEST(Lsmfm, PerfectPlasticityIsRefused) {
