@@ -2,6 +2,7 @@
 
 #include "base/exceptions.h"
 #include "fem/materials/isotropic_hardening.h"
+#include "fem/materials/j2_damage.h"
 #include "fem/materials/material_models.h"
 #include "fem/materials/tensor_tools.h"
 
@@ -51,6 +52,16 @@ void LawParameters::declare(dealii::ParameterHandler& prm) {
                     "Voce saturation exponent delta [-], > 0 when Saturation stress > 0.");
   prm.declare_entry("Thermal expansion", "0", Double(-1e-3, 1e-3),
                     "Isotropic linear thermal expansion coefficient alpha [1/K].");
+  prm.declare_entry("Damage onset plastic strain", "0", Double(0),
+                    "j2_damage: equivalent plastic strain at which damage starts [-]. "
+                    "D = D_max (1 - exp(-(eps_bar_p - onset) / softening)), sigma = (1 - D) "
+                    "sigma_effective.");
+  prm.declare_entry("Damage softening strain", "0.05", Double(0),
+                    "j2_damage: plastic strain beyond the onset over which D rises to 63 % of "
+                    "D_max [-], > 0.");
+  prm.declare_entry("Maximum damage", "0.9", Double(0, 1),
+                    "j2_damage: residual damage D_max [-], 0 <= D_max < 1: a failed point keeps "
+                    "1 - D_max of its stiffness and strength.");
 }
 
 void LawParameters::parse(const dealii::ParameterHandler& prm) {
@@ -64,6 +75,9 @@ void LawParameters::parse(const dealii::ParameterHandler& prm) {
   saturation_stress = prm.get_double("Saturation stress");
   saturation_exponent = prm.get_double("Saturation exponent");
   thermal_expansion = prm.get_double("Thermal expansion");
+  damage_onset_plastic_strain = prm.get_double("Damage onset plastic strain");
+  damage_softening_strain = prm.get_double("Damage softening strain");
+  maximum_damage = prm.get_double("Maximum damage");
   apply_preset();
   validate();
 }
@@ -103,6 +117,8 @@ void LawParameters::validate() const {
                              thermal_expansion);
   if (is_plastic(model)) // the hardening constructor checks its own ranges
     IsotropicHardening(yield_stress, hardening_modulus, saturation_stress, saturation_exponent);
+  if (model == "j2_damage")
+    DamageCurve{damage_onset_plastic_strain, damage_softening_strain, maximum_damage}.validate();
 }
 
 std::string LawParameters::describe() const {
@@ -117,6 +133,9 @@ std::string LawParameters::describe() const {
     else
       s << " (linear hardening)";
   }
+  if (model == "j2_damage")
+    s << " damage onset=" << damage_onset_plastic_strain
+      << " softening=" << damage_softening_strain << " D_max=" << maximum_damage;
   return s.str();
 }
 

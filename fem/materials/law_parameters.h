@@ -26,7 +26,7 @@ struct LawParameters {
   // One line listing model, preset and the values in use, for logs.
   std::string describe() const;
 
-  std::string model = "linear_elastic"; // linear_elastic|neo_hookean|j2_plasticity|j2_finite_strain
+  std::string model = "linear_elastic"; // a MaterialModels name (material_models.h)
   std::string preset = "custom";        // custom|cortical_bone|trabecular_bone|ti6al4v|pmma|copper
   double youngs_modulus = 17e9;         // [Pa]
   double poisson_ratio = 0.3;           // [-]
@@ -36,6 +36,10 @@ struct LawParameters {
   double saturation_stress = 0;         // [Pa], 0 = linear hardening
   double saturation_exponent = 0;       // [-]
   double thermal_expansion = 0;         // [1/K]
+  // j2_damage only: D(eps_bar_p) = D_max (1 - exp(-<eps_bar_p - onset> / softening)).
+  double damage_onset_plastic_strain = 0; // [-]
+  double damage_softening_strain = 0.05;  // [-]
+  double maximum_damage = 0.9;            // [-]
 };
 
 // The law described by p (validated first).

@@ -3,6 +3,7 @@
 
 #include "base/exceptions.h"
 #include "fem/materials/isotropic_hardening.h"
+#include "fem/materials/j2_damage.h"
 #include "fem/materials/j2_finite_strain.h"
 #include "fem/materials/j2_plasticity.h"
 #include "fem/materials/law_parameters.h"
@@ -615,4 +616,102 @@ TEST(LawParameters, ParsesSelectsModelAndPresetsOverrideExplicitValues) {
       r.apply_preset();
       EXPECT_NO_THROW(create_law(r)) << preset << " " << model;
     }
+}
+
+// ---------------------------------------------------------------- J2 with ductile damage
+
+TEST(J2Damage, ConsistentTangentMatchesFiniteDifferencesWhileSoftening) {
+  const double E = 120e6, nu = 0.3; // a rigid foam's order of magnitude
+  for (const auto& hardening : {IsotropicHardening(4e6, 2e6), IsotropicHardening(4e6, 0, 5e6, 40)}) {
+    SCOPED_TRACE(hardening.is_linear() ? "linear" : "Voce");
+    const J2Damage law(E, nu, 240, 0, hardening, DamageCurve{0.01, 0.04, 0.9});
+    MaterialState prior;
+    prior.plastic_strain = dealii::deviator(dealii::symmetrize(diag(2e-2, -1e-2, 0.5e-2)));
+    prior.equivalent_plastic_strain = 0.02; // past the onset: D > 0 and D' > 0
+    SymTensor2 dir;
+    dir[0][0] = 1.0;
+    dir[1][1] = -0.4;
+    dir[0][2] = 0.6;
+    dir[2][2] = 0.2;
+    const SymTensor2 plastic = 0.1 * dir + prior.plastic_strain;
+    const SmallStrainResponse r = law.small_strain(plastic, 0, prior);
+    ASSERT_GT(r.state.equivalent_plastic_strain, prior.equivalent_plastic_strain + 1e-3);
+    const double D = law.damage(r.state);
+    ASSERT_GT(D, 0.1);
+    double scale;
+    // h = 1e-9 on strains ~1e-2; round-off 1e-16 |σ| / h ~ 1e-3 Pa, truncation h² negligible;
+    // 1e-6 of the tangent's largest entry (~1e8 Pa) leaves room for both and catches a missing
+    // damage term (which is of the order of the tangent itself here).
+    const double error = small_strain_tangent_error(law, plastic, 0, prior, 1e-9, &scale);
+    EXPECT_LT(error, 1e-6 * scale);
+    // The tangent is not symmetric: the damage term σ̃ ⊗ n̂ makes it so (else the test of the
+    // damage term above would be vacuous).
+    const Tensor4 C = to_full(r.tangent);
+    double asym = 0;
+    for (unsigned int i = 0; i < 3; ++i)
+      for (unsigned int j = 0; j < 3; ++j)
+        for (unsigned int k = 0; k < 3; ++k)
+          for (unsigned int l = 0; l < 3; ++l)
+            asym = std::max(asym, std::abs(C[i][j][k][l] - C[k][l][i][j]));
+    EXPECT_GT(asym, 1e-3 * scale);
+    // The stress is (1 − D) times the effective stress on the yield surface.
+    EXPECT_NEAR(von_mises(r.stress), (1 - D) * hardening.flow_stress(r.state.equivalent_plastic_strain),
+                1e-9 * hardening.yield_stress());
+  }
+}
+
+TEST(J2Damage, SimpleShearSoftensAsTheClosedForm) {
+  // Perfect plasticity (H = 0): after yield the effective shear stress is σ_y/√3, the plastic
+  // engineering shear strain γ_p = γ − σ_y/(√3 G), ε̄_p = γ_p/√3, and τ = (1 − D(ε̄_p)) σ_y/√3.
+  const double E = 120e6, nu = 0.3, sy = 4e6;
+  const DamageCurve curve{0.005, 0.03, 0.9};
+  const J2Damage law(E, nu, 240, 0, IsotropicHardening(sy, 0), curve);
+  const double G = E / (2 * (1 + nu)), tau_y = sy / std::sqrt(3.0);
+  MaterialState state;
+  double peak = 0, max_error = 0, last = 0;
+  const unsigned int n = 200;
+  for (unsigned int step = 1; step <= n; ++step) {
+    const double gamma = 0.3 * step / n;
+    SymTensor2 eps;
+    eps[0][1] = 0.5 * gamma;
+    const SmallStrainResponse r = law.small_strain(eps, 0, state);
+    state = r.state;
+    const double tau = r.stress[0][1];
+    const double gp = std::max(0.0, gamma - tau_y / G);
+    const double exact = gamma < tau_y / G ? G * gamma : (1 - curve.damage(gp / std::sqrt(3.0))) * tau_y;
+    max_error = std::max(max_error, std::abs(tau - exact));
+    peak = std::max(peak, tau);
+    last = tau;
+  }
+  // Radial return is exact for H = 0 on a proportional path: round-off only.
+  EXPECT_LT(max_error, 1e-8 * tau_y);
+  EXPECT_NEAR(peak, tau_y, 1e-8 * tau_y);
+  // At γ_p ≈ 0.27, D ≈ 0.9 (1 − e^{−(0.156 − 0.005)/0.03}) = 0.894: the stress falls to ~0.11 τ_y.
+  EXPECT_LT(last, 0.15 * tau_y);
+  EXPECT_GT(last, 0.09 * tau_y); // and keeps the residual 1 − D_max
+}
+
+TEST(J2Damage, ParametersSelectTheLawAndRejectAFullyBrokenResidual) {
+  dealii::ParameterHandler prm;
+  LawParameters::declare(prm);
+  prm.set("Model", "j2_damage");
+  prm.set("Young's modulus", "1e8");
+  prm.set("Yield stress", "3e6");
+  prm.set("Damage onset plastic strain", "0.01");
+  prm.set("Damage softening strain", "0.02");
+  prm.set("Maximum damage", "0.8");
+  LawParameters p;
+  p.parse(prm);
+  const auto law = create_law(p);
+  ASSERT_EQ(law->name(), "j2_damage");
+  const auto& d = dynamic_cast<const J2Damage&>(*law);
+  EXPECT_DOUBLE_EQ(d.damage_curve().maximum_damage, 0.8);
+  EXPECT_DOUBLE_EQ(d.damage_curve().onset_plastic_strain, 0.01);
+  prm.set("Maximum damage", "1");
+  try {
+    p.parse(prm);
+    FAIL() << "D_max = 1 accepted";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("Maximum damage"), std::string::npos) << e.what();
+  }
 }
