@@ -36,7 +36,7 @@ bool contains(const fs::path& ancestor, const fs::path& p) {
 // throughput benchmark; a study's runs (runs/, each a run directory of its own).
 bool written_by_a_run(const fs::directory_entry& entry) {
   static const std::regex file_pattern(
-      R"((\.spinesim-run|parameters\.prm|log\.txt|summary\.json|.*\.(vtu|pvtu|pvd|vtk|csv|md|png|svg|gp|h5|xdmf|json|log|prm)|.*\.tmp[0-9]+|phantom\.(mha|mhd|raw|nrrd|nii|nii\.gz)|lammps_(vars|reference)\.txt))");
+      R"((\.spinesim-run|parameters\.prm|log\.txt|summary\.json|.*\.(vtu|pvtu|pvd|vtk|csv|dat|md|png|svg|gp|h5|xdmf|json|log|prm)|.*\.tmp[0-9]+|phantom\.(mha|mhd|raw|nrrd|nii|nii\.gz)|lammps_(vars|reference)\.txt))");
   static const std::regex dir_pattern(
       R"((checkpoint|checkpoint\.new|checkpoint\.old|runs|\.spinesim-.*))");
   const std::string name = entry.path().filename().string();

@@ -315,8 +315,13 @@ void Simulation<dim>::ConversionExtremes::from_json(const nlohmann::json& j) {
   reaction_jump = j.value("reaction_jump", -1.0);
 }
 
-template struct Simulation<2>::ConversionExtremes;
-template struct Simulation<3>::ConversionExtremes;
+// The members defined here, not the nested struct: `template class Simulation<dim>` in
+// simulation.cc may share a unity batch with this file, and instantiating the struct twice
+// in one translation unit is an error.
+template nlohmann::json Simulation<2>::ConversionExtremes::to_json() const;
+template nlohmann::json Simulation<3>::ConversionExtremes::to_json() const;
+template void Simulation<2>::ConversionExtremes::from_json(const nlohmann::json&);
+template void Simulation<3>::ConversionExtremes::from_json(const nlohmann::json&);
 template Simulation<2>::ConversionExtremes Simulation<2>::conversion_extremes() const;
 template Simulation<3>::ConversionExtremes Simulation<3>::conversion_extremes() const;
 template void Simulation<2>::record(unsigned int, double, RunContext&);

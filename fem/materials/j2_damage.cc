@@ -32,8 +32,9 @@ double DamageCurve::slope(double e) const {
 }
 
 J2Damage::J2Damage(double E, double nu, double rho, double alpha,
-                   const IsotropicHardening& hardening, const DamageCurve& damage)
-    : E_(E), nu_(nu), rho_(rho), alpha_(alpha), hardening_(hardening), damage_(damage) {
+                   const IsotropicHardening& hardening, const DamageCurve& damage, bool secant)
+    : E_(E), nu_(nu), rho_(rho), alpha_(alpha), hardening_(hardening), damage_(damage),
+      secant_(secant) {
   validate_elastic_constants("j2_damage", E, nu, rho, alpha);
   damage_.validate();
   K_ = bulk_modulus(E, nu);
@@ -60,13 +61,12 @@ SmallStrainResponse J2Damage::small_strain(const SymTensor2& strain, double dT,
   if (rm.plastic) {
     r.state.plastic_work += (1.0 - D) * rm.delta_gamma * rm.flow_stress;
     const double dD = damage_.slope(ep);
-    if (dD > 0) {
+    if (dD > 0 && !secant_) {
       // n̂: the unit deviatoric flow direction; the returned deviator is parallel to the trial
       // one, and a plastic step has a non-zero deviator.
       const SymTensor2 s = dealii::deviator(rm.stress);
       const SymTensor2 n = s / s.norm();
-      const double dgamma_factor =
-          2.0 * mu_ * std::sqrt(1.5) / (3.0 * mu_ + hardening_.slope(ep));
+      const double dgamma_factor = 2.0 * mu_ * std::sqrt(1.5) / (3.0 * mu_ + hardening_.slope(ep));
       r.tangent -= (dD * dgamma_factor) * dealii::outer_product(rm.stress, n);
     }
   }
@@ -94,8 +94,7 @@ SPINESIM_REGISTER_MATERIAL_MODEL(
           p.youngs_modulus, p.poisson_ratio, p.density, p.thermal_expansion,
           IsotropicHardening(p.yield_stress, p.hardening_modulus, p.saturation_stress,
                              p.saturation_exponent),
-          DamageCurve{p.damage_onset_plastic_strain, p.damage_softening_strain,
-                      p.maximum_damage});
+          DamageCurve{p.damage_onset_plastic_strain, p.damage_softening_strain, p.maximum_damage});
     })
 
 } // namespace spinesim::materials

@@ -13,6 +13,9 @@
 // state needs no variable of its own (MaterialState and its checkpoint layout are shared
 // with J2Plasticity). Consistent tangent (not symmetric):
 //   dσ/dε = (1 − D) D̃_ep − D'(ε̄_p) σ̃ ⊗ ∂Δγ/∂ε,   ∂Δγ/∂ε = 2μ √(3/2) n̂ / (3μ + H').
+// With `secant_tangent` the law returns (1 − D) D̃_ep instead: symmetric and positive
+// definite while softening, so Newton converges (linearly) through the peak where the
+// consistent tangent, indefinite there, makes it diverge and cut steps without end.
 // Plastic work per unit volume adds (1 − D) Δγ σ_y. A local (unregularised) softening law:
 // the post-peak response depends on the cell size (Bažant & Oh 1983); the peak much less.
 
@@ -22,9 +25,9 @@
 namespace spinesim::materials {
 
 struct DamageCurve {
-  double onset_plastic_strain = 0;  // ε̄_0 [-] >= 0
-  double softening_strain = 0.05;   // ε̄_s [-] > 0
-  double maximum_damage = 0.9;      // D_max [-], 0 <= D_max < 1
+  double onset_plastic_strain = 0; // ε̄_0 [-] >= 0
+  double softening_strain = 0.05;  // ε̄_s [-] > 0
+  double maximum_damage = 0.9;     // D_max [-], 0 <= D_max < 1
   // InvalidInput naming the entry unless the values are in range.
   void validate() const;
   double damage(double equivalent_plastic_strain) const; // D [-]
@@ -34,7 +37,8 @@ struct DamageCurve {
 class J2Damage : public ConstitutiveLaw {
  public:
   J2Damage(double youngs_modulus, double poisson_ratio, double density, double thermal_expansion,
-           const IsotropicHardening& hardening, const DamageCurve& damage);
+           const IsotropicHardening& hardening, const DamageCurve& damage,
+           bool secant_tangent = false);
 
   std::string name() const override { return "j2_damage"; }
   SmallStrainResponse small_strain(const SymTensor2& strain, double temperature_change,
@@ -47,6 +51,7 @@ class J2Damage : public ConstitutiveLaw {
   double density() const override { return rho_; }
   const IsotropicHardening& hardening() const { return hardening_; }
   const DamageCurve& damage_curve() const { return damage_; }
+  bool secant_tangent() const { return secant_; }
   double damage(const MaterialState& s) const {
     return damage_.damage(s.equivalent_plastic_strain);
   }
@@ -56,6 +61,7 @@ class J2Damage : public ConstitutiveLaw {
   double K_, mu_;
   IsotropicHardening hardening_;
   DamageCurve damage_;
+  bool secant_;
 };
 
 } // namespace spinesim::materials

@@ -134,8 +134,8 @@ std::string LawParameters::describe() const {
       s << " (linear hardening)";
   }
   if (model == "j2_damage")
-    s << " damage onset=" << damage_onset_plastic_strain
-      << " softening=" << damage_softening_strain << " D_max=" << maximum_damage;
+    s << " damage onset=" << damage_onset_plastic_strain << " softening=" << damage_softening_strain
+      << " D_max=" << maximum_damage;
   return s.str();
 }
 

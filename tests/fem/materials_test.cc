@@ -622,7 +622,8 @@ TEST(LawParameters, ParsesSelectsModelAndPresetsOverrideExplicitValues) {
 
 TEST(J2Damage, ConsistentTangentMatchesFiniteDifferencesWhileSoftening) {
   const double E = 120e6, nu = 0.3; // a rigid foam's order of magnitude
-  for (const auto& hardening : {IsotropicHardening(4e6, 2e6), IsotropicHardening(4e6, 0, 5e6, 40)}) {
+  for (const auto& hardening :
+       {IsotropicHardening(4e6, 2e6), IsotropicHardening(4e6, 0, 5e6, 40)}) {
     SCOPED_TRACE(hardening.is_linear() ? "linear" : "Voce");
     const J2Damage law(E, nu, 240, 0, hardening, DamageCurve{0.01, 0.04, 0.9});
     MaterialState prior;
@@ -655,7 +656,8 @@ TEST(J2Damage, ConsistentTangentMatchesFiniteDifferencesWhileSoftening) {
             asym = std::max(asym, std::abs(C[i][j][k][l] - C[k][l][i][j]));
     EXPECT_GT(asym, 1e-3 * scale);
     // The stress is (1 − D) times the effective stress on the yield surface.
-    EXPECT_NEAR(von_mises(r.stress), (1 - D) * hardening.flow_stress(r.state.equivalent_plastic_strain),
+    EXPECT_NEAR(von_mises(r.stress),
+                (1 - D) * hardening.flow_stress(r.state.equivalent_plastic_strain),
                 1e-9 * hardening.yield_stress());
   }
 }
@@ -678,7 +680,8 @@ TEST(J2Damage, SimpleShearSoftensAsTheClosedForm) {
     state = r.state;
     const double tau = r.stress[0][1];
     const double gp = std::max(0.0, gamma - tau_y / G);
-    const double exact = gamma < tau_y / G ? G * gamma : (1 - curve.damage(gp / std::sqrt(3.0))) * tau_y;
+    const double exact =
+        gamma < tau_y / G ? G * gamma : (1 - curve.damage(gp / std::sqrt(3.0))) * tau_y;
     max_error = std::max(max_error, std::abs(tau - exact));
     peak = std::max(peak, tau);
     last = tau;

@@ -132,8 +132,8 @@ TEST(PedicleScrew, TurnsWithItsDirection) {
   EXPECT_NEAR(sa.volume(), sb.volume(), 1e-15);
   // A point in the head of `a` (radius 3.5 mm < head 4 mm, beyond the 3.25 mm major radius)
   // lies beside the shaft of `b`, outside it.
-  dealii::Tensor<1, 3> across = dealii::cross_product_3d(sa.geometry().direction,
-                                                         dealii::Tensor<1, 3>({1, 0, 0}));
+  dealii::Tensor<1, 3> across =
+      dealii::cross_product_3d(sa.geometry().direction, dealii::Tensor<1, 3>({1, 0, 0}));
   across /= across.norm();
   const dealii::Point<3> x = sa.axis_point(-1e-3) + 3.5e-3 * across;
   EXPECT_TRUE(sa.inside(x));

@@ -1,0 +1,703 @@
+// The `screw_pullout` scenario: a pedicle screw inserted normal to the surface of a block of
+// rigid polyurethane foam (ASTM F1839, the standard surrogate of cancellous bone), pulled out
+// axially at constant displacement rate as in ASTM F543 Annex A3.
+//
+// Model. The block [−W/2, W/2]² × [−H, 0] is one hexahedral mesh, refined with p4est around
+// the screw until the cells there are pitch / (Cells per pitch) wide. A cell is implant
+// (material 1, Screw/Material) when at least half of 4×4×4 sample points lie in the screw
+// solid (implants/pedicle_screw.h), else foam (material 0); the bone–implant interface is
+// bonded. The block's bottom is held; the screw's section in the block's surface (the
+// implant faces on z = 0, boundary id 6) is displaced axially with its lateral motion held:
+// the grip of the testing machine on the screw, whose head above the surface carries no
+// foam and is not meshed. Displacement in load steps of the quasi-static Newton solver with
+// step cutting (a softening solid near its peak needs smaller steps, which the cuts provide;
+// a failed cut sequence is a NumericalFailure naming the step).
+//
+// Foam. Small-strain J2 with the yield stress from the foam's shear strength (σ_y = √3 S, a
+// von Mises solid fails in shear at σ_y/√3) or its compressive strength (σ_y = σ_c); with
+// Effects/Damage the ductile damage law of fem/materials/j2_damage.h softens it after the
+// onset plastic strain, so the force–displacement curve peaks and falls; without it the
+// foam is perfectly plastic (a plateau, no peak).
+//
+// Reference. Chapman et al. (1996), J. Biomech. Eng. 118:391–398: the pull-out force of a
+// screw in a homogeneous material is F = S A_s, A_s = π D_major L TSF, TSF = 0.5 +
+// 0.57735 d/p (the thread shape factor; d the thread depth, p the pitch, L the engaged
+// length). Figures chapman_force_N and chapman_ratio = peak / Chapman.
+
+#include "applications/common_sections.h"
+#include "applications/framework/parse_section.h"
+#include "applications/framework/run_context.h"
+#include "applications/framework/scenario.h"
+#include "applications/studies/child_run.h"
+#include "applications/studies/study_plot.h"
+#include "base/exceptions.h"
+#include "fem/displacement_error.h"
+#include "fem/materials/j2_damage.h"
+#include "fem/materials/j2_plasticity.h"
+#include "fem/materials/law_parameters.h"
+#include "fem/mechanics_solver.h"
+#include "implants/pedicle_screw.h"
+#include "implants/screw_parameters.h"
+
+#include <deal.II/base/mpi.h>
+#include <deal.II/distributed/tria.h>
+#include <deal.II/fe/fe_values.h>
+#include <deal.II/grid/grid_generator.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <iomanip>
+#include <memory>
+#include <sstream>
+
+namespace spinesim::applications {
+
+using namespace framework;
+
+// A named namespace, not an anonymous one: unity builds put several scenario files into one
+// translation unit, where internal helpers of the same name would clash.
+namespace screw_pullout {
+
+constexpr double pi = 3.14159265358979323846;
+// Boundary ids of the block from GridGenerator (colorize): 4 bottom, 5 top; 6 the grip.
+constexpr dealii::types::boundary_id grip_id = 6;
+
+struct ScrewSection {
+  implants::PedicleScrewGeometry geometry;
+  materials::LawParameters material;
+
+  static void declare(dealii::ParameterHandler& prm) {
+    implants::declare_screw_geometry(prm);
+    prm.enter_subsection("Material");
+    materials::LawParameters::declare(prm);
+    prm.set("Preset", "ti6al4v");
+    prm.leave_subsection();
+  }
+  void parse(dealii::ParameterHandler& prm) {
+    geometry = implants::parse_screw_geometry(prm);
+    prm.enter_subsection("Material");
+    material.parse(prm);
+    prm.leave_subsection();
+  }
+};
+
+struct FoamSection {
+  double youngs_modulus = 123e6, poisson_ratio = 0.3, density = 240;
+  double compressive_strength = 4.9e6, shear_strength = 2.8e6;
+  std::string yield_calibration = "shear";
+  double hardening_ratio = 0;
+  materials::DamageCurve damage;
+  bool secant_tangent = false;
+  double fracture_energy = 0; // [J/m^2], 0: local softening
+
+  static void declare(dealii::ParameterHandler& prm) {
+    using namespace dealii::Patterns;
+    // Defaults: solid rigid polyurethane foam of 15 pcf (0.24 g/cm^3), the grade between the
+    // ASTM F1839 grades 10 and 20; values are the manufacturer's nominal ones (Sawbones data
+    // sheet: compressive modulus 123 MPa and strength 4.9 MPa, shear strength 2.8 MPa).
+    prm.declare_entry("Young's modulus", "123", Double(0),
+                      "Compressive modulus of the foam [MPa].");
+    prm.declare_entry("Poisson ratio", "0.3", Double(-1, 0.5), "Poisson ratio [-].");
+    prm.declare_entry("Density", "240", Double(0), "Mass density [kg/m^3].");
+    prm.declare_entry("Compressive strength", "4.9", Double(0), "Compressive strength [MPa].");
+    prm.declare_entry("Shear strength", "2.8", Double(0),
+                      "Shear strength S [MPa] (ASTM C273); also Chapman's reference F = S A_s.");
+    prm.declare_entry("Yield calibration", "shear", Selection("shear|compression"),
+                      "Which strength sets the J2 yield stress [-]: shear (sigma_y = sqrt(3) S, "
+                      "the failure mode of pull-out) or compression (sigma_y = sigma_c).");
+    prm.declare_entry("Hardening ratio", "0", Double(0),
+                      "Linear hardening modulus over Young's modulus [-].");
+    prm.declare_entry("Damage onset plastic strain", "0.01", Double(0),
+                      "Equivalent plastic strain at which the foam starts to soften [-] "
+                      "(Effects/Damage).");
+    prm.declare_entry("Damage softening strain", "0.05", Double(0),
+                      "Plastic strain past the onset over which damage reaches 63 % of its "
+                      "maximum [-].");
+    prm.declare_entry("Maximum damage", "0.95", Double(0, 1),
+                      "Residual damage D_max < 1 of crushed foam [-].");
+    prm.declare_entry("Fracture energy", "0", Double(0),
+                      "Energy dissipated by the softening per unit area of a failure band "
+                      "[J/m^2]; > 0 scales the softening strain per cell, eps_s = G_f / "
+                      "(sigma_y D_max h) with h the cell size (crack band, Bazant & Oh 1983), "
+                      "so the post-peak response does not depend on the mesh; 0 uses Damage "
+                      "softening strain everywhere (local softening).");
+    prm.declare_entry("Damage tangent", "consistent", Selection("secant|consistent"),
+                      "Newton's tangent of the damaged foam [-]: secant ((1 - D) times the "
+                      "elastic-plastic tangent: symmetric, positive definite, linear convergence "
+                      "through the peak) or consistent (quadratic convergence before the peak, "
+                      "indefinite after it).");
+  }
+  void parse(const dealii::ParameterHandler& prm) {
+    youngs_modulus = 1e6 * prm.get_double("Young's modulus");
+    poisson_ratio = prm.get_double("Poisson ratio");
+    density = prm.get_double("Density");
+    compressive_strength = 1e6 * prm.get_double("Compressive strength");
+    shear_strength = 1e6 * prm.get_double("Shear strength");
+    yield_calibration = prm.get("Yield calibration");
+    hardening_ratio = prm.get_double("Hardening ratio");
+    damage.onset_plastic_strain = prm.get_double("Damage onset plastic strain");
+    damage.softening_strain = prm.get_double("Damage softening strain");
+    damage.maximum_damage = prm.get_double("Maximum damage");
+    secant_tangent = prm.get("Damage tangent") == "secant";
+    fracture_energy = prm.get_double("Fracture energy");
+    for (const auto& [name, v] : {std::pair{"Foam/Young's modulus", youngs_modulus},
+                                  {"Foam/Compressive strength", compressive_strength},
+                                  {"Foam/Shear strength", shear_strength}})
+      if (!(v > 0))
+        throw InvalidInput(name, "0", "a positive value [MPa]");
+    damage.validate();
+  }
+  double yield_stress() const {
+    return yield_calibration == "shear" ? std::sqrt(3.0) * shear_strength : compressive_strength;
+  }
+};
+
+struct BlockSection {
+  double width = 30e-3, depth = 40e-3, coarse_cell = 5e-3;
+  static void declare(dealii::ParameterHandler& prm) {
+    using namespace dealii::Patterns;
+    prm.declare_entry("Width", "30", Double(0),
+                      "Edge of the square block's top face, centred on the screw [mm].");
+    prm.declare_entry("Depth", "40", Double(0),
+                      "Block depth below the surface the screw enters [mm]; more than the "
+                      "screw's Length (the tip stays inside).");
+    prm.declare_entry("Coarse cell size", "5", Double(0),
+                      "Cell edge of the mesh before the refinement around the screw [mm].");
+  }
+  void parse(const dealii::ParameterHandler& prm) {
+    width = 1e-3 * prm.get_double("Width");
+    depth = 1e-3 * prm.get_double("Depth");
+    coarse_cell = 1e-3 * prm.get_double("Coarse cell size");
+    for (const auto& [name, v] : {std::pair{"Block/Width", width},
+                                  {"Block/Depth", depth},
+                                  {"Block/Coarse cell size", coarse_cell}})
+      if (!(v > 0))
+        throw InvalidInput(name, "0", "a positive length [mm]");
+  }
+};
+
+struct PulloutSection {
+  double displacement = 2e-3;
+  unsigned int steps = 40;
+  double cells_per_pitch = 4;
+  double margin = 2e-3;
+  double stop_drop = 0.3;
+  double relaxation_tolerance = 1e-4;
+  unsigned int relaxation_steps = 200000;
+  bool write_vtu = true;
+  static void declare(dealii::ParameterHandler& prm) {
+    using namespace dealii::Patterns;
+    prm.declare_entry(
+        "Displacement", "2", Double(0),
+        "Largest axial displacement of the screw at the block surface (the grip) [mm].");
+    prm.declare_entry("Steps", "40", Integer(1),
+                      "Equal displacement increments up to Displacement (the solver cuts a "
+                      "step that does not converge) [-].");
+    prm.declare_entry("Cells per pitch", "4", Double(1),
+                      "Resolution of the thread: cell edge near the screw = Pitch / this [-].");
+    prm.declare_entry("Refinement margin", "2", Double(0),
+                      "Distance beyond the screw's outer radius (and its ends) refined to the "
+                      "thread resolution [mm].");
+    prm.declare_entry("Stop after drop", "0.3", Double(0, 1),
+                      "Stop once the force has fallen this fraction below its peak [-]; 1 runs "
+                      "to Displacement.");
+    prm.declare_entry("Relaxation tolerance", "1e-4", Double(0),
+                      "Where Newton finds no equilibrium after its step cuts (an unstable drop "
+                      "past the peak: the released elastic energy exceeds what the failing "
+                      "band dissipates, so no static path exists under displacement control), "
+                      "dynamic relaxation crosses to the equilibrium of the step; it has "
+                      "converged when the free residual is below this fraction of the "
+                      "reactions [-].");
+    prm.declare_entry("Max relaxation steps", "200000", Integer(1),
+                      "Pseudo-time steps one relaxation may take before the step is a "
+                      "numerical failure [-].");
+    prm.declare_entry("Write VTU", "true", Bool(),
+                      "Write displacement, stress, plastic strain, damage and material [-].");
+  }
+  void parse(const dealii::ParameterHandler& prm) {
+    displacement = 1e-3 * prm.get_double("Displacement");
+    steps = prm.get_integer("Steps");
+    cells_per_pitch = prm.get_double("Cells per pitch");
+    margin = 1e-3 * prm.get_double("Refinement margin");
+    stop_drop = prm.get_double("Stop after drop");
+    relaxation_tolerance = prm.get_double("Relaxation tolerance");
+    relaxation_steps = prm.get_integer("Max relaxation steps");
+    write_vtu = prm.get_bool("Write VTU");
+    if (!(displacement > 0))
+      throw InvalidInput("Pullout/Displacement", "0", "a positive displacement [mm]");
+  }
+};
+
+std::string fmt(double v, int digits = 17) {
+  std::ostringstream s;
+  s << std::setprecision(digits) << v;
+  return s.str();
+}
+
+// Step sizes covering [a, b] with cells of about h.
+std::vector<double> steps_over(double length, double h) {
+  const unsigned int n = std::max(1u, static_cast<unsigned int>(std::ceil(length / h - 1e-9)));
+  return std::vector<double>(n, length / n);
+}
+
+class ScrewPullout : public Scenario {
+ public:
+  explicit ScrewPullout(const ScenarioFactoryArgs& args) : damage_on_(args.effects.damage) {
+    if (args.dim != 3)
+      throw InvalidInput("Dimension", std::to_string(args.dim), "3 (a screw is a 3-D solid)");
+    dealii::ParameterHandler& prm = args.prm;
+    prm.enter_subsection("Screw");
+    screw_.parse(prm);
+    prm.leave_subsection();
+    parse_section(prm, "Foam", foam_);
+    parse_section(prm, "Block", block_);
+    parse_section(prm, "Pullout", pull_);
+    parse_section(prm, "Mechanics", mech_);
+    if (!mech_.boundary_conditions.dirichlet.empty())
+      throw InvalidInput("Mechanics/Boundary conditions",
+                         "the scenario holds the block and pulls the screw itself",
+                         "no Dirichlet slots here");
+    const auto& g = screw_.geometry;
+    if (!(g.length < block_.depth))
+      throw InvalidInput("Block/Depth", fmt(block_.depth * 1e3, 6) + " mm",
+                         "more than Screw/Length (" + fmt(g.length * 1e3, 6) +
+                             " mm): the screw would leave the block");
+    const double outer = 0.5 * g.major_diameter;
+    if (!(outer + pull_.margin < 0.5 * block_.width))
+      throw InvalidInput("Block/Width", fmt(block_.width * 1e3, 6) + " mm",
+                         "more than 2 × (screw radius + Pullout/Refinement margin) = " +
+                             fmt(2e3 * (outer + pull_.margin), 6) + " mm");
+  }
+
+  bool check_by_building() const override { return false; }
+
+  void run(RunContext& ctx) override {
+    implants::PedicleScrewGeometry g = screw_.geometry;
+    g.entry = dealii::Point<3>(0, 0, 0);
+    g.direction = dealii::Tensor<1, 3>({0, 0, -1});
+    const implants::PedicleScrew screw(g);
+    ctx.log() << "  " << screw.describe() << "\n";
+
+    dealii::parallel::distributed::Triangulation<3> tria(
+        ctx.comm(), dealii::Triangulation<3>::limit_level_difference_at_vertices);
+    const double h_target = g.pitch / pull_.cells_per_pitch;
+    {
+      dealii::TimerOutput::Scope t(ctx.timer(), "mesh");
+      build_mesh(tria, screw, h_target);
+    }
+    classify_cells(tria, screw);
+    ctx.log() << "  mesh: " << tria.n_global_active_cells() << " cells, " << tria.n_global_levels()
+              << " levels, thread cells " << h_target * 1e3 << " mm (" << pull_.cells_per_pitch
+              << " per pitch); implant " << implant_cells_ << " cells, foam " << foam_cells_
+              << " cells\n";
+
+    // Laws.
+    const double sy = foam_.yield_stress();
+    const materials::IsotropicHardening hardening(sy, foam_.hardening_ratio * foam_.youngs_modulus);
+    std::shared_ptr<const materials::ConstitutiveLaw> foam_law;
+    if (damage_on_)
+      foam_law = std::make_shared<materials::J2Damage>(foam_.youngs_modulus, foam_.poisson_ratio,
+                                                       foam_.density, 0, hardening, foam_.damage,
+                                                       foam_.secant_tangent);
+    else
+      foam_law = std::make_shared<materials::J2Plasticity>(
+          foam_.youngs_modulus, foam_.poisson_ratio, foam_.density, 0, hardening);
+    // The run is quasi-static: masses only matter to the dynamic relaxation that crosses an
+    // unstable drop, where they are fictitious. The screw gets the density that gives it the
+    // foam's wave speed, so its stiff cells do not set a 500 times smaller stable step.
+    materials::LawParameters screw_material = screw_.material;
+    screw_material.density = foam_.density * screw_material.youngs_modulus / foam_.youngs_modulus;
+    const auto screw_law =
+        std::shared_ptr<const materials::ConstitutiveLaw>(materials::create_law(screw_material));
+    ctx.log() << "  foam: E " << foam_.youngs_modulus / 1e6 << " MPa, sigma_y " << sy / 1e6
+              << " MPa (" << foam_.yield_calibration << "; the other strength implied: "
+              << (foam_.yield_calibration == "shear"
+                      ? "compressive " + fmt(sy / 1e6, 4) + " MPa vs given " +
+                            fmt(foam_.compressive_strength / 1e6, 4)
+                      : "shear " + fmt(sy / std::sqrt(3.0) / 1e6, 4) + " MPa vs given " +
+                            fmt(foam_.shear_strength / 1e6, 4))
+              << " MPa), "
+              << (damage_on_
+                      ? "ductile damage (onset " + fmt(foam_.damage.onset_plastic_strain, 4) +
+                            ", softening " + fmt(foam_.damage.softening_strain, 4) + ", D_max " +
+                            fmt(foam_.damage.maximum_damage, 4) + ")"
+                      : "no damage (Effects/Damage = false): perfectly plastic")
+              << "\n  screw: " << screw_.material.describe() << "\n";
+
+    fem::MechanicsSolver<3> solver(tria, mech_);
+    solver.set_material(0, foam_law);
+    solver.set_material(1, screw_law);
+    if (damage_on_ && foam_.fracture_energy > 0) {
+      // Crack band: one law per cell size (the refinement levels), ε_s = G_f/(σ_y D_max h).
+      auto by_size =
+          std::make_shared<std::map<long, std::shared_ptr<const materials::ConstitutiveLaw>>>();
+      const FoamSection foam = foam_;
+      solver.set_cell_laws(
+          [by_size, foam, hardening,
+           sy](const auto& cell) -> std::shared_ptr<const materials::ConstitutiveLaw> {
+            if (cell->material_id() != 0)
+              return nullptr;
+            const double h = std::cbrt(cell->measure());
+            const long key = std::lround(h * 1e9); // nm: cells of one level share a law
+            auto& law = (*by_size)[key];
+            if (!law) {
+              materials::DamageCurve curve = foam.damage;
+              curve.softening_strain =
+                  foam.fracture_energy / (sy * std::max(curve.maximum_damage, 1e-3) * h);
+              law = std::make_shared<materials::J2Damage>(foam.youngs_modulus, foam.poisson_ratio,
+                                                          foam.density, 0, hardening, curve,
+                                                          foam.secant_tangent);
+            }
+            return law;
+          });
+      const double h = g.pitch / pull_.cells_per_pitch;
+      ctx.log() << "  crack band: G_f " << foam_.fracture_energy
+                << " J/m^2, softening strain at the thread cells (" << h * 1e3 << " mm) "
+                << foam_.fracture_energy / (sy * foam_.damage.maximum_damage * h) << "\n";
+    }
+    auto& bc = solver.boundary_conditions();
+    bc.add_dirichlet(4, "x,y,z", "0; 0; 0");
+    bc.add_dirichlet(grip_id, "x,y,z", "0; 0; " + fmt(pull_.displacement) + "*t");
+    {
+      dealii::TimerOutput::Scope t(ctx.timer(), "mechanics setup");
+      solver.setup();
+    }
+    const double dofs = solver.dof_handler().n_dofs();
+    ctx.log() << "  " << dofs << " DoFs\n";
+
+    // Chapman et al. (1996): F = S π D L TSF, L the engaged length (the threaded shaft).
+    const double tsf = 0.5 + 0.57735 * g.thread_depth() / g.pitch;
+    const double chapman = foam_.shear_strength * pi * g.major_diameter * g.length * tsf;
+
+    ctx.history().add({{"displacement_mm", 0.0},
+                       {"force_N", 0.0},
+                       {"failed_volume_mm3", 0.0},
+                       {"newton_iterations", 0.0},
+                       {"linear_iterations", 0.0},
+                       {"relaxation_steps", 0.0}});
+    ctx.set_cost({"fem_quasi_static", dofs * pull_.steps, dofs});
+    ctx.progress().start("screw pull-out", pull_.steps, 1.0);
+    std::vector<double> disp{0}, force{0};
+    double peak = 0, peak_d = 0, energy = 0, energy_to_peak = 0, stiffness = 0;
+    unsigned int newton = 0, linear_total = 0, relaxation_total = 0, relaxed_steps = 0;
+    unsigned int steps_done = 0, peak_step = 0;
+    bool dropped = false;
+    double failed_before = 0;
+    const auto start = std::chrono::steady_clock::now();
+    for (unsigned int step = 1; step <= pull_.steps; ++step) {
+      const double t = double(step) / pull_.steps;
+      unsigned int it = 0, linear = 0, relaxation = 0;
+      {
+        dealii::TimerOutput::Scope timer(ctx.timer(), "mechanics");
+        try {
+          try {
+            for (const auto& r : solver.solve_quasi_static(t)) {
+              it += r.newton_iterations;
+              for (const unsigned int l : r.linear_iterations)
+                linear += l;
+            }
+          } catch (const NumericalFailure& newton_failure) {
+            // Only once foam has failed: before that, a Newton failure is a problem of the model.
+            if (!damage_on_ || failed_before == 0)
+              throw;
+            dealii::TimerOutput::Scope relax_timer(ctx.timer(), "dynamic relaxation");
+            relaxation = relax(solver, t);
+            relaxation_total += relaxation;
+            ++relaxed_steps;
+            ctx.log() << "  step " << step << ": Newton found no static path ("
+                      << newton_failure.what_failed() << "); dynamic relaxation converged in "
+                      << relaxation << " pseudo-steps\n";
+          }
+        } catch (NumericalFailure& f) {
+          f.set_step(step, t);
+          throw;
+        }
+      }
+      newton += it;
+      linear_total += linear;
+      const double F = solver.reaction_force(grip_id)[2];
+      const double d = pull_.displacement * t;
+      if (!std::isfinite(F))
+        throw NumericalFailure("pull-out force",
+                               "screw grip (its section in the block surface), step " +
+                                   std::to_string(step),
+                               "check the foam and screw constants");
+      energy += 0.5 * (F + force.back()) * (d - disp.back());
+      stiffness = std::max(stiffness, (F - force.back()) / (d - disp.back()));
+      disp.push_back(d);
+      force.push_back(F);
+      if (F > peak) {
+        peak = F;
+        peak_d = d;
+        peak_step = step;
+        energy_to_peak = energy;
+      }
+      const Failure fail = failure(solver, screw);
+      failed_before = fail.failed_volume;
+      ctx.history().add({{"displacement_mm", d * 1e3},
+                         {"force_N", F},
+                         {"failed_volume_mm3", fail.failed_volume * 1e9},
+                         {"newton_iterations", double(it)},
+                         {"linear_iterations", double(linear)},
+                         {"relaxation_steps", double(relaxation)}});
+      ctx.flush_history();
+      ctx.progress().update(step, t);
+      steps_done = step;
+      if (peak_step < step && F < (1 - pull_.stop_drop) * peak) {
+        dropped = true;
+        break;
+      }
+    }
+    ctx.progress().finish();
+    const double solve_time =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const Failure fail = failure(solver, screw);
+    if (pull_.write_vtu) {
+      dealii::TimerOutput::Scope t(ctx.timer(), "output");
+      solver.write_output(ctx.output().path().string(), "solution", 0);
+    }
+    const double plot_ok = plot(ctx, disp, force, chapman);
+
+    Summary& sum = ctx.summary();
+    sum.set_figure("peak_pullout_force_N", peak, "N");
+    sum.set_figure("chapman_force_N", chapman, "N");
+    sum.set_figure("chapman_ratio", peak / chapman, "-");
+    sum.set_figure("thread_shape_factor", tsf, "-");
+    sum.set_figure("displacement_at_peak_mm", peak_d * 1e3, "mm");
+    sum.set_figure("stiffness_N_per_mm", stiffness / 1e3, "N/mm");
+    sum.set_figure("energy_to_peak_mJ", energy_to_peak * 1e3, "mJ");
+    sum.set_figure("final_force_N", force.back(), "N");
+    // 1 when the force fell by Stop after drop past the peak: a true peak was passed.
+    sum.set_figure("peak_passed", dropped ? 1.0 : 0.0, "-");
+    sum.set_figure("post_peak_drop", 1 - force.back() / peak, "-");
+    sum.set_figure("failed_volume_mm3", fail.failed_volume * 1e9, "mm^3");
+    sum.set_figure("failed_fraction_near_threads", fail.near_fraction, "-");
+    sum.set_figure("cells", tria.n_global_active_cells(), "-");
+    sum.set_figure("implant_cells", implant_cells_, "-");
+    sum.set_figure("thread_cell_size_mm", h_target * 1e3, "mm");
+    sum.set_figure("cells_per_pitch", pull_.cells_per_pitch, "-");
+    sum.set_figure("mechanics_dofs", dofs, "-");
+    sum.set_figure("load_steps", steps_done, "-");
+    sum.set_figure("newton_iterations", newton, "iterations");
+    sum.set_figure("linear_iterations", linear_total, "iterations");
+    sum.set_figure("relaxed_steps", relaxed_steps, "-");
+    sum.set_figure("relaxation_steps", relaxation_total, "steps");
+    sum.set_figure("solve_time", solve_time, "s");
+    sum.set_figure("force_plot_valid", plot_ok, "-");
+    ctx.log() << std::setprecision(5) << "  peak " << peak << " N at " << peak_d * 1e3
+              << " mm (Chapman " << chapman << " N, ratio " << peak / chapman << "), stiffness "
+              << stiffness / 1e3 << " N/mm, energy to peak " << energy_to_peak * 1e3
+              << " mJ; failed foam " << fail.failed_volume * 1e9 << " mm^3, "
+              << 100 * fail.near_fraction << " % of it within one thread depth "
+              << "of the crests"
+              << (dropped ? "" : "; the force did not drop past the peak within the run") << "\n";
+  }
+
+ private:
+  // The block, refined to h_target within Refinement margin of the threaded shaft's cylinder.
+  void build_mesh(dealii::parallel::distributed::Triangulation<3>& tria,
+                  const implants::PedicleScrew& screw, double h_target) const {
+    const auto& g = screw.geometry();
+    const double h0 = block_.coarse_cell, W = block_.width;
+    std::vector<std::vector<double>> steps(3);
+    steps[0] = steps[1] = steps_over(W, h0);
+    steps[2] = steps_over(block_.depth, h0);
+    dealii::GridGenerator::subdivided_hyper_rectangle(
+        tria, steps, dealii::Point<3>(-W / 2, -W / 2, -block_.depth),
+        dealii::Point<3>(W / 2, W / 2, 0), true);
+    for (unsigned int round = 0; round < 12; ++round) {
+      unsigned int flagged = 0;
+      for (const auto& cell : tria.active_cell_iterators())
+        if (cell->is_locally_owned()) {
+          const double h = cell->extent_in_direction(0);
+          const double half_diagonal = 0.5 * std::sqrt(3.0) * h;
+          const double sa = screw.axial(cell->center()), r = screw.radial(cell->center());
+          const double ds = sa < 0 ? -sa : std::max(0.0, sa - g.length);
+          const double dr = std::max(0.0, r - 0.5 * g.major_diameter);
+          if (h > h_target * (1 + 1e-9) && std::hypot(ds, dr) <= pull_.margin + half_diagonal) {
+            cell->set_refine_flag();
+            ++flagged;
+          }
+        }
+      if (dealii::Utilities::MPI::sum(flagged, tria.get_communicator()) == 0)
+        break;
+      tria.execute_coarsening_and_refinement();
+    }
+  }
+
+  // Material id per cell (1 implant, 0 foam); the implant's faces on the surface z = 0 get
+  // the grip's boundary id.
+  void classify_cells(dealii::parallel::distributed::Triangulation<3>& tria,
+                      const implants::PedicleScrew& screw) {
+    unsigned int implant = 0, foam = 0;
+    const unsigned int n = 4;
+    for (const auto& cell : tria.active_cell_iterators()) {
+      if (cell->is_artificial())
+        continue;
+      const dealii::Point<3> lo = cell->vertex(0), hi = cell->vertex(7);
+      unsigned int in = 0;
+      for (unsigned int i = 0; i < n; ++i)
+        for (unsigned int j = 0; j < n; ++j)
+          for (unsigned int k = 0; k < n; ++k) {
+            const dealii::Point<3> x(lo[0] + (i + 0.5) / n * (hi[0] - lo[0]),
+                                     lo[1] + (j + 0.5) / n * (hi[1] - lo[1]),
+                                     lo[2] + (k + 0.5) / n * (hi[2] - lo[2]));
+            in += screw.inside(x);
+          }
+      const bool is_implant = 2 * in >= n * n * n;
+      cell->set_material_id(is_implant ? 1 : 0);
+      if (is_implant)
+        for (const unsigned int f : cell->face_indices())
+          if (cell->face(f)->at_boundary() && cell->face(f)->boundary_id() == 5)
+            cell->face(f)->set_boundary_id(grip_id);
+      if (cell->is_locally_owned())
+        (is_implant ? implant : foam) += 1;
+    }
+    const MPI_Comm comm = tria.get_communicator();
+    implant_cells_ = dealii::Utilities::MPI::sum(implant, comm);
+    foam_cells_ = dealii::Utilities::MPI::sum(foam, comm);
+    if (implant_cells_ == 0)
+      throw InvalidInput("Pullout/Cells per pitch", fmt(pull_.cells_per_pitch, 6),
+                         "a resolution at which the screw covers at least one cell");
+  }
+
+  // Adaptive dynamic relaxation (base/dynamic_relaxation.h) at the loads of `time` from the
+  // last converged state; commits at equilibrium. Returns the pseudo-steps taken.
+  unsigned int relax(fem::MechanicsSolver<3>& solver, double time) const {
+    const MPI_Comm comm = solver.mpi_communicator();
+    const double dt = solver.stable_time_step();
+    double c = 0, peak_residual = 0, relative = 0;
+    for (unsigned int it = 1; it <= pull_.relaxation_steps; ++it) {
+      const RelaxationSums local = solver.relaxation_step(dt, c, time, it == 1);
+      double v[4] = {local.stiffness_numerator, local.stiffness_denominator, local.residual_square,
+                     local.reaction_square};
+      dealii::Utilities::MPI::sum(dealii::ArrayView<const double>(v, 4), comm,
+                                  dealii::ArrayView<double>(v, 4));
+      RelaxationSums sums;
+      sums.stiffness_numerator = v[0];
+      sums.stiffness_denominator = v[1];
+      sums.residual_square = v[2];
+      sums.reaction_square = v[3];
+      c = sums.damping(dt);
+      const double residual = std::sqrt(v[2]), reaction = std::sqrt(v[3]);
+      if (!std::isfinite(residual))
+        throw NumericalFailure("non-finite residual",
+                               "dynamic relaxation, pseudo-step " + std::to_string(it),
+                               "check the foam and screw constants");
+      peak_residual = std::max(peak_residual, residual);
+      const double scale = std::max(reaction, peak_residual);
+      relative = scale > 0 ? residual / scale : 0.0;
+      // The first step's forces are those of the previous state: judge from the second on.
+      if (it > 1 && relative <= pull_.relaxation_tolerance) {
+        solver.commit_relaxation();
+        solver.clear_velocity();
+        return it;
+      }
+    }
+    throw NumericalFailure(
+        "dynamic relaxation did not converge in " + std::to_string(pull_.relaxation_steps) +
+            " pseudo-steps (relative residual " + std::to_string(relative) + ")",
+        "screw pull-out past the peak", "raise Pullout/Max relaxation steps or Pullout/Steps");
+  }
+
+  struct Failure {
+    double failed_volume = 0; // foam with D >= D_max/2 (or, without damage, ε̄_p > onset) [m^3]
+    double near_fraction = 0; // share of it within one thread depth outside the crests [-]
+  };
+
+  // Failed foam: half its stiffness lost (D >= D_max/2); without damage, plastic strain past
+  // the damage onset. "Near the threads": r <= r_major + thread depth along the shaft, the
+  // band a stripped thread leaves (Chapman's shear cylinder) rather than a cone of foam.
+  Failure failure(const fem::MechanicsSolver<3>& solver,
+                  const implants::PedicleScrew& screw) const {
+    const auto& g = screw.geometry();
+    solver.refresh_states();
+    dealii::FEValues<3> fv(solver.mapping(), solver.fe(), solver.quadrature(),
+                           dealii::update_JxW_values | dealii::update_quadrature_points);
+    double failed = 0, near = 0;
+    for (const auto& cell : solver.dof_handler().active_cell_iterators())
+      if (cell->is_locally_owned() && cell->material_id() == 0) {
+        fv.reinit(cell);
+        const auto* damage_law =
+            dynamic_cast<const materials::J2Damage*>(&solver.cell_material(cell));
+        const auto data = solver.quadrature_point_data(cell);
+        for (unsigned int q = 0; q < data.size(); ++q) {
+          const auto& s = data[q].state;
+          const bool is_failed =
+              damage_law ? damage_law->damage(s) >= 0.5 * foam_.damage.maximum_damage
+                         : s.equivalent_plastic_strain > foam_.damage.onset_plastic_strain;
+          if (!is_failed)
+            continue;
+          failed += fv.JxW(q);
+          const dealii::Point<3>& x = fv.quadrature_point(q);
+          const double sa = screw.axial(x);
+          if (sa >= 0 && sa <= g.length &&
+              screw.radial(x) <= 0.5 * g.major_diameter + g.thread_depth())
+            near += fv.JxW(q);
+        }
+      }
+    const MPI_Comm comm = solver.mpi_communicator();
+    Failure f;
+    f.failed_volume = dealii::Utilities::MPI::sum(failed, comm);
+    const double near_all = dealii::Utilities::MPI::sum(near, comm);
+    f.near_fraction = f.failed_volume > 0 ? near_all / f.failed_volume : 0.0;
+    return f;
+  }
+
+  // force_displacement.png (gnuplot): 1 valid, 0 not, NaN without gnuplot.
+  double plot(RunContext& ctx, const std::vector<double>& d, const std::vector<double>& F,
+              double chapman) const {
+    std::ostringstream data;
+    data << "displacement_mm,force_N\n" << std::setprecision(10);
+    for (std::size_t i = 0; i < d.size(); ++i)
+      data << d[i] * 1e3 << "," << F[i] << "\n";
+    if (!ctx.is_root())
+      return 1;
+    ctx.output().write_atomic("force_displacement.csv", data.str());
+    const auto dir = ctx.output().path();
+    std::ostringstream gp;
+    gp << "set terminal pngcairo size 900,600 noenhanced\n"
+       << "set output '" << (dir / "force_displacement.png").string() << "'\n"
+       << "set title 'Screw pull-out: axial force against grip displacement'\n"
+       << "set xlabel 'displacement [mm]'\nset ylabel 'force [N]'\nset grid\nset key bottom right\n"
+       << "set datafile separator ','\n"
+       << "plot '" << (dir / "force_displacement.csv").string()
+       << "' every ::1 using 1:2 with linespoints pt 7 ps 0.6 title 'FEM ("
+       << foam_.yield_calibration << "-calibrated foam)', " << chapman
+       << " with lines dt 2 title 'Chapman et al. 1996'\n";
+    ctx.output().write_atomic("force_displacement.gp", gp.str());
+    const std::string gnuplot = find_in_path("gnuplot");
+    if (gnuplot.empty()) {
+      ctx.warn("gnuplot not found: no force_displacement.png (install gnuplot-nox); "
+               "force_displacement.csv has the curve");
+      return std::nan("");
+    }
+    run_child({gnuplot, (dir / "force_displacement.gp").string()},
+              dir / "force_displacement.gnuplot.log", 120);
+    return png_is_valid(dir / "force_displacement.png") ? 1 : 0;
+  }
+
+  bool damage_on_;
+  ScrewSection screw_;
+  FoamSection foam_;
+  BlockSection block_;
+  PulloutSection pull_;
+  typename fem::MechanicsSolver<3>::Parameters mech_;
+  unsigned int implant_cells_ = 0, foam_cells_ = 0;
+};
+
+} // namespace screw_pullout
+
+SPINESIM_REGISTER_SCENARIO(screw_pullout, "screw_pullout",
+                           "pedicle screw in a rigid polyurethane foam block (ASTM F1839) pulled "
+                           "out axially (ASTM F543): force-displacement curve, peak force "
+                           "against Chapman et al. (1996).",
+                           "mechanics|damage", create_scenario<screw_pullout::ScrewPullout>,
+                           {"Screw", screw_pullout::ScrewSection::declare},
+                           {"Foam", screw_pullout::FoamSection::declare},
+                           {"Block", screw_pullout::BlockSection::declare},
+                           {"Pullout", screw_pullout::PulloutSection::declare},
+                           sections::mechanics())
+
+} // namespace spinesim::applications
