@@ -18,7 +18,8 @@ inline framework::ScenarioSection geometry() {
   return {"Geometry", fem::MeshParameters::declare};
 }
 inline framework::ScenarioSection material() {
-  return {"Material", materials::LawParameters::declare};
+  return {"Material",
+          [](dealii::ParameterHandler& prm) { materials::LawParameters::declare(prm); }};
 }
 inline framework::ScenarioSection mechanics() {
   return {"Mechanics", fem::MechanicsSolver<2>::Parameters::declare};

@@ -48,6 +48,7 @@
 #include <chrono>
 #include <cmath>
 #include <iomanip>
+#include <limits>
 #include <memory>
 #include <sstream>
 
@@ -70,8 +71,7 @@ struct ScrewSection {
   static void declare(dealii::ParameterHandler& prm) {
     implants::declare_screw_geometry(prm);
     prm.enter_subsection("Material");
-    materials::LawParameters::declare(prm);
-    prm.set("Preset", "ti6al4v");
+    materials::LawParameters::declare(prm, "ti6al4v");
     prm.leave_subsection();
   }
   void parse(dealii::ParameterHandler& prm) {
@@ -287,8 +287,14 @@ class ScrewPullout : public Scenario {
       build_mesh(tria, screw, h_target);
     }
     classify_cells(tria, screw);
+    // The cell size the refinement reached at the thread (the smallest cells) [m].
+    double thread_h = std::numeric_limits<double>::max();
+    for (const auto& cell : tria.active_cell_iterators())
+      if (cell->is_locally_owned())
+        thread_h = std::min(thread_h, cell->extent_in_direction(0));
+    thread_h = dealii::Utilities::MPI::min(thread_h, ctx.comm());
     ctx.log() << "  mesh: " << tria.n_global_active_cells() << " cells, " << tria.n_global_levels()
-              << " levels, thread cells " << h_target * 1e3 << " mm (" << pull_.cells_per_pitch
+              << " levels, thread cells " << thread_h * 1e3 << " mm (" << g.pitch / thread_h
               << " per pitch); implant " << implant_cells_ << " cells, foam " << foam_cells_
               << " cells\n";
 
@@ -351,7 +357,7 @@ class ScrewPullout : public Scenario {
             }
             return law;
           });
-      const double h = g.pitch / pull_.cells_per_pitch;
+      const double h = thread_h;
       ctx.log() << "  crack band: G_f " << foam_.fracture_energy
                 << " J/m^2, softening strain at the thread cells (" << h * 1e3 << " mm) "
                 << foam_.fracture_energy / (sy * foam_.damage.maximum_damage * h) << "\n";
@@ -475,8 +481,8 @@ class ScrewPullout : public Scenario {
     sum.set_figure("failed_fraction_near_threads", fail.near_fraction, "-");
     sum.set_figure("cells", tria.n_global_active_cells(), "-");
     sum.set_figure("implant_cells", implant_cells_, "-");
-    sum.set_figure("thread_cell_size_mm", h_target * 1e3, "mm");
-    sum.set_figure("cells_per_pitch", pull_.cells_per_pitch, "-");
+    sum.set_figure("thread_cell_size_m", thread_h, "m");
+    sum.set_figure("cells_per_pitch", g.pitch / thread_h, "-");
     sum.set_figure("mechanics_dofs", dofs, "-");
     sum.set_figure("load_steps", steps_done, "-");
     sum.set_figure("newton_iterations", newton, "iterations");
@@ -499,10 +505,15 @@ class ScrewPullout : public Scenario {
   void build_mesh(dealii::parallel::distributed::Triangulation<3>& tria,
                   const implants::PedicleScrew& screw, double h_target) const {
     const auto& g = screw.geometry();
-    const double h0 = block_.coarse_cell, W = block_.width;
+    // Coarse cells of h_target 2^k (k from Coarse cell size), rounded up in number to fill
+    // the block: k refinements then give cells of at most h_target, and above h_target / 2.
+    const double W = block_.width;
+    const int k =
+        std::max(0, static_cast<int>(std::lround(std::log2(block_.coarse_cell / h_target))));
+    const double coarse = h_target * std::pow(2.0, k);
     std::vector<std::vector<double>> steps(3);
-    steps[0] = steps[1] = steps_over(W, h0);
-    steps[2] = steps_over(block_.depth, h0);
+    steps[0] = steps[1] = steps_over(W, coarse);
+    steps[2] = steps_over(block_.depth, coarse);
     dealii::GridGenerator::subdivided_hyper_rectangle(
         tria, steps, dealii::Point<3>(-W / 2, -W / 2, -block_.depth),
         dealii::Point<3>(W / 2, W / 2, 0), true);

@@ -20,13 +20,13 @@ bool is_plastic(const std::string& model) {
 }
 } // namespace
 
-void LawParameters::declare(dealii::ParameterHandler& prm) {
+void LawParameters::declare(dealii::ParameterHandler& prm, const std::string& default_preset) {
   using dealii::Patterns::Double;
   using dealii::Patterns::Selection;
   prm.declare_entry("Model", "linear_elastic", Selection(MaterialModels::instance().names("|")),
                     "Constitutive law [-]: " + MaterialModels::instance().documentation());
   prm.declare_entry(
-      "Preset", "custom", Selection(presets),
+      "Preset", default_preset, Selection(presets),
       "Material preset [-]. A value other than custom OVERRIDES the explicit entries it "
       "defines. cortical_bone: E 17 GPa, nu 0.3, rho 1900 kg/m^3, sigma_y 115 MPa (longitudinal "
       "tension, Reilly & Burstein 1975; Bayraktar et al. 2004), H 0 (assumed). "

@@ -14,7 +14,8 @@
 namespace spinesim::materials {
 
 struct LawParameters {
-  static void declare(dealii::ParameterHandler& prm);
+  // `default_preset`: the Preset a section starts from (an implant's section: ti6al4v).
+  static void declare(dealii::ParameterHandler& prm, const std::string& default_preset = "custom");
   // Reads the entries, applies a non-custom preset (overriding the explicit values it
   // defines) and validates; InvalidInput naming the parameter otherwise.
   void parse(const dealii::ParameterHandler& prm);

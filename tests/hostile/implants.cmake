@@ -1,0 +1,16 @@
+# Impossible screws and foam blocks are bad input naming the entry (exit 2), found by `check`
+# before anything is built.
+set(_screw ${PROJECT_SOURCE_DIR}/applications/validation/screw_pullout_foam.prm)
+spinesim_add_hostile_test(screw_pitch_below_thread_depth
+  ARGS check ${_screw} --set "Screw/Pitch=0.9" MATCH "Screw/Pitch.*above the thread depth")
+spinesim_add_hostile_test(screw_teeth_overlap
+  ARGS check ${_screw} --set "Screw/Pitch=1.1" --set "Screw/Crest width=0.5"
+  MATCH "Screw/Pitch.*teeth would overlap")
+spinesim_add_hostile_test(screw_cannulation_wider_than_core
+  ARGS check ${_screw} --set "Screw/Cannulation diameter=3" MATCH "Screw/Cannulation diameter")
+spinesim_add_hostile_test(screw_leaves_the_block
+  ARGS check ${_screw} --set "Block/Depth=15" MATCH "Block/Depth.*leave the block")
+spinesim_add_hostile_test(screw_block_too_narrow
+  ARGS check ${_screw} --set "Block/Width=8" MATCH "Block/Width")
+spinesim_add_hostile_test(foam_without_residual_stiffness
+  ARGS check ${_screw} --set "Foam/Maximum damage=1" MATCH "Foam/Maximum damage.*0 <= D_max < 1")
