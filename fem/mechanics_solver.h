@@ -186,6 +186,14 @@ class MechanicsSolver {
   void commit_relaxation();
   // Sets every velocity to zero (the end of a relaxation).
   void clear_velocity();
+  // Quasi-static equilibrium at `time` by adaptive dynamic relaxation from the current state,
+  // with the lumped masses at the stable step: where Newton finds no equilibrium (an unstable
+  // drop past a peak of a softening solid, which displacement control cannot follow
+  // statically), the damped pseudo-dynamics cross to the equilibrium of the step. Converged
+  // when ‖free residual‖ <= tolerance × max(‖reactions‖, largest ‖free residual‖ of this
+  // relaxation); then the point history is committed and the velocity cleared. Returns the
+  // pseudo-steps taken; NumericalFailure (NaN, or no convergence in max_steps). Collective.
+  unsigned int relax_quasi_static(double time, double tolerance, unsigned int max_steps);
 
   // Plastic-work heating. The mark (per-cell ∫ w_p dV and the time) is set at the start of
   // every solve_quasi_static() and by mark_plastic_work() (call it before a series of

@@ -101,6 +101,49 @@ void MechanicsSolver<dim>::clear_velocity() {
 }
 
 template <int dim>
+unsigned int MechanicsSolver<dim>::relax_quasi_static(double time, double tolerance,
+                                                      unsigned int max_steps) {
+  if (!is_setup_)
+    setup();
+  const double dt = stable_time_step();
+  double c = 0, peak_residual = 0, relative = 0;
+  v_ = 0;
+  update_ghosts();
+  trial_ = committed_;
+  for (unsigned int it = 1; it <= max_steps; ++it) {
+    const RelaxationSums local = relaxation_step(dt, c, time, it == 1);
+    double v[4] = {local.stiffness_numerator, local.stiffness_denominator, local.residual_square,
+                   local.reaction_square};
+    Utilities::MPI::sum(ArrayView<const double>(v, 4), comm_, ArrayView<double>(v, 4));
+    RelaxationSums sums;
+    sums.stiffness_numerator = v[0];
+    sums.stiffness_denominator = v[1];
+    sums.residual_square = v[2];
+    sums.reaction_square = v[3];
+    c = sums.damping(dt);
+    const double residual = std::sqrt(v[2]), reaction = std::sqrt(v[3]);
+    if (!std::isfinite(residual))
+      throw NumericalFailure("non-finite residual",
+                             "dynamic relaxation at t = " + std::to_string(time) +
+                                 ", pseudo-step " + std::to_string(it),
+                             "check the materials and the loads of this step");
+    peak_residual = std::max(peak_residual, residual);
+    const double scale = std::max(reaction, peak_residual);
+    relative = scale > 0 ? residual / scale : 0.0;
+    // The first step's forces are those of the state before it: judge from the second on.
+    if (it > 1 && relative <= tolerance) {
+      commit_relaxation();
+      clear_velocity();
+      return it;
+    }
+  }
+  throw NumericalFailure("dynamic relaxation did not converge in " + std::to_string(max_steps) +
+                             " pseudo-steps (relative residual " + std::to_string(relative) + ")",
+                         "quasi-static equilibrium at t = " + std::to_string(time),
+                         "allow more relaxation steps or take smaller load steps");
+}
+
+template <int dim>
 void MechanicsSolver<dim>::central_difference(double dt, double a, double bc_time,
                                               RelaxationSums* sums) {
   loaded_ = false; // loads are evaluated at the current time only
@@ -408,6 +451,7 @@ void MechanicsSolver<dim>::build_step_tables() {
   template typename MechanicsSolver<dim>::RelaxationSums MechanicsSolver<dim>::relaxation_step(    \
       double, double, double, bool);                                                               \
   template void MechanicsSolver<dim>::clear_velocity();                                            \
+  template unsigned int MechanicsSolver<dim>::relax_quasi_static(double, double, unsigned int);    \
   template void MechanicsSolver<dim>::commit_relaxation();                                         \
   template void MechanicsSolver<dim>::central_difference(double, double, double, RelaxationSums*); \
   template bool MechanicsSolver<dim>::linear_explicit() const;                                     \

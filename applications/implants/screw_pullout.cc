@@ -183,6 +183,7 @@ struct PulloutSection {
   double cells_per_pitch = 4;
   double margin = 2e-3;
   double stop_drop = 0.3;
+  unsigned int peak_refinement = 8;
   double relaxation_tolerance = 1e-4;
   unsigned int relaxation_steps = 200000;
   bool write_vtu = true;
@@ -192,8 +193,12 @@ struct PulloutSection {
         "Displacement", "2", Double(0),
         "Largest axial displacement of the screw at the block surface (the grip) [mm].");
     prm.declare_entry("Steps", "40", Integer(1),
-                      "Equal displacement increments up to Displacement (the solver cuts a "
-                      "step that does not converge) [-].");
+                      "Displacement increments of Displacement/Steps, while the force rises "
+                      "steeply [-].");
+    prm.declare_entry("Peak refinement", "8", Integer(1),
+                      "Once the secant stiffness falls below 3/4 of its first value, each step "
+                      "halves the increment, down to 1/this of Displacement/Steps: the peak "
+                      "and the drop are sampled finely [-].");
     prm.declare_entry("Cells per pitch", "4", Double(1),
                       "Resolution of the thread: cell edge near the screw = Pitch / this [-].");
     prm.declare_entry("Refinement margin", "2", Double(0),
@@ -221,6 +226,7 @@ struct PulloutSection {
     cells_per_pitch = prm.get_double("Cells per pitch");
     margin = 1e-3 * prm.get_double("Refinement margin");
     stop_drop = prm.get_double("Stop after drop");
+    peak_refinement = prm.get_integer("Peak refinement");
     relaxation_tolerance = prm.get_double("Relaxation tolerance");
     relaxation_steps = prm.get_integer("Max relaxation steps");
     write_vtu = prm.get_bool("Write VTU");
@@ -391,8 +397,12 @@ class ScrewPullout : public Scenario {
     bool dropped = false;
     double failed_before = 0;
     const auto start = std::chrono::steady_clock::now();
-    for (unsigned int step = 1; step <= pull_.steps; ++step) {
-      const double t = double(step) / pull_.steps;
+    // Steps of Displacement/Steps, halved down to 1/Peak refinement of that once the secant
+    // stiffness falls below three quarters of the first step's: the peak is sampled finely.
+    const double base_increment = 1.0 / pull_.steps;
+    double increment = base_increment, t = 0, first_stiffness = 0;
+    for (unsigned int step = 1; t < 1 - 1e-12; ++step) {
+      t = std::min(1.0, t + increment);
       unsigned int it = 0, linear = 0, relaxation = 0;
       {
         dealii::TimerOutput::Scope timer(ctx.timer(), "mechanics");
@@ -408,7 +418,8 @@ class ScrewPullout : public Scenario {
             if (!damage_on_ || failed_before == 0)
               throw;
             dealii::TimerOutput::Scope relax_timer(ctx.timer(), "dynamic relaxation");
-            relaxation = relax(solver, t);
+            relaxation = solver.relax_quasi_static(t, pull_.relaxation_tolerance,
+                                                    pull_.relaxation_steps);
             relaxation_total += relaxation;
             ++relaxed_steps;
             ctx.log() << "  step " << step << ": Newton found no static path ("
@@ -430,7 +441,12 @@ class ScrewPullout : public Scenario {
                                    std::to_string(step),
                                "check the foam and screw constants");
       energy += 0.5 * (F + force.back()) * (d - disp.back());
-      stiffness = std::max(stiffness, (F - force.back()) / (d - disp.back()));
+      const double secant = (F - force.back()) / (d - disp.back());
+      stiffness = std::max(stiffness, secant);
+      if (step == 1)
+        first_stiffness = secant;
+      if (secant < 0.75 * first_stiffness)
+        increment = std::max(0.5 * increment, base_increment / pull_.peak_refinement);
       disp.push_back(d);
       force.push_back(F);
       if (F > peak) {
@@ -571,45 +587,6 @@ class ScrewPullout : public Scenario {
     if (implant_cells_ == 0)
       throw InvalidInput("Pullout/Cells per pitch", fmt(pull_.cells_per_pitch, 6),
                          "a resolution at which the screw covers at least one cell");
-  }
-
-  // Adaptive dynamic relaxation (base/dynamic_relaxation.h) at the loads of `time` from the
-  // last converged state; commits at equilibrium. Returns the pseudo-steps taken.
-  unsigned int relax(fem::MechanicsSolver<3>& solver, double time) const {
-    const MPI_Comm comm = solver.mpi_communicator();
-    const double dt = solver.stable_time_step();
-    double c = 0, peak_residual = 0, relative = 0;
-    for (unsigned int it = 1; it <= pull_.relaxation_steps; ++it) {
-      const RelaxationSums local = solver.relaxation_step(dt, c, time, it == 1);
-      double v[4] = {local.stiffness_numerator, local.stiffness_denominator, local.residual_square,
-                     local.reaction_square};
-      dealii::Utilities::MPI::sum(dealii::ArrayView<const double>(v, 4), comm,
-                                  dealii::ArrayView<double>(v, 4));
-      RelaxationSums sums;
-      sums.stiffness_numerator = v[0];
-      sums.stiffness_denominator = v[1];
-      sums.residual_square = v[2];
-      sums.reaction_square = v[3];
-      c = sums.damping(dt);
-      const double residual = std::sqrt(v[2]), reaction = std::sqrt(v[3]);
-      if (!std::isfinite(residual))
-        throw NumericalFailure("non-finite residual",
-                               "dynamic relaxation, pseudo-step " + std::to_string(it),
-                               "check the foam and screw constants");
-      peak_residual = std::max(peak_residual, residual);
-      const double scale = std::max(reaction, peak_residual);
-      relative = scale > 0 ? residual / scale : 0.0;
-      // The first step's forces are those of the previous state: judge from the second on.
-      if (it > 1 && relative <= pull_.relaxation_tolerance) {
-        solver.commit_relaxation();
-        solver.clear_velocity();
-        return it;
-      }
-    }
-    throw NumericalFailure(
-        "dynamic relaxation did not converge in " + std::to_string(pull_.relaxation_steps) +
-            " pseudo-steps (relative residual " + std::to_string(relative) + ")",
-        "screw pull-out past the peak", "raise Pullout/Max relaxation steps or Pullout/Steps");
   }
 
   struct Failure {
