@@ -37,6 +37,17 @@ void declare_bone_section(dealii::ParameterHandler& prm) {
   prm.declare_entry("Hardening ratio", "0", Double(0, 0.99),
                     "Linear hardening modulus of the nonlinear variant as a fraction of the "
                     "cell's Young's modulus, H = ratio * E (0: perfectly plastic) [-].");
+  // Assumed post-yield constants (docs/implants.md): damage from 0.6 % plastic strain, about
+  // twice the yield strain of trabecular bone (0.7-0.85 %, Kopperdahl & Keaveny 1998; Morgan &
+  // Keaveny 2001) in total strain; crushed bone keeps a fifth of its stiffness and strength.
+  prm.declare_entry("Damage onset plastic strain", "0.006", Double(0),
+                    "Nonlinear variant with Effects/Damage: equivalent plastic strain at which "
+                    "the bone starts to soften (j2_damage) [-].");
+  prm.declare_entry("Damage softening strain", "0.02", Double(0),
+                    "Plastic strain past the onset over which damage reaches 63 % of its "
+                    "maximum [-].");
+  prm.declare_entry("Maximum damage", "0.8", Double(0, 1),
+                    "Residual damage D_max < 1 of crushed bone [-].");
 }
 
 void declare_caps_section(dealii::ParameterHandler& prm) {
@@ -63,6 +74,14 @@ void BoneParameters::parse(const dealii::ParameterHandler& prm) {
   }
   yield_law = prm.get("Yield law");
   hardening_ratio = prm.get_double("Hardening ratio");
+  damage.onset_plastic_strain = prm.get_double("Damage onset plastic strain");
+  damage.softening_strain = prm.get_double("Damage softening strain");
+  damage.maximum_damage = prm.get_double("Maximum damage");
+  try {
+    damage.validate();
+  } catch (InvalidInput& e) {
+    throw InvalidInput("Bone/" + e.where(), e.problem(), e.allowed());
+  }
 }
 
 void CapsParameters::parse(const dealii::ParameterHandler& prm) {
@@ -111,9 +130,11 @@ fem::CtParameters read_ct_parameters(dealii::ParameterHandler& prm, const BonePa
 }
 
 fem::CtCellLaws::Options cell_law_options(const BoneParameters& bone, const CapsParameters* caps,
-                                          bool nonlinear) {
+                                          bool nonlinear, bool damage) {
   fem::CtCellLaws::Options o;
   o.kind = nonlinear ? fem::CtCellLaws::Kind::j2_plasticity : fem::CtCellLaws::Kind::linear_elastic;
+  if (nonlinear && damage)
+    o.damage = bone.damage;
   o.yield_law = bone.yield_law;
   o.hardening_ratio = bone.hardening_ratio;
   o.minimum_density = bone.law.minimum_density;

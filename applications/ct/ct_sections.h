@@ -13,6 +13,7 @@
 // build directory); see resolve_data_file().
 
 #include "fem/ct/ct_cell_laws.h"
+#include "fem/materials/j2_damage.h"
 #include "fem/ct/ct_parameters.h"
 
 #include <deal.II/base/parameter_handler.h>
@@ -30,6 +31,8 @@ struct BoneParameters {
   fem::CtParameters law;                    // material half only
   std::string yield_law = "kopperdahl2002"; // density -> yield stress (nonlinear runs)
   double hardening_ratio = 0.0;             // H / E [-]
+  // Post-yield softening of the nonlinear variant with Effects/Damage (fem/materials/j2_damage.h).
+  materials::DamageCurve damage{0.006, 0.02, 0.8};
   void parse(const dealii::ParameterHandler& prm);
 };
 
@@ -48,7 +51,7 @@ fem::CtParameters read_ct_parameters(dealii::ParameterHandler& prm, const BonePa
 
 // Options for fem::CtCellLaws: caps elastic with their own nu; bone elastic or J2.
 fem::CtCellLaws::Options cell_law_options(const BoneParameters& bone, const CapsParameters* caps,
-                                          bool nonlinear);
+                                          bool nonlinear, bool damage = false);
 
 // The project's source directory (where applications/ and meshes/ live), as the build
 // configured it.

@@ -5,7 +5,10 @@
 // moduli (Bone/Density modulus law) through MechanicsSolver::set_cell_laws; caps are linear
 // elastic (Caps/*). Linear run: stiffness = |F_z| / delta. Nonlinear variant
 // (Loading/Nonlinear): small-strain J2 bone with yield from Bone/Yield law, displacement in
-// Loading/Steps steps; failure load = peak reaction.
+// Loading/Steps steps; failure load = peak reaction. With Effects/Damage the bone softens
+// past Bone/Damage onset plastic strain (j2_damage), so the reaction peaks and falls; where
+// Newton then finds no equilibrium (an unstable drop), dynamic relaxation crosses to it
+// (MechanicsSolver::relax_quasi_static).
 
 #include "applications/common_sections.h"
 #include "applications/ct/ct_sections.h"
@@ -38,6 +41,7 @@ struct LoadingParameters {
   double axial_displacement = 0.1e-3; // [m]
   bool nonlinear = false;
   unsigned int steps = 1;
+  double relaxation_tolerance = 1e-4;
   bool write_vtu = true;
 
   static void declare(dealii::ParameterHandler& prm) {
@@ -50,6 +54,10 @@ struct LoadingParameters {
                       "Bone/Yield law, reporting the peak reaction as the failure load [-].");
     prm.declare_entry("Steps", "1", Integer(1),
                       "Equal displacement increments; one history row each [-].");
+    prm.declare_entry("Relaxation tolerance", "1e-4", Double(0),
+                      "With Effects/Damage, a step past the peak where Newton finds no "
+                      "equilibrium is relaxed dynamically until the free residual is below this "
+                      "fraction of the reactions [-].");
     prm.declare_entry("Write VTU", "true", Bool(),
                       "Write the final displacement, von Mises stress and plastic strain [-].");
   }
@@ -57,6 +65,7 @@ struct LoadingParameters {
     axial_displacement = 1e-3 * prm.get_double("Axial displacement");
     nonlinear = prm.get_bool("Nonlinear");
     steps = prm.get_integer("Steps");
+    relaxation_tolerance = prm.get_double("Relaxation tolerance");
     write_vtu = prm.get_bool("Write VTU");
     if (!(axial_displacement > 0))
       throw InvalidInput("Loading/Axial displacement", "0", "a positive displacement [mm]");
@@ -90,7 +99,7 @@ double plastic_volume_fraction(const fem::MechanicsSolver<3>& solver) {
 
 class VertebraCompression : public Scenario {
  public:
-  explicit VertebraCompression(const ScenarioFactoryArgs& args) {
+  explicit VertebraCompression(const ScenarioFactoryArgs& args) : damage_(args.effects.damage) {
     if (args.dim != 3)
       throw InvalidInput("Dimension", std::to_string(args.dim), "3 (CT volumes are 3-D)");
     dealii::ParameterHandler& prm = args.prm;
@@ -119,7 +128,8 @@ class VertebraCompression : public Scenario {
       throw InvalidInput("Caps/Labels", "no end faces found on the caps",
                          "the labels of the lower and upper cap");
 
-    const fem::CtCellLaws laws(model, ct::cell_law_options(bone_, &caps_, loading_.nonlinear));
+    const fem::CtCellLaws laws(model,
+                               ct::cell_law_options(bone_, &caps_, loading_.nonlinear, damage_));
     // Bone moduli for the log: volume-weighted mean and range over non-cap cells.
     double e_min = 1e300, e_max = 0, e_mean = 0, v_bone = 0;
     for (std::size_t c = 0; c < model.cell_modulus.size(); ++c)
@@ -132,7 +142,9 @@ class VertebraCompression : public Scenario {
     e_mean /= v_bone;
     ctx.log() << "  bone (" << ct_.density_modulus_law << "): E " << e_min / 1e6 << " .. "
               << e_max / 1e6 << " MPa, volume mean " << e_mean / 1e6 << " MPa; "
-              << (loading_.nonlinear ? "J2, yield " + bone_.yield_law : "linear elastic")
+              << (loading_.nonlinear ? "J2, yield " + bone_.yield_law +
+                                           (damage_ ? ", softening (j2_damage)" : "")
+                                     : "linear elastic")
               << "; caps E " << caps_.youngs_modulus / 1e6 << " MPa, nu " << caps_.poisson_ratio
               << "\n";
 
@@ -158,7 +170,8 @@ class VertebraCompression : public Scenario {
 
     const unsigned int n = loading_.steps;
     double peak = 0, peak_displacement = 0, first_stiffness = 0, F = 0, balance = 0;
-    unsigned int newton = 0, peak_step = 0;
+    unsigned int newton = 0, peak_step = 0, relaxed_steps = 0, relaxation_steps = 0;
+    double last_fraction = 0;
     ctx.history().add(
         {{"displacement_mm", 0.0}, {"reaction_force_N", 0.0}, {"plastic_volume_fraction", 0.0}});
     // Cost table kind: a CT model solved quasi-statically, W = DoFs × load steps.
@@ -170,8 +183,22 @@ class VertebraCompression : public Scenario {
       {
         dealii::TimerOutput::Scope timer(ctx.timer(), "mechanics");
         try {
-          for (const auto& r : solver.solve_quasi_static(t))
-            newton += r.newton_iterations;
+          try {
+            for (const auto& r : solver.solve_quasi_static(t))
+              newton += r.newton_iterations;
+          } catch (const NumericalFailure& newton_failure) {
+            // Once the softening bone yields; before that, a real failure of the model.
+            if (!damage_ || !loading_.nonlinear || !(last_fraction > 0))
+              throw;
+            dealii::TimerOutput::Scope relax_timer(ctx.timer(), "dynamic relaxation");
+            const unsigned int n_relax =
+                solver.relax_quasi_static(t, loading_.relaxation_tolerance, 1000000);
+            relaxation_steps += n_relax;
+            ++relaxed_steps;
+            ctx.log() << "  step " << step << ": Newton found no static path ("
+                      << newton_failure.what_failed() << "); dynamic relaxation converged in "
+                      << n_relax << " pseudo-steps\n";
+          }
         } catch (NumericalFailure& f) {
           f.set_step(step, t);
           throw;
@@ -192,6 +219,7 @@ class VertebraCompression : public Scenario {
         peak_step = step;
       }
       const double fraction = loading_.nonlinear ? plastic_volume_fraction(solver) : 0.0;
+      last_fraction = fraction;
       if (step == 1)
         first_fraction = fraction;
       // 0.2 % offset: where F(d) crosses K0 (d - offset), K0 the first step's secant stiffness.
@@ -226,6 +254,10 @@ class VertebraCompression : public Scenario {
       sum.set_figure("first_step_plastic_volume_fraction", first_fraction, "-");
       sum.set_figure("specimen_height_mm", height * 1e3, "mm");
       sum.set_figure("displacement_at_peak_mm", peak_displacement * 1e3, "mm");
+      // How far the reaction fell after the peak, by the end of the loading (0: no fall).
+      sum.set_figure("post_peak_drop", peak > 0 ? 1 - F / peak : 0.0, "-");
+      sum.set_figure("relaxed_steps", relaxed_steps, "-");
+      sum.set_figure("relaxation_steps", relaxation_steps, "steps");
       sum.set_figure("peak_step", peak_step, "-");
       sum.set_figure("plastic_volume_fraction", plastic_volume_fraction(solver), "-");
     }
@@ -255,6 +287,7 @@ class VertebraCompression : public Scenario {
  private:
   ct::BoneParameters bone_;
   ct::CapsParameters caps_;
+  bool damage_;
   LoadingParameters loading_;
   fem::CtParameters ct_;
   typename fem::MechanicsSolver<3>::Parameters mech_;
@@ -265,7 +298,7 @@ class VertebraCompression : public Scenario {
 SPINESIM_REGISTER_SCENARIO(vertebra_compression, "vertebra_compression",
                            "CT vertebra (density-mapped bone) between PMMA caps, lower cap held, "
                            "upper cap displaced axially: stiffness, reaction, failure load.",
-                           "mechanics", create_scenario<VertebraCompression>, sections::ct(),
+                           "mechanics|damage", create_scenario<VertebraCompression>, sections::ct(),
                            sections::bone(), sections::caps(),
                            {"Loading", LoadingParameters::declare}, sections::mechanics())
 

@@ -3,6 +3,7 @@
 #include "base/exceptions.h"
 #include "fem/ct/density_modulus_law.h"
 #include "fem/materials/isotropic_hardening.h"
+#include "fem/materials/j2_damage.h"
 #include "fem/materials/j2_plasticity.h"
 #include "fem/materials/linear_elastic.h"
 
@@ -49,8 +50,12 @@ CtCellLaws::CtCellLaws(const CtModel& model, const Options& options)
     if (plastic && !options.elastic_labels.count(label)) {
       const double sy = yield_law->yield_stress(rho);
       (*yield_)[c] = sy;
-      (*laws_)[c] = std::make_shared<materials::J2Plasticity>(
-          E, nu, mass_density, 0.0, materials::IsotropicHardening(sy, options.hardening_ratio * E));
+      const materials::IsotropicHardening hardening(sy, options.hardening_ratio * E);
+      if (options.damage)
+        (*laws_)[c] = std::make_shared<materials::J2Damage>(E, nu, mass_density, 0.0, hardening,
+                                                            *options.damage);
+      else
+        (*laws_)[c] = std::make_shared<materials::J2Plasticity>(E, nu, mass_density, 0.0, hardening);
       ++n_plastic_;
     } else {
       (*laws_)[c] = std::make_shared<materials::LinearElastic>(E, nu, mass_density);

@@ -10,18 +10,22 @@
 //                   density-yield law (kopperdahl2002: 37.4 rho^1.39 MPa), linear hardening
 //                   H = hardening_ratio * E. J2 is tension-compression symmetric: the
 //                   compressive yield stress is used for both (axial compression scenes).
+//                   With Options::damage, J2Damage: the same, softening past the curve's
+//                   onset (a true peak of the force).
 // Labels listed in elastic_labels (PMMA caps) stay linear elastic in either kind. The mass
 // density of the law is 1000 max(rho, minimum density) kg/m^3 (laws need rho > 0; the raw
 // density stays in CtModel for mass sums).
 
 #include "fem/ct/ct_model.h"
 #include "fem/materials/constitutive_law.h"
+#include "fem/materials/j2_damage.h"
 
 #include <deal.II/grid/tria.h>
 
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -43,6 +47,8 @@ class CtCellLaws {
     std::string yield_law = "kopperdahl2002";  // density -> yield stress (j2 kind)
     double hardening_ratio = 0.0;              // H / E [-] (j2 kind)
     double minimum_density = 1e-3;             // [g/cm^3] floor for the law's mass density
+    // j2 kind: with a damage curve the bone softens past it (materials::J2Damage).
+    std::optional<materials::DamageCurve> damage;
   };
 
   // InvalidInput for a yield law without a yield relation or out-of-range options.
