@@ -302,6 +302,10 @@ class MechanicsSolver {
                          const dealii::AffineConstraints<double>& constraints);
   double load_blend(dealii::Function<dim>& f, const dealii::Point<dim>& x, unsigned int c,
                     double load_factor) const;
+  // Gives the constrained rows no active cell touched (zero after assembly) the mean
+  // diagonal, so the tangent stays regular with deactivated cells. Collective.
+  void regularise_untouched_rows(MatrixType& matrix,
+                                 const dealii::AffineConstraints<double>& constraints) const;
 
   // ---- quasi-static Newton (mechanics_solver_quasi_static.cc)
   unsigned int solve_linear(VectorType& du);

@@ -214,6 +214,8 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
   }
   if (with_matrix)
     matrix.compress(VectorOperation::add);
+  if (with_matrix && !assembly_cells_ && !assemble_into_explicit_matrix_)
+    regularise_untouched_rows(matrix, constraints);
   rhs_.compress(VectorOperation::add);
   f_int.compress(VectorOperation::add);
   f_ext.compress(VectorOperation::add);
@@ -227,6 +229,37 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
     throw NumericalFailure("non-finite residual", "global assembly",
                            "check material parameters and boundary conditions");
   return norms;
+}
+
+template <int dim>
+void MechanicsSolver<dim>::regularise_untouched_rows(
+    MatrixType& matrix, const AffineConstraints<double>& constraints) const {
+  // A constrained DoF that no active cell touches (an orphan among deactivated cells, or a
+  // hanging node of deactivated cells only) gets no entry from distribute_local_to_global:
+  // its row is zero and the matrix singular. AMG then returns a wrong update without a word
+  // and a direct solver fails; the mean diagonal keeps the row regular, and the constraint
+  // sets the DoF's value whatever the row says.
+  double sum = 0;
+  unsigned long count = 0;
+  std::vector<types::global_dof_index> empty;
+  for (const auto dof : owned_) {
+    const double d = matrix.diag_element(dof);
+    if (d != 0) {
+      sum += std::abs(d);
+      ++count;
+    } else if (constraints.is_constrained(dof))
+      empty.push_back(dof);
+  }
+  sum = Utilities::MPI::sum(sum, comm_);
+  count = Utilities::MPI::sum(count, comm_);
+  const unsigned long n_empty =
+      Utilities::MPI::sum(static_cast<unsigned long>(empty.size()), comm_);
+  if (n_empty == 0)
+    return;
+  const double scale = count > 0 ? sum / count : 1.0;
+  for (const auto dof : empty)
+    matrix.set(dof, dof, scale);
+  matrix.compress(VectorOperation::insert);
 }
 
 template <int dim>
@@ -261,6 +294,8 @@ const typename MechanicsSolver<dim>::MatrixType& MechanicsSolver<dim>::evaluate_
                                                    unsigned int, double) const;                    \
   template typename MechanicsSolver<dim>::AssemblyNorms MechanicsSolver<dim>::assemble(            \
       bool, double, const AffineConstraints<double>&);                                             \
+  template void MechanicsSolver<dim>::regularise_untouched_rows(                                   \
+      MatrixType&, const AffineConstraints<double>&) const;                                        \
   template const typename MechanicsSolver<dim>::VectorType&                                        \
   MechanicsSolver<dim>::evaluate_residual();                                                       \
   template const typename MechanicsSolver<dim>::MatrixType&                                        \

@@ -79,6 +79,12 @@ unsigned int MechanicsSolver<dim>::solve_linear(VectorType& du) {
     throw NumericalFailure("linear solver (" + prm_.linear_solver + ") did not converge in " +
                                std::to_string(e.last_step) + " iterations",
                            "tangent system", "try Linear solver = gmres or direct");
+  } catch (const ExceptionBase& e) {
+    // Trilinos reports a singular factorisation (Amesos) or a failed AMG set-up this way.
+    throw NumericalFailure("linear solver (" + prm_.linear_solver + ") failed: Trilinos " +
+                               "reported an error (a singular tangent?)",
+                           "tangent system",
+                           "check the supports for rigid-body motion and the material constants");
   }
   linear_iterations_.push_back(control.last_step());
   return control.last_step();

@@ -13,8 +13,8 @@
 // build directory); see resolve_data_file().
 
 #include "fem/ct/ct_cell_laws.h"
-#include "fem/materials/j2_damage.h"
 #include "fem/ct/ct_parameters.h"
+#include "fem/materials/j2_damage.h"
 
 #include <deal.II/base/parameter_handler.h>
 

@@ -418,8 +418,8 @@ class ScrewPullout : public Scenario {
             if (!damage_on_ || failed_before == 0)
               throw;
             dealii::TimerOutput::Scope relax_timer(ctx.timer(), "dynamic relaxation");
-            relaxation = solver.relax_quasi_static(t, pull_.relaxation_tolerance,
-                                                    pull_.relaxation_steps);
+            relaxation =
+                solver.relax_quasi_static(t, pull_.relaxation_tolerance, pull_.relaxation_steps);
             relaxation_total += relaxation;
             ++relaxed_steps;
             ctx.log() << "  step " << step << ": Newton found no static path ("

@@ -142,9 +142,9 @@ class VertebraCompression : public Scenario {
     e_mean /= v_bone;
     ctx.log() << "  bone (" << ct_.density_modulus_law << "): E " << e_min / 1e6 << " .. "
               << e_max / 1e6 << " MPa, volume mean " << e_mean / 1e6 << " MPa; "
-              << (loading_.nonlinear ? "J2, yield " + bone_.yield_law +
-                                           (damage_ ? ", softening (j2_damage)" : "")
-                                     : "linear elastic")
+              << (loading_.nonlinear
+                      ? "J2, yield " + bone_.yield_law + (damage_ ? ", softening (j2_damage)" : "")
+                      : "linear elastic")
               << "; caps E " << caps_.youngs_modulus / 1e6 << " MPa, nu " << caps_.poisson_ratio
               << "\n";
 

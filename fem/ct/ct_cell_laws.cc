@@ -55,7 +55,8 @@ CtCellLaws::CtCellLaws(const CtModel& model, const Options& options)
         (*laws_)[c] = std::make_shared<materials::J2Damage>(E, nu, mass_density, 0.0, hardening,
                                                             *options.damage);
       else
-        (*laws_)[c] = std::make_shared<materials::J2Plasticity>(E, nu, mass_density, 0.0, hardening);
+        (*laws_)[c] =
+            std::make_shared<materials::J2Plasticity>(E, nu, mass_density, 0.0, hardening);
       ++n_plastic_;
     } else {
       (*laws_)[c] = std::make_shared<materials::LinearElastic>(E, nu, mass_density);

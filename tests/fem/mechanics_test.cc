@@ -14,6 +14,7 @@
 #include <deal.II/base/function.h>
 #include <deal.II/base/mpi.h>
 #include <deal.II/base/quadrature_lib.h>
+#include <deal.II/grid/grid_generator.h>
 #include <deal.II/numerics/vector_tools.h>
 
 #include <gtest/gtest.h>
@@ -580,4 +581,63 @@ TEST(Mechanics, MeshShapesAndBoundaryIds) {
   bad.file_name = "does_not_exist.msh";
   parallel::distributed::Triangulation<2> t(comm());
   EXPECT_THROW(build_mesh(bad, t), InvalidInput);
+}
+
+namespace {
+
+// A bar [0,2]x[0,1](x[0,1]) of active cells under a refined, deactivated region y in [1,2]:
+// the hanging nodes on y = 1 belong to deactivated cells only. Uniaxial pull on rollers; the
+// reaction must be E A ε whatever the linear solver. Before the untouched constrained rows
+// were regularised the tangent had zero rows there: the direct solver failed (Amesos error
+// -22), and in a screw pull-out model with deactivated air cells AMG-GMRES returned a
+// reaction 450 times too large without a word.
+template <int dim>
+void check_deactivated_refined_region(const std::string& linear_solver) {
+  const double E = 1e9, nu = 0.3, eps = 1e-3;
+  parallel::distributed::Triangulation<dim> tria(comm());
+  std::vector<unsigned int> repetitions(dim, 1);
+  repetitions[0] = 2;
+  repetitions[1] = 2;
+  Point<dim> top;
+  for (unsigned int d = 0; d < dim; ++d)
+    top[d] = 1;
+  top[0] = 2;
+  top[1] = 2;
+  GridGenerator::subdivided_hyper_rectangle(tria, repetitions, Point<dim>(), top, true);
+  for (const auto& cell : tria.active_cell_iterators())
+    cell->set_material_id(0); // colorize numbers the cells too
+  for (const auto& cell : tria.active_cell_iterators())
+    if (cell->is_locally_owned() && cell->center()[1] > 1)
+      cell->set_refine_flag();
+  tria.execute_coarsening_and_refinement();
+  typename MechanicsSolver<dim>::Parameters prm;
+  prm.linear_solver = linear_solver;
+  MechanicsSolver<dim> mech(tria, prm);
+  mech.set_material(0, std::make_shared<materials::LinearElastic>(E, nu, 1000.0));
+  std::vector<bool> active(tria.n_active_cells(), true);
+  for (const auto& cell : tria.active_cell_iterators())
+    if (!cell->is_artificial() && cell->center()[1] > 1)
+      active[cell->active_cell_index()] = false;
+  mech.set_active_cells(active);
+  mech.boundary_conditions().add_dirichlet(0, "x", "0");
+  mech.boundary_conditions().add_dirichlet(2, "y", "0");
+  if (dim == 3)
+    mech.boundary_conditions().add_dirichlet(4, "z", "0");
+  mech.boundary_conditions().add_dirichlet(1, "x", std::to_string(2 * eps));
+  mech.solve_quasi_static(1.0);
+  // Plane strain in 2-D: E/(1−ν²); area 1 (per unit thickness in 2-D).
+  const double expected = (dim == 2 ? E / (1 - nu * nu) : E) * eps;
+  // Q1 reproduces the linear field exactly: solver tolerances (1e-8 Newton) remain.
+  EXPECT_NEAR(mech.reaction_force(1)[0], expected, 1e-7 * expected) << linear_solver;
+}
+
+} // namespace
+
+TEST(Mechanics, DeactivatedRefinedRegionKeepsTheTangentRegular2D) {
+  for (const std::string solver : {"direct", "cg", "gmres"})
+    check_deactivated_refined_region<2>(solver);
+}
+TEST(Mechanics, DeactivatedRefinedRegionKeepsTheTangentRegular3D) {
+  for (const std::string solver : {"direct", "cg", "gmres"})
+    check_deactivated_refined_region<3>(solver);
 }
