@@ -1,7 +1,6 @@
 #include "fem/materials/j2_damage.h"
 
 #include "base/exceptions.h"
-#include "fem/materials/j2_return_mapping.h"
 #include "fem/materials/material_models.h"
 #include "fem/materials/tensor_tools.h"
 
@@ -33,41 +32,33 @@ double DamageCurve::slope(double e) const {
 
 J2Damage::J2Damage(double E, double nu, double rho, double alpha,
                    const IsotropicHardening& hardening, const DamageCurve& damage, bool secant)
-    : E_(E), nu_(nu), rho_(rho), alpha_(alpha), hardening_(hardening), damage_(damage),
-      secant_(secant) {
-  validate_elastic_constants("j2_damage", E, nu, rho, alpha);
+    : effective_(E, nu, rho, alpha, hardening), damage_(damage), secant_(secant) {
   damage_.validate();
-  K_ = bulk_modulus(E, nu);
   mu_ = shear_modulus(E, nu);
 }
 
 SmallStrainResponse J2Damage::small_strain(const SymTensor2& strain, double dT,
                                            const MaterialState& old_state) const {
-  check_finite(strain, "strain", name());
-  const SymTensor2 eps_tr =
-      strain - old_state.plastic_strain - alpha_ * dT * dealii::unit_symmetric_tensor<3>();
-  const J2ReturnResult rm =
-      j2_radial_return(eps_tr, old_state.equivalent_plastic_strain, K_, mu_, hardening_, name());
+  // The effective (undamaged) response: J2Plasticity's radial return and tangent.
+  const SmallStrainResponse e = effective_.small_strain(strain, dT, old_state);
   SmallStrainResponse r;
-  r.state = old_state;
-  if (rm.plastic) {
-    r.state.plastic_strain += rm.plastic_strain_increment;
-    r.state.equivalent_plastic_strain += rm.delta_gamma;
-  }
-  const double ep = r.state.equivalent_plastic_strain;
+  r.state = e.state;
+  const double ep = e.state.equivalent_plastic_strain;
+  const double delta_gamma = ep - old_state.equivalent_plastic_strain;
   const double D = damage_.damage(ep);
-  r.stress = (1.0 - D) * rm.stress;
-  r.tangent = (1.0 - D) * rm.tangent;
-  if (rm.plastic) {
-    r.state.plastic_work += (1.0 - D) * rm.delta_gamma * rm.flow_stress;
+  r.stress = (1.0 - D) * e.stress;
+  r.tangent = (1.0 - D) * e.tangent;
+  if (delta_gamma > 0) {
+    r.state.plastic_work =
+        old_state.plastic_work + (1.0 - D) * (e.state.plastic_work - old_state.plastic_work);
     const double dD = damage_.slope(ep);
     if (dD > 0 && !secant_) {
       // n̂: the unit deviatoric flow direction; the returned deviator is parallel to the trial
       // one, and a plastic step has a non-zero deviator.
-      const SymTensor2 s = dealii::deviator(rm.stress);
+      const SymTensor2 s = dealii::deviator(e.stress);
       const SymTensor2 n = s / s.norm();
-      const double dgamma_factor = 2.0 * mu_ * std::sqrt(1.5) / (3.0 * mu_ + hardening_.slope(ep));
-      r.tangent -= (dD * dgamma_factor) * dealii::outer_product(rm.stress, n);
+      const double dgamma_factor = 2.0 * mu_ * std::sqrt(1.5) / (3.0 * mu_ + hardening().slope(ep));
+      r.tangent -= (dD * dgamma_factor) * dealii::outer_product(e.stress, n);
     }
   }
   return r;
@@ -76,13 +67,7 @@ SmallStrainResponse J2Damage::small_strain(const SymTensor2& strain, double dT,
 FiniteStrainResponse J2Damage::finite_strain(const Tensor2& F, double dT,
                                              const MaterialState& old_state) const {
   checked_determinant(F, name());
-  const SymTensor2 eps = dealii::symmetrize(F) - dealii::unit_symmetric_tensor<3>();
-  const SmallStrainResponse s = small_strain(eps, dT, old_state);
-  FiniteStrainResponse r;
-  r.first_piola = Tensor2(s.stress);
-  r.dP_dF = to_full(s.tangent);
-  r.state = s.state;
-  return r;
+  return as_linearised_finite_strain(small_strain(linearised_strain(F), dT, old_state));
 }
 
 SPINESIM_REGISTER_MATERIAL_MODEL(

@@ -3,7 +3,7 @@
 
 // Small-strain J2 plasticity with ductile damage driven by the equivalent plastic strain, in
 // the effective-stress form of continuum damage mechanics (Lemaitre 1985; Simo & Ju 1987):
-// the radial return of J2Plasticity runs on the effective (undamaged) stress σ̃, and
+// J2Plasticity (radial return, consistent tangent) gives the effective (undamaged) stress σ̃,
 //   σ = (1 − D(ε̄_p)) σ̃,
 //   D(ε̄_p) = D_max (1 − exp(−⟨ε̄_p − ε̄_0⟩ / ε̄_s)),
 // with ε̄_0 the plastic strain at damage onset, ε̄_s the softening strain and D_max < 1 the
@@ -21,6 +21,7 @@
 
 #include "fem/materials/constitutive_law.h"
 #include "fem/materials/isotropic_hardening.h"
+#include "fem/materials/j2_plasticity.h"
 
 namespace spinesim::materials {
 
@@ -46,10 +47,10 @@ class J2Damage : public ConstitutiveLaw {
   // Linearised kinematics as J2Plasticity::finite_strain (small displacement gradients only).
   FiniteStrainResponse finite_strain(const Tensor2& F, double temperature_change,
                                      const MaterialState& old_state) const override;
-  double youngs_modulus() const override { return E_; }
-  double poisson_ratio() const override { return nu_; }
-  double density() const override { return rho_; }
-  const IsotropicHardening& hardening() const { return hardening_; }
+  double youngs_modulus() const override { return effective_.youngs_modulus(); }
+  double poisson_ratio() const override { return effective_.poisson_ratio(); }
+  double density() const override { return effective_.density(); }
+  const IsotropicHardening& hardening() const { return effective_.hardening(); }
   const DamageCurve& damage_curve() const { return damage_; }
   bool secant_tangent() const { return secant_; }
   double damage(const MaterialState& s) const {
@@ -57,9 +58,8 @@ class J2Damage : public ConstitutiveLaw {
   }
 
  private:
-  double E_, nu_, rho_, alpha_;
-  double K_, mu_;
-  IsotropicHardening hardening_;
+  J2Plasticity effective_; // the undamaged material: radial return, elastic constants
+  double mu_;
   DamageCurve damage_;
   bool secant_;
 };

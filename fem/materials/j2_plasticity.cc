@@ -37,13 +37,7 @@ SmallStrainResponse J2Plasticity::small_strain(const SymTensor2& strain, double 
 FiniteStrainResponse J2Plasticity::finite_strain(const Tensor2& F, double dT,
                                                  const MaterialState& old_state) const {
   checked_determinant(F, name());
-  const SymTensor2 eps = dealii::symmetrize(F) - dealii::unit_symmetric_tensor<3>();
-  const SmallStrainResponse s = small_strain(eps, dT, old_state);
-  FiniteStrainResponse r;
-  r.first_piola = Tensor2(s.stress);
-  r.dP_dF = to_full(s.tangent);
-  r.state = s.state;
-  return r;
+  return as_linearised_finite_strain(small_strain(linearised_strain(F), dT, old_state));
 }
 
 SPINESIM_REGISTER_MATERIAL_MODEL(j2_plasticity, "j2_plasticity",

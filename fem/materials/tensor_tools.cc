@@ -115,4 +115,16 @@ dealii::SymmetricTensor<2, 2> in_plane(const SymTensor2& t) {
   return r;
 }
 
+SymTensor2 linearised_strain(const Tensor2& F) {
+  return dealii::symmetrize(F) - dealii::unit_symmetric_tensor<3>();
+}
+
+FiniteStrainResponse as_linearised_finite_strain(const SmallStrainResponse& response) {
+  FiniteStrainResponse r;
+  r.first_piola = Tensor2(response.stress);
+  r.dP_dF = to_full(response.tangent);
+  r.state = response.state;
+  return r;
+}
+
 } // namespace spinesim::materials

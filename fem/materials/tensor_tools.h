@@ -34,6 +34,11 @@ void check_finite(const SymTensor2& T, const std::string& what, const std::strin
 // Full (i,j,k,l) form of a symmetric 4th-order tensor, and the small-strain "P = σ" tangent.
 Tensor4 to_full(const SymTensor4& C);
 
+// Linearised kinematics for the finite_strain() of a small-strain law: ε = sym F − I, and the
+// response as P = σ, dP/dF = dσ/dε (not objective: small displacement gradients only).
+SymTensor2 linearised_strain(const Tensor2& F);
+FiniteStrainResponse as_linearised_finite_strain(const SmallStrainResponse& response);
+
 // Plane stress (σ_zz = σ_xz = σ_yz = 0) by static condensation of a 3-D tangent C:
 //   C^ps_abcd = C_abcd - C_abzz C_zzcd / C_zzzz,  a,b,c,d in {x,y}.
 // Exact for any tangent whose in-plane/out-of-plane shear coupling vanishes (all isotropic
