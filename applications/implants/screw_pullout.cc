@@ -241,7 +241,7 @@ std::string fmt(double v, int digits = 17) {
   return s.str();
 }
 
-// Step sizes covering [a, b] with cells of about h.
+// Equal steps covering `length` with cells of at most about h.
 std::vector<double> steps_over(double length, double h) {
   const unsigned int n = std::max(1u, static_cast<unsigned int>(std::ceil(length / h - 1e-9)));
   return std::vector<double>(n, length / n);
