@@ -194,6 +194,17 @@ class MechanicsSolver {
   // relaxation); then the point history is committed and the velocity cleared. Returns the
   // pseudo-steps taken; NumericalFailure (NaN, or no convergence in max_steps). Collective.
   unsigned int relax_quasi_static(double time, double tolerance, unsigned int max_steps);
+  // solve_quasi_static(time); where that fails with a NumericalFailure and `relax` holds (the
+  // caller knows the solid may soften: past yield of a damage law), relax_quasi_static() from
+  // the last converged state instead. Other failures, and every failure without `relax`, are
+  // thrown on.
+  struct QuasiStaticResult {
+    std::vector<LoadStepReport> reports; // Newton's accepted load steps
+    unsigned int relaxation_steps = 0;   // > 0: Newton gave up and the step was relaxed
+    std::string newton_failure;          // why Newton gave up (when relaxed)
+  };
+  QuasiStaticResult solve_quasi_static_or_relax(double time, bool relax, double tolerance,
+                                                unsigned int max_steps);
 
   // Plastic-work heating. The mark (per-cell ∫ w_p dV and the time) is set at the start of
   // every solve_quasi_static() and by mark_plastic_work() (call it before a series of

@@ -444,6 +444,22 @@ void MechanicsSolver<dim>::build_step_tables() {
   step_tables_ready_ = true;
 }
 
+template <int dim>
+typename MechanicsSolver<dim>::QuasiStaticResult
+MechanicsSolver<dim>::solve_quasi_static_or_relax(double time, bool relax, double tolerance,
+                                                  unsigned int max_steps) {
+  QuasiStaticResult result;
+  try {
+    result.reports = solve_quasi_static(time);
+  } catch (const NumericalFailure& failure) {
+    if (!relax)
+      throw;
+    result.newton_failure = failure.what_failed();
+    result.relaxation_steps = relax_quasi_static(time, tolerance, max_steps);
+  }
+  return result;
+}
+
 // Explicit instantiation of the members defined in this file.
 #define SPINESIM_INSTANTIATE(dim)                                                                  \
   template double MechanicsSolver<dim>::stable_time_step() const;                                  \
@@ -452,6 +468,8 @@ void MechanicsSolver<dim>::build_step_tables() {
       double, double, double, bool);                                                               \
   template void MechanicsSolver<dim>::clear_velocity();                                            \
   template unsigned int MechanicsSolver<dim>::relax_quasi_static(double, double, unsigned int);    \
+  template typename MechanicsSolver<dim>::QuasiStaticResult                                        \
+  MechanicsSolver<dim>::solve_quasi_static_or_relax(double, bool, double, unsigned int);           \
   template void MechanicsSolver<dim>::commit_relaxation();                                         \
   template void MechanicsSolver<dim>::central_difference(double, double, double, RelaxationSums*); \
   template bool MechanicsSolver<dim>::linear_explicit() const;                                     \

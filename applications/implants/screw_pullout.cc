@@ -407,23 +407,22 @@ class ScrewPullout : public Scenario {
       {
         dealii::TimerOutput::Scope timer(ctx.timer(), "mechanics");
         try {
-          try {
-            for (const auto& r : solver.solve_quasi_static(t)) {
-              it += r.newton_iterations;
-              for (const unsigned int l : r.linear_iterations)
-                linear += l;
-            }
-          } catch (const NumericalFailure& newton_failure) {
-            // Only once foam has failed: before that, a Newton failure is a problem of the model.
-            if (!damage_on_ || failed_before == 0)
-              throw;
-            dealii::TimerOutput::Scope relax_timer(ctx.timer(), "dynamic relaxation");
-            relaxation =
-                solver.relax_quasi_static(t, pull_.relaxation_tolerance, pull_.relaxation_steps);
+          // Relaxation only once foam has failed: before that, a Newton failure is a problem of
+          // the model.
+          const auto result = solver.solve_quasi_static_or_relax(t, damage_on_ && failed_before > 0,
+                                                                 pull_.relaxation_tolerance,
+                                                                 pull_.relaxation_steps);
+          for (const auto& r : result.reports) {
+            it += r.newton_iterations;
+            for (const unsigned int l : r.linear_iterations)
+              linear += l;
+          }
+          relaxation = result.relaxation_steps;
+          if (relaxation > 0) {
             relaxation_total += relaxation;
             ++relaxed_steps;
             ctx.log() << "  step " << step << ": Newton found no static path ("
-                      << newton_failure.what_failed() << "); dynamic relaxation converged in "
+                      << result.newton_failure << "); dynamic relaxation converged in "
                       << relaxation << " pseudo-steps\n";
           }
         } catch (NumericalFailure& f) {

@@ -183,21 +183,19 @@ class VertebraCompression : public Scenario {
       {
         dealii::TimerOutput::Scope timer(ctx.timer(), "mechanics");
         try {
-          try {
-            for (const auto& r : solver.solve_quasi_static(t))
-              newton += r.newton_iterations;
-          } catch (const NumericalFailure& newton_failure) {
-            // Once the softening bone yields; before that, a real failure of the model.
-            if (!damage_ || !loading_.nonlinear || !(last_fraction > 0))
-              throw;
-            dealii::TimerOutput::Scope relax_timer(ctx.timer(), "dynamic relaxation");
-            const unsigned int n_relax =
-                solver.relax_quasi_static(t, loading_.relaxation_tolerance, 1000000);
-            relaxation_steps += n_relax;
+          // Relaxation once the softening bone yields; before that, a Newton failure is a real
+          // failure of the model.
+          const auto result = solver.solve_quasi_static_or_relax(
+              t, damage_ && loading_.nonlinear && last_fraction > 0, loading_.relaxation_tolerance,
+              1000000);
+          for (const auto& r : result.reports)
+            newton += r.newton_iterations;
+          if (result.relaxation_steps > 0) {
+            relaxation_steps += result.relaxation_steps;
             ++relaxed_steps;
             ctx.log() << "  step " << step << ": Newton found no static path ("
-                      << newton_failure.what_failed() << "); dynamic relaxation converged in "
-                      << n_relax << " pseudo-steps\n";
+                      << result.newton_failure << "); dynamic relaxation converged in "
+                      << result.relaxation_steps << " pseudo-steps\n";
           }
         } catch (NumericalFailure& f) {
           f.set_step(step, t);
