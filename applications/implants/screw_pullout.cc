@@ -25,8 +25,12 @@
 // length). Figures chapman_force_N and chapman_ratio = peak / Chapman.
 
 #include "applications/common_sections.h"
+#include "applications/framework/checkpoint_manifest.h"
+#include "applications/framework/output_directory.h"
 #include "applications/framework/parse_section.h"
+#include "applications/framework/root_decides.h"
 #include "applications/framework/run_context.h"
+#include "applications/framework/run_stops.h"
 #include "applications/framework/scenario.h"
 #include "applications/studies/child_run.h"
 #include "applications/studies/study_plot.h"
@@ -44,9 +48,13 @@
 #include <deal.II/fe/fe_values.h>
 #include <deal.II/grid/grid_generator.h>
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <iomanip>
 #include <limits>
 #include <memory>
@@ -186,6 +194,8 @@ struct PulloutSection {
   unsigned int peak_refinement = 8;
   double relaxation_tolerance = 1e-4;
   unsigned int relaxation_steps = 200000;
+  unsigned int checkpoint_interval = 10;
+  unsigned int stop_after_step = 0;
   bool write_vtu = true;
   static void declare(dealii::ParameterHandler& prm) {
     using namespace dealii::Patterns;
@@ -217,6 +227,12 @@ struct PulloutSection {
     prm.declare_entry("Max relaxation steps", "200000", Integer(1),
                       "Pseudo-time steps one relaxation may take before the step is a "
                       "numerical failure [-].");
+    prm.declare_entry("Checkpoint interval", "10", Integer(0),
+                      "Write a checkpoint every this many steps (and at the end, and on "
+                      "SIGINT/SIGTERM); `spinesim run --restart` continues from it [steps].");
+    prm.declare_entry("Stop after step", "0", Integer(0),
+                      "End the run after this step with a checkpoint, for staged runs that "
+                      "continue with `spinesim run --restart`; 0 = run to the end [-].");
     prm.declare_entry("Write VTU", "true", Bool(),
                       "Write displacement, stress, plastic strain, damage and material [-].");
   }
@@ -229,6 +245,8 @@ struct PulloutSection {
     peak_refinement = prm.get_integer("Peak refinement");
     relaxation_tolerance = prm.get_double("Relaxation tolerance");
     relaxation_steps = prm.get_integer("Max relaxation steps");
+    checkpoint_interval = prm.get_integer("Checkpoint interval");
+    stop_after_step = prm.get_integer("Stop after step");
     write_vtu = prm.get_bool("Write VTU");
     if (!(displacement > 0))
       throw InvalidInput("Pullout/Displacement", "0", "a positive displacement [mm]");
@@ -246,6 +264,61 @@ std::vector<double> steps_over(double length, double h) {
   const unsigned int n = std::max(1u, static_cast<unsigned int>(std::ceil(length / h - 1e-9)));
   return std::vector<double>(n, length / n);
 }
+
+// The pull-out's progress between steps: what a checkpoint keeps besides the solver's state.
+struct PulloutProgress {
+  unsigned int step = 0; // steps done
+  double t = 0, increment = 0, first_stiffness = 0;
+  std::vector<double> disp{0}, force{0}; // the curve so far [m], [N]
+  double peak = 0, peak_d = 0, energy = 0, energy_to_peak = 0, stiffness = 0;
+  double failed_before = 0; // failed foam volume after the last step [m^3]
+  unsigned int newton = 0, linear = 0, relaxation = 0, relaxed_steps = 0, peak_step = 0;
+  bool dropped = false;
+
+  bool finished() const { return dropped || t >= 1 - 1e-12; }
+  nlohmann::json to_json() const {
+    return {{"step", step},
+            {"t", t},
+            {"increment", increment},
+            {"first_stiffness", first_stiffness},
+            {"disp", disp},
+            {"force", force},
+            {"peak", peak},
+            {"peak_d", peak_d},
+            {"energy", energy},
+            {"energy_to_peak", energy_to_peak},
+            {"stiffness", stiffness},
+            {"failed_before", failed_before},
+            {"newton", newton},
+            {"linear", linear},
+            {"relaxation", relaxation},
+            {"relaxed_steps", relaxed_steps},
+            {"peak_step", peak_step},
+            {"dropped", dropped}};
+  }
+  void from_json(const nlohmann::json& j) {
+    step = j.at("step");
+    t = j.at("t");
+    increment = j.at("increment");
+    first_stiffness = j.at("first_stiffness");
+    disp = j.at("disp").get<std::vector<double>>();
+    force = j.at("force").get<std::vector<double>>();
+    peak = j.at("peak");
+    peak_d = j.at("peak_d");
+    energy = j.at("energy");
+    energy_to_peak = j.at("energy_to_peak");
+    stiffness = j.at("stiffness");
+    failed_before = j.at("failed_before");
+    newton = j.at("newton");
+    linear = j.at("linear");
+    relaxation = j.at("relaxation");
+    relaxed_steps = j.at("relaxed_steps");
+    peak_step = j.at("peak_step");
+    dropped = j.at("dropped");
+    if (disp.empty() || disp.size() != force.size() || !(increment > 0))
+      throw std::runtime_error("inconsistent pull-out curve");
+  }
+};
 
 class ScrewPullout : public Scenario {
  public:
@@ -288,9 +361,22 @@ class ScrewPullout : public Scenario {
     dealii::parallel::distributed::Triangulation<3> tria(
         ctx.comm(), dealii::Triangulation<3>::limit_level_difference_at_vertices);
     const double h_target = g.pitch / pull_.cells_per_pitch;
+    PulloutProgress p;
+    p.increment = 1.0 / pull_.steps;
+    const std::filesystem::path checkpoint = ctx.checkpoint_dir();
     {
       dealii::TimerOutput::Scope t(ctx.timer(), "mesh");
-      build_mesh(tria, screw, h_target);
+      build_coarse_mesh(tria, screw, h_target);
+      if (ctx.restarting()) {
+        p = read_progress(ctx);
+        try {
+          tria.load((checkpoint / "mesh").string());
+        } catch (const std::exception& e) {
+          throw InvalidInput(checkpoint.string(), std::string("checkpoint unreadable: ") + e.what(),
+                             "the checkpoint as the run wrote it");
+        }
+      } else
+        refine_around_screw(tria, screw, h_target);
     }
     classify_cells(tria, screw);
     // The cell size the refinement reached at the thread (the smallest cells) [m].
@@ -373,7 +459,21 @@ class ScrewPullout : public Scenario {
     bc.add_dirichlet(grip_id, "x,y,z", "0; 0; " + fmt(pull_.displacement) + "*t");
     {
       dealii::TimerOutput::Scope t(ctx.timer(), "mechanics setup");
-      solver.setup();
+      if (ctx.restarting()) {
+        try {
+          solver.deserialize((checkpoint / "mesh").string());
+        } catch (const std::exception& e) {
+          throw InvalidInput(checkpoint.string(), std::string("checkpoint unreadable: ") + e.what(),
+                             "the checkpoint as the run wrote it");
+        }
+        // Rows written after the checkpoint came from a segment that did not survive.
+        if (ctx.is_root()) {
+          ctx.history().load(checkpoint / "history.csv");
+          ctx.history().truncate_after("displacement_mm", p.disp.back() * 1e3 * (1 + 1e-12));
+        }
+        ctx.log() << "  restarting after step " << p.step << ", " << p.disp.back() * 1e3 << " mm\n";
+      } else
+        solver.setup();
     }
     const double dofs = solver.dof_handler().n_dofs();
     ctx.log() << "  " << dofs << " DoFs\n";
@@ -382,36 +482,32 @@ class ScrewPullout : public Scenario {
     const double tsf = 0.5 + 0.57735 * g.thread_depth() / g.pitch;
     const double chapman = foam_.shear_strength * pi * g.major_diameter * g.length * tsf;
 
-    ctx.history().add({{"displacement_mm", 0.0},
-                       {"force_N", 0.0},
-                       {"failed_volume_mm3", 0.0},
-                       {"newton_iterations", 0.0},
-                       {"linear_iterations", 0.0},
-                       {"relaxation_steps", 0.0}});
-    ctx.set_cost({"fem_quasi_static", dofs * pull_.steps, dofs});
+    if (!ctx.restarting()) {
+      ctx.history().add({{"displacement_mm", 0.0},
+                         {"force_N", 0.0},
+                         {"failed_volume_mm3", 0.0},
+                         {"newton_iterations", 0.0},
+                         {"linear_iterations", 0.0},
+                         {"relaxation_steps", 0.0}});
+      ctx.set_cost({"fem_quasi_static", dofs * pull_.steps, dofs});
+    }
     ctx.progress().start("screw pull-out", pull_.steps, 1.0);
-    std::vector<double> disp{0}, force{0};
-    double peak = 0, peak_d = 0, energy = 0, energy_to_peak = 0, stiffness = 0;
-    unsigned int newton = 0, linear_total = 0, relaxation_total = 0, relaxed_steps = 0;
-    unsigned int steps_done = 0, peak_step = 0;
-    bool dropped = false;
-    double failed_before = 0;
     const auto start = std::chrono::steady_clock::now();
     // Steps of Displacement/Steps, halved down to 1/Peak refinement of that once the secant
     // stiffness falls below three quarters of the first step's: the peak is sampled finely.
     const double base_increment = 1.0 / pull_.steps;
-    double increment = base_increment, t = 0, first_stiffness = 0;
-    for (unsigned int step = 1; t < 1 - 1e-12; ++step) {
-      t = std::min(1.0, t + increment);
+    while (!p.finished()) {
+      const unsigned int step = p.step + 1;
+      const double t = std::min(1.0, p.t + p.increment);
       unsigned int it = 0, linear = 0, relaxation = 0;
       {
         dealii::TimerOutput::Scope timer(ctx.timer(), "mechanics");
         try {
           // Relaxation only once foam has failed: before that, a Newton failure is a problem of
           // the model.
-          const auto result = solver.solve_quasi_static_or_relax(t, damage_on_ && failed_before > 0,
-                                                                 pull_.relaxation_tolerance,
-                                                                 pull_.relaxation_steps);
+          const auto result = solver.solve_quasi_static_or_relax(
+              t, damage_on_ && p.failed_before > 0, pull_.relaxation_tolerance,
+              pull_.relaxation_steps);
           for (const auto& r : result.reports) {
             it += r.newton_iterations;
             for (const unsigned int l : r.linear_iterations)
@@ -419,8 +515,8 @@ class ScrewPullout : public Scenario {
           }
           relaxation = result.relaxation_steps;
           if (relaxation > 0) {
-            relaxation_total += relaxation;
-            ++relaxed_steps;
+            p.relaxation += relaxation;
+            ++p.relaxed_steps;
             ctx.log() << "  step " << step << ": Newton found no static path ("
                       << result.newton_failure << "); dynamic relaxation converged in "
                       << relaxation << " pseudo-steps\n";
@@ -430,8 +526,8 @@ class ScrewPullout : public Scenario {
           throw;
         }
       }
-      newton += it;
-      linear_total += linear;
+      p.newton += it;
+      p.linear += linear;
       const double F = solver.reaction_force(grip_id)[2];
       const double d = pull_.displacement * t;
       if (!std::isfinite(F))
@@ -439,34 +535,52 @@ class ScrewPullout : public Scenario {
                                "screw grip (its section in the block surface), step " +
                                    std::to_string(step),
                                "check the foam and screw constants");
-      energy += 0.5 * (F + force.back()) * (d - disp.back());
-      const double secant = (F - force.back()) / (d - disp.back());
-      stiffness = std::max(stiffness, secant);
+      p.energy += 0.5 * (F + p.force.back()) * (d - p.disp.back());
+      const double secant = (F - p.force.back()) / (d - p.disp.back());
+      p.stiffness = std::max(p.stiffness, secant);
       if (step == 1)
-        first_stiffness = secant;
-      if (secant < 0.75 * first_stiffness)
-        increment = std::max(0.5 * increment, base_increment / pull_.peak_refinement);
-      disp.push_back(d);
-      force.push_back(F);
-      if (F > peak) {
-        peak = F;
-        peak_d = d;
-        peak_step = step;
-        energy_to_peak = energy;
+        p.first_stiffness = secant;
+      if (secant < 0.75 * p.first_stiffness)
+        p.increment = std::max(0.5 * p.increment, base_increment / pull_.peak_refinement);
+      p.disp.push_back(d);
+      p.force.push_back(F);
+      if (F > p.peak) {
+        p.peak = F;
+        p.peak_d = d;
+        p.peak_step = step;
+        p.energy_to_peak = p.energy;
       }
       const Failure fail = failure(solver, screw);
-      failed_before = fail.failed_volume;
+      p.failed_before = fail.failed_volume;
       ctx.history().add({{"displacement_mm", d * 1e3},
                          {"force_N", F},
                          {"failed_volume_mm3", fail.failed_volume * 1e9},
                          {"newton_iterations", double(it)},
                          {"linear_iterations", double(linear)},
                          {"relaxation_steps", double(relaxation)}});
-      ctx.flush_history();
+      p.step = step;
+      p.t = t;
+      if (p.peak_step < step && F < (1 - pull_.stop_drop) * p.peak)
+        p.dropped = true;
+      const bool checkpointed =
+          p.finished() || (pull_.checkpoint_interval > 0 && step % pull_.checkpoint_interval == 0);
+      if (checkpointed)
+        write_checkpoint(ctx, solver, tria, p);
+      else
+        ctx.flush_history();
+      // SIGINT/SIGTERM: stop after this complete step with a checkpoint to continue from.
+      if (const int signal = ctx.interrupt_signal(); signal != 0 && !p.finished()) {
+        if (!checkpointed)
+          write_checkpoint(ctx, solver, tria, p);
+        ctx.progress().finish();
+        throw Interrupted(signal,
+                          "after step " + std::to_string(step) + ", " + fmt(d * 1e3, 6) + " mm");
+      }
       ctx.progress().update(step, t);
-      steps_done = step;
-      if (peak_step < step && F < (1 - pull_.stop_drop) * peak) {
-        dropped = true;
+      if (pull_.stop_after_step > 0 && step >= pull_.stop_after_step && !p.finished()) {
+        if (!checkpointed)
+          write_checkpoint(ctx, solver, tria, p);
+        ctx.log() << "  stopped after step " << step << " (Pullout/Stop after step)\n";
         break;
       }
     }
@@ -478,20 +592,20 @@ class ScrewPullout : public Scenario {
       dealii::TimerOutput::Scope t(ctx.timer(), "output");
       solver.write_output(ctx.output().path().string(), "solution", 0);
     }
-    const double plot_ok = plot(ctx, disp, force, chapman);
+    const double plot_ok = plot(ctx, p.disp, p.force, chapman);
 
     Summary& sum = ctx.summary();
-    sum.set_figure("peak_pullout_force_N", peak, "N");
+    sum.set_figure("peak_pullout_force_N", p.peak, "N");
     sum.set_figure("chapman_force_N", chapman, "N");
-    sum.set_figure("chapman_ratio", peak / chapman, "-");
+    sum.set_figure("chapman_ratio", p.peak / chapman, "-");
     sum.set_figure("thread_shape_factor", tsf, "-");
-    sum.set_figure("displacement_at_peak_mm", peak_d * 1e3, "mm");
-    sum.set_figure("stiffness_N_per_mm", stiffness / 1e3, "N/mm");
-    sum.set_figure("energy_to_peak_mJ", energy_to_peak * 1e3, "mJ");
-    sum.set_figure("final_force_N", force.back(), "N");
+    sum.set_figure("displacement_at_peak_mm", p.peak_d * 1e3, "mm");
+    sum.set_figure("stiffness_N_per_mm", p.stiffness / 1e3, "N/mm");
+    sum.set_figure("energy_to_peak_mJ", p.energy_to_peak * 1e3, "mJ");
+    sum.set_figure("final_force_N", p.force.back(), "N");
     // 1 when the force fell by Stop after drop past the peak: a true peak was passed.
-    sum.set_figure("peak_passed", dropped ? 1.0 : 0.0, "-");
-    sum.set_figure("post_peak_drop", 1 - force.back() / peak, "-");
+    sum.set_figure("peak_passed", p.dropped ? 1.0 : 0.0, "-");
+    sum.set_figure("post_peak_drop", 1 - p.force.back() / p.peak, "-");
     sum.set_figure("failed_volume_mm3", fail.failed_volume * 1e9, "mm^3");
     sum.set_figure("failed_fraction_near_threads", fail.near_fraction, "-");
     sum.set_figure("cells", tria.n_global_active_cells(), "-");
@@ -499,27 +613,26 @@ class ScrewPullout : public Scenario {
     sum.set_figure("thread_cell_size_m", thread_h, "m");
     sum.set_figure("cells_per_pitch", g.pitch / thread_h, "-");
     sum.set_figure("mechanics_dofs", dofs, "-");
-    sum.set_figure("load_steps", steps_done, "-");
-    sum.set_figure("newton_iterations", newton, "iterations");
-    sum.set_figure("linear_iterations", linear_total, "iterations");
-    sum.set_figure("relaxed_steps", relaxed_steps, "-");
-    sum.set_figure("relaxation_steps", relaxation_total, "steps");
+    sum.set_figure("load_steps", p.step, "-");
+    sum.set_figure("newton_iterations", p.newton, "iterations");
+    sum.set_figure("linear_iterations", p.linear, "iterations");
+    sum.set_figure("relaxed_steps", p.relaxed_steps, "-");
+    sum.set_figure("relaxation_steps", p.relaxation, "steps");
     sum.set_figure("solve_time", solve_time, "s");
     sum.set_figure("force_plot_valid", plot_ok, "-");
-    ctx.log() << std::setprecision(5) << "  peak " << peak << " N at " << peak_d * 1e3
-              << " mm (Chapman " << chapman << " N, ratio " << peak / chapman << "), stiffness "
-              << stiffness / 1e3 << " N/mm, energy to peak " << energy_to_peak * 1e3
+    ctx.log() << std::setprecision(5) << "  peak " << p.peak << " N at " << p.peak_d * 1e3
+              << " mm (Chapman " << chapman << " N, ratio " << p.peak / chapman << "), stiffness "
+              << p.stiffness / 1e3 << " N/mm, energy to peak " << p.energy_to_peak * 1e3
               << " mJ; failed foam " << fail.failed_volume * 1e9 << " mm^3, "
               << 100 * fail.near_fraction << " % of it within one thread depth "
               << "of the crests"
-              << (dropped ? "" : "; the force did not drop past the peak within the run") << "\n";
+              << (p.dropped ? "" : "; the force did not drop past the peak within the run") << "\n";
   }
 
  private:
-  // The block, refined to h_target within Refinement margin of the threaded shaft's cylinder.
-  void build_mesh(dealii::parallel::distributed::Triangulation<3>& tria,
-                  const implants::PedicleScrew& screw, double h_target) const {
-    const auto& g = screw.geometry();
+  // The block's coarse mesh: cells of h_target 2^k.
+  void build_coarse_mesh(dealii::parallel::distributed::Triangulation<3>& tria,
+                         const implants::PedicleScrew&, double h_target) const {
     // Coarse cells of h_target 2^k (k from Coarse cell size), rounded up in number to fill
     // the block: k refinements then give cells of at most h_target, and above h_target / 2.
     const double W = block_.width;
@@ -532,6 +645,12 @@ class ScrewPullout : public Scenario {
     dealii::GridGenerator::subdivided_hyper_rectangle(
         tria, steps, dealii::Point<3>(-W / 2, -W / 2, -block_.depth),
         dealii::Point<3>(W / 2, W / 2, 0), true);
+  }
+
+  // Refines to h_target within Refinement margin of the threaded shaft's cylinder.
+  void refine_around_screw(dealii::parallel::distributed::Triangulation<3>& tria,
+                           const implants::PedicleScrew& screw, double h_target) const {
+    const auto& g = screw.geometry();
     for (unsigned int round = 0; round < 12; ++round) {
       unsigned int flagged = 0;
       for (const auto& cell : tria.active_cell_iterators())
@@ -586,6 +705,68 @@ class ScrewPullout : public Scenario {
     if (implant_cells_ == 0)
       throw InvalidInput("Pullout/Cells per pitch", fmt(pull_.cells_per_pitch, 6),
                          "a resolution at which the screw covers at least one cell");
+  }
+
+  // The solver's state, the mesh, the progress and the history, written into a fresh
+  // directory and swapped in, so the previous checkpoint survives a crash while writing.
+  void write_checkpoint(RunContext& ctx, fem::MechanicsSolver<3>& solver,
+                        dealii::parallel::distributed::Triangulation<3>& tria,
+                        const PulloutProgress& p) const {
+    namespace fs = std::filesystem;
+    dealii::TimerOutput::Scope scope(ctx.timer(), "checkpoint");
+    const fs::path final_dir = ctx.checkpoint_dir();
+    const fs::path tmp_dir = final_dir.string() + ".new";
+    if (ctx.is_root()) {
+      fs::remove_all(tmp_dir);
+      fs::create_directories(tmp_dir);
+    }
+    MPI_Barrier(ctx.comm());
+    const std::string mesh_file = (tmp_dir / "mesh").string();
+    solver.prepare_for_serialization(mesh_file);
+    tria.save(mesh_file);
+    if (ctx.is_root()) {
+      write_file_atomic(tmp_dir / "state.json", p.to_json().dump(1));
+      ctx.flush_history();
+      fs::copy_file(ctx.output().path() / "history.csv", tmp_dir / "history.csv",
+                    fs::copy_options::overwrite_existing);
+      write_checkpoint_manifest(tmp_dir);
+      const fs::path old_dir = final_dir.string() + ".old";
+      fs::remove_all(old_dir);
+      if (fs::exists(final_dir))
+        fs::rename(final_dir, old_dir);
+      fs::rename(tmp_dir, final_dir);
+      fs::remove_all(old_dir);
+    }
+    MPI_Barrier(ctx.comm());
+  }
+
+  // The progress of the checkpoint, after verifying its manifest; NothingToRestart for a run
+  // that has finished, InvalidInput for a missing or unreadable checkpoint.
+  PulloutProgress read_progress(RunContext& ctx) const {
+    namespace fs = std::filesystem;
+    const fs::path dir = ctx.checkpoint_dir();
+    if (!fs::exists(dir / "state.json"))
+      throw InvalidInput("--restart " + ctx.output().path().string(), "no checkpoint in this run",
+                         "a run directory with checkpoint/state.json");
+    root_decides(ctx.comm(), [&] { verify_checkpoint_manifest(dir); });
+    PulloutProgress p;
+    try {
+      std::ifstream in(dir / "state.json");
+      p.from_json(nlohmann::json::parse(in));
+    } catch (const std::exception& e) {
+      throw InvalidInput((dir / "state.json").string(),
+                         std::string("checkpoint state unreadable: ") + e.what(),
+                         "the checkpoint as the run wrote it");
+    }
+    if (p.finished())
+      throw NothingToRestart("the run in " + ctx.output().path().string() + " finished at step " +
+                             std::to_string(p.step) + " (" + fmt(p.disp.back() * 1e3, 6) + " mm)");
+    if (pull_.stop_after_step > 0 && p.step >= pull_.stop_after_step)
+      throw NothingToRestart("the run in " + ctx.output().path().string() + " stopped at step " +
+                             std::to_string(p.step) + " as Pullout/Stop after step = " +
+                             std::to_string(pull_.stop_after_step) +
+                             " asks; continue with --set \"Pullout/Stop after step=0\"");
+    return p;
   }
 
   struct Failure {

@@ -26,6 +26,24 @@ spinesim_add_comparison_test(implants.screw_pullout_ranks_agree
   A ${_screw_runs}/quick/summary.json B ${_screw_runs}/quick_2ranks/summary.json
   CHECKS "peak_pullout_force_N:rel:0.01;displacement_at_peak_mm:rel:0.01"
   REQUIRES "screw_quick;screw_quick_2ranks" LABELS "scene;implants;mpi")
+# Checkpoint and restart: the quick model stopped after step 5 and continued with --restart
+# ends with the same figures as the uninterrupted run, to 1e-8 relative (measured: equal to
+# the last digit, the restart reloads the exact vectors, history and progress).
+spinesim_add_scene_test(implants.screw_pullout_restart_first_half SCENE ${_screw}
+  OUT ${_screw_runs}/restart SET ${_screw_quick} "Pullout/Stop after step=5"
+  EXPECT "status==ok;load_steps~5:0" LABELS "scene;implants" FIXTURE screw_restart_half)
+spinesim_add_scene_test(implants.screw_pullout_restart_second_half
+  ARGS "run;--restart;${_screw_runs}/restart;--set;Pullout/Stop after step=0;--progress;lines"
+  OUT ${_screw_runs}/restart EXPECT "status==ok;peak_passed>=1" LABELS "scene;implants")
+set_tests_properties(implants.screw_pullout_restart_second_half PROPERTIES
+                     FIXTURES_REQUIRED screw_restart_half FIXTURES_SETUP screw_restart_done)
+add_test(NAME implants.screw_pullout_restart_matches_uninterrupted
+         COMMAND ${CMAKE_COMMAND} -DA=${_screw_runs}/restart/summary.json
+                 -DB=${_screw_runs}/quick/summary.json -DTOL=1e-8 -DFLOOR=1e-9
+                 -P ${PROJECT_SOURCE_DIR}/tests/support/compare_summaries.cmake)
+set_tests_properties(implants.screw_pullout_restart_matches_uninterrupted PROPERTIES
+                     LABELS "scene;implants" FIXTURES_REQUIRED "screw_restart_done;screw_quick")
+
 # Without Effects/Damage the foam is perfectly plastic: no softening, so no peak is passed and
 # the force keeps its plateau (the run goes to the end, the last force within 5 % of the
 # largest: a J2 plateau with the plastic zone still spreading).
