@@ -89,4 +89,14 @@ bool verify_checkpoint_manifest(const fs::path& dir) {
   return true;
 }
 
+void publish_checkpoint(const fs::path& staged, const fs::path& final_dir) {
+  write_checkpoint_manifest(staged);
+  const fs::path old_dir = final_dir.string() + ".old";
+  fs::remove_all(old_dir);
+  if (fs::exists(final_dir))
+    fs::rename(final_dir, old_dir);
+  fs::rename(staged, final_dir);
+  fs::remove_all(old_dir);
+}
+
 } // namespace spinesim::framework

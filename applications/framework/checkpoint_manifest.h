@@ -14,6 +14,12 @@ namespace spinesim::framework {
 // rank has written its files).
 void write_checkpoint_manifest(const std::filesystem::path& dir);
 
+// The last step of writing a checkpoint, on one rank after every rank has written its files
+// into `staged`: the manifest, then `staged` swapped in for `final_dir`. The previous
+// checkpoint stays whole until the new one is in place.
+void publish_checkpoint(const std::filesystem::path& staged,
+                        const std::filesystem::path& final_dir);
+
 // InvalidInput naming the first missing, resized or altered file (or a malformed manifest).
 // A checkpoint without a manifest (written before manifests existed) passes: returns false.
 bool verify_checkpoint_manifest(const std::filesystem::path& dir);

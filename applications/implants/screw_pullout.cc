@@ -729,13 +729,7 @@ class ScrewPullout : public Scenario {
       ctx.flush_history();
       fs::copy_file(ctx.output().path() / "history.csv", tmp_dir / "history.csv",
                     fs::copy_options::overwrite_existing);
-      write_checkpoint_manifest(tmp_dir);
-      const fs::path old_dir = final_dir.string() + ".old";
-      fs::remove_all(old_dir);
-      if (fs::exists(final_dir))
-        fs::rename(final_dir, old_dir);
-      fs::rename(tmp_dir, final_dir);
-      fs::remove_all(old_dir);
+      publish_checkpoint(tmp_dir, final_dir);
     }
     MPI_Barrier(ctx.comm());
   }
