@@ -11,7 +11,9 @@ namespace spinesim::implants {
 
 namespace {
 constexpr double pi = 3.14159265358979323846;
-double deg(double a) { return a * pi / 180.0; }
+double deg(double a) {
+  return a * pi / 180.0;
+}
 std::string mm(double v) {
   std::ostringstream s;
   s << std::setprecision(6) << v * 1e3 << " mm";
@@ -83,7 +85,9 @@ PedicleScrew::PedicleScrew(PedicleScrewGeometry geometry) : g_(geometry) {
   e2_ = dealii::cross_product_3d(a, e1_);
 }
 
-double PedicleScrew::axial(const dealii::Point<3>& x) const { return (x - g_.entry) * g_.direction; }
+double PedicleScrew::axial(const dealii::Point<3>& x) const {
+  return (x - g_.entry) * g_.direction;
+}
 
 double PedicleScrew::radial(const dealii::Point<3>& x) const {
   const dealii::Tensor<1, 3> d = x - g_.entry;
@@ -142,17 +146,17 @@ double PedicleScrew::volume() const {
   const double M = rm * w * d - rm * t * d * d / 2 + w * d * d / 2 - t * d * d * d / 3;
   const double slice = pi * rm * rm + 2 * pi * M / g_.pitch; // solid cross-section at k = 1
   const double tr = g_.tip_ratio;
-  const double shaft = slice * ((g_.length - g_.tip_length) +
-                                g_.tip_length * (1 + tr + tr * tr) / 3.0) -
-                       pi * rc * rc * g_.length;
+  const double shaft =
+      slice * ((g_.length - g_.tip_length) + g_.tip_length * (1 + tr + tr * tr) / 3.0) -
+      pi * rc * rc * g_.length;
   const double head = pi * (0.25 * g_.head_diameter * g_.head_diameter - rc * rc) * g_.head_length;
   return shaft + head;
 }
 
 std::string PedicleScrew::describe() const {
   std::ostringstream s;
-  s << "screw: major " << mm(g_.major_diameter) << ", minor " << mm(g_.minor_diameter)
-    << ", pitch " << mm(g_.pitch) << ", thread depth " << mm(g_.thread_depth()) << ", flanks "
+  s << "screw: major " << mm(g_.major_diameter) << ", minor " << mm(g_.minor_diameter) << ", pitch "
+    << mm(g_.pitch) << ", thread depth " << mm(g_.thread_depth()) << ", flanks "
     << g_.lead_flank_angle << "/" << g_.trail_flank_angle << " deg, crest " << mm(g_.crest_width)
     << ", length " << mm(g_.length) << " (tip " << mm(g_.tip_length) << "), head "
     << mm(g_.head_diameter) << " x " << mm(g_.head_length);

@@ -28,20 +28,20 @@
 namespace spinesim::implants {
 
 struct PedicleScrewGeometry {
-  double major_diameter = 6.5e-3;     // [m]
-  double minor_diameter = 4.5e-3;     // [m]
-  double pitch = 2.8e-3;              // [m]
-  double crest_width = 0.2e-3;        // [m]
-  double lead_flank_angle = 5;        // [deg], from the radial plane
-  double trail_flank_angle = 30;      // [deg]
-  double length = 40e-3;              // threaded shaft [m]
-  double tip_length = 4e-3;           // conical tip [m], <= length
-  double tip_ratio = 0.5;             // tip diameter / shaft diameter at s = length [-]
-  double cannulation_diameter = 0;    // [m], 0 = solid
-  double head_diameter = 8e-3;        // [m]
-  double head_length = 4e-3;          // [m], 0 = no head
-  dealii::Point<3> entry;             // [m]
-  dealii::Tensor<1, 3> direction{};   // into the bone (normalised by validate())
+  double major_diameter = 6.5e-3;   // [m]
+  double minor_diameter = 4.5e-3;   // [m]
+  double pitch = 2.8e-3;            // [m]
+  double crest_width = 0.2e-3;      // [m]
+  double lead_flank_angle = 5;      // [deg], from the radial plane
+  double trail_flank_angle = 30;    // [deg]
+  double length = 40e-3;            // threaded shaft [m]
+  double tip_length = 4e-3;         // conical tip [m], <= length
+  double tip_ratio = 0.5;           // tip diameter / shaft diameter at s = length [-]
+  double cannulation_diameter = 0;  // [m], 0 = solid
+  double head_diameter = 8e-3;      // [m]
+  double head_length = 4e-3;        // [m], 0 = no head
+  dealii::Point<3> entry;           // [m]
+  dealii::Tensor<1, 3> direction{}; // into the bone (normalised by validate())
 
   double thread_depth() const { return 0.5 * (major_diameter - minor_diameter); }
   // Axial width of a tooth at its root [m].
