@@ -1,0 +1,58 @@
+#include "instruments/drilling_force_model.h"
+
+#include <cmath>
+
+namespace spinesim::instruments {
+
+double CuttingCoefficients::tangential_at(double h) const {
+  return tangential * std::pow(h / reference_chip_thickness, -exponent);
+}
+
+double CuttingCoefficients::thrust_at(double h) const {
+  return thrust * std::pow(h / reference_chip_thickness, -exponent);
+}
+
+DrillingForceModel::DrillingForceModel(DrillBit bit, unsigned int lip_samples)
+    : bit_(bit), samples_(lip_samples) {
+  bit_.validate();
+}
+
+DrillingLoad DrillingForceModel::load(double tip, double feed_per_rev, double spindle_rpm,
+                                      const MaterialAt& material) const {
+  DrillingLoad out;
+  if (!(feed_per_rev > 0))
+    return out;
+  const double kappa = bit_.half_angle(), s = std::sin(kappa), t = std::tan(kappa);
+  const double h = 0.5 * feed_per_rev * s;
+  const double r0 = bit_.pilot_radius(), r1 = bit_.radius(), dr = (r1 - r0) / samples_;
+  unsigned int engaged = 0;
+  for (unsigned int i = 0; i < samples_; ++i) {
+    const double r = r0 + (i + 0.5) * dr;
+    const CuttingCoefficients* c = material(tip - r / t, r);
+    if (!c)
+      continue;
+    ++engaged;
+    out.torque += c->tangential_at(h) * feed_per_rev * r * dr;
+    out.thrust += c->thrust_at(h) * feed_per_rev * s * dr;
+  }
+  const double omega = 2 * pi * spindle_rpm / 60.0, v = feed_per_rev * spindle_rpm / 60.0;
+  out.power = out.torque * omega + out.thrust * v;
+  out.engaged_fraction = double(engaged) / samples_;
+  return out;
+}
+
+double DrillingForceModel::feed_for_thrust(double tip, double thrust, double spindle_rpm,
+                                           const MaterialAt& material, double max_feed) const {
+  if (load(tip, max_feed, spindle_rpm, material).engaged_fraction == 0)
+    return 0.0;
+  if (load(tip, max_feed, spindle_rpm, material).thrust <= thrust)
+    return max_feed;
+  double lo = 0, hi = max_feed;
+  for (int it = 0; it < 60 && hi - lo > 1e-12 * max_feed; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (load(tip, mid, spindle_rpm, material).thrust < thrust ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+} // namespace spinesim::instruments

@@ -1,0 +1,161 @@
+#include "instruments/drilling_programme.h"
+
+#include "base/exceptions.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace spinesim::instruments {
+
+void DrillingSchedule::validate() const {
+  if (!(spindle_rpm > 0) || !std::isfinite(spindle_rpm))
+    throw InvalidInput("Drill/Spindle speed", std::to_string(spindle_rpm),
+                       "a positive speed [rev/min]: a drill that does not turn cannot feed");
+  if (!(feed_rate > 0) || !std::isfinite(feed_rate))
+    throw InvalidInput("Drill/Feed rate", std::to_string(feed_rate * 1e3),
+                       "a positive feed rate [mm/s]");
+  if (thrust_control && !(thrust_force > 0))
+    throw InvalidInput("Drill/Thrust force", std::to_string(thrust_force),
+                       "a positive thrust [N] with Feed control = thrust");
+  if (!(dwell >= 0))
+    throw InvalidInput("Drill/Dwell", std::to_string(dwell), "a time >= 0 [s]");
+  if (!(retraction_speed > 0))
+    throw InvalidInput("Drill/Retraction speed", std::to_string(retraction_speed * 1e3),
+                       "a positive speed [mm/s]");
+  if (!(pause >= 0))
+    throw InvalidInput("Drill/Pause between holes", std::to_string(pause), "a time >= 0 [s]");
+  if (!(margin_friction_torque >= 0))
+    throw InvalidInput("Drill/Margin friction torque", std::to_string(margin_friction_torque * 1e3),
+                       "a torque >= 0 [N mm]");
+}
+
+std::string to_string(DrillPhase phase) {
+  switch (phase) {
+  case DrillPhase::feed:
+    return "feed";
+  case DrillPhase::dwell:
+    return "dwell";
+  case DrillPhase::retract:
+    return "retract";
+  case DrillPhase::pause:
+    return "pause";
+  case DrillPhase::done:
+    return "done";
+  }
+  return "?";
+}
+
+DrillingProgramme::DrillingProgramme(DrillingForceModel model, std::vector<DrillHole> holes,
+                                     DrillingSchedule schedule)
+    : model_(std::move(model)), holes_(std::move(holes)), schedule_(schedule) {
+  schedule_.validate();
+}
+
+DrillState DrillingProgramme::initial_state() const {
+  DrillState s;
+  s.deepest.assign(holes_.size(), 0.0);
+  if (holes_.empty())
+    s.phase = DrillPhase::done;
+  return s;
+}
+
+double DrillingProgramme::nominal_duration() const {
+  double t = 0;
+  for (const auto& h : holes_)
+    t += h.depth / schedule_.feed_rate + schedule_.dwell + h.depth / schedule_.retraction_speed +
+         schedule_.pause;
+  return t;
+}
+
+DrillInterval DrillingProgramme::advance(
+    DrillState& st, double dt, unsigned int substeps,
+    const std::function<const CuttingCoefficients*(unsigned int, double, double)>& material)
+    const {
+  DrillInterval out;
+  const double omega = 2 * pi * schedule_.spindle_rpm / 60.0;
+  const double h = dt / std::max(1u, substeps);
+  double left = dt;
+  for (unsigned int k = 0; k < std::max(1u, substeps) && st.phase != DrillPhase::done; ++k) {
+    double sub = std::min(h, left);
+    left -= sub;
+    if (k + 1 == std::max(1u, substeps))
+      sub += left, left = 0; // round-off of the division goes to the last part
+    while (sub > 0 && st.phase != DrillPhase::done) {
+      const DrillHole& hole = holes_[st.hole];
+      const unsigned int hole_index = st.hole;
+      const auto mat = [&](double a, double r) { return material(hole_index, a, r); };
+      double used = sub;
+      const DrillPhase phase_before = st.phase;
+      const double tip_before = st.tip;
+      switch (st.phase) {
+      case DrillPhase::feed: {
+        // The feed over the part: at Feed rate, or the one holding the thrust at its start.
+        double f = schedule_.feed_rate * 60.0 / schedule_.spindle_rpm;
+        if (schedule_.thrust_control) {
+          const double ft = model_.feed_for_thrust(st.tip, schedule_.thrust_force,
+                                                   schedule_.spindle_rpm, mat, 100 * f);
+          if (ft > 0)
+            f = ft;
+        }
+        const double v = f * schedule_.spindle_rpm / 60.0;
+        used = std::min(sub, (hole.depth - st.tip) / v);
+        // Forces at the middle of the part (midpoint rule in time).
+        const DrillingLoad L = model_.load(st.tip + 0.5 * v * used, f, schedule_.spindle_rpm, mat);
+        out.cutting_energy += L.power * used;
+        out.max_thrust = std::max(out.max_thrust, L.thrust);
+        out.max_torque = std::max(out.max_torque, L.torque);
+        out.feed_per_rev = f;
+        st.tip = std::min(hole.depth, st.tip + v * used);
+        if (st.tip >= hole.depth * (1 - 1e-12)) {
+          st.tip = hole.depth;
+          st.phase = DrillPhase::dwell;
+          st.phase_time = 0;
+        }
+        break;
+      }
+      case DrillPhase::dwell:
+        used = std::min(sub, schedule_.dwell - st.phase_time);
+        if (used <= 0) {
+          used = 0;
+          st.phase = DrillPhase::retract;
+          st.phase_time = 0;
+        }
+        break;
+      case DrillPhase::retract:
+        used = std::min(sub, st.tip / schedule_.retraction_speed);
+        st.tip -= schedule_.retraction_speed * used;
+        if (st.tip <= 1e-12 * hole.depth) {
+          st.tip = 0;
+          st.phase = DrillPhase::pause;
+          st.phase_time = 0;
+        }
+        break;
+      case DrillPhase::pause:
+        used = std::min(sub, schedule_.pause - st.phase_time);
+        if (used <= 0) {
+          used = 0;
+          ++st.hole;
+          st.tip = 0;
+          st.phase = st.hole < holes_.size() ? DrillPhase::feed : DrillPhase::done;
+          st.phase_time = 0;
+        }
+        break;
+      case DrillPhase::done:
+        break;
+      }
+      if (st.phase != DrillPhase::done && hole_index < holes_.size())
+        st.deepest[hole_index] = std::max(st.deepest[hole_index], st.tip);
+      // Margin friction while the bit turns in its hole (feed, dwell, retraction).
+      if (used > 0 && (st.tip > 0 || tip_before > 0)) {
+        out.friction_energy += schedule_.margin_friction_torque * omega * used;
+        out.time_in_bone += used;
+      }
+      if (st.phase == phase_before)
+        st.phase_time += used;
+      sub -= used;
+    }
+  }
+  return out;
+}
+
+} // namespace spinesim::instruments

@@ -1,0 +1,176 @@
+// The twist drill: the mechanistic force model integrates to its closed forms (Kienzle's
+// specific cutting force over a straight lip), the thrust control inverts it, the programme
+// runs its phases for the times they should take and integrates the cutting power exactly
+// where the closed form is known, and the swept solid's distance is right on its three parts.
+
+#include "base/exceptions.h"
+#include "instruments/drilling_programme.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace spinesim;
+using namespace spinesim::instruments;
+
+namespace {
+
+CuttingCoefficients cortical() {
+  CuttingCoefficients c;
+  c.tangential = 200e6;
+  c.thrust = 300e6;
+  c.exponent = 0.3;
+  c.reference_chip_thickness = 0.05e-3;
+  return c;
+}
+
+DrillBit bit(double pilot = 0) {
+  DrillBit b;
+  b.diameter = 4e-3;
+  b.point_angle = 118;
+  b.pilot_diameter = pilot;
+  return b;
+}
+
+} // namespace
+
+// Fully engaged in one material: M = K_c(h) f (R² − r_p²)/2 and F = K_t(h) f sin κ (R − r_p)
+// with h = (f/2) sin κ; the midpoint rule is exact for these integrands (linear and constant
+// in r), so the tolerance is round-off.
+TEST(DrillingForces, FullyEngagedLipsMatchClosedForm) {
+  const CuttingCoefficients c = cortical();
+  for (const double pilot : {0.0, 1.5e-3}) {
+    const DrillingForceModel model(bit(pilot));
+    const auto everywhere = [&](double, double) { return &c; };
+    const double f = 0.06e-3, rpm = 1000, tip = 20e-3;
+    const DrillingLoad L = model.load(tip, f, rpm, everywhere);
+    const double kappa = 59.0 * pi / 180, h = 0.5 * f * std::sin(kappa);
+    const double R = 2e-3, rp = 0.5 * pilot;
+    const double M = c.tangential_at(h) * f * (R * R - rp * rp) / 2;
+    const double F = c.thrust_at(h) * f * std::sin(kappa) * (R - rp);
+    EXPECT_NEAR(L.torque, M, 1e-12 * M);
+    EXPECT_NEAR(L.thrust, F, 1e-12 * F);
+    EXPECT_NEAR(L.power, M * 2 * pi * rpm / 60 + F * f * rpm / 60, 1e-12 * L.power);
+    EXPECT_DOUBLE_EQ(L.engaged_fraction, 1.0);
+  }
+}
+
+// Entering a flat surface, only the lip within r_e = s tan κ of the axis cuts: M = K f r_e²/2
+// up to the one lip sample the surface crosses (|error| <= K f R dr).
+TEST(DrillingForces, PartialEngagementAtEntry) {
+  const CuttingCoefficients c = cortical();
+  const DrillingForceModel model(bit(), 256);
+  const auto bone_below_surface = [&](double a, double) -> const CuttingCoefficients* {
+    return a >= 0 ? &c : nullptr;
+  };
+  const double f = 0.06e-3, kappa = 59.0 * pi / 180, h = 0.5 * f * std::sin(kappa);
+  const double s = 0.5e-3, re = s * std::tan(kappa), R = 2e-3, dr = R / 256;
+  const DrillingLoad L = model.load(s, f, 1000, bone_below_surface);
+  EXPECT_NEAR(L.torque, c.tangential_at(h) * f * re * re / 2, c.tangential_at(h) * f * R * dr);
+  EXPECT_NEAR(L.engaged_fraction, re / R, 1.0 / 256);
+  EXPECT_EQ(model.load(-1e-3, f, 1000, bone_below_surface).torque, 0.0); // in air
+}
+
+TEST(DrillingForces, ThrustControlInvertsTheModel) {
+  const CuttingCoefficients c = cortical();
+  const DrillingForceModel model(bit());
+  const auto everywhere = [&](double, double) { return &c; };
+  const double f = model.feed_for_thrust(5e-3, 40.0, 1200, everywhere, 1e-3);
+  EXPECT_NEAR(model.load(5e-3, f, 1200, everywhere).thrust, 40.0, 1e-8);
+  // Nothing to cut: no feed from thrust.
+  EXPECT_EQ(model.feed_for_thrust(5e-3, 40.0, 1200, [](double, double) { return nullptr; }, 1e-3),
+            0.0);
+}
+
+// Two holes at constant feed: the phases take depth/v, the dwell, depth/v_r and the pause;
+// the cutting energy over the feed equals the closed form ∫ P dt of a cone entering a
+// half-space then cutting fully engaged:
+//   ∫ M ω dt = K f ω R² [ (d − L_c) / (2v) + L_c / (6v) ]   (L_c = R / tan κ),
+// up to the lip and time sampling (64 lips, 400 steps: 2e-3 relative).
+TEST(DrillingProgramme, PhasesAndCuttingEnergy) {
+  const CuttingCoefficients c = cortical();
+  DrillingSchedule sched;
+  sched.spindle_rpm = 1000;
+  sched.feed_rate = 1e-3;
+  sched.dwell = 0.5;
+  sched.retraction_speed = 5e-3;
+  sched.pause = 1.0;
+  sched.margin_friction_torque = 2e-3;
+  DrillHole hole;
+  hole.axis.entry = dealii::Point<3>(0, 0, 0);
+  hole.axis.direction = dealii::Tensor<1, 3>({0, 0, -1});
+  hole.depth = 5e-3;
+  DrillHole second = hole;
+  second.axis.entry = dealii::Point<3>(8e-3, 0, 0);
+  const DrillingProgramme programme(DrillingForceModel(bit()), {hole, second}, sched);
+  const auto material = [&](unsigned int, double a, double) -> const CuttingCoefficients* {
+    return a >= 0 ? &c : nullptr;
+  };
+  DrillState st = programme.initial_state();
+  const double feed_time = 5.0, total = programme.nominal_duration();
+  EXPECT_NEAR(total, 2 * (5.0 + 0.5 + 1.0 + 1.0), 1e-12);
+  double cutting = 0, friction = 0, in_bone = 0, t = 0;
+  const double dt = feed_time / 400;
+  while (t < feed_time - 1e-12) {
+    const DrillInterval I = programme.advance(st, dt, 1, material);
+    cutting += I.cutting_energy;
+    friction += I.friction_energy;
+    in_bone += I.time_in_bone;
+    t += dt;
+  }
+  EXPECT_EQ(st.phase, DrillPhase::dwell);
+  EXPECT_NEAR(st.tip, 5e-3, 1e-15);
+  const double f = 1e-3 * 60 / 1000, kappa = 59.0 * pi / 180, h = 0.5 * f * std::sin(kappa);
+  const double R = 2e-3, Lc = R / std::tan(kappa), v = 1e-3, omega = 2 * pi * 1000 / 60.0;
+  const double torque_energy =
+      c.tangential_at(h) * f * omega * R * R * ((5e-3 - Lc) / (2 * v) + Lc / (6 * v));
+  const double thrust_energy =
+      c.thrust_at(h) * f * std::sin(kappa) * R * v * ((5e-3 - Lc) / v + Lc / (2 * v));
+  EXPECT_NEAR(cutting, torque_energy + thrust_energy, 2e-3 * cutting);
+  // The rest of the programme in one call, split exactly at the phase ends.
+  const DrillInterval rest = programme.advance(st, total - feed_time + 1.0, 50, material);
+  EXPECT_EQ(st.phase, DrillPhase::done);
+  EXPECT_NEAR(st.deepest[0], 5e-3, 1e-15);
+  EXPECT_NEAR(st.deepest[1], 5e-3, 1e-15);
+  // Margin friction while the bit is in a hole: both feeds, dwells and retractions.
+  friction += rest.friction_energy;
+  in_bone += rest.time_in_bone;
+  EXPECT_NEAR(in_bone, 2 * (5.0 + 0.5 + 1.0), 1e-9);
+  EXPECT_NEAR(friction, 2e-3 * omega * in_bone, 1e-12);
+}
+
+TEST(DrillBit, DistanceToSweptSolid) {
+  const double R = 2e-3, kappa = 59.0 * pi / 180, tip = 10e-3, Lc = R / std::tan(kappa);
+  EXPECT_EQ(distance_to_swept_solid(5e-3, 1e-3, tip, R, kappa), 0.0);
+  EXPECT_NEAR(distance_to_swept_solid(5e-3, 3.5e-3, tip, R, kappa), 1.5e-3, 1e-15); // wall
+  // Straight below the tip on the axis: the tip itself is nearest.
+  EXPECT_NEAR(distance_to_swept_solid(tip + 1e-3, 0, tip, R, kappa), 1e-3, 1e-15);
+  // Normal to the cone from a point beside the point: (distance along the normal) exactly.
+  const dealii::Tensor<1, 2> normal({std::sin(kappa), std::cos(kappa)}); // (a, r), outward
+  const double am = tip - 0.5 * Lc, rm = 0.5 * R;                        // cone midpoint
+  EXPECT_NEAR(distance_to_swept_solid(am + 0.3e-3 * normal[0], rm + 0.3e-3 * normal[1], tip, R,
+                                      kappa),
+              0.3e-3, 1e-15);
+  // Beyond the rim, outwards and below: the corner at (tip − L_c, R).
+  EXPECT_NEAR(distance_to_swept_solid(tip - Lc + 3e-3, R + 4e-3, tip, R, kappa), 5e-3, 1e-12);
+  EXPECT_TRUE(in_swept_solid(tip - 1e-9, 0, tip, R, kappa));
+  EXPECT_FALSE(in_swept_solid(tip - Lc + 1e-9, R - 1e-9, tip, R, kappa));
+}
+
+TEST(DrillBit, BadInputNamesTheEntry) {
+  DrillBit b = bit(5e-3);
+  try {
+    b.validate();
+    FAIL() << "a pilot wider than the drill was accepted";
+  } catch (const InvalidInput& e) {
+    EXPECT_EQ(e.where(), "Drill/Pilot diameter");
+  }
+  DrillingSchedule s;
+  s.spindle_rpm = 0;
+  try {
+    s.validate();
+    FAIL() << "a drill that does not turn was accepted";
+  } catch (const InvalidInput& e) {
+    EXPECT_EQ(e.where(), "Drill/Spindle speed");
+  }
+}
