@@ -53,6 +53,17 @@ void HeatParameters<dim>::declare(ParameterHandler& prm) {
     prm.leave_subsection();
   }
 
+  prm.enter_subsection("Perfusion");
+  prm.declare_entry("Blood perfusion rate", "0", Patterns::Double(0.0),
+                    "Pennes (1948) perfusion w_b: volume of blood through a unit volume of tissue "
+                    "per second [1/s]; the heat sink w_b rho_b c_b (T_a - T). 0 = off; "
+                    "cancellous bone about 1e-3 to 1e-2 1/s, cortical bone much less.");
+  prm.declare_entry("Blood volumetric heat capacity", "3.8e6", Patterns::Double(0.0),
+                    "rho_b c_b of blood [J/(m^3 K)] (1060 kg/m^3 x 3600 J/(kg K)).");
+  prm.declare_entry("Arterial temperature", "310.15", Patterns::Double(0.0),
+                    "Temperature T_a of the blood entering the tissue [K].");
+  prm.leave_subsection();
+
   prm.enter_subsection("Linear solver");
   prm.declare_entry("Preconditioner", "AMG", Patterns::Selection("AMG|SSOR"),
                     "Preconditioner of the CG solver [-]: AMG (Trilinos ML) or SSOR.");
@@ -142,6 +153,12 @@ void HeatParameters<dim>::parse(ParameterHandler& prm) {
       material_overrides.push_back(m);
   }
 
+  prm.enter_subsection("Perfusion");
+  perfusion.rate = prm.get_double("Blood perfusion rate");
+  perfusion.blood_heat_capacity = prm.get_double("Blood volumetric heat capacity");
+  perfusion.arterial_temperature = prm.get_double("Arterial temperature");
+  prm.leave_subsection();
+
   prm.enter_subsection("Linear solver");
   preconditioner = prm.get("Preconditioner");
   solver_tolerance = prm.get_double("Tolerance");
@@ -223,6 +240,12 @@ void HeatParameters<dim>::validate() const {
     require_positive(m.material.density, where + "/Density", "[kg/m^3]");
     require_positive(m.material.specific_heat, where + "/Specific heat", "[J/(kg K)]");
   }
+  if (!(perfusion.rate >= 0) || !std::isfinite(perfusion.rate))
+    throw InvalidInput("Perfusion/Blood perfusion rate", "value " + format_number(perfusion.rate),
+                       "w_b >= 0 [1/s]");
+  require_positive(perfusion.blood_heat_capacity, "Perfusion/Blood volumetric heat capacity",
+                   "[J/(m^3 K)]");
+  require_positive(perfusion.arterial_temperature, "Perfusion/Arterial temperature", "[K]");
   if (preconditioner != "AMG" && preconditioner != "SSOR")
     throw InvalidInput("Linear solver/Preconditioner", "'" + preconditioner + "'", "AMG or SSOR");
   if (!(solver_tolerance > 0 && solver_tolerance < 1))

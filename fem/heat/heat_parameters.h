@@ -52,6 +52,13 @@ struct HeatParameters {
     double end_time = -1;  // [s], negative = never off
   };
 
+  // Pennes (1948, J. Appl. Physiol. 1:93) blood perfusion: q = w_b ρ_b c_b (T_a − T).
+  struct Perfusion {
+    double rate = 0;                       // w_b [1/s], blood volume per tissue volume; 0 = off
+    double blood_heat_capacity = 3.8e6;    // ρ_b c_b [J/(m^3 K)]
+    double arterial_temperature = 310.15;  // T_a [K]
+  };
+
   unsigned int degree = 1;
   double theta = 1.0;
   double time_step = 1e-2;                    // [s]
@@ -63,6 +70,7 @@ struct HeatParameters {
   std::vector<FixedTemperature> fixed_temperatures;
   std::vector<HeatFlux> heat_fluxes;
   std::vector<Convection> convections;
+  Perfusion perfusion;
   std::string preconditioner = "AMG"; // AMG | SSOR
   double solver_tolerance = 1e-10;    // relative to the right-hand side
   unsigned int max_iterations = 1000;

@@ -58,6 +58,75 @@ HeatSolver<dim>::material(types::material_id id) const {
 }
 
 template <int dim>
+void HeatSolver<dim>::set_removal(const Removal& removal) {
+  if (!(removal.wall_heat_transfer_coefficient >= 0) ||
+      !std::isfinite(removal.wall_heat_transfer_coefficient))
+    throw InvalidInput("cavity wall heat transfer coefficient",
+                       format_number(removal.wall_heat_transfer_coefficient), "h >= 0 [W/(m^2 K)]");
+  removal_ = removal;
+  cells_removed();
+}
+
+template <int dim>
+template <class FaceValues, class SubfaceValues, class F>
+void HeatSolver<dim>::for_each_convecting_face(
+    const typename DoFHandler<dim>::active_cell_iterator& cell, FaceValues& fe_face,
+    SubfaceValues& fe_subface, const F& f) const {
+  const bool walls = removal_.material_id != numbers::invalid_material_id &&
+                     removal_.wall_heat_transfer_coefficient > 0;
+  for (const unsigned int face : cell->face_indices()) {
+    if (cell->face(face)->at_boundary()) {
+      const types::boundary_id id = cell->face(face)->boundary_id();
+      for (const auto& c : prm_.convections)
+        if (static_cast<types::boundary_id>(c.boundary_id) == id) {
+          fe_face.reinit(cell, face);
+          f(static_cast<const FEFaceValuesBase<dim>&>(fe_face), c.heat_transfer_coefficient,
+            c.ambient_temperature);
+        }
+      continue;
+    }
+    if (!walls)
+      continue;
+    const double h = removal_.wall_heat_transfer_coefficient,
+                 t_inf = removal_.wall_ambient_temperature;
+    if (cell->face(face)->has_children()) {
+      for (unsigned int sf = 0; sf < cell->face(face)->n_children(); ++sf)
+        if (is_removed(cell->neighbor_child_on_subface(face, sf))) {
+          fe_subface.reinit(cell, face, sf);
+          f(static_cast<const FEFaceValuesBase<dim>&>(fe_subface), h, t_inf);
+        }
+    } else if (is_removed(cell->neighbor(face))) {
+      fe_face.reinit(cell, face);
+      f(static_cast<const FEFaceValuesBase<dim>&>(fe_face), h, t_inf);
+    }
+  }
+}
+
+template <int dim>
+double HeatSolver<dim>::regularise_idle_rows(bool matrix_rebuilt) {
+  if (removal_.material_id == numbers::invalid_material_id)
+    return 0.0;
+  if (matrix_rebuilt) {
+    idle_rows_.clear();
+    for (const auto i : locally_owned_dofs_)
+      if (system_matrix_.diag_element(i) == 0.0)
+        idle_rows_.push_back(i);
+    for (const auto i : idle_rows_)
+      system_matrix_.set(i, i, 1.0);
+    system_matrix_.compress(VectorOperation::insert);
+  }
+  // Energy of nodal powers that landed on idle rows (only removed cells share them): it never
+  // enters the body, so it is taken off what was counted as supplied.
+  double dropped = 0;
+  for (const auto i : idle_rows_) {
+    dropped += system_rhs_(i);
+    system_rhs_(i) = constraints_.is_constrained(i) ? 0.0 : solution_(i);
+  }
+  system_rhs_.compress(VectorOperation::insert);
+  return dropped;
+}
+
+template <int dim>
 void HeatSolver<dim>::setup() {
   prm_.validate();
   volumetric_source_ =
@@ -149,7 +218,7 @@ std::vector<double> HeatSolver<dim>::moving_source_scales(double time) const {
   for (const auto& src : moving_)
     centres.push_back(src.position(time));
   for (const auto& cell : dof_handler_.active_cell_iterators()) {
-    if (!cell->is_locally_owned())
+    if (!cell->is_locally_owned() || is_removed(cell))
       continue;
     bool reinitialised = false;
     for (unsigned int s = 0; s < moving_.size(); ++s) {
@@ -181,27 +250,44 @@ std::vector<double> HeatSolver<dim>::moving_source_scales(double time) const {
 
 template <int dim>
 double HeatSolver<dim>::convection_loss(const TrilinosWrappers::MPI::Vector& temperature) const {
-  if (prm_.convections.empty())
+  const bool walls = removal_.material_id != numbers::invalid_material_id &&
+                     removal_.wall_heat_transfer_coefficient > 0;
+  if (prm_.convections.empty() && !walls)
     return 0.0;
   QGauss<dim - 1> face_quadrature(fe_->degree + 1);
   FEFaceValues<dim> fe_face(*fe_, face_quadrature, update_values | update_JxW_values);
+  FESubfaceValues<dim> fe_subface(*fe_, face_quadrature, update_values | update_JxW_values);
   std::vector<double> values(face_quadrature.size());
   double loss = 0;
   for (const auto& cell : dof_handler_.active_cell_iterators()) {
-    if (!cell->is_locally_owned() || !cell->at_boundary())
+    if (!cell->is_locally_owned() || is_removed(cell))
       continue;
-    for (const unsigned int f : cell->face_indices()) {
-      if (!cell->face(f)->at_boundary())
-        continue;
-      for (const auto& c : prm_.convections) {
-        if (cell->face(f)->boundary_id() != static_cast<types::boundary_id>(c.boundary_id))
-          continue;
-        fe_face.reinit(cell, f);
-        fe_face.get_function_values(temperature, values);
-        for (unsigned int q = 0; q < face_quadrature.size(); ++q)
-          loss += c.heat_transfer_coefficient * values[q] * fe_face.JxW(q);
-      }
-    }
+    for_each_convecting_face(cell, fe_face, fe_subface,
+                             [&](const FEFaceValuesBase<dim>& fv, double h, double) {
+                               fv.get_function_values(temperature, values);
+                               for (unsigned int q = 0; q < face_quadrature.size(); ++q)
+                                 loss += h * values[q] * fv.JxW(q);
+                             });
+  }
+  return Utilities::MPI::sum(loss, comm_);
+}
+
+template <int dim>
+double HeatSolver<dim>::perfusion_loss(const TrilinosWrappers::MPI::Vector& temperature) const {
+  if (prm_.perfusion.rate == 0)
+    return 0.0;
+  const QGauss<dim> quadrature(fe_->degree + 1);
+  FEValues<dim> fe_values(*fe_, quadrature, update_values | update_JxW_values);
+  std::vector<double> values(quadrature.size());
+  double loss = 0;
+  const double w = prm_.perfusion.rate * prm_.perfusion.blood_heat_capacity;
+  for (const auto& cell : dof_handler_.active_cell_iterators()) {
+    if (!cell->is_locally_owned() || is_removed(cell))
+      continue;
+    fe_values.reinit(cell);
+    fe_values.get_function_values(temperature, values);
+    for (unsigned int q = 0; q < quadrature.size(); ++q)
+      loss += w * values[q] * fe_values.JxW(q);
   }
   return Utilities::MPI::sum(loss, comm_);
 }
@@ -219,6 +305,8 @@ void HeatSolver<dim>::assemble_step(double dt, bool rebuild_matrix) {
                               update_JxW_values);
   FEFaceValues<dim> fe_face(*fe_, face_quadrature,
                             update_values | update_quadrature_points | update_JxW_values);
+  FESubfaceValues<dim> fe_subface(*fe_, face_quadrature, update_values | update_JxW_values);
+  const double perfusion = prm_.perfusion.rate * prm_.perfusion.blood_heat_capacity;
 
   const std::vector<double> scale_old = moving_source_scales(t_old);
   const std::vector<double> scale_new = moving_source_scales(t_new);
@@ -238,13 +326,42 @@ void HeatSolver<dim>::assemble_step(double dt, bool rebuild_matrix) {
   if (rebuild_matrix)
     system_matrix_ = 0;
   system_rhs_ = 0;
-  double local_supplied = 0;
+  // Energy entering over the step: from sources, and the ambient / arterial parts of
+  // convection and perfusion (their losses h T and w ρc T are counted after the solve).
+  double local_sources = 0, local_ambient = 0, local_arterial = 0;
+
+  // Nodal powers of DoFs this rank owns: each enters through exactly one cell (removed or
+  // kept), so the constraints distribute it like any other load.
+  auto claim_external = [&](Vector<double>& rhs) {
+    double claimed = 0;
+    if (has_external_)
+      for (unsigned int i = 0; i < n_dofs; ++i)
+        if (locally_owned_dofs_.is_element(dofs[i])) {
+          const auto k = locally_owned_dofs_.index_within_set(dofs[i]);
+          if (!external_claimed[k]) {
+            external_claimed[k] = true;
+            rhs(i) += external_(dofs[i]);
+            claimed += external_(dofs[i]);
+          }
+        }
+    return claimed;
+  };
 
   for (const auto& cell : dof_handler_.active_cell_iterators()) {
     if (!cell->is_locally_owned())
       continue;
-    fe_values.reinit(cell);
     cell->get_dof_indices(dofs);
+    if (is_removed(cell)) {
+      cell_rhs = 0;
+      const double claimed = claim_external(cell_rhs);
+      if (claimed != 0) {
+        cell_rhs *= dt;
+        local_sources += dt * claimed;
+        constraints_.distribute_local_to_global(cell_rhs, dofs, system_rhs_);
+      }
+      continue;
+    }
+    fe_values.reinit(cell);
     const ThermalMaterial& mat = material(cell->material_id());
     const double rho_c = mat.density * mat.specific_heat;
     cell_mass = 0;
@@ -278,10 +395,19 @@ void HeatSolver<dim>::assemble_step(double dt, bool rebuild_matrix) {
         const double phi_i = fe_values.shape_value(i, q);
         const Tensor<1, dim> grad_i = fe_values.shape_grad(i, q);
         for (unsigned int j = 0; j < n_dofs; ++j) {
-          cell_mass(i, j) += rho_c * phi_i * fe_values.shape_value(j, q) * JxW;
-          cell_stiffness(i, j) += mat.conductivity * grad_i * fe_values.shape_grad(j, q) * JxW;
+          const double phi_j = fe_values.shape_value(j, q);
+          cell_mass(i, j) += rho_c * phi_i * phi_j * JxW;
+          cell_stiffness(i, j) +=
+              (mat.conductivity * grad_i * fe_values.shape_grad(j, q) + perfusion * phi_i * phi_j) *
+              JxW;
         }
         cell_source(i) += source * phi_i * JxW;
+        local_sources += dt * source * phi_i * JxW;
+        if (perfusion > 0) {
+          const double arterial = perfusion * prm_.perfusion.arterial_temperature * phi_i * JxW;
+          cell_source(i) += arterial;
+          local_arterial += dt * arterial;
+        }
       }
     }
 
@@ -290,51 +416,36 @@ void HeatSolver<dim>::assemble_step(double dt, bool rebuild_matrix) {
         if (!cell->face(f)->at_boundary())
           continue;
         const types::boundary_id id = cell->face(f)->boundary_id();
-        bool reinitialised = false;
-        auto reinit = [&]() {
-          if (!reinitialised)
-            fe_face.reinit(cell, f);
-          reinitialised = true;
-        };
         for (auto& [flux_id, flux] : fluxes_) {
           if (flux_id != id)
             continue;
-          reinit();
+          fe_face.reinit(cell, f);
           flux->set_time(t_old);
           flux->value_list(fe_face.get_quadrature_points(), g_old);
           flux->set_time(t_new);
           flux->value_list(fe_face.get_quadrature_points(), g_new);
           for (unsigned int q = 0; q < n_face_q; ++q)
-            for (unsigned int i = 0; i < n_dofs; ++i)
-              cell_source(i) += (theta * g_new[q] + (1.0 - theta) * g_old[q]) *
-                                fe_face.shape_value(i, q) * fe_face.JxW(q);
-        }
-        for (const auto& c : prm_.convections) {
-          if (static_cast<types::boundary_id>(c.boundary_id) != id)
-            continue;
-          reinit();
-          for (unsigned int q = 0; q < n_face_q; ++q)
             for (unsigned int i = 0; i < n_dofs; ++i) {
-              const double hphi =
-                  c.heat_transfer_coefficient * fe_face.shape_value(i, q) * fe_face.JxW(q);
-              cell_source(i) += hphi * c.ambient_temperature;
-              for (unsigned int j = 0; j < n_dofs; ++j)
-                cell_stiffness(i, j) += hphi * fe_face.shape_value(j, q);
+              const double g = (theta * g_new[q] + (1.0 - theta) * g_old[q]) *
+                               fe_face.shape_value(i, q) * fe_face.JxW(q);
+              cell_source(i) += g;
+              local_sources += dt * g;
             }
         }
       }
+    for_each_convecting_face(
+        cell, fe_face, fe_subface, [&](const FEFaceValuesBase<dim>& fv, double h, double t_inf) {
+          for (unsigned int q = 0; q < n_face_q; ++q)
+            for (unsigned int i = 0; i < n_dofs; ++i) {
+              const double hphi = h * fv.shape_value(i, q) * fv.JxW(q);
+              cell_source(i) += hphi * t_inf;
+              local_ambient += dt * hphi * t_inf;
+              for (unsigned int j = 0; j < n_dofs; ++j)
+                cell_stiffness(i, j) += hphi * fv.shape_value(j, q);
+            }
+        });
 
-    // Nodal powers from the coupling layer: each owned DoF enters through exactly one cell,
-    // so the constraints distribute it like any other load.
-    if (has_external_)
-      for (unsigned int i = 0; i < n_dofs; ++i)
-        if (locally_owned_dofs_.is_element(dofs[i])) {
-          const auto k = locally_owned_dofs_.index_within_set(dofs[i]);
-          if (!external_claimed[k]) {
-            external_claimed[k] = true;
-            cell_source(i) += external_(dofs[i]);
-          }
-        }
+    local_sources += dt * claim_external(cell_source);
 
     // (M + theta dt K) T^{n+1} = (M - (1-theta) dt K) T^n + dt F_theta
     cell->get_dof_values(solution_, old_values);
@@ -343,10 +454,8 @@ void HeatSolver<dim>::assemble_step(double dt, bool rebuild_matrix) {
         cell_matrix(i, j) = cell_mass(i, j) + theta * dt * cell_stiffness(i, j);
     cell_mass.vmult(cell_rhs, old_values);
     cell_stiffness.vmult(tmp, old_values);
-    for (unsigned int i = 0; i < n_dofs; ++i) {
+    for (unsigned int i = 0; i < n_dofs; ++i)
       cell_rhs(i) += -(1.0 - theta) * dt * tmp(i) + dt * cell_source(i);
-      local_supplied += dt * cell_source(i);
-    }
     if (rebuild_matrix)
       constraints_.distribute_local_to_global(cell_matrix, cell_rhs, dofs, system_matrix_,
                                               system_rhs_);
@@ -356,7 +465,13 @@ void HeatSolver<dim>::assemble_step(double dt, bool rebuild_matrix) {
   if (rebuild_matrix)
     system_matrix_.compress(VectorOperation::add);
   system_rhs_.compress(VectorOperation::add);
-  supplied_energy_ += Utilities::MPI::sum(local_supplied, comm_);
+  local_sources -= regularise_idle_rows(rebuild_matrix);
+  double parts[3] = {local_sources, local_ambient, local_arterial}, sums[3];
+  Utilities::MPI::sum(ArrayView<const double>(parts, 3), comm_, ArrayView<double>(sums, 3));
+  source_energy_ += sums[0];
+  convected_energy_ -= sums[1];
+  perfused_energy_ -= sums[2];
+  supplied_energy_ += sums[0] + sums[1] + sums[2];
 }
 
 template <int dim>
@@ -430,7 +545,7 @@ void HeatSolver<dim>::advance(double dt) {
   AssertThrow(is_set_up(), ExcMessage("HeatSolver::setup() must come first"));
   if (!(dt > 0) || !std::isfinite(dt))
     throw InvalidInput("heat time step", "dt = " + format_number(dt), "a positive finite step [s]");
-  const double loss_old = convection_loss(solution_);
+  const double loss_old = convection_loss(solution_), perfused_old = perfusion_loss(solution_);
   if (!fixed_.empty())
     make_constraints(time_ + dt); // same structure, new boundary values
   const bool rebuild = (dt != matrix_dt_);
@@ -444,8 +559,12 @@ void HeatSolver<dim>::advance(double dt) {
   ++step_;
   has_external_ = false;
   check_finite("heat solution");
-  const double loss_new = convection_loss(solution_);
-  supplied_energy_ -= dt * (prm_.theta * loss_new + (1.0 - prm_.theta) * loss_old);
+  const double loss_new = convection_loss(solution_), perfused_new = perfusion_loss(solution_);
+  const double convected = dt * (prm_.theta * loss_new + (1.0 - prm_.theta) * loss_old);
+  const double perfused = dt * (prm_.theta * perfused_new + (1.0 - prm_.theta) * perfused_old);
+  convected_energy_ += convected;
+  perfused_energy_ += perfused;
+  supplied_energy_ -= convected + perfused;
 }
 
 template <int dim>
@@ -499,12 +618,20 @@ std::vector<double> HeatSolver<dim>::temperature_at_points(const std::vector<Poi
 
 template <int dim>
 double HeatSolver<dim>::heat_content() const {
+  return heat_content_where([](const auto&) { return true; });
+}
+
+template <int dim>
+double HeatSolver<dim>::heat_content_where(
+    const std::function<bool(const typename Triangulation<dim>::active_cell_iterator&)>& select)
+    const {
   const QGauss<dim> quadrature(fe_->degree + 1);
   FEValues<dim> fe_values(*fe_, quadrature, update_values | update_JxW_values);
   std::vector<double> values(quadrature.size());
   double local = 0;
   for (const auto& cell : dof_handler_.active_cell_iterators()) {
-    if (!cell->is_locally_owned())
+    if (!cell->is_locally_owned() || is_removed(cell) ||
+        !select(typename Triangulation<dim>::active_cell_iterator(cell)))
       continue;
     fe_values.reinit(cell);
     fe_values.get_function_values(solution_, values);
@@ -532,11 +659,14 @@ double HeatSolver<dim>::min_temperature() const {
 }
 
 template <int dim>
-std::string HeatSolver<dim>::write_output(const std::string& directory, unsigned int counter,
-                                          const std::string& basename) const {
+std::string HeatSolver<dim>::write_output(
+    const std::string& directory, unsigned int counter, const std::string& basename,
+    const std::vector<std::pair<std::string, const TrilinosWrappers::MPI::Vector*>>& extra) const {
   DataOut<dim> data_out;
   data_out.attach_dof_handler(dof_handler_);
   data_out.add_data_vector(solution_, "temperature");
+  for (const auto& [name, vector] : extra)
+    data_out.add_data_vector(*vector, name);
   Vector<float> subdomain(triangulation_.n_active_cells()), material_id(subdomain.size());
   for (const auto& cell : triangulation_.active_cell_iterators())
     if (cell->is_locally_owned()) {

@@ -90,21 +90,59 @@ class HeatSolver {
   unsigned int step_number() const { return step_; }
   // Restores the clock and the energy counter after a checkpoint load.
   void set_time(double time, double supplied_energy = 0.0);
+  // Restores the parts of supplied_energy() after a checkpoint load.
+  void set_energy_parts(double source, double convected, double perfused) {
+    source_energy_ = source;
+    convected_energy_ = convected;
+    perfused_energy_ = perfused;
+  }
 
-  // Integral of rho c T over the body [J] ([J/m] in 2-D). Collective.
+  // Material removal (drilling, cutting): cells of material id `material_id` are no longer part
+  // of the body. They are left out of every integral; their faces shared with kept cells form
+  // the wall of the cavity, which convects with h (T − T_inf); temperatures only removed cells
+  // touch are frozen. Call cells_removed() whenever the caller has given more cells (owned and
+  // ghost alike) that id.
+  struct Removal {
+    dealii::types::material_id material_id = dealii::numbers::invalid_material_id;
+    double wall_heat_transfer_coefficient = 0; // h [W/(m^2 K)]
+    double wall_ambient_temperature = 293.15;  // T_inf [K]
+  };
+  void set_removal(const Removal& removal);
+  void cells_removed() { matrix_dt_ = -1; scale_cache_.clear(); }
+  template <class CellIterator>
+  bool is_removed(const CellIterator& cell) const {
+    return cell->material_id() == removal_.material_id;
+  }
+  const Removal& removal() const { return removal_; }
+
+  // Integral of rho c T over the body [J] ([J/m] in 2-D), removed cells excluded. Collective.
   double heat_content() const;
-  // Energy that entered through sources, prescribed fluxes and convection since setup [J],
-  // integrated with the same theta-rule as the scheme. Heat through fixed-temperature
-  // boundaries is not counted.
+  // The same over the kept, locally owned cells for which `select` holds (collective): e.g.
+  // the heat the cells about to be removed carry away.
+  double heat_content_where(
+      const std::function<bool(const typename dealii::Triangulation<dim>::active_cell_iterator&)>&
+          select) const;
+  // Energy that entered through sources, prescribed fluxes, convection and perfusion since
+  // setup [J], integrated with the same theta-rule as the scheme. Heat through
+  // fixed-temperature boundaries is not counted. Its parts: source_energy() from sources,
+  // fluxes and nodal powers; minus convected_energy(), the net loss by convection (boundaries
+  // and cavity walls); minus perfused_energy(), the net loss to the blood.
   double supplied_energy() const { return supplied_energy_; }
+  double source_energy() const { return source_energy_; }
+  double convected_energy() const { return convected_energy_; }
+  double perfused_energy() const { return perfused_energy_; }
   double max_temperature() const; // nodal maximum [K], collective
   double min_temperature() const;
   unsigned int last_linear_iterations() const { return last_iterations_; }
 
   // Writes <directory>/<basename>_<counter>.{N.vtu,pvtu}; returns the pvtu file name (no
   // directory). Collective.
-  std::string write_output(const std::string& directory, unsigned int counter,
-                           const std::string& basename = "temperature") const;
+  // `extra`: more nodal fields on dof_handler() (owned or ghosted vectors), by name.
+  std::string write_output(
+      const std::string& directory, unsigned int counter,
+      const std::string& basename = "temperature",
+      const std::vector<std::pair<std::string, const dealii::TrilinosWrappers::MPI::Vector*>>&
+          extra = {}) const;
 
   // Checkpoint: call prepare_for_serialization() before triangulation.save(); after
   // triangulation.load() call deserialize() (instead of setup()). With several solvers on one
@@ -122,7 +160,19 @@ class HeatSolver {
   void assemble_step(double dt, bool rebuild_matrix);
   // Scale factors making each active moving source deposit exactly its power on the mesh.
   std::vector<double> moving_source_scales(double time) const;
+  // ∫ h T dA over convecting boundaries and cavity walls, and ∫ w_b ρ_b c_b T dV [W].
   double convection_loss(const dealii::TrilinosWrappers::MPI::Vector& temperature) const;
+  double perfusion_loss(const dealii::TrilinosWrappers::MPI::Vector& temperature) const;
+  // Calls f(face_values, h, T_inf) for every convecting face (boundary or cavity wall) of a
+  // kept, locally owned cell, with face_values reinitialised on it (a subface where the
+  // removed neighbour is finer).
+  // (Defined in the .cc, its only user.)
+  template <class FaceValues, class SubfaceValues, class F>
+  void for_each_convecting_face(const typename dealii::DoFHandler<dim>::active_cell_iterator& cell,
+                                FaceValues& face, SubfaceValues& subface, const F& f) const;
+  // Rows no kept cell touches (after a removal): identity with the old value kept. Returns the
+  // local energy of nodal powers dropped there [J].
+  double regularise_idle_rows(bool matrix_rebuilt);
   void solve();
   void check_finite(const char* what) const;
 
@@ -155,7 +205,11 @@ class HeatSolver {
   struct Transfer;
   std::unique_ptr<Transfer> transfer_;
 
+  Removal removal_;
+  std::vector<dealii::types::global_dof_index> idle_rows_;
+
   double time_ = 0, supplied_energy_ = 0;
+  double source_energy_ = 0, convected_energy_ = 0, perfused_energy_ = 0;
   unsigned int step_ = 0, last_iterations_ = 0;
 };
 
