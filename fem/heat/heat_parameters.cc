@@ -83,7 +83,7 @@ void HeatParameters<dim>::declare(ParameterHandler& prm) {
         "Power", "0", Patterns::Double(0.0),
         "Total heat input of the moving Gaussian source (drill bit) [W] ([W/m] of depth "
         "in 2-D); 0 = unused slot. All of it enters the body while at least a "
-        "quarter of the Gaussian is inside (centre on the surface is fine).");
+        "fifth of the Gaussian is inside (centre on the surface is fine).");
     prm.declare_entry("Radius", "0.001", Patterns::Double(0.0),
                       "Gaussian radius r [m]: q ~ exp(-|x-c|^2/r^2).");
     prm.declare_entry("Speed", "0", Patterns::Double(0.0),

@@ -238,11 +238,12 @@ std::vector<double> HeatSolver<dim>::moving_source_scales(double time) const {
   Utilities::MPI::sum(local, comm_, integral);
   std::vector<double> scale(moving_.size(), 0.0);
   for (unsigned int s = 0; s < moving_.size(); ++s)
-    // Full power while at least a quarter of the Gaussian is inside (centre inside, on a face
-    // or on a 2-D corner / 3-D edge), fading with the overlap as the centre leaves, so the
-    // power never concentrates in a sliver of the mesh.
+    // Full power while at least a fifth of the Gaussian is inside (centre inside, on a face, or
+    // on a 2-D corner / 3-D edge, where a quarter is inside up to the quadrature's error),
+    // fading with the overlap as the centre leaves, so the power never concentrates in a
+    // sliver of the mesh.
     if (moving_[s].active(time))
-      scale[s] = moving_[s].power() / std::max(integral[s], 0.25);
+      scale[s] = moving_[s].power() / std::max(integral[s], 0.2);
   scale_cache_time_ = time;
   scale_cache_ = scale;
   return scale;

@@ -25,7 +25,7 @@ class MovingHeatSource {
   dealii::Point<dim> position(double time) const;
   // Gaussian density exp(-|x-c|^2/r^2) / (pi^(dim/2) r^dim) [1/m^dim]; it integrates to 1 over
   // R^dim. The solver rescales it on the mesh so that exactly `power` enters the body while at
-  // least a quarter of the Gaussian lies inside (centre inside, on a face, or on a 2-D corner /
+  // least a fifth of the Gaussian lies inside (centre inside, on a face, or on a 2-D corner /
   // 3-D edge: the bit's heat goes into the bone it touches), fading beyond.
   double density(const dealii::Point<dim>& x, double time) const;
   // The same about a known centre (assembly loops compute position() once per time).
