@@ -1,0 +1,855 @@
+// The `bone_drilling` scenario: a twist drill cutting holes in a cortical/cancellous bone
+// block, with the heat its cutting produces, the bone it removes, and the thermal damage it
+// leaves (docs/drilling.md).
+//
+// Data flow per step [t, t + dt]:
+//  1. The drilling programme (instruments/drilling_programme.h) moves the bit and integrates
+//     the mechanistic cutting power M ω + F v and the margin friction over the step, with the
+//     cutting coefficients of the bone each lip point is in (cortical, cancellous, none).
+//  2. p4est refines the cells ahead of the tip to the drill resolution (heat and dose fields
+//     carried over by interpolation, exact for Q1 under refinement).
+//  3. Cells whose centre the bit has swept leave the model (material id `removed_id`): the
+//     heat they hold, their volume and mass are booked as chips; their faces shared with
+//     kept bone become the hole wall, which convects (irrigation or air).
+//  4. The step's heat Partition × energy / dt enters the bone: the cutting part uniformly on
+//     the faces within 1.5 cells of the bit's cone (the lips; the top face while the point
+//     enters), the friction part on the hole wall behind the cone; as nodal powers that sum
+//     exactly to the power.
+//  5. The heat solver (backward Euler) advances; the CEM43 dose and the time above the
+//     necrosis temperature accumulate per node, exactly for a linear T(t) over the step.
+// The time step follows the feed: the tip advances Cells per step of a drill cell per step.
+// After the last hole the run continues for the Cooling time with the Maximum time step.
+
+#include "applications/drilling/drilling_sections.h"
+#include "applications/drilling/thermal_dose.h"
+#include "applications/framework/parse_section.h"
+#include "applications/framework/run_context.h"
+#include "applications/framework/scenario.h"
+#include "applications/studies/child_run.h"
+#include "applications/studies/study_plot.h"
+#include "base/exceptions.h"
+#include "fem/heat/heat_solver.h"
+#include "fem/material_id_transfer.h"
+#include "instruments/drilling_programme.h"
+
+#include <deal.II/base/mpi.h>
+#include <deal.II/base/quadrature_lib.h>
+#include <deal.II/distributed/solution_transfer.h>
+#include <deal.II/distributed/tria.h>
+#include <deal.II/fe/fe_values.h>
+#include <deal.II/grid/grid_generator.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <iomanip>
+#include <limits>
+#include <memory>
+#include <sstream>
+
+namespace spinesim::applications {
+
+using namespace framework;
+
+// A named namespace, not an anonymous one: unity builds join scenario files.
+namespace bone_drilling {
+
+using namespace drilling;
+using instruments::DrillPhase;
+using Vector = dealii::TrilinosWrappers::MPI::Vector;
+
+constexpr dealii::types::material_id removed_id = 100;
+constexpr dealii::types::boundary_id top_id = 5; // z = 0 of the colorised block
+
+std::string fmt(double v, int digits = 6) {
+  std::ostringstream s;
+  s << std::setprecision(digits) << v;
+  return s.str();
+}
+
+std::string mm_point(const dealii::Point<3>& x) {
+  std::ostringstream s;
+  s << "(" << x[0] * 1e3 << ", " << x[1] * 1e3 << ", " << x[2] * 1e3 << ") mm";
+  return s.str();
+}
+
+std::vector<double> steps_over(double length, double h) {
+  const unsigned int n = std::max(1u, static_cast<unsigned int>(std::ceil(length / h - 1e-9)));
+  return std::vector<double>(n, length / n);
+}
+
+// Distance in the (a, r) plane from (a, r) to the segment (a0, r0)–(a1, r1).
+double segment_distance(double a, double r, double a0, double r0, double a1, double r1) {
+  const double da = a1 - a0, dr = r1 - r0, len2 = da * da + dr * dr;
+  const double t = len2 > 0 ? std::clamp(((a - a0) * da + (r - r0) * dr) / len2, 0.0, 1.0) : 0.0;
+  return std::hypot(a - (a0 + t * da), r - (r0 + t * dr));
+}
+
+struct DrillingRun;
+
+class BoneDrilling : public Scenario {
+ public:
+  explicit BoneDrilling(const ScenarioFactoryArgs& args) {
+    if (args.dim != 3)
+      throw InvalidInput("Dimension", std::to_string(args.dim), "3 (a drill is a 3-D tool)");
+    parse_section(args.prm, "Drill", drill_);
+    parse_section(args.prm, "Bone block", bone_);
+    parse_section(args.prm, "Mesh", mesh_);
+    parse_section(args.prm, "Cooling", cooling_);
+    parse_section(args.prm, "Thermal damage", damage_);
+    parse_section(args.prm, "Drilling run", run_);
+    check_geometry();
+  }
+
+  void run(RunContext& ctx) override;
+
+ private:
+  // Bad input: holes that leave the block or start inside it, probes outside the bone or in a
+  // hole.
+  void check_geometry() const {
+    const double R = drill_.bit.radius(), half = 0.5 * bone_.width;
+    for (unsigned int j = 0; j < drill_.holes.size(); ++j) {
+      const auto& h = drill_.holes[j];
+      const std::string slot = "Drill/Hole " + std::to_string(j + 1) + "/";
+      if (h.axis.entry[2] < -1e-9)
+        throw InvalidInput(slot + "Entry", mm_point(h.axis.entry),
+                           "a point on or above the block's top face z = 0 (the drill comes "
+                           "from outside)");
+      if (!(h.axis.direction[2] < 0))
+        throw InvalidInput(slot + "Direction", "z component " + fmt(h.axis.direction[2]),
+                           "a direction into the block (negative z)");
+      const dealii::Point<3> surface = h.axis.point(-h.axis.entry[2] / h.axis.direction[2]);
+      const dealii::Point<3> end = h.axis.point(h.depth);
+      for (const auto& [name, x] : {std::pair{"where the hole crosses the top face", surface},
+                                    std::pair{"the tip's final position", end}})
+        if (std::abs(x[0]) > half - R || std::abs(x[1]) > half - R)
+          throw InvalidInput(slot + "Entry", std::string(name) + " " + mm_point(x) +
+                                                 " is outside the block or closer to its side "
+                                                 "than the drill radius",
+                             "x and y within +-(Bone block/Width/2 - radius) = +-" +
+                                 fmt((half - R) * 1e3) + " mm");
+      if (!(end[2] > -bone_.height))
+        throw InvalidInput(slot + "Depth", fmt(h.depth * 1e3) + " mm",
+                           "a depth whose tip stays inside the block (above z = -Bone block/Height)");
+    }
+    for (unsigned int p = 0; p < damage_.probes.size(); ++p) {
+      const auto& x = damage_.probes[p];
+      if (!bone_.inside(x) || x[2] >= 0)
+        throw InvalidInput("Thermal damage/Probes",
+                           "probe " + std::to_string(p + 1) + " at " + mm_point(x) +
+                               " is outside the bone",
+                           "points inside the block [-W/2, W/2]^2 x [-Height, 0)");
+      for (unsigned int j = 0; j < drill_.holes.size(); ++j)
+        if (final_hole_distance(j, x) <= 0)
+          throw InvalidInput("Thermal damage/Probes",
+                             "probe " + std::to_string(p + 1) + " at " + mm_point(x) +
+                                 " lies in hole " + std::to_string(j + 1) +
+                                 ", which drills it away",
+                             "points outside every hole");
+    }
+  }
+
+  double final_hole_distance(unsigned int j, const dealii::Point<3>& x) const {
+    const auto& h = drill_.holes[j];
+    return instruments::distance_to_swept_solid(h.axis.axial(x), h.axis.radial(x), h.depth,
+                                                drill_.bit.radius(), drill_.bit.half_angle());
+  }
+
+  // The coefficients of the bone at a lip point of hole j, or none.
+  const instruments::CuttingCoefficients* bone_at(unsigned int j, double a, double r,
+                                                  const std::vector<double>& deepest) const {
+    const auto& axis = drill_.holes[j].axis;
+    // Any direction normal to the axis: the block is the same all round at this scale.
+    dealii::Tensor<1, 3> n = dealii::cross_product_3d(axis.direction, dealii::Tensor<1, 3>({1, 0, 0}));
+    if (n.norm() < 1e-6)
+      n = dealii::cross_product_3d(axis.direction, dealii::Tensor<1, 3>({0, 1, 0}));
+    const dealii::Point<3> x = axis.point(a) + r * n / n.norm();
+    if (!bone_.inside(x) || x[2] > 0)
+      return nullptr;
+    for (unsigned int k = 0; k < j; ++k) // holes drilled before
+      if (instruments::in_swept_solid(drill_.holes[k].axis.axial(x), drill_.holes[k].axis.radial(x),
+                                      deepest[k], drill_.bit.radius(), drill_.bit.half_angle()))
+        return nullptr;
+    return bone_.layer(x) == 0 ? &bone_.cortical.cutting : &bone_.cancellous.cutting;
+  }
+
+  // VTU of temperature, CEM43 dose, time above the necrosis temperature and material.
+  void write_fields(RunContext& ctx, DrillingRun& S, unsigned int counter) const;
+  // probes.csv and probes.png (gnuplot): 1 valid, 0 not, NaN without gnuplot or probes.
+  double plot_probes(RunContext& ctx, const std::vector<std::vector<double>>& series) const;
+
+  DrillSection drill_;
+  BoneSection bone_;
+  MeshSection mesh_;
+  CoolingSection cooling_;
+  DamageSection damage_;
+  RunSection run_;
+};
+
+// The run's state between the helpers of run(): mesh, solver, dose fields and books.
+struct DrillingRun {
+  dealii::parallel::distributed::Triangulation<3>& tria;
+  fem::HeatSolver<3>& heat;
+  Vector cem43, above; // owned, per heat DoF: [min], [s]
+  double removed_volume = 0, removed_mass = 0, chips_heat = 0;
+  unsigned int refinements = 0;
+};
+
+void BoneDrilling::run(RunContext& ctx) {
+  const MPI_Comm comm = ctx.comm();
+  const auto& bit = drill_.bit;
+  const double R = bit.radius(), kappa = bit.half_angle(), Lc = bit.cone_length();
+  const double h_drill = bit.diameter / mesh_.cells_across_diameter;
+  const instruments::DrillingProgramme programme(instruments::DrillingForceModel(bit),
+                                                 drill_.holes, drill_.schedule);
+  ctx.log() << "  " << bit.describe() << "; " << drill_.holes.size() << " hole(s); "
+            << drill_.schedule.spindle_rpm << " rpm, "
+            << (drill_.schedule.thrust_control
+                    ? "thrust " + fmt(drill_.schedule.thrust_force) + " N"
+                    : "feed " + fmt(drill_.schedule.feed_rate * 1e3) + " mm/s (" +
+                          fmt(drill_.schedule.feed_rate * 60e3 / drill_.schedule.spindle_rpm) +
+                          " mm/rev)")
+            << "; heat partition " << drill_.heat_partition << "; "
+            << (cooling_.irrigation ? "irrigated" : "dry") << "\n";
+
+  // ---- mesh: coarse cells of h_drill 2^k, refined where the bit will pass.
+  dealii::parallel::distributed::Triangulation<3> tria(
+      comm, dealii::Triangulation<3>::limit_level_difference_at_vertices);
+  {
+    dealii::TimerOutput::Scope t(ctx.timer(), "mesh");
+    const int k =
+        std::max(0, static_cast<int>(std::lround(std::log2(mesh_.coarse_cell / h_drill))));
+    const double coarse = h_drill * std::pow(2.0, k);
+    const double W = bone_.width;
+    dealii::GridGenerator::subdivided_hyper_rectangle(
+        tria, {steps_over(W, coarse), steps_over(W, coarse), steps_over(bone_.height, coarse)},
+        dealii::Point<3>(-W / 2, -W / 2, -bone_.height), dealii::Point<3>(W / 2, W / 2, 0), true);
+  }
+  const auto classify = [&]() {
+    for (const auto& cell : tria.active_cell_iterators())
+      if (!cell->is_artificial() && cell->material_id() != removed_id)
+        cell->set_material_id(bone_.layer(cell->center()));
+  };
+  // Flags the cells near hole j down to `reach` (axial, from the entry) that are coarser than
+  // the drill cells, and those the final hole's wall or point cut that are coarser than the
+  // wall cells.
+  const double h_wall = h_drill / std::pow(2.0, mesh_.wall_levels);
+  const auto flag_near = [&](unsigned int j, double reach) {
+    unsigned int flagged = 0;
+    const auto& hole = drill_.holes[j];
+    const auto& axis = hole.axis;
+    // From where the axis crosses the top face, less the margin.
+    const double lo = axis.entry[2] / -axis.direction[2] - mesh_.margin;
+    for (const auto& cell : tria.active_cell_iterators())
+      if (cell->is_locally_owned() && cell->material_id() != removed_id) {
+        const double h = cell->extent_in_direction(0), half_diagonal = 0.5 * std::sqrt(3.0) * h;
+        if (h <= h_wall * (1 + 1e-9))
+          continue;
+        const double a = axis.axial(cell->center()), r = axis.radial(cell->center());
+        const double da = a < lo ? lo - a : std::max(0.0, a - reach - mesh_.margin);
+        const double dr = std::max(0.0, r - R - mesh_.margin);
+        if (std::hypot(da, dr) > half_diagonal)
+          continue;
+        // Distance to the final hole's surface: outside, or inside to the wall or the cone.
+        const double outside = instruments::distance_to_swept_solid(a, r, hole.depth, R, kappa);
+        const double to_surface =
+            outside > 0 ? outside
+                        : std::min(R - r, ((hole.depth - a) * std::tan(kappa) - r) * std::cos(kappa));
+        const bool on_wall = to_surface <= half_diagonal && a <= reach + mesh_.margin;
+        if (h > h_drill * (1 + 1e-9) || on_wall) {
+          cell->set_refine_flag();
+          ++flagged;
+        }
+      }
+    return dealii::Utilities::MPI::sum(flagged, comm);
+  };
+  // Initially: the entry of the first hole, and the whole of every hole with a pilot.
+  {
+    dealii::TimerOutput::Scope t(ctx.timer(), "mesh");
+    for (unsigned int round = 0; round < 12; ++round) {
+      unsigned int flagged = 0;
+      for (unsigned int j = 0; j < drill_.holes.size(); ++j)
+        if (bit.pilot_diameter > 0 || j == 0)
+          flagged += flag_near(j, bit.pilot_diameter > 0
+                                      ? drill_.holes[j].depth
+                                      : drill_.holes[j].axis.entry[2] /
+                                                -drill_.holes[j].axis.direction[2] +
+                                            mesh_.lookahead);
+      if (flagged == 0)
+        break;
+      tria.execute_coarsening_and_refinement();
+    }
+    classify();
+  }
+
+  // ---- heat.
+  fem::HeatParameters<3> hp;
+  hp.theta = 1.0; // backward Euler: robust where cells leave and sources switch
+  hp.time_step = run_.max_time_step;
+  hp.initial_temperature = fmt(cooling_.body_temperature, 17);
+  hp.default_material = {bone_.cortical.conductivity, bone_.cortical.density,
+                         bone_.cortical.specific_heat};
+  hp.material_overrides.push_back(
+      {1, {bone_.cancellous.conductivity, bone_.cancellous.density, bone_.cancellous.specific_heat}});
+  hp.convections.push_back({top_id, cooling_.wall_h(), cooling_.wall_temperature()});
+  hp.perfusion.rate = cooling_.perfusion_rate;
+  hp.perfusion.arterial_temperature = cooling_.body_temperature;
+  hp.solver_tolerance = 1e-12;
+  fem::HeatSolver<3> heat(tria, hp);
+  {
+    dealii::TimerOutput::Scope t(ctx.timer(), "heat setup");
+    heat.setup();
+    heat.set_removal({removed_id, cooling_.wall_h(), cooling_.wall_temperature()});
+  }
+  // The hole walls convect fully once open; while a bit fills its hole, only what its flutes
+  // carry (Cooling/Flute irrigation fraction).
+  bool wall_open = true;
+  const auto set_wall = [&](bool open) {
+    if (open == wall_open)
+      return;
+    wall_open = open;
+    heat.set_removal({removed_id, (open ? 1.0 : cooling_.flute_fraction) * cooling_.wall_h(),
+                      cooling_.wall_temperature()});
+  };
+  DrillingRun S{tria, heat, {}, {}};
+  S.cem43.reinit(heat.locally_owned_dofs(), comm);
+  S.above.reinit(heat.locally_owned_dofs(), comm);
+
+  const auto density_of = [&](dealii::types::material_id id) {
+    return id == 1 ? bone_.cancellous.density : bone_.cortical.density;
+  };
+  double initial_mass = 0;
+  for (const auto& cell : tria.active_cell_iterators())
+    if (cell->is_locally_owned())
+      initial_mass += density_of(cell->material_id()) * cell->measure();
+  initial_mass = dealii::Utilities::MPI::sum(initial_mass, comm);
+  const double initial_content = heat.heat_content();
+
+  // Refines near hole j to `reach`, carrying temperature and doses over.
+  const auto refine = [&](unsigned int j, double reach) {
+    for (unsigned int round = 0; round < 12; ++round) {
+      if (flag_near(j, reach) == 0)
+        return;
+      dealii::parallel::distributed::SolutionTransfer<3, Vector> t_cem(heat.dof_handler()),
+          t_above(heat.dof_handler());
+      Vector cem_g(heat.locally_owned_dofs(), heat.locally_relevant_dofs(), comm),
+          above_g(heat.locally_owned_dofs(), heat.locally_relevant_dofs(), comm);
+      cem_g = S.cem43;
+      above_g = S.above;
+      tria.prepare_coarsening_and_refinement();
+      fem::MaterialIdTransfer<3> ids(tria); // removed cells stay removed on any rank
+      ids.prepare();
+      heat.prepare_for_coarsening_and_refinement();
+      t_cem.prepare_for_coarsening_and_refinement(cem_g);
+      t_above.prepare_for_coarsening_and_refinement(above_g);
+      tria.execute_coarsening_and_refinement();
+      ids.finish();
+      heat.finish_refinement();
+      S.cem43.reinit(heat.locally_owned_dofs(), comm);
+      S.above.reinit(heat.locally_owned_dofs(), comm);
+      t_cem.interpolate(S.cem43);
+      t_above.interpolate(S.above);
+      classify();
+      heat.cells_removed();
+      ++S.refinements;
+    }
+  };
+  // Removes the kept cells whose centre lies in `inside`, booking heat, volume and mass.
+  const auto remove = [&](const std::function<bool(const dealii::Point<3>&)>& inside) {
+    const auto goes = [&](const auto& cell) {
+      return cell->material_id() != removed_id && inside(cell->center());
+    };
+    S.chips_heat += heat.heat_content_where(goes);
+    double volume = 0, mass = 0;
+    unsigned int n = 0;
+    for (const auto& cell : tria.active_cell_iterators())
+      if (!cell->is_artificial() && goes(cell)) {
+        if (cell->is_locally_owned()) {
+          volume += cell->measure();
+          mass += density_of(cell->material_id()) * cell->measure();
+          ++n;
+        }
+        cell->set_material_id(removed_id);
+      }
+    S.removed_volume += dealii::Utilities::MPI::sum(volume, comm);
+    S.removed_mass += dealii::Utilities::MPI::sum(mass, comm);
+    if (dealii::Utilities::MPI::sum(n, comm) > 0)
+      heat.cells_removed();
+  };
+  if (bit.pilot_diameter > 0) {
+    dealii::TimerOutput::Scope t(ctx.timer(), "removal");
+    remove([&](const dealii::Point<3>& x) {
+      for (const auto& h : drill_.holes)
+        if (instruments::in_swept_solid(h.axis.axial(x), h.axis.radial(x), h.depth,
+                                        bit.pilot_radius(), kappa))
+          return true;
+      return false;
+    });
+  }
+
+  // ---- heat input on the faces of kept cells: the lips' zone and the wall behind it.
+  struct Zone {
+    double cut_area = 0, wall_area = 0;
+  };
+  // Calls f(face values, is_cutting) for each face in a zone of hole j with its tip at `tip`.
+  dealii::QGauss<2> face_quadrature(2);
+  dealii::FEFaceValues<3> fe_face(heat.fe(), face_quadrature,
+                                  dealii::update_values | dealii::update_JxW_values);
+  dealii::FESubfaceValues<3> fe_subface(heat.fe(), face_quadrature,
+                                        dealii::update_values | dealii::update_JxW_values);
+  const auto for_each_zone_face = [&](unsigned int j, double tip, double reach,
+                                      const auto& f) {
+    const auto& axis = drill_.holes[j].axis;
+    const double r0 = bit.pilot_radius();
+    const auto classify_face = [&](const dealii::Point<3>& c, bool wall) -> int {
+      const double a = axis.axial(c), r = axis.radial(c);
+      // The lips: the cone from (tip − R/tan κ, R) to (tip − r_p/tan κ, r_p).
+      if (segment_distance(a, r, tip - R / std::tan(kappa), R, tip - r0 / std::tan(kappa), r0) <=
+          reach)
+        return 1;
+      if (wall && std::abs(r - R) <= reach && a >= -reach && a <= tip - Lc)
+        return 2;
+      return 0;
+    };
+    for (const auto& cell : heat.dof_handler().active_cell_iterators()) {
+      if (!cell->is_locally_owned() || cell->material_id() == removed_id)
+        continue;
+      for (const unsigned int face : cell->face_indices()) {
+        if (cell->face(face)->at_boundary()) {
+          if (cell->face(face)->boundary_id() != top_id)
+            continue;
+          const int zone = classify_face(cell->face(face)->center(), false);
+          if (zone) {
+            fe_face.reinit(cell, face);
+            f(cell, static_cast<const dealii::FEFaceValuesBase<3>&>(fe_face), zone);
+          }
+        } else if (cell->face(face)->has_children()) {
+          for (unsigned int sf = 0; sf < cell->face(face)->n_children(); ++sf)
+            if (cell->neighbor_child_on_subface(face, sf)->material_id() == removed_id) {
+              const int zone = classify_face(cell->face(face)->child(sf)->center(), true);
+              if (zone) {
+                fe_subface.reinit(cell, face, sf);
+                f(cell, static_cast<const dealii::FEFaceValuesBase<3>&>(fe_subface), zone);
+              }
+            }
+        } else if (cell->neighbor(face)->material_id() == removed_id) {
+          const int zone = classify_face(cell->face(face)->center(), true);
+          if (zone) {
+            fe_face.reinit(cell, face);
+            f(cell, static_cast<const dealii::FEFaceValuesBase<3>&>(fe_face), zone);
+          }
+        }
+      }
+    }
+  };
+  // Nodal powers: cut [W] over the lips' zone, wall [W] over the wall behind it (or the lips'
+  // zone where there is no wall yet). Their sum is cut + wall exactly.
+  const auto heat_input = [&](unsigned int j, double tip, double cut, double wall) -> Vector {
+    double reach = 1.5 * h_drill;
+    Zone z;
+    for (int widen = 0; widen < 4; ++widen, reach *= 2) {
+      z = Zone();
+      for_each_zone_face(j, tip, reach, [&](const auto&, const auto& fv, int zone) {
+        double area = 0;
+        for (unsigned int q = 0; q < fv.n_quadrature_points; ++q)
+          area += fv.JxW(q);
+        (zone == 1 ? z.cut_area : z.wall_area) += area;
+      });
+      z.cut_area = dealii::Utilities::MPI::sum(z.cut_area, comm);
+      z.wall_area = dealii::Utilities::MPI::sum(z.wall_area, comm);
+      if (z.cut_area > 0 || cut + wall == 0)
+        break;
+    }
+    if (cut + wall > 0 && z.cut_area == 0)
+      throw NumericalFailure("no bone face near the drill's lips to take the cutting heat",
+                             "hole " + std::to_string(j + 1) + ", tip at " + fmt(tip * 1e3) +
+                                 " mm",
+                             "the mesh is too coarse near the tip: raise Mesh/Cells across "
+                             "diameter or Mesh/Lookahead");
+    const double q_cut = (cut + (z.wall_area > 0 ? 0.0 : wall)) / z.cut_area;
+    const double q_wall = z.wall_area > 0 ? wall / z.wall_area : 0.0;
+    Vector writable;
+    writable.reinit(heat.locally_owned_dofs(), heat.locally_relevant_dofs(), comm, true);
+    std::vector<dealii::types::global_dof_index> dofs(heat.fe().n_dofs_per_cell());
+    if (cut + wall > 0)
+      for_each_zone_face(j, tip, reach, [&](const auto& cell, const auto& fv, int zone) {
+        const double q = zone == 1 ? q_cut : q_wall;
+        cell->get_dof_indices(dofs);
+        for (unsigned int i = 0; i < dofs.size(); ++i) {
+          double p = 0;
+          for (unsigned int k = 0; k < fv.n_quadrature_points; ++k)
+            p += q * fv.shape_value(i, k) * fv.JxW(k);
+          writable(dofs[i]) += p;
+        }
+      });
+    writable.compress(dealii::VectorOperation::add);
+    Vector owned(heat.locally_owned_dofs(), comm);
+    for (const auto i : heat.locally_owned_dofs())
+      owned(i) = writable(i);
+    owned.compress(dealii::VectorOperation::insert);
+    return owned;
+  };
+
+  // Largest temperature on kept bone (removed cells' nodes are frozen at their last values).
+  const auto kept_max_temperature = [&]() {
+    double local = -std::numeric_limits<double>::max();
+    std::vector<dealii::types::global_dof_index> dofs(heat.fe().n_dofs_per_cell());
+    for (const auto& cell : heat.dof_handler().active_cell_iterators())
+      if (cell->is_locally_owned() && cell->material_id() != removed_id) {
+        cell->get_dof_indices(dofs);
+        for (const auto i : dofs)
+          local = std::max(local, heat.solution()(i));
+      }
+    return dealii::Utilities::MPI::max(local, comm);
+  };
+
+  // ---- stepping.
+  const unsigned int n_probes = damage_.probes.size();
+  std::vector<double> probe_peak(n_probes, cooling_.body_temperature), probe_above(n_probes, 0.0);
+  std::vector<double> probe_T(n_probes, cooling_.body_temperature);
+  std::vector<std::vector<double>> probe_series; // time, then T per probe [°C]
+  instruments::DrillState state = programme.initial_state();
+  const double feed_dt =
+      std::min(run_.max_time_step, run_.cells_per_step * h_drill / drill_.schedule.feed_rate);
+  const double nominal_end = programme.nominal_duration() + run_.cooling_time;
+  ctx.log() << "  mesh: " << tria.n_global_active_cells() << " cells, drill cells "
+            << h_drill * 1e3 << " mm (" << mesh_.cells_across_diameter
+            << " across the diameter); " << heat.dof_handler().n_dofs() << " DoFs at the start\n";
+  ctx.set_cost({"fem_heat", double(heat.dof_handler().n_dofs()) * nominal_end / feed_dt,
+                double(heat.dof_handler().n_dofs())});
+  ctx.progress().start("bone drilling", static_cast<unsigned int>(std::ceil(nominal_end / feed_dt)),
+                       nominal_end);
+  const auto start = std::chrono::steady_clock::now();
+  double t = 0, done_at = -1, peak_T = cooling_.body_temperature, max_thrust = 0, max_torque = 0;
+  double cutting_energy = 0, friction_energy = 0, offered_heat = 0, max_dofs = 0;
+  unsigned int step = 0, output_counter = 0;
+  const auto material = [&](unsigned int j, double a, double r) {
+    return bone_at(j, a, r, state.deepest);
+  };
+  while (done_at < 0 || t < done_at + run_.cooling_time - 1e-12) {
+    ++step;
+    // The step: a fraction of a drill cell while feeding, the largest otherwise.
+    double dt = state.phase == DrillPhase::done ? run_.max_time_step : feed_dt;
+    if (state.phase == DrillPhase::feed && drill_.schedule.thrust_control && state.tip > 0) {
+      const double v = std::max(1e-9, programme.model().feed_for_thrust(
+                                          state.tip, drill_.schedule.thrust_force,
+                                          drill_.schedule.spindle_rpm,
+                                          [&](double a, double r) { return material(state.hole, a, r); },
+                                          1e-3) *
+                                          drill_.schedule.spindle_rpm / 60.0);
+      dt = std::min(run_.max_time_step, run_.cells_per_step * h_drill / v);
+    }
+    if (done_at >= 0)
+      dt = std::min(dt, done_at + run_.cooling_time - t);
+    instruments::DrillInterval interval;
+    {
+      dealii::TimerOutput::Scope timer(ctx.timer(), "drill");
+      interval = programme.advance(state, dt, run_.substeps, material);
+    }
+    cutting_energy += interval.cutting_energy;
+    friction_energy += interval.friction_energy;
+    max_thrust = std::max(max_thrust, interval.max_thrust);
+    max_torque = std::max(max_torque, interval.max_torque);
+    const bool drilling = state.phase != DrillPhase::done && state.phase != DrillPhase::pause;
+    const unsigned int j = std::min<unsigned int>(state.hole, drill_.holes.size() - 1);
+    if (drilling) {
+      {
+        dealii::TimerOutput::Scope timer(ctx.timer(), "refinement");
+        refine(j, std::min(drill_.holes[j].depth, state.deepest[j] + mesh_.lookahead));
+      }
+      dealii::TimerOutput::Scope timer(ctx.timer(), "removal");
+      const double tip = state.deepest[j];
+      const auto& axis = drill_.holes[j].axis;
+      remove([&](const dealii::Point<3>& x) {
+        return instruments::in_swept_solid(axis.axial(x), axis.radial(x), tip, R, kappa);
+      });
+    }
+    // Heat into the bone over the step, as a constant power.
+    const double cut = drill_.heat_partition * interval.cutting_energy / dt;
+    const double wall = drill_.heat_partition * interval.friction_energy / dt;
+    offered_heat += (cut + wall) * dt;
+    if (cut + wall > 0) {
+      dealii::TimerOutput::Scope timer(ctx.timer(), "heat input");
+      heat.add_source_vector(heat_input(j, state.tip, cut, wall));
+    }
+    set_wall(!drilling);
+    const Vector old_T = heat.solution();
+    {
+      dealii::TimerOutput::Scope timer(ctx.timer(), "heat");
+      try {
+        heat.advance(dt);
+      } catch (NumericalFailure& f) {
+        f.set_step(step, t + dt);
+        throw;
+      }
+    }
+    t += dt;
+    if (state.phase == DrillPhase::done && done_at < 0)
+      done_at = t;
+    {
+      dealii::TimerOutput::Scope timer(ctx.timer(), "thermal dose");
+      for (const auto i : heat.locally_owned_dofs()) {
+        S.cem43(i) += cem43_increment(old_T(i), heat.solution()(i), dt);
+        S.above(i) += time_above(old_T(i), heat.solution()(i), dt, damage_.necrosis_temperature);
+      }
+      S.cem43.compress(dealii::VectorOperation::insert);
+      S.above.compress(dealii::VectorOperation::insert);
+    }
+    std::vector<double> T_now;
+    {
+      dealii::TimerOutput::Scope timer(ctx.timer(), "probes");
+      T_now = heat.temperature_at_points(damage_.probes);
+      for (unsigned int p = 0; p < n_probes; ++p) {
+        probe_peak[p] = std::max(probe_peak[p], T_now[p]);
+        probe_above[p] += time_above(probe_T[p], T_now[p], dt, damage_.necrosis_temperature);
+      }
+      probe_T = T_now;
+      peak_T = std::max(peak_T, kept_max_temperature());
+    }
+    max_dofs = std::max(max_dofs, double(heat.dof_handler().n_dofs()));
+    std::vector<double> series{t};
+    for (const double T : T_now)
+      series.push_back(T - celsius);
+    probe_series.push_back(series);
+    std::vector<std::pair<std::string, double>> row{
+        {"time_s", t},
+        {"hole", double(j + 1)},
+        {"phase", double(static_cast<int>(state.phase))},
+        {"tip_depth_mm", state.tip * 1e3},
+        {"thrust_N", interval.max_thrust},
+        {"torque_Nmm", interval.max_torque * 1e3},
+        {"feed_per_rev_mm", interval.feed_per_rev * 1e3},
+        {"heat_input_W", cut + wall},
+        {"max_temperature_C", peak_T - celsius},
+        {"removed_volume_mm3", S.removed_volume * 1e9},
+        {"cells", double(tria.n_global_active_cells())}};
+    for (unsigned int p = 0; p < n_probes; ++p)
+      row.emplace_back("probe_" + std::to_string(p + 1) + "_C", T_now[p] - celsius);
+    ctx.history().add(row);
+    if (run_.write_vtu && run_.output_interval > 0 && step % run_.output_interval == 0) {
+      dealii::TimerOutput::Scope timer(ctx.timer(), "output");
+      write_fields(ctx, S, ++output_counter);
+    }
+    ctx.flush_history();
+    ctx.progress().update(step, t);
+  }
+  ctx.progress().finish();
+  const double solve_time =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  // ---- thermal damage in the remaining bone.
+  double necrotic_47 = 0, necrotic_cem = 0, distance_47 = 0, distance_cem = 0;
+  {
+    dealii::TimerOutput::Scope timer(ctx.timer(), "thermal dose");
+    Vector cem_g(heat.locally_owned_dofs(), heat.locally_relevant_dofs(), comm),
+        above_g(heat.locally_owned_dofs(), heat.locally_relevant_dofs(), comm);
+    cem_g = S.cem43;
+    above_g = S.above;
+    const dealii::QGauss<3> quadrature(2);
+    dealii::FEValues<3> fv(heat.fe(), quadrature,
+                           dealii::update_values | dealii::update_JxW_values |
+                               dealii::update_quadrature_points);
+    std::vector<double> cem(quadrature.size()), above(quadrature.size());
+    for (const auto& cell : heat.dof_handler().active_cell_iterators())
+      if (cell->is_locally_owned() && cell->material_id() != removed_id) {
+        fv.reinit(cell);
+        fv.get_function_values(cem_g, cem);
+        fv.get_function_values(above_g, above);
+        for (unsigned int q = 0; q < quadrature.size(); ++q) {
+          const bool by_time = above[q] >= damage_.necrosis_time;
+          const bool by_dose = cem[q] >= damage_.cem43_threshold;
+          if (!by_time && !by_dose)
+            continue;
+          double d = std::numeric_limits<double>::max();
+          for (unsigned int k = 0; k < drill_.holes.size(); ++k) {
+            const auto& axis = drill_.holes[k].axis;
+            const auto& x = fv.quadrature_point(q);
+            d = std::min(d, instruments::distance_to_swept_solid(axis.axial(x), axis.radial(x),
+                                                                 state.deepest[k], R, kappa));
+          }
+          if (by_time) {
+            necrotic_47 += fv.JxW(q);
+            distance_47 = std::max(distance_47, d);
+          }
+          if (by_dose) {
+            necrotic_cem += fv.JxW(q);
+            distance_cem = std::max(distance_cem, d);
+          }
+        }
+      }
+    necrotic_47 = dealii::Utilities::MPI::sum(necrotic_47, comm);
+    necrotic_cem = dealii::Utilities::MPI::sum(necrotic_cem, comm);
+    distance_47 = dealii::Utilities::MPI::max(distance_47, comm);
+    distance_cem = dealii::Utilities::MPI::max(distance_cem, comm);
+  }
+
+  // ---- books: swept volume (cylindrical midpoint rule per hole, within the block), mass,
+  // energy.
+  double swept = 0;
+  for (unsigned int k = 0; k < drill_.holes.size(); ++k) {
+    const auto& axis = drill_.holes[k].axis;
+    const unsigned int na = 400, nr = 80, nt = 64;
+    const double a_lo = -axis.entry[2] / -axis.direction[2] - R, a_hi = state.deepest[k];
+    dealii::Tensor<1, 3> e1 = dealii::cross_product_3d(axis.direction, dealii::Tensor<1, 3>({1, 0, 0}));
+    if (e1.norm() < 1e-6)
+      e1 = dealii::cross_product_3d(axis.direction, dealii::Tensor<1, 3>({0, 1, 0}));
+    e1 /= e1.norm();
+    const dealii::Tensor<1, 3> e2 = dealii::cross_product_3d(axis.direction, e1);
+    const double da = (a_hi - a_lo) / na, dr = R / nr, dth = 2 * instruments::pi / nt;
+    for (unsigned int ia = 0; ia < na; ++ia)
+      for (unsigned int ir = 0; ir < nr; ++ir) {
+        const double a = a_lo + (ia + 0.5) * da, r = (ir + 0.5) * dr;
+        if (!instruments::in_swept_solid(a, r, a_hi, R, kappa))
+          continue;
+        for (unsigned int it = 0; it < nt; ++it) {
+          const double th = (it + 0.5) * dth;
+          const dealii::Point<3> x = axis.point(a) + r * (std::cos(th) * e1 + std::sin(th) * e2);
+          if (bone_.inside(x))
+            swept += r * dr * da * dth;
+        }
+      }
+  }
+  double kept_mass = 0;
+  for (const auto& cell : tria.active_cell_iterators())
+    if (cell->is_locally_owned() && cell->material_id() != removed_id)
+      kept_mass += density_of(cell->material_id()) * cell->measure();
+  kept_mass = dealii::Utilities::MPI::sum(kept_mass, comm);
+  const double content = heat.heat_content();
+  const double balance = content - initial_content + S.chips_heat - heat.supplied_energy();
+  const double into_bone = drill_.heat_partition * (cutting_energy + friction_energy);
+
+  if (run_.write_vtu) {
+    dealii::TimerOutput::Scope timer(ctx.timer(), "output");
+    write_fields(ctx, S, output_counter + 1);
+  }
+  const double plot_ok = plot_probes(ctx, probe_series);
+
+  Summary& sum = ctx.summary();
+  sum.set_figure("peak_temperature_C", peak_T - celsius, "degC");
+  double max_probe = 0, max_probe_above = 0;
+  for (unsigned int p = 0; p < n_probes; ++p) {
+    const std::string name = "probe_" + std::to_string(p + 1);
+    sum.set_figure(name + "_peak_temperature_C", probe_peak[p] - celsius, "degC");
+    sum.set_figure(name + "_time_above_necrosis_s", probe_above[p], "s");
+    max_probe = std::max(max_probe, probe_peak[p] - celsius);
+    max_probe_above = std::max(max_probe_above, probe_above[p]);
+  }
+  if (n_probes > 0) {
+    sum.set_figure("max_probe_temperature_C", max_probe, "degC");
+    sum.set_figure("max_probe_time_above_necrosis_s", max_probe_above, "s");
+  }
+  sum.set_figure("necrotic_volume_47C_mm3", necrotic_47 * 1e9, "mm^3");
+  sum.set_figure("necrotic_volume_cem43_mm3", necrotic_cem * 1e9, "mm^3");
+  sum.set_figure("necrotic_distance_47C_mm", distance_47 * 1e3, "mm");
+  sum.set_figure("necrotic_distance_cem43_mm", distance_cem * 1e3, "mm");
+  sum.set_figure("max_thrust_force_N", max_thrust, "N");
+  sum.set_figure("max_torque_Nmm", max_torque * 1e3, "N mm");
+  sum.set_figure("cutting_energy_J", cutting_energy, "J");
+  sum.set_figure("friction_energy_J", friction_energy, "J");
+  sum.set_figure("heat_into_bone_J", heat.source_energy(), "J");
+  sum.set_figure("heat_input_error_relative",
+                 into_bone > 0 ? std::abs(heat.source_energy() - into_bone) / into_bone
+                               : std::numeric_limits<double>::quiet_NaN(),
+                 "-");
+  sum.set_figure("heat_convected_J", heat.convected_energy(), "J");
+  sum.set_figure("heat_perfused_J", heat.perfused_energy(), "J");
+  sum.set_figure("heat_removed_with_chips_J", S.chips_heat - 0.0, "J");
+  sum.set_figure("heat_balance_error_relative",
+                 heat.source_energy() > 0 ? std::abs(balance) / heat.source_energy()
+                                          : std::numeric_limits<double>::quiet_NaN(),
+                 "-");
+  sum.set_figure("removed_volume_mm3", S.removed_volume * 1e9, "mm^3");
+  sum.set_figure("swept_volume_mm3", swept * 1e9, "mm^3");
+  sum.set_figure("removed_volume_error_relative",
+                 swept > 0 ? std::abs(S.removed_volume - swept) / swept
+                           : std::numeric_limits<double>::quiet_NaN(),
+                 "-");
+  sum.set_figure("removed_mass_g", S.removed_mass * 1e3, "g");
+  sum.set_figure("mass_balance_error_relative",
+                 std::abs(initial_mass - kept_mass - S.removed_mass) / initial_mass, "-");
+  sum.set_figure("drill_cell_size_m", h_drill, "m");
+  sum.set_figure("cells", tria.n_global_active_cells(), "-");
+  sum.set_figure("max_heat_dofs", max_dofs, "-");
+  sum.set_figure("refinements", S.refinements, "-");
+  sum.set_figure("time_steps", step, "-");
+  sum.set_figure("simulated_time_s", t, "s");
+  sum.set_figure("solve_time", solve_time, "s");
+  sum.set_figure("probe_plot_valid", plot_ok, "-");
+  ctx.log() << std::setprecision(5) << "  peak " << peak_T - celsius << " degC in the bone, "
+            << max_probe << " degC at a probe; necrotic volume " << necrotic_47 * 1e9
+            << " mm^3 (47 degC, " << damage_.necrosis_time << " s) / " << necrotic_cem * 1e9
+            << " mm^3 (CEM43 >= " << damage_.cem43_threshold << " min), reaching "
+            << distance_47 * 1e3 << " / " << distance_cem * 1e3 << " mm from the hole wall\n"
+            << "  thrust up to " << max_thrust << " N, torque " << max_torque * 1e3
+            << " N mm; heat into bone " << heat.source_energy() << " J of "
+            << cutting_energy + friction_energy << " J; removed " << S.removed_volume * 1e9
+            << " mm^3 of " << swept * 1e9 << " mm^3 swept\n";
+}
+
+void BoneDrilling::write_fields(RunContext& ctx, DrillingRun& S, unsigned int counter) const {
+  const MPI_Comm comm = ctx.comm();
+  Vector cem_g(S.heat.locally_owned_dofs(), S.heat.locally_relevant_dofs(), comm),
+      above_g(S.heat.locally_owned_dofs(), S.heat.locally_relevant_dofs(), comm);
+  cem_g = S.cem43;
+  above_g = S.above;
+  S.heat.write_output(ctx.output().path().string(), counter, "drilling",
+                      {{"cem43_min", &cem_g}, {"time_above_necrosis_s", &above_g}});
+}
+
+double BoneDrilling::plot_probes(RunContext& ctx,
+                                 const std::vector<std::vector<double>>& series) const {
+  if (damage_.probes.empty())
+    return std::nan("");
+  if (!ctx.is_root())
+    return 1;
+  std::ostringstream csv;
+  csv << "time_s";
+  for (unsigned int p = 0; p < damage_.probes.size(); ++p)
+    csv << ",probe_" << p + 1 << "_C";
+  csv << "\n" << std::setprecision(10);
+  for (const auto& row : series) {
+    for (std::size_t i = 0; i < row.size(); ++i)
+      csv << (i ? "," : "") << row[i];
+    csv << "\n";
+  }
+  ctx.output().write_atomic("probes.csv", csv.str());
+  const auto dir = ctx.output().path();
+  std::ostringstream gp;
+  gp << "set terminal pngcairo size 900,600 noenhanced\n"
+     << "set output '" << (dir / "probes.png").string() << "'\n"
+     << "set title 'Bone drilling: thermocouple temperatures'\n"
+     << "set xlabel 'time [s]'\nset ylabel 'temperature [degC]'\nset grid\nset key top right\n"
+     << "set datafile separator ','\nplot ";
+  for (unsigned int p = 0; p < damage_.probes.size(); ++p) {
+    const auto& x = damage_.probes[p];
+    gp << "'" << (dir / "probes.csv").string() << "' every ::1 using 1:" << p + 2
+       << " with lines lw 2 title 'probe " << p + 1 << " (" << x[0] * 1e3 << ", " << x[1] * 1e3
+       << ", " << x[2] * 1e3 << ") mm', ";
+  }
+  gp << damage_.necrosis_temperature - celsius << " with lines dt 2 lc rgb 'red' title '"
+     << damage_.necrosis_temperature - celsius << " degC'\n";
+  ctx.output().write_atomic("probes.gp", gp.str());
+  const std::string gnuplot = find_in_path("gnuplot");
+  if (gnuplot.empty()) {
+    ctx.warn("gnuplot not found: no probes.png (install gnuplot-nox); probes.csv has the data");
+    return std::nan("");
+  }
+  run_child({gnuplot, (dir / "probes.gp").string()}, dir / "probes.gnuplot.log", 120);
+  return png_is_valid(dir / "probes.png") ? 1 : 0;
+}
+
+} // namespace bone_drilling
+
+SPINESIM_REGISTER_SCENARIO(bone_drilling, "bone_drilling",
+                           "a twist drill cutting holes in a cortical/cancellous bone block: "
+                           "mechanistic cutting heat, material removal, irrigation, probe "
+                           "temperatures, CEM43 and 47 degC necrosis.",
+                           "heat", create_scenario<bone_drilling::BoneDrilling>,
+                           {"Drill", drilling::DrillSection::declare},
+                           {"Bone block", drilling::BoneSection::declare},
+                           {"Mesh", drilling::MeshSection::declare},
+                           {"Cooling", drilling::CoolingSection::declare},
+                           {"Thermal damage", drilling::DamageSection::declare},
+                           {"Drilling run", drilling::RunSection::declare})
+
+} // namespace spinesim::applications

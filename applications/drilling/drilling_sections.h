@@ -1,0 +1,94 @@
+#ifndef SPINESIM_APPLICATIONS_DRILLING_DRILLING_SECTIONS_H
+#define SPINESIM_APPLICATIONS_DRILLING_DRILLING_SECTIONS_H
+
+// The input sections of the bone-drilling scene, in the units a surgeon or drill designer
+// uses (mm, rpm, °C, N mm, MPa), converted to SI on parsing:
+//   Drill           the bit, its programme (speed, feed or thrust, dwell, retraction, pause),
+//                   the heat partition and the holes (numbered slots);
+//   Bone            the block (width, height, cortical thickness) and per bone type its
+//                   thermal properties and specific cutting coefficients;
+//   Mesh            the cell size at the drill and how far refinement reaches around it;
+//   Cooling         irrigation, air, body temperature and perfusion;
+//   Thermal damage  thermocouple probes and the necrosis criteria;
+//   Drilling run    time stepping, the cooling time after the last hole, output.
+
+#include "instruments/drilling_programme.h"
+
+#include <deal.II/base/parameter_handler.h>
+#include <deal.II/base/point.h>
+
+#include <string>
+#include <vector>
+
+namespace spinesim::applications::drilling {
+
+constexpr double celsius = 273.15; // K at 0 °C
+
+struct DrillSection {
+  instruments::DrillBit bit;
+  instruments::DrillingSchedule schedule;
+  double heat_partition = 0.5;
+  std::vector<instruments::DrillHole> holes;
+  static constexpr unsigned int n_hole_slots = 4;
+  static void declare(dealii::ParameterHandler& prm);
+  void parse(dealii::ParameterHandler& prm);
+};
+
+struct BoneType {
+  double conductivity = 0.54, density = 1900, specific_heat = 1300; // SI
+  instruments::CuttingCoefficients cutting;
+};
+
+struct BoneSection {
+  double width = 20e-3, height = 15e-3, cortical_thickness = 15e-3; // [m]
+  BoneType cortical, cancellous;
+  static void declare(dealii::ParameterHandler& prm);
+  void parse(dealii::ParameterHandler& prm);
+  // Whether x is in the block [−W/2, W/2]² × [−H, 0] (with a relative tolerance).
+  bool inside(const dealii::Point<3>& x, double tolerance = 0) const;
+  // 0 cortical (above −Cortical thickness), 1 cancellous.
+  unsigned int layer(const dealii::Point<3>& x) const { return -x[2] < cortical_thickness ? 0 : 1; }
+};
+
+struct MeshSection {
+  double coarse_cell = 2e-3;
+  double cells_across_diameter = 16;
+  unsigned int wall_levels = 1;
+  double margin = 1e-3, lookahead = 1.5e-3;
+  static void declare(dealii::ParameterHandler& prm);
+  void parse(dealii::ParameterHandler& prm);
+};
+
+struct CoolingSection {
+  bool irrigation = true;
+  double irrigation_h = 2000, coolant_temperature = 20 + celsius;
+  double air_h = 10, air_temperature = 22 + celsius;
+  double body_temperature = 37 + celsius;
+  double perfusion_rate = 0;
+  double flute_fraction = 0; // of the wall h reaching the wall a bit occupies
+  // What convects on the hole wall and the exposed top face.
+  double wall_h() const { return irrigation ? irrigation_h : air_h; }
+  double wall_temperature() const { return irrigation ? coolant_temperature : air_temperature; }
+  static void declare(dealii::ParameterHandler& prm);
+  void parse(dealii::ParameterHandler& prm);
+};
+
+struct DamageSection {
+  std::vector<dealii::Point<3>> probes;
+  double necrosis_temperature = 47 + celsius, necrosis_time = 60;
+  double cem43_threshold = 16; // [min]
+  static void declare(dealii::ParameterHandler& prm);
+  void parse(dealii::ParameterHandler& prm);
+};
+
+struct RunSection {
+  double cooling_time = 30, max_time_step = 0.5, cells_per_step = 0.5;
+  unsigned int substeps = 8, output_interval = 0;
+  bool write_vtu = true;
+  static void declare(dealii::ParameterHandler& prm);
+  void parse(dealii::ParameterHandler& prm);
+};
+
+} // namespace spinesim::applications::drilling
+
+#endif

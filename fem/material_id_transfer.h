@@ -1,0 +1,42 @@
+#ifndef SPINESIM_FEM_MATERIAL_ID_TRANSFER_H
+#define SPINESIM_FEM_MATERIAL_ID_TRANSFER_H
+
+// Keeps the material ids of active cells through refinement, coarsening and repartitioning of
+// a distributed triangulation. p4est stores only the forest: a cell that moves to another
+// rank when execute_coarsening_and_refinement() repartitions arrives with its coarse cell's
+// id, so ids set on refined cells (removed bone, per-cell materials) would silently revert.
+// Children take their parent's id; coarsened cells must agree (CellDataTransfer's defaults).
+//
+//   MaterialIdTransfer<dim> keep(tria);
+//   keep.prepare();                  // after the flags are final, before execution
+//   tria.execute_coarsening_and_refinement();
+//   keep.finish();                   // owned cells from the transfer, ghosts from their owners
+
+#include <deal.II/distributed/cell_data_transfer.h>
+#include <deal.II/distributed/tria.h>
+#include <deal.II/lac/vector.h>
+
+#include <memory>
+#include <vector>
+
+namespace spinesim::fem {
+
+template <int dim>
+class MaterialIdTransfer {
+ public:
+  explicit MaterialIdTransfer(dealii::parallel::distributed::Triangulation<dim>& triangulation);
+  void prepare();
+  void finish();
+  // Copies the ids of locally owned cells to the ghost cells of other ranks (collective).
+  static void update_ghosts(dealii::parallel::distributed::Triangulation<dim>& triangulation);
+
+ private:
+  dealii::parallel::distributed::Triangulation<dim>& tria_;
+  dealii::Vector<float> ids_; // ids below 2^24 are exact in float
+  std::unique_ptr<dealii::parallel::distributed::CellDataTransfer<dim, dim, dealii::Vector<float>>>
+      transfer_;
+};
+
+} // namespace spinesim::fem
+
+#endif
