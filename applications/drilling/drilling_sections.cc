@@ -76,9 +76,13 @@ void DrillSection::declare(dealii::ParameterHandler& prm) {
                     "drill's pilot): it is removed at the start and the lips cut only the "
                     "annulus beyond it [mm]; 0 = none.");
   prm.declare_entry("Spindle speed", "1000", Double(0), "Rotational speed n [rev/min].");
-  prm.declare_entry("Feed control", "feed rate", Selection("feed rate|thrust"),
-                    "What sets the feed [-]: the Feed rate, or the feed at which the mechanistic "
+  prm.declare_entry("Feed control", "feed rate",
+                    Selection("feed rate|feed per revolution|thrust"),
+                    "What sets the feed [-]: the Feed rate; the Feed per revolution (the feed "
+                    "rate follows the Spindle speed); or the feed at which the mechanistic "
                     "model gives the Thrust force (a surgeon pushing with a steady hand).");
+  prm.declare_entry("Feed per revolution", "0.06", Double(0),
+                    "Axial advance per turn with Feed control = feed per revolution [mm/rev].");
   prm.declare_entry("Feed rate", "1", Double(0),
                     "Axial speed of the bit while cutting [mm/s]; with Feed control = thrust, "
                     "the speed through air (no lip in bone).");
@@ -116,6 +120,13 @@ void DrillSection::parse(dealii::ParameterHandler& prm) {
   schedule.spindle_rpm = prm.get_double("Spindle speed");
   schedule.thrust_control = prm.get("Feed control") == "thrust";
   schedule.feed_rate = 1e-3 * prm.get_double("Feed rate");
+  if (prm.get("Feed control") == "feed per revolution") {
+    const double f = 1e-3 * prm.get_double("Feed per revolution");
+    if (!(f > 0))
+      throw InvalidInput("Drill/Feed per revolution", std::to_string(f * 1e3),
+                         "a positive feed [mm/rev]");
+    schedule.feed_rate = f * schedule.spindle_rpm / 60.0;
+  }
   schedule.thrust_force = prm.get_double("Thrust force");
   schedule.dwell = prm.get_double("Dwell");
   schedule.retraction_speed = 1e-3 * prm.get_double("Retraction speed");

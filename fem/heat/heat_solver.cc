@@ -41,6 +41,12 @@ struct HeatSolver<dim>::Transfer {
 };
 
 template <int dim>
+struct HeatSolver<dim>::PointCache {
+  std::vector<Point<dim>> points;
+  Utilities::MPI::RemotePointEvaluation<dim> evaluation;
+};
+
+template <int dim>
 HeatSolver<dim>::HeatSolver(parallel::distributed::Triangulation<dim>& triangulation,
                             const Parameters& parameters)
     : triangulation_(triangulation), prm_(parameters), comm_(triangulation.get_communicator()) {}
@@ -171,6 +177,7 @@ void HeatSolver<dim>::setup_dofs() {
   preconditioner_.reset();
   matrix_dt_ = -1;
   scale_cache_.clear(); // the mesh changed
+  point_cache_.reset();
 }
 
 template <int dim>
@@ -597,8 +604,14 @@ template <int dim>
 std::vector<double> HeatSolver<dim>::temperature_at_points(const std::vector<Point<dim>>& points,
                                                            std::vector<bool>* found) const {
   AssertThrow(is_set_up(), ExcMessage("HeatSolver::setup() must come first"));
-  Utilities::MPI::RemotePointEvaluation<dim> cache;
-  cache.reinit(points, triangulation_, StaticMappingQ1<dim>::mapping);
+  // The same points on the same mesh (on every rank: the search is collective) reuse it.
+  const bool same = point_cache_ && point_cache_->points == points;
+  if (Utilities::MPI::min(same ? 1 : 0, comm_) == 0) {
+    point_cache_ = std::make_unique<PointCache>();
+    point_cache_->points = points;
+    point_cache_->evaluation.reinit(points, triangulation_, StaticMappingQ1<dim>::mapping);
+  }
+  auto& cache = point_cache_->evaluation;
   std::vector<double> values = VectorTools::point_values<1>(cache, dof_handler_, solution_);
   if (found)
     found->assign(points.size(), true);

@@ -204,6 +204,10 @@ class HeatSolver {
 
   struct Transfer;
   std::unique_ptr<Transfer> transfer_;
+  // The point search of the last temperature_at_points() call, reused while the points and
+  // the mesh stay the same (thermocouples read every step).
+  struct PointCache;
+  mutable std::unique_ptr<PointCache> point_cache_;
 
   Removal removal_;
   std::vector<dealii::types::global_dof_index> idle_rows_;

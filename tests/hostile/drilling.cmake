@@ -1,0 +1,18 @@
+# Impossible drilling set-ups are bad input naming the parameter (exit 2), found by `check`.
+set(_drill ${PROJECT_SOURCE_DIR}/applications/scenes/bone_drilling.prm)
+spinesim_add_hostile_test(drill_outside_the_block
+  ARGS check ${_drill} --set "Drill/Hole 1/Entry=15,0,0" MATCH "Drill/Hole 1/Entry.*outside the block")
+spinesim_add_hostile_test(drill_deeper_than_the_block
+  ARGS check ${_drill} --set "Drill/Hole 1/Depth=20" MATCH "Drill/Hole 1/Depth")
+spinesim_add_hostile_test(drill_starting_inside_the_bone
+  ARGS check ${_drill} --set "Drill/Hole 1/Entry=0,0,-3" MATCH "Drill/Hole 1/Entry.*top face")
+spinesim_add_hostile_test(drill_zero_speed_with_feed
+  ARGS check ${_drill} --set "Drill/Spindle speed=0" MATCH "Drill/Spindle speed.*does not turn")
+spinesim_add_hostile_test(drill_negative_heat_partition
+  ARGS check ${_drill} --set "Drill/Heat partition=-0.2" MATCH "Drill/Heat partition.*between 0 and 1")
+spinesim_add_hostile_test(drill_probe_outside_the_bone
+  ARGS check ${_drill} --set "Thermal damage/Probes=30,0,-2" MATCH "Thermal damage/Probes.*probe 1.*outside the bone")
+spinesim_add_hostile_test(drill_probe_in_the_hole
+  ARGS check ${_drill} --set "Thermal damage/Probes=1,0,-2" MATCH "Thermal damage/Probes.*lies in hole 1")
+spinesim_add_hostile_test(drill_pilot_wider_than_the_bit
+  ARGS check ${_drill} --set "Drill/Pilot diameter=5" MATCH "Drill/Pilot diameter")
