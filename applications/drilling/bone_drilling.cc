@@ -267,7 +267,18 @@ void BoneDrilling::run(RunContext& ctx) {
   {
     dealii::TimerOutput::Scope t(ctx.timer(), "mesh");
     for (unsigned int round = 0; round < 12; ++round) {
+      // Thermocouples read the field at drill resolution: cells within a drill cell of a probe.
       unsigned int flagged = 0;
+      for (const auto& cell : tria.active_cell_iterators())
+        if (cell->is_locally_owned() && cell->extent_in_direction(0) > h_drill * (1 + 1e-9))
+          for (const auto& x : damage_.probes)
+            if (cell->center().distance(x) <=
+                0.5 * std::sqrt(3.0) * cell->extent_in_direction(0) + h_drill) {
+              cell->set_refine_flag();
+              ++flagged;
+              break;
+            }
+      flagged = dealii::Utilities::MPI::sum(flagged, comm);
       for (unsigned int j = 0; j < drill_.holes.size(); ++j)
         if (bit.pilot_diameter > 0 || j == 0)
           flagged += flag_near(j, bit.pilot_diameter > 0
@@ -746,25 +757,36 @@ void BoneDrilling::run(RunContext& ctx) {
     max_probe_above = std::max(max_probe_above, probe_above[p]);
   }
   if (n_probes > 0) {
-    // Nearer the hole, hotter: for every pair of probes whose distances from the holes' walls
-    // differ by at least a drill cell, the nearer one peaked higher (1) or not (0).
-    std::vector<double> distance(n_probes, std::numeric_limits<double>::max());
+    // Nearer the hole, hotter: for every pair of probes at the same depth along the same hole
+    // (axial coordinates within a drill cell) whose distances from its wall differ by at least
+    // a drill cell, the nearer one peaked higher (1) or not (0); NaN without such a pair.
+    std::vector<double> distance(n_probes, std::numeric_limits<double>::max()), axial(n_probes);
+    std::vector<unsigned int> nearest(n_probes, 0);
     for (unsigned int p = 0; p < n_probes; ++p) {
       for (unsigned int k = 0; k < drill_.holes.size(); ++k) {
         const auto& axis = drill_.holes[k].axis;
         const auto& x = damage_.probes[p];
-        distance[p] = std::min(distance[p], instruments::distance_to_swept_solid(
-                                                axis.axial(x), axis.radial(x), state.deepest[k], R,
-                                                kappa));
+        const double d = instruments::distance_to_swept_solid(axis.axial(x), axis.radial(x),
+                                                              state.deepest[k], R, kappa);
+        if (d < distance[p]) {
+          distance[p] = d;
+          nearest[p] = k;
+          axial[p] = axis.axial(x);
+        }
       }
       sum.set_figure("probe_" + std::to_string(p + 1) + "_distance_mm", distance[p] * 1e3, "mm");
     }
     bool falls = true;
+    unsigned int pairs = 0;
     for (unsigned int p = 0; p < n_probes; ++p)
       for (unsigned int q = 0; q < n_probes; ++q)
-        if (distance[p] + h_drill <= distance[q] && !(probe_peak[p] > probe_peak[q]))
-          falls = false;
-    sum.set_figure("peak_falls_with_distance", falls ? 1.0 : 0.0, "-");
+        if (nearest[p] == nearest[q] && std::abs(axial[p] - axial[q]) <= h_drill &&
+            distance[p] + h_drill <= distance[q]) {
+          ++pairs;
+          falls = falls && probe_peak[p] > probe_peak[q];
+        }
+    sum.set_figure("peak_falls_with_distance",
+                   pairs > 0 ? (falls ? 1.0 : 0.0) : std::numeric_limits<double>::quiet_NaN(), "-");
     sum.set_figure("max_probe_temperature_C", max_probe, "degC");
     sum.set_figure("max_probe_time_above_necrosis_s", max_probe_above, "s");
   }

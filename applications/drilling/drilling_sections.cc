@@ -260,7 +260,7 @@ void CoolingSection::parse(dealii::ParameterHandler& prm) {
 }
 
 void DamageSection::declare(dealii::ParameterHandler& prm) {
-  prm.declare_entry("Probes", "3,0,-2; 4,0,-2; 5,0,-2; 3,0,-5; 3,0,-8", Anything(),
+  prm.declare_entry("Probes", "3,0,-5; 4,0,-5; 5,0,-5; 3,0,-2; 3,0,-8", Anything(),
                     "Thermocouples 'x,y,z; ...' [mm] inside the bone and outside every hole; "
                     "T(t) goes to probes.csv and probes.png.");
   prm.declare_entry("Necrosis temperature", "47", Double(0, 100),

@@ -8,18 +8,36 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <thread>
+#include <vector>
 
 extern char** environ;
 
 namespace spinesim::applications {
 
 namespace {
+
+// The environment's OMPI_MCA_* entries as the user set them: taken when the library loads,
+// before MPI_Init, which adds its own (a singleton start sets ess=singleton, orte_launch,
+// orte_ess_num_procs, ...; an mpirun child inheriting them exits at once).
+const std::vector<std::string>& user_mca_settings() {
+  static const std::vector<std::string> settings = [] {
+    std::vector<std::string> out;
+    for (char** e = environ; e != nullptr && *e != nullptr; ++e)
+      if (std::strncmp(*e, "OMPI_MCA_", 9) == 0)
+        out.emplace_back(*e);
+    return out;
+  }();
+  return settings;
+}
+// Taken at load time, not at the first call (which comes after MPI_Init).
+[[maybe_unused]] const bool user_mca_settings_taken = (user_mca_settings(), true);
 
 // Variables an MPI start-up sets for the process it starts: a child that inherits them tries
 // to join the parent's job instead of starting its own.
@@ -29,8 +47,15 @@ bool belongs_to_parent_mpi(const std::string& entry) {
     return true;
   if (!starts("OMPI_"))
     return false;
-  // The user's own settings (run as root, oversubscription, transport choices) stay.
-  return !(starts("OMPI_MCA_") || starts("OMPI_ALLOW_RUN_AS_ROOT"));
+  // The user's own settings (run as root, oversubscription, transport choices) stay; MCA
+  // entries MPI_Init added do not.
+  if (starts("OMPI_ALLOW_RUN_AS_ROOT"))
+    return false;
+  if (starts("OMPI_MCA_")) {
+    const auto& user = user_mca_settings();
+    return std::find(user.begin(), user.end(), entry) == user.end();
+  }
+  return true;
 }
 
 double load_average() {

@@ -64,12 +64,17 @@ spinesim_add_comparison_test(scene.bone_drilling_ranks_agree
   REQUIRES "drill_quick;drill_quick_2ranks" LABELS "scene;drilling;mpi")
 
 # The trends a surgeon relies on, asserted on the quick sweep (600 and 1200 rpm at 0.06
-# mm/rev, dry and irrigated; about 20 s): at a fixed feed per revolution the probe and peak
-# temperatures and the CEM43 necrosis distance rise with the speed (the same cutting energy
-# delivered in half the time), and irrigation lowers them.
+# mm/rev, dry and irrigated; about 35 s): at a fixed feed per revolution the peak bone
+# temperature (measured 96 -> 132 degC dry, 95 -> 120 irrigated) and the hottest probe (45.1 ->
+# 45.6 dry, 44.1 -> 44.6 irrigated) rise with the speed, and irrigation lowers both and the
+# CEM43 necrosis distance (1.05 -> 0.77 mm at 600 rpm). In this model the cutting energy per
+# hole does not depend on the speed at a fixed feed per revolution (Kienzle coefficients
+# without a speed term), only its rate: the wall heats more, while probes 1 mm or more from
+# the wall barely change (docs/drilling.md); the hottest probe here is the one 1 mm from the
+# wall at 2 mm depth.
 spinesim_add_scene_test(study.drilling_sweep_quick
   SCENE ${PROJECT_SOURCE_DIR}/tests/data/drilling_sweep_quick.prm
-  EXPECT "status==ok;failed_runs<=0;all_figures_finite>=1;png_valid>=1;trend_max_probe_temperature_C_vs_axis1>=1;trend_max_probe_temperature_C_vs_axis2<=-1;trend_peak_temperature_C_vs_axis1>=1;trend_peak_temperature_C_vs_axis2<=-1;trend_necrotic_distance_cem43_mm_vs_axis1>=1"
+  EXPECT "status==ok;failed_runs<=0;all_figures_finite>=1;png_valid>=1;trend_max_probe_temperature_C_vs_axis1>=1;trend_max_probe_temperature_C_vs_axis2<=-1;trend_peak_temperature_C_vs_axis1>=1;trend_peak_temperature_C_vs_axis2<=-1;trend_necrotic_distance_cem43_mm_vs_axis2<=-1"
   LABELS "scene;study;drilling" TIMEOUT 600)
 # The full sweep: 500/1000/2000 rpm × 0.03/0.06/0.12 mm/rev × dry/irrigated at the scene's
 # resolution (18 runs, about 12 min on two cores).
