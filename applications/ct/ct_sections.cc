@@ -40,14 +40,8 @@ void declare_bone_section(dealii::ParameterHandler& prm) {
   // Assumed post-yield constants (docs/implants.md): damage from 0.6 % plastic strain, about
   // twice the yield strain of trabecular bone (0.7-0.85 %, Kopperdahl & Keaveny 1998; Morgan &
   // Keaveny 2001) in total strain; crushed bone keeps a fifth of its stiffness and strength.
-  prm.declare_entry("Damage onset plastic strain", "0.006", Double(0),
-                    "Nonlinear variant with Effects/Damage: equivalent plastic strain at which "
-                    "the bone starts to soften (j2_damage) [-].");
-  prm.declare_entry("Damage softening strain", "0.02", Double(0),
-                    "Plastic strain past the onset over which damage reaches 63 % of its "
-                    "maximum [-].");
-  prm.declare_entry("Maximum damage", "0.8", Double(0, 1),
-                    "Residual damage D_max < 1 of crushed bone [-].");
+  materials::DamageCurve::declare(prm, materials::DamageCurve{0.006, 0.02, 0.8},
+                                  "the bone (nonlinear variant with Effects/Damage)");
 }
 
 void declare_caps_section(dealii::ParameterHandler& prm) {
@@ -74,9 +68,7 @@ void BoneParameters::parse(const dealii::ParameterHandler& prm) {
   }
   yield_law = prm.get("Yield law");
   hardening_ratio = prm.get_double("Hardening ratio");
-  damage.onset_plastic_strain = prm.get_double("Damage onset plastic strain");
-  damage.softening_strain = prm.get_double("Damage softening strain");
-  damage.maximum_damage = prm.get_double("Maximum damage");
+  damage = materials::DamageCurve::parse(prm);
   try {
     damage.validate();
   } catch (InvalidInput& e) {

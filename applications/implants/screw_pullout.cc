@@ -116,14 +116,7 @@ struct FoamSection {
                       "the failure mode of pull-out) or compression (sigma_y = sigma_c).");
     prm.declare_entry("Hardening ratio", "0", Double(0),
                       "Linear hardening modulus over Young's modulus [-].");
-    prm.declare_entry("Damage onset plastic strain", "0.01", Double(0),
-                      "Equivalent plastic strain at which the foam starts to soften [-] "
-                      "(Effects/Damage).");
-    prm.declare_entry("Damage softening strain", "0.05", Double(0),
-                      "Plastic strain past the onset over which damage reaches 63 % of its "
-                      "maximum [-].");
-    prm.declare_entry("Maximum damage", "0.95", Double(0, 1),
-                      "Residual damage D_max < 1 of crushed foam [-].");
+    materials::DamageCurve::declare(prm, materials::DamageCurve{0.01, 0.05, 0.95}, "the foam");
     prm.declare_entry("Fracture energy", "0", Double(0),
                       "Energy dissipated by the softening per unit area of a failure band "
                       "[J/m^2]; > 0 scales the softening strain per cell, eps_s = G_f / "
@@ -144,9 +137,7 @@ struct FoamSection {
     shear_strength = 1e6 * prm.get_double("Shear strength");
     yield_calibration = prm.get("Yield calibration");
     hardening_ratio = prm.get_double("Hardening ratio");
-    damage.onset_plastic_strain = prm.get_double("Damage onset plastic strain");
-    damage.softening_strain = prm.get_double("Damage softening strain");
-    damage.maximum_damage = prm.get_double("Maximum damage");
+    damage = materials::DamageCurve::parse(prm);
     secant_tangent = prm.get("Damage tangent") == "secant";
     fracture_energy = prm.get_double("Fracture energy");
     for (const auto& [name, v] : {std::pair{"Foam/Young's modulus", youngs_modulus},

@@ -5,6 +5,7 @@
 #include "fem/materials/tensor_tools.h"
 
 #include <cmath>
+#include <sstream>
 
 namespace spinesim::materials {
 
@@ -18,6 +19,35 @@ void DamageCurve::validate() const {
   if (!(maximum_damage >= 0 && maximum_damage < 1))
     throw InvalidInput("Maximum damage", std::to_string(maximum_damage),
                        "0 <= D_max < 1 (a failed point keeps 1 - D_max of its stiffness)");
+}
+
+void DamageCurve::declare(dealii::ParameterHandler& prm, const DamageCurve& defaults,
+                          const std::string& solid) {
+  using dealii::Patterns::Double;
+  const auto text = [](double v) {
+    std::ostringstream s;
+    s << v;
+    return s.str();
+  };
+  prm.declare_entry("Damage onset plastic strain", text(defaults.onset_plastic_strain), Double(0),
+                    "j2_damage: equivalent plastic strain at which " + solid +
+                        " starts to soften [-]: D = D_max (1 - exp(-(eps_bar_p - onset) / "
+                        "softening)), sigma = (1 - D) sigma_effective.");
+  prm.declare_entry("Damage softening strain", text(defaults.softening_strain), Double(0),
+                    "j2_damage: plastic strain past the onset over which D rises to 63 % of "
+                    "D_max [-], > 0.");
+  prm.declare_entry("Maximum damage", text(defaults.maximum_damage), Double(0, 1),
+                    "j2_damage: residual damage D_max of " + solid +
+                        " [-], 0 <= D_max < 1: a failed point keeps 1 - D_max of its stiffness "
+                        "and strength.");
+}
+
+DamageCurve DamageCurve::parse(const dealii::ParameterHandler& prm) {
+  DamageCurve d;
+  d.onset_plastic_strain = prm.get_double("Damage onset plastic strain");
+  d.softening_strain = prm.get_double("Damage softening strain");
+  d.maximum_damage = prm.get_double("Maximum damage");
+  return d;
 }
 
 double DamageCurve::damage(double e) const {

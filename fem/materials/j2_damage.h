@@ -23,6 +23,10 @@
 #include "fem/materials/isotropic_hardening.h"
 #include "fem/materials/j2_plasticity.h"
 
+#include <deal.II/base/parameter_handler.h>
+
+#include <string>
+
 namespace spinesim::materials {
 
 struct DamageCurve {
@@ -31,6 +35,12 @@ struct DamageCurve {
   double maximum_damage = 0.9;     // D_max [-], 0 <= D_max < 1
   // InvalidInput naming the entry unless the values are in range.
   void validate() const;
+  // The entries "Damage onset plastic strain", "Damage softening strain" and "Maximum damage"
+  // in the current section, with `defaults`; `solid` names what softens in the help texts
+  // ("the foam", "the bone"). Every section that sets a damage curve declares them here.
+  static void declare(dealii::ParameterHandler& prm, const DamageCurve& defaults,
+                      const std::string& solid);
+  static DamageCurve parse(const dealii::ParameterHandler& prm);
   double damage(double equivalent_plastic_strain) const; // D [-]
   double slope(double equivalent_plastic_strain) const;  // dD/dε̄_p [-]
 };

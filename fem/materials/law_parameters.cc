@@ -52,16 +52,7 @@ void LawParameters::declare(dealii::ParameterHandler& prm, const std::string& de
                     "Voce saturation exponent delta [-], > 0 when Saturation stress > 0.");
   prm.declare_entry("Thermal expansion", "0", Double(-1e-3, 1e-3),
                     "Isotropic linear thermal expansion coefficient alpha [1/K].");
-  prm.declare_entry("Damage onset plastic strain", "0", Double(0),
-                    "j2_damage: equivalent plastic strain at which damage starts [-]. "
-                    "D = D_max (1 - exp(-(eps_bar_p - onset) / softening)), sigma = (1 - D) "
-                    "sigma_effective.");
-  prm.declare_entry("Damage softening strain", "0.05", Double(0),
-                    "j2_damage: plastic strain beyond the onset over which D rises to 63 % of "
-                    "D_max [-], > 0.");
-  prm.declare_entry("Maximum damage", "0.9", Double(0, 1),
-                    "j2_damage: residual damage D_max [-], 0 <= D_max < 1: a failed point keeps "
-                    "1 - D_max of its stiffness and strength.");
+  DamageCurve::declare(prm, DamageCurve{0, 0.05, 0.9}, "the material");
 }
 
 void LawParameters::parse(const dealii::ParameterHandler& prm) {
@@ -75,9 +66,10 @@ void LawParameters::parse(const dealii::ParameterHandler& prm) {
   saturation_stress = prm.get_double("Saturation stress");
   saturation_exponent = prm.get_double("Saturation exponent");
   thermal_expansion = prm.get_double("Thermal expansion");
-  damage_onset_plastic_strain = prm.get_double("Damage onset plastic strain");
-  damage_softening_strain = prm.get_double("Damage softening strain");
-  maximum_damage = prm.get_double("Maximum damage");
+  const DamageCurve damage = DamageCurve::parse(prm);
+  damage_onset_plastic_strain = damage.onset_plastic_strain;
+  damage_softening_strain = damage.softening_strain;
+  maximum_damage = damage.maximum_damage;
   apply_preset();
   validate();
 }
