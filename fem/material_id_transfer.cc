@@ -27,7 +27,8 @@ void MaterialIdTransfer<dim>::finish() {
   transfer_.reset();
   for (const auto& cell : tria_.active_cell_iterators())
     if (cell->is_locally_owned())
-      cell->set_material_id(static_cast<dealii::types::material_id>(ids[cell->active_cell_index()]));
+      cell->set_material_id(
+          static_cast<dealii::types::material_id>(ids[cell->active_cell_index()]));
   update_ghosts(tria_);
 }
 
@@ -36,7 +37,8 @@ void MaterialIdTransfer<dim>::update_ghosts(
     dealii::parallel::distributed::Triangulation<dim>& triangulation) {
   using Iterator = typename dealii::Triangulation<dim>::active_cell_iterator;
   dealii::GridTools::exchange_cell_data_to_ghosts<unsigned int, dealii::Triangulation<dim>>(
-      triangulation, [](const Iterator& cell) { return static_cast<unsigned int>(cell->material_id()); },
+      triangulation,
+      [](const Iterator& cell) { return static_cast<unsigned int>(cell->material_id()); },
       [](const Iterator& cell, const unsigned int id) { cell->set_material_id(id); });
 }
 

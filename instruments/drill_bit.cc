@@ -18,7 +18,8 @@ double DrillBit::cone_length() const {
 
 void DrillBit::validate() const {
   if (!(diameter > 0) || !std::isfinite(diameter))
-    throw InvalidInput("Drill/Diameter", std::to_string(diameter * 1e3), "a positive diameter [mm]");
+    throw InvalidInput("Drill/Diameter", std::to_string(diameter * 1e3),
+                       "a positive diameter [mm]");
   if (!(point_angle > 0 && point_angle < 180))
     throw InvalidInput("Drill/Point angle", std::to_string(point_angle),
                        "an angle between 0 and 180 degrees (118 is the usual twist drill)");

@@ -21,13 +21,13 @@ namespace spinesim::instruments {
 inline constexpr double pi = 3.14159265358979323846;
 
 struct DrillBit {
-  double diameter = 4e-3;        // [m]
-  double point_angle = 118;      // [deg], 2κ
-  double pilot_diameter = 0;     // [m], 0 = no pilot hole
+  double diameter = 4e-3;    // [m]
+  double point_angle = 118;  // [deg], 2κ
+  double pilot_diameter = 0; // [m], 0 = no pilot hole
   double radius() const { return 0.5 * diameter; }
   double pilot_radius() const { return 0.5 * pilot_diameter; }
-  double half_angle() const;     // κ [rad]
-  double cone_length() const;    // R / tan κ [m], the axial length of the point
+  double half_angle() const;  // κ [rad]
+  double cone_length() const; // R / tan κ [m], the axial length of the point
   // InvalidInput naming the Drill entry for a non-positive diameter, a point angle outside
   // (0°, 180°), or a pilot not narrower than the drill.
   void validate() const;

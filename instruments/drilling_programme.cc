@@ -69,8 +69,7 @@ double DrillingProgramme::nominal_duration() const {
 
 DrillInterval DrillingProgramme::advance(
     DrillState& st, double dt, unsigned int substeps,
-    const std::function<const CuttingCoefficients*(unsigned int, double, double)>& material)
-    const {
+    const std::function<const CuttingCoefficients*(unsigned int, double, double)>& material) const {
   DrillInterval out;
   const double omega = 2 * pi * schedule_.spindle_rpm / 60.0;
   const double h = dt / std::max(1u, substeps);

@@ -21,13 +21,13 @@ struct DrillHole {
 };
 
 struct DrillingSchedule {
-  double spindle_rpm = 1000;       // [rev/min]
-  bool thrust_control = false;     // feed from Thrust force instead of Feed rate
-  double feed_rate = 1e-3;         // [m/s]; with thrust control, the approach speed in air
-  double thrust_force = 40;        // [N]
-  double dwell = 0;                // at depth, rotating [s]
-  double retraction_speed = 5e-3;  // [m/s]
-  double pause = 0;                // after leaving a hole, before the next [s]
+  double spindle_rpm = 1000;         // [rev/min]
+  bool thrust_control = false;       // feed from Thrust force instead of Feed rate
+  double feed_rate = 1e-3;           // [m/s]; with thrust control, the approach speed in air
+  double thrust_force = 40;          // [N]
+  double dwell = 0;                  // at depth, rotating [s]
+  double retraction_speed = 5e-3;    // [m/s]
+  double pause = 0;                  // after leaving a hole, before the next [s]
   double margin_friction_torque = 0; // of the margins on the hole wall [N m]
   // InvalidInput naming the Drill entry: speed or feed not positive, negative times.
   void validate() const;
@@ -39,17 +39,17 @@ std::string to_string(DrillPhase phase);
 struct DrillState {
   unsigned int hole = 0;
   DrillPhase phase = DrillPhase::feed;
-  double tip = 0;        // axial depth of the tip in the current hole [m]
-  double phase_time = 0; // time spent in the current phase [s]
+  double tip = 0;              // axial depth of the tip in the current hole [m]
+  double phase_time = 0;       // time spent in the current phase [s]
   std::vector<double> deepest; // per hole, the deepest tip reached [m]
 };
 
 struct DrillInterval {
-  double cutting_energy = 0;  // ∫ (M ω + F v) dt [J]
-  double friction_energy = 0; // ∫ M_margin ω dt while the drill is in its hole [J]
+  double cutting_energy = 0;             // ∫ (M ω + F v) dt [J]
+  double friction_energy = 0;            // ∫ M_margin ω dt while the drill is in its hole [J]
   double max_thrust = 0, max_torque = 0; // [N], [N m]
-  double feed_per_rev = 0;    // at the end of the interval's last feeding sub-step [m]
-  double time_in_bone = 0;    // of the interval, with the tip below its entry [s]
+  double feed_per_rev = 0;               // at the end of the interval's last feeding sub-step [m]
+  double time_in_bone = 0;               // of the interval, with the tip below its entry [s]
 };
 
 class DrillingProgramme {
@@ -60,9 +60,10 @@ class DrillingProgramme {
   DrillState initial_state() const;
   // Advances `state` by dt in `substeps` equal parts (phase ends split them exactly);
   // material(hole, a, r) gives the coefficients at a lip point of hole `hole`.
-  DrillInterval advance(DrillState& state, double dt, unsigned int substeps,
-                        const std::function<const CuttingCoefficients*(unsigned int, double,
-                                                                       double)>& material) const;
+  DrillInterval
+  advance(DrillState& state, double dt, unsigned int substeps,
+          const std::function<const CuttingCoefficients*(unsigned int, double, double)>& material)
+      const;
   // Time the programme takes with the feed rate (thrust control: an estimate at Feed rate) [s].
   double nominal_duration() const;
   // Speed of the tip while feeding at Feed rate [m/s] (the time step follows it).

@@ -123,14 +123,16 @@ class BoneDrilling : public Scenario {
       for (const auto& [name, x] : {std::pair{"where the hole crosses the top face", surface},
                                     std::pair{"the tip's final position", end}})
         if (std::abs(x[0]) > half - R || std::abs(x[1]) > half - R)
-          throw InvalidInput(slot + "Entry", std::string(name) + " " + mm_point(x) +
-                                                 " is outside the block or closer to its side "
-                                                 "than the drill radius",
+          throw InvalidInput(slot + "Entry",
+                             std::string(name) + " " + mm_point(x) +
+                                 " is outside the block or closer to its side "
+                                 "than the drill radius",
                              "x and y within +-(Bone block/Width/2 - radius) = +-" +
                                  fmt((half - R) * 1e3) + " mm");
       if (!(end[2] > -bone_.height))
-        throw InvalidInput(slot + "Depth", fmt(h.depth * 1e3) + " mm",
-                           "a depth whose tip stays inside the block (above z = -Bone block/Height)");
+        throw InvalidInput(
+            slot + "Depth", fmt(h.depth * 1e3) + " mm",
+            "a depth whose tip stays inside the block (above z = -Bone block/Height)");
     }
     for (unsigned int p = 0; p < damage_.probes.size(); ++p) {
       const auto& x = damage_.probes[p];
@@ -160,7 +162,8 @@ class BoneDrilling : public Scenario {
                                                   const std::vector<double>& deepest) const {
     const auto& axis = drill_.holes[j].axis;
     // Any direction normal to the axis: the block is the same all round at this scale.
-    dealii::Tensor<1, 3> n = dealii::cross_product_3d(axis.direction, dealii::Tensor<1, 3>({1, 0, 0}));
+    dealii::Tensor<1, 3> n =
+        dealii::cross_product_3d(axis.direction, dealii::Tensor<1, 3>({1, 0, 0}));
     if (n.norm() < 1e-6)
       n = dealii::cross_product_3d(axis.direction, dealii::Tensor<1, 3>({0, 1, 0}));
     const dealii::Point<3> x = axis.point(a) + r * n / n.norm();
@@ -192,6 +195,7 @@ struct DrillingRun {
   fem::HeatSolver<3>& heat;
   Vector cem43, above; // owned, per heat DoF: [min], [s]
   double removed_volume = 0, removed_mass = 0, chips_heat = 0;
+  double removed_capacity = 0; // Σ ρ c V of the removed cells [J/K]
   unsigned int refinements = 0;
 };
 
@@ -200,8 +204,8 @@ void BoneDrilling::run(RunContext& ctx) {
   const auto& bit = drill_.bit;
   const double R = bit.radius(), kappa = bit.half_angle(), Lc = bit.cone_length();
   const double h_drill = bit.diameter / mesh_.cells_across_diameter;
-  const instruments::DrillingProgramme programme(instruments::DrillingForceModel(bit),
-                                                 drill_.holes, drill_.schedule);
+  const instruments::DrillingProgramme programme(instruments::DrillingForceModel(bit), drill_.holes,
+                                                 drill_.schedule);
   ctx.log() << "  " << bit.describe() << "; " << drill_.holes.size() << " hole(s); "
             << drill_.schedule.spindle_rpm << " rpm, "
             << (drill_.schedule.thrust_control
@@ -253,8 +257,9 @@ void BoneDrilling::run(RunContext& ctx) {
         // Distance to the final hole's surface: outside, or inside to the wall or the cone.
         const double outside = instruments::distance_to_swept_solid(a, r, hole.depth, R, kappa);
         const double to_surface =
-            outside > 0 ? outside
-                        : std::min(R - r, ((hole.depth - a) * std::tan(kappa) - r) * std::cos(kappa));
+            outside > 0
+                ? outside
+                : std::min(R - r, ((hole.depth - a) * std::tan(kappa) - r) * std::cos(kappa));
         const bool on_wall = to_surface <= half_diagonal && a <= reach + mesh_.margin;
         if (h > h_drill * (1 + 1e-9) || on_wall) {
           cell->set_refine_flag();
@@ -281,11 +286,11 @@ void BoneDrilling::run(RunContext& ctx) {
       flagged = dealii::Utilities::MPI::sum(flagged, comm);
       for (unsigned int j = 0; j < drill_.holes.size(); ++j)
         if (bit.pilot_diameter > 0 || j == 0)
-          flagged += flag_near(j, bit.pilot_diameter > 0
-                                      ? drill_.holes[j].depth
-                                      : drill_.holes[j].axis.entry[2] /
-                                                -drill_.holes[j].axis.direction[2] +
-                                            mesh_.lookahead);
+          flagged +=
+              flag_near(j, bit.pilot_diameter > 0 ? drill_.holes[j].depth
+                                                  : drill_.holes[j].axis.entry[2] /
+                                                            -drill_.holes[j].axis.direction[2] +
+                                                        mesh_.lookahead);
       if (flagged == 0)
         break;
       tria.execute_coarsening_and_refinement();
@@ -301,7 +306,8 @@ void BoneDrilling::run(RunContext& ctx) {
   hp.default_material = {bone_.cortical.conductivity, bone_.cortical.density,
                          bone_.cortical.specific_heat};
   hp.material_overrides.push_back(
-      {1, {bone_.cancellous.conductivity, bone_.cancellous.density, bone_.cancellous.specific_heat}});
+      {1,
+       {bone_.cancellous.conductivity, bone_.cancellous.density, bone_.cancellous.specific_heat}});
   hp.convections.push_back({top_id, cooling_.wall_h(), cooling_.wall_temperature()});
   hp.perfusion.rate = cooling_.perfusion_rate;
   hp.perfusion.arterial_temperature = cooling_.body_temperature;
@@ -371,19 +377,22 @@ void BoneDrilling::run(RunContext& ctx) {
       return cell->material_id() != removed_id && inside(cell->center());
     };
     S.chips_heat += heat.heat_content_where(goes);
-    double volume = 0, mass = 0;
+    double volume = 0, mass = 0, capacity = 0;
     unsigned int n = 0;
     for (const auto& cell : tria.active_cell_iterators())
       if (!cell->is_artificial() && goes(cell)) {
         if (cell->is_locally_owned()) {
+          const auto& m = heat.material(cell->material_id());
           volume += cell->measure();
           mass += density_of(cell->material_id()) * cell->measure();
+          capacity += m.density * m.specific_heat * cell->measure();
           ++n;
         }
         cell->set_material_id(removed_id);
       }
     S.removed_volume += dealii::Utilities::MPI::sum(volume, comm);
     S.removed_mass += dealii::Utilities::MPI::sum(mass, comm);
+    S.removed_capacity += dealii::Utilities::MPI::sum(capacity, comm);
     if (dealii::Utilities::MPI::sum(n, comm) > 0)
       heat.cells_removed();
   };
@@ -408,8 +417,7 @@ void BoneDrilling::run(RunContext& ctx) {
                                   dealii::update_values | dealii::update_JxW_values);
   dealii::FESubfaceValues<3> fe_subface(heat.fe(), face_quadrature,
                                         dealii::update_values | dealii::update_JxW_values);
-  const auto for_each_zone_face = [&](unsigned int j, double tip, double reach,
-                                      const auto& f) {
+  const auto for_each_zone_face = [&](unsigned int j, double tip, double reach, const auto& f) {
     const auto& axis = drill_.holes[j].axis;
     const double r0 = bit.pilot_radius();
     const auto classify_face = [&](const dealii::Point<3>& c, bool wall) -> int {
@@ -473,8 +481,7 @@ void BoneDrilling::run(RunContext& ctx) {
     }
     if (cut + wall > 0 && z.cut_area == 0)
       throw NumericalFailure("no bone face near the drill's lips to take the cutting heat",
-                             "hole " + std::to_string(j + 1) + ", tip at " + fmt(tip * 1e3) +
-                                 " mm",
+                             "hole " + std::to_string(j + 1) + ", tip at " + fmt(tip * 1e3) + " mm",
                              "the mesh is too coarse near the tip: raise Mesh/Cells across "
                              "diameter or Mesh/Lookahead");
     const double q_cut = (cut + (z.wall_area > 0 ? 0.0 : wall)) / z.cut_area;
@@ -530,9 +537,9 @@ void BoneDrilling::run(RunContext& ctx) {
   const double feed_dt =
       std::min(run_.max_time_step, run_.cells_per_step * h_drill / drill_.schedule.feed_rate);
   const double nominal_end = programme.nominal_duration() + run_.cooling_time;
-  ctx.log() << "  mesh: " << tria.n_global_active_cells() << " cells, drill cells "
-            << h_drill * 1e3 << " mm (" << mesh_.cells_across_diameter
-            << " across the diameter); " << heat.dof_handler().n_dofs() << " DoFs at the start\n";
+  ctx.log() << "  mesh: " << tria.n_global_active_cells() << " cells, drill cells " << h_drill * 1e3
+            << " mm (" << mesh_.cells_across_diameter << " across the diameter); "
+            << heat.dof_handler().n_dofs() << " DoFs at the start\n";
   ctx.set_cost({"fem_heat", double(heat.dof_handler().n_dofs()) * nominal_end / feed_dt,
                 double(heat.dof_handler().n_dofs())});
   ctx.progress().start("bone drilling", static_cast<unsigned int>(std::ceil(nominal_end / feed_dt)),
@@ -549,12 +556,11 @@ void BoneDrilling::run(RunContext& ctx) {
     // The step: a fraction of a drill cell while feeding, the largest otherwise.
     double dt = state.phase == DrillPhase::done ? run_.max_time_step : feed_dt;
     if (state.phase == DrillPhase::feed && drill_.schedule.thrust_control && state.tip > 0) {
-      const double v = std::max(1e-9, programme.model().feed_for_thrust(
-                                          state.tip, drill_.schedule.thrust_force,
-                                          drill_.schedule.spindle_rpm,
-                                          [&](double a, double r) { return material(state.hole, a, r); },
-                                          1e-3) *
-                                          drill_.schedule.spindle_rpm / 60.0);
+      const double v =
+          std::max(1e-9, programme.model().feed_for_thrust(
+                             state.tip, drill_.schedule.thrust_force, drill_.schedule.spindle_rpm,
+                             [&](double a, double r) { return material(state.hole, a, r); }, 1e-3) *
+                             drill_.schedule.spindle_rpm / 60.0);
       dt = std::min(run_.max_time_step, run_.cells_per_step * h_drill / v);
     }
     if (done_at >= 0)
@@ -712,7 +718,8 @@ void BoneDrilling::run(RunContext& ctx) {
     const auto& axis = drill_.holes[k].axis;
     const unsigned int na = 400, nr = 80, nt = 64;
     const double a_lo = -axis.entry[2] / -axis.direction[2] - R, a_hi = state.deepest[k];
-    dealii::Tensor<1, 3> e1 = dealii::cross_product_3d(axis.direction, dealii::Tensor<1, 3>({1, 0, 0}));
+    dealii::Tensor<1, 3> e1 =
+        dealii::cross_product_3d(axis.direction, dealii::Tensor<1, 3>({1, 0, 0}));
     if (e1.norm() < 1e-6)
       e1 = dealii::cross_product_3d(axis.direction, dealii::Tensor<1, 3>({0, 1, 0}));
     e1 /= e1.norm();
@@ -805,7 +812,9 @@ void BoneDrilling::run(RunContext& ctx) {
                  "-");
   sum.set_figure("heat_convected_J", heat.convected_energy(), "J");
   sum.set_figure("heat_perfused_J", heat.perfused_energy(), "J");
-  sum.set_figure("heat_removed_with_chips_J", S.chips_heat - 0.0, "J");
+  // What the chips carried off above body temperature (the balance uses the full content).
+  sum.set_figure("heat_removed_with_chips_J",
+                 S.chips_heat - cooling_.body_temperature * S.removed_capacity, "J");
   sum.set_figure("heat_balance_error_relative",
                  heat.source_energy() > 0 ? std::abs(balance) / heat.source_energy()
                                           : std::numeric_limits<double>::quiet_NaN(),

@@ -23,8 +23,8 @@ void require_positive(double v, const std::string& where, const std::string& uni
     throw InvalidInput(where, std::to_string(v), "a positive value " + unit);
 }
 
-void declare_bone_type(dealii::ParameterHandler& prm, const std::string& name, double k,
-                       double rho, double c, double kc, double kt, const std::string& sources) {
+void declare_bone_type(dealii::ParameterHandler& prm, const std::string& name, double k, double rho,
+                       double c, double kc, double kt, const std::string& sources) {
   prm.enter_subsection(name);
   prm.declare_entry("Thermal conductivity", std::to_string(k), Double(0),
                     "k [W/(m K)]. " + sources);
@@ -76,8 +76,7 @@ void DrillSection::declare(dealii::ParameterHandler& prm) {
                     "drill's pilot): it is removed at the start and the lips cut only the "
                     "annulus beyond it [mm]; 0 = none.");
   prm.declare_entry("Spindle speed", "1000", Double(0), "Rotational speed n [rev/min].");
-  prm.declare_entry("Feed control", "feed rate",
-                    Selection("feed rate|feed per revolution|thrust"),
+  prm.declare_entry("Feed control", "feed rate", Selection("feed rate|feed per revolution|thrust"),
                     "What sets the feed [-]: the Feed rate; the Feed per revolution (the feed "
                     "rate follows the Spindle speed); or the feed at which the mechanistic "
                     "model gives the Thrust force (a surgeon pushing with a steady hand).");
@@ -86,8 +85,7 @@ void DrillSection::declare(dealii::ParameterHandler& prm) {
   prm.declare_entry("Feed rate", "1", Double(0),
                     "Axial speed of the bit while cutting [mm/s]; with Feed control = thrust, "
                     "the speed through air (no lip in bone).");
-  prm.declare_entry("Thrust force", "40", Double(0),
-                    "Axial force with Feed control = thrust [N].");
+  prm.declare_entry("Thrust force", "40", Double(0), "Axial force with Feed control = thrust [N].");
   prm.declare_entry("Dwell", "0", Double(0), "Time the bit turns at full depth [s].");
   prm.declare_entry("Retraction speed", "10", Double(0), "Axial speed when withdrawing [mm/s].");
   prm.declare_entry("Pause between holes", "5", Double(0),
@@ -160,7 +158,8 @@ void DrillSection::parse(dealii::ParameterHandler& prm) {
     holes.push_back(h);
   }
   if (holes.empty())
-    throw InvalidInput("Drill/Hole 1/Entry", "no hole given", "at least one hole slot with an Entry");
+    throw InvalidInput("Drill/Hole 1/Entry", "no hole given",
+                       "at least one hole slot with an Entry");
 }
 
 void BoneSection::declare(dealii::ParameterHandler& prm) {
@@ -192,8 +191,8 @@ void BoneSection::parse(dealii::ParameterHandler& prm) {
 
 bool BoneSection::inside(const dealii::Point<3>& x, double tolerance) const {
   const double t = tolerance * width;
-  return std::abs(x[0]) <= 0.5 * width + t && std::abs(x[1]) <= 0.5 * width + t &&
-         x[2] <= t && x[2] >= -height - t;
+  return std::abs(x[0]) <= 0.5 * width + t && std::abs(x[1]) <= 0.5 * width + t && x[2] <= t &&
+         x[2] >= -height - t;
 }
 
 void MeshSection::declare(dealii::ParameterHandler& prm) {

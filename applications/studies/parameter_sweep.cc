@@ -20,9 +20,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <algorithm>
 #include <fstream>
 #include <iomanip>
 #include <sstream>
@@ -184,7 +184,8 @@ class ParameterSweep : public Scenario {
       ctx.progress().update(i + 1, i + 1);
     }
     ctx.progress().finish();
-    report(ctx, runs, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    report(ctx, runs,
+           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   }
 
  private:
@@ -193,8 +194,8 @@ class ParameterSweep : public Scenario {
     for (const auto& s : sweep_.settings)
       args.insert(args.end(), {"--set", s});
     for (unsigned int k = 0; k < r.index.size(); ++k)
-      args.insert(args.end(), {"--set", sweep_.axes[k].parameter + "=" +
-                                            sweep_.axes[k].values[r.index[k]]});
+      args.insert(args.end(),
+                  {"--set", sweep_.axes[k].parameter + "=" + sweep_.axes[k].values[r.index[k]]});
     return args;
   }
 
@@ -211,7 +212,8 @@ class ParameterSweep : public Scenario {
     fs::remove(log);
     if (result.exit_code != 0)
       throw InvalidInput("Sweep/Scene",
-                         "spinesim check of " + sweep_.scene + " with the first values failed (exit " +
+                         "spinesim check of " + sweep_.scene +
+                             " with the first values failed (exit " +
                              std::to_string(result.exit_code) + "):\n" + text,
                          "a scene and axes that spinesim check accepts");
     ctx.log() << "  the first combination passed spinesim check\n";
@@ -332,7 +334,10 @@ class ParameterSweep : public Scenario {
         const int t = trend(runs, f, k);
         sum.set_figure("trend_" + sweep_.figures[f] + "_vs_axis" + std::to_string(k + 1), t, "-");
         ctx.log() << "  " << sweep_.figures[f] << " along " << sweep_.axes[k].label << ": "
-                  << (t > 0 ? "rises" : t < 0 ? "falls" : "no monotone trend") << "\n";
+                  << (t > 0   ? "rises"
+                      : t < 0 ? "falls"
+                              : "no monotone trend")
+                  << "\n";
       }
     if (sweep_.plot)
       sum.set_figure("png_valid", plot(ctx, runs), "-");
@@ -364,9 +369,9 @@ class ParameterSweep : public Scenario {
       const std::string name = "sweep_" + sweep_.figures[f];
       std::ostringstream gp;
       gp << "set terminal pngcairo size 900,600 noenhanced\nset output '"
-         << (dir / (name + ".png")).string() << "'\nset title '" << sweep_.figures[f]
-         << " against " << x.label << "'\nset xlabel '" << x.label << "'\nset ylabel '"
-         << sweep_.figures[f] << "'\nset grid\nset key outside right\nplot ";
+         << (dir / (name + ".png")).string() << "'\nset title '" << sweep_.figures[f] << " against "
+         << x.label << "'\nset xlabel '" << x.label << "'\nset ylabel '" << sweep_.figures[f]
+         << "'\nset grid\nset key outside right\nplot ";
       // One data block per combination of the other axes (gnuplot's `index`), in order of
       // the abscissa, so each line joins its own runs.
       std::ostringstream data;

@@ -19,8 +19,9 @@
 // the method's convergence rate.
 // Figures: the relative error of every probe against Rosenthal and its maximum
 // (max_probe_error_relative), the same against the Gaussian source
-// (max_probe_discretisation_error_relative), and the energy balance of the insulated block. The mesh is refined to Cell size in a tube
-// around the path; the time step moves the source 1/(Steps per cell) of a cell per step.
+// (max_probe_discretisation_error_relative), and the energy balance of the insulated block. The
+// mesh is refined to Cell size in a tube around the path; the time step moves the source 1/(Steps
+// per cell) of a cell per step.
 
 #include "applications/framework/parse_section.h"
 #include "applications/framework/run_context.h"
@@ -111,12 +112,18 @@ struct RosenthalSection {
     coarse_cell = 1e-3 * prm.get_double("Coarse cell size");
     steps_per_cell = prm.get_double("Steps per cell");
     theta = prm.get_double("Theta");
-    for (const auto& [name, v] :
-         {std::pair{"Power", power}, {"Speed", speed}, {"Source radius", radius},
-          {"Thermal conductivity", conductivity}, {"Density", density},
-          {"Specific heat", specific_heat}, {"Travel", travel}, {"Half width", half_width},
-          {"Cell size", cell_size}, {"Tube radius", tube_radius},
-          {"Coarse cell size", coarse_cell}, {"Steps per cell", steps_per_cell}})
+    for (const auto& [name, v] : {std::pair{"Power", power},
+                                  {"Speed", speed},
+                                  {"Source radius", radius},
+                                  {"Thermal conductivity", conductivity},
+                                  {"Density", density},
+                                  {"Specific heat", specific_heat},
+                                  {"Travel", travel},
+                                  {"Half width", half_width},
+                                  {"Cell size", cell_size},
+                                  {"Tube radius", tube_radius},
+                                  {"Coarse cell size", coarse_cell},
+                                  {"Steps per cell", steps_per_cell}})
       if (!(v > 0))
         throw InvalidInput(std::string("Rosenthal/") + name, "0 or negative",
                            "a positive value (see the entry's help for its unit)");
@@ -181,8 +188,8 @@ struct RosenthalField {
     const double e1[2] = {xi / R, rho / R}, e2[2] = {-rho / R, xi / R}; // (ξ, ρ) components
     std::vector<double> s, ws, th, wt, ph, wp;
     gauss_legendre(std::max(0.0, R - 6 * r), R + 6 * r, 24, s, ws);
-    const double th_max = R > 7 * r ? std::min(pi, 2 * std::asin(std::min(1.0, 3 * r / (R - 6 * r))))
-                                    : pi;
+    const double th_max =
+        R > 7 * r ? std::min(pi, 2 * std::asin(std::min(1.0, 3 * r / (R - 6 * r)))) : pi;
     double sum = 0;
     if (dim == 3) {
       gauss_legendre(0, th_max, 40, th, wt);
@@ -197,7 +204,8 @@ struct RosenthalField {
           for (unsigned int m = 0; m < n_phi; ++m) {
             // z = s (cos θ e1 + sin θ (cos φ e2 + sin φ e3)), e3 normal to the (ξ, ρ) plane.
             const double phi = 2 * pi * (m + 0.5) / n_phi;
-            const double z_xi = s[i] * (std::cos(th[j]) * e1[0] + std::sin(th[j]) * std::cos(phi) * e2[0]);
+            const double z_xi =
+                s[i] * (std::cos(th[j]) * e1[0] + std::sin(th[j]) * std::cos(phi) * e2[0]);
             ring += kernel(z_xi, s[i]);
           }
           sum += ws[i] * wt[j] * s[i] * s[i] * std::sin(th[j]) * g * ring * 2 * pi / n_phi;
@@ -292,7 +300,8 @@ class RosenthalMovingSource : public Scenario {
     ctx.set_cost({"fem_heat", dofs * n_steps, dofs});
 
     const double e0 = heat.heat_content();
-    ctx.history().add({{"time_s", 0.0}, {"source_x_mm", 0.0}, {"max_temperature_K", heat.max_temperature()}});
+    ctx.history().add(
+        {{"time_s", 0.0}, {"source_x_mm", 0.0}, {"max_temperature_K", heat.max_temperature()}});
     ctx.progress().start("moving source", n_steps, t_end);
     const auto start = std::chrono::steady_clock::now();
     for (unsigned int step = 1; step <= n_steps; ++step) {
@@ -328,8 +337,8 @@ class RosenthalMovingSource : public Scenario {
       points.push_back(x);
     }
     const std::vector<double> T = heat.temperature_at_points(points);
-    const RosenthalField field{dim, (dim == 3 ? 4.0 : 2.0) * r.power, r.conductivity, alpha,
-                               r.speed, r.radius};
+    const RosenthalField field{
+        dim, (dim == 3 ? 4.0 : 2.0) * r.power, r.conductivity, alpha, r.speed, r.radius};
     Summary& sum = ctx.summary();
     double worst = 0, worst_discretisation = 0;
     auto finite_or_inf = [](double e) {

@@ -54,9 +54,9 @@ struct HeatParameters {
 
   // Pennes (1948, J. Appl. Physiol. 1:93) blood perfusion: q = w_b ρ_b c_b (T_a − T).
   struct Perfusion {
-    double rate = 0;                       // w_b [1/s], blood volume per tissue volume; 0 = off
-    double blood_heat_capacity = 3.8e6;    // ρ_b c_b [J/(m^3 K)]
-    double arterial_temperature = 310.15;  // T_a [K]
+    double rate = 0;                      // w_b [1/s], blood volume per tissue volume; 0 = off
+    double blood_heat_capacity = 3.8e6;   // ρ_b c_b [J/(m^3 K)]
+    double arterial_temperature = 310.15; // T_a [K]
   };
 
   unsigned int degree = 1;

@@ -441,17 +441,17 @@ void HeatSolver<dim>::assemble_step(double dt, bool rebuild_matrix) {
             }
         }
       }
-    for_each_convecting_face(
-        cell, fe_face, fe_subface, [&](const FEFaceValuesBase<dim>& fv, double h, double t_inf) {
-          for (unsigned int q = 0; q < n_face_q; ++q)
-            for (unsigned int i = 0; i < n_dofs; ++i) {
-              const double hphi = h * fv.shape_value(i, q) * fv.JxW(q);
-              cell_source(i) += hphi * t_inf;
-              local_ambient += dt * hphi * t_inf;
-              for (unsigned int j = 0; j < n_dofs; ++j)
-                cell_stiffness(i, j) += hphi * fv.shape_value(j, q);
-            }
-        });
+    for_each_convecting_face(cell, fe_face, fe_subface,
+                             [&](const FEFaceValuesBase<dim>& fv, double h, double t_inf) {
+                               for (unsigned int q = 0; q < n_face_q; ++q)
+                                 for (unsigned int i = 0; i < n_dofs; ++i) {
+                                   const double hphi = h * fv.shape_value(i, q) * fv.JxW(q);
+                                   cell_source(i) += hphi * t_inf;
+                                   local_ambient += dt * hphi * t_inf;
+                                   for (unsigned int j = 0; j < n_dofs; ++j)
+                                     cell_stiffness(i, j) += hphi * fv.shape_value(j, q);
+                                 }
+                             });
 
     local_sources += dt * claim_external(cell_source);
 

@@ -108,7 +108,10 @@ class HeatSolver {
     double wall_ambient_temperature = 293.15;  // T_inf [K]
   };
   void set_removal(const Removal& removal);
-  void cells_removed() { matrix_dt_ = -1; scale_cache_.clear(); }
+  void cells_removed() {
+    matrix_dt_ = -1;
+    scale_cache_.clear();
+  }
   template <class CellIterator>
   bool is_removed(const CellIterator& cell) const {
     return cell->material_id() == removal_.material_id;

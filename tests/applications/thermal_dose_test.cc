@@ -33,8 +33,8 @@ TEST(ThermalDose, ConstantTemperature) {
 
 // The closed form for a linear T(t) against a 2e5-point midpoint rule (error ~1e-10).
 TEST(ThermalDose, LinearRampsIncludingAcross43) {
-  for (const auto& [T0, T1] : {std::pair{44.0, 60.0}, {60.0, 45.0}, {37.0, 42.0}, {40.0, 50.0},
-                               {55.0, 38.0}}) {
+  for (const auto& [T0, T1] :
+       {std::pair{44.0, 60.0}, {60.0, 45.0}, {37.0, 42.0}, {40.0, 50.0}, {55.0, 38.0}}) {
     const double exact = cem43_increment(T0 + K, T1 + K, 2.0);
     EXPECT_NEAR(exact, cem43_midpoint(T0 + K, T1 + K, 2.0, 200000), 1e-8 * exact)
         << T0 << " -> " << T1;

@@ -78,7 +78,8 @@ TEST(DrillingForces, ThrustControlInvertsTheModel) {
   const double f = model.feed_for_thrust(5e-3, 40.0, 1200, everywhere, 1e-3);
   EXPECT_NEAR(model.load(5e-3, f, 1200, everywhere).thrust, 40.0, 1e-8);
   // Nothing to cut: no feed from thrust.
-  EXPECT_EQ(model.feed_for_thrust(5e-3, 40.0, 1200, [](double, double) { return nullptr; }, 1e-3),
+  EXPECT_EQ(model.feed_for_thrust(
+                5e-3, 40.0, 1200, [](double, double) { return nullptr; }, 1e-3),
             0.0);
 }
 
@@ -148,9 +149,9 @@ TEST(DrillBit, DistanceToSweptSolid) {
   // Normal to the cone from a point beside the point: (distance along the normal) exactly.
   const dealii::Tensor<1, 2> normal({std::sin(kappa), std::cos(kappa)}); // (a, r), outward
   const double am = tip - 0.5 * Lc, rm = 0.5 * R;                        // cone midpoint
-  EXPECT_NEAR(distance_to_swept_solid(am + 0.3e-3 * normal[0], rm + 0.3e-3 * normal[1], tip, R,
-                                      kappa),
-              0.3e-3, 1e-15);
+  EXPECT_NEAR(
+      distance_to_swept_solid(am + 0.3e-3 * normal[0], rm + 0.3e-3 * normal[1], tip, R, kappa),
+      0.3e-3, 1e-15);
   // Beyond the rim, outwards and below: the corner at (tip − L_c, R).
   EXPECT_NEAR(distance_to_swept_solid(tip - Lc + 3e-3, R + 4e-3, tip, R, kappa), 5e-3, 1e-12);
   EXPECT_TRUE(in_swept_solid(tip - 1e-9, 0, tip, R, kappa));

@@ -63,22 +63,31 @@ spinesim_add_comparison_test(scene.bone_drilling_ranks_agree
   CHECKS "peak_temperature_C:rel:1e-6;max_probe_temperature_C:rel:1e-6;removed_volume_mm3:rel:1e-12;cutting_energy_J:rel:1e-12;necrotic_volume_cem43_mm3:rel:0.01"
   REQUIRES "drill_quick;drill_quick_2ranks" LABELS "scene;drilling;mpi")
 
-# The trends a surgeon relies on, asserted on the quick sweep (600 and 1200 rpm at 0.06
-# mm/rev, dry and irrigated; about 35 s): at a fixed feed per revolution the peak bone
-# temperature (measured 96 -> 132 degC dry, 95 -> 120 irrigated) and the hottest probe (45.1 ->
-# 45.6 dry, 44.1 -> 44.6 irrigated) rise with the speed, and irrigation lowers both and the
-# CEM43 necrosis distance (1.05 -> 0.77 mm at 600 rpm). In this model the cutting energy per
-# hole does not depend on the speed at a fixed feed per revolution (Kienzle coefficients
-# without a speed term), only its rate: the wall heats more, while probes 1 mm or more from
-# the wall barely change (docs/drilling.md); the hottest probe here is the one 1 mm from the
-# wall at 2 mm depth.
+# The trends, asserted on the quick sweep (600 and 1200 rpm at 0.06 mm/rev, dry and
+# irrigated, each run on two ranks; about 30 s): at a fixed feed per revolution the peak bone
+# temperature rises with the speed (measured 96 -> 132 degC dry, 95 -> 120 irrigated: the same
+# cutting energy per hole delivered in half the time), and irrigation lowers the hottest
+# probe, the peak and the CEM43 necrosis reach (1.05 -> 0.77 mm at 600 rpm). The probes 1 mm
+# and more from the wall are not asserted against the speed: in this model (Kienzle
+# coefficients without a speed term) they see nearly the same energy per length of hole at
+# any speed and change by tenths of a degree either way (docs/drilling.md, the sweep).
 spinesim_add_scene_test(study.drilling_sweep_quick
   SCENE ${PROJECT_SOURCE_DIR}/tests/data/drilling_sweep_quick.prm
-  EXPECT "status==ok;failed_runs<=0;all_figures_finite>=1;png_valid>=1;trend_max_probe_temperature_C_vs_axis1>=1;trend_max_probe_temperature_C_vs_axis2<=-1;trend_peak_temperature_C_vs_axis1>=1;trend_peak_temperature_C_vs_axis2<=-1;trend_necrotic_distance_cem43_mm_vs_axis2<=-1"
+  EXPECT "status==ok;failed_runs<=0;all_figures_finite>=1;png_valid>=1;trend_peak_temperature_C_vs_axis1>=1;trend_peak_temperature_C_vs_axis2<=-1;trend_max_probe_temperature_C_vs_axis2<=-1;trend_necrotic_distance_cem43_mm_vs_axis2<=-1"
   LABELS "scene;study;drilling" TIMEOUT 600)
 # The full sweep: 500/1000/2000 rpm × 0.03/0.06/0.12 mm/rev × dry/irrigated at the scene's
-# resolution (18 runs, about 12 min on two cores).
+# resolution (18 runs on two ranks, 13.4 min measured). Asserted as measured: the peak bone
+# temperature rises with the speed and the feed per revolution; the hottest probe falls with
+# the feed (thicker chips cost less energy per volume, and the hole takes less time) and with
+# irrigation, as do the peak and the CEM43 necrosis reach.
 spinesim_add_scene_test(benchmark.drilling_sweep
   SCENE ${PROJECT_SOURCE_DIR}/applications/studies/drilling_sweep.prm
-  EXPECT "status==ok;failed_runs<=0;all_figures_finite>=1;png_valid>=1;trend_max_probe_temperature_C_vs_axis1>=1;trend_max_probe_temperature_C_vs_axis3<=-1"
+  EXPECT "status==ok;failed_runs<=0;all_figures_finite>=1;png_valid>=1;trend_peak_temperature_C_vs_axis1>=1;trend_peak_temperature_C_vs_axis2>=1;trend_max_probe_temperature_C_vs_axis2<=-1;trend_max_probe_temperature_C_vs_axis3<=-1;trend_peak_temperature_C_vs_axis3<=-1;trend_necrotic_distance_cem43_mm_vs_axis3<=-1"
+  LABELS "benchmark;study;drilling" TIMEOUT 3600)
+# The scene's cost against its resolution (8 to 24 cells across the bit, about 8 min): every
+# run finishes with finite figures, and the default resolution (16) runs within the required
+# 5 minutes on two cores (measured in the study's table; here the whole study's bound).
+spinesim_add_scene_test(benchmark.drilling_resolution
+  SCENE ${PROJECT_SOURCE_DIR}/applications/benchmarks/drilling_resolution.prm
+  EXPECT "status==ok;failed_runs<=0;all_rows_finite>=1;png_valid>=1"
   LABELS "benchmark;study;drilling" TIMEOUT 3600)
