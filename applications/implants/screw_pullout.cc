@@ -819,16 +819,7 @@ class ScrewPullout : public Scenario {
        << "' every ::1 using 1:2 with linespoints pt 7 ps 0.6 title 'FEM ("
        << foam_.yield_calibration << "-calibrated foam)', " << chapman
        << " with lines dt 2 title 'Chapman et al. 1996'\n";
-    ctx.output().write_atomic("force_displacement.gp", gp.str());
-    const std::string gnuplot = find_in_path("gnuplot");
-    if (gnuplot.empty()) {
-      ctx.warn("gnuplot not found: no force_displacement.png (install gnuplot-nox); "
-               "force_displacement.csv has the curve");
-      return std::nan("");
-    }
-    run_child({gnuplot, (dir / "force_displacement.gp").string()},
-              dir / "force_displacement.gnuplot.log", 120);
-    return png_is_valid(dir / "force_displacement.png") ? 1 : 0;
+    return draw_with_gnuplot(ctx, "force_displacement", gp.str(), "force_displacement.csv");
   }
 
   bool damage_on_;

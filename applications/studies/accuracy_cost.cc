@@ -456,11 +456,6 @@ class AccuracyCost : public Scenario {
 
   // Returns 1 when every problem's PNG is a valid image, 0 otherwise, NaN without gnuplot.
   double plot(RunContext& ctx, const std::vector<StudyRow>& rows) const {
-    if (find_in_path("gnuplot").empty()) {
-      ctx.warn("gnuplot not found: no accuracy_cost_*.png (install gnuplot-nox); "
-               "accuracy_cost.csv has the data");
-      return std::nan("");
-    }
     std::vector<std::string> problems;
     for (const auto& c : study_.cases)
       if (c.error_figure != "none" &&
@@ -468,21 +463,16 @@ class AccuracyCost : public Scenario {
         problems.push_back(c.problem);
     bool all_valid = true;
     for (const auto& problem : problems) {
-      const std::string png = "accuracy_cost_" + problem + ".png";
-      const std::string script = "accuracy_cost_" + problem + ".gp";
-      ctx.output().write_atomic(
-          script, accuracy_cost_script(problem, rows, (ctx.output().path() / png).string(),
-                                       study_.time_measure == "run" ? "wall time of the run"
-                                                                    : "wall time of the process"));
-      const auto result =
-          run_child({find_in_path("gnuplot"), (ctx.output().path() / script).string()},
-                    ctx.output().path() / ("accuracy_cost_" + problem + ".gnuplot.log"), 120);
-      (void)result; // a failed gnuplot leaves no valid PNG, which the check below reports
-      const bool valid = png_is_valid(ctx.output().path() / png);
-      if (!valid)
-        ctx.warn("accuracy_cost plot of " + problem + " is not a valid PNG (see " +
-                 "accuracy_cost_" + problem + ".gnuplot.log)");
-      all_valid = all_valid && valid;
+      const std::string name = "accuracy_cost_" + problem;
+      const double drawn = draw_with_gnuplot(
+          ctx, name,
+          accuracy_cost_script(problem, rows, (ctx.output().path() / (name + ".png")).string(),
+                               study_.time_measure == "run" ? "wall time of the run"
+                                                            : "wall time of the process"),
+          "accuracy_cost.csv");
+      if (std::isnan(drawn))
+        return drawn; // no gnuplot
+      all_valid = all_valid && drawn == 1;
     }
     return all_valid ? 1 : 0;
   }

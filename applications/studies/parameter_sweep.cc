@@ -345,11 +345,6 @@ class ParameterSweep : public Scenario {
 
   // sweep_<figure>.png: the figure against axis 1, one line per combination of the others.
   double plot(RunContext& ctx, const std::vector<SweepRun>& runs) const {
-    const std::string gnuplot = find_in_path("gnuplot");
-    if (gnuplot.empty()) {
-      ctx.warn("gnuplot not found: no sweep plots (install gnuplot-nox); sweep.csv has the data");
-      return std::nan("");
-    }
     const auto dir = ctx.output().path();
     const auto& x = sweep_.axes.front();
     // Combinations of the other axes, in the CSV's column order (axis 1 is column 1).
@@ -399,9 +394,10 @@ class ParameterSweep : public Scenario {
       }
       ctx.output().write_atomic(name + ".dat", data.str());
       gp << "\n";
-      ctx.output().write_atomic(name + ".gp", gp.str());
-      run_child({gnuplot, (dir / (name + ".gp")).string()}, dir / (name + ".gnuplot.log"), 120);
-      valid = valid && png_is_valid(dir / (name + ".png"));
+      const double drawn = draw_with_gnuplot(ctx, name, gp.str(), "sweep.csv");
+      if (std::isnan(drawn))
+        return drawn; // no gnuplot
+      valid = valid && drawn == 1;
     }
     return valid ? 1.0 : 0.0;
   }

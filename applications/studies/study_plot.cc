@@ -1,7 +1,10 @@
 #include "applications/studies/study_plot.h"
 
+#include "applications/studies/child_run.h"
+
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <fstream>
 #include <iomanip>
@@ -51,6 +54,23 @@ std::string accuracy_cost_script(const std::string& problem, const std::vector<S
   gp << "$front using 1:2 with steps dt 2 lc rgb 'black' title 'Pareto front', "
      << "$front using 1:2 with points pt 6 ps 2.5 lc rgb 'black' notitle\n";
   return gp.str();
+}
+
+double draw_with_gnuplot(framework::RunContext& ctx, const std::string& name,
+                         const std::string& script, const std::string& data) {
+  const auto dir = ctx.output().path();
+  ctx.output().write_atomic(name + ".gp", script);
+  const std::string gnuplot = find_in_path("gnuplot");
+  if (gnuplot.empty()) {
+    ctx.warn("gnuplot not found: no " + name + ".png (install gnuplot-nox); " + data +
+             " holds the data");
+    return std::nan("");
+  }
+  run_child({gnuplot, (dir / (name + ".gp")).string()}, dir / (name + ".gnuplot.log"), 120);
+  if (png_is_valid(dir / (name + ".png")))
+    return 1;
+  ctx.warn(name + ".png is not a valid PNG (see " + name + ".gnuplot.log)");
+  return 0;
 }
 
 bool png_is_valid(const std::filesystem::path& file) {

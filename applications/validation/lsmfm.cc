@@ -588,15 +588,7 @@ class LsmfmScenario : public Scenario {
        << "plot '" << (dir / "plastic_zone_fem.dat").string()
        << "' using 1:2:3 with points pt 7 ps 0.5 palette notitle\n"
        << "unset multiplot\n";
-    ctx.output().write_atomic("plastic_zone.gp", gp.str());
-    const std::string gnuplot = find_in_path("gnuplot");
-    if (gnuplot.empty()) {
-      ctx.warn("gnuplot not found: no plastic_zone.png (install gnuplot-nox); "
-               "plastic_zone_*.dat have the points");
-      return std::nan("");
-    }
-    run_child({gnuplot, (dir / "plastic_zone.gp").string()}, dir / "plastic_zone.gnuplot.log", 120);
-    return png_is_valid(dir / "plastic_zone.png") ? 1 : 0;
+    return draw_with_gnuplot(ctx, "plastic_zone", gp.str(), "plastic_zone_*.dat");
   }
 };
 
