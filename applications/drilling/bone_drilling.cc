@@ -25,6 +25,7 @@
 #include "applications/framework/parse_section.h"
 #include "applications/framework/run_context.h"
 #include "applications/framework/scenario.h"
+#include "applications/simulation/pvd_record.h"
 #include "applications/studies/child_run.h"
 #include "applications/studies/study_plot.h"
 #include "base/exceptions.h"
@@ -176,8 +177,9 @@ class BoneDrilling : public Scenario {
     return bone_.layer(x) == 0 ? &bone_.cortical.cutting : &bone_.cancellous.cutting;
   }
 
-  // VTU of temperature, CEM43 dose, time above the necrosis temperature and material.
-  void write_fields(RunContext& ctx, DrillingRun& S, unsigned int counter) const;
+  // VTU of temperature, CEM43 dose, time above the necrosis temperature and material, with
+  // drilling.pvd indexing them by time.
+  void write_fields(RunContext& ctx, DrillingRun& S, unsigned int counter, double time) const;
   // probes.csv and probes.png (gnuplot): 1 valid, 0 not, NaN without gnuplot or probes.
   double plot_probes(RunContext& ctx, const std::vector<std::vector<double>>& series) const;
 
@@ -196,6 +198,7 @@ struct DrillingRun {
   Vector cem43, above; // owned, per heat DoF: [min], [s]
   double removed_volume = 0, removed_mass = 0, chips_heat = 0;
   double removed_capacity = 0; // Σ ρ c V of the removed cells [J/K]
+  PvdRecord pvd{"drilling.pvd"};
   unsigned int refinements = 0;
 };
 
@@ -656,7 +659,7 @@ void BoneDrilling::run(RunContext& ctx) {
     ctx.history().add(row);
     if (run_.write_vtu && run_.output_interval > 0 && step % run_.output_interval == 0) {
       dealii::TimerOutput::Scope timer(ctx.timer(), "output");
-      write_fields(ctx, S, ++output_counter);
+      write_fields(ctx, S, ++output_counter, t);
     }
     ctx.flush_history();
     ctx.progress().update(step, t);
@@ -749,7 +752,7 @@ void BoneDrilling::run(RunContext& ctx) {
 
   if (run_.write_vtu) {
     dealii::TimerOutput::Scope timer(ctx.timer(), "output");
-    write_fields(ctx, S, output_counter + 1);
+    write_fields(ctx, S, output_counter + 1, t);
   }
   const double plot_ok = plot_probes(ctx, probe_series);
 
@@ -847,14 +850,17 @@ void BoneDrilling::run(RunContext& ctx) {
             << " mm^3 of " << swept * 1e9 << " mm^3 swept\n";
 }
 
-void BoneDrilling::write_fields(RunContext& ctx, DrillingRun& S, unsigned int counter) const {
+void BoneDrilling::write_fields(RunContext& ctx, DrillingRun& S, unsigned int counter,
+                                double time) const {
   const MPI_Comm comm = ctx.comm();
   Vector cem_g(S.heat.locally_owned_dofs(), S.heat.locally_relevant_dofs(), comm),
       above_g(S.heat.locally_owned_dofs(), S.heat.locally_relevant_dofs(), comm);
   cem_g = S.cem43;
   above_g = S.above;
-  S.heat.write_output(ctx.output().path().string(), counter, "drilling",
-                      {{"cem43_min", &cem_g}, {"time_above_necrosis_s", &above_g}});
+  S.pvd.add(time,
+            S.heat.write_output(ctx.output().path().string(), counter, "drilling",
+                                {{"cem43_min", &cem_g}, {"time_above_necrosis_s", &above_g}}));
+  S.pvd.write(ctx);
 }
 
 double BoneDrilling::plot_probes(RunContext& ctx,
@@ -889,14 +895,7 @@ double BoneDrilling::plot_probes(RunContext& ctx,
   }
   gp << damage_.necrosis_temperature - celsius << " with lines dt 2 lc rgb 'red' title '"
      << damage_.necrosis_temperature - celsius << " degC'\n";
-  ctx.output().write_atomic("probes.gp", gp.str());
-  const std::string gnuplot = find_in_path("gnuplot");
-  if (gnuplot.empty()) {
-    ctx.warn("gnuplot not found: no probes.png (install gnuplot-nox); probes.csv has the data");
-    return std::nan("");
-  }
-  run_child({gnuplot, (dir / "probes.gp").string()}, dir / "probes.gnuplot.log", 120);
-  return png_is_valid(dir / "probes.png") ? 1 : 0;
+  return draw_with_gnuplot(ctx, "probes", gp.str(), "probes.csv");
 }
 
 } // namespace bone_drilling

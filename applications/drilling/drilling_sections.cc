@@ -12,12 +12,6 @@ using namespace dealii::Patterns;
 
 namespace {
 
-std::string mm(double v) {
-  std::ostringstream s;
-  s << v * 1e3 << " mm";
-  return s.str();
-}
-
 void require_positive(double v, const std::string& where, const std::string& unit) {
   if (!(v > 0) || !std::isfinite(v))
     throw InvalidInput(where, std::to_string(v), "a positive value " + unit);
