@@ -4,8 +4,11 @@ execute_process(COMMAND ${SPINESIM} params OUTPUT_VARIABLE _out RESULT_VARIABLE 
 if(NOT _rc EQUAL 0)
   message(FATAL_ERROR "spinesim params exited ${_rc}")
 endif()
-# Semicolons would split CMake lists: neutralise them first.
+# Semicolons would split CMake lists, and square brackets change where they split (a "[" or
+# "]" split across two help lines leaves one unbalanced in the matched line): neutralise them.
 string(REPLACE ";" "," _out "${_out}")
+string(REPLACE "[" "(" _out "${_out}")
+string(REPLACE "]" ")" _out "${_out}")
 string(REGEX MATCHALL "\n *set [^\n]+=[^\n]*" _sets "${_out}")
 list(LENGTH _sets _n)
 # Each entry must be preceded by its help comment: count "# ..." lines directly above a set.
