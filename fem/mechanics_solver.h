@@ -95,6 +95,19 @@ class MechanicsSolver {
   // again after changing the mesh (history is reset then).
   // Per-cell laws (e.g. CT density-mapped moduli): evaluated in setup() for every locally
   // owned and ghost cell; a null return falls back to the law of the cell's material id.
+  // Tractions on the cavity wall: the faces active cells share with inactive ones (cells
+  // removed by drilling or converted to particles), subfaces of hanging faces included.
+  // t(x, n) [Pa] at a point x of the wall, n the outward unit normal of the active cell;
+  // time-independent (applied in full at every load step once loaded, ramped in the first).
+  using CavityTraction =
+      std::function<dealii::Tensor<1, dim>(const dealii::Point<dim>&, const dealii::Tensor<1, dim>&)>;
+  void set_cavity_traction(CavityTraction traction) { cavity_traction_ = std::move(traction); }
+  // ∫ f(x, n) dA over the cavity wall on all ranks [unit of f · m^(dim−1)], collective: to
+  // scale a cavity load to a given resultant before setting it.
+  double cavity_integral(
+      const std::function<double(const dealii::Point<dim>&, const dealii::Tensor<1, dim>&)>& f)
+      const;
+
   using CellLawFunction = std::function<std::shared_ptr<const materials::ConstitutiveLaw>(
       const typename dealii::Triangulation<dim>::active_cell_iterator&)>;
   void set_cell_laws(CellLawFunction f);
@@ -355,6 +368,7 @@ class MechanicsSolver {
 
   BoundaryConditions<dim> bcs_;
   std::shared_ptr<dealii::Function<dim>> body_force_, temperature_change_;
+  CavityTraction cavity_traction_;
   std::map<dealii::types::material_id, std::shared_ptr<const materials::ConstitutiveLaw>> laws_;
   std::vector<QuadraturePointData> committed_, trial_;
 

@@ -14,6 +14,30 @@
 
 namespace spinesim::fem {
 
+namespace cavity_wall {
+// Calls f(face values) for each (sub)face of `cell` that borders a cell `active` rejects:
+// the whole face where the neighbour is as fine or coarser, each subface whose neighbour
+// child is inactive where the neighbour is finer.
+template <int dim, typename Cell, typename Active, typename F>
+void for_each_face(const Cell& cell, const Active& active, FEFaceValues<dim>& face_values,
+                   FESubfaceValues<dim>& subface_values, const F& f) {
+  for (const unsigned int face : cell->face_indices()) {
+    if (cell->face(face)->at_boundary())
+      continue;
+    if (cell->face(face)->has_children()) {
+      for (unsigned int sf = 0; sf < cell->face(face)->n_children(); ++sf)
+        if (!active(cell->neighbor_child_on_subface(face, sf))) {
+          subface_values.reinit(cell, face, sf);
+          f(static_cast<const FEFaceValuesBase<dim>&>(subface_values));
+        }
+    } else if (!active(cell->neighbor(face))) {
+      face_values.reinit(cell, face);
+      f(static_cast<const FEFaceValuesBase<dim>&>(face_values));
+    }
+  }
+}
+} // namespace cavity_wall
+
 using namespace dealii;
 using materials::Tensor2;
 
@@ -49,6 +73,9 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
   FEFaceValues<dim> fe_face(*mapping_, fe_, face_quadrature_,
                             update_values | update_quadrature_points | update_normal_vectors |
                                 update_JxW_values);
+  FESubfaceValues<dim> fe_subface(*mapping_, fe_, face_quadrature_,
+                                  update_values | update_quadrature_points |
+                                      update_normal_vectors | update_JxW_values);
   const FEValuesExtractors::Vector displacements(0);
   FullMatrix<double> cell_matrix(n, n);
   Vector<double> cell_rhs(n), cell_fint(n), cell_fext(n);
@@ -200,6 +227,21 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
         }
       }
 
+    // Tractions on the cavity wall (time-independent: in full once loaded).
+    if (cavity_traction_ && !active_.empty()) {
+      const double scale = loaded_ ? 1.0 : load_factor;
+      cavity_wall::for_each_face<dim>(
+          cell, [&](const auto& other) { return active_[other->active_cell_index()]; }, fe_face, fe_subface,
+          [&](const FEFaceValuesBase<dim>& fv) {
+            for (unsigned int q = 0; q < fv.n_quadrature_points; ++q) {
+              const Tensor<1, dim> t =
+                  scale * cavity_traction_(fv.quadrature_point(q), fv.normal_vector(q));
+              for (unsigned int i = 0; i < n; ++i)
+                cell_fext(i) += t[comp[i]] * fv.shape_value(i, q) * fv.JxW(q);
+            }
+          });
+    }
+
     cell->get_dof_indices(dofs);
     for (unsigned int i = 0; i < n; ++i)
       cell_rhs(i) = cell_fext(i) - cell_fint(i);
@@ -288,12 +330,37 @@ const typename MechanicsSolver<dim>::MatrixType& MechanicsSolver<dim>::evaluate_
   return matrix_;
 }
 
+template <int dim>
+double MechanicsSolver<dim>::cavity_integral(
+    const std::function<double(const Point<dim>&, const Tensor<1, dim>&)>& f) const {
+  double local = 0;
+  if (!active_.empty()) {
+    FEFaceValues<dim> fe_face(*mapping_, fe_, face_quadrature_,
+                              update_quadrature_points | update_normal_vectors |
+                                  update_JxW_values);
+    FESubfaceValues<dim> fe_subface(*mapping_, fe_, face_quadrature_,
+                                    update_quadrature_points | update_normal_vectors |
+                                        update_JxW_values);
+    for (const auto& cell : dof_handler_.active_cell_iterators())
+      if (cell->is_locally_owned() && is_active(cell))
+        cavity_wall::for_each_face<dim>(
+            cell, [&](const auto& other) { return active_[other->active_cell_index()]; }, fe_face, fe_subface,
+            [&](const FEFaceValuesBase<dim>& fv) {
+              for (unsigned int q = 0; q < fv.n_quadrature_points; ++q)
+                local += f(fv.quadrature_point(q), fv.normal_vector(q)) * fv.JxW(q);
+            });
+  }
+  return Utilities::MPI::sum(local, comm_);
+}
+
 // Explicit instantiation of the members defined in this file.
 #define SPINESIM_INSTANTIATE(dim)                                                                  \
   template double MechanicsSolver<dim>::load_blend(Function<dim>&, const Point<dim>&,              \
                                                    unsigned int, double) const;                    \
   template typename MechanicsSolver<dim>::AssemblyNorms MechanicsSolver<dim>::assemble(            \
       bool, double, const AffineConstraints<double>&);                                             \
+  template double MechanicsSolver<dim>::cavity_integral(                                          \
+      const std::function<double(const Point<dim>&, const Tensor<1, dim>&)>&) const;               \
   template void MechanicsSolver<dim>::regularise_untouched_rows(                                   \
       MatrixType&, const AffineConstraints<double>&) const;                                        \
   template const typename MechanicsSolver<dim>::VectorType&                                        \

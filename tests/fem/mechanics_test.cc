@@ -641,3 +641,90 @@ TEST(Mechanics, DeactivatedRefinedRegionKeepsTheTangentRegular3D) {
   for (const std::string solver : {"direct", "cg", "gmres"})
     check_deactivated_refined_region<3>(solver);
 }
+
+namespace {
+
+// A block [0,4]^dim of unit cells with the cells in [1,3]^dim deactivated (a cavity) and
+// refined once, so that every face of the cavity wall is a hanging face seen from the kept
+// side (subfaces); a neighbouring column is refined too (regular fine faces). The wall's
+// area is that of a cube (square) of edge 2, whatever the faces' levels. Clamped on x = 0:
+// a uniform cavity traction t0 must be balanced by the support, R = −t0 A; a pressure on the
+// closed wall has no resultant, R = 0.
+template <int dim>
+void check_cavity_traction() {
+  parallel::distributed::Triangulation<dim> tria(comm());
+  GridGenerator::subdivided_hyper_cube(tria, 4, 0.0, 4.0, true);
+  for (const auto& cell : tria.active_cell_iterators())
+    cell->set_material_id(0);
+  const auto in_cavity = [](const Point<dim>& c) {
+    for (unsigned int d = 0; d < dim; ++d)
+      if (c[d] < 1 || c[d] > 3)
+        return false;
+    return true;
+  };
+  for (const auto& cell : tria.active_cell_iterators())
+    if (cell->is_locally_owned() &&
+        (in_cavity(cell->center()) ||
+         (cell->center()[0] > 3 && cell->center()[1] > 1 && cell->center()[1] < 2)))
+      cell->set_refine_flag();
+  tria.execute_coarsening_and_refinement();
+  typename MechanicsSolver<dim>::Parameters prm;
+  MechanicsSolver<dim> mech(tria, prm);
+  mech.set_material(0, std::make_shared<materials::LinearElastic>(1e9, 0.3, 1000.0));
+  std::vector<bool> active(tria.n_active_cells(), true);
+  for (const auto& cell : tria.active_cell_iterators())
+    if (!cell->is_artificial() && in_cavity(cell->center()))
+      active[cell->active_cell_index()] = false;
+  mech.set_active_cells(active);
+  mech.boundary_conditions().add_dirichlet(0, "x,y" + std::string(dim == 3 ? ",z" : ""),
+                                           dim == 3 ? "0;0;0" : "0;0");
+  mech.setup();
+  const double area = mech.cavity_integral([](const auto&, const auto&) { return 1.0; });
+  const double exact_area = 2.0 * dim * std::pow(2.0, dim - 1);
+  // Sums of exact face measures of axis-aligned faces: round-off only.
+  EXPECT_NEAR(area, exact_area, 1e-12 * exact_area);
+  // The outward normals of the active cells point into the cavity: ∫ n dA = 0 over the
+  // closed wall, and ∫ n_x x dA = −(cavity volume) (divergence theorem, n inward to it).
+  const double flux = mech.cavity_integral([](const auto& x, const auto& n) { return n[0] * x[0]; });
+  EXPECT_NEAR(flux, -std::pow(2.0, dim), 1e-12 * std::pow(2.0, dim));
+
+  Tensor<1, dim> t0;
+  t0[0] = 3e6;
+  t0[1] = -1e6;
+  mech.set_cavity_traction([&](const auto&, const auto&) { return t0; });
+  mech.solve_quasi_static(1.0);
+  const Tensor<1, dim> R = mech.reaction_force(0);
+  // Newton's relative tolerance (1e-8) bounds the residual, hence the equilibrium error.
+  for (unsigned int d = 0; d < dim; ++d)
+    EXPECT_NEAR(R[d], -t0[d] * area, 1e-7 * t0.norm() * area) << "component " << d;
+
+  const double p = 5e6;
+  mech.set_cavity_traction([&](const auto&, const auto& n) { return Tensor<1, dim>(-p * n); });
+  mech.solve_quasi_static(2.0);
+  const Tensor<1, dim> R0 = mech.reaction_force(0);
+  EXPECT_LT(R0.norm(), 1e-7 * p * area);
+  // The pressure pushes the cavity's walls out: the cell at x in [0,1] next to the cavity
+  // moves away from it only by a clamped amount; the far side (x = 4) moves outward.
+  Vector<double> u_far(dim);
+  Point<dim> far;
+  for (unsigned int d = 0; d < dim; ++d)
+    far[d] = 2.0;
+  far[0] = 4.0;
+  double ux = 0;
+  for (const auto& cell : mech.dof_handler().active_cell_iterators())
+    if (cell->is_locally_owned())
+      for (const unsigned int v : cell->vertex_indices())
+        if (cell->vertex(v).distance(far) < 1e-12)
+          ux = mech.displacement()(cell->vertex_dof_index(v, 0));
+  ux = Utilities::MPI::max(ux, comm());
+  EXPECT_GT(ux, 0.0);
+}
+
+} // namespace
+
+TEST(Mechanics, CavityTractionIsBalancedByTheSupport2D) {
+  check_cavity_traction<2>();
+}
+TEST(Mechanics, CavityTractionIsBalancedByTheSupport3D) {
+  check_cavity_traction<3>();
+}
