@@ -15,6 +15,8 @@
 
 #include <Epetra_Import.h>
 
+#include <algorithm>
+
 namespace spinesim::fem {
 
 using namespace dealii;
@@ -227,6 +229,8 @@ void MechanicsSolver<dim>::setup() {
   hanging_.reinit(relevant_);
   DoFTools::make_hanging_node_constraints(dof_handler_, hanging_);
   hanging_.close();
+  if (!active_.empty())
+    drop_inactive_hanging_constraints();
   explicit_matrix_ready_ = false;
   dirichlet_dofs_ready_ = false;
   step_tables_ready_ = false;
@@ -331,6 +335,46 @@ void MechanicsSolver<dim>::compute_lumped_mass() {
 }
 
 template <int dim>
+void MechanicsSolver<dim>::drop_inactive_hanging_constraints() {
+  // A hanging node keeps the fine side conforming to the coarse cell across the face. Where
+  // that coarse cell is inactive (drilled out, converted) there is nothing to conform to, and
+  // the constraint does harm: it ties the active fine cells' node to the coarse face's corner
+  // DoFs, which may belong to inactive cells only. Such a DoF's row is regularised (its
+  // increment is zero), so it acts as a spurious support, and forces on the node leak out of
+  // the balance. The constraints kept are those of the DoFs on the refined faces of active
+  // cells (locally owned or ghost: every DoF of an owned cell is reached).
+  std::vector<types::global_dof_index> child_dofs(fe_.n_dofs_per_face()),
+      parent_dofs(fe_.n_dofs_per_face());
+  std::vector<types::global_dof_index> keep;
+  for (const auto& cell : dof_handler_.active_cell_iterators())
+    if (!cell->is_artificial() && is_active(cell))
+      for (const unsigned int f : cell->face_indices())
+        if (!cell->at_boundary(f) && cell->face(f)->has_children()) {
+          cell->face(f)->get_dof_indices(parent_dofs);
+          for (unsigned int c = 0; c < cell->face(f)->n_children(); ++c) {
+            cell->face(f)->child(c)->get_dof_indices(child_dofs);
+            for (const auto dof : child_dofs)
+              if (std::find(parent_dofs.begin(), parent_dofs.end(), dof) == parent_dofs.end())
+                keep.push_back(dof);
+          }
+        }
+  std::sort(keep.begin(), keep.end());
+  keep.erase(std::unique(keep.begin(), keep.end()), keep.end());
+  AffineConstraints<double> filtered(relevant_);
+  for (const auto& line : hanging_.get_lines())
+    if (std::binary_search(keep.begin(), keep.end(), line.index)) {
+      filtered.add_line(line.index);
+      filtered.add_entries(line.index, line.entries);
+      filtered.set_inhomogeneity(line.index, line.inhomogeneity);
+    }
+  filtered.close();
+  hanging_.clear();
+  hanging_.reinit(relevant_);
+  hanging_.merge(filtered);
+  hanging_.close();
+}
+
+template <int dim>
 void MechanicsSolver<dim>::mark_orphan_dofs() {
   orphan_.assign(relevant_.n_elements(), false);
   if (active_.empty())
@@ -427,7 +471,10 @@ void MechanicsSolver<dim>::make_constraints(AffineConstraints<double>& c, bool h
                                             double load_factor) {
   c.clear();
   c.reinit(relevant_);
-  DoFTools::make_hanging_node_constraints(dof_handler_, c);
+  for (const auto& line : hanging_.get_lines()) { // the hanging nodes active cells need
+    c.add_line(line.index);
+    c.add_entries(line.index, line.entries);
+  }
   // Orphaned DoFs (only inactive cells around them) stay where they are; driven DoFs follow
   // their imposed values.
   for (const auto& [dof, value] : driven_)

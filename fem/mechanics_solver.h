@@ -46,6 +46,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 class Epetra_Import;
@@ -99,14 +100,13 @@ class MechanicsSolver {
   // removed by drilling or converted to particles), subfaces of hanging faces included.
   // t(x, n) [Pa] at a point x of the wall, n the outward unit normal of the active cell;
   // time-independent (applied in full at every load step once loaded, ramped in the first).
-  using CavityTraction =
-      std::function<dealii::Tensor<1, dim>(const dealii::Point<dim>&, const dealii::Tensor<1, dim>&)>;
+  using CavityTraction = std::function<dealii::Tensor<1, dim>(const dealii::Point<dim>&,
+                                                              const dealii::Tensor<1, dim>&)>;
   void set_cavity_traction(CavityTraction traction) { cavity_traction_ = std::move(traction); }
   // ∫ f(x, n) dA over the cavity wall on all ranks [unit of f · m^(dim−1)], collective: to
   // scale a cavity load to a given resultant before setting it.
-  double cavity_integral(
-      const std::function<double(const dealii::Point<dim>&, const dealii::Tensor<1, dim>&)>& f)
-      const;
+  double cavity_integral(const std::function<double(const dealii::Point<dim>&,
+                                                    const dealii::Tensor<1, dim>&)>& f) const;
 
   using CellLawFunction = std::function<std::shared_ptr<const materials::ConstitutiveLaw>(
       const typename dealii::Triangulation<dim>::active_cell_iterator&)>;
@@ -257,7 +257,9 @@ class MechanicsSolver {
   dealii::Vector<float> cell_equivalent_plastic_strain() const; // cell averages [-]
   // Writes <directory>/<basename>_<cycle>.<rank>.vtu + .pvtu; returns the pvtu file name.
   std::string write_output(const std::string& directory, const std::string& basename,
-                           unsigned int cycle) const;
+                           unsigned int cycle,
+                           const std::vector<std::pair<std::string, const dealii::Vector<float>*>>&
+                               cell_fields = {}) const;
 
   // Checkpoint: mesh, displacement, velocity, committed history, time. load_checkpoint needs
   // the triangulation to hold the same coarse mesh only (build_coarse_mesh) and the same
@@ -309,6 +311,8 @@ class MechanicsSolver {
   void build_rigid_body_modes();
   void compute_lumped_mass();
   void mark_orphan_dofs();
+  void drop_inactive_hanging_constraints(); // setup() with inactive cells
+
   // set_temperature_field(): T − T_ref per quadrature point (active_cell_index * n_q + q).
   void evaluate_temperature_field(std::vector<double>& dT) const;
 

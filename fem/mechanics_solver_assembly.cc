@@ -74,8 +74,8 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
                             update_values | update_quadrature_points | update_normal_vectors |
                                 update_JxW_values);
   FESubfaceValues<dim> fe_subface(*mapping_, fe_, face_quadrature_,
-                                  update_values | update_quadrature_points |
-                                      update_normal_vectors | update_JxW_values);
+                                  update_values | update_quadrature_points | update_normal_vectors |
+                                      update_JxW_values);
   const FEValuesExtractors::Vector displacements(0);
   FullMatrix<double> cell_matrix(n, n);
   Vector<double> cell_rhs(n), cell_fint(n), cell_fext(n);
@@ -231,7 +231,8 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
     if (cavity_traction_ && !active_.empty()) {
       const double scale = loaded_ ? 1.0 : load_factor;
       cavity_wall::for_each_face<dim>(
-          cell, [&](const auto& other) { return active_[other->active_cell_index()]; }, fe_face, fe_subface,
+          cell, [&](const auto& other) { return active_[other->active_cell_index()]; }, fe_face,
+          fe_subface,
           [&](const FEFaceValuesBase<dim>& fv) {
             for (unsigned int q = 0; q < fv.n_quadrature_points; ++q) {
               const Tensor<1, dim> t =
@@ -336,15 +337,15 @@ double MechanicsSolver<dim>::cavity_integral(
   double local = 0;
   if (!active_.empty()) {
     FEFaceValues<dim> fe_face(*mapping_, fe_, face_quadrature_,
-                              update_quadrature_points | update_normal_vectors |
-                                  update_JxW_values);
+                              update_quadrature_points | update_normal_vectors | update_JxW_values);
     FESubfaceValues<dim> fe_subface(*mapping_, fe_, face_quadrature_,
                                     update_quadrature_points | update_normal_vectors |
                                         update_JxW_values);
     for (const auto& cell : dof_handler_.active_cell_iterators())
       if (cell->is_locally_owned() && is_active(cell))
         cavity_wall::for_each_face<dim>(
-            cell, [&](const auto& other) { return active_[other->active_cell_index()]; }, fe_face, fe_subface,
+            cell, [&](const auto& other) { return active_[other->active_cell_index()]; }, fe_face,
+            fe_subface,
             [&](const FEFaceValuesBase<dim>& fv) {
               for (unsigned int q = 0; q < fv.n_quadrature_points; ++q)
                 local += f(fv.quadrature_point(q), fv.normal_vector(q)) * fv.JxW(q);
@@ -359,7 +360,7 @@ double MechanicsSolver<dim>::cavity_integral(
                                                    unsigned int, double) const;                    \
   template typename MechanicsSolver<dim>::AssemblyNorms MechanicsSolver<dim>::assemble(            \
       bool, double, const AffineConstraints<double>&);                                             \
-  template double MechanicsSolver<dim>::cavity_integral(                                          \
+  template double MechanicsSolver<dim>::cavity_integral(                                           \
       const std::function<double(const Point<dim>&, const Tensor<1, dim>&)>&) const;               \
   template void MechanicsSolver<dim>::regularise_untouched_rows(                                   \
       MatrixType&, const AffineConstraints<double>&) const;                                        \
