@@ -4,6 +4,7 @@
 #include "base/list_parsing.h"
 
 #include <cmath>
+#include <iomanip>
 #include <sstream>
 
 namespace spinesim::applications::drilling {
@@ -12,13 +13,21 @@ using namespace dealii::Patterns;
 
 namespace {
 
+// A default value as the parameter file shows it (shortest round-trip form).
+std::string default_text(double v) {
+  std::ostringstream s;
+  s << std::setprecision(6) << v;
+  return s.str();
+}
+
 void require_positive(double v, const std::string& where, const std::string& unit) {
   if (!(v > 0) || !std::isfinite(v))
     throw InvalidInput(where, std::to_string(v), "a positive value " + unit);
 }
 
 void declare_bone_type(dealii::ParameterHandler& prm, const std::string& name, double k, double rho,
-                       double c, double kc, double kt, const std::string& sources) {
+                       double c, double kc, double kt, const std::string& sources,
+                       const BoneType& mechanics, const std::string& strength_sources) {
   prm.enter_subsection(name);
   prm.declare_entry("Thermal conductivity", std::to_string(k), Double(0),
                     "k [W/(m K)]. " + sources);
@@ -37,6 +46,20 @@ void declare_bone_type(dealii::ParameterHandler& prm, const std::string& name, d
                     "Kienzle's size-effect exponent m, K(h) = K_ref (h/h_ref)^-m [-].");
   prm.declare_entry("Reference chip thickness", "0.05", Double(0),
                     "h_ref at which the coefficients above hold [mm].");
+  prm.declare_entry("Young's modulus", default_text(mechanics.youngs_modulus * 1e-6), Double(0),
+                    "E of the bone, isotropic linear elastic [MPa]. " + strength_sources);
+  prm.declare_entry("Poisson's ratio", default_text(mechanics.poisson_ratio), Double(-1, 0.5),
+                    "nu [-].");
+  prm.declare_entry("Thermal expansion", default_text(mechanics.thermal_expansion), Double(0),
+                    "Linear thermal expansion coefficient alpha [1/K]. The default is of the "
+                    "order of the mineral's (hydroxyapatite, about 1e-5 1/K); no measurement on "
+                    "wet bone at body temperature is cited here: set it from your specimen.");
+  prm.declare_entry("Tensile strength", default_text(mechanics.tensile_strength * 1e-6), Double(0),
+                    "Ultimate tensile stress S_t of the maximum-principal-stress (Rankine) "
+                    "criterion [MPa].");
+  prm.declare_entry("Compressive strength", default_text(mechanics.compressive_strength * 1e-6),
+                    Double(0),
+                    "Ultimate compressive stress S_c (positive) of the same criterion [MPa].");
   prm.leave_subsection();
 }
 
@@ -50,8 +73,16 @@ BoneType parse_bone_type(dealii::ParameterHandler& prm, const std::string& name)
   b.cutting.thrust = 1e6 * prm.get_double("Thrust cutting coefficient");
   b.cutting.exponent = prm.get_double("Chip thickness exponent");
   b.cutting.reference_chip_thickness = 1e-3 * prm.get_double("Reference chip thickness");
+  b.youngs_modulus = 1e6 * prm.get_double("Young's modulus");
+  b.poisson_ratio = prm.get_double("Poisson's ratio");
+  b.thermal_expansion = prm.get_double("Thermal expansion");
+  b.tensile_strength = 1e6 * prm.get_double("Tensile strength");
+  b.compressive_strength = 1e6 * prm.get_double("Compressive strength");
   prm.leave_subsection();
   const std::string where = "Bone block/" + name + "/";
+  require_positive(b.youngs_modulus, where + "Young's modulus", "[MPa]");
+  require_positive(b.tensile_strength, where + "Tensile strength", "[MPa]");
+  require_positive(b.compressive_strength, where + "Compressive strength", "[MPa]");
   require_positive(b.conductivity, where + "Thermal conductivity", "[W/(m K)]");
   require_positive(b.density, where + "Density", "[kg/m^3]");
   require_positive(b.specific_heat, where + "Specific heat", "[J/(kg K)]");
@@ -166,11 +197,20 @@ void BoneSection::declare(dealii::ParameterHandler& prm) {
                     "[mm]. At least Height: all cortical.");
   declare_bone_type(prm, "Cortical", 0.54, 1900, 1300, 200, 300,
                     "Davidson & James (2000, Med. Eng. Phys. 22:741) measured 0.53-0.58 for "
-                    "bovine cortical bone.");
+                    "bovine cortical bone.",
+                    BoneType::cortical_defaults(),
+                    "Reilly & Burstein (1975, J. Biomech. 8:393), human femoral cortical bone: "
+                    "E 17.9 GPa along the osteons, 10.1 GPa across; ultimate tension 133 / 51 "
+                    "MPa and compression 193 / 133 MPa along / across. A drill usually cuts "
+                    "across the osteons: the defaults take the transverse strengths.");
   declare_bone_type(prm, "Cancellous", 0.30, 1100, 2200, 40, 60,
                     "Cancellous bone with marrow conducts less and stores more per kilogram "
                     "(representative values; the cutting coefficients scale roughly with "
-                    "apparent density).");
+                    "apparent density).",
+                    BoneType::cancellous_defaults(),
+                    "Vertebral cancellous bone: E about 300 MPa and yield strains 0.70 % in "
+                    "tension, 0.77 % in compression (Morgan & Keaveny 2001, J. Biomech. "
+                    "34:569), hence the default strengths E x strain.");
 }
 
 void BoneSection::parse(dealii::ParameterHandler& prm) {
@@ -305,6 +345,44 @@ void RunSection::parse(dealii::ParameterHandler& prm) {
   write_vtu = prm.get_bool("Write VTU");
   require_positive(max_time_step, "Drilling run/Maximum time step", "[s]");
   require_positive(cells_per_step, "Drilling run/Cells per step", "[-]");
+}
+
+void MechanicsSection::declare(dealii::ParameterHandler& prm) {
+  prm.declare_entry("Interval", "2", Double(0),
+                    "Simulated time between the mechanics solves while a bit cuts [s]; there "
+                    "is one more at the end of each hole's feed (deepest point, largest "
+                    "thrust) and one at the end of the run. 0 = those only.");
+  prm.declare_entry("Support", "bottom", Selection("bottom|sides|bottom and sides"),
+                    "Which faces of the block are clamped (all displacement components) [-].");
+  prm.declare_entry("Critical distance", "0.35", Double(0),
+                    "L of the theory of critical distances, point method [mm]: the failure "
+                    "criterion is assessed at points at least L/2 from the drilled surface, "
+                    "where the stair-stepped wall of removed cells no longer sets the stress. "
+                    "Kasiri & Taylor (2008, J. Biomech. 41:603) found L = 0.3-0.4 mm for the "
+                    "bones they studied.");
+  prm.declare_entry("Critical stress factor", "1.33", Double(0),
+                    "T: the critical tensile stress of the point method is T x Tensile "
+                    "strength (1.33 in the same study) [-]; compression uses the Compressive "
+                    "strength as it is.");
+  prm.declare_entry("Residual stiffness", "1e-3", Double(0, 1),
+                    "With Effects/Damage: the fraction of Young's modulus a cell keeps once it "
+                    "fails in tension (smeared cracking, so the load flows round the crack); "
+                    "bone crushed in compression is reported but keeps its stiffness [-].");
+  prm.declare_entry("Failure rounds", "8", Integer(1, 100),
+                    "With Effects/Damage: the most re-solves per mechanics solve after cells "
+                    "fail, as the stress redistributes; the failures still growing after them "
+                    "are reported in the log [-].");
+}
+
+void MechanicsSection::parse(dealii::ParameterHandler& prm) {
+  interval = prm.get_double("Interval");
+  support = prm.get("Support");
+  residual_stiffness = prm.get_double("Residual stiffness");
+  critical_distance = 1e-3 * prm.get_double("Critical distance");
+  critical_stress_factor = prm.get_double("Critical stress factor");
+  require_positive(critical_stress_factor, "Drilling mechanics/Critical stress factor", "[-]");
+  failure_rounds = prm.get_integer("Failure rounds");
+  require_positive(residual_stiffness, "Drilling mechanics/Residual stiffness", "(0, 1]");
 }
 
 } // namespace spinesim::applications::drilling

@@ -17,6 +17,7 @@
 #include <deal.II/base/parameter_handler.h>
 #include <deal.II/base/point.h>
 
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -37,6 +38,24 @@ struct DrillSection {
 struct BoneType {
   double conductivity = 0.54, density = 1900, specific_heat = 1300; // SI
   instruments::CuttingCoefficients cutting;
+  // Mechanics (SI): isotropic linear elasticity, thermal expansion, and the strengths of the
+  // maximum-principal-stress criterion (Keyak & Rossi 2000, J. Biomech. 33:209, compare it
+  // with other criteria for bone).
+  double youngs_modulus = 17e9, poisson_ratio = 0.3, thermal_expansion = 1.5e-5;
+  double tensile_strength = 51e6, compressive_strength = 133e6;
+  static BoneType cortical_defaults() { return BoneType(); }
+  static BoneType cancellous_defaults() {
+    BoneType b;
+    b.youngs_modulus = 300e6;
+    b.tensile_strength = 2.1e6;     // 300 MPa x 0.70 %
+    b.compressive_strength = 2.3e6; // 300 MPa x 0.77 %
+    return b;
+  }
+  // Failure index of a stress with principal values s1 ≥ s2 ≥ s3 [Pa] against the critical
+  // tensile stress T S_t and S_c: ≥ 1 fails.
+  double failure_index(double s1, double s3, double T = 1.0) const {
+    return std::max(s1 / (T * tensile_strength), -s3 / compressive_strength);
+  }
 };
 
 struct BoneSection {
@@ -77,6 +96,22 @@ struct DamageSection {
   std::vector<dealii::Point<3>> probes;
   double necrosis_temperature = 47 + celsius, necrosis_time = 60;
   double cem43_threshold = 16; // [min]
+  static void declare(dealii::ParameterHandler& prm);
+  void parse(dealii::ParameterHandler& prm);
+};
+
+// "Drilling mechanics" (read with Effects/Mechanics): quasi-static thermo-elastic solves of
+// the drilled block at intervals, under the thrust and torque of the bit on the hole's point
+// and, with Effects/Thermal expansion, the temperature of the heat solve.
+struct MechanicsSection {
+  double interval = 2.0;          // simulated time between solves while cutting [s]
+  std::string support = "bottom"; // bottom | sides | bottom and sides
+  double residual_stiffness = 1e-3;
+  unsigned int failure_rounds = 8;
+  // Theory of critical distances, point method (Kasiri & Taylor 2008, J. Biomech. 41:603):
+  // the stress at L/2 from the drilled surface against T × the tensile strength.
+  double critical_distance = 0.35e-3; // L [m]
+  double critical_stress_factor = 1.33;
   static void declare(dealii::ParameterHandler& prm);
   void parse(dealii::ParameterHandler& prm);
 };

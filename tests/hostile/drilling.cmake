@@ -16,3 +16,10 @@ spinesim_add_hostile_test(drill_probe_in_the_hole
   ARGS check ${_drill} --set "Thermal damage/Probes=1,0,-2" MATCH "Thermal damage/Probes.*lies in hole 1")
 spinesim_add_hostile_test(drill_pilot_wider_than_the_bit
   ARGS check ${_drill} --set "Drill/Pilot diameter=5" MATCH "Drill/Pilot diameter")
+# The drilling scenario runs on its heat model and has no particles (yet): switching heat off
+# or asking for a particle method is bad input naming the entry.
+spinesim_add_hostile_test(drill_without_heat
+  ARGS check ${_drill} --set "Effects/Heat=false" --set "Effects/Thermal expansion=false"
+  MATCH "Effects/Heat.*heat model")
+spinesim_add_hostile_test(drill_with_particles
+  ARGS check ${_drill} --set "Effects/Particles method=nosb" MATCH "Effects/Particles method")
