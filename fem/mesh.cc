@@ -8,6 +8,8 @@
 #include <deal.II/grid/grid_in.h>
 #include <deal.II/grid/grid_tools.h>
 
+#include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <new>
 #include <sstream>
@@ -208,5 +210,10 @@ template void build_coarse_mesh<2>(const MeshParameters&,
                                    dealii::parallel::distributed::Triangulation<2>&);
 template void build_coarse_mesh<3>(const MeshParameters&,
                                    dealii::parallel::distributed::Triangulation<3>&);
+
+std::vector<double> steps_over(double length, double h) {
+  const unsigned int n = std::max(1u, static_cast<unsigned int>(std::ceil(length / h - 1e-9)));
+  return std::vector<double>(n, length / n);
+}
 
 } // namespace spinesim::fem

@@ -53,6 +53,10 @@ template <int dim>
 void build_coarse_mesh(const MeshParameters& parameters,
                        dealii::parallel::distributed::Triangulation<dim>& triangulation);
 
+// Equal steps covering `length` [m] with cells of at most about h [m] (at least one): the
+// step sizes of GridGenerator::subdivided_hyper_rectangle along one axis.
+std::vector<double> steps_over(double length, double h);
+
 } // namespace spinesim::fem
 
 #endif

@@ -29,6 +29,7 @@
 #include "applications/studies/child_run.h"
 #include "applications/studies/study_plot.h"
 #include "base/exceptions.h"
+#include "fem/mesh.h"
 #include "fem/heat/heat_solver.h"
 #include "fem/material_id_transfer.h"
 #include "fem/materials/linear_elastic.h"
@@ -83,11 +84,6 @@ std::string mm_point(const dealii::Point<3>& x) {
   std::ostringstream s;
   s << "(" << x[0] * 1e3 << ", " << x[1] * 1e3 << ", " << x[2] * 1e3 << ") mm";
   return s.str();
-}
-
-std::vector<double> steps_over(double length, double h) {
-  const unsigned int n = std::max(1u, static_cast<unsigned int>(std::ceil(length / h - 1e-9)));
-  return std::vector<double>(n, length / n);
 }
 
 // Distance in the (a, r) plane from (a, r) to the segment (a0, r0)–(a1, r1).
@@ -249,7 +245,7 @@ void BoneDrilling::run(RunContext& ctx) {
     const double coarse = h_drill * std::pow(2.0, k);
     const double W = bone_.width;
     dealii::GridGenerator::subdivided_hyper_rectangle(
-        tria, {steps_over(W, coarse), steps_over(W, coarse), steps_over(bone_.height, coarse)},
+        tria, {fem::steps_over(W, coarse), fem::steps_over(W, coarse), fem::steps_over(bone_.height, coarse)},
         dealii::Point<3>(-W / 2, -W / 2, -bone_.height), dealii::Point<3>(W / 2, W / 2, 0), true);
     for (const auto& cell : tria.active_cell_iterators()) // colorize numbered the cells too
       cell->set_material_id(0);

@@ -35,6 +35,7 @@
 #include "applications/studies/child_run.h"
 #include "applications/studies/study_plot.h"
 #include "base/exceptions.h"
+#include "fem/mesh.h"
 #include "fem/displacement_error.h"
 #include "fem/materials/j2_damage.h"
 #include "fem/materials/j2_plasticity.h"
@@ -248,12 +249,6 @@ std::string fmt(double v, int digits = 17) {
   std::ostringstream s;
   s << std::setprecision(digits) << v;
   return s.str();
-}
-
-// Equal steps covering `length` with cells of at most about h.
-std::vector<double> steps_over(double length, double h) {
-  const unsigned int n = std::max(1u, static_cast<unsigned int>(std::ceil(length / h - 1e-9)));
-  return std::vector<double>(n, length / n);
 }
 
 // The pull-out's progress between steps: what a checkpoint keeps besides the solver's state.
@@ -631,8 +626,8 @@ class ScrewPullout : public Scenario {
         std::max(0, static_cast<int>(std::lround(std::log2(block_.coarse_cell / h_target))));
     const double coarse = h_target * std::pow(2.0, k);
     std::vector<std::vector<double>> steps(3);
-    steps[0] = steps[1] = steps_over(W, coarse);
-    steps[2] = steps_over(block_.depth, coarse);
+    steps[0] = steps[1] = fem::steps_over(W, coarse);
+    steps[2] = fem::steps_over(block_.depth, coarse);
     dealii::GridGenerator::subdivided_hyper_rectangle(
         tria, steps, dealii::Point<3>(-W / 2, -W / 2, -block_.depth),
         dealii::Point<3>(W / 2, W / 2, 0), true);

@@ -28,6 +28,7 @@
 #include "applications/framework/scenario.h"
 #include "base/exceptions.h"
 #include "base/list_parsing.h"
+#include "fem/mesh.h"
 #include "fem/heat/heat_solver.h"
 
 #include <deal.II/base/mpi.h>
@@ -226,11 +227,6 @@ struct RosenthalField {
   }
 };
 
-std::vector<double> steps_over(double length, double h) {
-  const unsigned int n = std::max(1u, static_cast<unsigned int>(std::ceil(length / h - 1e-9)));
-  return std::vector<double>(n, length / n);
-}
-
 template <int dim>
 class RosenthalMovingSource : public Scenario {
  public:
@@ -251,9 +247,9 @@ class RosenthalMovingSource : public Scenario {
       const int k = std::max(0, int(std::lround(std::log2(r.coarse_cell / r.cell_size))));
       const double coarse = r.cell_size * std::pow(2.0, k);
       std::vector<std::vector<double>> steps(dim);
-      steps[0] = steps_over(length, coarse);
+      steps[0] = fem::steps_over(length, coarse);
       for (unsigned int d = 1; d < dim; ++d)
-        steps[d] = steps_over(r.half_width, coarse);
+        steps[d] = fem::steps_over(r.half_width, coarse);
       dealii::Point<dim> lo, hi;
       lo[0] = -r.lead;
       hi[0] = r.travel + r.ahead;

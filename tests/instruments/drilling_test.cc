@@ -175,3 +175,35 @@ TEST(DrillBit, BadInputNamesTheEntry) {
     EXPECT_EQ(e.where(), "Drill/Spindle speed");
   }
 }
+
+// Thrust control through the entry: the point enters the bone with few lips engaged, so the
+// feed that holds the thrust there is far larger than once the point is in. The feed of each
+// sub-step is the one whose thrust at the sub-step's middle (where the forces are taken) is
+// the target, taken on the side below it where one more lip sample engaging makes the thrust
+// jump: no interval reports more than the target, and once the point is in, the target is
+// held to the bisection's tolerance (1e-9 of the feed).
+TEST(DrillingProgramme, ThrustControlDoesNotOvershootAtTheEntry) {
+  const CuttingCoefficients c = cortical();
+  DrillingSchedule sched;
+  sched.spindle_rpm = 1000;
+  sched.feed_rate = 1e-3;
+  sched.thrust_control = true;
+  sched.thrust_force = 60;
+  DrillHole hole;
+  hole.axis.entry = dealii::Point<3>(0, 0, 0);
+  hole.axis.direction = dealii::Tensor<1, 3>({0, 0, -1});
+  hole.depth = 4e-3;
+  const DrillingProgramme programme(DrillingForceModel(bit()), {hole}, sched);
+  const auto material = [&](unsigned int, double a, double) -> const CuttingCoefficients* {
+    return a >= 0 ? &c : nullptr;
+  };
+  DrillState st = programme.initial_state();
+  double max_thrust = 0;
+  for (unsigned int step = 0; step < 400 && st.phase == DrillPhase::feed; ++step)
+    max_thrust = std::max(max_thrust, programme.advance(st, 0.05, 8, material).max_thrust);
+  EXPECT_NE(st.phase, DrillPhase::feed);
+  EXPECT_NEAR(st.deepest[0], 4e-3, 1e-15);
+  EXPECT_LE(max_thrust, 60.0 * (1 + 1e-6));
+  // Fully engaged the thrust is held exactly (the bisection's tolerance).
+  EXPECT_GE(max_thrust, 60.0 * (1 - 1e-6));
+}
