@@ -393,6 +393,15 @@ class MechanicsSolver {
   mutable std::map<dealii::types::boundary_id,
                    std::vector<std::pair<dealii::types::global_dof_index, unsigned int>>>
       reaction_dofs_;
+  // Per boundary id, the owned hanging DoFs with masters on it: (DoF, component, Σ weights of
+  // those masters). A hanging node's force belongs partly to its masters: a support's reaction
+  // includes those shares, or forces near refined supports go missing.
+  struct ReactionShare {
+    dealii::types::global_dof_index dof;
+    unsigned int component;
+    double weight;
+  };
+  mutable std::map<dealii::types::boundary_id, std::vector<ReactionShare>> reaction_shares_;
   MatrixType explicit_matrix_; // K over the active cells for the linear explicit path
   bool explicit_matrix_ready_ = false, assemble_into_explicit_matrix_ = false;
   mutable bool states_stale_ = false;

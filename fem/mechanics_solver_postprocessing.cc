@@ -57,11 +57,33 @@ Tensor<1, dim> MechanicsSolver<dim>::local_reaction_force(types::boundary_id id)
     for (unsigned int c = 0; c < dim; ++c)
       for (const auto i : on_boundary& component_dofs_[c])
         list.emplace_back(i, c);
+    // Hanging DoFs whose masters lie on the boundary, wherever those masters are owned: a
+    // ghosted indicator of the boundary's DoFs (collective, once per id and setup).
+    VectorType flag(owned_, comm_), flag_ghosted(owned_, relevant_, comm_);
+    for (const auto& [i, c] : list)
+      flag(i) = 1.0;
+    flag.compress(VectorOperation::insert);
+    flag_ghosted = flag;
+    auto& shares = reaction_shares_[id];
+    for (const auto& line : hanging_.get_lines()) {
+      // A hanging DoF on the boundary is counted as it is (its masters are there too).
+      if (!owned_.is_element(line.index) || flag_ghosted(line.index) != 0.0)
+        continue;
+      double weight = 0;
+      for (const auto& [master, w] : line.entries)
+        if (flag_ghosted(master) != 0.0)
+          weight += w;
+      if (weight != 0.0)
+        shares.push_back(
+            {line.index, owned_component_[owned_.index_within_set(line.index)], weight});
+    }
     it = reaction_dofs_.find(id);
   }
   Tensor<1, dim> r;
   for (const auto& [i, c] : it->second)
     r[c] += raw_residual_(i);
+  for (const auto& share : reaction_shares_[id])
+    r[share.component] += share.weight * raw_residual_(share.dof);
   return r;
 }
 

@@ -29,11 +29,14 @@
 #include "applications/studies/child_run.h"
 #include "applications/studies/study_plot.h"
 #include "base/exceptions.h"
-#include "fem/mesh.h"
+#include "fem/ct/ct_volume.h"
+#include "fem/ct/density_calibration.h"
+#include "fem/ct/density_modulus_law.h"
 #include "fem/heat/heat_solver.h"
 #include "fem/material_id_transfer.h"
 #include "fem/materials/linear_elastic.h"
 #include "fem/mechanics_solver.h"
+#include "fem/mesh.h"
 #include "instruments/drilling_programme.h"
 
 #include <deal.II/base/mpi.h>
@@ -114,6 +117,8 @@ class BoneDrilling : public Scenario {
     parse_section(args.prm, "Thermal damage", damage_);
     parse_section(args.prm, "Drilling run", run_);
     check_geometry();
+    if (bone_.ct.enabled())
+      load_ct_block();
   }
 
   void run(RunContext& ctx) override;
@@ -166,6 +171,55 @@ class BoneDrilling : public Scenario {
     }
   }
 
+  // Bone block/CT: reads and calibrates the image; InvalidInput naming Top centre if the block
+  // does not fit in it.
+  void load_ct_block() {
+    const auto& c = bone_.ct;
+    const fem::CtVolume image = fem::read_ct_volume(c.image_file);
+    ct_geometry_ = image;
+    ct_density_ = fem::DensityCalibration(fem::DensityCalibration::parse_value_type(c.value_type),
+                                          c.intercept, c.slope)
+                      .densities(image);
+    ct_law_ = std::make_unique<fem::DensityModulusLaw>(c.modulus_law, 1e9, c.minimum_density, 1e6);
+    const double half = 0.5 * bone_.width;
+    for (const double x : {-half, half})
+      for (const double y : {-half, half})
+        for (const double z : {-bone_.height, 0.0})
+          if (!std::isfinite(ct_density(dealii::Point<3>(x, y, z))))
+            throw InvalidInput("Bone block/CT/Top centre",
+                               "the block's corner " + mm_point(dealii::Point<3>(x, y, z)) +
+                                   " lies outside " + c.image_file,
+                               "a top centre that keeps the Width x Width x Height block inside "
+                               "the image");
+  }
+
+  // Calibrated density [g/cm^3] of the nearest voxel to block point x; NaN outside the image.
+  double ct_density(const dealii::Point<3>& x) const {
+    const auto idx = ct_geometry_.index_of(bone_.ct.top_centre + x);
+    unsigned int ijk[3];
+    for (unsigned int d = 0; d < 3; ++d) {
+      const double i = std::round(idx[d]);
+      if (!(i >= 0 && i < ct_geometry_.size[d]))
+        return std::numeric_limits<double>::quiet_NaN();
+      ijk[d] = static_cast<unsigned int>(i);
+    }
+    return ct_density_[ct_geometry_.linear_index(ijk[0], ijk[1], ijk[2])];
+  }
+
+  // 0 cortical, 1 cancellous: by depth in the layered block, by density in a CT block.
+  unsigned int layer_at(const dealii::Point<3>& x) const {
+    if (!bone_.ct.enabled())
+      return bone_.layer(x);
+    return ct_density(x) >= bone_.ct.cortical_density ? 0 : 1;
+  }
+
+  // Young's modulus [Pa] at x: the type's, or the CT block's density law.
+  double modulus_at(const dealii::Point<3>& x, unsigned int layer) const {
+    if (!bone_.ct.enabled())
+      return (layer == 1 ? bone_.cancellous : bone_.cortical).youngs_modulus;
+    return ct_law_->modulus(ct_density(x));
+  }
+
   double final_hole_distance(unsigned int j, const dealii::Point<3>& x) const {
     const auto& h = drill_.holes[j];
     return instruments::distance_to_swept_solid(h.axis.axial(x), h.axis.radial(x), h.depth,
@@ -188,7 +242,7 @@ class BoneDrilling : public Scenario {
       if (instruments::in_swept_solid(drill_.holes[k].axis.axial(x), drill_.holes[k].axis.radial(x),
                                       deepest[k], drill_.bit.radius(), drill_.bit.half_angle()))
         return nullptr;
-    return bone_.layer(x) == 0 ? &bone_.cortical.cutting : &bone_.cancellous.cutting;
+    return layer_at(x) == 0 ? &bone_.cortical.cutting : &bone_.cancellous.cutting;
   }
 
   // VTU of temperature, CEM43 dose, time above the necrosis temperature and material, with
@@ -198,6 +252,9 @@ class BoneDrilling : public Scenario {
   double plot_probes(RunContext& ctx, const std::vector<std::vector<double>>& series) const;
 
   bool mechanics_on_, thermal_expansion_, damage_on_;
+  fem::VolumeGeometry ct_geometry_; // Bone block/CT
+  std::vector<double> ct_density_;  // [g/cm^3] per voxel
+  std::unique_ptr<fem::DensityModulusLaw> ct_law_;
   MechanicsSection mechanics_;
   DrillSection drill_;
   BoneSection bone_;
@@ -245,7 +302,9 @@ void BoneDrilling::run(RunContext& ctx) {
     const double coarse = h_drill * std::pow(2.0, k);
     const double W = bone_.width;
     dealii::GridGenerator::subdivided_hyper_rectangle(
-        tria, {fem::steps_over(W, coarse), fem::steps_over(W, coarse), fem::steps_over(bone_.height, coarse)},
+        tria,
+        {fem::steps_over(W, coarse), fem::steps_over(W, coarse),
+         fem::steps_over(bone_.height, coarse)},
         dealii::Point<3>(-W / 2, -W / 2, -bone_.height), dealii::Point<3>(W / 2, W / 2, 0), true);
     for (const auto& cell : tria.active_cell_iterators()) // colorize numbered the cells too
       cell->set_material_id(0);
@@ -253,7 +312,7 @@ void BoneDrilling::run(RunContext& ctx) {
   const auto classify = [&]() {
     for (const auto& cell : tria.active_cell_iterators())
       if (!cell->is_artificial() && cell->material_id() != removed_id)
-        cell->set_material_id(bone_.layer(cell->center()) +
+        cell->set_material_id(layer_at(cell->center()) +
                               (is_failed(cell->material_id()) ? failed_offset : 0));
   };
   // Flags the cells near hole j down to `reach` (axial, from the entry) that are coarser than
@@ -363,6 +422,21 @@ void BoneDrilling::run(RunContext& ctx) {
     if (cell->is_locally_owned())
       initial_mass += density_of(cell->material_id()) * cell->measure();
   initial_mass = dealii::Utilities::MPI::sum(initial_mass, comm);
+  // A CT block: its volume-mean calibrated density and the cortical share of its volume.
+  double ct_mean_density = 0, cortical_fraction = 0, block_volume = 0;
+  if (bone_.ct.enabled()) {
+    for (const auto& cell : tria.active_cell_iterators())
+      if (cell->is_locally_owned()) {
+        ct_mean_density += ct_density(cell->center()) * cell->measure();
+        cortical_fraction += (layer_of(cell->material_id()) == 0 ? 1.0 : 0.0) * cell->measure();
+        block_volume += cell->measure();
+      }
+    block_volume = dealii::Utilities::MPI::sum(block_volume, comm);
+    ct_mean_density = dealii::Utilities::MPI::sum(ct_mean_density, comm) / block_volume;
+    cortical_fraction = dealii::Utilities::MPI::sum(cortical_fraction, comm) / block_volume;
+    ctx.log() << "  CT block from " << bone_.ct.image_file << ": mean density " << ct_mean_density
+              << " g/cm^3, cortical " << 100 * cortical_fraction << " % of the volume\n";
+  }
   const double initial_content = heat.heat_content();
 
   // Refines near hole j to `reach`, carrying temperature and doses over.
@@ -616,6 +690,17 @@ void BoneDrilling::run(RunContext& ctx) {
       mech = std::make_unique<fem::MechanicsSolver<3>>(tria, mp);
       for (const dealii::types::material_id id : {0, 1, 2, 3})
         mech->set_material(id, law_of(id));
+      if (bone_.ct.enabled()) // each cell's modulus from its density
+        mech->set_cell_laws(
+            [&](const auto& cell) -> std::shared_ptr<const materials::ConstitutiveLaw> {
+              const dealii::types::material_id id = cell->material_id();
+              const unsigned int layer = layer_of(id);
+              const BoneType& b = layer == 1 ? bone_.cancellous : bone_.cortical;
+              return std::make_shared<materials::LinearElastic>(
+                  modulus_at(cell->center(), layer) *
+                      (is_failed(id) ? mechanics_.residual_stiffness : 1.0),
+                  b.poisson_ratio, b.density, thermal_expansion_ ? b.thermal_expansion : 0.0);
+            });
       std::vector<bool> active(tria.n_active_cells(), false);
       for (const auto& cell : tria.active_cell_iterators())
         if (!cell->is_artificial())
@@ -672,7 +757,12 @@ void BoneDrilling::run(RunContext& ctx) {
       for (const auto& cell : mech->dof_handler().active_cell_iterators()) {
         if (!cell->is_locally_owned() || cell->material_id() == removed_id)
           continue;
-        const BoneType& b = layer_of(cell->material_id()) == 1 ? bone_.cancellous : bone_.cortical;
+        const unsigned int layer = layer_of(cell->material_id());
+        const BoneType& b = layer == 1 ? bone_.cancellous : bone_.cortical;
+        // In a CT block the strengths scale with the cell's modulus (density-independent
+        // failure strains).
+        const double strength_scale =
+            bone_.ct.enabled() ? modulus_at(cell->center(), layer) / b.youngs_modulus : 1.0;
         // Points nearer the drilled surface than L/2 are shown but not assessed (point method).
         fe_values.reinit(cell);
         const auto points = mech->quadrature_point_data(cell);
@@ -691,10 +781,11 @@ void BoneDrilling::run(RunContext& ctx) {
           max_vm = std::max(max_vm, dev);
           max_s1 = std::max(max_s1, s[0]);
           min_s3 = std::min(min_s3, s[2]);
-          const double fi = b.failure_index(s[0], s[2], mechanics_.critical_stress_factor);
+          const double fi = b.failure_index(s[0] / strength_scale, s[2] / strength_scale,
+                                            mechanics_.critical_stress_factor);
           cell_fi = std::max(cell_fi, fi);
-          cell_tension =
-              std::max(cell_tension, b.failure_index(s[0], 0.0, mechanics_.critical_stress_factor));
+          cell_tension = std::max(cell_tension, b.failure_index(s[0] / strength_scale, 0.0,
+                                                                mechanics_.critical_stress_factor));
           if (fi > max_fi) {
             max_fi = fi;
             worst = x;
@@ -1158,6 +1249,10 @@ void BoneDrilling::run(RunContext& ctx) {
     sum.set_figure("residual_max_von_mises_MPa",
                    snapshots.empty() ? nan : snapshots.back().max_von_mises * 1e-6, "MPa");
     sum.set_figure("mechanics_time_s", mechanics_seconds, "s");
+  }
+  if (bone_.ct.enabled()) {
+    sum.set_figure("ct_mean_density_g_cm3", ct_mean_density, "g/cm^3");
+    sum.set_figure("ct_cortical_volume_fraction", cortical_fraction, "-");
   }
   sum.set_figure("drill_cell_size_m", h_drill, "m");
   sum.set_figure("cells", tria.n_global_active_cells(), "-");

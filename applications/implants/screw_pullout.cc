@@ -35,12 +35,12 @@
 #include "applications/studies/child_run.h"
 #include "applications/studies/study_plot.h"
 #include "base/exceptions.h"
-#include "fem/mesh.h"
 #include "fem/displacement_error.h"
 #include "fem/materials/j2_damage.h"
 #include "fem/materials/j2_plasticity.h"
 #include "fem/materials/law_parameters.h"
 #include "fem/mechanics_solver.h"
+#include "fem/mesh.h"
 #include "implants/pedicle_screw.h"
 #include "implants/screw_parameters.h"
 

@@ -28,8 +28,8 @@
 #include "applications/framework/scenario.h"
 #include "base/exceptions.h"
 #include "base/list_parsing.h"
-#include "fem/mesh.h"
 #include "fem/heat/heat_solver.h"
+#include "fem/mesh.h"
 
 #include <deal.II/base/mpi.h>
 #include <deal.II/distributed/tria.h>

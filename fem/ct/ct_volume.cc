@@ -155,6 +155,18 @@ dealii::Point<3> VolumeGeometry::point(double i, double j, double k) const {
   return p;
 }
 
+std::array<double, 3> VolumeGeometry::index_of(const dealii::Point<3>& x) const {
+  dealii::Tensor<2, 3> A; // x = origin + A idx, A = direction diag(spacing)
+  for (unsigned int r = 0; r < 3; ++r)
+    for (unsigned int c = 0; c < 3; ++c)
+      A[r][c] = direction[r][c] * spacing[c];
+  dealii::Tensor<1, 3> d;
+  for (unsigned int r = 0; r < 3; ++r)
+    d[r] = x[r] - origin[r];
+  const dealii::Tensor<1, 3> idx = dealii::invert(A) * d;
+  return {{idx[0], idx[1], idx[2]}};
+}
+
 double VolumeGeometry::handedness() const {
   const auto& a = direction;
   const double det = a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) -

@@ -36,6 +36,9 @@ struct VolumeGeometry {
   double voxel_volume() const { return spacing[0] * spacing[1] * spacing[2]; } // [m^3]
   // Physical point [m] of a (possibly fractional) index; (i,j,k) integer = voxel centre.
   dealii::Point<3> point(double i, double j, double k) const;
+  // The (fractional) index of a physical point [m], the inverse of point(): integer values at
+  // voxel centres, outside [-0.5, size - 0.5] outside the image.
+  std::array<double, 3> index_of(const dealii::Point<3>& x) const;
   // +1 for a right-handed image frame, -1 when the direction matrix flips an axis.
   double handedness() const;
   // Same size, spacing, origin and direction up to `relative_tolerance` of the spacing.

@@ -113,6 +113,11 @@ TEST(CtVolume, ReadsVerse004GridAndLabelCounts) {
   EXPECT_NEAR(p0.distance(p1), image.spacing[0], 1e-12);
   for (unsigned int d = 0; d < 3; ++d)
     EXPECT_NEAR(p0[d], image.origin[d], 1e-15);
+  // Point -> index inverts it (the header's direction matrix included), to round-off.
+  const auto idx = image.index_of(image.point(12.25, 40, 73.5));
+  EXPECT_NEAR(idx[0], 12.25, 1e-9);
+  EXPECT_NEAR(idx[1], 40, 1e-9);
+  EXPECT_NEAR(idx[2], 73.5, 1e-9);
 }
 
 TEST(CtVolume, MissingOrUnknownFilesAreInvalidInput) {

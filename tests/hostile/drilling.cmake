@@ -23,3 +23,7 @@ spinesim_add_hostile_test(drill_without_heat
   MATCH "Effects/Heat.*heat model")
 spinesim_add_hostile_test(drill_with_particles
   ARGS check ${_drill} --set "Effects/Particles method=nosb" MATCH "Effects/Particles method")
+# A CT block that does not fit in its image.
+spinesim_add_hostile_test(drill_ct_block_outside_the_image
+  ARGS check ${PROJECT_SOURCE_DIR}/applications/scenes/bone_drilling_ct.prm
+       --set "Bone block/CT/Top centre=0,0,0" MATCH "Bone block/CT/Top centre.*outside")

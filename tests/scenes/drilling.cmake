@@ -83,6 +83,19 @@ spinesim_add_scene_test(scene.bone_drilling_cancellous_cracks SCENE ${_drill} RA
   EXPECT "status==ok;max_failure_index>=1;failed_cells>=10;failing_volume_mm3>=1;support_reaction_error_relative<=1e-8"
   LABELS "scene;drilling;mechanics" TIMEOUT 600)
 
+# A CT block (applications/scenes/bone_drilling_ct.prm: a box of the verse004 vertebral body
+# under its cranial endplate) at 8 cells across the bit on two ranks: the same books as the
+# layered block, the supports take the thrust, and the block is the image's: its volume-mean
+# density sampled at the cells' centres is the box's, 0.0782 g/cm^3 by an independent
+# midpoint rule over the same nearest voxels (60^3 points); bound 10 %, the sampling error of
+# cells two voxels wide away from the drill is about 2 %. The body is osteoporotic: no voxel
+# reaches the cortical 0.8 g/cm^3.
+spinesim_add_scene_test(scene.bone_drilling_ct
+  SCENE ${PROJECT_SOURCE_DIR}/applications/scenes/bone_drilling_ct.prm RANKS 2
+  OUT ${_drill_runs}/ct SET "Mesh/Cells across diameter=8" "Drilling run/Cooling time=10"
+  EXPECT "status==ok;heat_input_error_relative<=1e-6;heat_balance_error_relative<=1e-6;mass_balance_error_relative<=1e-12;support_reaction_error_relative<=1e-8;ct_mean_density_g_cm3>=0.070;ct_mean_density_g_cm3<=0.086;ct_cortical_volume_fraction<=0;peak_temperature_C>=40;max_failure_index>=0.001"
+  LABELS "scene;drilling;mechanics;ct" TIMEOUT 600)
+
 # The trends, asserted on the quick sweep (600 and 1200 rpm at 0.06 mm/rev, dry and
 # irrigated, each run on two ranks; about 30 s): at a fixed feed per revolution the peak bone
 # temperature rises with the speed (measured 96 -> 132 degC dry, 95 -> 120 irrigated: the same
