@@ -29,9 +29,7 @@
 #include "applications/studies/child_run.h"
 #include "applications/studies/study_plot.h"
 #include "base/exceptions.h"
-#include "fem/ct/ct_volume.h"
-#include "fem/ct/density_calibration.h"
-#include "fem/ct/density_modulus_law.h"
+#include "fem/ct/ct_box.h"
 #include "fem/heat/heat_solver.h"
 #include "fem/material_id_transfer.h"
 #include "fem/materials/linear_elastic.h"
@@ -174,50 +172,26 @@ class BoneDrilling : public Scenario {
   // Bone block/CT: reads and calibrates the image; InvalidInput naming Top centre if the block
   // does not fit in it.
   void load_ct_block() {
-    const auto& c = bone_.ct;
-    const fem::CtVolume image = fem::read_ct_volume(c.image_file);
-    ct_geometry_ = image;
-    ct_density_ = fem::DensityCalibration(fem::DensityCalibration::parse_value_type(c.value_type),
-                                          c.intercept, c.slope)
-                      .densities(image);
-    ct_law_ = std::make_unique<fem::DensityModulusLaw>(c.modulus_law, 1e9, c.minimum_density, 1e6);
+    ct_box_ = std::make_unique<fem::CtBox>(bone_.ct);
     const double half = 0.5 * bone_.width;
-    for (const double x : {-half, half})
-      for (const double y : {-half, half})
-        for (const double z : {-bone_.height, 0.0})
-          if (!std::isfinite(ct_density(dealii::Point<3>(x, y, z))))
-            throw InvalidInput("Bone block/CT/Top centre",
-                               "the block's corner " + mm_point(dealii::Point<3>(x, y, z)) +
-                                   " lies outside " + c.image_file,
-                               "a top centre that keeps the Width x Width x Height block inside "
-                               "the image");
+    ct_box_->require_inside(dealii::Point<3>(-half, -half, -bone_.height),
+                            dealii::Point<3>(half, half, 0), "Bone block/CT/");
   }
 
-  // Calibrated density [g/cm^3] of the nearest voxel to block point x; NaN outside the image.
-  double ct_density(const dealii::Point<3>& x) const {
-    const auto idx = ct_geometry_.index_of(bone_.ct.top_centre + x);
-    unsigned int ijk[3];
-    for (unsigned int d = 0; d < 3; ++d) {
-      const double i = std::round(idx[d]);
-      if (!(i >= 0 && i < ct_geometry_.size[d]))
-        return std::numeric_limits<double>::quiet_NaN();
-      ijk[d] = static_cast<unsigned int>(i);
-    }
-    return ct_density_[ct_geometry_.linear_index(ijk[0], ijk[1], ijk[2])];
-  }
+  double ct_density(const dealii::Point<3>& x) const { return ct_box_->density(x); }
 
   // 0 cortical, 1 cancellous: by depth in the layered block, by density in a CT block.
   unsigned int layer_at(const dealii::Point<3>& x) const {
     if (!bone_.ct.enabled())
       return bone_.layer(x);
-    return ct_density(x) >= bone_.ct.cortical_density ? 0 : 1;
+    return ct_density(x) >= bone_.cortical_density ? 0 : 1;
   }
 
   // Young's modulus [Pa] at x: the type's, or the CT block's density law.
   double modulus_at(const dealii::Point<3>& x, unsigned int layer) const {
     if (!bone_.ct.enabled())
       return (layer == 1 ? bone_.cancellous : bone_.cortical).youngs_modulus;
-    return ct_law_->modulus(ct_density(x));
+    return ct_box_->modulus(x);
   }
 
   double final_hole_distance(unsigned int j, const dealii::Point<3>& x) const {
@@ -252,9 +226,7 @@ class BoneDrilling : public Scenario {
   double plot_probes(RunContext& ctx, const std::vector<std::vector<double>>& series) const;
 
   bool mechanics_on_, thermal_expansion_, damage_on_;
-  fem::VolumeGeometry ct_geometry_; // Bone block/CT
-  std::vector<double> ct_density_;  // [g/cm^3] per voxel
-  std::unique_ptr<fem::DensityModulusLaw> ct_law_;
+  std::unique_ptr<fem::CtBox> ct_box_; // Bone block/CT
   MechanicsSection mechanics_;
   DrillSection drill_;
   BoneSection bone_;

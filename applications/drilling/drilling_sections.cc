@@ -3,8 +3,6 @@
 #include "applications/ct/ct_sections.h"
 #include "base/exceptions.h"
 #include "base/list_parsing.h"
-#include "fem/ct/ct_volume.h"
-#include "fem/ct/density_modulus_law.h"
 
 #include <cmath>
 #include <filesystem>
@@ -200,32 +198,13 @@ void BoneSection::declare(dealii::ParameterHandler& prm) {
                     "Thickness of the cortical layer under the top face; cancellous bone below "
                     "[mm]. At least Height: all cortical.");
   prm.enter_subsection("CT");
-  prm.declare_entry("Image file", "", Anything(),
-                    "A CT image whose box is the bone block instead of the layers above (empty: "
-                    "the layered block); relative to the project or absolute [-]. Each cell's "
-                    "calibrated density at its centre (nearest voxel) sets its bone type and, "
-                    "with mechanics, its modulus.");
-  prm.declare_entry("Value type", "density", Selection("density|hu"),
-                    "Voxel values: equivalent mineral density in mg/cm^3, or Hounsfield units "
-                    "[-].");
-  prm.declare_entry("Calibration intercept", "0", Double(),
-                    "a in rho = a + b HU (hu only) [g/cm^3].");
-  prm.declare_entry("Calibration slope", "0.001", Double(),
-                    "b in rho = a + b HU (hu only) [g/cm^3 per HU].");
-  prm.declare_entry("Top centre", "", Anything(),
-                    "The image point at the centre of the block's top face, where x = y = z = 0 "
-                    "of the block; the block's axes are the image's physical axes [mm].");
+  fem::CtBoxParameters::declare(prm, "the layered block above");
   prm.declare_entry("Cortical density", "0.8", Double(0),
                     "Cells at or above this calibrated density are cortical bone, the others "
-                    "cancellous (thermal properties, cutting coefficients, strengths) [g/cm^3].");
-  prm.declare_entry("Density modulus law", "morgan2003_vertebra",
-                    Selection(fem::DensityModulusLaw::names()),
-                    "E(rho) of each cell for the mechanics (fem/ct/density_modulus_law.h); the "
-                    "strengths of its type scale with E / (the type's Young's modulus): failure "
-                    "strains that do not depend on density, as Morgan & Keaveny (2001) found "
-                    "within an anatomic site [-].");
-  prm.declare_entry("Minimum density", "0.01", Double(0),
-                    "Floor of the density before the law (voxels of marrow or air) [g/cm^3].");
+                    "cancellous (thermal properties, cutting coefficients, strengths; the "
+                    "strengths then scale with the cell's modulus over its type's: failure "
+                    "strains that do not depend on density, as Morgan & Keaveny 2001 found "
+                    "within a site) [g/cm^3].");
   prm.leave_subsection();
   declare_bone_type(prm, "Cortical", 0.54, 1900, 1300, 200, 300,
                     "Davidson & James (2000, Med. Eng. Phys. 22:741) measured 0.53-0.58 for "
@@ -250,23 +229,9 @@ void BoneSection::parse(dealii::ParameterHandler& prm) {
   height = 1e-3 * prm.get_double("Height");
   cortical_thickness = 1e-3 * prm.get_double("Cortical thickness");
   prm.enter_subsection("CT");
-  ct.image_file = applications::ct::resolve_data_file(prm.get("Image file"));
-  ct.value_type = prm.get("Value type");
-  ct.intercept = prm.get_double("Calibration intercept");
-  ct.slope = prm.get_double("Calibration slope");
-  const std::string centre = prm.get("Top centre");
-  ct.cortical_density = prm.get_double("Cortical density");
-  ct.modulus_law = prm.get("Density modulus law");
-  ct.minimum_density = prm.get_double("Minimum density");
+  ct.parse(prm, "Bone block/CT/", applications::ct::resolve_data_file);
+  cortical_density = prm.get_double("Cortical density");
   prm.leave_subsection();
-  if (ct.enabled()) {
-    const auto c = parse_numbers(centre, "Bone block/CT/Top centre", 3, "[mm]");
-    ct.top_centre = dealii::Point<3>(1e-3 * c[0], 1e-3 * c[1], 1e-3 * c[2]);
-    if (!std::filesystem::exists(ct.image_file))
-      throw InvalidInput("Bone block/CT/Image file", ct.image_file,
-                         "an existing image file (" + fem::accepted_image_formats() +
-                             "), relative to the project or absolute");
-  }
   require_positive(width, "Bone block/Width", "[mm]");
   require_positive(height, "Bone block/Height", "[mm]");
   cortical = parse_bone_type(prm, "Cortical");

@@ -12,6 +12,7 @@
 //   Thermal damage  thermocouple probes and the necrosis criteria;
 //   Drilling run    time stepping, the cooling time after the last hole, output.
 
+#include "fem/ct/ct_box.h"
 #include "instruments/drilling_programme.h"
 
 #include <deal.II/base/parameter_handler.h>
@@ -58,23 +59,13 @@ struct BoneType {
   }
 };
 
-// A box of a CT image as the bone block (Bone block/CT): the cell's bone type from its
-// calibrated density, and with mechanics its modulus from a density-modulus law.
-struct CtBlockSection {
-  std::string image_file;             // empty: the layered block
-  std::string value_type = "density"; // density (mg/cm^3) | hu
-  double intercept = 0, slope = 1e-3; // rho = a + b HU [g/cm^3] (hu)
-  dealii::Point<3> top_centre;        // image point at the block's top-face centre [m]
-  double cortical_density = 0.8;      // [g/cm^3] at and above: cortical
-  std::string modulus_law = "morgan2003_vertebra";
-  double minimum_density = 0.01; // [g/cm^3] floor before the law
-  bool enabled() const { return !image_file.empty(); }
-};
-
 struct BoneSection {
   double width = 20e-3, height = 15e-3, cortical_thickness = 15e-3; // [m]
   BoneType cortical, cancellous;
-  CtBlockSection ct;
+  // Bone block/CT: a box of a CT image as the block; each cell's type from its calibrated
+  // density (cortical at and above cortical_density [g/cm^3]) and, with mechanics, its modulus.
+  fem::CtBoxParameters ct;
+  double cortical_density = 0.8;
   static void declare(dealii::ParameterHandler& prm);
   void parse(dealii::ParameterHandler& prm);
   // Whether x is in the block [−W/2, W/2]² × [−H, 0] (with a relative tolerance).

@@ -25,6 +25,7 @@
 // length). Figures chapman_force_N and chapman_ratio = peak / Chapman.
 
 #include "applications/common_sections.h"
+#include "applications/ct/ct_sections.h"
 #include "applications/framework/checkpoint_manifest.h"
 #include "applications/framework/output_directory.h"
 #include "applications/framework/parse_section.h"
@@ -35,6 +36,7 @@
 #include "applications/studies/child_run.h"
 #include "applications/studies/study_plot.h"
 #include "base/exceptions.h"
+#include "fem/ct/ct_box.h"
 #include "fem/displacement_error.h"
 #include "fem/materials/j2_damage.h"
 #include "fem/materials/j2_plasticity.h"
@@ -155,8 +157,19 @@ struct FoamSection {
 
 struct BlockSection {
   double width = 30e-3, depth = 40e-3, coarse_cell = 5e-3;
+  // Block/CT: a box of a CT image instead of the homogeneous foam (fem/ct/ct_box.h).
+  fem::CtBoxParameters ct;
   static void declare(dealii::ParameterHandler& prm) {
     using namespace dealii::Patterns;
+    prm.enter_subsection("CT");
+    fem::CtBoxParameters::declare(
+        prm,
+        "the homogeneous foam: each bone cell's modulus from the Density modulus law and its "
+        "yield stress from the law's density-yield relation (kopperdahl2002: 37.4 rho^1.39 MPa) "
+        "or, for laws without one, the foam's yield strain times its modulus; the Foam section "
+        "keeps the Poisson ratio, hardening ratio, damage curve and fracture energy",
+        "kopperdahl2002");
+    prm.leave_subsection();
     prm.declare_entry("Width", "30", Double(0),
                       "Edge of the square block's top face, centred on the screw [mm].");
     prm.declare_entry("Depth", "40", Double(0),
@@ -165,10 +178,13 @@ struct BlockSection {
     prm.declare_entry("Coarse cell size", "5", Double(0),
                       "Cell edge of the mesh before the refinement around the screw [mm].");
   }
-  void parse(const dealii::ParameterHandler& prm) {
+  void parse(dealii::ParameterHandler& prm) {
     width = 1e-3 * prm.get_double("Width");
     depth = 1e-3 * prm.get_double("Depth");
     coarse_cell = 1e-3 * prm.get_double("Coarse cell size");
+    prm.enter_subsection("CT");
+    ct.parse(prm, "Block/CT/", ct::resolve_data_file);
+    prm.leave_subsection();
     for (const auto& [name, v] : {std::pair{"Block/Width", width},
                                   {"Block/Depth", depth},
                                   {"Block/Coarse cell size", coarse_cell}})
@@ -328,6 +344,12 @@ class ScrewPullout : public Scenario {
       throw InvalidInput("Block/Depth", fmt(block_.depth * 1e3, 6) + " mm",
                          "more than Screw/Length (" + fmt(g.length * 1e3, 6) +
                              " mm): the screw would leave the block");
+    if (block_.ct.enabled()) {
+      ct_box_ = std::make_unique<fem::CtBox>(block_.ct);
+      const double half = 0.5 * block_.width;
+      ct_box_->require_inside(dealii::Point<3>(-half, -half, -block_.depth),
+                              dealii::Point<3>(half, half, 0), "Block/CT/");
+    }
     const double outer = 0.5 * g.major_diameter;
     if (!(outer + pull_.margin < 0.5 * block_.width))
       throw InvalidInput("Block/Width", fmt(block_.width * 1e3, 6) + " mm",
@@ -440,6 +462,57 @@ class ScrewPullout : public Scenario {
                 << " J/m^2, softening strain at the thread cells (" << h * 1e3 << " mm) "
                 << foam_.fracture_energy / (sy * foam_.damage.maximum_damage * h) << "\n";
     }
+    // Block/CT: each bone cell's own law from its density (replaces the foam's, the crack band
+    // included: its softening strain then uses the cell's yield stress).
+    double engaged_density = 0, engaged_yield = 0;
+    if (ct_box_) {
+      const auto& law = ct_box_->law();
+      const FoamSection foam = foam_;
+      const bool damage = damage_on_;
+      const fem::CtBox* box = ct_box_.get();
+      const auto yield_at = [box, foam](const dealii::Point<3>& x) {
+        const double rho = box->density(x);
+        return box->law().has_yield_stress()
+                   ? box->law().yield_stress(rho)
+                   : box->law().modulus(rho) * foam.yield_stress() / foam.youngs_modulus;
+      };
+      solver.set_cell_laws(
+          [box, foam, damage,
+           yield_at](const auto& cell) -> std::shared_ptr<const materials::ConstitutiveLaw> {
+            if (cell->material_id() != 0)
+              return nullptr;
+            const double E = box->modulus(cell->center()), sy_cell = yield_at(cell->center());
+            const materials::IsotropicHardening h(sy_cell, foam.hardening_ratio * E);
+            if (!damage)
+              return std::make_shared<materials::J2Plasticity>(E, foam.poisson_ratio, foam.density,
+                                                               0, h);
+            materials::DamageCurve curve = foam.damage;
+            if (foam.fracture_energy > 0)
+              curve.softening_strain =
+                  foam.fracture_energy /
+                  (sy_cell * std::max(curve.maximum_damage, 1e-3) * std::cbrt(cell->measure()));
+            return std::make_shared<materials::J2Damage>(E, foam.poisson_ratio, foam.density, 0, h,
+                                                         curve, foam.secant_tangent);
+          });
+      // The bone the thread engages: cells within a millimetre of the thread's crest along the
+      // threaded length (volume means).
+      double volume = 0;
+      for (const auto& cell : tria.active_cell_iterators())
+        if (cell->is_locally_owned() && cell->material_id() == 0) {
+          const auto c = cell->center();
+          if (std::hypot(c[0], c[1]) <= 0.5 * g.major_diameter + 1e-3 && -c[2] <= g.length) {
+            engaged_density += box->density(c) * cell->measure();
+            engaged_yield += yield_at(c) * cell->measure();
+            volume += cell->measure();
+          }
+        }
+      volume = dealii::Utilities::MPI::sum(volume, ctx.comm());
+      engaged_density = dealii::Utilities::MPI::sum(engaged_density, ctx.comm()) / volume;
+      engaged_yield = dealii::Utilities::MPI::sum(engaged_yield, ctx.comm()) / volume;
+      ctx.log() << "  CT bone from " << block_.ct.image_file << " (" << law.name()
+                << "): at the thread, mean density " << engaged_density << " g/cm^3, yield stress "
+                << engaged_yield / 1e6 << " MPa\n";
+    }
     auto& bc = solver.boundary_conditions();
     bc.add_dirichlet(4, "x,y,z", "0; 0; 0");
     bc.add_dirichlet(grip_id, "x,y,z", "0; 0; " + fmt(pull_.displacement) + "*t");
@@ -466,7 +539,9 @@ class ScrewPullout : public Scenario {
 
     // Chapman et al. (1996): F = S π D L TSF, L the engaged length (the threaded shaft).
     const double tsf = 0.5 + 0.57735 * g.thread_depth() / g.pitch;
-    const double chapman = foam_.shear_strength * pi * g.major_diameter * g.length * tsf;
+    // In CT bone, S from the mean yield stress of the engaged bone (von Mises: S = σ_y/√3).
+    const double shear_strength = ct_box_ ? engaged_yield / std::sqrt(3.0) : foam_.shear_strength;
+    const double chapman = shear_strength * pi * g.major_diameter * g.length * tsf;
 
     if (!ctx.restarting()) {
       ctx.history().add({{"displacement_mm", 0.0},
@@ -582,6 +657,10 @@ class ScrewPullout : public Scenario {
 
     Summary& sum = ctx.summary();
     sum.set_figure("peak_pullout_force_N", p.peak, "N");
+    if (ct_box_) {
+      sum.set_figure("ct_engaged_density_g_cm3", engaged_density, "g/cm^3");
+      sum.set_figure("ct_engaged_yield_stress_MPa", engaged_yield / 1e6, "MPa");
+    }
     sum.set_figure("chapman_force_N", chapman, "N");
     sum.set_figure("chapman_ratio", p.peak / chapman, "-");
     sum.set_figure("thread_shape_factor", tsf, "-");
@@ -818,6 +897,7 @@ class ScrewPullout : public Scenario {
   }
 
   bool damage_on_;
+  std::unique_ptr<fem::CtBox> ct_box_; // Block/CT
   ScrewSection screw_;
   FoamSection foam_;
   BlockSection block_;

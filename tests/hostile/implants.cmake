@@ -14,3 +14,9 @@ spinesim_add_hostile_test(screw_block_too_narrow
   ARGS check ${_screw} --set "Block/Width=8" MATCH "Block/Width")
 spinesim_add_hostile_test(foam_without_residual_stiffness
   ARGS check ${_screw} --set "Foam/Maximum damage=1" MATCH "Foam/Maximum damage.*0 <= D_max < 1")
+# A CT block that leaves its image, and a degenerate block axis.
+set(_screw_ct ${PROJECT_SOURCE_DIR}/applications/scenes/screw_pullout_ct.prm)
+spinesim_add_hostile_test(screw_ct_block_outside_the_image
+  ARGS check ${_screw_ct} --set "Block/CT/Top centre=250,-83,223" MATCH "Block/CT/Top centre.*outside")
+spinesim_add_hostile_test(screw_ct_block_axis_zero
+  ARGS check ${_screw_ct} --set "Block/CT/Block z axis=0,0,0" MATCH "Block/CT/Block z axis.*non-zero")
