@@ -235,7 +235,6 @@ void MechanicsSolver<dim>::setup() {
   dirichlet_dofs_ready_ = false;
   step_tables_ready_ = false;
   reaction_dofs_.clear();
-  reaction_shares_.clear();
   states_stale_ = false;
   cell_laws_.assign(tria_.n_active_cells(), nullptr);
   if (cell_law_function_)

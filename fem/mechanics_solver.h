@@ -45,6 +45,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -116,6 +117,10 @@ class MechanicsSolver {
   // active_cell_index, to be set consistently for locally owned and ghost cells. Inactive
   // cells contribute neither stiffness nor mass; DoFs touched by no active cell are held
   // fixed (or driven). An empty vector means every cell is active.
+  // Hanging-node constraints whose coarse cell is inactive are dropped when setup() runs
+  // (they would tie active nodes to DoFs that only inactive cells hold still); cells
+  // deactivated after setup() keep the constraints of the setup (call setup() again to drop
+  // them: the sparsity pattern changes).
   void set_active_cells(const std::vector<bool>& active);
   bool is_active(const CellIterator& cell) const {
     return active_.empty() || active_[cell->active_cell_index()];
@@ -245,8 +250,11 @@ class MechanicsSolver {
   const VectorType& displacement() const { return u_ghost_; } // ghosted
   const VectorType& velocity() const { return v_ghost_; }     // ghosted, at t - dt/2
   // Force the supports exert on the body on boundary `id` (sum of f_int − f_ext over the
-  // dofs there, all ranks) [N] (2-D plane: N per unit thickness).
+  // dofs there and the shares of hanging nodes next to them, all ranks) [N] (2-D plane: N per
+  // unit thickness). The first call for an id (after setup) is collective.
   dealii::Tensor<1, dim> reaction_force(dealii::types::boundary_id id) const;
+  // The same over several ids, each DoF counted once (edges shared by two supports).
+  dealii::Tensor<1, dim> reaction_force(const std::set<dealii::types::boundary_id>& ids) const;
   // This rank's share of it (its owned DoFs), for callers that add parts and reduce once.
   dealii::Tensor<1, dim> local_reaction_force(dealii::types::boundary_id id) const;
   double strain_energy() const;                 // ∫ (stress work − plastic work) dV [J]
@@ -390,18 +398,21 @@ class MechanicsSolver {
   };
   std::vector<std::vector<BoundaryDof>> dirichlet_dofs_;
   bool dirichlet_dofs_ready_ = false;
-  mutable std::map<dealii::types::boundary_id,
-                   std::vector<std::pair<dealii::types::global_dof_index, unsigned int>>>
-      reaction_dofs_;
-  // Per boundary id, the owned hanging DoFs with masters on it: (DoF, component, Σ weights of
-  // those masters). A hanging node's force belongs partly to its masters: a support's reaction
-  // includes those shares, or forces near refined supports go missing.
+  // Per set of boundary ids: its owned DoFs (DoF, component) once each, and the owned hanging
+  // DoFs off it with masters on it (DoF, component, Σ weights of those masters). A hanging
+  // node's force belongs partly to its masters: a support's reaction includes those shares,
+  // or forces near refined supports go missing.
   struct ReactionShare {
     dealii::types::global_dof_index dof;
     unsigned int component;
     double weight;
   };
-  mutable std::map<dealii::types::boundary_id, std::vector<ReactionShare>> reaction_shares_;
+  struct ReactionDofs {
+    std::vector<std::pair<dealii::types::global_dof_index, unsigned int>> dofs;
+    std::vector<ReactionShare> shares;
+  };
+  mutable std::map<std::set<dealii::types::boundary_id>, ReactionDofs> reaction_dofs_;
+  const ReactionDofs& reaction_dofs(const std::set<dealii::types::boundary_id>& ids) const;
   MatrixType explicit_matrix_; // K over the active cells for the linear explicit path
   bool explicit_matrix_ready_ = false, assemble_into_explicit_matrix_ = false;
   mutable bool states_stale_ = false;

@@ -400,7 +400,8 @@ void MechanicsSolver<dim>::cache_dirichlet_dofs() {
 template <int dim>
 bool MechanicsSolver<dim>::linear_explicit() const {
   if (prm_.kinematics != "small_strain" || body_force_ || temperature_change_ ||
-      temperature_field_ || !bcs_.traction().empty() || !bcs_.pressure().empty())
+      temperature_field_ || cavity_traction_ || !bcs_.traction().empty() ||
+      !bcs_.pressure().empty())
     return false;
   for (const auto& [id, law] : laws_)
     if (law && law->name() != "linear_elastic")

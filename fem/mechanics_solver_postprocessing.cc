@@ -48,43 +48,58 @@ Tensor<1, dim> MechanicsSolver<dim>::reaction_force(types::boundary_id id) const
 }
 
 template <int dim>
-Tensor<1, dim> MechanicsSolver<dim>::local_reaction_force(types::boundary_id id) const {
-  auto it = reaction_dofs_.find(id);
-  if (it == reaction_dofs_.end()) {
-    const IndexSet on_boundary =
-        DoFTools::extract_boundary_dofs(dof_handler_, ComponentMask(), {id});
-    auto& list = reaction_dofs_[id];
-    for (unsigned int c = 0; c < dim; ++c)
-      for (const auto i : on_boundary& component_dofs_[c])
-        list.emplace_back(i, c);
-    // Hanging DoFs whose masters lie on the boundary, wherever those masters are owned: a
-    // ghosted indicator of the boundary's DoFs (collective, once per id and setup).
-    VectorType flag(owned_, comm_), flag_ghosted(owned_, relevant_, comm_);
-    for (const auto& [i, c] : list)
-      flag(i) = 1.0;
-    flag.compress(VectorOperation::insert);
-    flag_ghosted = flag;
-    auto& shares = reaction_shares_[id];
-    for (const auto& line : hanging_.get_lines()) {
-      // A hanging DoF on the boundary is counted as it is (its masters are there too).
-      if (!owned_.is_element(line.index) || flag_ghosted(line.index) != 0.0)
-        continue;
-      double weight = 0;
-      for (const auto& [master, w] : line.entries)
-        if (flag_ghosted(master) != 0.0)
-          weight += w;
-      if (weight != 0.0)
-        shares.push_back(
-            {line.index, owned_component_[owned_.index_within_set(line.index)], weight});
-    }
-    it = reaction_dofs_.find(id);
+const typename MechanicsSolver<dim>::ReactionDofs&
+MechanicsSolver<dim>::reaction_dofs(const std::set<types::boundary_id>& ids) const {
+  auto it = reaction_dofs_.find(ids);
+  if (it != reaction_dofs_.end())
+    return it->second;
+  ReactionDofs& r = reaction_dofs_[ids];
+  const IndexSet on_boundary = DoFTools::extract_boundary_dofs(dof_handler_, ComponentMask(), ids);
+  for (unsigned int c = 0; c < dim; ++c)
+    for (const auto i : on_boundary& component_dofs_[c])
+      r.dofs.emplace_back(i, c);
+  // Hanging DoFs whose masters lie on the boundary, wherever those masters are owned: a
+  // ghosted indicator of the boundary's DoFs (collective, once per set of ids and setup).
+  VectorType flag(owned_, comm_), flag_ghosted(owned_, relevant_, comm_);
+  for (const auto& [i, c] : r.dofs)
+    flag(i) = 1.0;
+  flag.compress(VectorOperation::insert);
+  flag_ghosted = flag;
+  for (const auto& line : hanging_.get_lines()) {
+    // A hanging DoF on the boundary is counted as it is (its masters are there too).
+    if (!owned_.is_element(line.index) || flag_ghosted(line.index) != 0.0)
+      continue;
+    double weight = 0;
+    for (const auto& [master, w] : line.entries)
+      if (flag_ghosted(master) != 0.0)
+        weight += w;
+    if (weight != 0.0)
+      r.shares.push_back(
+          {line.index, owned_component_[owned_.index_within_set(line.index)], weight});
   }
-  Tensor<1, dim> r;
-  for (const auto& [i, c] : it->second)
-    r[c] += raw_residual_(i);
-  for (const auto& share : reaction_shares_[id])
-    r[share.component] += share.weight * raw_residual_(share.dof);
   return r;
+}
+
+template <int dim>
+Tensor<1, dim> MechanicsSolver<dim>::reaction_force(const std::set<types::boundary_id>& ids) const {
+  const ReactionDofs& r = reaction_dofs(ids);
+  Tensor<1, dim> f;
+  for (const auto& [i, c] : r.dofs)
+    f[c] += raw_residual_(i);
+  for (const auto& share : r.shares)
+    f[share.component] += share.weight * raw_residual_(share.dof);
+  return Utilities::MPI::sum(f, comm_);
+}
+
+template <int dim>
+Tensor<1, dim> MechanicsSolver<dim>::local_reaction_force(types::boundary_id id) const {
+  const ReactionDofs& r = reaction_dofs({id});
+  Tensor<1, dim> f;
+  for (const auto& [i, c] : r.dofs)
+    f[c] += raw_residual_(i);
+  for (const auto& share : r.shares)
+    f[share.component] += share.weight * raw_residual_(share.dof);
+  return f;
 }
 
 template <int dim>
@@ -263,6 +278,10 @@ std::string MechanicsSolver<dim>::write_output(
 #define SPINESIM_INSTANTIATE(dim)                                                                  \
   template Tensor<1, dim> MechanicsSolver<dim>::reaction_force(types::boundary_id) const;          \
   template Tensor<1, dim> MechanicsSolver<dim>::local_reaction_force(types::boundary_id) const;    \
+  template Tensor<1, dim> MechanicsSolver<dim>::reaction_force(                                    \
+      const std::set<types::boundary_id>&) const;                                                  \
+  template const typename MechanicsSolver<dim>::ReactionDofs& MechanicsSolver<dim>::reaction_dofs( \
+      const std::set<types::boundary_id>&) const;                                                  \
   template void MechanicsSolver<dim>::mark_plastic_work();                                         \
   template Vector<double> MechanicsSolver<dim>::cell_plastic_dissipation_rate() const;             \
   template double MechanicsSolver<dim>::plastic_work() const;                                      \

@@ -88,28 +88,27 @@ DrillInterval DrillingProgramme::advance(
       const double tip_before = st.tip;
       switch (st.phase) {
       case DrillPhase::feed: {
-        // The feed over the part: at Feed rate, or the one whose thrust at the part's middle
-        // (where the forces are taken) is the Thrust force. The feed holding it at the part's
-        // start bounds it from above: the point only engages more as it advances. Taken at the
-        // start, a point entering the bone with few lips engaged ran away (a 60 N thrust gave
-        // 650 N by the end of the first step).
+        // The feed over the part: at Feed rate, or under thrust control the one whose thrust at
+        // the part's end, the most engaged point of the part, is the Thrust force (taken on
+        // the side at or below it: the thrust jumps as one more lip sample engages). The feed
+        // holding it at the part's start bounds it from above. Taken at the start, a point
+        // entering the bone with few lips engaged ran away (60 N gave 650 N by the end of the
+        // first step). Where no lip cuts yet, the bit approaches at the Feed rate.
         double f = schedule_.feed_rate * 60.0 / schedule_.spindle_rpm;
         if (schedule_.thrust_control) {
           const double rev = schedule_.spindle_rpm / 60.0, F = schedule_.thrust_force;
-          double hi = model_.feed_for_thrust(st.tip, F, schedule_.spindle_rpm, mat, 100 * f);
-          if (!(hi > 0))
-            hi = 100 * f; // no lip cuts at the start
-          const auto middle_thrust = [&](double feed) {
+          const double start =
+              model_.feed_for_thrust(st.tip, F, schedule_.spindle_rpm, mat, 100 * f);
+          double hi = start > 0 ? start : f;
+          const auto end_thrust = [&](double feed) {
             const double advance = std::min(feed * rev * sub, hole.depth - st.tip);
-            return model_.load(st.tip + 0.5 * advance, feed, schedule_.spindle_rpm, mat).thrust;
+            return model_.load(st.tip + advance, feed, schedule_.spindle_rpm, mat).thrust;
           };
-          if (middle_thrust(hi) > F * (1 + 1e-9)) {
-            // The side at or below F: with the lips sampled, the thrust jumps as one more
-            // sample engages, by up to 1/(engaged samples) of it while the point enters.
+          if (end_thrust(hi) > F * (1 + 1e-9)) {
             double lo = 0;
             while (hi - lo > 1e-9 * hi) {
               const double mid = 0.5 * (lo + hi);
-              (middle_thrust(mid) > F ? hi : lo) = mid;
+              (end_thrust(mid) > F ? hi : lo) = mid;
             }
             hi = lo;
           }

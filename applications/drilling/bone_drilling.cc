@@ -51,6 +51,7 @@
 #include <iomanip>
 #include <limits>
 #include <memory>
+#include <set>
 #include <sstream>
 
 namespace spinesim::applications {
@@ -786,7 +787,9 @@ void BoneDrilling::run(RunContext& ctx) {
       const double distance = surface_distance(worst);
       const bool holds_worst = fi_stats.max_index == dealii::Utilities::MPI::this_mpi_process(comm);
       snap.failure_distance =
-          dealii::Utilities::MPI::sum(holds_worst ? std::max(0.0, distance) : 0.0, comm);
+          fi_stats.max > 0 // else no point was assessed (all nearer the wall than L/2)
+              ? dealii::Utilities::MPI::sum(holds_worst ? std::max(0.0, distance) : 0.0, comm)
+              : std::numeric_limits<double>::quiet_NaN();
       snap.max_failure_index = fi_stats.max;
       snap.failing_volume = dealii::Utilities::MPI::sum(failing, comm);
       failed_now = dealii::Utilities::MPI::sum(failed_now, comm);
@@ -794,9 +797,9 @@ void BoneDrilling::run(RunContext& ctx) {
       if (snap.applied_thrust > 0) {
         // Equilibrium: the supports take the bit's load, R + F d = 0 (the thermal stresses are
         // self-equilibrated; the torque's traction has no resultant on a full cone).
-        dealii::Tensor<1, 3> reaction;
-        for (const auto id : support_ids())
-          reaction += mech->reaction_force(id);
+        const auto ids = support_ids(); // edges shared by two supports counted once
+        const dealii::Tensor<1, 3> reaction =
+            mech->reaction_force(std::set<dealii::types::boundary_id>(ids.begin(), ids.end()));
         snap.reaction_error = (reaction + thrust * d).norm() / thrust;
       }
       if (failed_now == 0)

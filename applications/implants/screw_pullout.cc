@@ -507,6 +507,10 @@ class ScrewPullout : public Scenario {
           }
         }
       volume = dealii::Utilities::MPI::sum(volume, ctx.comm());
+      if (!(volume > 0))
+        throw InvalidInput("Pullout/Cells per pitch", fmt(pull_.cells_per_pitch, 4),
+                           "enough cells for a bone cell centre within 1 mm of the thread's "
+                           "crests (the engaged bone of Chapman's estimate)");
       engaged_density = dealii::Utilities::MPI::sum(engaged_density, ctx.comm()) / volume;
       engaged_yield = dealii::Utilities::MPI::sum(engaged_yield, ctx.comm()) / volume;
       ctx.log() << "  CT bone from " << block_.ct.image_file << " (" << law.name()

@@ -791,7 +791,8 @@ TEST(Mechanics, HangingNodesOnInactiveCellsLeakNoLoad3D) {
 
 namespace {
 
-// A support's reaction includes the shares of hanging nodes next to it. The block [0,2]^2
+// A support's reaction includes the shares of hanging nodes next to it, and a reaction over
+// several supports counts their shared DoFs once. The block [0,2]^2
 // (× [0,1]) of unit cells is clamped on x = 0 and refined in the cell at the origin, so the
 // nodes between its children and the coarse cell above hang off masters on the support. A
 // uniform body force b: the support carries the whole weight, R = −b V. Summing the raw
@@ -827,6 +828,21 @@ void check_reaction_with_hanging_nodes_at_the_support() {
   // Newton's relative tolerance (1e-8) bounds the equilibrium error.
   for (unsigned int d = 0; d < dim; ++d)
     EXPECT_NEAR(R[d], -b[d] * volume, 1e-7 * b.l2_norm() * volume) << "component " << d;
+
+  // Clamped on x = 0 and y = 0 as well: the two supports share the edge x = y = 0, whose DoFs
+  // the reaction over both ids counts once (the sum of the two ids' reactions counts them
+  // twice).
+  MechanicsSolver<dim> two(tria, typename MechanicsSolver<dim>::Parameters());
+  two.set_material(0, std::make_shared<materials::LinearElastic>(1e9, 0.3, 1000.0));
+  for (const types::boundary_id id : {0, 2})
+    two.boundary_conditions().add_dirichlet(id, "x,y" + std::string(dim == 3 ? ",z" : ""),
+                                            dim == 3 ? "0;0;0" : "0;0");
+  two.set_body_force(std::make_shared<Functions::ConstantFunction<dim>>(b));
+  two.solve_quasi_static(1.0);
+  const Tensor<1, dim> R2 = two.reaction_force(std::set<types::boundary_id>{0, 2});
+  for (unsigned int d = 0; d < dim; ++d)
+    EXPECT_NEAR(R2[d], -b[d] * volume, 1e-7 * b.l2_norm() * volume) << "component " << d;
+  EXPECT_GT((two.reaction_force(0) + two.reaction_force(2) - R2).norm(), 1e-3 * b.l2_norm());
 }
 
 } // namespace

@@ -178,10 +178,10 @@ TEST(DrillBit, BadInputNamesTheEntry) {
 
 // Thrust control through the entry: the point enters the bone with few lips engaged, so the
 // feed that holds the thrust there is far larger than once the point is in. The feed of each
-// sub-step is the one whose thrust at the sub-step's middle (where the forces are taken) is
-// the target, taken on the side below it where one more lip sample engaging makes the thrust
-// jump: no interval reports more than the target, and once the point is in, the target is
-// held to the bisection's tolerance (1e-9 of the feed).
+// sub-step is the one whose thrust at the sub-step's end (the most engaged point) is the
+// target, taken on the side below it where one more lip sample engaging makes the thrust
+// jump: neither the intervals (forces at the sub-steps' middles) nor the ends exceed the
+// target, and once the point is in, the target is held to the bisection's tolerance.
 TEST(DrillingProgramme, ThrustControlDoesNotOvershootAtTheEntry) {
   const CuttingCoefficients c = cortical();
   DrillingSchedule sched;
@@ -198,9 +198,19 @@ TEST(DrillingProgramme, ThrustControlDoesNotOvershootAtTheEntry) {
     return a >= 0 ? &c : nullptr;
   };
   DrillState st = programme.initial_state();
-  double max_thrust = 0;
-  for (unsigned int step = 0; step < 400 && st.phase == DrillPhase::feed; ++step)
-    max_thrust = std::max(max_thrust, programme.advance(st, 0.05, 8, material).max_thrust);
+  const DrillingForceModel model(bit());
+  const auto in_bone = [&](double a, double) -> const CuttingCoefficients* {
+    return a >= 0 ? &c : nullptr;
+  };
+  double max_thrust = 0, max_end_thrust = 0;
+  for (unsigned int step = 0; step < 400 && st.phase == DrillPhase::feed; ++step) {
+    const DrillInterval I = programme.advance(st, 0.05, 8, material);
+    max_thrust = std::max(max_thrust, I.max_thrust);
+    // Also where the last sub-step ends, the point at its most engaged.
+    max_end_thrust =
+        std::max(max_end_thrust, model.load(st.tip, I.feed_per_rev, 1000, in_bone).thrust);
+  }
+  EXPECT_LE(max_end_thrust, 60.0 * (1 + 1e-6));
   EXPECT_NE(st.phase, DrillPhase::feed);
   EXPECT_NEAR(st.deepest[0], 4e-3, 1e-15);
   EXPECT_LE(max_thrust, 60.0 * (1 + 1e-6));
