@@ -18,13 +18,7 @@ void CtBoxParameters::declare(dealii::ParameterHandler& prm, const std::string& 
                     "A CT image whose box replaces " + what +
                         " (empty: no CT); relative to the project or absolute [-]. Each cell "
                         "takes the calibrated density of the voxel nearest its centre.");
-  prm.declare_entry("Value type", "density", Selection("density|hu"),
-                    "Voxel values: equivalent mineral density in mg/cm^3, or Hounsfield units "
-                    "[-].");
-  prm.declare_entry("Calibration intercept", "0", Double(),
-                    "a in rho = a + b HU (hu only) [g/cm^3].");
-  prm.declare_entry("Calibration slope", "0.001", Double(),
-                    "b in rho = a + b HU (hu only) [g/cm^3 per HU].");
+  DensityCalibration::declare(prm);
   prm.declare_entry("Top centre", "", Anything(),
                     "The image point at the centre of the block's top face, where x = y = z = 0 "
                     "of the block, in the image's physical frame (LPS for medical images) [mm].");

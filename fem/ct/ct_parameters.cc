@@ -24,13 +24,7 @@ void CtParameters::declare_volume(dealii::ParameterHandler& prm) {
   prm.declare_entry("Label file", "", FileName(FileName::input),
                     "Segmentation on the image grid (integer labels), needed when Labels is "
                     "not empty; relative to the scene file [-].");
-  prm.declare_entry("Value type", "density", Selection("density|hu"),
-                    "Voxel values: density = equivalent mineral density [mg/cm^3]; hu = "
-                    "Hounsfield units, calibrated by rho = intercept + slope * HU [-].");
-  prm.declare_entry("Calibration intercept", "0", Double(),
-                    "Intercept a of rho = a + b * HU (Value type = hu) [g/cm^3].");
-  prm.declare_entry("Calibration slope", "0.001", Double(0),
-                    "Slope b of rho = a + b * HU (Value type = hu) [g/cm^3 per HU].");
+  DensityCalibration::declare(prm);
   prm.declare_entry("Labels", "", List(Integer(0, 254)),
                     "Labels to mesh, comma separated; each becomes the material id of its "
                     "cells. Empty: threshold mode (material id 0) [-].");

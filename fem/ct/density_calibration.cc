@@ -6,6 +6,17 @@
 
 namespace spinesim::fem {
 
+void DensityCalibration::declare(dealii::ParameterHandler& prm) {
+  using namespace dealii::Patterns;
+  prm.declare_entry("Value type", "density", Selection("density|hu"),
+                    "Voxel values: density = equivalent mineral density [mg/cm^3]; hu = "
+                    "Hounsfield units, calibrated by rho = intercept + slope * HU [-].");
+  prm.declare_entry("Calibration intercept", "0", Double(),
+                    "Intercept a of rho = a + b * HU (Value type = hu) [g/cm^3].");
+  prm.declare_entry("Calibration slope", "0.001", Double(0),
+                    "Slope b of rho = a + b * HU (Value type = hu) [g/cm^3 per HU].");
+}
+
 DensityCalibration::DensityCalibration(ValueType type, double intercept, double slope)
     : type_(type), intercept_(intercept), slope_(slope) {
   if (!std::isfinite(intercept) || !std::isfinite(slope))

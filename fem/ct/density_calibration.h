@@ -10,6 +10,8 @@
 
 #include "fem/ct/ct_volume.h"
 
+#include <deal.II/base/parameter_handler.h>
+
 #include <string>
 #include <vector>
 
@@ -23,6 +25,9 @@ class DensityCalibration {
   DensityCalibration(ValueType type, double intercept, double slope);
   // "density" or "hu"; InvalidInput otherwise.
   static ValueType parse_value_type(const std::string& name);
+  // The entries Value type, Calibration intercept and Calibration slope, in the current
+  // subsection: every CT input (a CT model, a CT box) declares them alike.
+  static void declare(dealii::ParameterHandler& prm);
 
   // [g/cm^3] of one voxel value. No floor: negative results (air, fat) are passed on so mass
   // sums stay honest; the modulus law floors them.
