@@ -43,6 +43,7 @@
 #include <deal.II/grid/grid_tools_cache.h>
 
 #include <cmath>
+#include <limits>
 #include <map>
 #include <random>
 #include <sstream>
@@ -61,6 +62,7 @@ struct LsmfmRunParameters {
   std::string exact_displacement;
   bool compare_fem = false;
   bool plastic_zone_plot = true;
+  int reaction_boundary_id = -1;
   StretchReference reference;
 
   static void declare(dealii::ParameterHandler& prm) {
@@ -83,6 +85,11 @@ struct LsmfmRunParameters {
     prm.declare_entry("Plastic zone plot", "true", Bool(),
                       "With the FEM comparison, draw plastic_zone.png (gnuplot): the plastic "
                       "points of both solutions side by side [-].");
+    prm.declare_entry("Reaction boundary id", "-1", Integer(-1),
+                      "Boundary id whose load is reported: reaction_force_norm = |∫ σ^h n dA| "
+                      "over its faces (Gauss rule, the LSMFM's own stress field), per step in "
+                      "history.csv, and with the FEM comparison fem_reaction_force_norm; "
+                      "-1 = none [N, per unit thickness in 2-D].");
     StretchReference::declare(prm);
   }
   void parse(const dealii::ParameterHandler& prm) {
@@ -93,6 +100,7 @@ struct LsmfmRunParameters {
     exact_displacement = prm.get("Exact displacement");
     compare_fem = prm.get_bool("Compare with FEM");
     plastic_zone_plot = prm.get_bool("Plastic zone plot");
+    reaction_boundary_id = prm.get_integer("Reaction boundary id");
     reference.parse(prm, "LSMFM run");
     if (!(end_time > 0))
       throw InvalidInput("LSMFM run/End time", "must be positive", "a time > 0 [s]");
@@ -188,6 +196,10 @@ class LsmfmScenario : public Scenario {
               << lsmfm_.kinematics << (dim == 2 ? ", " + lsmfm_.plane_model : std::string())
               << "\n  material: " << law_.describe() << "\n";
 
+    // The cost table's work: unknowns × load steps (each step a few sparse factorisations).
+    ctx.set_cost({"lsmfm_quasi_static", double(solver->n_unknowns()) * run_.steps,
+                  double(solver->n_unknowns())});
+
     std::unique_ptr<fem::MechanicsSolver<dim>> fem;
     if (run_.compare_fem) {
       dealii::TimerOutput::Scope t(ctx.timer(), "fem setup");
@@ -199,14 +211,18 @@ class LsmfmScenario : public Scenario {
     std::vector<bool> reached(run_.reference.stretch.size(), false);
     std::vector<std::array<double, 2>> at_reference(reached.size());
     unsigned int newton = 0, max_newton = 0;
-    double min_line_search = 1;
+    double min_line_search = 1, max_yield_violation = 0;
+    // The load on Reaction boundary id at the last step; NaN when none is asked for (the
+    // history column then says so).
+    double reaction = std::numeric_limits<double>::quiet_NaN();
     ctx.history().add({{"time", 0.0},
                        {"stretch", 1.0},
                        {"flow_stress_MPa", 0.0},
                        {"eff_plastic_strain", 0.0},
                        {"iterations", 0.0},
                        {"functional", 0.0},
-                       {"plastic_points", 0.0}});
+                       {"plastic_points", 0.0},
+                       {"reaction_force", run_.reaction_boundary_id >= 0 ? 0.0 : reaction}});
     ctx.progress().start("LSMFM", run_.steps, run_.end_time);
     for (unsigned int step = 1; step <= run_.steps; ++step) {
       const double t = run_.end_time * step / run_.steps;
@@ -224,6 +240,7 @@ class LsmfmScenario : public Scenario {
       newton += r.iterations;
       max_newton = std::max(max_newton, r.iterations);
       min_line_search = std::min(min_line_search, r.min_line_search);
+      max_yield_violation = std::max(max_yield_violation, r.max_yield_violation);
       if (fem) {
         dealii::TimerOutput::Scope timer(ctx.timer(), "fem");
         try {
@@ -234,13 +251,16 @@ class LsmfmScenario : public Scenario {
         }
       }
       const auto avg = averages(*solver);
+      if (run_.reaction_boundary_id >= 0)
+        reaction = boundary_load(tria, mapping, *solver).norm();
       ctx.history().add({{"time", t},
                          {"stretch", avg[0]},
                          {"flow_stress_MPa", avg[1] / 1e6},
                          {"eff_plastic_strain", avg[2]},
                          {"iterations", double(r.iterations)},
                          {"functional", r.functional},
-                         {"plastic_points", double(r.plastic_points)}});
+                         {"plastic_points", double(r.plastic_points)},
+                         {"reaction_force", reaction}});
       for (unsigned int i = 0; i < reached.size(); ++i)
         if (!reached[i] && std::abs(avg[0] - run_.reference.stretch[i]) < 1e-6) {
           reached[i] = true;
@@ -265,6 +285,10 @@ class LsmfmScenario : public Scenario {
     s.set_figure("newton_iterations", newton, "iterations");
     s.set_figure("max_newton_iterations_per_step", max_newton, "iterations");
     s.set_figure("min_line_search_factor", min_line_search, "-");
+    // The largest violation of the yield condition a load step's plastic set was accepted
+    // with (LSMFM/Yield tolerance), over the initial yield stress.
+    if (law_.model != "linear_elastic")
+      s.set_figure("max_yield_violation_relative", max_yield_violation / law_.yield_stress, "-");
     double max_spacing = 0;
     for (double h : spacing_)
       max_spacing = std::max(max_spacing, h);
@@ -283,8 +307,14 @@ class LsmfmScenario : public Scenario {
       s.set_figure("displacement_l2_error_relative", exact_error(tria, mapping, *solver).relative(),
                    "-");
     }
+    if (run_.reaction_boundary_id >= 0)
+      s.set_figure("reaction_force_norm", reaction, dim == 2 ? "N/m" : "N");
     if (fem) {
       s.set_figure("relative_difference_vs_fem", difference_to_fem(*fem, *solver).relative(), "-");
+      if (run_.reaction_boundary_id >= 0)
+        s.set_figure("fem_reaction_force_norm",
+                     fem->reaction_force(run_.reaction_boundary_id).norm(),
+                     dim == 2 ? "N/m" : "N");
       s.set_figure("fem_dofs", fem->dof_handler().n_dofs(), "-");
       // The plot when the LSMFM has a plastic zone to show.
       if (run_.plastic_zone_plot && plastic > 0)
@@ -306,6 +336,38 @@ class LsmfmScenario : public Scenario {
   std::vector<dealii::Point<dim>> nodes_;
   std::vector<double> spacing_;
   std::vector<BoundaryNode<dim>> boundary_;
+
+  // ∫ σ^h n dA over the faces of Reaction boundary id: the force the boundary takes, from the
+  // LSMFM's stress unknowns (MLS-evaluated at 3 Gauss points per face direction; the stress
+  // field is linear within a support, so the rule is not the limit). Reference
+  // configuration: the plate of Table 2 is small strain.
+  dealii::Tensor<1, dim> boundary_load(const dealii::Triangulation<dim>& tria,
+                                       const dealii::Mapping<dim>& mapping,
+                                       const meshfree::LsmfmSolver<dim>& solver) const {
+    const dealii::QGauss<dim - 1> quadrature(3);
+    dealii::FE_Q<dim> fe(1);
+    dealii::FEFaceValues<dim> fv(mapping, fe, quadrature,
+                                 dealii::update_quadrature_points | dealii::update_normal_vectors |
+                                     dealii::update_JxW_values);
+    // Voigt order 11, 22, 33, 12, 23, 13 (LsmfmSolver::Voigt).
+    static constexpr unsigned int voigt[3][3] = {{0, 3, 5}, {3, 1, 4}, {5, 4, 2}};
+    dealii::Tensor<1, dim> force;
+    for (const auto& cell : tria.active_cell_iterators())
+      for (unsigned int f = 0; f < cell->n_faces(); ++f) {
+        const auto face = cell->face(f);
+        if (!face->at_boundary() || face->boundary_id() != run_.reaction_boundary_id)
+          continue;
+        fv.reinit(cell, f);
+        for (unsigned int q = 0; q < quadrature.size(); ++q) {
+          const auto sigma = solver.stress(fv.quadrature_point(q));
+          const auto n = fv.normal_vector(q);
+          for (unsigned int i = 0; i < dim; ++i)
+            for (unsigned int j = 0; j < dim; ++j)
+              force[i] += sigma[voigt[i][j]] * n[j] * fv.JxW(q);
+        }
+      }
+    return force;
+  }
 
   // Nodes at the vertices; spacing = the longest mesh edge at a vertex (on graded or
   // stretched cells the influence domain must reach the neighbour along the long edge: with

@@ -47,6 +47,11 @@ void LsmfmParameters::declare(dealii::ParameterHandler& prm) {
                     "step's increment (displacement and stress each) with the gradient of I "
                     "down by 1e-4 [-].");
   prm.declare_entry("Max iterations", "40", Integer(1), "Newton iterations per load step [-].");
+  prm.declare_entry("Yield tolerance", "5e-3", Double(0.0, 1.0),
+                    "The plastic set of a load step is accepted when no point violates the "
+                    "yield condition by more than this fraction of the initial yield stress: "
+                    "a flowing point with its trial stress below the yield surface, or an "
+                    "elastic one above it [-].");
   prm.declare_entry("Maximum condition number", "1e12", Double(1.0),
                     "Largest accepted condition number of the MLS moment matrix [-].");
 }
@@ -63,6 +68,7 @@ void LsmfmParameters::parse(const dealii::ParameterHandler& prm) {
   tolerance = prm.get_double("Tolerance");
   update_tolerance = prm.get_double("Update tolerance");
   max_iterations = prm.get_integer("Max iterations");
+  yield_tolerance = prm.get_double("Yield tolerance");
   max_condition_number = prm.get_double("Maximum condition number");
   validate();
 }

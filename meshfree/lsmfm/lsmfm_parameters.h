@@ -27,6 +27,7 @@ struct LsmfmParameters {
   double tolerance = 1e-10;                 // on the gradient of I, relative to the step's first
   double update_tolerance = 1e-5;           // on the Newton update over the step's increment
   unsigned int max_iterations = 40;         // Newton iterations per load step
+  double yield_tolerance = 5e-3;            // plastic set consistent to this fraction of σ_Y
   double max_condition_number = 1e12;       // MLS moment matrix guard [-]
 
   static void declare(dealii::ParameterHandler& prm);

@@ -89,6 +89,7 @@ class LsmfmSolver {
     double min_line_search = 1;   // smallest accepted line-search factor of the step
     unsigned int set_updates = 0; // Newton solves repeated for a changed plastic set
     unsigned int kink_stops = 0;  // solves ended as a stall at a kink of I (see newton())
+    double max_yield_violation = 0; // of the accepted plastic set [Pa] (see solve_step())
   };
 
   // nodes: x_J [m]; spacing: nodal spacing per node [m] (h_J = support ratio × spacing);
