@@ -206,6 +206,9 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
   }
   if (mechanics_) {
     s.set_figure("mechanics_dofs", mechanics_->dof_handler().n_dofs(), "-");
+    // The resolution's length, what a convergence study plots its errors against.
+    s.set_figure("max_cell_diameter_m",
+                 dealii::Utilities::MPI::max(fem::max_cell_diameter(*mechanics_), ctx.comm()), "m");
     s.set_figure("strain_energy",
                  coupled_ ? coupled_->strain_energy() : mechanics_->strain_energy(),
                  dim == 2 ? "J/m" : "J");
@@ -336,9 +339,6 @@ void Simulation<dim>::report_exact_error(RunContext& ctx) {
   if (mechanics_) {
     fem = fem::displacement_error_sums(*mechanics_, *exact_displacement_);
     has_fem = mechanics_->n_active_cells() > 0;
-    ctx.summary().set_figure(
-        "max_cell_diameter_m",
-        dealii::Utilities::MPI::max(fem::max_cell_diameter(*mechanics_), ctx.comm()), "m");
   }
   if (coupled_) {
     const auto& p = coupled_->particles();

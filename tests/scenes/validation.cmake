@@ -58,14 +58,29 @@ spinesim_add_scene_test(validation.lsmfm_finite_extension_material_point
 
 # Table 2, perforated plate, in the elastic range (u = 0.05 t, yield begins near t = 0.16):
 # the LSMFM and the FEM (Q1, same mesh) within the paper's 0.5 % (measured 0.42 % at 1376
-# nodes). The full elasto-plastic run to u = 0.05 does not converge past about 45 % of the load
-# (points chatter across the yield surface, docs/lsmfm.md): a known failure.
+# nodes).
 spinesim_add_scene_test(validation.lsmfm_perforated_plate_elastic
   SCENE ${_val}/lsmfm_perforated_plate.prm
   SET "LSMFM run/End time=0.1" "LSMFM run/Steps=1"
   EXPECT "status==ok;relative_difference_vs_fem<=0.005;plastic_points<=0;nodes>=1300"
   LABELS "scene;validation;meshfree")
+# The whole elasto-plastic run to u = 0.05 in 80 steps at 369 nodes (about 20 s): every
+# step converges (status ok) with its plastic set within the yield tolerance. The load on the
+# top edge against the converged FEM value 1.59039 N/m (Q2 on 41 728 DoFs; Q2 on 10 624 DoFs
+# gives 1.59043, docs/lsmfm.md): measured 1.5816 (-0.55 %), bound 2 % — the same mesh's Q1
+# FEM is 0.97 % off. The displacement differs from that Q1 FEM by 3.4 % here (0.59 % at 5312
+# nodes, the run below); bound 5 %.
+spinesim_add_scene_test(validation.lsmfm_perforated_plate_plastic_369
+  SCENE ${_val}/lsmfm_perforated_plate.prm
+  SET "Geometry/Global refinements=2"
+  EXPECT "status==ok;reaction_force_norm>=1.5586;reaction_force_norm<=1.6222;relative_difference_vs_fem<=0.05;max_yield_violation_relative<=0.005;plastic_points>=300;plastic_zone_png_valid>=1"
+  LABELS "scene;validation;meshfree")
+# Table 2 at the paper's resolution or finer (5312 nodes; the paper has 2511): the LSMFM and
+# the FEM within 0.5 %. Measured 0.585 % (37 min): the difference falls from 3.4 % (369
+# nodes) and 1.36 % (1376) by about 2.4 per halving of the spacing, so one more refinement
+# should pass; a known failure until then.
 spinesim_add_scene_test(validation.lsmfm_perforated_plate
   SCENE ${_val}/lsmfm_perforated_plate.prm
+  SET "Geometry/Global refinements=4"
   EXPECT "status==ok;relative_difference_vs_fem<=0.005;plastic_zone_png_valid>=1"
-  LABELS "scene;validation;meshfree;known_failure" TIMEOUT 3600)
+  LABELS "scene;validation;meshfree;known_failure" TIMEOUT 5400)
