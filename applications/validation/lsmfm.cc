@@ -42,6 +42,7 @@
 #include <deal.II/grid/grid_tools.h>
 #include <deal.II/grid/grid_tools_cache.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -177,6 +178,19 @@ class LsmfmScenario : public Scenario {
       fem::build_mesh(mesh_, tria);
       make_nodes(tria);
     }
+    if (run_.reaction_boundary_id >= 0) {
+      const auto ids = tria.get_boundary_ids();
+      const auto id = static_cast<dealii::types::boundary_id>(run_.reaction_boundary_id);
+      if (std::find(ids.begin(), ids.end(), id) == ids.end()) {
+        std::ostringstream allowed;
+        for (const auto id : ids)
+          allowed << (allowed.tellp() > 0 ? ", " : "") << id;
+        throw InvalidInput("LSMFM run/Reaction boundary id",
+                           "= " + std::to_string(run_.reaction_boundary_id) +
+                               ": no face of the mesh has it",
+                           "-1 or a boundary id of the geometry: " + allowed.str());
+      }
+    }
     const auto rule = integration_rule(tria, mapping);
     typename meshfree::LsmfmSolver<dim>::Material mat;
     mat.youngs_modulus = law_.youngs_modulus;
@@ -212,6 +226,7 @@ class LsmfmScenario : public Scenario {
     std::vector<std::array<double, 2>> at_reference(reached.size());
     unsigned int newton = 0, max_newton = 0;
     double min_line_search = 1, max_yield_violation = 0;
+    unsigned int set_fallbacks = 0;
     // The load on Reaction boundary id at the last step; NaN when none is asked for (the
     // history column then says so).
     double reaction = std::numeric_limits<double>::quiet_NaN();
@@ -241,6 +256,7 @@ class LsmfmScenario : public Scenario {
       max_newton = std::max(max_newton, r.iterations);
       min_line_search = std::min(min_line_search, r.min_line_search);
       max_yield_violation = std::max(max_yield_violation, r.max_yield_violation);
+      set_fallbacks += r.set_fallbacks;
       if (fem) {
         dealii::TimerOutput::Scope timer(ctx.timer(), "fem");
         try {
@@ -287,8 +303,12 @@ class LsmfmScenario : public Scenario {
     s.set_figure("min_line_search_factor", min_line_search, "-");
     // The largest violation of the yield condition a load step's plastic set was accepted
     // with (LSMFM/Yield tolerance), over the initial yield stress.
-    if (law_.model != "linear_elastic")
+    if (law_.model != "linear_elastic" && law_.yield_stress > 0) {
       s.set_figure("max_yield_violation_relative", max_yield_violation / law_.yield_stress, "-");
+      // Load steps whose plastic set cycled and was decided by an iterate-wise solve
+      // (max_yield_violation_relative covers the other steps).
+      s.set_figure("plastic_set_fallbacks", set_fallbacks, "-");
+    }
     double max_spacing = 0;
     for (double h : spacing_)
       max_spacing = std::max(max_spacing, h);
@@ -313,8 +333,7 @@ class LsmfmScenario : public Scenario {
       s.set_figure("relative_difference_vs_fem", difference_to_fem(*fem, *solver).relative(), "-");
       if (run_.reaction_boundary_id >= 0)
         s.set_figure("fem_reaction_force_norm",
-                     fem->reaction_force(run_.reaction_boundary_id).norm(),
-                     dim == 2 ? "N/m" : "N");
+                     fem->reaction_force(run_.reaction_boundary_id).norm(), dim == 2 ? "N/m" : "N");
       s.set_figure("fem_dofs", fem->dof_handler().n_dofs(), "-");
       // The plot when the LSMFM has a plastic zone to show.
       if (run_.plastic_zone_plot && plastic > 0)
@@ -355,7 +374,8 @@ class LsmfmScenario : public Scenario {
     for (const auto& cell : tria.active_cell_iterators())
       for (unsigned int f = 0; f < cell->n_faces(); ++f) {
         const auto face = cell->face(f);
-        if (!face->at_boundary() || face->boundary_id() != run_.reaction_boundary_id)
+        if (!face->at_boundary() || face->boundary_id() != static_cast<dealii::types::boundary_id>(
+                                                               run_.reaction_boundary_id))
           continue;
         fv.reinit(cell, f);
         for (unsigned int q = 0; q < quadrature.size(); ++q) {

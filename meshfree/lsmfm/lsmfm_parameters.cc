@@ -50,8 +50,9 @@ void LsmfmParameters::declare(dealii::ParameterHandler& prm) {
   prm.declare_entry("Yield tolerance", "5e-3", Double(0.0, 1.0),
                     "The plastic set of a load step is accepted when no point violates the "
                     "yield condition by more than this fraction of the initial yield stress: "
-                    "a flowing point with its trial stress below the yield surface, or an "
-                    "elastic one above it [-].");
+                    "a flowing point below the yield surface or an elastic one above it (the "
+                    "current stress for the complementary form, the trial stress for "
+                    "return_mapping) [-].");
   prm.declare_entry("Maximum condition number", "1e12", Double(1.0),
                     "Largest accepted condition number of the MLS moment matrix [-].");
 }

@@ -822,24 +822,16 @@ typename LsmfmSolver<dim>::StepResult LsmfmSolver<dim>::solve_step() {
   // ratio cE = 1.5 E/K̄ at the yield surface, and Newton stalls near it for small K̄
   // (measured on the finite extension, E/K̄ = 3e5: no convergence in 40 iterations from the
   // first plastic step on, already at E/K̄ = 3e3). Here the set is held fixed during a
-  // Newton solve, which makes I smooth, and updated between solves until it is consistent:
-  // every point of the set has φ̃ >= 0 (γ >= 0) and every other point φ̃ <= 0. The solution
-  // is the one eqs. (40-41) describe.
-  // The set is updated from the yield test of every point (φ̃ for the complementary form,
-  // the trial excess for the return-mapping form). Two measures keep this iteration from
-  // oscillating:
-  //  * only the violators within a factor 2 of the worst one change sides. Flipping all of
-  //    them overshoots: on the perforated plate (complementary form, t = 0.36) the set swung
-  //    8 → 80 → 28 → 68 → 28 → 76 points, each solve relaxing too much or too little stress;
-  //  * a set whose worst violation is below LSMFM/Yield tolerance × σ_Y is consistent. Near
-  //    a kink of I the last few points can cycle at violations of 1e-4..3e-3 σ_Y (measured on
-  //    the same plate) without any consistent set in reach.
-  const double yield_tolerance = prm_.yield_tolerance * mat_.yield_stress;
-  const auto update_set = [&]() {
-    std::vector<double> phi(points_.size(), 0.0);
+  // Newton solve, which makes I smooth, and updated between solves until it is consistent
+  // to LSMFM/Yield tolerance: every point of the set has φ̃ >= −tol σ_Y and every other
+  // point φ̃ <= tol σ_Y (eqs. 40-41 to that tolerance).
+  // The yield test of every point: φ̃ for the complementary form (current stress), the
+  // trial excess for the return-mapping form (radial return), both in Pa.
+  std::vector<double> phi(points_.size(), 0.0);
+  const auto violation = [&]() {
     double worst = 0;
     for (unsigned int q = 0; q < points_.size(); ++q) {
-      if (return_mapping_) { // the trial state decides (radial return)
+      if (return_mapping_) {
         phi[q] = trial_excess_[q];
       } else {
         const Voigt sigma = point_stress(q);
@@ -854,6 +846,18 @@ typename LsmfmSolver<dim>::StepResult LsmfmSolver<dim>::solve_step() {
       if (plastic_set_[q] ? phi[q] < 0 : phi[q] > 0)
         worst = std::max(worst, std::abs(phi[q]));
     }
+    return worst;
+  };
+  // Two measures keep the set iteration from oscillating:
+  //  * only the violators within a factor 2 of the worst one change sides. Flipping all of
+  //    them overshoots: on the perforated plate (complementary form, t = 0.36) the set swung
+  //    8 → 80 → 28 → 68 → 28 → 76 points, each solve relaxing too much or too little stress;
+  //  * a set whose worst violation is below the tolerance is accepted. Near a kink of I the
+  //    last few points can cycle at violations of 1e-4..3e-3 σ_Y (measured on the same
+  //    plate) without any consistent set in reach. The floor 1e-10 σ_Y is round-off.
+  const double yield_tolerance = std::max(prm_.yield_tolerance, 1e-10) * mat_.yield_stress;
+  const auto update_set = [&]() {
+    const double worst = violation();
     result.max_yield_violation = worst;
     if (worst <= yield_tolerance)
       return 0u;
@@ -878,6 +882,7 @@ typename LsmfmSolver<dim>::StepResult LsmfmSolver<dim>::solve_step() {
       break;
     ++result.set_updates;
     if (!seen.insert(plastic_set_).second || round == prm_.max_iterations) {
+      ++result.set_fallbacks;
       iterate_switching_ = true;
       try {
         newton(result, g0);

@@ -86,10 +86,11 @@ class LsmfmSolver {
     double functional = 0;        // I at the converged state [m^dim]
     double relative_gradient = 0; // |∇I| over its value at the start of the step
     unsigned int plastic_points = 0;
-    double min_line_search = 1;   // smallest accepted line-search factor of the step
-    unsigned int set_updates = 0; // Newton solves repeated for a changed plastic set
-    unsigned int kink_stops = 0;  // solves ended as a stall at a kink of I (see newton())
+    double min_line_search = 1;     // smallest accepted line-search factor of the step
+    unsigned int set_updates = 0;   // Newton solves repeated for a changed plastic set
+    unsigned int kink_stops = 0;    // solves ended as a stall at a kink of I (see newton())
     double max_yield_violation = 0; // of the accepted plastic set [Pa] (see solve_step())
+    unsigned int set_fallbacks = 0; // set iterations ended by the iterate-wise solve
   };
 
   // nodes: x_J [m]; spacing: nodal spacing per node [m] (h_J = support ratio × spacing);

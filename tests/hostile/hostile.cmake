@@ -198,6 +198,12 @@ spinesim_add_hostile_test(study_bad_case PREPARE run:${_quick}
 # LSMFM: the complementary flow rule of Kwon & Youn has 1/K (eq. 27) and holds no perfectly
 # plastic solid; the scene is refused, naming the entry and the alternative (the error comes
 # while the model is built, so the earlier run must survive the staged --force).
+# A reaction boundary the mesh does not have would report a load of 0: refused, listing the
+# boundary ids there are.
+spinesim_add_hostile_test(lsmfm_reaction_boundary_missing
+  ARGS check ${PROJECT_SOURCE_DIR}/applications/validation/lsmfm_perforated_plate.prm
+       --set "LSMFM run/Reaction boundary id=7"
+  MATCH "LSMFM run/Reaction boundary id.*no face of the mesh has it.*0, 1, 2, 3")
 spinesim_add_hostile_test(lsmfm_perfect_plasticity PREPARE run:${_quick}
   ARGS run ${PROJECT_SOURCE_DIR}/applications/validation/lsmfm_perforated_plate.prm
        --output @KEEP@ --force --set "Material/Hardening modulus=0"

@@ -32,12 +32,14 @@ foreach(_dim 2 3)
     LABELS "scene;study;meshfree")
 endforeach()
 
-# The full study (about 10 min on two cores, label benchmark; its budget is 30 min).
+# The full study (about 24 min on two cores, label benchmark; its budget is 30 min).
 # Asserted: every run finishes with finite figures, the plots are valid, and the orders that
 # theory fixes (Q1 2 and Q2 3 on the cantilever's cubic solution; B-bar Q1 2 on the nearly
-# incompressible cylinder, where the standard Q1 locks and is only reported).
+# incompressible cylinder, where the standard Q1 locks and is only reported), and the FEM's
+# load on the elasto-plastic plate approaching the converged value (the LSMFM's does not:
+# docs/accuracy-cost.md).
 spinesim_add_scene_test(benchmark.accuracy_cost SCENE ${_studies}/accuracy_cost.prm
-  EXPECT "status==ok;failed_runs<=0;all_rows_finite>=1;png_valid>=1;order_cantilever_fem_q1>=1.8;order_cantilever_fem_q2>=2.8;order_thick_cylinder_fem_q1_bbar>=1.8;errors_fall_cantilever_nosb>=1;errors_fall_cantilever_spg>=1;study_wall_time_s<=1800"
+  EXPECT "status==ok;failed_runs<=0;all_rows_finite>=1;png_valid>=1;order_cantilever_fem_q1>=1.8;order_cantilever_fem_q2>=2.8;order_thick_cylinder_fem_q1_bbar>=1.8;errors_fall_cantilever_nosb>=1;errors_fall_cantilever_spg>=1;errors_fall_perforated_plate_fem_q1>=1;errors_fall_perforated_plate_fem_q2>=1;study_wall_time_s<=1800"
   LABELS "benchmark;study" TIMEOUT 3600)
 
 # spinesim check --estimate against what the runs measure: the default scene and the vertebra
