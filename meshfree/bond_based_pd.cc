@@ -139,7 +139,8 @@ PmbForceRows<dim> make_kernel(ParticleSet<dim>& particles, BondList<dim>& bonds,
           bonds.length.data(),
           k.data(),
           bonds.broken.data(),
-          s0};
+          s0,
+          particles.size()};
 }
 
 template <int dim>

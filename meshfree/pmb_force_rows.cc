@@ -4,6 +4,8 @@
 
 #include <cstdlib>
 #include <cstring>
+#include <stdexcept>
+#include <string>
 
 namespace spinesim::meshfree {
 
@@ -12,33 +14,88 @@ template <int dim>
 std::size_t pmb_force_rows_x86_64_v3(const PmbForceRows<dim>& rows, std::size_t begin,
                                      std::size_t end, int& bad);
 #endif
+#ifdef SPINESIM_PMB_X86_64_V4
+template <int dim>
+std::size_t pmb_force_rows_x86_64_v4(const PmbForceRows<dim>& rows, std::size_t begin,
+                                     std::size_t end, int& bad);
+#endif
 
 namespace {
-// Decided once (a function-local static is initialised once, thread-safely).
-bool use_x86_64_v3() {
-#ifdef SPINESIM_PMB_X86_64_V3
-  static const bool use = [] {
-    const char* isa = std::getenv("SPINESIM_KERNEL_ISA");
-    if (isa && std::strcmp(isa, "baseline") == 0)
-      return false;
-    __builtin_cpu_init();
-    return __builtin_cpu_supports("x86-64-v3") != 0;
-  }();
-  return use;
-#else
-  return false;
+enum class Isa { baseline = 0, x86_64_v3 = 1, x86_64_v4 = 2 };
+
+const char* isa_name(Isa isa) {
+  switch (isa) {
+  case Isa::x86_64_v4:
+    return "x86-64-v4";
+  case Isa::x86_64_v3:
+    return "x86-64-v3";
+  default:
+    return "baseline";
+  }
+}
+
+// The highest variant this build has and this CPU runs.
+Isa supported_isa() {
+  Isa best = Isa::baseline;
+#if defined(SPINESIM_PMB_X86_64_V3) || defined(SPINESIM_PMB_X86_64_V4)
+  __builtin_cpu_init();
 #endif
+#ifdef SPINESIM_PMB_X86_64_V3
+  if (__builtin_cpu_supports("x86-64-v3"))
+    best = Isa::x86_64_v3;
+#endif
+#ifdef SPINESIM_PMB_X86_64_V4
+  if (best == Isa::x86_64_v3 && __builtin_cpu_supports("x86-64-v4"))
+    best = Isa::x86_64_v4;
+#endif
+  return best;
+}
+
+// Decided once (a function-local static is initialised once, thread-safely): the supported
+// variant, capped by SPINESIM_KERNEL_ISA.
+Isa chosen_isa() {
+  static const Isa chosen = [] {
+    Isa isa = supported_isa();
+    if (const char* cap = std::getenv("SPINESIM_KERNEL_ISA")) {
+      if (std::strcmp(cap, "baseline") == 0)
+        isa = Isa::baseline;
+      else if (std::strcmp(cap, "x86-64-v3") == 0 && isa > Isa::x86_64_v3)
+        isa = Isa::x86_64_v3;
+    }
+    return isa;
+  }();
+  return chosen;
+}
+
+// The v4 loop's 32-bit gather offsets dim·j (pmb_force_rows_x86_64_v4.cc).
+bool v4_offsets_fit(int dim, std::size_t n_particles) {
+  return n_particles > 0 && std::size_t(dim) * n_particles < (std::size_t(1) << 31);
+}
+
+template <int dim>
+std::size_t run(Isa isa, const PmbForceRows<dim>& rows, std::size_t begin, std::size_t end,
+                int& bad) {
+  switch (isa) {
+#ifdef SPINESIM_PMB_X86_64_V4
+  case Isa::x86_64_v4:
+    if (v4_offsets_fit(dim, rows.n_particles))
+      return pmb_force_rows_x86_64_v4(rows, begin, end, bad);
+    [[fallthrough]];
+#endif
+#ifdef SPINESIM_PMB_X86_64_V3
+  case Isa::x86_64_v3:
+    return pmb_force_rows_x86_64_v3(rows, begin, end, bad);
+#endif
+  default:
+    return pmb_force_rows_body(rows, begin, end, bad);
+  }
 }
 } // namespace
 
 template <int dim>
 std::size_t pmb_force_rows(const PmbForceRows<dim>& rows, std::size_t begin, std::size_t end,
                            int& bad) {
-#ifdef SPINESIM_PMB_X86_64_V3
-  if (use_x86_64_v3())
-    return pmb_force_rows_x86_64_v3(rows, begin, end, bad);
-#endif
-  return pmb_force_rows_baseline(rows, begin, end, bad);
+  return run(chosen_isa(), rows, begin, end, bad);
 }
 
 template <int dim>
@@ -47,8 +104,33 @@ std::size_t pmb_force_rows_baseline(const PmbForceRows<dim>& rows, std::size_t b
   return pmb_force_rows_body(rows, begin, end, bad);
 }
 
-const char* pmb_force_rows_isa() {
-  return use_x86_64_v3() ? "x86-64-v3" : "baseline";
+template <int dim>
+std::size_t pmb_force_rows_variant(const char* isa, const PmbForceRows<dim>& rows,
+                                   std::size_t begin, std::size_t end, int& bad) {
+  const Isa best = supported_isa();
+  for (int v = 0; v <= int(best); ++v)
+    if (std::strcmp(isa, isa_name(Isa(v))) == 0) {
+      if (Isa(v) == Isa::x86_64_v4 && !v4_offsets_fit(dim, rows.n_particles))
+        throw std::invalid_argument("pmb_force_rows_variant: x86-64-v4 needs 0 < dim * "
+                                    "n_particles < 2^31");
+      return run(Isa(v), rows, begin, end, bad);
+    }
+  throw std::invalid_argument(std::string("pmb_force_rows_variant: '") + isa +
+                              "' is not built or not supported by this CPU");
+}
+
+std::vector<const char*> pmb_force_rows_variants() {
+  std::vector<const char*> names;
+  for (int v = 0; v <= int(supported_isa()); ++v)
+    names.push_back(isa_name(Isa(v)));
+  return names;
+}
+
+const char* pmb_force_rows_isa(int dim, std::size_t n_particles) {
+  const Isa isa = chosen_isa();
+  if (isa == Isa::x86_64_v4 && !v4_offsets_fit(dim, n_particles))
+    return isa_name(Isa::x86_64_v3);
+  return isa_name(isa);
 }
 
 template std::size_t pmb_force_rows<2>(const PmbForceRows<2>&, std::size_t, std::size_t, int&);
@@ -57,5 +139,9 @@ template std::size_t pmb_force_rows_baseline<2>(const PmbForceRows<2>&, std::siz
                                                 int&);
 template std::size_t pmb_force_rows_baseline<3>(const PmbForceRows<3>&, std::size_t, std::size_t,
                                                 int&);
+template std::size_t pmb_force_rows_variant<2>(const char*, const PmbForceRows<2>&, std::size_t,
+                                               std::size_t, int&);
+template std::size_t pmb_force_rows_variant<3>(const char*, const PmbForceRows<3>&, std::size_t,
+                                               std::size_t, int&);
 
 } // namespace spinesim::meshfree

@@ -2,16 +2,18 @@
 #define SPINESIM_MESHFREE_PMB_FORCE_ROWS_H
 
 // The PMB force loop of every explicit bond-based PD run (BondBasedPD::compute_forces and
-// compute_forces_range) over a range of particles, on raw arrays. It is compiled twice: for
-// the baseline x86-64 (or any other) target, and, where the compiler can, for x86-64-v3 (AVX2,
-// FMA) at -O3 in its own translation unit. The first call picks the variant the CPU runs;
-// SPINESIM_KERNEL_ISA=baseline forces the baseline (the same bits on every machine: FMA
-// rounds differently). Measured on the LAMMPS comparison cube (docs/benchmarks.md): the v3
-// variant is 1.3x the baseline, all of it from FMA, VEX encoding and -O3 scheduling of the
-// same scalar loop; the order of operations per particle is the same in both.
+// compute_forces_range) over a range of particles, on raw arrays. It is compiled up to three
+// times: for the baseline x86-64 (or any other) target and, where the compiler can, for
+// x86-64-v3 (AVX2, FMA) and x86-64-v4 (AVX-512), each in its own translation unit. The first
+// call picks the highest variant the CPU runs; SPINESIM_KERNEL_ISA=baseline or x86-64-v3 caps
+// it (baseline: the same bits on every machine, FMA rounds differently). Measured on the
+// LAMMPS comparison cube (docs/benchmarks.md): v3 is 1.3x the baseline (FMA, VEX encoding,
+// -O3 scheduling of the same loop), v4 (hardware gathers, 8 bonds per vector) about 1.7x v3.
+// Every variant sums each particle's row on its own, so forces never depend on the threads.
 
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 namespace spinesim::meshfree {
 
@@ -28,6 +30,10 @@ struct PmbForceRows {
   const double* kb;       // bond stiffness k_ij [N/m^4]
   std::uint8_t* broken;   // bond state, written when a bond breaks
   double s0;              // critical stretch (+inf: no breaking)
+  // Particles the neighbour indices refer to (owned and ghosts). The x86-64-v4 variant gathers
+  // with 32-bit offsets dim·j, so it runs only when dim·n_particles < 2^31; 0 (unknown) keeps
+  // it off.
+  std::size_t n_particles = 0;
 };
 
 // Forces on particles [begin, end); breaks bonds whose stretch exceeds s0. Returns the bond
@@ -42,8 +48,18 @@ template <int dim>
 std::size_t pmb_force_rows_baseline(const PmbForceRows<dim>& rows, std::size_t begin,
                                     std::size_t end, int& bad);
 
-// The variant pmb_force_rows runs on this machine: "x86-64-v3" or "baseline".
-const char* pmb_force_rows_isa();
+// One named variant ("baseline", "x86-64-v3", "x86-64-v4"), for comparing them (tests). Throws
+// std::invalid_argument for a name this build or this CPU cannot run.
+template <int dim>
+std::size_t pmb_force_rows_variant(const char* isa, const PmbForceRows<dim>& rows,
+                                   std::size_t begin, std::size_t end, int& bad);
+
+// The variants this build has and this CPU runs, baseline first.
+std::vector<const char*> pmb_force_rows_variants();
+
+// The variant pmb_force_rows runs on this machine for rows of n particles of dimension dim:
+// "x86-64-v4", "x86-64-v3" or "baseline".
+const char* pmb_force_rows_isa(int dim = 3, std::size_t n_particles = 1);
 
 } // namespace spinesim::meshfree
 

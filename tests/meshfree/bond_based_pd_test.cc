@@ -12,9 +12,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <random>
+#include <stdexcept>
+#include <string>
 
 using namespace spinesim;
 using namespace spinesim::meshfree;
@@ -430,9 +433,10 @@ void check_bond_energies_sum_to_strain_energy() {
   EXPECT_LE(asymmetry, 1e-12 * largest);
 }
 
-// The force loop's two compiled variants (meshfree/pmb_force_rows.h) are the same arithmetic:
-// forces agree to round-off, the same bonds break. On a CPU without x86-64-v3 the dispatched
-// variant is the baseline and this checks the dispatch alone.
+// The force loop's compiled variants (meshfree/pmb_force_rows.h) are the same arithmetic:
+// forces agree to round-off, the same bonds break. Every variant this CPU runs is compared
+// with the baseline, and the dispatched one is among them; on a CPU without x86-64-v3 only the
+// baseline runs and this checks the dispatch alone.
 template <int dim>
 void check_force_loop_variants_agree() {
   const double h = 1e-3;
@@ -442,10 +446,17 @@ void check_force_loop_variants_agree() {
   BondBasedPD<dim> pd(pd_parameters<dim>("gaussian", 0, 3.015, true, true), 50e9, 0.25);
   auto bonds = NeighborSearch<dim>(pd.neighbor_options(h)).build(p);
   pd.initialise(p, bonds);
-  std::vector<double> f[2];
-  std::vector<std::uint8_t> broken[2];
-  std::size_t broke[2];
-  for (int variant = 0; variant < 2; ++variant) {
+  const std::vector<const char*> variants = pmb_force_rows_variants();
+  ASSERT_FALSE(variants.empty());
+  EXPECT_STREQ(variants.front(), "baseline");
+  const std::string dispatched = pmb_force_rows_isa(dim, p.size());
+  EXPECT_TRUE(std::any_of(variants.begin(), variants.end(), [&](const char* v) {
+    return dispatched == v;
+  })) << dispatched;
+  std::vector<std::vector<double>> f;
+  std::vector<std::vector<std::uint8_t>> broken;
+  std::vector<std::size_t> broke;
+  for (const char* variant : variants) {
     auto b = bonds;
     std::vector<double> force(dim * p.size());
     // s0 between the smallest and largest stretch (displacements up to 1 % of h, bonds of at
@@ -459,27 +470,36 @@ void check_force_loop_variants_agree() {
                                  b.length.data(),
                                  pd.bond_stiffness().data(),
                                  b.broken.data(),
-                                 5e-3};
+                                 5e-3,
+                                 p.size()};
     int bad = 0;
-    broke[variant] = variant == 0 ? pmb_force_rows_baseline(rows, 0, p.size(), bad)
-                                  : pmb_force_rows(rows, 0, p.size(), bad);
-    EXPECT_EQ(bad, 0);
-    f[variant] = force;
-    broken[variant] = b.broken;
+    // Two calls on halves: a row's forces must not depend on where a range starts.
+    const std::size_t half = p.size() / 2;
+    broke.push_back(pmb_force_rows_variant(variant, rows, 0, half, bad) +
+                    pmb_force_rows_variant(variant, rows, half, p.size(), bad));
+    EXPECT_EQ(bad, 0) << variant;
+    f.push_back(force);
+    broken.push_back(b.broken);
   }
   EXPECT_GT(broke[0], 0u);
   EXPECT_LT(broke[0], bonds.n_bonds());
-  EXPECT_EQ(broke[0], broke[1]);
-  EXPECT_EQ(broken[0], broken[1]);
   double scale = 0;
   for (double v : f[0])
     scale = std::max(scale, std::abs(v));
   EXPECT_GT(scale, 0);
-  // FMA rounds once where the baseline rounds twice: ~1 ulp per operation, amplified by the
-  // cancellation in e = |y| − |ξ| (|ξ|/e ≲ 1e3 here) and summed over ~30-120 bonds: < 1e-11.
-  for (std::size_t c = 0; c < f[0].size(); ++c)
-    ASSERT_NEAR(f[1][c], f[0][c], 1e-11 * scale)
-        << "component " << c << ", dispatched variant " << pmb_force_rows_isa();
+  for (std::size_t v = 1; v < variants.size(); ++v) {
+    EXPECT_EQ(broke[v], broke[0]) << variants[v];
+    EXPECT_EQ(broken[v], broken[0]) << variants[v];
+    // FMA rounds once where the baseline rounds twice, and x86-64-v4 sums a row in 8 lanes:
+    // ~1 ulp per operation, amplified by the cancellation in e = |y| − |ξ| (|ξ|/e ≲ 1e3 here)
+    // and summed over ~30-120 bonds: < 1e-11.
+    for (std::size_t c = 0; c < f[0].size(); ++c)
+      ASSERT_NEAR(f[v][c], f[0][c], 1e-11 * scale) << "component " << c << ", " << variants[v];
+  }
+  // A name this build or CPU lacks is refused, not silently replaced.
+  int bad = 0;
+  const PmbForceRows<dim> none{};
+  EXPECT_THROW(pmb_force_rows_variant("x86-64-v9", none, 0, 0, bad), std::invalid_argument);
 }
 
 TEST(BondBasedPD, ForceLoopVariantsAgree2D) {

@@ -30,3 +30,14 @@ spinesim_add_scene_test(meshfree.pd_explicit_throughput_energy SCENE ${_bench}/p
   SET "Benchmark/Lattice points per side=10" "Benchmark/Steps=200" "Benchmark/Critical stretch=0"
   EXPECT "status==ok;bonds_broken<=0;momentum_drift<=1e-12;energy_relative_change<=1e-2;energy_relative_change>=-1e-2"
   LABELS "scene;meshfree")
+
+# The LAMMPS ratio itself: spinesim and LAMMPS peri/pmb back to back on the same cube, 5
+# same-minute pairs on 1 and on 2 cores; fails unless both medians reach 8x (the target of
+# docs/benchmarks.md) or LAMMPS is missing. Needs `apt-get install lammps`. Known to fall short
+# today (medians 5.4 and 5.9 with the x86-64-v4 loop, docs/benchmarks.md), hence known_failure.
+add_test(NAME benchmark.pd_lammps_ratio
+         COMMAND ${CMAKE_COMMAND} -E env SPINESIM=$<TARGET_FILE:spinesim> MIN_RATIO=8 "CORES=1 2"
+                 OUT=${CMAKE_CURRENT_BINARY_DIR}/runs/benchmark.pd_lammps_ratio
+                 bash ${_bench}/lammps/run_lammps_comparison.sh 30 200 5)
+set_tests_properties(benchmark.pd_lammps_ratio PROPERTIES LABELS "benchmark;known_failure"
+                     TIMEOUT 1800 RUN_SERIAL TRUE)

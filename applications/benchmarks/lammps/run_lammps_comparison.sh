@@ -6,7 +6,8 @@
 #
 # Environment: SPINESIM (default: <repo>/build/bin/spinesim), LMP (default: lmp), MPIRUN
 # (default: mpirun), CORES (default: "1 2"), OUT (default: a fresh directory under /tmp),
-# OMP_WAIT_POLICY for spinesim (default: passive).
+# OMP_WAIT_POLICY for spinesim (default: passive), MIN_RATIO (when set, exit 1 unless every
+# core count's median ratio reaches it).
 # spinesim uses OMP_NUM_THREADS threads, LAMMPS (this build has no OPENMP package) MPI ranks.
 # Each repeat is a same-minute pair (spinesim, then LAMMPS); the script prints every pair's
 # ratio with the 1-minute load and the min / median / max ratio per core count.
@@ -44,6 +45,7 @@ echo "# host $(hostname), $(nproc) cores; load before: $(uptime | sed 's/.*load 
 echo "# output in $OUT"
 echo "# each repeat runs spinesim then LAMMPS back to back; ratio = spinesim / LAMMPS particle-steps/s"
 printf "%-6s %-7s %-16s %-16s %-8s %s\n" cores repeat spinesim_ps/s lammps_ps/s ratio "load(1min) before/after"
+failed=""
 for cores in $CORES; do
   ratios=""
   for r in $(seq 1 "$repeats"); do
@@ -66,8 +68,13 @@ for cores in $CORES; do
     ratios="$ratios $ratio"
     printf "%-6s %-7s %-16.4g %-16.4g %-8s %s / %s\n" "$cores" "$r" "$ours" "$theirs" "$ratio" "$before" "$(load1)"
   done
-  echo "$ratios" | tr ' ' '\n' | sed '/^$/d' | sort -g | awk -v c="$cores" '{ a[++n] = $1 }
-    END { printf "# %s core(s): ratio min %s, median %s, max %s over %d repeat(s)\n", c, a[1], a[int((n + 1) / 2)], a[n], n }'
+  summary=$(echo "$ratios" | tr ' ' '\n' | sed '/^$/d' | sort -g | awk -v c="$cores" '{ a[++n] = $1 }
+    END { printf "# %s core(s): ratio min %s, median %s, max %s over %d repeat(s)\n", c, a[1], a[int((n + 1) / 2)], a[n], n }')
+  echo "$summary"
+  median=$(echo "$summary" | sed 's/.*median \([0-9.]*\),.*/\1/')
+  if [ -n "${MIN_RATIO:-}" ] && ! awk -v m="$median" -v t="$MIN_RATIO" 'BEGIN { exit !(m + 0 >= t + 0 && m != "") }'; then
+    failed="$failed $cores"
+  fi
 done
 
 # Same physics: the final energies (per unit particle volume) of the last 1-core runs.
@@ -80,3 +87,7 @@ awk -v k="$(sed -n 's/^ke //p' "$ref")" -v p="$(sed -n 's/^pe //p' "$ref")" -v K
     printf "# final energies per particle volume [J/m^3]: spinesim ke %.9g pe %.9g, LAMMPS ke %.9g pe %.9g\n", k, p, K, P
     printf "# relative difference of ke + pe: %.3g (spinesim broke %d bonds)\n", ((k + p) - (K + P)) / (K + P), nb
   }'
+if [ -n "$failed" ]; then
+  echo "# FAIL: median ratio below MIN_RATIO=$MIN_RATIO on core count(s):$failed"
+  exit 1
+fi

@@ -1,0 +1,112 @@
+// pmb_force_rows for x86-64-v4 (AVX-512): 8 bonds of a row per vector, written with intrinsics.
+// meshfree/CMakeLists.txt compiles this file alone with -march=x86-64-v4 and defines
+// SPINESIM_PMB_X86_64_V4 where the compiler takes it. Called only after the CPU has been checked
+// (pmb_force_rows.cc).
+//
+// Why this form (measured on the LAMMPS comparison cube, docs/benchmarks.md): the blocked loop
+// of pmb_force_rows_body.h spends its time moving gathered scalars in and out of vector
+// registers; here the neighbour coordinates come with hardware gathers straight into 8-lane
+// registers, square root, division and breaking test run on 8 bonds at once, and the tail of a
+// row is a lane mask instead of a scalar loop.
+//
+// The arithmetic per bond is the baseline's: y = (x_j − x_i) + (u_j − u_i), |y|² summed in the
+// neighbour search's order (so a particle at rest feels exactly zero force), e = |y| − |ξ|,
+// a = k (e/|y|), breaking where e > s0 |ξ|. Only the force sum differs: each of the 8 lanes sums
+// its bonds with FMA, and the lanes are added in a fixed tree. The order depends on the row
+// alone, so the forces are independent of the thread count and of how rows are split.
+
+#ifdef SPINESIM_PMB_X86_64_V4
+
+#include "meshfree/pmb_force_rows.h"
+
+// GCC 12 warns inside its own AVX-512 headers (the deliberately undefined halves of
+// _mm512_reduce_add_pd and of the extracts; GCC bug 105593).
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#include <immintrin.h>
+
+#include <cmath>
+
+namespace spinesim::meshfree {
+namespace {
+
+template <int dim>
+std::size_t rows_avx512(const PmbForceRows<dim>& r, std::size_t begin, std::size_t end, int& bad) {
+  const double* const x = r.x;
+  const double* const u = r.u;
+  const std::size_t* const off = r.off;
+  const unsigned int* const nb = r.nb;
+  const double* const len = r.len;
+  const double* const kb = r.kb;
+  std::uint8_t* const broken = r.broken;
+  const __m512d s0 = _mm512_set1_pd(r.s0);
+  const __m512d zero = _mm512_setzero_pd();
+  const __m128i one = _mm_set1_epi8(1);
+  std::size_t total = 0;
+  for (std::size_t i = begin; i < end; ++i) {
+    __m512d xi[dim], ui[dim], acc[dim];
+    for (unsigned int d = 0; d < dim; ++d) {
+      xi[d] = _mm512_set1_pd(x[dim * i + d]);
+      ui[d] = _mm512_set1_pd(u[dim * i + d]);
+      acc[d] = zero;
+    }
+    const std::size_t row_end = off[i + 1];
+    for (std::size_t k = off[i]; k < row_end; k += 8) {
+      const std::size_t left = row_end - k;
+      const __mmask8 lanes = left >= 8 ? __mmask8(0xff) : __mmask8((1u << left) - 1u);
+      // dim·j as 32-bit gather offsets: PmbForceRows::n_particles bounds dim·n below 2^31
+      // (pmb_force_rows.cc falls back to the x86-64-v3 loop otherwise).
+      __m256i j = _mm256_maskz_loadu_epi32(lanes, nb + k);
+      j = dim == 3 ? _mm256_add_epi32(j, _mm256_slli_epi32(j, 1)) : _mm256_slli_epi32(j, 1);
+      __m512d y[dim];
+      for (unsigned int d = 0; d < dim; ++d) {
+        const __m512d xj = _mm512_mask_i32gather_pd(zero, lanes, j, x + d, 8);
+        const __m512d uj = _mm512_mask_i32gather_pd(zero, lanes, j, u + d, 8);
+        y[d] = _mm512_add_pd(_mm512_sub_pd(xj, xi[d]), _mm512_sub_pd(uj, ui[d]));
+      }
+      __m512d l2 = _mm512_mul_pd(y[0], y[0]);
+      for (unsigned int d = 1; d < dim; ++d)
+        l2 = _mm512_add_pd(l2, _mm512_mul_pd(y[d], y[d]));
+      const __m512d l = _mm512_sqrt_pd(l2);
+      const __m512d lk = _mm512_maskz_loadu_pd(lanes, len + k);
+      const __m512d e = _mm512_sub_pd(l, lk);
+      const __mmask8 breaking =
+          _mm512_mask_cmp_pd_mask(lanes, e, _mm512_mul_pd(s0, lk), _CMP_GT_OQ);
+      const __m512d a = _mm512_mul_pd(_mm512_maskz_loadu_pd(lanes, kb + k), _mm512_div_pd(e, l));
+      const __m128i flags = _mm_maskz_loadu_epi8(lanes, broken + k);
+      const __mmask8 was = __mmask8(_mm_test_epi8_mask(flags, flags));
+      const __mmask8 now = was | breaking;
+      if (now != was) { // rare: write the flags of the bonds breaking now
+        _mm_mask_storeu_epi8(broken + k, lanes, _mm_maskz_mov_epi8(now, one));
+        total += std::size_t(__builtin_popcount(unsigned(now & ~was)));
+      }
+      const __mmask8 live = lanes & __mmask8(~now);
+      for (unsigned int d = 0; d < dim; ++d)
+        acc[d] = _mm512_mask3_fmadd_pd(a, y[d], acc[d], live);
+    }
+    const double V = r.V[i];
+    for (unsigned int d = 0; d < dim; ++d) {
+      const double fd = V * _mm512_reduce_add_pd(acc[d]);
+      r.f[dim * i + d] = fd;
+      if (!std::isfinite(fd))
+        bad = 1;
+    }
+  }
+  return total;
+}
+
+} // namespace
+
+template <int dim>
+std::size_t pmb_force_rows_x86_64_v4(const PmbForceRows<dim>& rows, std::size_t begin,
+                                     std::size_t end, int& bad) {
+  return rows_avx512(rows, begin, end, bad);
+}
+
+template std::size_t pmb_force_rows_x86_64_v4<2>(const PmbForceRows<2>&, std::size_t, std::size_t,
+                                                 int&);
+template std::size_t pmb_force_rows_x86_64_v4<3>(const PmbForceRows<3>&, std::size_t, std::size_t,
+                                                 int&);
+
+} // namespace spinesim::meshfree
+
+#endif
