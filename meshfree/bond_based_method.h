@@ -44,6 +44,9 @@ class BondBasedMethod : public ParticleMethod<dim> {
   std::optional<double> implied_poisson_ratio() const override {
     return implied_poisson_ratio(pd_.parameters().plane_model);
   }
+  std::size_t memory_bytes() const override {
+    return pd_.bond_stiffness().capacity() * sizeof(double) + driven_.capacity();
+  }
   std::vector<std::string> take_messages() override {
     std::vector<std::string> m;
     m.swap(messages_);

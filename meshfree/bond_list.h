@@ -38,6 +38,11 @@ struct BondList {
   }
   double surface(std::size_t k) const { return surface_factor.empty() ? 1.0 : surface_factor[k]; }
   std::size_t n_broken() const;
+  // Drops the rows of particles n and above (they keep empty rows) and releases their memory:
+  // for a rank that sums forces only for its first n (owned) particles.
+  void keep_rows(unsigned int n);
+  // Bytes held by the arrays (capacity).
+  std::size_t memory_bytes() const;
 };
 
 } // namespace spinesim::meshfree

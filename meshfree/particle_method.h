@@ -154,6 +154,9 @@ class ParticleMethod {
   virtual void load(std::istream&) {}
   // Messages for the run log since the last call (e.g. particles that lost their family).
   virtual std::vector<std::string> take_messages() { return {}; }
+  // Bytes of the method's own per-particle and per-bond arrays (capacities; heap memory inside
+  // material states not counted). 0 for a method that does not count them.
+  virtual std::size_t memory_bytes() const { return 0; }
 
   // Whether a bond that breaks changes forces beyond its two ends' rows, so every rank holding
   // a row of either end must learn of it (SPG: the pair leaves both RK shape-function rows,

@@ -2,6 +2,7 @@
 
 #include <deal.II/base/data_out_base.h>
 
+#include <algorithm>
 #include <fstream>
 #include <tuple>
 
@@ -12,7 +13,7 @@ namespace {
 template <int dim>
 class ParticleDataOut : public dealii::DataOutInterface<0, dim> {
  public:
-  explicit ParticleDataOut(const ParticleSet<dim>& p) {
+  ParticleDataOut(const ParticleSet<dim>& p, unsigned int count) {
     names_.clear();
     for (const char* vec : {"displacement", "velocity"})
       for (unsigned int d = 0; d < dim; ++d)
@@ -23,8 +24,8 @@ class ParticleDataOut : public dealii::DataOutInterface<0, dim> {
     for (const auto& f : fields)
       names_.push_back(f);
 
-    patches_.resize(p.size());
-    for (unsigned int i = 0; i < p.size(); ++i) {
+    patches_.resize(std::min(count, p.size()));
+    for (unsigned int i = 0; i < patches_.size(); ++i) {
       auto& patch = patches_[i];
       patch.vertices[0] = p.current_position(i);
       patch.patch_index = i;
@@ -64,8 +65,9 @@ class ParticleDataOut : public dealii::DataOutInterface<0, dim> {
 } // namespace
 
 template <int dim>
-void write_particles_vtu(const ParticleSet<dim>& particles, const std::string& file_name) {
-  ParticleDataOut<dim> out(particles);
+void write_particles_vtu(const ParticleSet<dim>& particles, const std::string& file_name,
+                         unsigned int count) {
+  ParticleDataOut<dim> out(particles, count);
   std::ofstream file(file_name);
   dealii::DataOutBase::VtkFlags flags;
   flags.compression_level = dealii::DataOutBase::VtkFlags::best_speed; // see mechanics output
@@ -73,7 +75,19 @@ void write_particles_vtu(const ParticleSet<dim>& particles, const std::string& f
   out.write_vtu(file);
 }
 
-template void write_particles_vtu(const ParticleSet<2>&, const std::string&);
-template void write_particles_vtu(const ParticleSet<3>&, const std::string&);
+template <int dim>
+void write_particles_pvtu(const ParticleSet<dim>& particles, const std::string& file_name,
+                          const std::vector<std::string>& pieces) {
+  ParticleDataOut<dim> out(particles, 0); // the field names only
+  std::ofstream file(file_name);
+  out.write_pvtu_record(file, pieces);
+}
+
+template void write_particles_vtu(const ParticleSet<2>&, const std::string&, unsigned int);
+template void write_particles_vtu(const ParticleSet<3>&, const std::string&, unsigned int);
+template void write_particles_pvtu(const ParticleSet<2>&, const std::string&,
+                                   const std::vector<std::string>&);
+template void write_particles_pvtu(const ParticleSet<3>&, const std::string&,
+                                   const std::vector<std::string>&);
 
 } // namespace spinesim::meshfree

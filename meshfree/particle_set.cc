@@ -166,6 +166,20 @@ void ParticleSet<dim>::set_density(double rho) {
 }
 
 template <int dim>
+std::size_t ParticleSet<dim>::memory_bytes() const {
+  std::size_t bytes =
+      x_.capacity() * sizeof(dealii::Point<dim>) +
+      (u_.capacity() + v_.capacity() + a_.capacity() + f_.capacity() + fext_.capacity()) *
+          sizeof(Vector) +
+      (volume_.capacity() + density_.capacity() + temperature_.capacity() + damage_.capacity()) *
+          sizeof(double) +
+      material_id_.capacity() * sizeof(unsigned int) + fixed_.capacity();
+  for (const auto& [name, field] : scalar_fields_)
+    bytes += field.capacity() * sizeof(double);
+  return bytes;
+}
+
+template <int dim>
 double ParticleSet<dim>::kinetic_energy() const {
   double e = 0;
   for (unsigned int i = 0; i < size(); ++i)

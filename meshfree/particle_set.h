@@ -85,6 +85,8 @@ class ParticleSet {
 
   void set_density(double rho);
   double kinetic_energy() const; // ½ Σ m |v|² [J]
+  // Bytes held by the arrays (capacity), scalar fields included.
+  std::size_t memory_bytes() const;
 
   // Whole arrays, for loops.
   const std::vector<dealii::Point<dim>>& reference_positions() const { return x_; }

@@ -69,17 +69,18 @@ CrackPath<dim>::CrackPath(const CrackOutputParameters& parameters) : prm_(parame
 template <int dim>
 void CrackPath<dim>::update(const std::vector<dealii::Point<dim>>& positions,
                             const std::vector<double>& damage,
-                            const std::vector<std::uint8_t>& counted, double time) {
+                            const std::vector<std::uint8_t>& counted, double time,
+                            const std::vector<std::uint64_t>* keys) {
   for (unsigned int i = 0; i < positions.size(); ++i)
     if (counted[i] && damage[i] >= prm_.damage_threshold)
-      failure_time_.emplace(i, time);
+      failure_time_.emplace(keys ? (*keys)[i] : i, time);
 }
 
 template <int dim>
-std::map<unsigned int, double> CrackPath<dim>::gathered(MPI_Comm comm) const {
-  const std::vector<std::pair<unsigned int, double>> mine(failure_time_.begin(),
-                                                          failure_time_.end());
-  std::map<unsigned int, double> all;
+std::map<std::uint64_t, double> CrackPath<dim>::gathered(MPI_Comm comm) const {
+  const std::vector<std::pair<std::uint64_t, double>> mine(failure_time_.begin(),
+                                                           failure_time_.end());
+  std::map<std::uint64_t, double> all;
   for (const auto& part : dealii::Utilities::MPI::all_gather(comm, mine))
     for (const auto& [i, t] : part) {
       const auto [it, inserted] = all.emplace(i, t);
@@ -91,13 +92,25 @@ std::map<unsigned int, double> CrackPath<dim>::gathered(MPI_Comm comm) const {
 
 template <int dim>
 std::string CrackPath<dim>::csv(const std::vector<dealii::Point<dim>>& positions,
-                                const std::vector<double>& damage, MPI_Comm comm) const {
+                                const std::vector<double>& damage, MPI_Comm comm,
+                                const std::vector<std::uint64_t>* keys) const {
   std::ostringstream out;
   out.precision(10);
   for (unsigned int d = 0; d < dim; ++d)
     out << axes[d] << "_m,";
   out << "damage,failure_time_s\n";
-  for (const auto& [i, t] : gathered(comm)) {
+  std::map<std::uint64_t, unsigned int> index; // key -> position in the arrays
+  if (keys)
+    for (unsigned int i = 0; i < keys->size(); ++i)
+      index.emplace((*keys)[i], i);
+  for (const auto& [key, t] : gathered(comm)) {
+    unsigned int i = static_cast<unsigned int>(key);
+    if (keys) {
+      const auto it = index.find(key);
+      if (it == index.end())
+        continue;
+      i = it->second;
+    }
     for (unsigned int d = 0; d < dim; ++d)
       out << positions[i][d] << ",";
     out << damage[i] << "," << t << "\n";
@@ -109,8 +122,9 @@ template <int dim>
 void CrackPath<dim>::add_figures(framework::Summary& s,
                                  const std::vector<dealii::Point<dim>>& positions,
                                  const std::vector<double>& damage,
-                                 const std::vector<std::uint8_t>& counted, MPI_Comm comm) const {
-  add_direction_figures(s, positions, damage, counted, comm);
+                                 const std::vector<std::uint8_t>& counted, MPI_Comm comm,
+                                 const std::vector<std::uint64_t>* keys) const {
+  add_direction_figures(s, positions, damage, counted, comm, keys);
   if (along_ < 0)
     return;
   double lo = 0, hi = 0, path_sq = 0;
@@ -134,15 +148,15 @@ template <int dim>
 void CrackPath<dim>::add_direction_figures(framework::Summary& s,
                                            const std::vector<dealii::Point<dim>>& positions,
                                            const std::vector<double>& damage,
-                                           const std::vector<std::uint8_t>& counted,
-                                           MPI_Comm comm) const {
+                                           const std::vector<std::uint8_t>& counted, MPI_Comm comm,
+                                           const std::vector<std::uint64_t>* keys) const {
   const auto times = gathered(comm); // every rank's particles
   std::vector<dealii::Point<dim>> cracked, grown;
   for (unsigned int i = 0; i < positions.size(); ++i)
     if (counted[i] && damage[i] >= prm_.damage_threshold) {
       cracked.push_back(positions[i]);
       // Cracked after the start: not part of a pre-crack (its failure time is 0).
-      const auto it = times.find(i);
+      const auto it = times.find(keys ? (*keys)[i] : i);
       if (it == times.end() || it->second > 0.0)
         grown.push_back(positions[i]);
     }
@@ -204,7 +218,7 @@ template <int dim>
 void CrackPath<dim>::from_json(const nlohmann::json& j) {
   failure_time_.clear();
   for (const auto& entry : j)
-    failure_time_.emplace(entry.at(0).get<unsigned int>(), entry.at(1).get<double>());
+    failure_time_.emplace(entry.at(0).get<std::uint64_t>(), entry.at(1).get<double>());
 }
 
 template class CrackPath<2>;

@@ -40,20 +40,27 @@ class CrackPath {
   // InvalidInput naming Simulation/Crack line if it cannot be read for this dimension.
   explicit CrackPath(const CrackOutputParameters& parameters);
 
+  // Every function below names particle i by keys[i] when `keys` is given (a distributed
+  // zone's lattice ids, unique over the ranks), by i otherwise.
+  //
   // Notes the particles (those with `counted` set) whose damage reached the threshold by
   // `time`; the first time is kept.
   void update(const std::vector<dealii::Point<dim>>& positions, const std::vector<double>& damage,
-              const std::vector<std::uint8_t>& counted, double time);
+              const std::vector<std::uint8_t>& counted, double time,
+              const std::vector<std::uint64_t>* keys = nullptr);
   // x, y[, z] (reference position), damage now, failure time, one row per cracked particle of
-  // any rank (collective; `damage` current for every particle on every rank).
+  // any rank (collective; `damage` current, on every rank, for every particle that reached the
+  // threshold).
   std::string csv(const std::vector<dealii::Point<dim>>& positions,
-                  const std::vector<double>& damage, MPI_Comm comm) const;
+                  const std::vector<double>& damage, MPI_Comm comm,
+                  const std::vector<std::uint64_t>* keys = nullptr) const;
+  double damage_threshold() const { return prm_.damage_threshold; }
   // With a crack line: crack_extent_min_<along>_m, crack_extent_max_<along>_m and
   // crack_path_rms_<across>_m over the counted particles at or past the threshold now.
   // Collective (the grown_crack_ figures need every rank's failure times).
   void add_figures(framework::Summary& summary, const std::vector<dealii::Point<dim>>& positions,
                    const std::vector<double>& damage, const std::vector<std::uint8_t>& counted,
-                   MPI_Comm comm) const;
+                   MPI_Comm comm, const std::vector<std::uint64_t>* keys = nullptr) const;
   // Whatever the crack's direction: crack_particles, and for two or more cracked particles
   // crack_angle_deg (principal axis of the cracked particles in the x-y plane, from the x
   // axis, in (−90, 90]), crack_length_m along it and the tips crack_tip_{1,2}_<axis>_m. The
@@ -62,7 +69,8 @@ class CrackPath {
   void add_direction_figures(framework::Summary& summary,
                              const std::vector<dealii::Point<dim>>& positions,
                              const std::vector<double>& damage,
-                             const std::vector<std::uint8_t>& counted, MPI_Comm comm) const;
+                             const std::vector<std::uint8_t>& counted, MPI_Comm comm,
+                             const std::vector<std::uint64_t>* keys = nullptr) const;
   // Failure times of every rank (collective), for checkpoints; from_json takes them all.
   nlohmann::json to_json(MPI_Comm comm) const;
   void from_json(const nlohmann::json& j);
@@ -71,11 +79,11 @@ class CrackPath {
   CrackOutputParameters prm_;
   void direction_figures(framework::Summary& summary, const std::string& prefix,
                          const std::vector<dealii::Point<dim>>& cracked) const;
-  int along_ = -1, across_ = -1;                // coordinate indices of the crack line, -1 = none
-  double offset_ = 0;                           // the line's value of the across coordinate [m]
-  std::map<unsigned int, double> failure_time_; // particle -> first time at threshold [s]
+  int along_ = -1, across_ = -1;                 // coordinate indices of the crack line, -1 = none
+  double offset_ = 0;                            // the line's value of the across coordinate [m]
+  std::map<std::uint64_t, double> failure_time_; // particle -> first time at threshold [s]
   // The failure times of all ranks (the earliest where two ranks saw the same particle).
-  std::map<unsigned int, double> gathered(MPI_Comm comm) const;
+  std::map<std::uint64_t, double> gathered(MPI_Comm comm) const;
 };
 
 } // namespace spinesim::applications

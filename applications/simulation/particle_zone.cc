@@ -3,6 +3,7 @@
 #include "applications/framework/parse_section.h"
 #include "applications/framework/run_context.h"
 #include "applications/simulation/zone_energy.h"
+#include "applications/simulation/zone_partition.h"
 #include "base/exceptions.h"
 #include "base/expression_function.h"
 #include "base/list_parsing.h"
@@ -179,9 +180,21 @@ struct ParticleZone<dim>::Impl {
   std::size_t broke_since_step_check = 0; // bond ends broken since the stable step was taken
   bool account_restored = true;           // false: a restart from a checkpoint without the account
   unsigned int explicit_steps = 0, relaxation_iterations = 0;
-  std::size_t broken_initially = 0;
+  std::size_t broken_initially = 0; // bond ends cut by pre-cracks, over all ranks
+  std::uint64_t n_bonds_global = 0; // pairs, over all ranks
+  std::uint64_t n_global = 0;       // particles, over all ranks
+
+  // Distributed zone (zone_partition.h): owned particles first, ghosts after.
+  MPI_Comm comm = MPI_COMM_SELF;
+  std::unique_ptr<ZonePartition<dim>> partition;
+  unsigned int n_owned() const { return partition ? partition->n_owned() : particles.size(); }
+  double sum(double x) const { return partition ? dealii::Utilities::MPI::sum(x, comm) : x; }
+  double max(double x) const { return partition ? dealii::Utilities::MPI::max(x, comm) : x; }
+  double min(double x) const { return partition ? dealii::Utilities::MPI::min(x, comm) : x; }
 
   void compute_forces(meshfree::ParticleSet<dim>& p) {
+    if (partition) // the ghosts' displacements of this pass (drift and prescription done)
+      partition->update_ghosts(p.displacements());
     if (!account) {
       broke_since_step_check += method->compute_forces(p, bonds, damage);
       return;
@@ -200,6 +213,40 @@ struct ParticleZone<dim>::Impl {
       energy.force_pass(p, before, method->strain_energy(p, bonds), &forces_before);
     else
       energy.force_pass(p, before, before, nullptr);
+  }
+
+  // Whether lattice point x lies in the body's shape.
+  bool in_shape(const dealii::Point<dim>& x) const {
+    if (prm.shape == "box")
+      return true;
+    const unsigned int radial_dims = prm.shape == "annulus" ? 2 : dim;
+    double r2 = 0;
+    for (unsigned int d = 0; d < radial_dims; ++d)
+      r2 += (x[d] - prm.centre[d]) * (x[d] - prm.centre[d]);
+    const double r = std::sqrt(r2);
+    return r >= prm.inner_radius && r <= prm.outer_radius;
+  }
+
+  // This rank's part of the body (owned, then ghosts within ghost_reach), ghosts fixed.
+  meshfree::ParticleSet<dim> distributed_body(double ghost_reach) {
+    dealii::Point<dim> lo, hi;
+    for (unsigned int d = 0; d < dim; ++d) {
+      lo[d] = prm.lower[d];
+      hi[d] = prm.upper[d];
+    }
+    partition = std::make_unique<ZonePartition<dim>>(
+        comm, lo, hi, prm.spacing, ghost_reach,
+        [this](const dealii::Point<dim>& x) { return in_shape(x); });
+    if (dealii::Utilities::MPI::sum(partition->n_owned(), comm) == 0)
+      throw InvalidInput("Particles/Shape", prm.shape + " holds no lattice point of the box",
+                         "radii and a centre that put the shape inside the box");
+    const double volume = partition->lattice_cell_volume() * (dim == 2 ? method->thickness() : 1);
+    auto set = meshfree::ParticleSet<dim>::from_points(
+        partition->points(), std::vector<double>(partition->points().size(), volume),
+        method->thickness());
+    for (unsigned int i = partition->n_owned(); i < set.size(); ++i)
+      set.set_fixed(i); // moved by the exchange, never by the integrator
+    return set;
   }
 
   // The lattice points of the box inside the shape.
@@ -271,6 +318,10 @@ struct ParticleZone<dim>::Impl {
     }
   }
 
+  meshfree::FragmentCount fragments() const {
+    return partition ? distributed_fragments(bonds, *partition) : meshfree::count_fragments(bonds);
+  }
+
   dealii::Tensor<1, dim> reaction() const {
     dealii::Tensor<1, dim> r;
     if (prm.reaction_region < 1)
@@ -278,6 +329,9 @@ struct ParticleZone<dim>::Impl {
     // The supports balance the internal force on the prescribed particles.
     for (const unsigned int i : regions[prm.reaction_region - 1].particles)
       r -= particles.force(i);
+    if (partition) // regions list owned particles
+      for (unsigned int d = 0; d < dim; ++d)
+        r[d] = dealii::Utilities::MPI::sum(r[d], comm);
     return r;
   }
 };
@@ -325,9 +379,21 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
     lo[d] = z.prm.lower[d];
     hi[d] = z.prm.upper[d];
   }
-  z.particles = z.body();
-  z.particles.set_density(z.law.density);
+  z.comm = ctx.comm();
+  if (z.prm.shape != "box" && z.prm.centre.size() < dim)
+    throw InvalidInput("Particles/Centre", "needs one coordinate per dimension",
+                       std::to_string(dim) + " comma-separated values [m]");
   auto options = z.method->neighbor_options(z.prm.spacing);
+  // Distributed: explicit bond-based zones on more than one rank (particle_zone.h). Ghosts
+  // reach two search radii (δ plus the partial-volume shell), so the first-layer ghosts'
+  // rows are whole for the surface correction.
+  const bool distribute = ctx.n_ranks() > 1 && z.method->name() == "bond_based" &&
+                          z.prm.integration == "explicit" && !z.account;
+  if (distribute)
+    z.particles = z.distributed_body(2.0 * (options.horizon + z.prm.spacing) * (1 + 1e-9));
+  else
+    z.particles = z.body();
+  z.particles.set_density(z.law.density);
   for (std::size_t k = 0; k < z.prm.cracks.size(); ++k) {
     const std::string where = "Particles/Crack " + std::to_string(k + 1) + "/Corners";
     const auto c = parse_crack_corners(z.prm.cracks[k], where, dim);
@@ -345,10 +411,14 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
                          dim == 2 ? "two points 'x1,y1; x2,y2'" : "four points of 3 coordinates");
   }
   z.bonds = meshfree::NeighborSearch<dim>(options).build(z.particles);
-  z.broken_initially = z.bonds.n_broken();
+  if (z.partition)
+    z.bonds.keep_rows(z.partition->n_owned()); // forces are summed for owned particles only
+  z.broken_initially = std::size_t(z.sum(z.bonds.n_broken()));
+  z.n_bonds_global = std::uint64_t(z.sum(z.bonds.n_bonds())) / 2;
+  z.n_global = std::uint64_t(z.sum(z.n_owned()));
   z.method->initialise(z.particles, z.bonds);
   z.stiffness_bound = z.method->stiffness_bound(z.particles, z.bonds);
-  z.dt_stable = z.method->stable_time_step(z.particles, z.bonds, z.prm.time_step_safety);
+  z.dt_stable = z.min(z.method->stable_time_step(z.particles, z.bonds, z.prm.time_step_safety));
 
   const char letters[] = {'x', 'y', 'z'};
   for (std::size_t k = 0; k < z.prm.regions.size(); ++k) {
@@ -364,7 +434,7 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
     }
     region.values = parse_expressions<dim>(r.values, where + "/Values", region.components.size(),
                                            true, "[m], one per component");
-    for (unsigned int i = 0; i < z.particles.size(); ++i) {
+    for (unsigned int i = 0; i < z.n_owned(); ++i) {
       const auto& x = z.particles.reference_position(i);
       bool inside = true;
       for (unsigned int d = 0; d < dim; ++d)
@@ -375,7 +445,7 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
           z.particles.set_fixed(i, c);
       }
     }
-    if (region.particles.empty())
+    if (z.sum(region.particles.size()) == 0)
       throw InvalidInput(where, "holds no particle", "a box that contains lattice points");
     z.regions.push_back(std::move(region));
   }
@@ -388,10 +458,20 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
       z.energy.start(z.particles, z.method->strain_energy(z.particles, z.bonds));
     z.verlet->initialise(z.particles); // forces and accelerations at t = 0
   }
-  ctx.log() << "  particles: " << z.particles.size() << " on a lattice of spacing " << z.prm.spacing
-            << " m, " << z.bonds.n_bonds() / 2 << " bonds (" << z.broken_initially / 2
+  ctx.log() << "  particles: " << n_global_particles() << " on a lattice of spacing "
+            << z.prm.spacing << " m, " << z.n_bonds_global << " bonds (" << z.broken_initially / 2
             << " cut by pre-cracks), stable step " << z.dt_stable << " s, method "
             << z.method->name() << ", material " << z.law.describe() << "\n";
+  if (z.partition) {
+    const double owned = z.partition->n_owned(), held = z.particles.size();
+    ctx.log() << "  distributed over " << ctx.n_ranks() << " ranks on "
+              << z.partition->n_background_cells()
+              << " p4est background cells: owned particles per rank max/mean "
+              << z.max(owned) / (z.sum(owned) / ctx.n_ranks()) << ", ghosts per owned "
+              << (z.sum(held) - z.sum(owned)) / z.sum(owned) << "\n";
+  } else if (ctx.n_ranks() > 1)
+    ctx.log() << "  not distributed (only explicit bond-based zones without an energy account "
+                 "are): every rank holds and advances the whole zone\n";
   for (const auto& message : z.method->take_messages())
     ctx.log() << "  " << message << "\n";
 }
@@ -435,9 +515,14 @@ void ParticleZone<dim>::advance_to(double time) {
       z.max_speed = std::max(z.max_speed, v.norm());
     // A broken bond can stiffen a NOSB-PD family (its shape tensor shrinks), so the stable
     // step may only get smaller after breaks (bond-based PD: its bound never falls).
-    if (z.broke_since_step_check > 0) {
-      z.dt_stable = std::min(
-          z.dt_stable, z.method->stable_time_step(z.particles, z.bonds, z.prm.time_step_safety));
+    // Distributed: every rank takes the step of the run (one reduction a step).
+    const bool broke =
+        z.partition ? dealii::Utilities::MPI::logical_or(z.broke_since_step_check > 0, z.comm)
+                    : z.broke_since_step_check > 0;
+    if (broke) {
+      z.dt_stable =
+          std::min(z.dt_stable,
+                   z.min(z.method->stable_time_step(z.particles, z.bonds, z.prm.time_step_safety)));
       z.broke_since_step_check = 0;
     }
     z.time += dt;
@@ -452,13 +537,13 @@ void ParticleZone<dim>::add_history(std::vector<std::pair<std::string, double>>&
   Impl& z = *impl_;
   z.method->update_damage(z.particles, z.bonds);
   double max_damage = 0;
-  for (const double d : z.particles.damages())
-    max_damage = std::max(max_damage, d);
-  row.emplace_back("particle_kinetic_energy", z.particles.kinetic_energy());
-  row.emplace_back("particle_strain_energy", z.method->strain_energy(z.particles, z.bonds));
-  row.emplace_back("broken_bonds", double(z.bonds.n_broken() - z.broken_initially) / 2);
-  row.emplace_back("max_damage", max_damage);
-  row.emplace_back("fragments", meshfree::count_fragments(z.bonds).fragments);
+  for (unsigned int i = 0; i < z.n_owned(); ++i) // ghosts have no rows here
+    max_damage = std::max(max_damage, z.particles.damage(i));
+  row.emplace_back("particle_kinetic_energy", z.sum(z.particles.kinetic_energy()));
+  row.emplace_back("particle_strain_energy", z.sum(z.method->strain_energy(z.particles, z.bonds)));
+  row.emplace_back("broken_bonds", (z.sum(z.bonds.n_broken()) - z.broken_initially) / 2);
+  row.emplace_back("max_damage", z.max(max_damage));
+  row.emplace_back("fragments", z.fragments().fragments);
   if (z.prm.reaction_region > 0) {
     const auto r = z.reaction();
     const char* names[] = {"particle_reaction_x", "particle_reaction_y", "particle_reaction_z"};
@@ -469,7 +554,38 @@ void ParticleZone<dim>::add_history(std::vector<std::pair<std::string, double>>&
 
 template <int dim>
 std::size_t ParticleZone<dim>::n_bonds() const {
-  return impl_->bonds.n_bonds() / 2;
+  return impl_->n_bonds_global;
+}
+
+template <int dim>
+bool ParticleZone<dim>::distributed() const {
+  return impl_->partition != nullptr;
+}
+
+template <int dim>
+bool ParticleZone<dim>::is_owned(unsigned int i) const {
+  return i < impl_->n_owned();
+}
+
+template <int dim>
+const std::vector<std::uint64_t>* ParticleZone<dim>::global_ids() const {
+  return impl_->partition ? &impl_->partition->ids() : nullptr;
+}
+
+template <int dim>
+std::uint64_t ParticleZone<dim>::n_global_particles() const {
+  return impl_->n_global;
+}
+
+template <int dim>
+std::size_t ParticleZone<dim>::memory_bytes() const {
+  const Impl& z = *impl_;
+  std::size_t bytes = z.particles.memory_bytes() + z.bonds.memory_bytes() +
+                      z.method->memory_bytes() + z.stiffness_bound.capacity() * sizeof(double) +
+                      z.forces_before.capacity() * sizeof(dealii::Tensor<1, dim>);
+  for (const auto& r : z.regions)
+    bytes += r.particles.capacity() * sizeof(unsigned int);
+  return bytes + (z.partition ? z.partition->memory_bytes() : 0);
 }
 
 template <int dim>
@@ -482,24 +598,28 @@ void ParticleZone<dim>::add_figures(RunContext& ctx) const {
   const Impl& z = *impl_;
   Summary& s = ctx.summary();
   const std::string per = dim == 2 ? "/m" : "";
-  s.set_figure("particles", z.particles.size(), "-");
+  s.set_figure("particles", double(n_global_particles()), "-");
   s.set_figure("particle_spacing_m", z.prm.spacing, "m");
   unsigned int free = 0; // the particles the method solves for (no prescribed component)
-  for (unsigned int i = 0; i < z.particles.size(); ++i)
+  for (unsigned int i = 0; i < z.n_owned(); ++i)
     free += !z.particles.is_fixed(i);
-  s.set_figure("free_particles", free, "-");
-  s.set_figure("bonds", z.bonds.n_bonds() / 2, "-");
-  s.set_figure("broken_bonds", double(z.bonds.n_broken() - z.broken_initially) / 2, "-");
-  s.set_figure("particle_strain_energy", z.method->strain_energy(z.particles, z.bonds), "J");
-  s.set_figure("particle_kinetic_energy", z.particles.kinetic_energy(), "J");
+  s.set_figure("free_particles", z.sum(free), "-");
+  s.set_figure("bonds", double(z.n_bonds_global), "-");
+  s.set_figure("broken_bonds", (z.sum(z.bonds.n_broken()) - z.broken_initially) / 2, "-");
+  s.set_figure("particle_strain_energy", z.sum(z.method->strain_energy(z.particles, z.bonds)), "J");
+  s.set_figure("particle_kinetic_energy", z.sum(z.particles.kinetic_energy()), "J");
   s.set_figure("particle_stable_time_step", z.dt_stable, "s");
-  const auto pieces = meshfree::count_fragments(z.bonds);
+  // The particle data of the rank holding the most (particle_zone.h: memory_bytes).
+  s.set_figure("particle_memory_per_rank_max_bytes",
+               dealii::Utilities::MPI::max(double(memory_bytes()), ctx.comm()), "B");
+  s.set_figure("particle_ranks", z.partition ? ctx.n_ranks() : 1, "-");
+  const auto pieces = z.fragments();
   s.set_figure("fragments", pieces.fragments, "-");
   s.set_figure("isolated_particles", pieces.isolated, "-");
   s.set_figure("largest_fragment_particles", pieces.largest, "-");
   if (z.prm.integration == "explicit") {
     s.set_figure("particle_explicit_steps", z.explicit_steps, "-");
-    s.set_figure("max_particle_speed", z.max_speed, "m/s");
+    s.set_figure("max_particle_speed", z.max(z.max_speed), "m/s");
   } else
     s.set_figure("relaxation_iterations", z.relaxation_iterations, "iterations");
   if (z.prm.reaction_region > 0)
@@ -531,21 +651,43 @@ fem::EnergyBalance ParticleZone<dim>::energy_balance() const {
 template <int dim>
 std::string ParticleZone<dim>::write_output(const std::string& directory,
                                             unsigned int cycle) const {
-  const std::string name = "particles_" + dealii::Utilities::int_to_string(cycle, 4) + ".vtu";
-  meshfree::write_particles_vtu(impl_->particles, directory + "/" + name);
-  return name;
+  const std::string base = "particles_" + dealii::Utilities::int_to_string(cycle, 4);
+  if (!impl_->partition) {
+    meshfree::write_particles_vtu(impl_->particles, directory + "/" + base + ".vtu");
+    return base + ".vtu";
+  }
+  const unsigned int rank = dealii::Utilities::MPI::this_mpi_process(impl_->comm),
+                     ranks = dealii::Utilities::MPI::n_mpi_processes(impl_->comm);
+  const auto piece = [&](unsigned int r) {
+    return base + "." + dealii::Utilities::int_to_string(r, 4) + ".vtu";
+  };
+  meshfree::write_particles_vtu(impl_->particles, directory + "/" + piece(rank), impl_->n_owned());
+  if (rank == 0) {
+    std::vector<std::string> pieces;
+    for (unsigned int r = 0; r < ranks; ++r)
+      pieces.push_back(piece(r));
+    meshfree::write_particles_pvtu(impl_->particles, directory + "/" + base + ".pvtu", pieces);
+  }
+  return base + ".pvtu";
 }
 
 template <int dim>
 void ParticleZone<dim>::save(const std::string& file) const {
   const Impl& z = *impl_;
-  std::ofstream out(file, std::ios::binary);
+  const unsigned int rank = dealii::Utilities::MPI::this_mpi_process(z.comm),
+                     ranks = dealii::Utilities::MPI::n_mpi_processes(z.comm);
+  std::ofstream out(z.partition ? file + "." + std::to_string(rank) : file, std::ios::binary);
   const auto write = [&out](const void* data, std::size_t bytes) {
     out.write(static_cast<const char*>(data), bytes);
   };
   const std::uint64_t n = z.particles.size(), nb = z.bonds.n_bonds();
   write(&n, sizeof n);
   write(&nb, sizeof nb);
+  if (z.partition) { // the part of a distributed zone: restart on the same ranks only
+    const std::uint32_t r = rank, rs = ranks;
+    write(&r, sizeof r);
+    write(&rs, sizeof rs);
+  }
   write(&z.time, sizeof z.time);
   write(&z.explicit_steps, sizeof z.explicit_steps);
   write(&z.relaxation_iterations, sizeof z.relaxation_iterations);
@@ -563,15 +705,39 @@ void ParticleZone<dim>::save(const std::string& file) const {
 template <int dim>
 void ParticleZone<dim>::load(const std::string& file) {
   Impl& z = *impl_;
-  std::ifstream in(file, std::ios::binary);
+  const unsigned int rank = dealii::Utilities::MPI::this_mpi_process(z.comm),
+                     ranks = dealii::Utilities::MPI::n_mpi_processes(z.comm);
+  const std::string part = z.partition ? file + "." + std::to_string(rank) : file;
+  std::ifstream in(part, std::ios::binary);
+  if (!z.partition && !in)
+    throw InvalidInput(part,
+                       "no particle checkpoint (a distributed zone writes one file per rank, " +
+                           file + ".<rank>)",
+                       "a restart on the number of MPI ranks that wrote the checkpoint");
+  if (z.partition && !in)
+    throw InvalidInput(part,
+                       "no particle checkpoint for rank " + std::to_string(rank) +
+                           ": the checkpoint was written by a run on another number of ranks",
+                       "a restart on the number of MPI ranks that wrote the checkpoint");
   const auto read = [&in](void* data, std::size_t bytes) {
     in.read(static_cast<char*>(data), bytes);
   };
   std::uint64_t n = 0, nb = 0;
   read(&n, sizeof n);
   read(&nb, sizeof nb);
-  if (!in || n != z.particles.size() || nb != z.bonds.n_bonds())
-    throw InvalidInput(file, "particle checkpoint does not match the scene's particle zone",
+  std::uint32_t saved_rank = rank, saved_ranks = ranks;
+  if (z.partition) {
+    read(&saved_rank, sizeof saved_rank);
+    read(&saved_ranks, sizeof saved_ranks);
+  }
+  if (!in || saved_rank != rank || saved_ranks != ranks)
+    throw InvalidInput(part,
+                       "particle checkpoint written by a run on " + std::to_string(saved_ranks) +
+                           " rank(s), not distributed as this run (" + std::to_string(ranks) +
+                           " ranks)",
+                       "a restart on the number of MPI ranks that wrote the checkpoint");
+  if (n != z.particles.size() || nb != z.bonds.n_bonds())
+    throw InvalidInput(part, "particle checkpoint does not match the scene's particle zone",
                        "the checkpoint of this run, unchanged Particles parameters");
   read(&z.time, sizeof z.time);
   read(&z.explicit_steps, sizeof z.explicit_steps);

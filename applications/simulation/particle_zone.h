@@ -6,14 +6,20 @@
 // displacements of particle regions, with pre-cracks, advanced explicitly (velocity Verlet,
 // sub-stepped at the stable step) or quasi-statically (adaptive dynamic relaxation at every step).
 //
-// MPI: the particle zone is not distributed yet: every rank holds and advances the whole
-// zone identically (the loops are deterministic), and rank 0 writes its output.
+// MPI: an explicit bond-based zone is distributed (zone_partition.h): each rank holds the
+// particles of its p4est background cells and, as fixed ghosts refreshed before every force
+// pass, those within two horizons (first-layer ghosts need whole families for the surface
+// correction); bond rows exist for owned particles only, so every sum over rows counts each
+// particle once over the ranks, and each rank writes its part of the output and checkpoint.
+// Other zones (NOSB-PD, quasi-static relaxation, an energy account) are still held and advanced
+// whole and identically on every rank, and rank 0 writes their output.
 
 #include "fem/explicit_energy.h"
 #include "meshfree/particle_set.h"
 
 #include <deal.II/base/parameter_handler.h>
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <utility>
@@ -79,13 +85,25 @@ class ParticleZone {
   bool energy_account_restored() const;
   std::size_t n_bonds() const;     // bonds, each counted once
   double stable_time_step() const; // of its explicit steps [s]
-  // The zone's particles (damage as of the last add_history).
+  // The particles this rank holds (damage as of the last add_history): the whole zone, or in a
+  // distributed zone its owned particles followed by its ghosts.
   const meshfree::ParticleSet<dim>& particles() const;
-  // Writes particles_<cycle>.vtu (rank 0); returns the file name.
+  bool distributed() const;
+  // Whether this rank owns particle i (always, unless distributed).
+  bool is_owned(unsigned int i) const;
+  // Lattice ids of particles() in a distributed zone (unique over the ranks); nullptr otherwise.
+  const std::vector<std::uint64_t>* global_ids() const;
+  std::uint64_t n_global_particles() const;
+  // Bytes of particle data this rank holds: particles, bonds, the method's per-particle and
+  // per-bond arrays, the partition's exchange vectors.
+  std::size_t memory_bytes() const;
+  // Writes particles_<cycle>.vtu (not distributed: call on rank 0) or, distributed (call on
+  // every rank), one piece per rank and the .pvtu joining them; returns the file to record.
   std::string write_output(const std::string& directory, unsigned int cycle) const;
 
-  void save(const std::string& file) const; // rank 0 writes
-  void load(const std::string& file);       // every rank reads
+  // Not distributed: rank 0 writes `file`; distributed: every rank writes file.<rank>.
+  void save(const std::string& file) const;
+  void load(const std::string& file); // every rank reads
 
  private:
   struct Impl;

@@ -155,7 +155,7 @@ void Simulation<dim>::build(RunContext& ctx) {
   dealii::TimerOutput::Scope scope(ctx.timer(), "setup");
   if (particles_) {
     particles_->setup(ctx);
-    if (particles_->particles().size() == 1)
+    if (particles_->n_global_particles() == 1)
       ctx.warn("the particle zone holds a single particle: it has no bonds, so no internal "
                "force and an infinite stable step (Particles/Spacing against the box)");
   }
@@ -355,7 +355,7 @@ RunCost Simulation<dim>::planned_cost() const {
     }
   } else if (particles_) {
     const double bonds = particles_->n_bonds();
-    cost.state = dim * particles_->particles().size() + bonds;
+    cost.state = dim * double(particles_->n_global_particles()) + bonds;
     const bool explicit_steps =
         particles_->stable_time_step() > 0 &&
         prm_.get(std::vector<std::string>{"Particles"}, "Integration") == "explicit";

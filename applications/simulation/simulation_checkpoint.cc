@@ -36,7 +36,7 @@ void Simulation<dim>::write_checkpoint(unsigned int step, double time, RunContex
     mechanics_->prepare_for_serialization(mesh_file);
   if (triangulation_)
     triangulation_->save(mesh_file);
-  if (particles_ && ctx.is_root())
+  if (particles_ && (ctx.is_root() || particles_->distributed())) // distributed: a file per rank
     particles_->save((tmp_dir / "particles.bin").string());
   if (coupled_)
     coupled_->save((tmp_dir / "coupling.txt").string());

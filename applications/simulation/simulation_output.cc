@@ -15,31 +15,77 @@ using coupling::FemParticleCoupling;
 
 namespace {
 
-// The particles the crack output looks at: reference positions, damage, and which of them
-// count: every particle of a zone; the free particles of a coupled run, either those this rank
-// owns (damage current there, no communication: history rows) or all of them after
-// synchronising every particle's damage to every rank (collective: the end of the run).
+// The particles the crack output looks at: reference positions, damage, which of them count,
+// and their keys. A coupled run: the free particles, either those this rank owns (damage
+// current there, no communication: history rows) or all of them after synchronising every
+// particle's damage to every rank (collective: the end of the run). A zone held whole on every
+// rank: all its particles. A distributed zone: its owned particles keyed by lattice id, or at
+// the end of the run every rank's cracked particles gathered (collective).
 template <int dim>
 struct CrackView {
-  const std::vector<dealii::Point<dim>>& positions;
-  const std::vector<double>& damage;
+  const std::vector<dealii::Point<dim>>* positions = nullptr;
+  const std::vector<double>* damage = nullptr;
   std::vector<std::uint8_t> counted;
+  const std::vector<std::uint64_t>* keys = nullptr;
+  // Storage of a gathered view.
+  std::vector<dealii::Point<dim>> gathered_positions;
+  std::vector<double> gathered_damage;
+  std::vector<std::uint64_t> gathered_keys;
 };
 
 template <int dim>
-CrackView<dim> crack_view(const FemParticleCoupling<dim>* coupled, const ParticleZone<dim>* zone,
-                          bool owned_only) {
+void fill_crack_view(CrackView<dim>& v, const FemParticleCoupling<dim>* coupled,
+                     const ParticleZone<dim>* zone, bool owned_only, double threshold,
+                     MPI_Comm comm) {
   if (coupled) {
     if (!owned_only)
       coupled->synchronise();
     const auto& p = coupled->particles();
-    std::vector<std::uint8_t> counted(p.size());
+    v.positions = &p.reference_positions();
+    v.damage = &p.damages();
+    v.counted.resize(p.size());
     for (unsigned int i = 0; i < p.size(); ++i)
-      counted[i] = coupled->is_free(i) && (!owned_only || coupled->is_owned(i));
-    return {p.reference_positions(), p.damages(), counted};
+      v.counted[i] = coupled->is_free(i) && (!owned_only || coupled->is_owned(i));
+    return;
   }
   const auto& p = zone->particles();
-  return {p.reference_positions(), p.damages(), std::vector<std::uint8_t>(p.size(), 1)};
+  if (!zone->distributed() || owned_only) {
+    v.positions = &p.reference_positions();
+    v.damage = &p.damages();
+    v.counted.resize(p.size());
+    for (unsigned int i = 0; i < p.size(); ++i)
+      v.counted[i] = zone->is_owned(i);
+    v.keys = zone->global_ids();
+    return;
+  }
+  // key, coordinates, damage of each cracked owned particle, as doubles (keys < 2^53)
+  std::vector<double> mine;
+  for (unsigned int i = 0; i < p.size(); ++i)
+    if (zone->is_owned(i) && p.damage(i) >= threshold) {
+      mine.push_back(double((*zone->global_ids())[i]));
+      for (unsigned int d = 0; d < dim; ++d)
+        mine.push_back(p.reference_position(i)[d]);
+      mine.push_back(p.damage(i));
+    }
+  // Sorted by key: the order of the undistributed zone, so the figures' sums match it.
+  std::vector<std::pair<std::uint64_t, const double*>> entries;
+  const auto parts = dealii::Utilities::MPI::all_gather(comm, mine);
+  for (const auto& part : parts)
+    for (std::size_t k = 0; k + dim + 2 <= part.size(); k += dim + 2)
+      entries.emplace_back(static_cast<std::uint64_t>(part[k]), &part[k]);
+  std::sort(entries.begin(), entries.end());
+  for (const auto& [key, entry] : entries) {
+    v.gathered_keys.push_back(key);
+    dealii::Point<dim> x;
+    for (unsigned int d = 0; d < dim; ++d)
+      x[d] = entry[1 + d];
+    v.gathered_positions.push_back(x);
+    v.gathered_damage.push_back(entry[1 + dim]);
+  }
+  v.positions = &v.gathered_positions;
+  v.damage = &v.gathered_damage;
+  v.counted.assign(v.gathered_positions.size(), 1);
+  v.keys = &v.gathered_keys;
 }
 
 } // namespace
@@ -116,8 +162,10 @@ void Simulation<dim>::record(unsigned int step, double time, RunContext& ctx) {
     }
   }
   if (crack_ && (coupled_ || particles_)) { // damage is current: max_damage / add_history
-    const auto view = crack_view<dim>(coupled_.get(), particles_.get(), true);
-    crack_->update(view.positions, view.damage, view.counted, time);
+    CrackView<dim> view;
+    fill_crack_view<dim>(view, coupled_.get(), particles_.get(), true, crack_->damage_threshold(),
+                         ctx.comm());
+    crack_->update(*view.positions, *view.damage, view.counted, time, view.keys);
   }
   ctx.history().add(row);
 }
@@ -142,7 +190,7 @@ void Simulation<dim>::write_output(unsigned int step, double time, RunContext& c
   }
   if (particles_) {
     std::string name;
-    if (ctx.is_root())
+    if (ctx.is_root() || particles_->distributed()) // distributed: a piece per rank
       name = particles_->write_output(dir, output_cycle_);
     particles_pvd_.add(time, name);
     particles_pvd_.write(ctx);
@@ -160,9 +208,12 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
   if (particles_)
     particles_->add_figures(ctx);
   if (crack_ && (coupled_ || particles_)) {
-    const auto view = crack_view<dim>(coupled_.get(), particles_.get(), false);
-    crack_->add_figures(s, view.positions, view.damage, view.counted, ctx.comm()); // collective
-    const std::string csv = crack_->csv(view.positions, view.damage, ctx.comm());  // collective
+    CrackView<dim> view; // collective
+    fill_crack_view<dim>(view, coupled_.get(), particles_.get(), false, crack_->damage_threshold(),
+                         ctx.comm());
+    crack_->add_figures(s, *view.positions, *view.damage, view.counted, ctx.comm(),
+                        view.keys); // collective
+    const std::string csv = crack_->csv(*view.positions, *view.damage, ctx.comm(), view.keys);
     if (ctx.is_root())
       ctx.output().write_atomic("crack_path.csv", csv);
   }
@@ -348,11 +399,13 @@ void Simulation<dim>::report_exact_error(RunContext& ctx) {
     });
     has_particles = coupled_->n_free_particles() > 0;
   } else if (particles_) {
-    // Every rank holds the whole zone: rank 0's sums count once.
+    // Not distributed: every rank holds the whole zone, rank 0's sums count once.
+    // Distributed: each rank sums its owned particles (ghosts are fixed).
     const auto& p = particles_->particles();
-    if (ctx.is_root())
-      particles = meshfree::displacement_error_sums(p, *exact_displacement_,
-                                                    [&](unsigned int i) { return !p.is_fixed(i); });
+    if (ctx.is_root() || particles_->distributed())
+      particles = meshfree::displacement_error_sums(p, *exact_displacement_, [&](unsigned int i) {
+        return particles_->is_owned(i) && !p.is_fixed(i);
+      });
     has_particles = true;
   }
   const auto sum = [&](ErrorSums e) {

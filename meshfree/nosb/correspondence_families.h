@@ -63,6 +63,13 @@ class CorrespondenceFamilies {
   std::size_t n_fallbacks() const { return fallbacks_; }
   // Condition number of each particle's K_i (infinity when singular) from the last build.
   const std::vector<double>& condition_numbers() const { return condition_; }
+  // Bytes held by the arrays (capacities).
+  std::size_t memory_bytes() const {
+    return (centre_.capacity() + node_.capacity()) * sizeof(unsigned int) +
+           (weight_.capacity() + condition_.capacity()) * sizeof(double) +
+           (history_.capacity() + offsets_.capacity()) * sizeof(std::size_t) +
+           gradient_.capacity() * sizeof(dealii::Tensor<1, dim>) + failed_.capacity();
+  }
 
   // F_e from the displacements.
   dealii::Tensor<2, dim> deformation_gradient(unsigned int e,

@@ -50,6 +50,7 @@ class NosbMethod : public ParticleMethod<dim> {
   void save(std::ostream& out) const override;
   void load(std::istream& in) override;
   std::vector<std::string> take_messages() override { return pd_.take_messages(); }
+  std::size_t memory_bytes() const override { return pd_.memory_bytes() + driven_.capacity(); }
   // A particle's force gathers the families of its neighbours (f_m = −Σ_e w_e P_e G_m).
   bool needs_neighbour_rows() const override { return true; }
   bool forces_derive_from_energy() const override {

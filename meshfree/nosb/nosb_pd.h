@@ -179,6 +179,17 @@ class NosbPD {
   void set_reference_temperature(double T) { reference_temperature_ = T; }
   // Driven particles (coupling ghosts): a bond between two of them never breaks.
   void set_driven(std::vector<std::uint8_t> driven) { driven_ = std::move(driven); }
+  // Bytes of the families, gradients, states and indices (capacities).
+  std::size_t memory_bytes() const {
+    return particle_families_.memory_bytes() + bond_families_.memory_bytes() +
+           F_particle_.capacity() * sizeof(dealii::Tensor<2, dim>) +
+           (committed_.capacity() + trial_.capacity()) * sizeof(materials::MaterialState) +
+           history_keys_.capacity() * sizeof(std::pair<unsigned int, unsigned int>) +
+           (particle_history_begin_.capacity() + gather_offsets_.capacity() +
+            gather_entries_.capacity()) *
+               sizeof(std::size_t) +
+           entry_family_.capacity() * sizeof(unsigned int) + driven_.capacity();
+  }
 
  private:
   struct Response {

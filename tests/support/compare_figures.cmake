@@ -1,6 +1,7 @@
 # Compares chosen figures of two summary.json files.
 # Variables: A, B (files); CHECKS: list of "figure:rel:tol" (|a-b| <= tol*max(|a|,|b|)),
-# "figure:abs:tol" (|a-b| <= tol) or "figure:ratio:min" (b/a >= min, e.g. a speed-up).
+# "figure:abs:tol" (|a-b| <= tol), "figure:ratio:min" (b/a >= min, e.g. a speed-up) or
+# "figure:ratio_max:max" (b/a <= max, e.g. memory per rank).
 # A figure missing or not finite in either file fails (figures.cmake).
 cmake_minimum_required(VERSION 3.19)
 include(${CMAKE_CURRENT_LIST_DIR}/figures.cmake)
@@ -22,8 +23,10 @@ foreach(_check IN LISTS CHECKS)
     set(_expr "(${_va} - ${_vb})^2 <= (${_tol})^2")
   elseif(_kind STREQUAL "ratio")
     set(_expr "${_va} > 0 && ${_vb} / ${_va} >= ${_tol}")
+  elseif(_kind STREQUAL "ratio_max")
+    set(_expr "${_va} > 0 && ${_vb} >= 0 && ${_vb} / ${_va} <= ${_tol}")
   else()
-    message(FATAL_ERROR "unknown check kind ${_kind} (rel|abs|ratio)")
+    message(FATAL_ERROR "unknown check kind ${_kind} (rel|abs|ratio|ratio_max)")
   endif()
   spinesim_awk_true("${_expr}" _ok)
   if(NOT _ok)
