@@ -21,6 +21,7 @@
 #include <deal.II/base/utilities.h>
 #include <deal.II/lac/vector.h>
 
+#include <chrono>
 #include <cmath>
 #include <fstream>
 
@@ -180,6 +181,7 @@ struct ParticleZone<dim>::Impl {
   std::size_t broke_since_step_check = 0; // bond ends broken since the stable step was taken
   bool account_restored = true;           // false: a restart from a checkpoint without the account
   unsigned int explicit_steps = 0, relaxation_iterations = 0;
+  double advance_seconds = 0;       // wall time in advance_to [s]
   std::size_t broken_initially = 0; // bond ends cut by pre-cracks, over all ranks
   std::uint64_t n_bonds_global = 0; // pairs, over all ranks
   std::uint64_t n_global = 0;       // particles, over all ranks
@@ -193,8 +195,30 @@ struct ParticleZone<dim>::Impl {
   double min(double x) const { return partition ? dealii::Utilities::MPI::min(x, comm) : x; }
 
   void compute_forces(meshfree::ParticleSet<dim>& p) {
-    if (partition) // the ghosts' displacements of this pass (drift and prescription done)
-      partition->update_ghosts(p.displacements());
+    if (!partition)
+      return compute_forces_here(p);
+    partition->update_ghosts(p.displacements()); // the ghosts' positions of this pass
+    // A failure on one rank stops every rank with its report (the others would wait in the
+    // next exchange): one reduction a force pass.
+    std::string what, where, hint;
+    try {
+      compute_forces_here(p);
+    } catch (const NumericalFailure& e) {
+      what = e.what_failed();
+      where = e.location();
+      hint = e.hint();
+    }
+    const unsigned int ranks = dealii::Utilities::MPI::n_mpi_processes(comm);
+    const unsigned int first = dealii::Utilities::MPI::min(
+        what.empty() ? ranks : dealii::Utilities::MPI::this_mpi_process(comm), comm);
+    if (first < ranks)
+      throw NumericalFailure(dealii::Utilities::MPI::broadcast(comm, what, first),
+                             dealii::Utilities::MPI::broadcast(comm, where, first) + " (MPI rank " +
+                                 std::to_string(first) + ")",
+                             dealii::Utilities::MPI::broadcast(comm, hint, first));
+  }
+
+  void compute_forces_here(meshfree::ParticleSet<dim>& p) {
     if (!account) {
       broke_since_step_check += method->compute_forces(p, bonds, damage);
       return;
@@ -240,13 +264,34 @@ struct ParticleZone<dim>::Impl {
     if (dealii::Utilities::MPI::sum(partition->n_owned(), comm) == 0)
       throw InvalidInput("Particles/Shape", prm.shape + " holds no lattice point of the box",
                          "radii and a centre that put the shape inside the box");
+    return local_set();
+  }
+
+  // The particles of the partition's points, ghosts fixed.
+  meshfree::ParticleSet<dim> local_set() const {
     const double volume = partition->lattice_cell_volume() * (dim == 2 ? method->thickness() : 1);
     auto set = meshfree::ParticleSet<dim>::from_points(
         partition->points(), std::vector<double>(partition->points().size(), volume),
         method->thickness());
     for (unsigned int i = partition->n_owned(); i < set.size(); ++i)
       set.set_fixed(i); // moved by the exchange, never by the integrator
+    set.set_density(law.density);
     return set;
+  }
+
+  // After the bonds are built and the ghosts' rows dropped: only the ghosts bonded to an owned
+  // particle stay (the second layer served the first layer's surface correction).
+  void drop_unbonded_ghosts() {
+    const unsigned int n_owned = partition->n_owned();
+    std::vector<std::uint8_t> keep(particles.size() - n_owned, 0);
+    for (const unsigned int j : bonds.neighbor)
+      if (j >= n_owned)
+        keep[j - n_owned] = 1;
+    const std::vector<unsigned int> index = partition->keep_ghosts(keep);
+    for (unsigned int& j : bonds.neighbor)
+      j = index[j];
+    bonds.offsets.resize(partition->points().size() + 1);
+    particles = local_set();
   }
 
   // The lattice points of the box inside the shape.
@@ -411,8 +456,10 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
                          dim == 2 ? "two points 'x1,y1; x2,y2'" : "four points of 3 coordinates");
   }
   z.bonds = meshfree::NeighborSearch<dim>(options).build(z.particles);
-  if (z.partition)
+  if (z.partition) {
     z.bonds.keep_rows(z.partition->n_owned()); // forces are summed for owned particles only
+    z.drop_unbonded_ghosts();
+  }
   z.broken_initially = std::size_t(z.sum(z.bonds.n_broken()));
   z.n_bonds_global = std::uint64_t(z.sum(z.bonds.n_bonds())) / 2;
   z.n_global = std::uint64_t(z.sum(z.n_owned()));
@@ -466,9 +513,11 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
     const double owned = z.partition->n_owned(), held = z.particles.size();
     ctx.log() << "  distributed over " << ctx.n_ranks() << " ranks on "
               << z.partition->n_background_cells()
-              << " p4est background cells: owned particles per rank max/mean "
-              << z.max(owned) / (z.sum(owned) / ctx.n_ranks()) << ", ghosts per owned "
-              << (z.sum(held) - z.sum(owned)) / z.sum(owned) << "\n";
+              << " p4est background cells weighted by their particles: owned particles per "
+                 "rank max/mean "
+              << z.partition->load_imbalance()
+              << " (equal cells: " << z.partition->load_imbalance_unweighted()
+              << "), ghosts per owned " << (z.sum(held) - z.sum(owned)) / z.sum(owned) << "\n";
   } else if (ctx.n_ranks() > 1)
     ctx.log() << "  not distributed (only explicit bond-based zones without an energy account "
                  "are): every rank holds and advances the whole zone\n";
@@ -479,6 +528,13 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
 template <int dim>
 void ParticleZone<dim>::advance_to(double time) {
   Impl& z = *impl_;
+  struct Clock { // adds the wall time of this call to advance_seconds, however it returns
+    double& total;
+    std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+    ~Clock() {
+      total += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    }
+  } clock{z.advance_seconds};
   if (z.prm.integration == "quasi_static") {
     z.prescribe(time);
     meshfree::AdaptiveDynamicRelaxation<dim> adr(
@@ -613,6 +669,12 @@ void ParticleZone<dim>::add_figures(RunContext& ctx) const {
   s.set_figure("particle_memory_per_rank_max_bytes",
                dealii::Utilities::MPI::max(double(memory_bytes()), ctx.comm()), "B");
   s.set_figure("particle_ranks", z.partition ? ctx.n_ranks() : 1, "-");
+  if (z.partition) { // owned particles of the busiest rank over the mean (zone_partition.h)
+    s.set_figure("particle_load_imbalance", z.partition->load_imbalance(), "-");
+    s.set_figure("particle_load_imbalance_unweighted", z.partition->load_imbalance_unweighted(),
+                 "-");
+  }
+  s.set_figure("particle_advance_time_s", z.max(z.advance_seconds), "s");
   const auto pieces = z.fragments();
   s.set_figure("fragments", pieces.fragments, "-");
   s.set_figure("isolated_particles", pieces.isolated, "-");

@@ -8,9 +8,10 @@
 //
 // MPI: an explicit bond-based zone is distributed (zone_partition.h): each rank holds the
 // particles of its p4est background cells and, as fixed ghosts refreshed before every force
-// pass, those within two horizons (first-layer ghosts need whole families for the surface
-// correction); bond rows exist for owned particles only, so every sum over rows counts each
-// particle once over the ranks, and each rank writes its part of the output and checkpoint.
+// pass, those bonded to them (the bonds are built with ghosts two search radii deep, so that
+// first-layer ghosts have whole families for the surface correction). Bond rows exist for
+// owned particles only, so every sum over rows counts each particle once over the ranks, and
+// each rank writes its part of the output and checkpoint.
 // Other zones (NOSB-PD, quasi-static relaxation, an energy account) are still held and advanced
 // whole and identically on every rank, and rank 0 writes their output.
 

@@ -5,13 +5,14 @@
 #include <deal.II/base/mpi.h>
 #include <deal.II/grid/grid_generator.h>
 
+#include <Epetra_FEVector.h>
+#include <Epetra_Import.h>
 #include <Epetra_MultiVector.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <map>
-#include <unordered_map>
 #include <utility>
 
 namespace spinesim::applications {
@@ -67,42 +68,24 @@ ZonePartition<dim>::ZonePartition(MPI_Comm comm, const dealii::Point<dim>& lo,
                            "dim values per point with 32-bit Trilinos ids",
                        "fewer than 2^31 / dim lattice points in the Particles box");
 
-  // Background cells at least ghost_reach wide: a coarse subdivision refined L times, so p4est
-  // orders the cells along its space-filling curve (Z-order within each coarse cell).
-  std::array<unsigned int, dim> reps;
-  unsigned int fewest = ~0u;
-  for (unsigned int d = 0; d < dim; ++d) {
-    reps[d] = std::max(1u, static_cast<unsigned int>(std::floor((hi[d] - lo[d]) / ghost_reach)));
-    fewest = std::min(fewest, reps[d]);
-  }
-  unsigned int levels = 0;
-  while ((2u << levels) <= fewest)
-    ++levels;
+  // Background cells at least ghost_reach wide, all of them coarse cells (p4est trees).
+  // Refined cells would be coarser to partition: p4est keeps the 2^dim children of a cell on
+  // one rank (partitioning for coarsening), so a block refined once could not be split at
+  // all. deal.II orders the trees by Cuthill-McKee, which the partition follows.
   std::vector<unsigned int> coarse(dim);
   std::array<unsigned int, dim> cells;
   std::array<double, dim> width;
   for (unsigned int d = 0; d < dim; ++d) {
-    coarse[d] = std::max(1u, reps[d] >> levels);
-    cells[d] = coarse[d] << levels;
-    width[d] = (hi[d] - lo[d]) / cells[d]; // >= ghost_reach: cells[d] <= reps[d]
+    cells[d] = std::max(1u, static_cast<unsigned int>(std::floor((hi[d] - lo[d]) / ghost_reach)));
+    coarse[d] = cells[d];
+    width[d] = (hi[d] - lo[d]) / cells[d]; // >= ghost_reach
   }
   background_ = std::make_unique<dealii::parallel::distributed::Triangulation<dim>>(comm);
   dealii::GridGenerator::subdivided_hyper_rectangle(*background_, coarse, lo, hi);
-  background_->refine_global(levels);
 
-  // Owned (1) and ghost (2) background cells of this rank.
-  std::unordered_map<std::uint64_t, unsigned char> role;
-  std::vector<std::array<unsigned int, dim>> relevant;
-  for (const auto& cell : background_->active_cell_iterators()) {
-    if (!cell->is_locally_owned() && !cell->is_ghost())
-      continue;
-    const auto b = cell_of<dim>(cell->center(), lo, width, cells);
-    role[linear<dim>(b, cells)] = cell->is_locally_owned() ? 1 : 2;
-    relevant.push_back(b);
-  }
-  std::vector<std::pair<std::uint64_t, dealii::Point<dim>>> owned, ghosts;
-  for (const auto& b : relevant) {
-    // The lattice points whose centres may fall in cell b, each kept by its own cell only.
+  // Calls f(id, x) for the lattice points of background cell b inside the body, each for its
+  // own cell only.
+  const auto for_each_point = [&](const std::array<unsigned int, dim>& b, auto&& f) {
     std::array<unsigned int, dim> k_lo, k_hi;
     for (unsigned int d = 0; d < dim; ++d) {
       const double first = std::floor(b[d] * width[d] / dx[d]) - 1;
@@ -111,7 +94,6 @@ ZonePartition<dim>::ZonePartition(MPI_Comm comm, const dealii::Point<dim>& lo,
       k_hi[d] = std::min<unsigned int>(n[d] - 1, static_cast<unsigned int>(std::max(0.0, last)));
     }
     const std::uint64_t key = linear<dim>(b, cells);
-    const unsigned char r = role[key];
     std::array<unsigned int, dim> k = k_lo;
     while (true) {
       dealii::Point<dim> x;
@@ -121,7 +103,7 @@ ZonePartition<dim>::ZonePartition(MPI_Comm comm, const dealii::Point<dim>& lo,
         std::uint64_t id = 0;
         for (int d = dim - 1; d >= 0; --d)
           id = id * n[d] + k[d];
-        (r == 1 ? owned : ghosts).emplace_back(id, x);
+        f(id, x);
       }
       unsigned int d = 0;
       while (d < dim && k[d] == k_hi[d]) {
@@ -132,11 +114,44 @@ ZonePartition<dim>::ZonePartition(MPI_Comm comm, const dealii::Point<dim>& lo,
         break;
       ++k[d];
     }
+  };
+
+  // Weighted partition (deal.II's weight signal, as in step-68): a cell weighs its particles,
+  // so a shape that leaves cells empty (a ring in its box) does not leave ranks idle. The
+  // first call counts this rank's particles under the equal-cell partition.
+  double unweighted_load = 0;
+  const auto connection = background_->signals.weight.connect(
+      [&](const typename dealii::Triangulation<dim>::cell_iterator& cell,
+          const typename dealii::Triangulation<dim>::CellStatus) -> unsigned int {
+        unsigned int count = 0;
+        for_each_point(cell_of<dim>(cell->center(), lo, width, cells),
+                       [&count](std::uint64_t, const dealii::Point<dim>&) { ++count; });
+        unweighted_load += count;
+        return count;
+      });
+  background_->repartition();
+  connection.disconnect();
+  imbalance_unweighted_ = dealii::Utilities::MPI::max(unweighted_load, comm) /
+                          std::max(1.0, dealii::Utilities::MPI::sum(unweighted_load, comm) /
+                                            dealii::Utilities::MPI::n_mpi_processes(comm));
+
+  // This rank's points: those of its owned cells, and of its ghost cells as ghosts.
+  std::vector<std::pair<std::uint64_t, dealii::Point<dim>>> owned, ghosts;
+  for (const auto& cell : background_->active_cell_iterators()) {
+    if (!cell->is_locally_owned() && !cell->is_ghost())
+      continue;
+    auto& list = cell->is_locally_owned() ? owned : ghosts;
+    for_each_point(
+        cell_of<dim>(cell->center(), lo, width, cells),
+        [&list](std::uint64_t id, const dealii::Point<dim>& x) { list.emplace_back(id, x); });
   }
   const auto by_id = [](const auto& a, const auto& b) { return a.first < b.first; };
   std::sort(owned.begin(), owned.end(), by_id);
   std::sort(ghosts.begin(), ghosts.end(), by_id);
   n_owned_ = owned.size();
+  imbalance_ = dealii::Utilities::MPI::max(double(n_owned_), comm) /
+               std::max(1.0, dealii::Utilities::MPI::sum(double(n_owned_), comm) /
+                                 dealii::Utilities::MPI::n_mpi_processes(comm));
   for (const auto* list : {&owned, &ghosts})
     for (const auto& [id, x] : *list) {
       ids_.push_back(id);
@@ -144,28 +159,62 @@ ZonePartition<dim>::ZonePartition(MPI_Comm comm, const dealii::Point<dim>& lo,
     }
 
   // Exchange vectors over lattice ids.
-  dealii::IndexSet owned_dofs(n_global_ * dim), relevant_dofs(n_global_ * dim);
-  dealii::IndexSet owned_ids(n_global_), relevant_ids(n_global_);
-  for (unsigned int i = 0; i < ids_.size(); ++i) {
-    for (unsigned int d = 0; d < dim; ++d) {
-      relevant_dofs.add_index(ids_[i] * dim + d);
-      if (i < n_owned_)
-        owned_dofs.add_index(ids_[i] * dim + d);
-    }
-    relevant_ids.add_index(ids_[i]);
-    if (i < n_owned_)
-      owned_ids.add_index(ids_[i]);
+  dealii::IndexSet owned_dofs(n_global_ * dim), owned_ids(n_global_);
+  for (unsigned int i = 0; i < n_owned_; ++i) {
+    for (unsigned int d = 0; d < dim; ++d)
+      owned_dofs.add_index(ids_[i] * dim + d);
+    owned_ids.add_index(ids_[i]);
   }
-  for (auto* set : {&owned_dofs, &relevant_dofs, &owned_ids, &relevant_ids})
-    set->compress();
+  owned_dofs.compress();
+  owned_ids.compress();
   owned_vector_.reinit(owned_dofs, comm);
-  ghosted_vector_.reinit(owned_dofs, relevant_dofs, comm);
   owned_scalar_.reinit(owned_ids, comm);
-  ghosted_scalar_.reinit(owned_ids, relevant_ids, comm);
+  build_ghosted_vectors();
+}
+
+template <int dim>
+void ZonePartition<dim>::build_ghosted_vectors() {
+  dealii::IndexSet relevant_dofs(n_global_ * dim), relevant_ids(n_global_);
+  for (unsigned int i = 0; i < ids_.size(); ++i) {
+    for (unsigned int d = 0; d < dim; ++d)
+      relevant_dofs.add_index(ids_[i] * dim + d);
+    relevant_ids.add_index(ids_[i]);
+  }
+  relevant_dofs.compress();
+  relevant_ids.compress();
+  ghosted_vector_.reinit(owned_vector_.locally_owned_elements(), relevant_dofs, comm_);
+  ghosted_scalar_.reinit(owned_scalar_.locally_owned_elements(), relevant_ids, comm_);
+  vector_import_ = std::make_unique<Epetra_Import>(ghosted_vector_.trilinos_vector().Map(),
+                                                   owned_vector_.trilinos_vector().Map());
+  scalar_import_ = std::make_unique<Epetra_Import>(ghosted_scalar_.trilinos_vector().Map(),
+                                                   owned_scalar_.trilinos_vector().Map());
+  ghost_vector_slot_.clear();
+  ghost_scalar_slot_.clear();
   for (unsigned int i = n_owned_; i < ids_.size(); ++i) {
     ghost_vector_slot_.push_back(relevant_dofs.index_within_set(ids_[i] * dim));
     ghost_scalar_slot_.push_back(relevant_ids.index_within_set(ids_[i]));
   }
+}
+
+template <int dim>
+std::vector<unsigned int> ZonePartition<dim>::keep_ghosts(const std::vector<std::uint8_t>& keep) {
+  AssertDimension(keep.size(), points_.size() - n_owned_);
+  std::vector<unsigned int> new_index(points_.size(), ~0u);
+  unsigned int next = n_owned_;
+  for (unsigned int i = 0; i < n_owned_; ++i)
+    new_index[i] = i;
+  for (unsigned int g = 0; g < keep.size(); ++g)
+    if (keep[g]) {
+      points_[next] = points_[n_owned_ + g];
+      ids_[next] = ids_[n_owned_ + g];
+      new_index[n_owned_ + g] = next++;
+    }
+  points_.resize(next);
+  ids_.resize(next);
+  points_.shrink_to_fit();
+  ids_.shrink_to_fit();
+  build_ghosted_vectors();
+  return new_index;
 }
 
 template <int dim>
@@ -179,15 +228,15 @@ unsigned int ZonePartition<dim>::n_background_cells() const {
 template <int dim>
 void ZonePartition<dim>::update_ghosts(std::vector<dealii::Tensor<1, dim>>& values) const {
   AssertDimension(values.size(), points_.size());
-  auto& owned = const_cast<dealii::TrilinosWrappers::MPI::Vector&>(owned_vector_);
-  auto& ghosted = const_cast<dealii::TrilinosWrappers::MPI::Vector&>(ghosted_vector_);
+  auto& owned = owned_vector_;
+  auto& ghosted = ghosted_vector_;
   // The owned map lists ids ascending and the owned points are sorted by id: local entry
   // i·dim + d is point i's component d.
   double* out = owned.trilinos_vector()[0];
   for (unsigned int i = 0; i < n_owned_; ++i)
     for (unsigned int d = 0; d < dim; ++d)
       out[i * dim + d] = values[i][d];
-  ghosted = owned; // the Epetra import
+  ghosted.trilinos_vector().Import(owned.trilinos_vector(), *vector_import_, Insert);
   const double* in = ghosted.trilinos_vector()[0];
   for (unsigned int g = 0; g < ghost_vector_slot_.size(); ++g)
     for (unsigned int d = 0; d < dim; ++d)
@@ -197,12 +246,12 @@ void ZonePartition<dim>::update_ghosts(std::vector<dealii::Tensor<1, dim>>& valu
 template <int dim>
 void ZonePartition<dim>::update_ghosts(std::vector<double>& values) const {
   AssertDimension(values.size(), points_.size());
-  auto& owned = const_cast<dealii::TrilinosWrappers::MPI::Vector&>(owned_scalar_);
-  auto& ghosted = const_cast<dealii::TrilinosWrappers::MPI::Vector&>(ghosted_scalar_);
+  auto& owned = owned_scalar_;
+  auto& ghosted = ghosted_scalar_;
   double* out = owned.trilinos_vector()[0];
   for (unsigned int i = 0; i < n_owned_; ++i)
     out[i] = values[i];
-  ghosted = owned;
+  ghosted.trilinos_vector().Import(owned.trilinos_vector(), *scalar_import_, Insert);
   const double* in = ghosted.trilinos_vector()[0];
   for (unsigned int g = 0; g < ghost_scalar_slot_.size(); ++g)
     values[n_owned_ + g] = in[ghost_scalar_slot_[g]];

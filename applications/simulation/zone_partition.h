@@ -3,10 +3,10 @@
 
 // A particle zone's lattice spread over the ranks of a run (docs/scaling.md). The zone box is
 // covered by background cells no smaller than a ghost reach; p4est (through deal.II's
-// parallel::distributed::Triangulation) partitions those cells along its space-filling curve,
-// and every lattice point lives on the rank that owns its cell. A rank holds its owned points
-// and, as ghosts, the points of its ghost cells: every point within the ghost reach of an owned
-// one. Nothing is sized by the global particle count.
+// parallel::distributed::Triangulation) partitions those cells, each weighted by its particles
+// (the weight signal), and every lattice point lives on the rank that owns its cell. A rank holds
+// its owned points and, as ghosts, the points of its ghost cells: every point within the ghost
+// reach of an owned one. Nothing is sized by the global particle count.
 //
 // Ghost values travel through Trilinos vectors whose index sets are the lattice ids (the
 // Epetra import of deal.II's ghosted TrilinosWrappers::MPI::Vector), so the pattern is the
@@ -22,6 +22,8 @@
 #include <deal.II/lac/trilinos_vector.h>
 
 #include <mpi.h>
+
+class Epetra_Import;
 
 #include <cstdint>
 #include <functional>
@@ -50,6 +52,14 @@ class ZonePartition {
   double lattice_cell_volume() const { return cell_volume_; } // per unit thickness in 2-D
   std::uint64_t n_global_points() const { return n_global_; }
   unsigned int n_background_cells() const;
+  // Owned particles of the busiest rank over the mean: after the weighted partition, and as the
+  // equal-cell partition would have had it.
+  double load_imbalance() const { return imbalance_; }
+  double load_imbalance_unweighted() const { return imbalance_unweighted_; }
+
+  // Keeps the ghosts g with keep[g] (g = 0 for the first ghost), in order, and shrinks the
+  // exchange to them. Returns each point's new index (~0u for a dropped ghost). Collective.
+  std::vector<unsigned int> keep_ghosts(const std::vector<std::uint8_t>& keep);
 
   // Copies the owned entries to the ghosts (collective). Sizes: points().size().
   void update_ghosts(std::vector<dealii::Tensor<1, dim>>& values) const;
@@ -66,11 +76,19 @@ class ZonePartition {
   unsigned int n_owned_ = 0;
   double cell_volume_ = 0;
   std::uint64_t n_global_ = 0;
+  double imbalance_ = 1, imbalance_unweighted_ = 1;
   // Per-component (id·dim + d) and scalar (id) vectors: owned, and owned + ghosts.
-  dealii::TrilinosWrappers::MPI::Vector owned_vector_, ghosted_vector_;
-  dealii::TrilinosWrappers::MPI::Vector owned_scalar_, ghosted_scalar_;
+  // Scratch of update_ghosts (const: it changes no state of the partition).
+  mutable dealii::TrilinosWrappers::MPI::Vector owned_vector_, ghosted_vector_;
+  mutable dealii::TrilinosWrappers::MPI::Vector owned_scalar_, ghosted_scalar_;
   // Where ghost g's first entry sits in the ghosted vectors' local storage.
   std::vector<unsigned int> ghost_vector_slot_, ghost_scalar_slot_;
+  // The import plans, made once: an assignment between deal.II vectors of different maps
+  // builds a new Epetra_Import every time (measured: a tenth of a step of the weak-scaling
+  // block went to its map lookups and sorts).
+  std::unique_ptr<Epetra_Import> vector_import_, scalar_import_;
+  // (Re)builds the ghosted vectors, import plans and slots for the current points.
+  void build_ghosted_vectors();
 };
 
 // The fragments of a zone whose bond rows are those of the owned particles of `partition`

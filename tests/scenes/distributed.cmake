@@ -77,3 +77,14 @@ add_test(NAME distributed.ring_restart_matches_uninterrupted
 set_tests_properties(distributed.ring_restart_matches_uninterrupted PROPERTIES
                      LABELS "scene;particles;mpi"
                      FIXTURES_REQUIRED "dist_restart_done;dist_ring_2d_2")
+
+# A non-finite force on one rank stops every rank with that rank's report (the others would
+# otherwise wait in the next ghost exchange): the particles at the bottom of the ring
+# (y < -48 mm, on one rank) are pulled down by 1e300 t m with Damage off, so the forces of
+# their bonds overflow in step 1.
+spinesim_add_scene_test(distributed.ring_nonfinite_force_on_one_rank SCENE ${_dist_ring} RANKS 2
+  SET "Simulation/Energy account=false" "Effects/Damage=false"
+      "Particles/Region 1/Lower corner=-0.05, -0.05" "Particles/Region 1/Upper corner=0.05, -0.048"
+      "Particles/Region 1/Components=y" "Particles/Region 1/Values=-1e300*t"
+  EXIT 1 MATCH "non-finite peridynamic force.*MPI rank [01].*when: +step 1"
+  LABELS "scene;particles;hostile;stability")

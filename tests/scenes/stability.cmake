@@ -64,8 +64,9 @@ set(_ring_2d "${_ring_ok};initial_energy_J~3524.5:1e-10;fracture_dissipation_J>=
 spinesim_add_scene_test(stability.ring_fragmentation_bond_based_2d SCENE ${_ring}
   OUT ${_ring_runs}/bond_based_2d_1 FIXTURE ring_2d_1
   EXPECT "${_ring_2d}" LABELS "scene;particles;validation;stability")
-# The particle zone is not distributed: each rank runs all of it, and root writes. Two ranks
-# must give the same figures bit for bit (the loops are deterministic).
+# With the energy account the particle zone is not distributed: each rank runs all of it, and
+# root writes. Two ranks must give the same figures bit for bit (the loops are deterministic).
+# Distributed zones: tests/scenes/distributed.cmake.
 spinesim_add_scene_test(stability.ring_fragmentation_bond_based_2d_2ranks SCENE ${_ring} RANKS 2
   OUT ${_ring_runs}/bond_based_2d_2 FIXTURE ring_2d_2
   EXPECT "${_ring_2d}" LABELS "scene;particles;validation;stability")
