@@ -308,7 +308,7 @@ void NeighborSearch<dim>::apply_surface_correction(const ParticleSet<dim>& parti
           g[i][d] = sum[d] > 0.0 ? bulk / sum[d] : 0.0;
       });
   // Checked outside the parallel region: exceptions must not cross it.
-  for (unsigned int i = 0; i < n; ++i)
+  for (unsigned int i = 0; i < std::min(n, options_.surface_checked_particles); ++i)
     for (unsigned int d = 0; d < dim; ++d)
       if (!(g[i][d] > 0.0) || !std::isfinite(g[i][d])) {
         std::ostringstream where;

@@ -35,6 +35,10 @@ class NeighborSearch {
     InfluenceFunction<dim> influence{}; // ω
     bool partial_volume = false;        // β from the linear rule
     bool surface_correction = false;    // G (energy based)
+    // Particles [0, n) whose correction must exist (a bond along every axis); the rest (a
+    // rank's ghosts, whose families are cut at the edge of what the rank holds) get g = 0
+    // where they have no such bond. Default: all.
+    unsigned int surface_checked_particles = ~0u;
     std::vector<PreCrack<dim>> pre_cracks;
   };
 

@@ -8,7 +8,7 @@
 // call picks the highest variant the CPU runs; SPINESIM_KERNEL_ISA=baseline or x86-64-v3 caps
 // it (baseline: the same bits on every machine, FMA rounds differently). Measured on the
 // LAMMPS comparison cube (docs/benchmarks.md): v3 is 1.3x the baseline (FMA, VEX encoding,
-// -O3 scheduling of the same loop), v4 (hardware gathers, 8 bonds per vector) about 1.7x v3.
+// -O3 scheduling of the same loop), v4 (hardware gathers, 8 bonds per vector) about 1.8x v3.
 // Every variant sums each particle's row on its own, so forces never depend on the threads.
 
 #include <cstddef>

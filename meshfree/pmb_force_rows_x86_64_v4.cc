@@ -79,9 +79,11 @@ std::size_t rows_avx512(const PmbForceRows<dim>& r, std::size_t begin, std::size
         _mm_mask_storeu_epi8(broken + k, lanes, _mm_maskz_mov_epi8(now, one));
         total += std::size_t(__builtin_popcount(unsigned(now & ~was)));
       }
-      const __mmask8 live = lanes & __mmask8(~now);
+      // A broken bond adds 0·y, as in the baseline: a non-finite y still makes the force
+      // non-finite (and the run fail) instead of vanishing with its lane.
+      const __m512d a_live = _mm512_maskz_mov_pd(lanes & __mmask8(~now), a);
       for (unsigned int d = 0; d < dim; ++d)
-        acc[d] = _mm512_mask3_fmadd_pd(a, y[d], acc[d], live);
+        acc[d] = _mm512_mask3_fmadd_pd(a_live, y[d], acc[d], lanes);
     }
     const double V = r.V[i];
     for (unsigned int d = 0; d < dim; ++d) {

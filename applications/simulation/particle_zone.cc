@@ -194,28 +194,53 @@ struct ParticleZone<dim>::Impl {
   double max(double x) const { return partition ? dealii::Utilities::MPI::max(x, comm) : x; }
   double min(double x) const { return partition ? dealii::Utilities::MPI::min(x, comm) : x; }
 
-  void compute_forces(meshfree::ParticleSet<dim>& p) {
+  // Runs f on every rank of a distributed zone and, if it threw on any rank, throws the first
+  // such rank's report on all of them (NumericalFailure and InvalidInput as such, anything
+  // else as std::runtime_error): the others would otherwise wait in the next collective call.
+  // f must make no collective call itself. One reduction. Not distributed: f alone.
+  template <class F>
+  void collectively(F&& f) const {
     if (!partition)
-      return compute_forces_here(p);
-    partition->update_ghosts(p.displacements()); // the ghosts' positions of this pass
-    // A failure on one rank stops every rank with its report (the others would wait in the
-    // next exchange): one reduction a force pass.
-    std::string what, where, hint;
+      return f();
+    int kind = 0; // 1 numerical failure, 2 bad input
+    std::string a, b, c;
     try {
-      compute_forces_here(p);
+      f();
     } catch (const NumericalFailure& e) {
-      what = e.what_failed();
-      where = e.location();
-      hint = e.hint();
+      kind = 1;
+      a = e.what_failed();
+      b = e.location();
+      c = e.hint();
+    } catch (const InvalidInput& e) {
+      kind = 2;
+      a = e.where();
+      b = e.problem();
+      c = e.allowed();
+    } catch (const std::exception& e) { // e.g. a checkpoint file that cannot be written
+      kind = 3;
+      a = e.what();
     }
     const unsigned int ranks = dealii::Utilities::MPI::n_mpi_processes(comm);
     const unsigned int first = dealii::Utilities::MPI::min(
-        what.empty() ? ranks : dealii::Utilities::MPI::this_mpi_process(comm), comm);
-    if (first < ranks)
-      throw NumericalFailure(dealii::Utilities::MPI::broadcast(comm, what, first),
-                             dealii::Utilities::MPI::broadcast(comm, where, first) + " (MPI rank " +
-                                 std::to_string(first) + ")",
-                             dealii::Utilities::MPI::broadcast(comm, hint, first));
+        kind == 0 ? ranks : dealii::Utilities::MPI::this_mpi_process(comm), comm);
+    if (first == ranks)
+      return;
+    kind = dealii::Utilities::MPI::broadcast(comm, kind, first);
+    a = dealii::Utilities::MPI::broadcast(comm, a, first);
+    b = dealii::Utilities::MPI::broadcast(comm, b, first);
+    c = dealii::Utilities::MPI::broadcast(comm, c, first);
+    const std::string rank = " (MPI rank " + std::to_string(first) + ")";
+    if (kind == 1)
+      throw NumericalFailure(a, b + rank, c);
+    if (kind == 2)
+      throw InvalidInput(a, b + rank, c);
+    throw std::runtime_error(a + rank);
+  }
+
+  void compute_forces(meshfree::ParticleSet<dim>& p) {
+    if (partition)
+      partition->update_ghosts(p.displacements()); // the ghosts' positions of this pass
+    collectively([&] { compute_forces_here(p); }); // one reduction a force pass
   }
 
   void compute_forces_here(meshfree::ParticleSet<dim>& p) {
@@ -335,7 +360,7 @@ struct ParticleZone<dim>::Impl {
     const auto v = parse_expressions<dim>(prm.initial_velocity, "Particles/Initial velocity", dim,
                                           false, "[m/s]");
     dealii::Vector<double> value(dim);
-    for (unsigned int i = 0; i < particles.size(); ++i) {
+    for (unsigned int i = 0; i < n_owned(); ++i) { // ghosts stay at rest: the exchange moves them
       v->vector_value(particles.reference_position(i), value);
       for (unsigned int d = 0; d < dim; ++d) {
         if (!std::isfinite(value[d]))
@@ -455,7 +480,9 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
       throw InvalidInput(where, "wrong number of coordinates",
                          dim == 2 ? "two points 'x1,y1; x2,y2'" : "four points of 3 coordinates");
   }
-  z.bonds = meshfree::NeighborSearch<dim>(options).build(z.particles);
+  if (z.partition) // ghosts at the edge of this rank's cells have cut families
+    options.surface_checked_particles = z.partition->n_owned();
+  z.collectively([&] { z.bonds = meshfree::NeighborSearch<dim>(options).build(z.particles); });
   if (z.partition) {
     z.bonds.keep_rows(z.partition->n_owned()); // forces are summed for owned particles only
     z.drop_unbonded_ghosts();
@@ -499,7 +526,7 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
   z.verlet = std::make_unique<meshfree::VelocityVerlet<dim>>(
       [&z](meshfree::ParticleSet<dim>& p) { z.compute_forces(p); });
   z.prescribe(0.0);
-  z.set_initial_velocity();
+  z.collectively([&z] { z.set_initial_velocity(); });
   if (z.prm.integration == "explicit") {
     if (z.account)
       z.energy.start(z.particles, z.method->strain_energy(z.particles, z.bonds));
@@ -735,85 +762,95 @@ std::string ParticleZone<dim>::write_output(const std::string& directory,
 
 template <int dim>
 void ParticleZone<dim>::save(const std::string& file) const {
-  const Impl& z = *impl_;
-  const unsigned int rank = dealii::Utilities::MPI::this_mpi_process(z.comm),
-                     ranks = dealii::Utilities::MPI::n_mpi_processes(z.comm);
-  std::ofstream out(z.partition ? file + "." + std::to_string(rank) : file, std::ios::binary);
-  const auto write = [&out](const void* data, std::size_t bytes) {
-    out.write(static_cast<const char*>(data), bytes);
-  };
-  const std::uint64_t n = z.particles.size(), nb = z.bonds.n_bonds();
-  write(&n, sizeof n);
-  write(&nb, sizeof nb);
-  if (z.partition) { // the part of a distributed zone: restart on the same ranks only
-    const std::uint32_t r = rank, rs = ranks;
-    write(&r, sizeof r);
-    write(&rs, sizeof rs);
-  }
-  write(&z.time, sizeof z.time);
-  write(&z.explicit_steps, sizeof z.explicit_steps);
-  write(&z.relaxation_iterations, sizeof z.relaxation_iterations);
-  for (const auto* field :
-       {&z.particles.displacements(), &z.particles.velocities(), &z.particles.accelerations()})
-    write(field->data(), field->size() * sizeof(dealii::Tensor<1, dim>));
-  write(z.bonds.broken.data(), nb);
-  z.method->save(out);
-  z.energy.save(out); // the account and the run's top speed, so a restart continues them
-  out.write(reinterpret_cast<const char*>(&z.max_speed), sizeof z.max_speed);
-  if (!out)
-    throw std::runtime_error("cannot write particle checkpoint " + file);
+  impl_->collectively([&] { // a rank that cannot write stops all of them
+    const Impl& z = *impl_;
+    const unsigned int rank = dealii::Utilities::MPI::this_mpi_process(z.comm),
+                       ranks = dealii::Utilities::MPI::n_mpi_processes(z.comm);
+    std::ofstream out(z.partition ? file + "." + std::to_string(rank) : file, std::ios::binary);
+    const auto write = [&out](const void* data, std::size_t bytes) {
+      out.write(static_cast<const char*>(data), bytes);
+    };
+    const std::uint64_t n = z.particles.size(), nb = z.bonds.n_bonds();
+    write(&n, sizeof n);
+    write(&nb, sizeof nb);
+    if (z.partition) { // the part of a distributed zone: restart on the same ranks only
+      const std::uint32_t r = rank, rs = ranks;
+      write(&r, sizeof r);
+      write(&rs, sizeof rs);
+    }
+    write(&z.time, sizeof z.time);
+    write(&z.explicit_steps, sizeof z.explicit_steps);
+    write(&z.relaxation_iterations, sizeof z.relaxation_iterations);
+    for (const auto* field :
+         {&z.particles.displacements(), &z.particles.velocities(), &z.particles.accelerations()})
+      write(field->data(), field->size() * sizeof(dealii::Tensor<1, dim>));
+    write(z.bonds.broken.data(), nb);
+    z.method->save(out);
+    z.energy.save(out); // the account and the run's top speed, so a restart continues them
+    out.write(reinterpret_cast<const char*>(&z.max_speed), sizeof z.max_speed);
+    // The stepping time so far, so particle_advance_time_s covers the whole run after a restart.
+    out.write(reinterpret_cast<const char*>(&z.advance_seconds), sizeof z.advance_seconds);
+    if (!out)
+      throw std::runtime_error("cannot write particle checkpoint " + file);
+  });
 }
 
 template <int dim>
 void ParticleZone<dim>::load(const std::string& file) {
   Impl& z = *impl_;
-  const unsigned int rank = dealii::Utilities::MPI::this_mpi_process(z.comm),
-                     ranks = dealii::Utilities::MPI::n_mpi_processes(z.comm);
-  const std::string part = z.partition ? file + "." + std::to_string(rank) : file;
-  std::ifstream in(part, std::ios::binary);
-  if (!z.partition && !in)
-    throw InvalidInput(part,
-                       "no particle checkpoint (a distributed zone writes one file per rank, " +
-                           file + ".<rank>)",
-                       "a restart on the number of MPI ranks that wrote the checkpoint");
-  if (z.partition && !in)
-    throw InvalidInput(part,
-                       "no particle checkpoint for rank " + std::to_string(rank) +
-                           ": the checkpoint was written by a run on another number of ranks",
-                       "a restart on the number of MPI ranks that wrote the checkpoint");
-  const auto read = [&in](void* data, std::size_t bytes) {
-    in.read(static_cast<char*>(data), bytes);
-  };
-  std::uint64_t n = 0, nb = 0;
-  read(&n, sizeof n);
-  read(&nb, sizeof nb);
-  std::uint32_t saved_rank = rank, saved_ranks = ranks;
-  if (z.partition) {
-    read(&saved_rank, sizeof saved_rank);
-    read(&saved_ranks, sizeof saved_ranks);
-  }
-  if (!in || saved_rank != rank || saved_ranks != ranks)
-    throw InvalidInput(part,
-                       "particle checkpoint written by a run on " + std::to_string(saved_ranks) +
-                           " rank(s), not distributed as this run (" + std::to_string(ranks) +
-                           " ranks)",
-                       "a restart on the number of MPI ranks that wrote the checkpoint");
-  if (n != z.particles.size() || nb != z.bonds.n_bonds())
-    throw InvalidInput(part, "particle checkpoint does not match the scene's particle zone",
-                       "the checkpoint of this run, unchanged Particles parameters");
-  read(&z.time, sizeof z.time);
-  read(&z.explicit_steps, sizeof z.explicit_steps);
-  read(&z.relaxation_iterations, sizeof z.relaxation_iterations);
-  for (auto* field :
-       {&z.particles.displacements(), &z.particles.velocities(), &z.particles.accelerations()})
-    read(field->data(), field->size() * sizeof(dealii::Tensor<1, dim>));
-  read(z.bonds.broken.data(), nb);
-  if (!in)
-    throw InvalidInput(file, "particle checkpoint is truncated", "a complete checkpoint");
-  z.method->initialise(z.particles, z.bonds); // families from the restored intact bonds
-  z.method->load(in);
-  z.account_restored = z.energy.load(in);
-  in.read(reinterpret_cast<char*>(&z.max_speed), sizeof z.max_speed);
+  // Every check fails on all ranks alike; the force pass below is collective.
+  z.collectively([&] {
+    const unsigned int rank = dealii::Utilities::MPI::this_mpi_process(z.comm),
+                       ranks = dealii::Utilities::MPI::n_mpi_processes(z.comm);
+    const std::string part = z.partition ? file + "." + std::to_string(rank) : file;
+    std::ifstream in(part, std::ios::binary);
+    if (!z.partition && !in)
+      throw InvalidInput(part,
+                         "no particle checkpoint (a distributed zone writes one file per rank, " +
+                             file + ".<rank>)",
+                         "a restart on the number of MPI ranks that wrote the checkpoint");
+    if (z.partition && !in)
+      throw InvalidInput(part,
+                         "no particle checkpoint for rank " + std::to_string(rank) +
+                             ": the checkpoint was written by a run on another number of ranks",
+                         "a restart on the number of MPI ranks that wrote the checkpoint");
+    const auto read = [&in](void* data, std::size_t bytes) {
+      in.read(static_cast<char*>(data), bytes);
+    };
+    std::uint64_t n = 0, nb = 0;
+    read(&n, sizeof n);
+    read(&nb, sizeof nb);
+    std::uint32_t saved_rank = rank, saved_ranks = ranks;
+    if (z.partition) {
+      read(&saved_rank, sizeof saved_rank);
+      read(&saved_ranks, sizeof saved_ranks);
+    }
+    if (!in || saved_rank != rank || saved_ranks != ranks)
+      throw InvalidInput(part,
+                         "particle checkpoint written by a run on " + std::to_string(saved_ranks) +
+                             " rank(s), not distributed as this run (" + std::to_string(ranks) +
+                             " ranks)",
+                         "a restart on the number of MPI ranks that wrote the checkpoint");
+    if (n != z.particles.size() || nb != z.bonds.n_bonds())
+      throw InvalidInput(part, "particle checkpoint does not match the scene's particle zone",
+                         "the checkpoint of this run, unchanged Particles parameters");
+    read(&z.time, sizeof z.time);
+    read(&z.explicit_steps, sizeof z.explicit_steps);
+    read(&z.relaxation_iterations, sizeof z.relaxation_iterations);
+    for (auto* field :
+         {&z.particles.displacements(), &z.particles.velocities(), &z.particles.accelerations()})
+      read(field->data(), field->size() * sizeof(dealii::Tensor<1, dim>));
+    read(z.bonds.broken.data(), nb);
+    if (!in)
+      throw InvalidInput(file, "particle checkpoint is truncated", "a complete checkpoint");
+    z.method->initialise(z.particles, z.bonds); // families from the restored intact bonds
+    z.method->load(in);
+    z.account_restored = z.energy.load(in);
+    in.read(reinterpret_cast<char*>(&z.max_speed), sizeof z.max_speed);
+    double seconds = 0; // absent from checkpoints written before it was kept
+    if (in.read(reinterpret_cast<char*>(&seconds), sizeof seconds))
+      z.advance_seconds = seconds;
+  });
   z.verlet->initialise(z.particles);
 }
 

@@ -38,6 +38,7 @@ void Simulation<dim>::write_checkpoint(unsigned int step, double time, RunContex
     triangulation_->save(mesh_file);
   if (particles_ && (ctx.is_root() || particles_->distributed())) // distributed: a file per rank
     particles_->save((tmp_dir / "particles.bin").string());
+  MPI_Barrier(ctx.comm()); // every rank's files are complete before rank 0 publishes them
   if (coupled_)
     coupled_->save((tmp_dir / "coupling.txt").string());
   const nlohmann::json crack_json = crack_ ? crack_->to_json(ctx.comm()) : nlohmann::json();

@@ -33,7 +33,7 @@ spinesim_add_scene_test(meshfree.pd_explicit_throughput_energy SCENE ${_bench}/p
 
 # The LAMMPS ratio itself: spinesim and LAMMPS peri/pmb back to back on the same cube, 5
 # same-minute pairs on 1 and on 2 cores; fails unless both medians reach 8x (the target of
-# docs/benchmarks.md) or LAMMPS is missing. Needs `apt-get install lammps`. Known to fall short
+# docs/benchmarks.md), and fails when LAMMPS is missing. Needs `apt-get install lammps`. Known to fall short
 # today (medians 5.4 and 5.9 with the x86-64-v4 loop, docs/benchmarks.md), hence known_failure.
 add_test(NAME benchmark.pd_lammps_ratio
          COMMAND ${CMAKE_COMMAND} -E env SPINESIM=$<TARGET_FILE:spinesim> MIN_RATIO=8 "CORES=1 2"
@@ -47,7 +47,8 @@ set_tests_properties(benchmark.pd_lammps_ratio PROPERTIES LABELS "benchmark;know
 # thread each. Efficiency = t(1 rank) / t(2 ranks) of the particle stepping
 # (particle_advance_time_s). Measured 0.66-0.67 in 3 pairs; two independent 1-rank runs side by
 # side already reach only 0.85 of a lone one on this 2-core machine (shared memory bandwidth),
-# and rebuilding the Epetra import at every exchange gave 0.50. Floor 0.6.
+# and rebuilding the Epetra import at every exchange gave 0.50. Floor 0.55: the measured value
+# less the 10-20 % scatter of timings on this shared machine, still above that regression.
 spinesim_add_scene_test(benchmark.pd_zone_weak_scaling_1rank
   SCENE ${_bench}/pd_zone_weak_scaling.prm OUT ${CMAKE_CURRENT_BINARY_DIR}/runs/weak_scaling_1
   FIXTURE weak_1 EXPECT "status==ok;particles~13500:0;particle_ranks~1:0"
@@ -63,7 +64,7 @@ set_tests_properties(benchmark.pd_zone_weak_scaling_1rank benchmark.pd_zone_weak
 spinesim_add_comparison_test(benchmark.pd_zone_weak_scaling_efficiency
   A ${CMAKE_CURRENT_BINARY_DIR}/runs/weak_scaling_2/summary.json
   B ${CMAKE_CURRENT_BINARY_DIR}/runs/weak_scaling_1/summary.json
-  CHECKS "particle_advance_time_s:ratio:0.6" REQUIRES "weak_1;weak_2" LABELS "benchmark;mpi")
+  CHECKS "particle_advance_time_s:ratio:0.55" REQUIRES "weak_1;weak_2" LABELS "benchmark;mpi")
 
 # The zone's ghost exchange (Trilinos import, plan made once) against deal.II's ParticleHandler
 # on the same 27 000-particle block, 2 ranks (applications/benchmarks/ghost_exchange.cc). The
