@@ -458,7 +458,7 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
   // reach two search radii (δ plus the partial-volume shell), so the first-layer ghosts'
   // rows are whole for the surface correction.
   const bool distribute = ctx.n_ranks() > 1 && z.method->name() == "bond_based" &&
-                          z.prm.integration == "explicit" && !z.account;
+                          z.prm.integration == "explicit";
   if (distribute)
     z.particles = z.distributed_body(2.0 * (options.horizon + z.prm.spacing) * (1 + 1e-9));
   else
@@ -528,6 +528,8 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
   z.prescribe(0.0);
   z.collectively([&z] { z.set_initial_velocity(); });
   if (z.prm.integration == "explicit") {
+    if (z.partition)
+      z.energy.set_counted(z.partition->n_owned());
     if (z.account)
       z.energy.start(z.particles, z.method->strain_energy(z.particles, z.bonds));
     z.verlet->initialise(z.particles); // forces and accelerations at t = 0
@@ -546,8 +548,8 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
               << " (equal cells: " << z.partition->load_imbalance_unweighted()
               << "), ghosts per owned " << (z.sum(held) - z.sum(owned)) / z.sum(owned) << "\n";
   } else if (ctx.n_ranks() > 1)
-    ctx.log() << "  not distributed (only explicit bond-based zones without an energy account "
-                 "are): every rank holds and advances the whole zone\n";
+    ctx.log() << "  not distributed (only explicit bond-based zones are): every rank holds and "
+                 "advances the whole zone\n";
   for (const auto& message : z.method->take_messages())
     ctx.log() << "  " << message << "\n";
 }
@@ -734,7 +736,16 @@ bool ParticleZone<dim>::energy_account_restored() const {
 
 template <int dim>
 fem::EnergyBalance ParticleZone<dim>::energy_balance() const {
-  return impl_->energy.balance();
+  fem::EnergyBalance b = impl_->energy.balance();
+  if (!impl_->partition)
+    return b;
+  // Each rank's account covers its owned particles and bond rows: the terms add up.
+  for (double* term : {&b.external_work, &b.strain_energy, &b.kinetic_energy,
+                       &b.kinetic_energy_central, &b.fracture_dissipation, &b.damping_dissipation,
+                       &b.initial_energy})
+    *term = impl_->sum(*term);
+  b.valid = !dealii::Utilities::MPI::logical_or(!b.valid, impl_->comm);
+  return b;
 }
 
 template <int dim>

@@ -12,8 +12,8 @@
 // first-layer ghosts have whole families for the surface correction). Bond rows exist for
 // owned particles only, so every sum over rows counts each particle once over the ranks, and
 // each rank writes its part of the output and checkpoint.
-// Other zones (NOSB-PD, quasi-static relaxation, an energy account) are still held and advanced
-// whole and identically on every rank, and rank 0 writes their output.
+// Other zones (NOSB-PD, quasi-static relaxation) are still held and advanced whole and
+// identically on every rank, and rank 0 writes their output.
 
 #include "fem/explicit_energy.h"
 #include "meshfree/particle_set.h"

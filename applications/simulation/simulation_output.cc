@@ -94,7 +94,7 @@ template <int dim>
 fem::EnergyBalance Simulation<dim>::energy_balance() const {
   if (coupled_)
     return coupled_->energy_balance();
-  if (particles_ && !mechanics_) // not distributed: every rank holds the whole account
+  if (particles_ && !mechanics_) // summed over the ranks when the zone is distributed
     return particles_->energy_balance();
   return fem::sum_energy({&mechanics_->energy_account()}, 0.0, mechanics_->mpi_communicator());
 }

@@ -17,7 +17,7 @@ dealii::Tensor<1, dim> ZoneEnergy<dim>::working_force(const meshfree::ParticleSe
 template <int dim>
 void ZoneEnergy<dim>::start(const meshfree::ParticleSet<dim>& p, double stored) {
   double kinetic = 0;
-  for (unsigned int i = 0; i < p.size(); ++i)
+  for (unsigned int i = 0; i < n(p); ++i)
     for (unsigned int d = 0; d < dim; ++d)
       if (!p.is_fixed(i, d))
         kinetic += 0.5 * p.mass(i) * p.velocity(i)[d] * p.velocity(i)[d];
@@ -31,7 +31,7 @@ template <int dim>
 void ZoneEnergy<dim>::before_step(const meshfree::ParticleSet<dim>& p) {
   u_before_ = p.displacements();
   g_before_.resize(p.size());
-  for (unsigned int i = 0; i < p.size(); ++i)
+  for (unsigned int i = 0; i < n(p); ++i)
     g_before_[i] = working_force(p, i);
 }
 
@@ -41,7 +41,7 @@ void ZoneEnergy<dim>::force_pass(const meshfree::ParticleSet<dim>& p, double sto
                                  const std::vector<dealii::Tensor<1, dim>>* forces_before) {
   double lost_work = 0; // ½ (f_before − f_after) · (u_{n+1} − u_n); 0 at t = 0 (no step yet)
   if (forces_before && u_before_.size() == p.size())
-    for (unsigned int i = 0; i < p.size(); ++i)
+    for (unsigned int i = 0; i < n(p); ++i)
       lost_work += 0.5 * ((*forces_before)[i] - p.force(i)) * (p.displacement(i) - u_before_[i]);
   balance_.fracture_dissipation += stored_before - stored_after + lost_work;
   balance_.strain_energy = stored_after;
@@ -51,7 +51,7 @@ template <int dim>
 void ZoneEnergy<dim>::after_step(const meshfree::ParticleSet<dim>& p, double time, double dt,
                                  double damped) {
   double work = 0, kinetic = 0, a2 = 0;
-  for (unsigned int i = 0; i < p.size(); ++i) {
+  for (unsigned int i = 0; i < n(p); ++i) {
     work += 0.5 * (g_before_[i] + working_force(p, i)) * (p.displacement(i) - u_before_[i]);
     for (unsigned int d = 0; d < dim; ++d)
       if (!p.is_fixed(i, d)) {

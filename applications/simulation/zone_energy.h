@@ -18,12 +18,15 @@
 //    the step (trapezoid), so the motion paid only half of the last step's work of the forces
 //    the breaks removed (for a bond stretched in tension the term is negative). Without it the
 //    balance is off by a first-order term in Δt (docs/coupling.md, Energy account).
-// Everything refers to t_{n+1}, the end of the last step. The zone is not distributed (every
-// rank holds all of it), so the account is not summed over ranks.
+// Everything refers to t_{n+1}, the end of the last step. In a distributed zone each rank keeps
+// the account of its owned particles (the first set_counted() of the set; ghosts are fixed but
+// no supports) with the stored energy of its own bond rows: every term is a sum over particles,
+// so the zone's account is the sum of the ranks' (ParticleZone::energy_balance).
 
 #include "fem/explicit_energy.h"
 #include "meshfree/particle_set.h"
 
+#include <algorithm>
 #include <iosfwd>
 #include <vector>
 
@@ -34,6 +37,8 @@ class ZoneEnergy {
  public:
   // The state at t = 0 (initial displacements and velocities set), with its stored energy.
   void start(const meshfree::ParticleSet<dim>& p, double stored);
+  // Only particles [0, n) count (a rank's owned particles); default all.
+  void set_counted(unsigned int n) { counted_ = n; }
   // Before a step, prescribed motion not yet applied: u_n and the forces at t_n.
   void before_step(const meshfree::ParticleSet<dim>& p);
   // A force pass: the stored energy with the bonds before it and after its breaks. In a pass
@@ -52,6 +57,8 @@ class ZoneEnergy {
 
  private:
   fem::EnergyBalance balance_;
+  unsigned int counted_ = ~0u;
+  unsigned int n(const meshfree::ParticleSet<dim>& p) const { return std::min(p.size(), counted_); }
   // u_n and the generalised force G_n that works on it: f_ext on free components, −f_int on
   // prescribed ones (the support force R plus the load).
   std::vector<dealii::Tensor<1, dim>> u_before_, g_before_;

@@ -1,7 +1,7 @@
 # Distributed particle zones (applications/simulation/zone_partition.h, docs/scaling.md): the
-# bond-based ring of stability.cmake flung apart by v0 = 50 m/s, without the energy account (an
-# account keeps the zone whole on every rank), on 1, 2 and 4 ranks (4 oversubscribe the 2
-# cores). Each rank holds the particles of its p4est background cells and, as ghosts, those
+# bond-based ring of stability.cmake flung apart by v0 = 50 m/s, without the energy account
+# (stability.ring_fragmentation_ranks_agree checks the account on 2 ranks), on 1, 2 and 4 ranks
+# (4 oversubscribe the 2 cores). Each rank holds the particles of its p4est background cells and, as ghosts, those
 # within two search radii; a row sums its bonds in local index order, so rank counts differ by
 # round-off in the force sums. Measured: kinetic and strain energies agree to 2e-14 relative,
 # the same 8488 broken bonds, 16 fragments and crack figures. The tolerances: 1e-9 on energies
