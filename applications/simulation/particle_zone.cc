@@ -457,8 +457,8 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
   // Distributed: explicit bond-based zones on more than one rank (particle_zone.h). Ghosts
   // reach two search radii (δ plus the partial-volume shell), so the first-layer ghosts'
   // rows are whole for the surface correction.
-  const bool distribute = ctx.n_ranks() > 1 && z.method->name() == "bond_based" &&
-                          z.prm.integration == "explicit";
+  const bool distribute =
+      ctx.n_ranks() > 1 && z.method->name() == "bond_based" && z.prm.integration == "explicit";
   if (distribute)
     z.particles = z.distributed_body(2.0 * (options.horizon + z.prm.spacing) * (1 + 1e-9));
   else
@@ -740,9 +740,9 @@ fem::EnergyBalance ParticleZone<dim>::energy_balance() const {
   if (!impl_->partition)
     return b;
   // Each rank's account covers its owned particles and bond rows: the terms add up.
-  for (double* term : {&b.external_work, &b.strain_energy, &b.kinetic_energy,
-                       &b.kinetic_energy_central, &b.fracture_dissipation, &b.damping_dissipation,
-                       &b.initial_energy})
+  for (double* term :
+       {&b.external_work, &b.strain_energy, &b.kinetic_energy, &b.kinetic_energy_central,
+        &b.fracture_dissipation, &b.damping_dissipation, &b.initial_energy})
     *term = impl_->sum(*term);
   b.valid = !dealii::Utilities::MPI::logical_or(!b.valid, impl_->comm);
   return b;
