@@ -206,6 +206,20 @@ BondList<dim> NeighborSearch<dim>::extend(const ParticleSet<dim>& particles,
         dirty[previous.neighbor[k]] = 1;
   }
 
+  // Which particles get a row (empty: all).
+  std::vector<std::uint8_t> has_row;
+  if (options_.rows_around_first < n) {
+    has_row.assign(n, 0);
+    for (unsigned int i = 0; i < options_.rows_around_first; ++i) {
+      has_row[i] = 1;
+      grid.around(x[i], [&](unsigned int j) {
+        if ((x[j] - x[i]).norm_square() <= r2)
+          has_row[j] = 1;
+      });
+    }
+  }
+  const auto row = [&has_row](unsigned int i) { return has_row.empty() || has_row[i]; };
+
   BondList<dim> bonds;
   bonds.horizon = delta;
   auto accept = [&](unsigned int i, unsigned int j) {
@@ -223,7 +237,9 @@ BondList<dim> NeighborSearch<dim>::extend(const ParticleSet<dim>& particles,
   for (long ii = 0; ii < nl; ++ii) {
     const unsigned int i = static_cast<unsigned int>(ii);
     std::size_t count = 0;
-    if (dirty[i])
+    if (!row(i))
+      count = 0;
+    else if (dirty[i])
       grid.around(x[i], [&](unsigned int j) { count += accept(i, j) ? 1 : 0; });
     else
       count = previous.end(i) - previous.begin(i);
@@ -241,6 +257,8 @@ BondList<dim> NeighborSearch<dim>::extend(const ParticleSet<dim>& particles,
 #pragma omp parallel for schedule(dynamic, 64) if (nl > parallel_particle_threshold)
   for (long ii = 0; ii < nl; ++ii) {
     const unsigned int i = static_cast<unsigned int>(ii);
+    if (!row(i))
+      continue;
     if (!dirty[i]) {
       // Unchanged row: copied (the same arithmetic on the same inputs would give the same bits).
       const std::size_t from = previous.begin(i), to = bonds.begin(i), m = bonds.end(i) - to;

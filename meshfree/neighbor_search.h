@@ -39,6 +39,11 @@ class NeighborSearch {
     // rank's ghosts, whose families are cut at the edge of what the rank holds) get g = 0
     // where they have no such bond. Default: all.
     unsigned int surface_checked_particles = ~0u;
+    // Rows only for particles [0, n) and their neighbours (within the search radius of one of
+    // them); the others get empty rows. A rank of a distributed zone: its owned particles and
+    // the ghosts whose whole rows the surface correction needs, not the outer ghosts that only
+    // complete those rows. Default: every row.
+    unsigned int rows_around_first = ~0u;
     std::vector<PreCrack<dim>> pre_cracks;
   };
 

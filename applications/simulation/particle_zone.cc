@@ -480,8 +480,10 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
       throw InvalidInput(where, "wrong number of coordinates",
                          dim == 2 ? "two points 'x1,y1; x2,y2'" : "four points of 3 coordinates");
   }
-  if (z.partition) // ghosts at the edge of this rank's cells have cut families
+  if (z.partition) { // rows for owned particles and the ghosts bonded to them, checked for owned
+    options.rows_around_first = z.partition->n_owned();
     options.surface_checked_particles = z.partition->n_owned();
+  }
   z.collectively([&] { z.bonds = meshfree::NeighborSearch<dim>(options).build(z.particles); });
   if (z.partition) {
     z.bonds.keep_rows(z.partition->n_owned()); // forces are summed for owned particles only

@@ -212,6 +212,57 @@ void check_surface_correction() {
   }
 }
 
+// Rows only around the first m particles (a rank's owned particles of a distributed zone):
+// those rows and their neighbours' rows are the full build's, bit for bit, including the
+// surface factors of the first m (their partners' rows are whole); every other row is empty.
+template <int dim>
+void check_rows_around_first() {
+  const double h = 1.0;
+  unsigned int n[dim];
+  for (unsigned int d = 0; d < dim; ++d)
+    n[d] = dim == 2 ? 16 : 10;
+  const auto p = test::box<dim>(n, h);
+  typename NeighborSearch<dim>::Options o;
+  o.horizon = 3.015 * h;
+  o.partial_volume = true;
+  o.surface_correction = true;
+  const auto full = NeighborSearch<dim>(o).build(p);
+  const unsigned int m = p.size() / 4; // the first rows of the box (x fastest)
+  o.rows_around_first = m;
+  o.surface_checked_particles = m;
+  const auto part = NeighborSearch<dim>(o).build(p);
+  ASSERT_EQ(part.n_particles(), full.n_particles());
+  std::vector<std::uint8_t> near(p.size(), 0);
+  for (unsigned int i = 0; i < m; ++i) {
+    near[i] = 1;
+    for (std::size_t k = full.begin(i); k < full.end(i); ++k)
+      near[full.neighbor[k]] = 1;
+  }
+  unsigned int empty = 0;
+  for (unsigned int i = 0; i < p.size(); ++i) {
+    if (!near[i]) {
+      EXPECT_EQ(part.end(i), part.begin(i)) << "particle " << i;
+      ++empty;
+      continue;
+    }
+    ASSERT_EQ(part.end(i) - part.begin(i), full.end(i) - full.begin(i)) << "particle " << i;
+    for (std::size_t k = part.begin(i), q = full.begin(i); k < part.end(i); ++k, ++q) {
+      EXPECT_EQ(part.neighbor[k], full.neighbor[q]);
+      EXPECT_EQ(part.volume_fraction[k], full.volume_fraction[q]);
+      if (i < m)
+        EXPECT_EQ(part.surface_factor[k], full.surface_factor[q]) << "particle " << i;
+    }
+  }
+  EXPECT_GT(empty, 0u); // the option did leave rows out
+}
+
+TEST(NeighborSearch, RowsAroundFirst2D) {
+  check_rows_around_first<2>();
+}
+TEST(NeighborSearch, RowsAroundFirst3D) {
+  check_rows_around_first<3>();
+}
+
 TEST(NeighborSearch, SurfaceCorrection2D) {
   check_surface_correction<2>();
 }
