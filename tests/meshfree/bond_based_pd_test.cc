@@ -60,6 +60,24 @@ double bond_force_scale(const BondBasedPD<dim>& pd, const ParticleSet<dim>& p,
   return s;
 }
 
+// The force loop's view (meshfree/pmb_force_rows.h) of particles p with bonds b, stiffness of
+// pd, forces into `force`, critical stretch s0.
+template <int dim>
+PmbForceRows<dim> force_rows(ParticleSet<dim>& p, BondList<dim>& b, const BondBasedPD<dim>& pd,
+                             std::vector<double>& force, double s0) {
+  return {&p.reference_positions()[0][0],
+          &p.displacements()[0][0],
+          force.data(),
+          p.volumes().data(),
+          b.offsets.data(),
+          b.neighbor.data(),
+          b.length.data(),
+          pd.bond_stiffness().data(),
+          b.broken.data(),
+          s0,
+          p.size()};
+}
+
 } // namespace
 
 TEST(BondBasedPD, MicromodulusClosedForms2D) {
@@ -462,17 +480,7 @@ void check_force_loop_variants_agree() {
     std::vector<double> force(dim * p.size());
     // s0 between the smallest and largest stretch (displacements up to 1 % of h, bonds of at
     // least h: stretches up to 2 %); 0.5 % breaks some bonds but not all.
-    const PmbForceRows<dim> rows{&p.reference_positions()[0][0],
-                                 &p.displacements()[0][0],
-                                 force.data(),
-                                 p.volumes().data(),
-                                 b.offsets.data(),
-                                 b.neighbor.data(),
-                                 b.length.data(),
-                                 pd.bond_stiffness().data(),
-                                 b.broken.data(),
-                                 5e-3,
-                                 p.size()};
+    const PmbForceRows<dim> rows = force_rows(p, b, pd, force, 5e-3);
     int bad = 0;
     // Two calls on halves: a row's forces must not depend on where a range starts.
     const std::size_t half = p.size() / 2;
@@ -520,17 +528,7 @@ void check_broken_bond_keeps_non_finite_visible() {
   for (const char* variant : pmb_force_rows_variants()) {
     auto b = bonds;
     std::vector<double> force(dim * p.size());
-    const PmbForceRows<dim> rows{&p.reference_positions()[0][0],
-                                 &p.displacements()[0][0],
-                                 force.data(),
-                                 p.volumes().data(),
-                                 b.offsets.data(),
-                                 b.neighbor.data(),
-                                 b.length.data(),
-                                 pd.bond_stiffness().data(),
-                                 b.broken.data(),
-                                 5e-3,
-                                 p.size()};
+    const PmbForceRows<dim> rows = force_rows(p, b, pd, force, 5e-3);
     int bad = 0;
     EXPECT_EQ(pmb_force_rows_variant(variant, rows, 0, 1, bad), 0u) << variant; // row 0 only
     EXPECT_EQ(bad, 1) << variant;
