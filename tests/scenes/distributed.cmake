@@ -89,3 +89,32 @@ spinesim_add_scene_test(distributed.ring_nonfinite_force_on_one_rank SCENE ${_di
       "Particles/Region 1/Components=y" "Particles/Region 1/Values=-1e300*t"
   EXIT 1 MATCH "non-finite peridynamic force.*MPI rank [01].*when: +step 1"
   LABELS "scene;particles;hostile;stability")
+
+# Runs not distributed yet give the same figures on 1, 2 and 4 ranks, bit for bit (every rank
+# runs the whole problem with the same deterministic loops; docs/scaling.md, "What is
+# distributed"): the NOSB-PD ring breathing with its energy account (2 s), and the implicit PD
+# solver study of Jo & Ha (2021) on MPI_COMM_SELF (9 s).
+set(_nosb_ring_set "Effects/Damage=false" "Effects/Particles method=nosb"
+                   "Particles/NOSB/Stabilization=penalty")
+foreach(_ranks 1 2 4)
+  spinesim_add_scene_test(distributed.nosb_ring_breathing_${_ranks}ranks SCENE ${_dist_ring}
+    RANKS ${_ranks} SET ${_nosb_ring_set} OUT ${_dist_runs}/nosb_ring_${_ranks}
+    FIXTURE dist_nosb_ring_${_ranks} EXPECT "status==ok;particle_ranks~1:0"
+    LABELS "scene;particles")
+endforeach()
+foreach(_ranks 2 4)
+  spinesim_add_comparison_test(distributed.nosb_ring_1_vs_${_ranks}_ranks
+    A ${_dist_runs}/nosb_ring_1/summary.json B ${_dist_runs}/nosb_ring_${_ranks}/summary.json
+    CHECKS "energy_balance_error_relative:rel:0;kinetic_energy_J:rel:0;strain_energy_J:rel:0;max_particle_speed:rel:0"
+    REQUIRES "dist_nosb_ring_1;dist_nosb_ring_${_ranks}" LABELS "scene;particles;mpi")
+endforeach()
+foreach(_ranks 1 2)
+  spinesim_add_scene_test(distributed.pd_solver_study_${_ranks}ranks
+    SCENE ${PROJECT_SOURCE_DIR}/applications/validation/pd_cracked_plate.prm RANKS ${_ranks}
+    OUT ${_dist_runs}/pd_study_${_ranks} FIXTURE dist_pd_study_${_ranks} EXPECT "status==ok"
+    LABELS "scene;meshfree" TIMEOUT 300)
+endforeach()
+spinesim_add_comparison_test(distributed.pd_solver_study_1_vs_2_ranks
+  A ${_dist_runs}/pd_study_1/summary.json B ${_dist_runs}/pd_study_2/summary.json
+  CHECKS "kappa_h_ratio_min:rel:0;kappa_h_ratio_max:rel:0;mg_max_iterations:abs:0;amg_max_iterations:abs:0;cg_iterations_over_paper_k5:rel:0"
+  REQUIRES "dist_pd_study_1;dist_pd_study_2" LABELS "scene;meshfree;mpi")
