@@ -264,7 +264,7 @@ struct ParticleZone<dim>::Impl {
       energy.force_pass(p, before, before, nullptr);
   }
 
-  // Whether lattice point x lies in the body's shape.
+  // Whether lattice point x lies in the body's shape (the Centre was checked in setup()).
   bool in_shape(const dealii::Point<dim>& x) const {
     if (prm.shape == "box")
       return true;
@@ -319,9 +319,9 @@ struct ParticleZone<dim>::Impl {
     particles = local_set();
   }
 
-  // The lattice points of the box inside the shape.
+  // The lattice points of the box inside the shape (the whole zone, on this rank).
   meshfree::ParticleSet<dim> body() const {
-    dealii::Point<dim> lo, hi, c;
+    dealii::Point<dim> lo, hi;
     for (unsigned int d = 0; d < dim; ++d) {
       lo[d] = prm.lower[d];
       hi[d] = prm.upper[d];
@@ -329,25 +329,13 @@ struct ParticleZone<dim>::Impl {
     auto lattice = meshfree::ParticleSet<dim>::lattice(lo, hi, prm.spacing, method->thickness());
     if (prm.shape == "box")
       return lattice;
-    if (prm.centre.size() < dim)
-      throw InvalidInput("Particles/Centre", "needs one coordinate per dimension",
-                         std::to_string(dim) + " comma-separated values [m]");
-    for (unsigned int d = 0; d < dim; ++d)
-      c[d] = prm.centre[d];
-    const unsigned int radial_dims = prm.shape == "annulus" ? 2 : dim;
     std::vector<dealii::Point<dim>> points;
     std::vector<double> volumes;
-    for (unsigned int i = 0; i < lattice.size(); ++i) {
-      const auto& x = lattice.reference_position(i);
-      double r2 = 0;
-      for (unsigned int d = 0; d < radial_dims; ++d)
-        r2 += (x[d] - c[d]) * (x[d] - c[d]);
-      const double r = std::sqrt(r2);
-      if (r >= prm.inner_radius && r <= prm.outer_radius) {
-        points.push_back(x);
+    for (unsigned int i = 0; i < lattice.size(); ++i)
+      if (in_shape(lattice.reference_position(i))) {
+        points.push_back(lattice.reference_position(i));
         volumes.push_back(lattice.volume(i));
       }
-    }
     if (points.empty())
       throw InvalidInput("Particles/Shape", prm.shape + " holds no lattice point of the box",
                          "radii and a centre that put the shape inside the box");
