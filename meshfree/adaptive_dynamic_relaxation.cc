@@ -55,10 +55,11 @@ AdaptiveDynamicRelaxation<dim>::solve(ParticleSet<dim>& p,
 
   // Forces at the current state; the sums of the free components (residual, stiffness
   // estimate) and of the fixed ones (reactions), and ‖f_ext‖.
+  const unsigned int counted = std::min(n, distribution_.counted);
   auto evaluate = [&](RelaxationSums& sums, double& external) {
     compute_forces_(p);
     double s_ext = 0;
-    for (unsigned int i = 0; i < n; ++i)
+    for (unsigned int i = 0; i < counted; ++i)
       for (unsigned int d = 0; d < dim; ++d) {
         s_ext += fe[i][d] * fe[i][d];
         if (p.is_fixed(i, d)) {
@@ -70,9 +71,10 @@ AdaptiveDynamicRelaxation<dim>::solve(ParticleSet<dim>& p,
         acceleration[dim * i + d] = a;
         sums.add_free(r, a, previous[dim * i + d], u[i][d], v[i][d], 1.0);
       }
-    external = std::sqrt(s_ext);
-    if (!std::isfinite(sums.residual_square)) {
-      for (unsigned int i = 0; i < n; ++i)
+    const auto check = [&] {
+      if (std::isfinite(sums.residual_square))
+        return;
+      for (unsigned int i = 0; i < counted; ++i)
         for (unsigned int d = 0; d < dim; ++d)
           if (!p.is_fixed(i, d) && !std::isfinite(acceleration[dim * i + d])) {
             std::ostringstream where;
@@ -80,7 +82,22 @@ AdaptiveDynamicRelaxation<dim>::solve(ParticleSet<dim>& p,
             throw NumericalFailure("non-finite force in dynamic relaxation", where.str(),
                                    "check the stiffness bound passed to the relaxation");
           }
+    };
+    if (distribution_.collectively)
+      distribution_.collectively(check);
+    else
+      check();
+    if (distribution_.sum) {
+      std::vector<double> all{sums.stiffness_numerator, sums.stiffness_denominator,
+                              sums.residual_square, sums.reaction_square, s_ext};
+      distribution_.sum(all);
+      sums.stiffness_numerator = all[0];
+      sums.stiffness_denominator = all[1];
+      sums.residual_square = all[2];
+      sums.reaction_square = all[3];
+      s_ext = all[4];
     }
+    external = std::sqrt(s_ext);
   };
 
   Result result;

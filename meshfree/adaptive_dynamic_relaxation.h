@@ -46,6 +46,19 @@ class AdaptiveDynamicRelaxation {
 
   AdaptiveDynamicRelaxation(const Parameters& parameters, ForceFunction compute_forces);
 
+  // A relaxation over several ranks, each holding its owned particles first and fixed ghosts
+  // after them (a distributed particle zone): only particles [0, counted) enter the sums, which
+  // `sum` adds over the ranks in place (the damping, residual and convergence test are then
+  // those of the whole problem, the same on every rank), and the local check for a non-finite
+  // force runs through `collectively`, which must rethrow the first failing rank's exception on
+  // every rank. compute_forces must refresh the ghosts itself.
+  struct Distribution {
+    unsigned int counted = ~0u;
+    std::function<void(std::vector<double>&)> sum;
+    std::function<void(const std::function<void()>&)> collectively;
+  };
+  void set_distribution(Distribution distribution) { distribution_ = std::move(distribution); }
+
   // Relaxes the displacements of the free components. `stiffness_bound` S_i = Σ_j V_j C_ij
   // [N/m^4] per particle (BondBasedPD::stiffness_bound). Velocities are pseudo-velocities and
   // are zeroed on return. NumericalFailure on a non-finite state.
@@ -54,6 +67,7 @@ class AdaptiveDynamicRelaxation {
  private:
   Parameters prm_;
   ForceFunction compute_forces_;
+  Distribution distribution_;
 };
 
 } // namespace spinesim::meshfree

@@ -87,6 +87,11 @@ class ParticleMethod {
   // Particles whose motion is prescribed from outside (the ghosts of a coupled run): a bond
   // between two of them never breaks. Empty = none. Call before initialise().
   virtual void set_driven(std::vector<std::uint8_t> driven) { (void)driven; }
+  // Particles [first, size) are ghosts of a distributed zone: copies of other ranks' particles
+  // that the exchange moves, held so that the rows of the owned ones are whole. Their forces
+  // are not used; a ghost without a bond row has no family by design, and a ghost's failure is
+  // its owner's to report. Default: no ghosts. Call before initialise().
+  virtual void set_first_ghost(unsigned int first) { (void)first; }
 
   // Neighbour requirements for a particle spacing h: search radius (horizon or support),
   // influence function, partial volumes, surface correction.
@@ -110,7 +115,8 @@ class ParticleMethod {
   virtual double stable_time_step(const ParticleSet<dim>& particles, const BondList<dim>& bonds,
                                   double safety) = 0;
 
-  // Stored energy density W_i per particle [J/m^3] and the total Σ W_i V_i [J].
+  // Stored energy density W_i per particle [J/m^3] and the total Σ W_i V_i [J] (the total over
+  // the particles before the first ghost, set_first_ghost()).
   virtual std::vector<double> strain_energy_density(const ParticleSet<dim>& particles,
                                                     const BondList<dim>& bonds) const = 0;
   virtual double strain_energy(const ParticleSet<dim>& particles,

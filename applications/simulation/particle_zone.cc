@@ -304,19 +304,37 @@ struct ParticleZone<dim>::Impl {
     return set;
   }
 
-  // After the bonds are built and the ghosts' rows dropped: only the ghosts bonded to an owned
-  // particle stay (the second layer served the first layer's surface correction).
+  // After the bonds are built (and, for a method whose forces need no neighbour rows, the
+  // ghosts' rows dropped): only the ghosts some kept row bonds to stay. Bond-based: the first
+  // layer (the second served its surface correction). NOSB-PD: both layers, the second
+  // completing the first-layer ghosts' families, which the owned particles' forces gather.
   void drop_unbonded_ghosts() {
-    const unsigned int n_owned = partition->n_owned();
-    std::vector<std::uint8_t> keep(particles.size() - n_owned, 0);
+    const unsigned int n_owned = partition->n_owned(), n = particles.size();
+    std::vector<std::uint8_t> keep(n - n_owned, 0);
     for (const unsigned int j : bonds.neighbor)
       if (j >= n_owned)
         keep[j - n_owned] = 1;
     const std::vector<unsigned int> index = partition->keep_ghosts(keep);
     for (unsigned int& j : bonds.neighbor)
       j = index[j];
-    bonds.offsets.resize(partition->points().size() + 1);
+    // A dropped ghost has an empty row (a row's particle is bonded to an owned one, so kept).
+    std::vector<std::size_t> offsets(partition->points().size() + 1, 0);
+    for (unsigned int i = 0; i < n; ++i)
+      if (index[i] != ~0u)
+        offsets[index[i] + 1] = bonds.offsets[i + 1];
+      else if (bonds.offsets[i + 1] != bonds.offsets[i])
+        throw std::logic_error("particle zone: a dropped ghost has a bond row");
+    bonds.offsets = std::move(offsets);
     particles = local_set();
+  }
+
+  // Bond ends in the owned particles' rows (the ghosts' rows are their owners' to count).
+  std::size_t owned_bond_ends() const { return bonds.offsets[n_owned()]; }
+  std::size_t owned_broken_ends() const {
+    std::size_t broken = 0;
+    for (std::size_t k = 0; k < owned_bond_ends(); ++k)
+      broken += bonds.broken[k] ? 1 : 0;
+    return broken;
   }
 
   // The lattice points of the box inside the shape (the whole zone, on this rank).
@@ -442,11 +460,10 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
     throw InvalidInput("Particles/Centre", "needs one coordinate per dimension",
                        std::to_string(dim) + " comma-separated values [m]");
   auto options = z.method->neighbor_options(z.prm.spacing);
-  // Distributed: explicit bond-based zones on more than one rank (particle_zone.h). Ghosts
-  // reach two search radii (δ plus the partial-volume shell), so the first-layer ghosts'
-  // rows are whole for the surface correction.
-  const bool distribute =
-      ctx.n_ranks() > 1 && z.method->name() == "bond_based" && z.prm.integration == "explicit";
+  // Distributed on more than one rank (particle_zone.h). Ghosts reach two search radii (δ plus
+  // the partial-volume shell), so the first-layer ghosts' rows are whole: for bond-based PD's
+  // surface correction, for NOSB-PD's families.
+  const bool distribute = ctx.n_ranks() > 1;
   if (distribute)
     z.particles = z.distributed_body(2.0 * (options.horizon + z.prm.spacing) * (1 + 1e-9));
   else
@@ -474,11 +491,16 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
   }
   z.collectively([&] { z.bonds = meshfree::NeighborSearch<dim>(options).build(z.particles); });
   if (z.partition) {
-    z.bonds.keep_rows(z.partition->n_owned()); // forces are summed for owned particles only
+    // Forces are summed for owned particles only; a NOSB-PD force also gathers the families
+    // of the first-layer ghosts, so their rows stay (and are updated the same way on every
+    // rank that holds them: the same displacements, the same breaks).
+    if (!z.method->needs_neighbour_rows())
+      z.bonds.keep_rows(z.partition->n_owned());
     z.drop_unbonded_ghosts();
+    z.method->set_first_ghost(z.partition->n_owned());
   }
-  z.broken_initially = std::size_t(z.sum(z.bonds.n_broken()));
-  z.n_bonds_global = std::uint64_t(z.sum(z.bonds.n_bonds())) / 2;
+  z.broken_initially = std::size_t(z.sum(z.owned_broken_ends()));
+  z.n_bonds_global = std::uint64_t(z.sum(z.owned_bond_ends())) / 2;
   z.n_global = std::uint64_t(z.sum(z.n_owned()));
   z.method->initialise(z.particles, z.bonds);
   z.stiffness_bound = z.method->stiffness_bound(z.particles, z.bonds);
@@ -537,9 +559,7 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
               << z.partition->load_imbalance()
               << " (equal cells: " << z.partition->load_imbalance_unweighted()
               << "), ghosts per owned " << (z.sum(held) - z.sum(owned)) / z.sum(owned) << "\n";
-  } else if (ctx.n_ranks() > 1)
-    ctx.log() << "  not distributed (only explicit bond-based zones are): every rank holds and "
-                 "advances the whole zone\n";
+  }
   for (const auto& message : z.method->take_messages())
     ctx.log() << "  " << message << "\n";
 }
@@ -558,6 +578,13 @@ void ParticleZone<dim>::advance_to(double time) {
     z.prescribe(time);
     meshfree::AdaptiveDynamicRelaxation<dim> adr(
         z.adr_prm, [&z](meshfree::ParticleSet<dim>& p) { z.compute_forces(p); });
+    if (z.partition) // sums over the owned particles of all ranks
+      adr.set_distribution({z.n_owned(),
+                            [&z](std::vector<double>& values) {
+                              MPI_Allreduce(MPI_IN_PLACE, values.data(), int(values.size()),
+                                            MPI_DOUBLE, MPI_SUM, z.comm);
+                            },
+                            [&z](const std::function<void()>& f) { z.collectively(f); }});
     const auto result = adr.solve(z.particles, z.stiffness_bound);
     z.relaxation_iterations += result.iterations;
     if (!result.converged)
@@ -616,7 +643,7 @@ void ParticleZone<dim>::add_history(std::vector<std::pair<std::string, double>>&
     max_damage = std::max(max_damage, z.particles.damage(i));
   row.emplace_back("particle_kinetic_energy", z.sum(z.particles.kinetic_energy()));
   row.emplace_back("particle_strain_energy", z.sum(z.method->strain_energy(z.particles, z.bonds)));
-  row.emplace_back("broken_bonds", (z.sum(z.bonds.n_broken()) - z.broken_initially) / 2);
+  row.emplace_back("broken_bonds", (z.sum(z.owned_broken_ends()) - z.broken_initially) / 2);
   row.emplace_back("max_damage", z.max(max_damage));
   row.emplace_back("fragments", z.fragments().fragments);
   if (z.prm.reaction_region > 0) {
@@ -680,7 +707,7 @@ void ParticleZone<dim>::add_figures(RunContext& ctx) const {
     free += !z.particles.is_fixed(i);
   s.set_figure("free_particles", z.sum(free), "-");
   s.set_figure("bonds", double(z.n_bonds_global), "-");
-  s.set_figure("broken_bonds", (z.sum(z.bonds.n_broken()) - z.broken_initially) / 2, "-");
+  s.set_figure("broken_bonds", (z.sum(z.owned_broken_ends()) - z.broken_initially) / 2, "-");
   s.set_figure("particle_strain_energy", z.sum(z.method->strain_energy(z.particles, z.bonds)), "J");
   s.set_figure("particle_kinetic_energy", z.sum(z.particles.kinetic_energy()), "J");
   s.set_figure("particle_stable_time_step", z.dt_stable, "s");
@@ -791,6 +818,10 @@ void ParticleZone<dim>::save(const std::string& file) const {
     out.write(reinterpret_cast<const char*>(&z.max_speed), sizeof z.max_speed);
     // The stepping time so far, so particle_advance_time_s covers the whole run after a restart.
     out.write(reinterpret_cast<const char*>(&z.advance_seconds), sizeof z.advance_seconds);
+    // The forces of the last pass, which the restart keeps instead of its own pass: with a
+    // history-dependent law that pass would start from the history the last one committed and
+    // return-map the same F once more (equal only to round-off, ~1e-15).
+    write(z.particles.forces().data(), z.particles.size() * sizeof(dealii::Tensor<1, dim>));
     if (!out)
       throw std::runtime_error("cannot write particle checkpoint " + file);
   });
@@ -799,6 +830,7 @@ void ParticleZone<dim>::save(const std::string& file) const {
 template <int dim>
 void ParticleZone<dim>::load(const std::string& file) {
   Impl& z = *impl_;
+  std::vector<dealii::Tensor<1, dim>> forces, accelerations; // of the last pass, if saved
   // Every check fails on all ranks alike; the force pass below is collective.
   z.collectively([&] {
     const unsigned int rank = dealii::Utilities::MPI::this_mpi_process(z.comm),
@@ -851,8 +883,18 @@ void ParticleZone<dim>::load(const std::string& file) {
     double seconds = 0; // absent from checkpoints written before it was kept
     if (in.read(reinterpret_cast<char*>(&seconds), sizeof seconds))
       z.advance_seconds = seconds;
+    forces.resize(z.particles.size());
+    if (!in.read(reinterpret_cast<char*>(forces.data()), forces.size() * sizeof(forces[0])))
+      forces.clear(); // a checkpoint written before they were kept
+    accelerations = z.particles.accelerations();
   });
+  // The pass refreshes the method's own per-pass data (deformation gradients for output, the
+  // trial history the next step replaces); the saved forces, where present, then stand.
   z.verlet->initialise(z.particles);
+  if (!forces.empty()) {
+    z.particles.forces() = forces;
+    z.particles.accelerations() = accelerations;
+  }
 }
 
 template <int dim>

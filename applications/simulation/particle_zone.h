@@ -6,14 +6,14 @@
 // displacements of particle regions, with pre-cracks, advanced explicitly (velocity Verlet,
 // sub-stepped at the stable step) or quasi-statically (adaptive dynamic relaxation at every step).
 //
-// MPI: an explicit bond-based zone is distributed (zone_partition.h): each rank holds the
-// particles of its p4est background cells and, as fixed ghosts refreshed before every force
-// pass, those bonded to them (the bonds are built with ghosts two search radii deep, so that
-// first-layer ghosts have whole families for the surface correction). Bond rows exist for
-// owned particles only, so every sum over rows counts each particle once over the ranks, and
-// each rank writes its part of the output and checkpoint.
-// Other zones (NOSB-PD, quasi-static relaxation) are still held and advanced whole and
-// identically on every rank, and rank 0 writes their output.
+// MPI: a zone on several ranks is distributed (zone_partition.h): each rank holds the particles
+// of its p4est background cells and, as fixed ghosts refreshed before every force pass, those
+// within two search radii. Bond-based PD keeps rows for owned particles only (the second ghost
+// layer served the first layer's surface correction); NOSB-PD also keeps the first-layer
+// ghosts' rows, so their families, which an owned particle's force gathers, are whole, and
+// updates them as their owners do. Every sum over particles counts the owned ones, so it counts
+// each particle once over the ranks (dynamic relaxation's sums included), and each rank writes
+// its part of the output and checkpoint.
 
 #include "fem/explicit_energy.h"
 #include "meshfree/particle_set.h"

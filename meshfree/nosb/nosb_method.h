@@ -61,6 +61,7 @@ class NosbMethod : public ParticleMethod<dim> {
     driven_ = driven;
     pd_.set_driven(std::move(driven));
   }
+  void set_first_ghost(unsigned int first) override { pd_.set_first_ghost(first); }
   std::optional<std::vector<dealii::Tensor<1, dim>>>
   driven_reactions(const ParticleSet<dim>& particles, const BondList<dim>& bonds) const override;
   std::optional<std::vector<double>>

@@ -106,10 +106,11 @@ void NosbPD<dim>::update_families(const ParticleSet<dim>& particles, const BondL
     bond_families_.build(particles, bonds, o);
   }
   // Driven particles without a row (coupling ghosts beyond a horizon of the free ones) have
-  // no family by design: not a failure worth a message.
+  // no family by design: not a failure worth a message. A distributed zone's ghosts are
+  // reported by their owners.
   std::vector<unsigned int> reported;
   for (const unsigned int i : newly)
-    if (driven_.empty() || !driven_[i] || bonds.end(i) > bonds.begin(i))
+    if (i < first_ghost_ && (driven_.empty() || !driven_[i] || bonds.end(i) > bonds.begin(i)))
       reported.push_back(i);
   log_failed(particles, reported);
   ++families_version_;
@@ -543,8 +544,9 @@ double NosbPD<dim>::family_energy(unsigned int e, const ParticleSet<dim>& partic
 template <int dim>
 double NosbPD<dim>::strain_energy(const ParticleSet<dim>& particles) const {
   double E = 0;
-  for (unsigned int e = 0; e < families().n_families(); ++e)
-    E += family_energy(e, particles);
+  const auto& fam = families();
+  for (unsigned int e = 0; e < fam.n_families() && fam.centre(e) < first_ghost_; ++e)
+    E += family_energy(e, particles); // families come in centre order: ghosts' last
   return E;
 }
 

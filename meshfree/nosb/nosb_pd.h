@@ -120,8 +120,9 @@ class NosbPD {
   double stable_time_step(const ParticleSet<dim>& particles, const BondList<dim>& bonds,
                           double safety);
 
-  // Stored energy Σ_e w_e W(F_e) [J]; W(F) = ∫_0^1 P(I + t(F−I)) : (F − I) dt (4-point Gauss;
-  // exact for St. Venant–Kirchhoff, the stored energy for any hyperelastic law).
+  // Stored energy Σ_e w_e W(F_e) [J] of the families centred on non-ghost particles; W(F) = ∫_0^1
+  // P(I + t(F−I)) : (F − I) dt (4-point Gauss; exact for St. Venant–Kirchhoff, the stored energy
+  // for any hyperelastic law).
   double strain_energy(const ParticleSet<dim>& particles) const;
   // The same energy per particle: each family's w_e W(F_e) goes to its centre particle, over
   // that particle's volume [J/m^3].
@@ -179,6 +180,9 @@ class NosbPD {
   void set_reference_temperature(double T) { reference_temperature_ = T; }
   // Driven particles (coupling ghosts): a bond between two of them never breaks.
   void set_driven(std::vector<std::uint8_t> driven) { driven_ = std::move(driven); }
+  // Particles [first, size) are a distributed zone's ghosts (ParticleMethod::set_first_ghost):
+  // their owners report their failures.
+  void set_first_ghost(unsigned int first) { first_ghost_ = first; }
   // Bytes of the families, gradients, states and indices (capacities).
   std::size_t memory_bytes() const {
     return particle_families_.memory_bytes() + bond_families_.memory_bytes() +
@@ -214,6 +218,7 @@ class NosbPD {
   std::vector<std::size_t> particle_history_begin_; // history indices of particle i: [b_i, b_i+1)
   double reference_temperature_ = 0;
   std::vector<std::uint8_t> driven_;
+  unsigned int first_ghost_ = ~0u;
   std::vector<std::string> messages_;
   unsigned long families_version_ = 0, pattern_version_ = ~0ul;
   // Transpose of the families' node lists for the force gather: per particle, the entries q

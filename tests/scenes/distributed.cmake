@@ -90,24 +90,93 @@ spinesim_add_scene_test(distributed.ring_nonfinite_force_on_one_rank SCENE ${_di
   EXIT 1 MATCH "non-finite peridynamic force.*MPI rank [01].*when: +step 1"
   LABELS "scene;particles;hostile;stability")
 
-# Runs not distributed yet give the same figures on 1, 2 and 4 ranks, bit for bit (every rank
-# runs the whole problem with the same deterministic loops; docs/scaling.md, "What is
-# distributed"): the NOSB-PD ring breathing with its energy account (2 s), and the implicit PD
-# solver study of Jo & Ha (2021) on MPI_COMM_SELF (9 s).
+# NOSB-PD zones distributed the same way, with the first-layer ghosts' rows kept: an owned
+# particle's force gathers its neighbours' families (P_j K_j⁻¹), so every rank holding a ghost
+# builds, breaks and evaluates that ghost's family as its owner does, from the same exchanged
+# displacements. Checked on the ring breathing with the penalty control and the energy account
+# (1, 2, 4 ranks), on the fragmenting ring with bond-associated families (1, 2 ranks, 18 s and
+# 11 s), on the 3-D tube breathing (1, 2 ranks) and with J2 plasticity, stopped and restarted
+# on 2 ranks (the method's history goes into each rank's checkpoint). Measured: energies and
+# the balance agree to 2e-14 relative (the chaotic fragmenting run included: the same 18 656
+# broken bonds and 40 fragments); the tolerances are those of the bond-based ring above. The
+# 3-D tube fails with Damage on at step 11 (det F < 0 at the same particle on 1 and 2 ranks:
+# NOSB-PD fracture, docs/coupling.md), so it runs without.
+set(_nosb_checks "particle_kinetic_energy:rel:1e-9;particle_strain_energy:rel:1e-9;max_particle_speed:rel:1e-9")
 set(_nosb_ring_set "Effects/Damage=false" "Effects/Particles method=nosb"
                    "Particles/NOSB/Stabilization=penalty")
 foreach(_ranks 1 2 4)
   spinesim_add_scene_test(distributed.nosb_ring_breathing_${_ranks}ranks SCENE ${_dist_ring}
     RANKS ${_ranks} SET ${_nosb_ring_set} OUT ${_dist_runs}/nosb_ring_${_ranks}
-    FIXTURE dist_nosb_ring_${_ranks} EXPECT "status==ok;particle_ranks~1:0"
+    FIXTURE dist_nosb_ring_${_ranks} EXPECT "status==ok;particle_ranks~${_ranks}:0;particles~1484:0"
     LABELS "scene;particles")
 endforeach()
 foreach(_ranks 2 4)
   spinesim_add_comparison_test(distributed.nosb_ring_1_vs_${_ranks}_ranks
     A ${_dist_runs}/nosb_ring_1/summary.json B ${_dist_runs}/nosb_ring_${_ranks}/summary.json
-    CHECKS "energy_balance_error_relative:rel:0;kinetic_energy_J:rel:0;strain_energy_J:rel:0;max_particle_speed:rel:0"
+    CHECKS "${_nosb_checks};energy_balance_error_relative:rel:1e-9"
     REQUIRES "dist_nosb_ring_1;dist_nosb_ring_${_ranks}" LABELS "scene;particles;mpi")
 endforeach()
+# Per rank on 2 ranks: measured 0.54 of 1 rank (two ghost layers, 44 % ghosts per owned).
+spinesim_add_comparison_test(distributed.nosb_ring_memory_per_rank
+  A ${_dist_runs}/nosb_ring_1/summary.json B ${_dist_runs}/nosb_ring_2/summary.json
+  CHECKS "particle_memory_per_rank_max_bytes:ratio_max:0.6"
+  REQUIRES "dist_nosb_ring_1;dist_nosb_ring_2" LABELS "scene;particles;mpi")
+foreach(_ranks 1 2)
+  spinesim_add_scene_test(distributed.nosb_ring_fragmentation_${_ranks}ranks SCENE ${_dist_ring}
+    RANKS ${_ranks} SET "Effects/Particles method=nosb" OUT ${_dist_runs}/nosb_frag_${_ranks}
+    FIXTURE dist_nosb_frag_${_ranks} EXPECT "status==ok;particle_ranks~${_ranks}:0;fragments>=2"
+    LABELS "scene;particles;stability" TIMEOUT 120)
+  spinesim_add_scene_test(distributed.nosb_tube_breathing_3d_${_ranks}ranks SCENE ${_dist_ring3}
+    RANKS ${_ranks} SET ${_nosb_ring_set} "Simulation/End time=4e-5" "Simulation/Steps=20"
+    OUT ${_dist_runs}/nosb_tube_${_ranks} FIXTURE dist_nosb_tube_${_ranks}
+    EXPECT "status==ok;particle_ranks~${_ranks}:0;particles~5936:0" LABELS "scene;particles")
+endforeach()
+spinesim_add_comparison_test(distributed.nosb_ring_fragmentation_1_vs_2_ranks
+  A ${_dist_runs}/nosb_frag_1/summary.json B ${_dist_runs}/nosb_frag_2/summary.json
+  CHECKS "${_dist_checks};fracture_dissipation_J:rel:1e-9"
+  REQUIRES "dist_nosb_frag_1;dist_nosb_frag_2" LABELS "scene;particles;stability;mpi")
+spinesim_add_comparison_test(distributed.nosb_tube_3d_1_vs_2_ranks
+  A ${_dist_runs}/nosb_tube_1/summary.json B ${_dist_runs}/nosb_tube_2/summary.json
+  CHECKS "${_nosb_checks};energy_balance_error_relative:rel:1e-9;particle_memory_per_rank_max_bytes:ratio_max:0.6"
+  REQUIRES "dist_nosb_tube_1;dist_nosb_tube_2" LABELS "scene;particles;mpi")
+# J2 plasticity (yield 40 MPa, so the ring flows: it ends with 212 J/m stored against 941 J/m
+# when elastic, hence the bound of 400): the uninterrupted run on 1 and 2 ranks, and
+# the 2-rank run stopped after step 20 and restarted. Measured: 2e-15 relative between all
+# three: the uninterrupted and the restarted run on 2 ranks agree bit for bit (the checkpoint
+# keeps the last pass's forces: a fresh pass would return-map the same F from the history it
+# committed, equal only to round-off), the ranks to round-off.
+set(_nosb_j2_set ${_nosb_ring_set} "Material/Model=j2_plasticity" "Material/Yield stress=40e6"
+                 "Material/Hardening modulus=1e9")
+foreach(_ranks 1 2)
+  spinesim_add_scene_test(distributed.nosb_ring_j2_${_ranks}ranks SCENE ${_dist_ring}
+    RANKS ${_ranks} SET ${_nosb_j2_set} OUT ${_dist_runs}/nosb_j2_${_ranks}
+    FIXTURE dist_nosb_j2_${_ranks}
+    EXPECT "status==ok;particle_ranks~${_ranks}:0;particle_strain_energy<=400"
+    LABELS "scene;particles")
+endforeach()
+spinesim_add_scene_test(distributed.nosb_ring_j2_restart_first_half SCENE ${_dist_ring} RANKS 2
+  SET ${_nosb_j2_set} "Simulation/Checkpoint interval=10" "Simulation/Stop after step=20"
+  OUT ${_dist_runs}/nosb_j2_restart EXPECT "status==ok;last_step~20:0"
+  FIXTURE dist_nosb_j2_half LABELS "scene;particles")
+spinesim_add_scene_test(distributed.nosb_ring_j2_restart_second_half RANKS 2
+  ARGS "run;--restart;${_dist_runs}/nosb_j2_restart;--set;Simulation/Stop after step=0"
+  OUT ${_dist_runs}/nosb_j2_restart EXPECT "status==ok;last_step~50:0"
+  FIXTURE dist_nosb_j2_done LABELS "scene;particles")
+set_tests_properties(distributed.nosb_ring_j2_restart_second_half PROPERTIES
+                     FIXTURES_REQUIRED dist_nosb_j2_half)
+spinesim_add_comparison_test(distributed.nosb_ring_j2_1_vs_2_ranks
+  A ${_dist_runs}/nosb_j2_1/summary.json B ${_dist_runs}/nosb_j2_2/summary.json
+  CHECKS "${_nosb_checks}" REQUIRES "dist_nosb_j2_1;dist_nosb_j2_2"
+  LABELS "scene;particles;mpi")
+spinesim_add_comparison_test(distributed.nosb_ring_j2_restart_matches
+  A ${_dist_runs}/nosb_j2_2/summary.json B ${_dist_runs}/nosb_j2_restart/summary.json
+  CHECKS "particle_kinetic_energy:rel:0;particle_strain_energy:rel:0;max_particle_speed:rel:0"
+  REQUIRES "dist_nosb_j2_2;dist_nosb_j2_done"
+  LABELS "scene;particles;mpi")
+
+# The implicit PD solver study of Jo & Ha (2021) runs on MPI_COMM_SELF (docs/scaling.md, "What
+# is distributed"): every rank runs the whole problem with the same deterministic loops, and
+# the figures on 1 and 2 ranks agree bit for bit (9 s).
 foreach(_ranks 1 2)
   spinesim_add_scene_test(distributed.pd_solver_study_${_ranks}ranks
     SCENE ${PROJECT_SOURCE_DIR}/applications/validation/pd_cracked_plate.prm RANKS ${_ranks}
@@ -118,3 +187,34 @@ spinesim_add_comparison_test(distributed.pd_solver_study_1_vs_2_ranks
   A ${_dist_runs}/pd_study_1/summary.json B ${_dist_runs}/pd_study_2/summary.json
   CHECKS "kappa_h_ratio_min:rel:0;kappa_h_ratio_max:rel:0;mg_max_iterations:abs:0;amg_max_iterations:abs:0;cg_iterations_over_paper_k5:rel:0"
   REQUIRES "dist_pd_study_1;dist_pd_study_2" LABELS "scene;meshfree;mpi")
+
+# Quasi-static zones (adaptive dynamic relaxation, Kilic & Madenci 2010) distributed the same
+# way: the relaxation's sums (residual, reactions, the Rayleigh-quotient damping) run over the
+# owned particles and are added over the ranks, so its damping and its convergence test are
+# those of the whole zone on every rank. The sums add in another order, so the iteration
+# count may differ by a few (measured 3188 against 3224 on the plate) and the answers agree to
+# the relaxation tolerance, not to round-off.
+# - Bond-based plate in tension (applications/scenes/pd_plate_tension.prm, tolerance 1e-8):
+#   reactions measured 879365.20662 and 879365.20661 N/m (1.5e-11 relative; checked to 1e-7,
+#   ten times the tolerance) with the bound of scene.pd_plate_tension.
+# - NOSB-PD under an affine displacement (tests/data/exact_affine_nosb_*.prm, tolerance 1e-10):
+#   the error against the exact field is 1.5e-10 (2-D) and 8.2e-10 (3-D) on 2 ranks, as on one;
+#   bound 1e-8 as in study.exact_displacement_affine_nosb_*.
+foreach(_ranks 1 2)
+  spinesim_add_scene_test(distributed.pd_plate_tension_${_ranks}ranks
+    SCENE ${PROJECT_SOURCE_DIR}/applications/scenes/pd_plate_tension.prm RANKS ${_ranks}
+    OUT ${_dist_runs}/plate_tension_${_ranks} FIXTURE dist_plate_${_ranks}
+    EXPECT "status==ok;particle_ranks~${_ranks}:0;particle_reaction_norm~857143:0.05;particles~800:0"
+    LABELS "scene;meshfree")
+endforeach()
+spinesim_add_comparison_test(distributed.pd_plate_tension_1_vs_2_ranks
+  A ${_dist_runs}/plate_tension_1/summary.json B ${_dist_runs}/plate_tension_2/summary.json
+  CHECKS "particle_reaction_norm:rel:1e-7;particle_strain_energy:rel:1e-7;particle_memory_per_rank_max_bytes:ratio_max:0.6"
+  REQUIRES "dist_plate_1;dist_plate_2" LABELS "scene;meshfree;mpi")
+foreach(_dim 2 3)
+  spinesim_add_scene_test(distributed.exact_displacement_affine_nosb_${_dim}d_2ranks
+    SCENE ${PROJECT_SOURCE_DIR}/tests/data/exact_affine_nosb_${_dim}d.prm RANKS 2
+    OUT ${_dist_runs}/affine_nosb_${_dim}d
+    EXPECT "status==ok;particle_ranks~2:0;displacement_l2_error_relative<=1e-8;free_particles>=16"
+    LABELS "scene;meshfree;mpi")
+endforeach()
