@@ -49,7 +49,8 @@ void ParticleZoneParameters::declare(dealii::ParameterHandler& prm) {
   prm.declare_entry("Shape", "box", Selection("box|annulus|spherical_shell"),
                     "Which lattice points of the box make the body [-]: box (all); annulus "
                     "(Inner radius <= r <= Outer radius, r the distance from Centre in the x-y "
-                    "plane: a ring in 2-D, a tube along z in 3-D); spherical_shell (r the "
+                    "plane: a ring in 2-D, a tube along z in 3-D; with an Outer radius beyond "
+                    "the box, a plate or block with a hole); spherical_shell (r the "
                     "distance in space). The lattice stays uniform (spacing h), which keeps "
                     "bond-based PD's calibration.");
   prm.declare_entry("Centre", "0, 0, 0", Anything(),
@@ -314,16 +315,16 @@ struct ParticleZone<dim>::Impl {
     for (const unsigned int j : bonds.neighbor)
       if (j >= n_owned)
         keep[j - n_owned] = 1;
+    for (unsigned int g = n_owned; g < n; ++g) // a ghost with a row stays, so rows compact
+      if (bonds.end(g) > bonds.begin(g))
+        keep[g - n_owned] = 1;
     const std::vector<unsigned int> index = partition->keep_ghosts(keep);
     for (unsigned int& j : bonds.neighbor)
       j = index[j];
-    // A dropped ghost has an empty row (a row's particle is bonded to an owned one, so kept).
     std::vector<std::size_t> offsets(partition->points().size() + 1, 0);
-    for (unsigned int i = 0; i < n; ++i)
+    for (unsigned int i = 0; i < n; ++i) // dropped ghosts have empty rows
       if (index[i] != ~0u)
         offsets[index[i] + 1] = bonds.offsets[i + 1];
-      else if (bonds.offsets[i + 1] != bonds.offsets[i])
-        throw std::logic_error("particle zone: a dropped ghost has a bond row");
     bonds.offsets = std::move(offsets);
     particles = local_set();
   }
@@ -496,7 +497,7 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
     // rank that holds them: the same displacements, the same breaks).
     if (!z.method->needs_neighbour_rows())
       z.bonds.keep_rows(z.partition->n_owned());
-    z.drop_unbonded_ghosts();
+    z.drop_unbonded_ghosts(); // collective: keep_ghosts rebuilds the exchange
     z.method->set_first_ghost(z.partition->n_owned());
   }
   z.broken_initially = std::size_t(z.sum(z.owned_broken_ends()));
@@ -560,8 +561,23 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
               << " (equal cells: " << z.partition->load_imbalance_unweighted()
               << "), ghosts per owned " << (z.sum(held) - z.sum(owned)) / z.sum(owned) << "\n";
   }
-  for (const auto& message : z.method->take_messages())
+  for (const auto& message : take_messages())
     ctx.log() << "  " << message << "\n";
+}
+
+template <int dim>
+std::vector<std::string> ParticleZone<dim>::take_messages() {
+  Impl& z = *impl_;
+  std::vector<std::string> mine = z.method->take_messages();
+  if (!z.partition)
+    return mine;
+  // A distributed zone's particles are reported by their owners, on any rank.
+  const auto all = dealii::Utilities::MPI::gather(z.comm, mine, 0);
+  std::vector<std::string> messages;
+  for (unsigned int r = 0; r < all.size(); ++r)
+    for (const auto& m : all[r])
+      messages.push_back(m + " (MPI rank " + std::to_string(r) + ")");
+  return messages;
 }
 
 template <int dim>
@@ -788,6 +804,11 @@ std::string ParticleZone<dim>::write_output(const std::string& directory,
   return base + ".pvtu";
 }
 
+namespace {
+// Last entry of a particle checkpoint ("SPZ-END"): a file that ends before it was cut.
+constexpr std::uint64_t checkpoint_end_tag = 0x444e452d5a5053ull;
+} // namespace
+
 template <int dim>
 void ParticleZone<dim>::save(const std::string& file) const {
   impl_->collectively([&] { // a rank that cannot write stops all of them
@@ -822,6 +843,7 @@ void ParticleZone<dim>::save(const std::string& file) const {
     // history-dependent law that pass would start from the history the last one committed and
     // return-map the same F once more (equal only to round-off, ~1e-15).
     write(z.particles.forces().data(), z.particles.size() * sizeof(dealii::Tensor<1, dim>));
+    write(&checkpoint_end_tag, sizeof checkpoint_end_tag); // tells a whole file from a cut one
     if (!out)
       throw std::runtime_error("cannot write particle checkpoint " + file);
   });
@@ -842,6 +864,14 @@ void ParticleZone<dim>::load(const std::string& file) {
                          "no particle checkpoint (a distributed zone writes one file per rank, " +
                              file + ".<rank>)",
                          "a restart on the number of MPI ranks that wrote the checkpoint");
+    if (z.partition && !in && std::ifstream(file))
+      throw InvalidInput(part,
+                         "no particle checkpoint for rank " + std::to_string(rank) + ", but " +
+                             file +
+                             " holds a whole zone: it was written when this zone was not "
+                             "distributed (earlier versions held NOSB-PD and quasi-static zones "
+                             "whole on every rank)",
+                         "a restart with the version that wrote it, or a new run");
     if (z.partition && !in)
       throw InvalidInput(part,
                          "no particle checkpoint for rank " + std::to_string(rank) +
@@ -884,8 +914,15 @@ void ParticleZone<dim>::load(const std::string& file) {
     if (in.read(reinterpret_cast<char*>(&seconds), sizeof seconds))
       z.advance_seconds = seconds;
     forces.resize(z.particles.size());
-    if (!in.read(reinterpret_cast<char*>(forces.data()), forces.size() * sizeof(forces[0])))
+    in.read(reinterpret_cast<char*>(forces.data()), forces.size() * sizeof(forces[0]));
+    if (in.gcount() == 0)
       forces.clear(); // a checkpoint written before they were kept
+    else {
+      std::uint64_t tag = 0;
+      if (!in || !in.read(reinterpret_cast<char*>(&tag), sizeof tag) || tag != checkpoint_end_tag)
+        throw InvalidInput(part, "particle checkpoint is truncated (it ends inside the forces)",
+                           "a complete checkpoint");
+    }
     accelerations = z.particles.accelerations();
   });
   // The pass refreshes the method's own per-pass data (deformation gradients for output, the

@@ -76,6 +76,9 @@ class ParticleZone {
   void setup(RunContext& ctx);
   // Advances from the zone's time to `time` [s].
   void advance_to(double time);
+  // The method's messages for the run log since the last call (e.g. particles that lost their
+  // family), from every rank, on rank 0 (collective when distributed; empty elsewhere).
+  std::vector<std::string> take_messages();
 
   // Updates the particles' damage, then adds the zone's columns.
   void add_history(std::vector<std::pair<std::string, double>>& row);

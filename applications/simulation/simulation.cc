@@ -464,8 +464,16 @@ void Simulation<dim>::fem_quasi_static(unsigned int, double time, double, RunCon
 }
 
 template <int dim>
-void Simulation<dim>::advance_particles(unsigned int, double time, double, RunContext&) {
+void Simulation<dim>::advance_particles(unsigned int, double time, double, RunContext& ctx) {
   particles_->advance_to(time);
+  // A fragmenting zone can lose hundreds of families in a step: the first few name the place.
+  const std::vector<std::string> messages = particles_->take_messages();
+  constexpr std::size_t shown = 10;
+  for (std::size_t k = 0; k < std::min(messages.size(), shown); ++k)
+    ctx.log() << "  particles: " << messages[k] << "\n";
+  if (messages.size() > shown)
+    ctx.log() << "  particles: ... and " << messages.size() - shown
+              << " more such messages in this step\n";
 }
 
 template <int dim>

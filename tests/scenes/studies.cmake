@@ -10,9 +10,11 @@ set(_studies ${PROJECT_SOURCE_DIR}/applications/studies)
 # horizon is half the depth, and 1 m) is bounded below by 1, the order of the free-surface
 # error of peridynamics (Le & Bobaru 2018). Every run must finish with finite
 # figures, and the plot must be a valid PNG. LSMFM: linear MLS basis, expected L2 order 2
-# (measured 1.97 between 297 and 1105 nodes), bound 1.8 as for Q1.
+# (measured 1.97 between 297 and 1105 nodes), bound 1.8 as for Q1. Kirsch's plate
+# (problems/kirsch_plate_fem.prm, the exact field on the edges, isoparametric hole): Q1 at
+# refinements 2, 3 and Q2 at 1, 2, measured orders 2.05 and 3.03 against h (the same bounds).
 spinesim_add_scene_test(study.accuracy_cost_quick SCENE ${_studies}/accuracy_cost_quick.prm
-  EXPECT "status==ok;runs>=8;failed_runs<=0;all_rows_finite>=1;png_valid>=1;order_cantilever_fem_q1>=1.8;order_cantilever_fem_q2>=2.8;order_cantilever_nosb>=1;order_cantilever_lsmfm>=1.8;errors_fall_cantilever_fem_q1>=1;errors_fall_cantilever_fem_q2>=1;errors_fall_cantilever_nosb>=1;errors_fall_cantilever_lsmfm>=1"
+  EXPECT "status==ok;runs>=12;failed_runs<=0;all_rows_finite>=1;png_valid>=1;order_cantilever_fem_q1>=1.8;order_cantilever_fem_q2>=2.8;order_cantilever_nosb>=1;order_cantilever_lsmfm>=1.8;errors_fall_cantilever_fem_q1>=1;errors_fall_cantilever_fem_q2>=1;errors_fall_cantilever_nosb>=1;errors_fall_cantilever_lsmfm>=1;order_kirsch_plate_fem_q1>=1.8;order_kirsch_plate_fem_q2>=2.8;errors_fall_kirsch_plate_fem_q1>=1;errors_fall_kirsch_plate_fem_q2>=1"
   LABELS "scene;study" TIMEOUT 600)
 
 # Simulation/Exact displacement against a field every method reproduces exactly: an affine
@@ -31,6 +33,16 @@ foreach(_dim 2 3)
     EXPECT "status==ok;displacement_l2_error_relative<=1e-8;free_particles>=16"
     LABELS "scene;study;meshfree")
 endforeach()
+
+# Kirsch's plate with NOSB-PD particles (problems/kirsch_plate_particles.prm, h = 0.25 m), on
+# 2 ranks (a distributed quasi-static zone): measured 3.051 % against Kirsch's exact field, the
+# same to 1e-8 as on one rank; the error is the free-surface effect at the hole (order 1,
+# docs/accuracy-cost.md). Bound 3.5 %: a regression of the method or of the distributed
+# relaxation moves it by more than that.
+spinesim_add_scene_test(study.kirsch_plate_nosb_2ranks RANKS 2
+  SCENE ${_studies}/problems/kirsch_plate_particles.prm
+  EXPECT "status==ok;particle_ranks~2:0;free_particles~972:0;displacement_l2_error_relative<=0.035"
+  LABELS "scene;study;meshfree;mpi" TIMEOUT 300)
 
 # The full study (about 24 min on two cores, label benchmark; its budget is 30 min).
 # Asserted: every run finishes with finite figures, the plots are valid, and the orders that
