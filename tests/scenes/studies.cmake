@@ -1,9 +1,9 @@
 # Accuracy against cost (applications/studies/, docs/accuracy-cost.md).
 set(_studies ${PROJECT_SOURCE_DIR}/applications/studies)
 
-# The quick study (about 45 s on two cores alone; its budget is 90 s): the
-# Timoshenko cantilever with FEM Q1 (refinements 3, 4), Q2 (2, 3) and NOSB-PD (h = 2, 1 m),
-# three repetitions each. The exact solution is cubic
+# The quick study (81 s on two cores alone, one repetition; its budget is 90 s, not asserted
+# here: a timed test on a shared machine is no measurement): the Timoshenko cantilever with FEM
+# Q1 (refinements 3, 4), Q2 (2, 3), NOSB-PD (h = 2, 1 m) and the LSMFM. The exact solution is cubic
 # and imposed at both ends, so Q1 and Q2 show their asymptotic L2 orders 2 and 3 already on
 # these meshes (measured 2.0000 and 2.9999; bounds 1.8 and 2.8 leave 0.2 for pre-asymptotic meshes).
 # NOSB-PD: the error must fall with h; its order (measured 2.13 between h = 2 m, where the
