@@ -24,6 +24,7 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <map>
 
 namespace spinesim::applications {
 
@@ -571,12 +572,29 @@ std::vector<std::string> ParticleZone<dim>::take_messages() {
   std::vector<std::string> mine = z.method->take_messages();
   if (!z.partition)
     return mine;
-  // A distributed zone's particles are reported by their owners, on any rank.
+  // A distributed zone's particles are reported by their owners, on any rank; a message every
+  // rank made (about the method, not a particle) is said once.
   const auto all = dealii::Utilities::MPI::gather(z.comm, mine, 0);
   std::vector<std::string> messages;
+  std::map<std::string, std::vector<unsigned int>> ranks_of;
   for (unsigned int r = 0; r < all.size(); ++r)
-    for (const auto& m : all[r])
-      messages.push_back(m + " (MPI rank " + std::to_string(r) + ")");
+    for (const auto& m : all[r]) {
+      auto& ranks = ranks_of[m];
+      if (ranks.empty())
+        messages.push_back(m);
+      ranks.push_back(r);
+    }
+  for (auto& m : messages) {
+    const auto& ranks = ranks_of[m];
+    if (ranks.size() == 1)
+      m += " (MPI rank " + std::to_string(ranks[0]) + ")";
+    else if (ranks.size() < all.size()) {
+      m += " (MPI ranks";
+      for (const unsigned int r : ranks)
+        m += " " + std::to_string(r);
+      m += ")";
+    }
+  }
   return messages;
 }
 
@@ -843,7 +861,7 @@ void ParticleZone<dim>::save(const std::string& file) const {
     // history-dependent law that pass would start from the history the last one committed and
     // return-map the same F once more (equal only to round-off, ~1e-15).
     write(z.particles.forces().data(), z.particles.size() * sizeof(dealii::Tensor<1, dim>));
-    write(&checkpoint_end_tag, sizeof checkpoint_end_tag); // tells a whole file from a cut one
+    write(&checkpoint_end_tag, sizeof checkpoint_end_tag); // a file cut inside the forces shows
     if (!out)
       throw std::runtime_error("cannot write particle checkpoint " + file);
   });
@@ -868,10 +886,10 @@ void ParticleZone<dim>::load(const std::string& file) {
       throw InvalidInput(part,
                          "no particle checkpoint for rank " + std::to_string(rank) + ", but " +
                              file +
-                             " holds a whole zone: it was written when this zone was not "
-                             "distributed (earlier versions held NOSB-PD and quasi-static zones "
+                             " holds a whole zone: it was written by a run on one rank (or by "
+                             "an earlier version, which held NOSB-PD and quasi-static zones "
                              "whole on every rank)",
-                         "a restart with the version that wrote it, or a new run");
+                         "a restart on one rank, as the run that wrote it");
     if (z.partition && !in)
       throw InvalidInput(part,
                          "no particle checkpoint for rank " + std::to_string(rank) +
@@ -928,6 +946,7 @@ void ParticleZone<dim>::load(const std::string& file) {
   // The pass refreshes the method's own per-pass data (deformation gradients for output, the
   // trial history the next step replaces); the saved forces, where present, then stand.
   z.verlet->initialise(z.particles);
+  z.method->take_messages(); // families lost before the checkpoint were reported then
   if (!forces.empty()) {
     z.particles.forces() = forces;
     z.particles.accelerations() = accelerations;

@@ -12,7 +12,7 @@ set(_studies ${PROJECT_SOURCE_DIR}/applications/studies)
 # figures, and the plot must be a valid PNG. LSMFM: linear MLS basis, expected L2 order 2
 # (measured 1.97 between 297 and 1105 nodes), bound 1.8 as for Q1. Kirsch's plate
 # (problems/kirsch_plate_fem.prm, the exact field on the edges, isoparametric hole): Q1 at
-# refinements 2, 3 and Q2 at 1, 2, measured orders 2.05 and 3.03 against h (the same bounds).
+# refinements 2, 3 and Q2 at 1, 2, measured orders 2.05 and 3.06 against h (the same bounds).
 spinesim_add_scene_test(study.accuracy_cost_quick SCENE ${_studies}/accuracy_cost_quick.prm
   EXPECT "status==ok;runs>=12;failed_runs<=0;all_rows_finite>=1;png_valid>=1;order_cantilever_fem_q1>=1.8;order_cantilever_fem_q2>=2.8;order_cantilever_nosb>=1;order_cantilever_lsmfm>=1.8;errors_fall_cantilever_fem_q1>=1;errors_fall_cantilever_fem_q2>=1;errors_fall_cantilever_nosb>=1;errors_fall_cantilever_lsmfm>=1;order_kirsch_plate_fem_q1>=1.8;order_kirsch_plate_fem_q2>=2.8;errors_fall_kirsch_plate_fem_q1>=1;errors_fall_kirsch_plate_fem_q2>=1"
   LABELS "scene;study" TIMEOUT 600)
@@ -49,9 +49,11 @@ spinesim_add_scene_test(study.kirsch_plate_nosb_2ranks RANKS 2
 # theory fixes (Q1 2 and Q2 3 on the cantilever's cubic solution; B-bar Q1 2 on the nearly
 # incompressible cylinder, where the standard Q1 locks and is only reported), and the FEM's
 # load on the elasto-plastic plate approaching the converged value (the LSMFM's does not:
-# docs/accuracy-cost.md).
+# docs/accuracy-cost.md); on Kirsch's plate Q1 2, Q2 3, and NOSB-PD's error falling at an
+# order of at least 0.8 (its hole's free surface makes it order 1: measured 1.72 between
+# h = 0.25 and 0.2 m, 1.05 from 0.2 to 0.125 m).
 spinesim_add_scene_test(benchmark.accuracy_cost SCENE ${_studies}/accuracy_cost.prm
-  EXPECT "status==ok;failed_runs<=0;all_rows_finite>=1;png_valid>=1;order_cantilever_fem_q1>=1.8;order_cantilever_fem_q2>=2.8;order_thick_cylinder_fem_q1_bbar>=1.8;errors_fall_cantilever_nosb>=1;errors_fall_cantilever_spg>=1;errors_fall_perforated_plate_fem_q1>=1;errors_fall_perforated_plate_fem_q2>=1;study_wall_time_s<=1800"
+  EXPECT "status==ok;failed_runs<=0;all_rows_finite>=1;png_valid>=1;order_cantilever_fem_q1>=1.8;order_cantilever_fem_q2>=2.8;order_thick_cylinder_fem_q1_bbar>=1.8;errors_fall_cantilever_nosb>=1;errors_fall_cantilever_spg>=1;errors_fall_perforated_plate_fem_q1>=1;errors_fall_perforated_plate_fem_q2>=1;order_kirsch_plate_fem_q1>=1.8;order_kirsch_plate_fem_q2>=2.8;order_kirsch_plate_nosb>=0.8;errors_fall_kirsch_plate_nosb>=1;study_wall_time_s<=1800"
   LABELS "benchmark;study" TIMEOUT 3600)
 
 # spinesim check --estimate against what the runs measure: the default scene and the vertebra
