@@ -5,6 +5,6 @@ spinesim_add_gtest(test_applications_particle_method_registration
   LIBS spinesim_scenarios spinesim_framework
   LABELS "unit;applications")
 target_link_libraries(test_applications_particle_method_registration "-Wl,--no-as-needed"
-                      spinesim_scenarios)
+                      spinesim_scenarios "-Wl,--as-needed")
 target_compile_definitions(test_applications_particle_method_registration PRIVATE
   SPINESIM_TEST_RUN_DIR="${CMAKE_CURRENT_BINARY_DIR}/runs")
