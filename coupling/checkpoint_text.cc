@@ -60,12 +60,12 @@ CheckpointContents read_checkpoint_text(std::istream& in, std::uintmax_t bytes, 
   std::string tag;
   std::size_t n = 0, nc = 0, nb = 0, nh = 0;
   if (!(in >> tag) || tag != "spinesim_coupling" || !read_number(in, c.version) || c.version < 1 ||
-      c.version > 3 || !read_finite(in, c.time) || c.time < 0 || !read_number(in, n) ||
+      c.version > 4 || !read_finite(in, c.time) || c.time < 0 || !read_number(in, n) ||
       !read_number(in, nc) || !read_number(in, nb) ||
       (c.version >= 2 && !(read_finite(in, c.dissipation) && read_finite(in, c.heat))) ||
       (c.version >= 3 && !read_number(in, nh)))
     throw InvalidInput(file, "missing or unreadable coupling checkpoint header",
-                       "a file written by FemParticleCoupling::save (versions 1 to 3)");
+                       "a file written by FemParticleCoupling::save (versions 1 to 4)");
   // Every count is bounded by what the file can hold (each number takes at least two bytes
   // with its separator) before a loop runs or a vector is sized by it.
   const auto fits = [&](std::size_t count, std::size_t numbers_per_record) {
@@ -123,8 +123,10 @@ CheckpointContents read_checkpoint_text(std::istream& in, std::uintmax_t bytes, 
     auto& r = c.history.emplace_back();
     bool ok = read_number(in, r.particle) && read_number(in, r.neighbour) && r.particle < n &&
               r.neighbour < n;
-    for (auto& value : r.state)
-      ok = ok && read_finite(in, value);
+    const unsigned int n_state =
+        c.version >= 4 ? checkpoint_state_doubles : checkpoint_state_doubles - 1;
+    for (unsigned int m = 0; m < n_state; ++m)
+      ok = ok && read_finite(in, r.state[m]);
     require(ok, "history record", k);
   }
 

@@ -19,8 +19,8 @@
 namespace spinesim::coupling {
 
 // Numbers of one material state in a history record (materials::material_state_doubles; the
-// loader checks that the two agree).
-constexpr unsigned int checkpoint_state_doubles = 14;
+// loader checks that the two agree). Version 3 files hold one fewer: no fracture damage.
+constexpr unsigned int checkpoint_state_doubles = 15;
 
 // One particle's line: host cell (deal.II CellId text) and quadrature point, free flag,
 // Dirichlet slots, volume, density, temperature, reference position, displacement, velocity

@@ -73,8 +73,9 @@ void CouplingCheckpoint<dim>::save(const std::string& file) const {
   out.precision(17);
   // Version 2 adds the fracture-heat totals (the per-particle accounts are handed to the FEM
   // at the end of every macro step, so they are empty when a checkpoint is written); version 3
-  // the material history of the particle method.
-  out << "spinesim_coupling 3\n"
+  // the material history of the particle method; version 4 its fracture damage D_f (one more
+  // number per history record).
+  out << "spinesim_coupling 4\n"
       << p_.integrator.time() << " " << particles.size() << " " << p_.converter.converted().size()
       << " " << broken.size() << " " << dissipation << " " << p_.fracture.heat() << " " << n_history
       << "\n";

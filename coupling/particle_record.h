@@ -37,7 +37,7 @@ struct ParticleRecord {
         velocity& has_state;
     if (has_state)
       ar& state.plastic_strain& state.elastic_left_cauchy_green& state
-          .equivalent_plastic_strain& state.plastic_work;
+          .equivalent_plastic_strain& state.plastic_work& state.fracture_damage;
   }
 
   bool operator==(const ParticleRecord& o) const {

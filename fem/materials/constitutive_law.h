@@ -26,6 +26,10 @@ struct MaterialState {
       dealii::unit_symmetric_tensor<3>(); // finite-strain J2: b^e [-]
   double equivalent_plastic_strain = 0;   // accumulated ε̄_p [-]
   double plastic_work = 0;                // dissipated plastic work per unit volume [J/m^3]
+  // Share D_f of the stress the point has lost to fracture of its neighbourhood [-], imposed
+  // from outside the law: a NOSB-PD family scales its stress by 1 − D_f after bond breaks so
+  // that a break never raises the stored energy. Every law passes it through unchanged.
+  double fracture_damage = 0;
 };
 
 // What a law returns at a point. Tangents are consistent (algorithmic) tangents.

@@ -2,7 +2,7 @@
 #define SPINESIM_FEM_MATERIALS_MATERIAL_STATE_IO_H
 
 // A material state as a flat array of numbers, for checkpoints and exchange between ranks:
-// plastic strain ε_p (6, upper triangle), elastic left Cauchy-Green b^e (6), ε̄_p, w_p.
+// plastic strain ε_p (6, upper triangle), elastic left Cauchy-Green b^e (6), ε̄_p, w_p, D_f.
 
 #include "fem/materials/constitutive_law.h"
 
@@ -10,13 +10,13 @@
 
 namespace spinesim::materials {
 
-constexpr unsigned int material_state_doubles = 14;
+constexpr unsigned int material_state_doubles = 15;
 
 // Whether s is the state of untouched material (a new family or particle starts from it, so a
 // checkpoint need not write it).
 inline bool is_virgin(const MaterialState& s) {
   const MaterialState virgin;
-  return s.equivalent_plastic_strain == 0 && s.plastic_work == 0 &&
+  return s.equivalent_plastic_strain == 0 && s.plastic_work == 0 && s.fracture_damage == 0 &&
          s.plastic_strain == virgin.plastic_strain &&
          s.elastic_left_cauchy_green == virgin.elastic_left_cauchy_green;
 }
@@ -32,6 +32,7 @@ inline std::array<double, material_state_doubles> pack_state(const MaterialState
     }
   v[12] = s.equivalent_plastic_strain;
   v[13] = s.plastic_work;
+  v[14] = s.fracture_damage;
   return v;
 }
 
@@ -46,6 +47,7 @@ inline MaterialState unpack_state(const std::array<double, material_state_double
     }
   s.equivalent_plastic_strain = v[12];
   s.plastic_work = v[13];
+  s.fracture_damage = v[14];
   return s;
 }
 

@@ -177,13 +177,15 @@ NosbPD<dim>::evaluate(unsigned int e, const dealii::Tensor<2, dim>& F,
                            "det F <= 0: the load step is too large or particles interpenetrate; "
                            "use more load steps or a smaller time step");
   }
+  // The family's share of stress lost at bond breaks (break_bonds): W = (1 − D_f) W_law.
+  const double kept = 1.0 - committed_[fam.history_index(e)].fracture_damage;
   Response out;
   for (unsigned int a = 0; a < dim; ++a)
     for (unsigned int J = 0; J < dim; ++J) {
-      out.P[a][J] = r.first_piola[a][J];
+      out.P[a][J] = kept * r.first_piola[a][J];
       for (unsigned int b = 0; b < dim; ++b)
         for (unsigned int L = 0; L < dim; ++L)
-          out.A[a][J][b][L] = r.dP_dF[a][J][b][L];
+          out.A[a][J][b][L] = kept * r.dP_dF[a][J][b][L];
     }
   if (trial)
     *trial = r.state;
@@ -248,8 +250,11 @@ void NosbPD<dim>::compute_forces(ParticleSet<dim>& particles, const BondList<dim
       for_each_penalty_bond(bonds, i, Gc, [&](std::size_t k, unsigned int j, double kappa) {
         const Vec& xi = bonds.xi[k];
         const Vec eta = u[j] - u[i];
-        // z_ij − z_ji = 2η − (F_i − I)ξ − (F_j − I)ξ
-        const Vec dz = 2.0 * eta - (F_particle_[i] * xi - xi) - (F_particle_[j] * xi - xi);
+        // s_i z_ij − s_j z_ji = s_i (η − (F_i − I)ξ) + s_j (η − (F_j − I)ξ), each end's part
+        // scaled like its stress by s = 1 − D_f (antisymmetric in i↔j still)
+        const double si = penalty_kept(i), sj = penalty_kept(j);
+        const Vec dz =
+            si * (eta - (F_particle_[i] * xi - xi)) + sj * (eta - (F_particle_[j] * xi - xi));
         f[i] += (kappa * V[i] * V[j]) * dz;
       });
     }
@@ -273,6 +278,7 @@ std::size_t NosbPD<dim>::break_bonds(ParticleSet<dim>& particles, BondList<dim>&
   const auto& u = particles.displacements();
   const bool any_driven = !driven_.empty();
   // Each bond decides alone (the reversed bond sees the same stretch bit for bit): a map.
+  std::vector<std::uint8_t> touched(particles.size(), 0);
   std::atomic<std::size_t> n_broken{0};
   for_each_bond(bonds, [&](unsigned int i, std::size_t k, unsigned int j) {
     if (bonds.broken[k] || (any_driven && driven_[i] && driven_[j]))
@@ -280,14 +286,49 @@ std::size_t NosbPD<dim>::break_bonds(ParticleSet<dim>& particles, BondList<dim>&
     const auto y = bonds.xi[k] + (u[j] - u[i]);
     if (y.norm() > (1.0 + s0_) * bonds.length[k]) {
       bonds.broken[k] = 1;
+      touched[i] = 1; // the reversed bond marks j: each thread writes its own rows only
       n_broken.fetch_add(1, std::memory_order_relaxed);
     }
   });
   if (n_broken > 0) {
+    std::vector<unsigned int> changed;
+    for (unsigned int i = 0; i < particles.size(); ++i)
+      if (touched[i])
+        changed.push_back(i);
+    std::vector<double> before(changed.size());
+    parallel_for_rethrow(
+        static_cast<long>(changed.size()), parallel_particle_threshold,
+        [&](long c) { before[c] = particle_strain_energy(changed[c], particles); });
     update_families(particles, bonds);
+    release_energy_at_breaks(particles, changed, before);
     update_damage(particles, bonds);
   }
   return n_broken;
+}
+
+template <int dim>
+void NosbPD<dim>::release_energy_at_breaks(const ParticleSet<dim>& particles,
+                                           const std::vector<unsigned int>& changed,
+                                           const std::vector<double>& before) {
+  // A break rebuilds the families of both ends (K and F from the bonds left). At the same
+  // displacements F may then *grow*: a family that lost its hoop bonds measures the hoop
+  // stretch from a few near-radial ones, and the stored energy of its centre rises, which an
+  // explicit run turns into kinetic energy (fragments at 7× the initial speed on the ring).
+  // A break must release energy, so a centre whose energy rose gets the fracture damage that
+  // brings it back: 1 − D_f ← (1 − D_f) E_before/E_after on all its families. The energy
+  // then never rises at a break, and a family that sees an opening crack in F carries
+  // (almost) no stress.
+  parallel_for_rethrow(static_cast<long>(changed.size()), parallel_particle_threshold, [&](long c) {
+    const unsigned int i = changed[c];
+    const double after = particle_strain_energy(i, particles);
+    if (!(after > before[c]))
+      return;
+    const double ratio = before[c] > 0.0 ? before[c] / after : 0.0;
+    for (std::size_t h = particle_history_begin_[i]; h < particle_history_begin_[i + 1]; ++h) {
+      const double D = 1.0 - (1.0 - committed_[h].fracture_damage) * ratio;
+      committed_[h].fracture_damage = trial_[h].fracture_damage = D;
+    }
+  });
 }
 
 template <int dim>
@@ -400,11 +441,12 @@ void NosbPD<dim>::assemble_tangent(const ParticleSet<dim>& particles, const Bond
         const Vec& xi = bonds.xi[k];
         const double kappa =
             0.5 * Gc * bonds.influence[k] * bonds.volume_factor(k) / bonds.length[k] * V[i] * V[j];
-        add_scalar(i, j, -2.0 * kappa);
-        add_scalar(i, i, 2.0 * kappa);
-        for (const int e : {pfam_of[i], pfam_of[j]})
+        const double si = penalty_kept(i), sj = penalty_kept(j);
+        add_scalar(i, j, -(si + sj) * kappa);
+        add_scalar(i, i, (si + sj) * kappa);
+        for (const auto& [e, s] : {std::make_pair(pfam_of[i], si), std::make_pair(pfam_of[j], sj)})
           for (std::size_t q = pfam.begin(e); q < pfam.end(e); ++q)
-            add_scalar(i, pfam.node(q), kappa * (pfam.gradient(q) * xi));
+            add_scalar(i, pfam.node(q), s * kappa * (pfam.gradient(q) * xi));
       });
     }
   }
@@ -463,7 +505,8 @@ std::vector<double> NosbPD<dim>::stiffness_row_bound(const ParticleSet<dim>& par
   if (prm_.stabilization == Stabilization::penalty && prm_.stabilization_coefficient > 0) {
     // The penalty force of row i, κ V_i V_j (2η − (F_i − I)ξ − (F_j − I)ξ) per bond, depends
     // on u_i, u_j (2κVV each) and on the nodes q of the particle families of i and j through
-    // (G_q · ξ) u_q: its row sum is at most Σ_j κ V_i V_j (4 + |ξ| (Σ_q∈i |G_q| + Σ_q∈j |G_q|)).
+    // (G_q · ξ) u_q: its row sum is at most
+    // Σ_j κ V_i V_j (2(s_i + s_j) + |ξ| (s_i Σ_q∈i |G_q| + s_j Σ_q∈j |G_q|)), s = 1 − D_f.
     const auto& pfam = particle_families_;
     std::vector<double> gsum(particles.size(), 0.0); // Σ_q |G_q| of each particle family
     for (unsigned int e = 0; e < pfam.n_families(); ++e)
@@ -479,7 +522,9 @@ std::vector<double> NosbPD<dim>::stiffness_row_bound(const ParticleSet<dim>& par
         continue;
       double r = 0;
       for_each_penalty_bond(bonds, i, Gc, [&](std::size_t k, unsigned int j, double kappa) {
-        r += kappa * V[i] * V[j] * (4.0 + bonds.length[k] * (gsum[i] + gsum[j]));
+        const double si = penalty_kept(i), sj = penalty_kept(j);
+        r += kappa * V[i] * V[j] *
+             (2.0 * (si + sj) + bonds.length[k] * (si * gsum[i] + sj * gsum[j]));
       });
       R[i] += r;
     }
@@ -529,7 +574,8 @@ double NosbPD<dim>::family_energy(unsigned int e, const ParticleSet<dim>& partic
     const auto sigma = dealii::symmetrize(
         law_->finite_strain(materials::embed_plane_strain(F), dT, committed_[fam.history_index(e)])
             .first_piola);
-    return fam.weight(e) * j2->stored_energy_density(sigma);
+    const double kept = 1.0 - committed_[fam.history_index(e)].fracture_damage;
+    return kept * fam.weight(e) * j2->stored_energy_density(sigma); // W = (1 − D_f) W_law
   }
   const dealii::Tensor<2, dim> H = F - dealii::Tensor<2, dim>(dealii::unit_symmetric_tensor<dim>());
   double W = 0;
@@ -631,12 +677,14 @@ materials::MaterialState NosbPD<dim>::particle_state(unsigned int i) const {
     mean.elastic_left_cauchy_green += s.elastic_left_cauchy_green;
     mean.equivalent_plastic_strain += s.equivalent_plastic_strain;
     mean.plastic_work += s.plastic_work;
+    mean.fracture_damage += s.fracture_damage;
   }
   const double total = static_cast<double>(e - b);
   mean.plastic_strain /= total;
   mean.elastic_left_cauchy_green /= total;
   mean.equivalent_plastic_strain /= total;
   mean.plastic_work /= total;
+  mean.fracture_damage /= total;
   return mean;
 }
 

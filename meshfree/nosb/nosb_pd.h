@@ -28,8 +28,11 @@
 //
 // Damage: bonds break irreversibly when the stretch |y_j − y_i|/|ξ| − 1 exceeds s0 (the
 // Critical stretch, else from the Fracture energy with BondBasedPD's Gc formula for the same
-// calibration modulus). Broken bonds leave K and F. Failed particles (singular or badly
-// conditioned K) carry no stress and have damage 1; each is logged once.
+// calibration modulus). Broken bonds leave K and F. A break never raises the stored energy:
+// where the rebuilt families of a particle store more than before at the same displacements,
+// their stress is scaled down by the fracture damage D_f (MaterialState::fracture_damage) to
+// the energy before. Failed particles (singular or badly conditioned K) carry no stress and
+// have damage 1; each is logged once.
 
 #include "fem/materials/constitutive_law.h"
 #include "meshfree/bond_list.h"
@@ -152,6 +155,11 @@ class NosbPD {
       body(k, j, 0.5 * Gc * bonds.influence[k] * bonds.volume_factor(k) / bonds.length[k]);
     });
   }
+  // 1 − D_f of particle i's (particle) family: scales its end of the penalty hourglass force as
+  // its stress, so a family that a break left without stress adds no hourglass force either.
+  double penalty_kept(unsigned int i) const {
+    return i < committed_.size() ? 1.0 - committed_[i].fracture_damage : 1.0;
+  }
   // Messages about failed particles since the last call (for the run log).
   std::vector<std::string> take_messages();
 
@@ -206,6 +214,11 @@ class NosbPD {
   // w_e W(F_e) of family e at the current displacements [J].
   double family_energy(unsigned int e, const ParticleSet<dim>& particles) const;
   void log_failed(const ParticleSet<dim>& particles, const std::vector<unsigned int>& newly);
+  // After the families of the `changed` particles were rebuilt for broken bonds: raises D_f
+  // of a particle's families where its stored energy exceeds `before` (its energy then).
+  void release_energy_at_breaks(const ParticleSet<dim>& particles,
+                                const std::vector<unsigned int>& changed,
+                                const std::vector<double>& before);
 
   Parameters prm_;
   std::shared_ptr<const materials::ConstitutiveLaw> law_;

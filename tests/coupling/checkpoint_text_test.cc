@@ -81,6 +81,25 @@ TEST(CheckpointText, Version3FileReadBack2D) {
   EXPECT_EQ(c.history[0].state[13], 14);
   EXPECT_EQ(c.history[1].particle, 1u);
   EXPECT_EQ(c.history[1].state[13], 2);
+  EXPECT_EQ(c.history[1].state[14], 0); // version 3: no fracture damage, so none
+}
+
+TEST(CheckpointText, Version4RecordsCarryFractureDamage) {
+  // The version-3 file with the fracture damage D_f appended to each history record.
+  std::string text = valid_2d();
+  text.replace(text.find("spinesim_coupling 3"), 19, "spinesim_coupling 4");
+  const std::string end0 = "13 14\n", end1 = "0.5 2\n";
+  text.replace(text.find(end0), end0.size(), "13 14 0.25\n");
+  text.replace(text.find(end1), end1.size(), "0.5 2 0.75\n");
+  const auto c = read(text);
+  EXPECT_EQ(c.version, 4);
+  ASSERT_EQ(c.history.size(), 2u);
+  EXPECT_EQ(c.history[0].state[13], 14);
+  EXPECT_EQ(c.history[0].state[14], 0.25);
+  EXPECT_EQ(c.history[1].state[14], 0.75);
+  // Read as version 3, the records are one number too long: data after the last record.
+  text.replace(text.find("spinesim_coupling 4"), 19, "spinesim_coupling 3");
+  EXPECT_THROW(read(text), InvalidInput);
 }
 
 TEST(CheckpointText, Version3FileReadBack3D) {

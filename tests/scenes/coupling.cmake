@@ -438,7 +438,7 @@ endforeach()
 # Griffith-Irwin with Feddersen's width factor gives 2.497e6 N/m (scene header); measured
 # 2.30e6 (ratio 0.921): the grips pull at 0.05 m/s and the crack starts from the discrete
 # particle front. Bound +-10 % (the required one). The crack runs straight across the plate
-# (RMS 4.3 mm off y = 0, angle 0.0 deg measured; bounds two particle spacings, 12.5 mm, and 2 deg).
+# (RMS 5.0 mm off y = 0, angle 0.0 deg measured; bounds two particle spacings, 12.5 mm, and 2 deg).
 set(_plate_nosb ${PROJECT_SOURCE_DIR}/applications/scenes/cracked_plate_nosb.prm)
 spinesim_add_scene_test(scene.cracked_plate_nosb SCENE ${_plate_nosb} OUT ${_runs}/cracked_plate_nosb
   SET "Simulation/Write VTU=false"
@@ -583,10 +583,13 @@ spinesim_add_scene_test(coupling.energy_elastic_3d SCENE ${_bar3} OUT ${_bar_run
   EXPECT "status==ok;energy_balance_error_relative<=0.02;fracture_dissipation_J<=0;external_work_J>=0.5"
   LABELS "scene;validation;coupling")
 # The fracture run, 1 and 2 ranks (22 s on one core): the grips' work equals strain + kinetic
-# energy + the stored energy the breaks released, to 0.07 % measured (bound 2 %). The crack
-# runs from the notch tip (y = -10 mm) through the far face (last particle row at 18.75 mm)
-# in the particle layers next to x = 0 (RMS 1.25 mm = h/2).
-set(_bar_checks "status==ok;energy_balance_error_relative<=0.02;fracture_dissipation_J>=0.01;crack_extent_max_y_m>=0.015;crack_extent_min_y_m<=-0.009;crack_path_rms_x_m<=0.0025")
+# energy + the stored energy the breaks released, to 2.65 % measured (bound 4 %). The penalty
+# control's hourglass force is not the gradient of an energy, and its work at the breaks is
+# outside the account (tests/scenes/stability.cmake, ring_fragmentation_nosb_penalty_2d). It
+# read 0.07 % while a break could raise the stored energy (before the fracture damage D_f of
+# NosbPD), which offset it. The crack runs from the notch tip (y = -10 mm) through the far face
+# (last particle row at 18.75 mm) in the particle layers next to x = 0 (RMS 1.32 mm ~ h/2).
+set(_bar_checks "status==ok;energy_balance_error_relative<=0.04;fracture_dissipation_J>=0.01;crack_extent_max_y_m>=0.015;crack_extent_min_y_m<=-0.009;crack_path_rms_x_m<=0.0025")
 spinesim_add_scene_test(coupling.notched_bar_nosb_3d SCENE ${_bar3} OUT ${_bar_runs}/fracture_3d
   EXPECT "${_bar_checks}" LABELS "scene;validation;coupling" TIMEOUT 300 FIXTURE bar_1)
 spinesim_add_scene_test(coupling.notched_bar_nosb_3d_2ranks SCENE ${_bar3}
