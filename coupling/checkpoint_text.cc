@@ -72,7 +72,7 @@ CheckpointContents read_checkpoint_text(std::istream& in, std::uintmax_t bytes, 
     return count <= bytes / (2 * numbers_per_record);
   };
   if (!fits(n, 7 + 3 * dim) || !fits(nc, 2) || !fits(nb, 2) ||
-      !fits(nh, 2 + checkpoint_state_doubles))
+      !fits(nh, 2 + checkpoint_state_doubles - (c.version >= 4 ? 0 : 1)))
     throw InvalidInput(file,
                        "header counts (" + std::to_string(n) + " particles, " + std::to_string(nc) +
                            " converted cells, " + std::to_string(nb) + " broken bonds, " +

@@ -13,14 +13,19 @@
 namespace spinesim::meshfree {
 
 namespace {
+// First word of the material history in a checkpoint written with the fracture damage
+// ("NOSBHIS2"); earlier files start with the state count and hold one number fewer a state.
+constexpr std::uint64_t history_tag_with_fracture_damage = 0x3253494842534f4eULL;
+
 void write_state(std::ostream& out, const materials::MaterialState& s) {
   const auto v = materials::pack_state(s);
   out.write(reinterpret_cast<const char*>(v.data()), sizeof(double) * v.size());
 }
 
-materials::MaterialState read_state(std::istream& in) {
+materials::MaterialState read_state(std::istream& in, bool with_fracture_damage) {
   std::array<double, materials::material_state_doubles> v{};
-  in.read(reinterpret_cast<char*>(v.data()), sizeof(double) * v.size());
+  const std::size_t n = with_fracture_damage ? v.size() : v.size() - 1;
+  in.read(reinterpret_cast<char*>(v.data()), sizeof(double) * n);
   return materials::unpack_state(v);
 }
 } // namespace
@@ -159,6 +164,8 @@ template <int dim>
 void NosbMethod<dim>::save(std::ostream& out) const {
   const auto& states = pd_.committed_states();
   const std::uint64_t n = states.size();
+  out.write(reinterpret_cast<const char*>(&history_tag_with_fracture_damage),
+            sizeof(history_tag_with_fracture_damage));
   out.write(reinterpret_cast<const char*>(&n), sizeof(n));
   for (const auto& s : states)
     write_state(out, s);
@@ -168,13 +175,16 @@ template <int dim>
 void NosbMethod<dim>::load(std::istream& in) {
   std::uint64_t n = 0;
   in.read(reinterpret_cast<char*>(&n), sizeof(n));
+  const bool with_fracture_damage = n == history_tag_with_fracture_damage;
+  if (with_fracture_damage)
+    in.read(reinterpret_cast<char*>(&n), sizeof(n));
   if (!in || n != pd_.committed_states().size())
     throw InvalidInput("NOSB-PD checkpoint", "the material history does not fit the particles",
                        "a checkpoint written by the same run");
   std::vector<materials::MaterialState> states;
   states.reserve(n);
   for (std::uint64_t k = 0; k < n; ++k)
-    states.push_back(read_state(in));
+    states.push_back(read_state(in, with_fracture_damage));
   if (!in)
     throw InvalidInput("NOSB-PD checkpoint", "truncated material history", "a complete checkpoint");
   pd_.set_committed_states(states);

@@ -167,6 +167,14 @@ NosbPD<dim>::evaluate(unsigned int e, const dealii::Tensor<2, dim>& F,
                       const ParticleSet<dim>& particles, materials::MaterialState* trial) const {
   const auto& fam = families();
   const unsigned int i = fam.centre(e);
+  // The family's share of stress lost at bond breaks (break_bonds): W = (1 − D_f) W_law. A
+  // family that lost all of it carries nothing, whatever its F (it may have inverted).
+  const double kept = 1.0 - committed_[fam.history_index(e)].fracture_damage;
+  if (!(kept > 0.0)) {
+    if (trial)
+      *trial = committed_[fam.history_index(e)];
+    return Response();
+  }
   const materials::Tensor2 F3 = materials::embed_plane_strain(F);
   materials::FiniteStrainResponse r;
   try {
@@ -177,8 +185,6 @@ NosbPD<dim>::evaluate(unsigned int e, const dealii::Tensor<2, dim>& F,
                            "det F <= 0: the load step is too large or particles interpenetrate; "
                            "use more load steps or a smaller time step");
   }
-  // The family's share of stress lost at bond breaks (break_bonds): W = (1 − D_f) W_law.
-  const double kept = 1.0 - committed_[fam.history_index(e)].fracture_damage;
   Response out;
   for (unsigned int a = 0; a < dim; ++a)
     for (unsigned int J = 0; J < dim; ++J) {
@@ -424,8 +430,8 @@ void NosbPD<dim>::assemble_tangent(const ParticleSet<dim>& particles, const Bond
   }
 
   if (penalty) {
-    // f_i += κ' (z_ij − z_ji), κ' = ½ G_s c ω β V_i V_j/|ξ|; stiffness −∂f_i/∂u_m =
-    // −κ' [2(δ_mj − δ_mi) − G^i_m·ξ − G^j_m·ξ] I.
+    // f_i += κ' (s_i z_ij − s_j z_ji), κ' = ½ G_s c ω β V_i V_j/|ξ|, s = 1 − D_f; stiffness
+    // −∂f_i/∂u_m = −κ' [(s_i + s_j)(δ_mj − δ_mi) − s_i G^i_m·ξ − s_j G^j_m·ξ] I.
     const auto& V = particles.volumes();
     const double Gc = prm_.stabilization_coefficient * c_;
     auto add_scalar = [&](unsigned int i, unsigned int m, double s) {
@@ -503,8 +509,9 @@ std::vector<double> NosbPD<dim>::stiffness_row_bound(const ParticleSet<dim>& par
     for (unsigned int a = 0; a < dim; ++a)
       R[i] = std::max(R[i], rows[i][a]);
   if (prm_.stabilization == Stabilization::penalty && prm_.stabilization_coefficient > 0) {
-    // The penalty force of row i, κ V_i V_j (2η − (F_i − I)ξ − (F_j − I)ξ) per bond, depends
-    // on u_i, u_j (2κVV each) and on the nodes q of the particle families of i and j through
+    // The penalty force of row i, κ V_i V_j (s_i (η − (F_i − I)ξ) + s_j (η − (F_j − I)ξ)) per
+    // bond, depends on u_i, u_j ((s_i + s_j) κVV each) and on the nodes q of the particle
+    // families of i and j through
     // (G_q · ξ) u_q: its row sum is at most
     // Σ_j κ V_i V_j (2(s_i + s_j) + |ξ| (s_i Σ_q∈i |G_q| + s_j Σ_q∈j |G_q|)), s = 1 − D_f.
     const auto& pfam = particle_families_;
@@ -567,6 +574,8 @@ double NosbPD<dim>::family_energy(unsigned int e, const ParticleSet<dim>& partic
   const double w[4] = {0.5 * wb, 0.5 * wa, 0.5 * wa, 0.5 * wb};
   const auto& fam = families();
   const auto F = fam.deformation_gradient(e, particles.displacements());
+  if (!(committed_[fam.history_index(e)].fracture_damage < 1.0))
+    return 0.0; // no stress, no energy (evaluate)
   if (const auto* j2 = dynamic_cast<const materials::J2Plasticity*>(law_.get())) {
     // Small-strain J2 on isotropic linear elasticity: the path integral from F = I would
     // count the plastic strain as stored (J2Plasticity::stored_energy_density).
@@ -654,8 +663,13 @@ template <int dim>
 void NosbPD<dim>::set_particle_state(unsigned int i, const materials::MaterialState& state) {
   if (i + 1 >= particle_history_begin_.size())
     return;
-  for (std::size_t h = particle_history_begin_[i]; h < particle_history_begin_[i + 1]; ++h)
+  // The fracture damage belongs to the particle's families, not to the state brought in (an
+  // FEM point's, when a converted cell takes over a ghost particle): it is kept.
+  for (std::size_t h = particle_history_begin_[i]; h < particle_history_begin_[i + 1]; ++h) {
+    const double D = std::max(committed_[h].fracture_damage, state.fracture_damage);
     committed_[h] = trial_[h] = state;
+    committed_[h].fracture_damage = trial_[h].fracture_damage = D;
+  }
 }
 
 template <int dim>

@@ -157,6 +157,7 @@ class NosbPD {
   }
   // 1 − D_f of particle i's (particle) family: scales its end of the penalty hourglass force as
   // its stress, so a family that a break left without stress adds no hourglass force either.
+  // The penalty control uses particle families, whose history index is the particle index.
   double penalty_kept(unsigned int i) const {
     return i < committed_.size() ? 1.0 - committed_[i].fracture_damage : 1.0;
   }

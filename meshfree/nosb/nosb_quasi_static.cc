@@ -196,6 +196,7 @@ NosbQuasiStatic<dim>::solve(ParticleSet<dim>& p, BondList<dim>& bonds, const Loa
     const auto u_saved = p.displacements();
     const auto fext_saved = p.external_forces();
     const auto broken_saved = bonds.broken;
+    const auto states_saved = model_.committed_states(); // D_f rises at breaks, outside commit
     std::size_t broken_in_step = 0;
     bool ok = false;
     try {
@@ -239,6 +240,7 @@ NosbQuasiStatic<dim>::solve(ParticleSet<dim>& p, BondList<dim>& bonds, const Loa
         bonds.broken = broken_saved;
         model_.update_families(p, bonds);
         model_.update_damage(p, bonds);
+        model_.set_committed_states(states_saved);
       }
       dl *= 0.5;
       ++result.cuts;

@@ -4,6 +4,7 @@
 // test), conserves linear momentum for any displacement (Σ f = 0), has a finite positive
 // stable step, a non-negative stored energy that vanishes at rest, and damage in [0, 1].
 #include "fem/materials/law_parameters.h"
+#include "fem/materials/material_state_io.h"
 #include "meshfree/bond_based_method.h"
 #include "meshfree/neighbor_search.h"
 #include "meshfree/particle_method.h"
@@ -14,6 +15,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <sstream>
 
 namespace spinesim::meshfree {
 namespace {
@@ -183,6 +185,55 @@ TEST(ParticleMethod, MomentumStableStepEnergy3D) {
 
 // A bad parameter in a method's own section is InvalidInput when the scene is read, before
 // any particle exists.
+// The NOSB-PD material history in a zone checkpoint carries the fracture damage D_f: saved
+// and loaded it comes back exactly; a history written before D_f existed (no tag, one number
+// fewer a state) still loads, with D_f = 0; a cut file is bad input.
+template <int dim>
+void check_nosb_history_checkpoint() {
+  auto b = make_body<dim>("nosb", dim == 2 ? 6 : 4);
+  materials::MaterialState s;
+  s.equivalent_plastic_strain = 0.01;
+  s.fracture_damage = 0.375;
+  b.method->set_particle_states({{0u, s}});
+  std::stringstream file;
+  b.method->save(file);
+  auto c = make_body<dim>("nosb", dim == 2 ? 6 : 4);
+  c.method->load(file);
+  const auto records = c.method->history({});
+  ASSERT_FALSE(records.empty());
+  for (const auto& r : records) {
+    EXPECT_EQ(r.particle, 0u);
+    EXPECT_EQ(r.state.fracture_damage, 0.375);
+    EXPECT_EQ(r.state.equivalent_plastic_strain, 0.01);
+  }
+  // The earlier layout: the count, then 14 numbers a state (bond-associated families: one
+  // state per bond).
+  std::stringstream old;
+  const std::uint64_t n = b.bonds.n_bonds();
+  old.write(reinterpret_cast<const char*>(&n), sizeof n);
+  auto v = materials::pack_state(s);
+  for (std::uint64_t k = 0; k < n; ++k)
+    old.write(reinterpret_cast<const char*>(v.data()), sizeof(double) * (v.size() - 1));
+  auto d = make_body<dim>("nosb", dim == 2 ? 6 : 4);
+  d.method->load(old);
+  const auto loaded = d.method->history({});
+  ASSERT_EQ(loaded.size(), n);
+  for (const auto& r : loaded) {
+    EXPECT_EQ(r.state.fracture_damage, 0.0);
+    EXPECT_EQ(r.state.equivalent_plastic_strain, 0.01);
+  }
+  std::string cut = file.str();
+  cut.resize(cut.size() - 8);
+  std::istringstream cut_file(cut);
+  EXPECT_THROW(c.method->load(cut_file), InvalidInput);
+}
+TEST(ParticleMethod, NosbHistoryCheckpointCarriesFractureDamage2D) {
+  check_nosb_history_checkpoint<2>();
+}
+TEST(ParticleMethod, NosbHistoryCheckpointCarriesFractureDamage3D) {
+  check_nosb_history_checkpoint<3>();
+}
+
 TEST(ParticleMethod, BadParameterIsInvalidInputAtReading) {
   dealii::ParameterHandler prm;
   declare_particle_method_sections(prm);

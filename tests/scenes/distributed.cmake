@@ -95,10 +95,11 @@ spinesim_add_scene_test(distributed.ring_nonfinite_force_on_one_rank SCENE ${_di
 # builds, breaks and evaluates that ghost's family as its owner does, from the same exchanged
 # displacements. Checked on the ring breathing with the penalty control and the energy account
 # (1, 2, 4 ranks), on the fragmenting ring with bond-associated families (1, 2 ranks, 18 s and
-# 11 s), on the 3-D tube breathing (1, 2 ranks) and with J2 plasticity, stopped and restarted
+# 11 s), on the fragmenting 3-D tube (1, 2 ranks) and with J2 plasticity, stopped and restarted
 # on 2 ranks (the method's history goes into each rank's checkpoint). Measured: energies and
 # the balance agree to 2e-14 relative (the chaotic fragmenting run included: the same 18 656
-# broken bonds and 40 fragments); the tolerances are those of the bond-based ring above. The
+# broken bonds and 40 fragments, measured before the fracture damage D_f); the tolerances are
+# those of the bond-based ring above. The
 # 3-D tube fragments with the penalty control over 20 steps (before the fracture damage D_f
 # of NosbPD it stopped at step 11 with det F < 0): the fracture damage is decided per particle
 # from the same exchanged displacements on every rank holding it, so the counts agree exactly.
