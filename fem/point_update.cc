@@ -63,11 +63,16 @@ Tensor2 ConstitutivePointUpdate::operator()(const materials::ConstitutiveLaw& la
       throw NumericalFailure("inverted element (det F = " + std::to_string(J) + ")", "",
                              "reduce the load increment (more Load steps) or refine the "
                              "mesh where the deformation concentrates");
-    const materials::FiniteStrainResponse r = law.finite_strain(F, dT, old.state);
-    S = r.first_piola;
-    if (A)
+    if (A) {
+      const materials::FiniteStrainResponse r = law.finite_strain(F, dT, old.state);
+      S = r.first_piola;
       copy_tangent(r.dP_dF);
-    tr.state = r.state;
+      tr.state = r.state;
+    } else { // explicit steps and residuals: the stress alone
+      const materials::FiniteStrainStress r = law.finite_strain_stress(F, dT, old.state);
+      S = r.first_piola;
+      tr.state = r.state;
+    }
     tr.cauchy_stress = symmetrize(S * transpose(F)) / J;
     tr.strain = 0.5 * (symmetrize(transpose(F) * F) - unit_symmetric_tensor<3>());
     tr.deformation = F;

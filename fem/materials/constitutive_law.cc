@@ -1,8 +1,15 @@
 #include "fem/materials/constitutive_law.h"
 
 #include <cmath>
+#include <utility>
 
 namespace spinesim::materials {
+
+FiniteStrainStress ConstitutiveLaw::finite_strain_stress(const Tensor2& F, double dT,
+                                                         const MaterialState& old_state) const {
+  FiniteStrainResponse r = finite_strain(F, dT, old_state);
+  return {r.first_piola, std::move(r.state)};
+}
 
 double ConstitutiveLaw::p_wave_speed() const {
   const double E = youngs_modulus(), nu = poisson_ratio();

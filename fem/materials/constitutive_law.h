@@ -45,6 +45,12 @@ struct FiniteStrainResponse {
   MaterialState state;
 };
 
+// The stress alone, for callers that need no tangent (explicit steps, energy quadrature).
+struct FiniteStrainStress {
+  Tensor2 first_piola; // P [Pa]
+  MaterialState state;
+};
+
 class ConstitutiveLaw {
  public:
   virtual ~ConstitutiveLaw() = default;
@@ -57,6 +63,11 @@ class ConstitutiveLaw {
   // Finite deformation: deformation gradient F (det F > 0, else NumericalFailure).
   virtual FiniteStrainResponse finite_strain(const Tensor2& F, double temperature_change,
                                              const MaterialState& old_state) const = 0;
+  // The same P and state without ∂P/∂F. The default calls finite_strain(); a law whose tangent
+  // costs several times its stress overrides it (an explicit step evaluates the law once per
+  // particle family or quadrature point and step, and never uses the tangent).
+  virtual FiniteStrainStress finite_strain_stress(const Tensor2& F, double temperature_change,
+                                                  const MaterialState& old_state) const;
 
   // Elastic constants for stable-step estimates, stabilisation and AMG scaling.
   virtual double youngs_modulus() const = 0; // [Pa]

@@ -96,7 +96,7 @@ SmallStrainResponse J2Damage::small_strain(const SymTensor2& strain, double dT,
 
 FiniteStrainResponse J2Damage::finite_strain(const Tensor2& F, double dT,
                                              const MaterialState& old_state) const {
-  checked_determinant(F, name());
+  checked_determinant(F, *this);
   return as_linearised_finite_strain(small_strain(linearised_strain(F), dT, old_state));
 }
 

@@ -43,9 +43,9 @@ SymTensor2 J2FiniteStrain::elastic_left_cauchy_green(const Tensor2& F, const Mat
 
 FiniteStrainResponse J2FiniteStrain::finite_strain(const Tensor2& F, double dT,
                                                    const MaterialState& old_state) const {
-  checked_determinant(F, name());
+  checked_determinant(F, *this);
   const Tensor2 Cp_inv(old_state.elastic_left_cauchy_green);
-  check_finite(Cp_inv, "stored inverse plastic right Cauchy-Green tensor", name());
+  check_finite(Cp_inv, "stored inverse plastic right Cauchy-Green tensor", *this);
   const Tensor2 G = F * Cp_inv; // b_tr = G Fᵀ
   const SymTensor2 b_tr = dealii::symmetrize(G * dealii::transpose(F));
 
@@ -124,7 +124,7 @@ FiniteStrainResponse J2FiniteStrain::finite_strain(const Tensor2& F, double dT,
           r.dP_dF[i][J][k][L] = v;
         }
     }
-  check_finite(r.first_piola, "first Piola stress", name());
+  check_finite(r.first_piola, "first Piola stress", *this);
   return r;
 }
 

@@ -17,7 +17,7 @@ J2Plasticity::J2Plasticity(double E, double nu, double rho, double alpha,
 
 SmallStrainResponse J2Plasticity::small_strain(const SymTensor2& strain, double dT,
                                                const MaterialState& old_state) const {
-  check_finite(strain, "strain", name());
+  check_finite(strain, "strain", *this);
   const SymTensor2 eps_tr =
       strain - old_state.plastic_strain - alpha_ * dT * dealii::unit_symmetric_tensor<3>();
   const J2ReturnResult rm =
@@ -36,7 +36,7 @@ SmallStrainResponse J2Plasticity::small_strain(const SymTensor2& strain, double 
 
 FiniteStrainResponse J2Plasticity::finite_strain(const Tensor2& F, double dT,
                                                  const MaterialState& old_state) const {
-  checked_determinant(F, name());
+  checked_determinant(F, *this);
   return as_linearised_finite_strain(small_strain(linearised_strain(F), dT, old_state));
 }
 

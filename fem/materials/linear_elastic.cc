@@ -14,11 +14,12 @@ LinearElastic::LinearElastic(double E, double nu, double rho, double alpha)
   lambda_ = lame_lambda(E, nu);
   mu_ = shear_modulus(E, nu);
   C_ = isotropic_elasticity(lambda_, mu_);
+  C_full_ = Tensor4(C_);
 }
 
 SmallStrainResponse LinearElastic::small_strain(const SymTensor2& strain, double dT,
                                                 const MaterialState& old_state) const {
-  check_finite(strain, "strain", name());
+  check_finite(strain, "strain", *this);
   SmallStrainResponse r;
   const SymTensor2 elastic = strain - alpha_ * dT * dealii::unit_symmetric_tensor<3>();
   r.stress = C_ * elastic;
@@ -27,14 +28,25 @@ SmallStrainResponse LinearElastic::small_strain(const SymTensor2& strain, double
   return r;
 }
 
-FiniteStrainResponse LinearElastic::finite_strain(const Tensor2& F, double dT,
-                                                  const MaterialState& old_state) const {
-  checked_determinant(F, name());
+SymTensor2 LinearElastic::second_piola(const Tensor2& F, double dT) const {
+  checked_determinant(F, *this);
   const SymTensor2 I = dealii::unit_symmetric_tensor<3>();
-  const double theta = std::exp(alpha_ * dT);
+  const double theta = alpha_ == 0.0 ? 1.0 : std::exp(alpha_ * dT);
   const SymTensor2 green =
       0.5 * (dealii::symmetrize(dealii::transpose(F) * F) - I) - 0.5 * (theta * theta - 1.0) * I;
-  const SymTensor2 S = C_ * green;
+  return C_ * green;
+}
+
+FiniteStrainStress LinearElastic::finite_strain_stress(const Tensor2& F, double dT,
+                                                       const MaterialState& old_state) const {
+  FiniteStrainStress r{F * Tensor2(second_piola(F, dT)), old_state};
+  check_finite(r.first_piola, "first Piola stress", *this);
+  return r;
+}
+
+FiniteStrainResponse LinearElastic::finite_strain(const Tensor2& F, double dT,
+                                                  const MaterialState& old_state) const {
+  const SymTensor2 S = second_piola(F, dT);
 
   FiniteStrainResponse r;
   r.first_piola = F * Tensor2(S);
@@ -46,7 +58,7 @@ FiniteStrainResponse LinearElastic::finite_strain(const Tensor2& F, double dT,
         for (unsigned int B = 0; B < 3; ++B) {
           double sum = 0;
           for (unsigned int M = 0; M < 3; ++M)
-            sum += F[i][M] * C_[M][J][L][B];
+            sum += F[i][M] * C_full_[M][J][L][B];
           FC[J][L][i][B] = sum;
         }
   for (unsigned int i = 0; i < 3; ++i)
@@ -59,7 +71,7 @@ FiniteStrainResponse LinearElastic::finite_strain(const Tensor2& F, double dT,
           r.dP_dF[i][J][k][L] = v;
         }
   r.state = old_state;
-  check_finite(r.first_piola, "first Piola stress", name());
+  check_finite(r.first_piola, "first Piola stress", *this);
   return r;
 }
 

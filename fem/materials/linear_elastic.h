@@ -26,6 +26,8 @@ class LinearElastic : public ConstitutiveLaw {
                                    const MaterialState& old_state) const override;
   FiniteStrainResponse finite_strain(const Tensor2& F, double temperature_change,
                                      const MaterialState& old_state) const override;
+  FiniteStrainStress finite_strain_stress(const Tensor2& F, double temperature_change,
+                                          const MaterialState& old_state) const override;
   double youngs_modulus() const override { return E_; }
   double poisson_ratio() const override { return nu_; }
   double density() const override { return rho_; }
@@ -47,9 +49,13 @@ class LinearElastic : public ConstitutiveLaw {
                                    double temperature_change) const;
 
  private:
+  // S = C : (E − E_θ) [Pa], shared by both finite-strain entry points.
+  SymTensor2 second_piola(const Tensor2& F, double temperature_change) const;
+
   double E_, nu_, rho_, alpha_;
   double lambda_, mu_;
   SymTensor4 C_;
+  Tensor4 C_full_; // C_ with every index stored: the tangent's loops read it without mapping
 };
 
 } // namespace spinesim::materials

@@ -17,7 +17,7 @@ NeoHookean::NeoHookean(double E, double nu, double rho, double alpha)
 
 SmallStrainResponse NeoHookean::small_strain(const SymTensor2& strain, double dT,
                                              const MaterialState& old_state) const {
-  check_finite(strain, "strain", name());
+  check_finite(strain, "strain", *this);
   SmallStrainResponse r;
   r.tangent = isotropic_elasticity(lambda_, mu_);
   r.stress = r.tangent * (strain - alpha_ * dT * dealii::unit_symmetric_tensor<3>());
@@ -27,7 +27,7 @@ SmallStrainResponse NeoHookean::small_strain(const SymTensor2& strain, double dT
 
 FiniteStrainResponse NeoHookean::finite_strain(const Tensor2& F, double dT,
                                                const MaterialState& old_state) const {
-  checked_determinant(F, name());
+  checked_determinant(F, *this);
   const double theta = std::exp(alpha_ * dT);
   const Tensor2 Fe = F / theta;
   const double J = dealii::determinant(Fe);
@@ -46,7 +46,19 @@ FiniteStrainResponse NeoHookean::finite_strain(const Tensor2& F, double dT,
                                           (mu_ - lambda_ * lnJ) * Fi[L][i] * Fi[Jc][k] +
                                           lambda_ * Fi[Jc][i] * Fi[L][k]);
   r.state = old_state;
-  check_finite(r.first_piola, "first Piola stress", name());
+  check_finite(r.first_piola, "first Piola stress", *this);
+  return r;
+}
+
+FiniteStrainStress NeoHookean::finite_strain_stress(const Tensor2& F, double dT,
+                                                    const MaterialState& old_state) const {
+  checked_determinant(F, *this);
+  const double theta = std::exp(alpha_ * dT);
+  const Tensor2 Fe = F / theta;
+  const Tensor2 FiT = dealii::transpose(dealii::invert(Fe));
+  FiniteStrainStress r{
+      (mu_ * (Fe - FiT) + lambda_ * std::log(dealii::determinant(Fe)) * FiT) / theta, old_state};
+  check_finite(r.first_piola, "first Piola stress", *this);
   return r;
 }
 

@@ -25,6 +25,8 @@ class NeoHookean : public ConstitutiveLaw {
                                    const MaterialState& old_state) const override;
   FiniteStrainResponse finite_strain(const Tensor2& F, double temperature_change,
                                      const MaterialState& old_state) const override;
+  FiniteStrainStress finite_strain_stress(const Tensor2& F, double temperature_change,
+                                          const MaterialState& old_state) const override;
   double youngs_modulus() const override { return E_; }
   double poisson_ratio() const override { return nu_; }
   double density() const override { return rho_; }

@@ -52,12 +52,12 @@ std::string describe_F(const Tensor2& F) {
 }
 } // namespace
 
-double checked_determinant(const Tensor2& F, const std::string& law) {
+double checked_determinant(const Tensor2& F, const ConstitutiveLaw& law) {
   check_finite(F, "deformation gradient", law);
   const double J = dealii::determinant(F);
   if (!(J > 0.0)) {
     std::ostringstream s;
-    s << "det F = " << J << " <= 0 (inverted material) in " << law;
+    s << "det F = " << J << " <= 0 (inverted material) in " << law.name();
     throw NumericalFailure(s.str(), "material point update, " + describe_F(F),
                            "the element or particle neighbourhood is inverted: reduce the time "
                            "or load step, or refine where the deformation concentrates");
@@ -65,16 +65,16 @@ double checked_determinant(const Tensor2& F, const std::string& law) {
   return J;
 }
 
-void check_finite(const Tensor2& T, const std::string& what, const std::string& law) {
+void check_finite(const Tensor2& T, const char* what, const ConstitutiveLaw& law) {
   for (unsigned int i = 0; i < 3; ++i)
     for (unsigned int j = 0; j < 3; ++j)
       if (!std::isfinite(T[i][j]))
-        throw NumericalFailure("non-finite " + what + " in " + law,
+        throw NumericalFailure(std::string("non-finite ") + what + " in " + law.name(),
                                "material point update, " + describe_F(T),
                                "an upstream NaN or overflow: check the time step and loads");
 }
 
-void check_finite(const SymTensor2& T, const std::string& what, const std::string& law) {
+void check_finite(const SymTensor2& T, const char* what, const ConstitutiveLaw& law) {
   check_finite(Tensor2(T), what, law);
 }
 

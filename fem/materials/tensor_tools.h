@@ -25,11 +25,13 @@ void validate_elastic_constants(const std::string& where, double E, double nu, d
                                 double alpha);
 
 // det F, after checking F is finite and det F > 0; otherwise NumericalFailure naming the law.
-double checked_determinant(const Tensor2& F, const std::string& law);
+// The law is passed, not its name: these run once per material point and step, and only a
+// failure builds a message.
+double checked_determinant(const Tensor2& F, const ConstitutiveLaw& law);
 
 // Throws NumericalFailure if any component is NaN or infinite.
-void check_finite(const Tensor2& T, const std::string& what, const std::string& law);
-void check_finite(const SymTensor2& T, const std::string& what, const std::string& law);
+void check_finite(const Tensor2& T, const char* what, const ConstitutiveLaw& law);
+void check_finite(const SymTensor2& T, const char* what, const ConstitutiveLaw& law);
 
 // Full (i,j,k,l) form of a symmetric 4th-order tensor, and the small-strain "P = σ" tangent.
 Tensor4 to_full(const SymTensor4& C);

@@ -164,37 +164,48 @@ const CorrespondenceFamilies<dim>& NosbPD<dim>::families() const {
 template <int dim>
 typename NosbPD<dim>::Response
 NosbPD<dim>::evaluate(unsigned int e, const dealii::Tensor<2, dim>& F,
-                      const ParticleSet<dim>& particles, materials::MaterialState* trial) const {
+                      const ParticleSet<dim>& particles, materials::MaterialState* trial,
+                      bool with_tangent) const {
   const auto& fam = families();
   const unsigned int i = fam.centre(e);
   // The family's share of stress lost at bond breaks (break_bonds): W = (1 − D_f) W_law. A
   // family that lost all of it carries nothing, whatever its F (it may have inverted).
-  const double kept = 1.0 - committed_[fam.history_index(e)].fracture_damage;
+  const materials::MaterialState& old = committed_[fam.history_index(e)];
+  const double kept = 1.0 - old.fracture_damage;
   if (!(kept > 0.0)) {
     if (trial)
-      *trial = committed_[fam.history_index(e)];
+      *trial = old;
     return Response();
   }
   const materials::Tensor2 F3 = materials::embed_plane_strain(F);
-  materials::FiniteStrainResponse r;
+  const double dT = particles.temperature(i) - reference_temperature_;
+  Response out;
   try {
-    r = law_->finite_strain(F3, particles.temperature(i) - reference_temperature_,
-                            committed_[fam.history_index(e)]);
+    if (with_tangent) {
+      const materials::FiniteStrainResponse r = law_->finite_strain(F3, dT, old);
+      for (unsigned int a = 0; a < dim; ++a)
+        for (unsigned int J = 0; J < dim; ++J) {
+          out.P[a][J] = kept * r.first_piola[a][J];
+          for (unsigned int b = 0; b < dim; ++b)
+            for (unsigned int L = 0; L < dim; ++L)
+              out.A[a][J][b][L] = kept * r.dP_dF[a][J][b][L];
+        }
+      if (trial)
+        *trial = r.state;
+    } else {
+      // An explicit step needs P only; the law's tangent would cost several times more.
+      const materials::FiniteStrainStress r = law_->finite_strain_stress(F3, dT, old);
+      for (unsigned int a = 0; a < dim; ++a)
+        for (unsigned int J = 0; J < dim; ++J)
+          out.P[a][J] = kept * r.first_piola[a][J];
+      if (trial)
+        *trial = r.state;
+    }
   } catch (const NumericalFailure& f) {
     throw NumericalFailure(f.what_failed(), where(particles, i) + " (NOSB-PD family)",
                            "det F <= 0: the load step is too large or particles interpenetrate; "
                            "use more load steps or a smaller time step");
   }
-  Response out;
-  for (unsigned int a = 0; a < dim; ++a)
-    for (unsigned int J = 0; J < dim; ++J) {
-      out.P[a][J] = kept * r.first_piola[a][J];
-      for (unsigned int b = 0; b < dim; ++b)
-        for (unsigned int L = 0; L < dim; ++L)
-          out.A[a][J][b][L] = kept * r.dP_dF[a][J][b][L];
-    }
-  if (trial)
-    *trial = r.state;
   return out;
 }
 
@@ -223,10 +234,11 @@ void NosbPD<dim>::compute_forces(ParticleSet<dim>& particles, const BondList<dim
 
   const auto& fam = families();
   const long n_fam = fam.n_families();
-  std::vector<dealii::Tensor<2, dim>> P(n_fam);
+  auto& P = family_stress_;
+  P.resize(n_fam);
   parallel_for_rethrow(n_fam, parallel_particle_threshold, [&](long e) {
     const auto F = fam.deformation_gradient(e, u);
-    P[e] = evaluate(e, F, particles, &trial_[fam.history_index(e)]).P;
+    P[e] = evaluate(e, F, particles, &trial_[fam.history_index(e)], false).P;
   });
   // f_m = −Σ_e w_e P_e G_m: each family's forces sum to zero (Σ_m G_m = 0). Gathered per
   // particle over its family entries in ascending order: the sums of a scatter over families,
@@ -403,7 +415,7 @@ void NosbPD<dim>::assemble_tangent(const ParticleSet<dim>& particles, const Bond
   std::vector<dealii::types::global_dof_index> cols(dim);
   double vals[dim];
   for (unsigned int e = 0; e < fam.n_families(); ++e) {
-    const Response r = evaluate(e, fam.deformation_gradient(e, u), particles, nullptr);
+    const Response r = evaluate(e, fam.deformation_gradient(e, u), particles, nullptr, true);
     const double w = fam.weight(e);
     for (std::size_t qm = fam.begin(e); qm < fam.end(e); ++qm) {
       // T[a][b][L] = w Σ_J A_aJbL G_m[J]
@@ -483,7 +495,7 @@ std::vector<double> NosbPD<dim>::stiffness_row_bound(const ParticleSet<dim>& par
   // Per family: B[a][J] = Σ_b Σ_L |A_aJbL| Σ_p |G_p,L|; rows m get w_e Σ_J |G_m,J| B[a][J].
   std::vector<dealii::Tensor<2, dim>> B(n_fam);
   parallel_for_rethrow(n_fam, parallel_particle_threshold, [&](long e) {
-    const Response r = evaluate(e, fam.deformation_gradient(e, u), particles, nullptr);
+    const Response r = evaluate(e, fam.deformation_gradient(e, u), particles, nullptr, true);
     dealii::Tensor<1, dim> g;
     for (std::size_t q = fam.begin(e); q < fam.end(e); ++q)
       for (unsigned int L = 0; L < dim; ++L)
@@ -580,9 +592,10 @@ double NosbPD<dim>::family_energy(unsigned int e, const ParticleSet<dim>& partic
     // Small-strain J2 on isotropic linear elasticity: the path integral from F = I would
     // count the plastic strain as stored (J2Plasticity::stored_energy_density).
     const double dT = particles.temperature(fam.centre(e)) - reference_temperature_;
-    const auto sigma = dealii::symmetrize(
-        law_->finite_strain(materials::embed_plane_strain(F), dT, committed_[fam.history_index(e)])
-            .first_piola);
+    const auto sigma =
+        dealii::symmetrize(law_->finite_strain_stress(materials::embed_plane_strain(F), dT,
+                                                      committed_[fam.history_index(e)])
+                               .first_piola);
     const double kept = 1.0 - committed_[fam.history_index(e)].fracture_damage;
     return kept * fam.weight(e) * j2->stored_energy_density(sigma); // W = (1 − D_f) W_law
   }
@@ -591,7 +604,7 @@ double NosbPD<dim>::family_energy(unsigned int e, const ParticleSet<dim>& partic
   for (unsigned int q = 0; q < 4; ++q) {
     const dealii::Tensor<2, dim> Ft =
         dealii::Tensor<2, dim>(dealii::unit_symmetric_tensor<dim>()) + t[q] * H;
-    W += w[q] * dealii::scalar_product(evaluate(e, Ft, particles, nullptr).P, H);
+    W += w[q] * dealii::scalar_product(evaluate(e, Ft, particles, nullptr, false).P, H);
   }
   return fam.weight(e) * W;
 }

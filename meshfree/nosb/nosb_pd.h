@@ -195,7 +195,7 @@ class NosbPD {
   // Bytes of the families, gradients, states and indices (capacities).
   std::size_t memory_bytes() const {
     return particle_families_.memory_bytes() + bond_families_.memory_bytes() +
-           F_particle_.capacity() * sizeof(dealii::Tensor<2, dim>) +
+           (F_particle_.capacity() + family_stress_.capacity()) * sizeof(dealii::Tensor<2, dim>) +
            (committed_.capacity() + trial_.capacity()) * sizeof(materials::MaterialState) +
            history_keys_.capacity() * sizeof(std::pair<unsigned int, unsigned int>) +
            (particle_history_begin_.capacity() + gather_offsets_.capacity() +
@@ -209,8 +209,10 @@ class NosbPD {
     dealii::Tensor<2, dim> P;
     dealii::Tensor<4, dim> A;
   };
+  // P (and A = ∂P/∂F when `with_tangent`; otherwise A is left zero) of family e at F.
   Response evaluate(unsigned int e, const dealii::Tensor<2, dim>& F,
-                    const ParticleSet<dim>& particles, materials::MaterialState* trial) const;
+                    const ParticleSet<dim>& particles, materials::MaterialState* trial,
+                    bool with_tangent) const;
   void compute_particle_gradients(const ParticleSet<dim>& particles);
   // w_e W(F_e) of family e at the current displacements [J].
   double family_energy(unsigned int e, const ParticleSet<dim>& particles) const;
@@ -227,6 +229,7 @@ class NosbPD {
   double modulus_ = 0, c_ = 0, s0_ = 0;
   CorrespondenceFamilies<dim> particle_families_, bond_families_;
   std::vector<dealii::Tensor<2, dim>> F_particle_;
+  std::vector<dealii::Tensor<2, dim>> family_stress_; // P per family, scratch of compute_forces
   std::vector<materials::MaterialState> committed_, trial_;
   std::vector<std::pair<unsigned int, unsigned int>> history_keys_;
   std::vector<std::size_t> particle_history_begin_; // history indices of particle i: [b_i, b_i+1)

@@ -167,9 +167,10 @@ double SpgMethod<dim>::energy_density(unsigned int i, const ParticleSet<dim>& pa
   if (const auto* j2 = dynamic_cast<const materials::J2Plasticity*>(law_.get())) {
     // The stored energy of small-strain J2, not the path integral (which would count the
     // plastic strain as stored): the FEM and NOSB-PD take the same.
-    return j2->stored_energy_density(dealii::symmetrize(
-        law_->finite_strain(materials::embed_plane_strain(F), dT, solver_->committed_states()[i])
-            .first_piola));
+    return j2->stored_energy_density(
+        dealii::symmetrize(law_->finite_strain_stress(materials::embed_plane_strain(F), dT,
+                                                      solver_->committed_states()[i])
+                               .first_piola));
   }
   materials::Tensor2 H;
   for (unsigned int r = 0; r < dim; ++r)
@@ -178,7 +179,7 @@ double SpgMethod<dim>::energy_density(unsigned int i, const ParticleSet<dim>& pa
   double W = 0;
   for (unsigned int q = 0; q < 4; ++q) {
     const materials::Tensor2 Ft = materials::Tensor2(dealii::unit_symmetric_tensor<3>()) + t[q] * H;
-    const auto r = law_->finite_strain(Ft, dT, solver_->committed_states()[i]);
+    const auto r = law_->finite_strain_stress(Ft, dT, solver_->committed_states()[i]);
     W += w[q] * dealii::scalar_product(r.first_piola, H);
   }
   return W;

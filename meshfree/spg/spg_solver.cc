@@ -186,7 +186,7 @@ void SPGSolver<dim>::compute_forces(ParticleSet<dim>& p) {
     Matrix P;
     try {
       const double dT = has_temperature ? temperature[N] - reference_temperature_ : 0.0;
-      const auto r = law_.finite_strain(F3, dT, committed_[N]);
+      const auto r = law_.finite_strain_stress(F3, dT, committed_[N]);
       state_[N] = r.state;
       if (!deferred_commit_)
         committed_[N] = r.state;

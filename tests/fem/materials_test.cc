@@ -535,6 +535,36 @@ TEST(Failures, InvertedDeformationGradientRaisesNumericalFailure) {
     EXPECT_THROW(law->finite_strain(diag(1, std::nan(""), 1), 0, MaterialState()),
                  NumericalFailure);
     EXPECT_NO_THROW(law->finite_strain(diag(1.01, 1, 1), 0, MaterialState()));
+    // The stress-only entry point guards the same way.
+    EXPECT_THROW(law->finite_strain_stress(diag(1, 1, -1), 0, MaterialState()), NumericalFailure);
+    EXPECT_THROW(law->finite_strain_stress(diag(1, std::nan(""), 1), 0, MaterialState()),
+                 NumericalFailure);
+  }
+}
+
+// finite_strain_stress (explicit steps) must return what finite_strain returns, tangent aside,
+// for every law and a history-changing step: the same arithmetic, so to round-off (1e-12 of
+// the stress scale; the laws that override it evaluate P with the same operations).
+TEST(FiniteStrainStress, AgreesWithTheFullResponseInEveryLaw) {
+  const double alpha = 1.2e-5;
+  std::vector<std::unique_ptr<ConstitutiveLaw>> laws;
+  laws.push_back(std::make_unique<LinearElastic>(17e9, 0.3, 1900, alpha));
+  laws.push_back(std::make_unique<NeoHookean>(17e9, 0.3, 1900, alpha));
+  laws.push_back(
+      std::make_unique<J2Plasticity>(17e9, 0.3, 1900, alpha, IsotropicHardening(100e6, 1e9)));
+  laws.push_back(
+      std::make_unique<J2FiniteStrain>(17e9, 0.3, 1900, alpha, IsotropicHardening(100e6, 1e9)));
+  const Tensor2 F = rotation(vec(1, 2, 3), 0.4) * (identity() + 0.03 * diag(1, -0.5, 0.3));
+  for (const auto& law : laws) {
+    SCOPED_TRACE(law->name());
+    const auto full = law->finite_strain(F, 40.0, MaterialState());
+    const auto stress = law->finite_strain_stress(F, 40.0, MaterialState());
+    const double scale = full.first_piola.norm();
+    ASSERT_GT(scale, 1e7); // a real stress, not zero against zero
+    EXPECT_LE((stress.first_piola - full.first_piola).norm(), 1e-12 * scale);
+    EXPECT_NEAR(stress.state.equivalent_plastic_strain, full.state.equivalent_plastic_strain,
+                1e-14);
+    EXPECT_LE((stress.state.plastic_strain - full.state.plastic_strain).norm(), 1e-14);
   }
 }
 
