@@ -9,6 +9,7 @@
 #include <array>
 #include <cmath>
 #include <sstream>
+#include <utility>
 
 namespace spinesim::materials {
 
@@ -43,6 +44,20 @@ SymTensor2 J2FiniteStrain::elastic_left_cauchy_green(const Tensor2& F, const Mat
 
 FiniteStrainResponse J2FiniteStrain::finite_strain(const Tensor2& F, double dT,
                                                    const MaterialState& old_state) const {
+  FiniteStrainResponse r;
+  FiniteStrainStress s = respond(F, dT, old_state, &r.dP_dF);
+  r.first_piola = s.first_piola;
+  r.state = std::move(s.state);
+  return r;
+}
+
+FiniteStrainStress J2FiniteStrain::finite_strain_stress(const Tensor2& F, double dT,
+                                                        const MaterialState& old_state) const {
+  return respond(F, dT, old_state, nullptr);
+}
+
+FiniteStrainStress J2FiniteStrain::respond(const Tensor2& F, double dT,
+                                           const MaterialState& old_state, Tensor4* dP_dF) const {
   checked_determinant(F, *this);
   const Tensor2 Cp_inv(old_state.elastic_left_cauchy_green);
   check_finite(Cp_inv, "stored inverse plastic right Cauchy-Green tensor", *this);
@@ -72,12 +87,12 @@ FiniteStrainResponse J2FiniteStrain::finite_strain(const Tensor2& F, double dT,
   const SymTensor2 I = dealii::unit_symmetric_tensor<3>();
   const SymTensor2 eps_tr =
       0.5 * spectral(log_lam) - alpha_ * dT * I; // elastic log strain, thermal part removed
-  const J2ReturnResult rm =
-      j2_radial_return(eps_tr, old_state.equivalent_plastic_strain, K_, mu_, hardening_, name());
+  const J2ReturnResult rm = j2_radial_return(eps_tr, old_state.equivalent_plastic_strain, K_, mu_,
+                                             hardening_, law_name, dP_dF != nullptr);
   const SymTensor2& tau = rm.stress;
   const Tensor2 F_inv = dealii::invert(F);
 
-  FiniteStrainResponse r;
+  FiniteStrainStress r;
   r.first_piola = Tensor2(tau) * dealii::transpose(F_inv);
   r.state = old_state;
   if (rm.plastic) {
@@ -92,6 +107,10 @@ FiniteStrainResponse J2FiniteStrain::finite_strain(const Tensor2& F, double dT,
     r.state.equivalent_plastic_strain += rm.delta_gamma;
     r.state.plastic_work += rm.delta_gamma * rm.flow_stress;
   }
+
+  check_finite(r.first_piola, "first Piola stress", *this);
+  if (!dP_dF)
+    return r;
 
   // Tangent. Divided differences of ln for the derivative of ½ ln b.
   double g[3][3];
@@ -121,10 +140,9 @@ FiniteStrainResponse J2FiniteStrain::finite_strain(const Tensor2& F, double dT,
           double v = 0;
           for (unsigned int m = 0; m < 3; ++m)
             v += dtau[i][m] * F_inv[J][m] - tau[i][m] * F_inv[J][k] * F_inv[L][m];
-          r.dP_dF[i][J][k][L] = v;
+          (*dP_dF)[i][J][k][L] = v;
         }
     }
-  check_finite(r.first_piola, "first Piola stress", *this);
   return r;
 }
 

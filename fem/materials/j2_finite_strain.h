@@ -37,11 +37,14 @@ class J2FiniteStrain : public ConstitutiveLaw {
   J2FiniteStrain(double youngs_modulus, double poisson_ratio, double density,
                  double thermal_expansion, const IsotropicHardening& hardening);
 
-  std::string name() const override { return "j2_finite_strain"; }
+  static constexpr const char* law_name = "j2_finite_strain";
+  std::string name() const override { return law_name; }
   SmallStrainResponse small_strain(const SymTensor2& strain, double temperature_change,
                                    const MaterialState& old_state) const override;
   FiniteStrainResponse finite_strain(const Tensor2& F, double temperature_change,
                                      const MaterialState& old_state) const override;
+  FiniteStrainStress finite_strain_stress(const Tensor2& F, double temperature_change,
+                                          const MaterialState& old_state) const override;
   double youngs_modulus() const override { return E_; }
   double poisson_ratio() const override { return nu_; }
   double density() const override { return rho_; }
@@ -52,6 +55,9 @@ class J2FiniteStrain : public ConstitutiveLaw {
   static SymTensor2 elastic_left_cauchy_green(const Tensor2& F, const MaterialState& state);
 
  private:
+  // P and the updated state; ∂P/∂F into `dP_dF` when it is given.
+  FiniteStrainStress respond(const Tensor2& F, double temperature_change,
+                             const MaterialState& old_state, Tensor4* dP_dF) const;
   double E_, nu_, rho_, alpha_;
   double K_, mu_;
   IsotropicHardening hardening_;

@@ -5,6 +5,8 @@
 #include "fem/materials/j2_return_mapping.h"
 #include "fem/materials/tensor_tools.h"
 
+#include <utility>
+
 namespace spinesim::materials {
 
 J2Plasticity::J2Plasticity(double E, double nu, double rho, double alpha,
@@ -17,11 +19,16 @@ J2Plasticity::J2Plasticity(double E, double nu, double rho, double alpha,
 
 SmallStrainResponse J2Plasticity::small_strain(const SymTensor2& strain, double dT,
                                                const MaterialState& old_state) const {
+  return respond(strain, dT, old_state, true);
+}
+
+SmallStrainResponse J2Plasticity::respond(const SymTensor2& strain, double dT,
+                                          const MaterialState& old_state, bool with_tangent) const {
   check_finite(strain, "strain", *this);
   const SymTensor2 eps_tr =
       strain - old_state.plastic_strain - alpha_ * dT * dealii::unit_symmetric_tensor<3>();
-  const J2ReturnResult rm =
-      j2_radial_return(eps_tr, old_state.equivalent_plastic_strain, K_, mu_, hardening_, name());
+  const J2ReturnResult rm = j2_radial_return(eps_tr, old_state.equivalent_plastic_strain, K_, mu_,
+                                             hardening_, law_name, with_tangent);
   SmallStrainResponse r;
   r.stress = rm.stress;
   r.tangent = rm.tangent;
@@ -38,6 +45,13 @@ FiniteStrainResponse J2Plasticity::finite_strain(const Tensor2& F, double dT,
                                                  const MaterialState& old_state) const {
   checked_determinant(F, *this);
   return as_linearised_finite_strain(small_strain(linearised_strain(F), dT, old_state));
+}
+
+FiniteStrainStress J2Plasticity::finite_strain_stress(const Tensor2& F, double dT,
+                                                      const MaterialState& old_state) const {
+  checked_determinant(F, *this);
+  SmallStrainResponse r = respond(linearised_strain(F), dT, old_state, false);
+  return {Tensor2(r.stress), std::move(r.state)};
 }
 
 SPINESIM_REGISTER_MATERIAL_MODEL(j2_plasticity, "j2_plasticity",

@@ -19,11 +19,14 @@ class J2Plasticity : public ConstitutiveLaw {
   J2Plasticity(double youngs_modulus, double poisson_ratio, double density,
                double thermal_expansion, const IsotropicHardening& hardening);
 
-  std::string name() const override { return "j2_plasticity"; }
+  static constexpr const char* law_name = "j2_plasticity";
+  std::string name() const override { return law_name; }
   SmallStrainResponse small_strain(const SymTensor2& strain, double temperature_change,
                                    const MaterialState& old_state) const override;
   FiniteStrainResponse finite_strain(const Tensor2& F, double temperature_change,
                                      const MaterialState& old_state) const override;
+  FiniteStrainStress finite_strain_stress(const Tensor2& F, double temperature_change,
+                                          const MaterialState& old_state) const override;
   double youngs_modulus() const override { return E_; }
   double poisson_ratio() const override { return nu_; }
   double density() const override { return rho_; }
@@ -35,6 +38,8 @@ class J2Plasticity : public ConstitutiveLaw {
   double stored_energy_density(const SymTensor2& stress) const;
 
  private:
+  SmallStrainResponse respond(const SymTensor2& strain, double temperature_change,
+                              const MaterialState& old_state, bool with_tangent) const;
   double E_, nu_, rho_, alpha_;
   double K_, mu_;
   IsotropicHardening hardening_;

@@ -8,10 +8,9 @@
 namespace spinesim::materials {
 
 J2ReturnResult j2_radial_return(const SymTensor2& eps_tr, double ebar_n, double K, double mu,
-                                const IsotropicHardening& hardening, const std::string& law) {
+                                const IsotropicHardening& hardening, const char* law,
+                                bool with_tangent) {
   const SymTensor2 I = dealii::unit_symmetric_tensor<3>();
-  const SymTensor4 IxI = dealii::outer_product(I, I);
-  const SymTensor4 Idev = dealii::deviator_tensor<3>();
 
   J2ReturnResult r;
   const SymTensor2 s_tr = 2.0 * mu * dealii::deviator(eps_tr);
@@ -23,7 +22,8 @@ J2ReturnResult j2_radial_return(const SymTensor2& eps_tr, double ebar_n, double 
   // Trial state elastic (a relative tolerance keeps round-off from triggering a return).
   if (q_tr - sy_n <= 1e-12 * sy_n) {
     r.stress = p * I + s_tr;
-    r.tangent = K * IxI + 2.0 * mu * Idev;
+    if (with_tangent)
+      r.tangent = K * dealii::outer_product(I, I) + 2.0 * mu * dealii::deviator_tensor<3>();
     r.flow_stress = sy_n;
     return r;
   }
@@ -49,15 +49,17 @@ J2ReturnResult j2_radial_return(const SymTensor2& eps_tr, double ebar_n, double 
   }
 
   const SymTensor2 n = s_tr / norm_s;
-  const double Hp = hardening.slope(ebar_n + dg);
   const double factor = 1.0 - 3.0 * mu * dg / q_tr;
   r.plastic = true;
   r.delta_gamma = dg;
   r.flow_stress = hardening.flow_stress(ebar_n + dg);
   r.plastic_strain_increment = dg * std::sqrt(1.5) * n;
   r.stress = p * I + factor * s_tr;
-  r.tangent = K * IxI + 2.0 * mu * factor * Idev +
-              6.0 * mu * mu * (dg / q_tr - 1.0 / (3.0 * mu + Hp)) * dealii::outer_product(n, n);
+  if (with_tangent) {
+    const double Hp = hardening.slope(ebar_n + dg);
+    r.tangent = K * dealii::outer_product(I, I) + 2.0 * mu * factor * dealii::deviator_tensor<3>() +
+                6.0 * mu * mu * (dg / q_tr - 1.0 / (3.0 * mu + Hp)) * dealii::outer_product(n, n);
+  }
   return r;
 }
 

@@ -9,8 +9,6 @@
 #include "fem/materials/constitutive_law.h"
 #include "fem/materials/isotropic_hardening.h"
 
-#include <string>
-
 namespace spinesim::materials {
 
 struct J2ReturnResult {
@@ -27,10 +25,11 @@ struct J2ReturnResult {
 // Linear hardening converges in one Newton step; Voce in a few (Newton on a convex,
 // decreasing residual from Δγ = 0 approaches the root monotonically).
 // NumericalFailure if the local Newton iteration does not converge in 50 iterations.
+// Without `with_tangent` the tangent is left zero (explicit steps need the stress only).
 J2ReturnResult j2_radial_return(const SymTensor2& elastic_trial_strain,
                                 double equivalent_plastic_strain, double bulk_modulus,
                                 double shear_modulus, const IsotropicHardening& hardening,
-                                const std::string& law);
+                                const char* law, bool with_tangent = true);
 
 } // namespace spinesim::materials
 

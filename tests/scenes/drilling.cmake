@@ -25,7 +25,7 @@ spinesim_add_scene_test(study.rosenthal_convergence_2d
 # The same in 3-D up to 0.125 mm cells (about 12 min on two cores; measured on one rank per
 # run: order 2.25 against the finest, errors falling 5.2, 0.38, 0.23 %).
 spinesim_add_scene_test(benchmark.rosenthal_convergence
-  SCENE ${PROJECT_SOURCE_DIR}/applications/benchmarks/rosenthal_convergence.prm
+  SCENE ${PROJECT_SOURCE_DIR}/applications/benchmarks/rosenthal_convergence.prm PROCESSORS 2
   EXPECT "status==ok;failed_runs<=0;all_rows_finite>=1;errors_fall_rosenthal_3d_fem_q1>=1;order_rosenthal_3d_fem_q1>=1.8"
   LABELS "benchmark;study;heat" TIMEOUT 3600)
 
@@ -104,8 +104,10 @@ spinesim_add_scene_test(scene.bone_drilling_ct
 # and more from the wall are not asserted against the speed: in this model (Kienzle
 # coefficients without a speed term) they see nearly the same energy per length of hole at
 # any speed and change by tenths of a degree either way (docs/drilling.md, the sweep).
+# The study starts each run on two ranks itself (Sweep/Ranks): it holds two of ctest's slots,
+# or it shares the cores with other tests and takes five times as long.
 spinesim_add_scene_test(study.drilling_sweep_quick
-  SCENE ${PROJECT_SOURCE_DIR}/tests/data/drilling_sweep_quick.prm
+  SCENE ${PROJECT_SOURCE_DIR}/tests/data/drilling_sweep_quick.prm PROCESSORS 2
   EXPECT "status==ok;failed_runs<=0;all_figures_finite>=1;png_valid>=1;trend_peak_temperature_C_vs_axis1>=1;trend_peak_temperature_C_vs_axis2<=-1;trend_max_probe_temperature_C_vs_axis2<=-1;trend_necrotic_distance_cem43_mm_vs_axis2<=-1"
   LABELS "scene;study;drilling" TIMEOUT 600)
 # The full sweep: 500/1000/2000 rpm × 0.03/0.06/0.12 mm/rev × dry/irrigated at the scene's
@@ -114,13 +116,13 @@ spinesim_add_scene_test(study.drilling_sweep_quick
 # the feed (thicker chips cost less energy per volume, and the hole takes less time) and with
 # irrigation, as do the peak and the CEM43 necrosis reach.
 spinesim_add_scene_test(benchmark.drilling_sweep
-  SCENE ${PROJECT_SOURCE_DIR}/applications/studies/drilling_sweep.prm
+  SCENE ${PROJECT_SOURCE_DIR}/applications/studies/drilling_sweep.prm PROCESSORS 2
   EXPECT "status==ok;failed_runs<=0;all_figures_finite>=1;png_valid>=1;trend_peak_temperature_C_vs_axis1>=1;trend_peak_temperature_C_vs_axis2>=1;trend_max_probe_temperature_C_vs_axis2<=-1;trend_max_probe_temperature_C_vs_axis3<=-1;trend_peak_temperature_C_vs_axis3<=-1;trend_necrotic_distance_cem43_mm_vs_axis3<=-1"
   LABELS "benchmark;study;drilling" TIMEOUT 3600)
 # The scene's cost against its resolution (8 to 24 cells across the bit, about 8 min): every
 # run finishes with finite figures, and the default resolution (16) runs within the required
 # 5 minutes on two cores (measured in the study's table; here the whole study's bound).
 spinesim_add_scene_test(benchmark.drilling_resolution
-  SCENE ${PROJECT_SOURCE_DIR}/applications/benchmarks/drilling_resolution.prm
+  SCENE ${PROJECT_SOURCE_DIR}/applications/benchmarks/drilling_resolution.prm PROCESSORS 2
   EXPECT "status==ok;failed_runs<=0;all_rows_finite>=1;png_valid>=1"
   LABELS "benchmark;study;drilling" TIMEOUT 3600)
