@@ -63,7 +63,7 @@ case "$action" in
     ;;
   test)
     echo "== running the default test suite (benchmarks and known failures excluded)"
-    ctest --test-dir "$build" -LE "benchmark|known_failure" --output-on-failure -j "$jobs" "$@"
+    ctest --test-dir "$build" -LE "benchmark|known_failure|long" --output-on-failure -j "$jobs" "$@"
     ;;
   *) usage ;;
 esac

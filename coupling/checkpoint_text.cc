@@ -66,13 +66,15 @@ CheckpointContents read_checkpoint_text(std::istream& in, std::uintmax_t bytes, 
       (c.version >= 3 && !read_number(in, nh)))
     throw InvalidInput(file, "missing or unreadable coupling checkpoint header",
                        "a file written by FemParticleCoupling::save (versions 1 to 4)");
+  // Numbers of a history record's material state: version 4 added the fracture damage.
+  const unsigned int n_state =
+      c.version >= 4 ? checkpoint_state_doubles : checkpoint_state_doubles - 1;
   // Every count is bounded by what the file can hold (each number takes at least two bytes
   // with its separator) before a loop runs or a vector is sized by it.
   const auto fits = [&](std::size_t count, std::size_t numbers_per_record) {
     return count <= bytes / (2 * numbers_per_record);
   };
-  if (!fits(n, 7 + 3 * dim) || !fits(nc, 2) || !fits(nb, 2) ||
-      !fits(nh, 2 + checkpoint_state_doubles - (c.version >= 4 ? 0 : 1)))
+  if (!fits(n, 7 + 3 * dim) || !fits(nc, 2) || !fits(nb, 2) || !fits(nh, 2 + n_state))
     throw InvalidInput(file,
                        "header counts (" + std::to_string(n) + " particles, " + std::to_string(nc) +
                            " converted cells, " + std::to_string(nb) + " broken bonds, " +
@@ -123,8 +125,6 @@ CheckpointContents read_checkpoint_text(std::istream& in, std::uintmax_t bytes, 
     auto& r = c.history.emplace_back();
     bool ok = read_number(in, r.particle) && read_number(in, r.neighbour) && r.particle < n &&
               r.neighbour < n;
-    const unsigned int n_state =
-        c.version >= 4 ? checkpoint_state_doubles : checkpoint_state_doubles - 1;
     for (unsigned int m = 0; m < n_state; ++m)
       ok = ok && read_finite(in, r.state[m]);
     require(ok, "history record", k);

@@ -320,12 +320,23 @@ std::pair<double, double> FemParticleCoupling<dim>::max_free_forces() {
 
 template <int dim>
 std::vector<double> FemParticleCoupling<dim>::equivalent_plastic_strains() const {
+  return gather_state(&materials::MaterialState::equivalent_plastic_strain);
+}
+
+template <int dim>
+std::vector<double> FemParticleCoupling<dim>::fracture_damages() const {
+  return gather_state(&materials::MaterialState::fracture_damage);
+}
+
+template <int dim>
+std::vector<double>
+FemParticleCoupling<dim>::gather_state(double materials::MaterialState::*field) const {
   std::vector<double> e(state_.particles.size(), 0.0);
   if (!state_.carries_state())
     return e;
   for (unsigned int i = 0; i < e.size(); ++i)
     if (state_.free[i] && state_.is_owned(i))
-      e[i] = state_.method->particle_state(i).equivalent_plastic_strain;
+      e[i] = state_.method->particle_state(i).*field;
   if (Utilities::MPI::n_mpi_processes(state_.fem.mpi_communicator()) > 1)
     Utilities::MPI::sum(e, state_.fem.mpi_communicator(), e);
   return e;
@@ -348,6 +359,7 @@ std::string FemParticleCoupling<dim>::write_output(const std::string& directory,
   const std::string name = "particles_" + Utilities::int_to_string(cycle, 4) + ".vtu";
   halo_.synchronise(); // collective: damage and states of every particle on every rank
   const auto plastic = equivalent_plastic_strains(); // collective
+  const auto fracture = fracture_damages();          // collective
   // Physical displacements from their owners (SPG's unknowns are RK coefficients; the others'
   // are the displacements themselves).
   std::vector<double> u(dim * particles.size(), 0.0);
@@ -366,6 +378,8 @@ std::string FemParticleCoupling<dim>::write_output(const std::string& directory,
   meshfree::ParticleSet<dim> out(particles.thickness());
   std::vector<double>* eps =
       state_.carries_state() ? &out.add_scalar_field("equivalent_plastic_strain") : nullptr;
+  std::vector<double>* df =
+      state_.carries_state() ? &out.add_scalar_field("fracture_damage") : nullptr;
   for (unsigned int i = 0; i < particles.size(); ++i)
     if (state_.free[i]) {
       const unsigned int k = out.add_particle(particles.reference_position(i), particles.volume(i));
@@ -377,6 +391,8 @@ std::string FemParticleCoupling<dim>::write_output(const std::string& directory,
       out.temperature(k) = particles.temperature(i);
       if (eps)
         (*eps)[k] = plastic[i];
+      if (df)
+        (*df)[k] = fracture[i];
     }
   const std::string dir =
       directory.empty() || directory.back() == '/' ? directory : directory + "/";

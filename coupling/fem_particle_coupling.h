@@ -184,10 +184,18 @@ class FemParticleCoupling {
   // Equivalent plastic strain ε̄_p of every free particle from its owner (0 for ghosts and for
   // methods without material state) [-]. Collective.
   std::vector<double> equivalent_plastic_strains() const;
+  // Fracture damage D_f of every free particle (the share of stress its families lost at
+  // bond breaks, NOSB-PD; 0 for ghosts and other methods) [-]. Collective.
+  std::vector<double> fracture_damages() const;
   // Messages for the run log since the last call (the method's, and the coupling's own).
   std::vector<std::string> take_messages();
 
   // particles_<cycle>.vtu of the free particles (rank 0); returns the file name. Collective.
+ private:
+  // Member `field` of every free particle's material state from its owner. Collective.
+  std::vector<double> gather_state(double materials::MaterialState::*field) const;
+
+ public:
   std::string write_output(const std::string& directory, unsigned int cycle) const;
   void save(const std::string& file) const { checkpoint_.save(file); } // rank 0 writes
   // Every rank reads; FEM state restored separately.

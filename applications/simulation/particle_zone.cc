@@ -21,10 +21,12 @@
 #include <deal.II/base/utilities.h>
 #include <deal.II/lac/vector.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <optional>
 
 namespace spinesim::applications {
 
@@ -759,6 +761,19 @@ void ParticleZone<dim>::add_figures(RunContext& ctx) const {
   s.set_figure("fragments", pieces.fragments, "-");
   s.set_figure("isolated_particles", pieces.isolated, "-");
   s.set_figure("largest_fragment_particles", pieces.largest, "-");
+  if (z.method->carries_material_state()) {
+    // Fracture damage D_f (NOSB-PD: stress released at bond breaks; 0 for other methods):
+    // the largest, and the volume share of particles past one half.
+    double max_df = 0, damaged_volume = 0, volume = 0;
+    for (unsigned int i = 0; i < z.n_owned(); ++i) {
+      const double df = z.method->particle_state(i).fracture_damage;
+      max_df = std::max(max_df, df);
+      volume += z.particles.volume(i);
+      damaged_volume += df > 0.5 ? z.particles.volume(i) : 0.0;
+    }
+    s.set_figure("max_fracture_damage", z.max(max_df), "-");
+    s.set_figure("fracture_damaged_volume_fraction", z.sum(damaged_volume) / z.sum(volume), "-");
+  }
   if (z.prm.integration == "explicit") {
     s.set_figure("particle_explicit_steps", z.explicit_steps, "-");
     s.set_figure("max_particle_speed", z.max(z.max_speed), "m/s");
@@ -803,8 +818,23 @@ template <int dim>
 std::string ParticleZone<dim>::write_output(const std::string& directory,
                                             unsigned int cycle) const {
   const std::string base = "particles_" + dealii::Utilities::int_to_string(cycle, 4);
+  // A method with material state adds its plastic strain and fracture damage D_f (the share
+  // of stress a NOSB-PD family lost at bond breaks) per particle, on a copy of the set.
+  std::optional<meshfree::ParticleSet<dim>> with_state;
+  if (impl_->method && impl_->method->carries_material_state()) {
+    with_state.emplace(impl_->particles);
+    auto& eps = with_state->add_scalar_field("equivalent_plastic_strain");
+    auto& df = with_state->add_scalar_field("fracture_damage");
+    const unsigned int n = impl_->partition ? impl_->n_owned() : impl_->particles.size();
+    for (unsigned int i = 0; i < n; ++i) {
+      const materials::MaterialState st = impl_->method->particle_state(i);
+      eps[i] = st.equivalent_plastic_strain;
+      df[i] = st.fracture_damage;
+    }
+  }
+  const meshfree::ParticleSet<dim>& particles = with_state ? *with_state : impl_->particles;
   if (!impl_->partition) {
-    meshfree::write_particles_vtu(impl_->particles, directory + "/" + base + ".vtu");
+    meshfree::write_particles_vtu(particles, directory + "/" + base + ".vtu");
     return base + ".vtu";
   }
   const unsigned int rank = dealii::Utilities::MPI::this_mpi_process(impl_->comm),
@@ -812,12 +842,12 @@ std::string ParticleZone<dim>::write_output(const std::string& directory,
   const auto piece = [&](unsigned int r) {
     return base + "." + dealii::Utilities::int_to_string(r, 4) + ".vtu";
   };
-  meshfree::write_particles_vtu(impl_->particles, directory + "/" + piece(rank), impl_->n_owned());
+  meshfree::write_particles_vtu(particles, directory + "/" + piece(rank), impl_->n_owned());
   if (rank == 0) {
     std::vector<std::string> pieces;
     for (unsigned int r = 0; r < ranks; ++r)
       pieces.push_back(piece(r));
-    meshfree::write_particles_pvtu(impl_->particles, directory + "/" + base + ".pvtu", pieces);
+    meshfree::write_particles_pvtu(particles, directory + "/" + base + ".pvtu", pieces);
   }
   return base + ".pvtu";
 }

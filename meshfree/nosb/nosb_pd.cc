@@ -336,10 +336,13 @@ void NosbPD<dim>::release_energy_at_breaks(const ParticleSet<dim>& particles,
   // brings it back: 1 − D_f ← (1 − D_f) E_before/E_after on all its families. The energy
   // then never rises at a break, and a family that sees an opening crack in F carries
   // (almost) no stress.
+  // Rises below the energy of a strain of 1e-8 over the particle's volume are round-off (a
+  // fragment in rigid rotation stores ~eps^2 E): they must not damage it.
+  const auto& V = particles.volumes();
   parallel_for_rethrow(static_cast<long>(changed.size()), parallel_particle_threshold, [&](long c) {
     const unsigned int i = changed[c];
     const double after = particle_strain_energy(i, particles);
-    if (!(after > before[c]))
+    if (!(after > before[c] + 1e-16 * modulus_ * V[i]))
       return;
     const double ratio = before[c] > 0.0 ? before[c] / after : 0.0;
     for (std::size_t h = particle_history_begin_[i]; h < particle_history_begin_[i + 1]; ++h) {

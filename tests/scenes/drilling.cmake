@@ -8,9 +8,18 @@ set(_val ${PROJECT_SOURCE_DIR}/applications/validation)
 # field of the Gaussian source (the discretisation error) within 1 % (measured 0.64 % and
 # 0.35 %). The insulated block holds exactly what the source put in, P t, to the CG
 # tolerance (1e-12 of a right-hand side ~ the content, 200 times the input: bound 1e-8).
+# Label long (ctest -L long; 86 s on two ranks): the default run checks the same at the coarser
+# cells below.
 spinesim_add_scene_test(validation.rosenthal_moving_source_3d
   SCENE ${_val}/rosenthal_moving_source.prm RANKS 2
   EXPECT "status==ok;max_probe_error_relative<=0.03;max_probe_discretisation_error_relative<=0.01;heat_input_error_relative<=1e-8;cells>=50000"
+  LABELS "scene;validation;heat;long" TIMEOUT 600)
+# The same at 0.35 mm cells (31 240 cells, 36 s on two ranks): against Rosenthal 1.97 %
+# (bound 3 %); the discretisation error 1.03 %, 1.6 times that at 0.25 mm (h² predicts 1.96),
+# bound 1.5 %; the heat input as above.
+spinesim_add_scene_test(validation.rosenthal_moving_source_3d_coarse
+  SCENE ${_val}/rosenthal_moving_source.prm RANKS 2 SET "Rosenthal/Cell size=0.35"
+  EXPECT "status==ok;max_probe_error_relative<=0.03;max_probe_discretisation_error_relative<=0.015;heat_input_error_relative<=1e-8;cells>=30000"
   LABELS "scene;validation;heat" TIMEOUT 600)
 spinesim_add_scene_test(validation.rosenthal_moving_source_2d
   SCENE ${_val}/rosenthal_moving_source_2d.prm
@@ -48,18 +57,22 @@ spinesim_add_scene_test(benchmark.rosenthal_convergence
 # 40 K / 0.7 = 15 MPa at L/2 from the wall; bound -5 MPa).
 set(_drill ${PROJECT_SOURCE_DIR}/applications/scenes/bone_drilling.prm)
 set(_drill_runs ${CMAKE_CURRENT_BINARY_DIR}/runs/bone_drilling)
+# The scene as shipped is labelled long (126 s on two ranks: ctest -L long); the default run
+# checks the same books and bounds on the quick variant below.
 spinesim_add_scene_test(scene.bone_drilling SCENE ${_drill} RANKS 2 OUT ${_drill_runs}/default
   EXPECT "status==ok;heat_input_error_relative<=1e-6;heat_balance_error_relative<=1e-6;mass_balance_error_relative<=1e-12;removed_volume_error_relative<=0.02;peak_falls_with_distance>=1;peak_temperature_C>=47;necrotic_volume_cem43_mm3>=1;necrotic_distance_cem43_mm>=0.1;max_thrust_force_N>=10;max_torque_Nmm>=10;probe_plot_valid>=1;mechanics_solves>=6;support_reaction_error_relative<=1e-8;max_failure_index<=0.5;max_failure_index>=0.01;min_principal_stress_MPa<=-5"
-  LABELS "scene;heat;drilling;mechanics" TIMEOUT 600)
+  LABELS "scene;heat;drilling;mechanics;long" TIMEOUT 600)
 
 # A coarse, shallow variant with a 1.5 mm pilot hole (8 cells across the bit, a 5 mm hole,
 # 10 s of cooling; seconds) on 1 and 2 ranks: the same figures (measured: peak temperature
 # 6e-10 apart, removed volume and cutting energy equal), and the same books at coarse
 # resolution (removed volume measured 2.8 % off the swept at 8 cells across: the staircase,
-# bound 5 %).
+# bound 5 %). The scene's other checks hold here too (measured: peak 102.8 degC, CEM43 28.5
+# mm^3 reaching 0.77 mm, thrust 23.5 N, torque 25.2 N mm, 4 mechanics solves over the
+# shallower hole, supports 1.5e-10, failure index 0.138, principal stress -18.3 MPa).
 set(_drill_quick "Mesh/Cells across diameter=8" "Drill/Hole 1/Depth=5"
     "Drilling run/Cooling time=10" "Drill/Pilot diameter=1.5")
-set(_drill_quick_checks "status==ok;heat_input_error_relative<=1e-6;heat_balance_error_relative<=1e-6;mass_balance_error_relative<=1e-12;removed_volume_error_relative<=0.05;peak_falls_with_distance>=1")
+set(_drill_quick_checks "status==ok;heat_input_error_relative<=1e-6;heat_balance_error_relative<=1e-6;mass_balance_error_relative<=1e-12;removed_volume_error_relative<=0.05;peak_falls_with_distance>=1;peak_temperature_C>=47;necrotic_volume_cem43_mm3>=1;necrotic_distance_cem43_mm>=0.1;max_thrust_force_N>=10;max_torque_Nmm>=10;probe_plot_valid>=1;mechanics_solves>=4;support_reaction_error_relative<=1e-8;max_failure_index<=0.5;max_failure_index>=0.01;min_principal_stress_MPa<=-5")
 spinesim_add_scene_test(scene.bone_drilling_quick SCENE ${_drill} OUT ${_drill_runs}/quick
   SET ${_drill_quick} EXPECT "${_drill_quick_checks}" LABELS "scene;heat;drilling"
   FIXTURE drill_quick)

@@ -109,16 +109,21 @@ spinesim_add_scene_test(stability.sphere_fragmentation_bond_based_3d
 # particle 66 m/s, 104 fragments (904 isolated particles: the families that lost their hoop
 # bonds lose their radial stiffness too, so the ring crumbles more than with bond-based PD,
 # 16 fragments and 8 isolated particles).
+# The fracture damage itself (max_fracture_damage, and the volume share of particles past
+# D_f = 1/2): breaks released energy (max D_f measured 0.99994; bound >= 0.5, <= 1) and the
+# scalar D_f spreads over the ring (93 % of the volume past 1/2; penalty control 100 %):
+# asserted above 1/2 so that a D_f that stopped being raised or being written fails.
+set(_ring_df "max_fracture_damage>=0.5;max_fracture_damage<=1;fracture_damaged_volume_fraction>=0.5;fracture_damaged_volume_fraction<=1")
 spinesim_add_scene_test(stability.ring_fragmentation_nosb_2d SCENE ${_ring}
   SET "Effects/Particles method=nosb"
-  EXPECT "${_ring_2d}" LABELS "scene;particles;validation;stability" TIMEOUT 120)
+  EXPECT "${_ring_2d};${_ring_df}" LABELS "scene;particles;validation;stability" TIMEOUT 120)
 # The penalty control: the same checks but the balance, which misses the work of the
 # hourglass force (not the gradient of an energy: 0.16 % without breaking) at the breaks:
 # measured 4.0 % (2-D ring), 3.5 % (3-D tube, 40 us), hence the bound of 6 %. Fastest particle
 # 65 m/s, fracture dissipation 172 J/m, 204 fragments.
 spinesim_add_scene_test(stability.ring_fragmentation_nosb_penalty_2d SCENE ${_ring}
   SET "Effects/Particles method=nosb" "Particles/NOSB/Stabilization=penalty"
-  EXPECT "status==ok;energy_balance_error_relative<=0.06;max_particle_speed<=100;initial_energy_J~3524.5:1e-10;fracture_dissipation_J>=10;fragments>=2"
+  EXPECT "status==ok;energy_balance_error_relative<=0.06;max_particle_speed<=100;initial_energy_J~3524.5:1e-10;fracture_dissipation_J>=10;fragments>=2;${_ring_df}"
   LABELS "scene;particles;validation;stability" TIMEOUT 120)
 # Stopped after step 20 of 50 and continued with --restart, the ring ends with the
 # uninterrupted run's figures, the energy account included (the zone's checkpoint carries the
