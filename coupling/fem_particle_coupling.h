@@ -191,11 +191,6 @@ class FemParticleCoupling {
   std::vector<std::string> take_messages();
 
   // particles_<cycle>.vtu of the free particles (rank 0); returns the file name. Collective.
- private:
-  // Member `field` of every free particle's material state from its owner. Collective.
-  std::vector<double> gather_state(double materials::MaterialState::*field) const;
-
- public:
   std::string write_output(const std::string& directory, unsigned int cycle) const;
   void save(const std::string& file) const { checkpoint_.save(file); } // rank 0 writes
   // Every rank reads; FEM state restored separately.
@@ -211,6 +206,8 @@ class FemParticleCoupling {
     std::vector<std::uint8_t> skip, dirichlet, driven;
   };
   DofSplit dof_split() const;
+  // Member `field` of every free particle's material state from its owner. Collective.
+  std::vector<double> gather_state(double materials::MaterialState::*field) const;
 
   // Declared in dependency order: each piece refers only to those above it.
   CouplingState<dim> state_;

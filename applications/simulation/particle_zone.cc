@@ -825,8 +825,7 @@ std::string ParticleZone<dim>::write_output(const std::string& directory,
     with_state.emplace(impl_->particles);
     auto& eps = with_state->add_scalar_field("equivalent_plastic_strain");
     auto& df = with_state->add_scalar_field("fracture_damage");
-    const unsigned int n = impl_->partition ? impl_->n_owned() : impl_->particles.size();
-    for (unsigned int i = 0; i < n; ++i) {
+    for (unsigned int i = 0; i < impl_->n_owned(); ++i) {
       const materials::MaterialState st = impl_->method->particle_state(i);
       eps[i] = st.equivalent_plastic_strain;
       df[i] = st.fracture_damage;

@@ -100,6 +100,20 @@ FiniteStrainResponse J2Damage::finite_strain(const Tensor2& F, double dT,
   return as_linearised_finite_strain(small_strain(linearised_strain(F), dT, old_state));
 }
 
+FiniteStrainStress J2Damage::finite_strain_stress(const Tensor2& F, double dT,
+                                                  const MaterialState& old_state) const {
+  // small_strain without the tangent: the effective stress scaled by 1 − D(ε̄_p).
+  checked_determinant(F, *this); // failures name this law, as finite_strain's do
+  const FiniteStrainStress e = effective_.finite_strain_stress(F, dT, old_state);
+  const double ep = e.state.equivalent_plastic_strain;
+  const double D = damage_.damage(ep);
+  FiniteStrainStress r{(1.0 - D) * e.first_piola, e.state};
+  if (ep - old_state.equivalent_plastic_strain > 0)
+    r.state.plastic_work =
+        old_state.plastic_work + (1.0 - D) * (e.state.plastic_work - old_state.plastic_work);
+  return r;
+}
+
 SPINESIM_REGISTER_MATERIAL_MODEL(
     j2_damage, "j2_damage",
     "small-strain von Mises with ductile damage D(eps_bar_p) on the effective stress "

@@ -57,6 +57,8 @@ class J2Damage : public ConstitutiveLaw {
   // Linearised kinematics as J2Plasticity::finite_strain (small displacement gradients only).
   FiniteStrainResponse finite_strain(const Tensor2& F, double temperature_change,
                                      const MaterialState& old_state) const override;
+  FiniteStrainStress finite_strain_stress(const Tensor2& F, double temperature_change,
+                                          const MaterialState& old_state) const override;
   double youngs_modulus() const override { return effective_.youngs_modulus(); }
   double poisson_ratio() const override { return effective_.poisson_ratio(); }
   double density() const override { return effective_.density(); }

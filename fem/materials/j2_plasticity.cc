@@ -44,7 +44,7 @@ SmallStrainResponse J2Plasticity::respond(const SymTensor2& strain, double dT,
 FiniteStrainResponse J2Plasticity::finite_strain(const Tensor2& F, double dT,
                                                  const MaterialState& old_state) const {
   checked_determinant(F, *this);
-  return as_linearised_finite_strain(small_strain(linearised_strain(F), dT, old_state));
+  return as_linearised_finite_strain(respond(linearised_strain(F), dT, old_state, true));
 }
 
 FiniteStrainStress J2Plasticity::finite_strain_stress(const Tensor2& F, double dT,

@@ -31,7 +31,7 @@ SmallStrainResponse LinearElastic::small_strain(const SymTensor2& strain, double
 SymTensor2 LinearElastic::second_piola(const Tensor2& F, double dT) const {
   checked_determinant(F, *this);
   const SymTensor2 I = dealii::unit_symmetric_tensor<3>();
-  const double theta = alpha_ == 0.0 ? 1.0 : std::exp(alpha_ * dT);
+  const double theta = std::exp(alpha_ * dT); // a NaN ΔT makes the stress NaN: caught below
   const SymTensor2 green =
       0.5 * (dealii::symmetrize(dealii::transpose(F) * F) - I) - 0.5 * (theta * theta - 1.0) * I;
   return C_ * green;

@@ -554,6 +554,15 @@ TEST(FiniteStrainStress, AgreesWithTheFullResponseInEveryLaw) {
       std::make_unique<J2Plasticity>(17e9, 0.3, 1900, alpha, IsotropicHardening(100e6, 1e9)));
   laws.push_back(
       std::make_unique<J2FiniteStrain>(17e9, 0.3, 1900, alpha, IsotropicHardening(100e6, 1e9)));
+  LawParameters damage;
+  damage.model = "j2_damage";
+  damage.youngs_modulus = 17e9;
+  damage.poisson_ratio = 0.3;
+  damage.density = 1900;
+  damage.thermal_expansion = alpha;
+  damage.yield_stress = 100e6;
+  damage.hardening_modulus = 1e9;
+  laws.push_back(create_law(damage));
   const Tensor2 F = rotation(vec(1, 2, 3), 0.4) * (identity() + 0.03 * diag(1, -0.5, 0.3));
   for (const auto& law : laws) {
     SCOPED_TRACE(law->name());
@@ -565,6 +574,11 @@ TEST(FiniteStrainStress, AgreesWithTheFullResponseInEveryLaw) {
     EXPECT_NEAR(stress.state.equivalent_plastic_strain, full.state.equivalent_plastic_strain,
                 1e-14);
     EXPECT_LE((stress.state.plastic_strain - full.state.plastic_strain).norm(), 1e-14);
+    EXPECT_LE(
+        (stress.state.elastic_left_cauchy_green - full.state.elastic_left_cauchy_green).norm(),
+        1e-14);
+    EXPECT_LE(std::abs(stress.state.plastic_work - full.state.plastic_work),
+              1e-12 * std::max(1.0, std::abs(full.state.plastic_work)));
   }
 }
 
