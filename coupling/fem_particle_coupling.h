@@ -170,6 +170,12 @@ class FemParticleCoupling {
   double particle_spacing() const { return state_.spacing; }
   double horizon() const { return state_.horizon(); }
   const meshfree::ParticleSet<dim>& particles() const { return state_.particles; }
+  // Their physical displacements [m] where they have rows (SPG's unknowns are RK
+  // coefficients; the other methods' are the displacements themselves).
+  std::vector<dealii::Tensor<1, dim>> physical_particle_displacements() const {
+    return state_.method ? state_.method->physical_displacements(state_.particles)
+                         : state_.particles.displacements();
+  }
   bool is_free(unsigned int i) const { return state_.free[i] != 0; }
   const std::vector<ConversionReport>& conversions() const { return converter_.reports(); }
 

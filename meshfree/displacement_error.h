@@ -14,11 +14,14 @@
 namespace spinesim::meshfree {
 
 // Over the particles `counted` accepts (e.g. those the method solves for: no prescribed
-// component, owned by this rank); the caller adds the ranks' sums.
+// component, owned by this rank); the caller adds the ranks' sums. `displacements`: the
+// physical displacements when the particles' unknowns are not (SPG's RK coefficients;
+// ParticleMethod::physical_displacements), else the particles' own.
 template <int dim>
-ErrorSums displacement_error_sums(const ParticleSet<dim>& particles,
-                                  const dealii::Function<dim>& exact,
-                                  const std::function<bool(unsigned int)>& counted);
+ErrorSums
+displacement_error_sums(const ParticleSet<dim>& particles, const dealii::Function<dim>& exact,
+                        const std::function<bool(unsigned int)>& counted,
+                        const std::vector<dealii::Tensor<1, dim>>* displacements = nullptr);
 
 } // namespace spinesim::meshfree
 

@@ -208,6 +208,9 @@ class ParticleMethod {
   physical_displacements(const ParticleSet<dim>& particles) const {
     return particles.displacements();
   }
+  // True when the particles' displacements are such generalised unknowns (output and errors
+  // must then ask physical_displacements()).
+  virtual bool generalised_displacements() const { return false; }
 };
 
 // A method whose parameters are read, waiting for its material: a coupled run learns E, ν and

@@ -424,12 +424,6 @@ ParticleZone<dim>::ParticleZone(dealii::ParameterHandler& prm, const std::string
   parse_section(prm, "Particles", impl_->prm);
   parse_section(prm, std::vector<std::string>{"Particles", "Quasi-static"}, impl_->adr_prm);
   impl_->damage = damage;
-  if (method == "spg")
-    throw InvalidInput("Effects/Particles method",
-                       "SPG particle zones need loads on RK coefficients (constraints by the "
-                       "transformation method), which the simulation scenario does not apply yet",
-                       "bond_based or nosb for a particle zone; SPG runs: the spg_* validation "
-                       "scenarios");
   const std::shared_ptr<const materials::ConstitutiveLaw> law = materials::create_law(impl_->law);
   const meshfree::ParticleMaterial material{impl_->law.youngs_modulus, impl_->law.poisson_ratio,
                                             impl_->law.density, law};
@@ -821,8 +815,13 @@ std::string ParticleZone<dim>::write_output(const std::string& directory,
   // A method with material state adds its plastic strain and fracture damage D_f (the share
   // of stress a NOSB-PD family lost at bond breaks) per particle, on a copy of the set.
   std::optional<meshfree::ParticleSet<dim>> with_state;
-  if (impl_->method && impl_->method->carries_material_state()) {
+  if (impl_->method && impl_->method->generalised_displacements()) {
     with_state.emplace(impl_->particles);
+    with_state->displacements() = physical_displacements();
+  }
+  if (impl_->method && impl_->method->carries_material_state()) {
+    if (!with_state)
+      with_state.emplace(impl_->particles);
     auto& eps = with_state->add_scalar_field("equivalent_plastic_strain");
     auto& df = with_state->add_scalar_field("fracture_damage");
     for (unsigned int i = 0; i < impl_->n_owned(); ++i) {
@@ -985,6 +984,12 @@ void ParticleZone<dim>::load(const std::string& file) {
 template <int dim>
 const meshfree::ParticleSet<dim>& ParticleZone<dim>::particles() const {
   return impl_->particles;
+}
+
+template <int dim>
+std::vector<dealii::Tensor<1, dim>> ParticleZone<dim>::physical_displacements() const {
+  return impl_->method ? impl_->method->physical_displacements(impl_->particles)
+                       : impl_->particles.displacements();
 }
 
 template class ParticleZone<2>;

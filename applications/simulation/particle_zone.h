@@ -92,6 +92,9 @@ class ParticleZone {
   // The particles this rank holds (damage as of the last add_history): the whole zone, or in a
   // distributed zone its owned particles followed by its ghosts.
   const meshfree::ParticleSet<dim>& particles() const;
+  // Their physical displacements [m] (SPG's unknowns are RK coefficients; the other methods'
+  // are the displacements themselves).
+  std::vector<dealii::Tensor<1, dim>> physical_displacements() const;
   bool distributed() const;
   // Whether this rank owns particle i (always, unless distributed).
   bool is_owned(unsigned int i) const;

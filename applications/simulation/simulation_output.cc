@@ -393,19 +393,24 @@ void Simulation<dim>::report_exact_error(RunContext& ctx) {
   }
   if (coupled_) {
     const auto& p = coupled_->particles();
+    const auto u = coupled_->physical_particle_displacements();
     // Free particles on their owners: ghosts and fixed particles are the FEM's or prescribed.
-    particles = meshfree::displacement_error_sums(p, *exact_displacement_, [&](unsigned int i) {
-      return coupled_->is_free(i) && coupled_->is_owned(i) && !p.is_fixed(i);
-    });
+    particles = meshfree::displacement_error_sums(
+        p, *exact_displacement_,
+        [&](unsigned int i) {
+          return coupled_->is_free(i) && coupled_->is_owned(i) && !p.is_fixed(i);
+        },
+        &u);
     has_particles = coupled_->n_free_particles() > 0;
   } else if (particles_) {
     // Not distributed: every rank holds the whole zone, rank 0's sums count once.
     // Distributed: each rank sums its owned particles (ghosts are fixed).
     const auto& p = particles_->particles();
+    const auto u = particles_->physical_displacements();
     if (ctx.is_root() || particles_->distributed())
-      particles = meshfree::displacement_error_sums(p, *exact_displacement_, [&](unsigned int i) {
-        return particles_->is_owned(i) && !p.is_fixed(i);
-      });
+      particles = meshfree::displacement_error_sums(
+          p, *exact_displacement_,
+          [&](unsigned int i) { return particles_->is_owned(i) && !p.is_fixed(i); }, &u);
     has_particles = true;
   }
   const auto sum = [&](ErrorSums e) {

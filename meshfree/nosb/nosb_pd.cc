@@ -133,6 +133,12 @@ void NosbPD<dim>::build_gather_index(unsigned int n_particles) {
   std::vector<std::size_t> next(gather_offsets_.begin(), gather_offsets_.end() - 1);
   for (std::size_t q = 0; q < n_entries; ++q) // ascending q: the scatter's order
     gather_entries_[next[fam.node(q)]++] = q;
+  gather_family_.resize(n_entries);
+  gather_gradient_.resize(n_entries);
+  for (std::size_t k = 0; k < n_entries; ++k) {
+    gather_family_[k] = entry_family_[gather_entries_[k]];
+    gather_gradient_[k] = fam.gradient(gather_entries_[k]);
+  }
   gather_version_ = families_version_;
 }
 
@@ -249,9 +255,8 @@ void NosbPD<dim>::compute_forces(ParticleSet<dim>& particles, const BondList<dim
   parallel_for_rethrow(n_particles, parallel_particle_threshold, [&](long m) {
     Vec fm;
     for (std::size_t k = gather_offsets_[m]; k < gather_offsets_[m + 1]; ++k) {
-      const std::size_t q = gather_entries_[k];
-      const unsigned int e = entry_family_[q];
-      fm -= fam.weight(e) * (P[e] * fam.gradient(q));
+      const unsigned int e = gather_family_[k];
+      fm -= fam.weight(e) * (P[e] * gather_gradient_[k]);
     }
     f[m] = fm;
   });
@@ -302,7 +307,8 @@ std::size_t NosbPD<dim>::break_bonds(ParticleSet<dim>& particles, BondList<dim>&
     if (bonds.broken[k] || (any_driven && driven_[i] && driven_[j]))
       return;
     const auto y = bonds.xi[k] + (u[j] - u[i]);
-    if (y.norm() > (1.0 + s0_) * bonds.length[k]) {
+    const double limit = (1.0 + s0_) * bonds.length[k];
+    if (y.norm_square() > limit * limit) { // |y| > (1 + s0) L, without a square root
       bonds.broken[k] = 1;
       touched[i] = 1; // the reversed bond marks j: each thread writes its own rows only
       n_broken.fetch_add(1, std::memory_order_relaxed);

@@ -90,6 +90,22 @@ void RKShapeFunctions<dim>::compute(const std::vector<dealii::Point<dim>>& point
   }
   if (failed >= 0)
     fail(failed, points[failed]);
+  value_at_partner.assign(bonds.n_bonds(), 0.0);
+  gradient_at_partner.assign(bonds.n_bonds(), dealii::Tensor<1, dim>());
+  for (unsigned int i = 0; i < n; ++i)
+    if (has_row(i))
+      transpose_row(i, bonds);
+}
+
+template <int dim>
+void RKShapeFunctions<dim>::transpose_row(unsigned int i, const BondList<dim>& bonds) {
+  for_each_bond_of(bonds, i, [&](std::size_t k, unsigned int) {
+    const std::size_t r = reverse[k];
+    if (r < bonds.n_bonds()) {
+      value_at_partner[r] = value[k];
+      gradient_at_partner[r] = gradient[k];
+    }
+  });
 }
 
 template <int dim>
@@ -99,6 +115,7 @@ void RKShapeFunctions<dim>::recompute_row(unsigned int i,
                                           const BondList<dim>& bonds) {
   if (compute_row(i, points, volumes, bonds) != 0)
     fail(i, points[i]);
+  transpose_row(i, bonds);
 }
 
 template <int dim>

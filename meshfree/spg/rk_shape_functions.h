@@ -59,8 +59,14 @@ class RKShapeFunctions {
   std::vector<double> value;                    // per bond k = (i → j): Ψ_j(X_i)
   std::vector<dealii::Tensor<1, dim>> gradient; // per bond: ∇Ψ_j(X_i) [1/m]
   std::vector<std::size_t> reverse;             // k(i → j) ↦ k(j → i)
-  std::vector<std::uint8_t> shepard;            // 1 = row fell back to constant basis
-  std::vector<double> condition_number;         // of the scaled moment matrix, per row
+  // The same functions read from the partner's row, stored in row i's order: per bond
+  // k = (i → j), Ψ_i(X_j) and ∇Ψ_i(X_j) (value[reverse[k]], gradient[reverse[k]]; zero where j
+  // has no row). A gather over i's row then reads memory in order instead of jumping through
+  // reverse[] across the whole bond list.
+  std::vector<double> value_at_partner;
+  std::vector<dealii::Tensor<1, dim>> gradient_at_partner;
+  std::vector<std::uint8_t> shepard;    // 1 = row fell back to constant basis
+  std::vector<double> condition_number; // of the scaled moment matrix, per row
 
  private:
   RKKernel<dim> kernel_;
@@ -70,6 +76,8 @@ class RKShapeFunctions {
   int compute_row(unsigned int i, const std::vector<dealii::Point<dim>>& points,
                   const std::vector<double>& volumes, const BondList<dim>& bonds);
   void fail(unsigned int i, const dealii::Point<dim>& x) const;
+  // Copies row i's values and gradients to their places in the partners' rows.
+  void transpose_row(unsigned int i, const BondList<dim>& bonds);
 };
 
 } // namespace spinesim::meshfree

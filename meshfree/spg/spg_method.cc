@@ -96,13 +96,12 @@ void SpgMethod<dim>::initialise(const ParticleSet<dim>& particles, const BondLis
 template <int dim>
 std::size_t SpgMethod<dim>::compute_forces(ParticleSet<dim>& particles, BondList<dim>& bonds,
                                            bool allow_breaking) {
-  if (breaking_ && !allow_breaking &&
-      (prm_.critical_stretch > 0.0 || prm_.critical_plastic_strain > 0.0))
-    throw InvalidInput("SPG/Critical stretch, SPG/Critical plastic strain",
-                       "bonds may not break in this run (Effects/Damage = false)",
-                       "0 for both, or Effects/Damage = true");
+  // A pass that may not break (Effects/Damage = false, or the pass an energy account takes
+  // before the breaks, for the forces they remove) evaluates the forces on the bonds as they are.
   const std::size_t before = solver().n_broken_bonds();
+  solver_->set_breaking(breaking_ && allow_breaking);
   solver_->compute_forces(particles);
+  solver_->set_breaking(breaking_);
   const std::size_t broken = solver_->n_broken_bonds() - before;
   // The caller's rows carry the breaks too (the same rows, unless the kernel searched its own).
   if (broken > 0 && solver_->bonds().n_bonds() == bonds.n_bonds())
@@ -128,6 +127,9 @@ std::vector<dealii::Tensor<1, dim>>
 SpgMethod<dim>::physical_displacements(const ParticleSet<dim>& particles) const {
   if (!solver_)
     return particles.displacements();
+  // An updated kernel's functions belong to its last reference: u^h of the last evaluation.
+  if (solver_->parameters().update_mode() != SpgKernelUpdate::total_lagrangian)
+    return solver_->physical_displacements();
   return solver_->smoothed(particles.displacements());
 }
 

@@ -59,13 +59,14 @@ class SpgMethod : public ParticleMethod<dim> {
                    const std::vector<std::pair<unsigned int, unsigned int>>& pairs) override;
   std::vector<dealii::Tensor<1, dim>>
   physical_displacements(const ParticleSet<dim>& particles) const override;
+  bool generalised_displacements() const override { return true; }
   typename NeighborSearch<dim>::Options neighbor_options(double spacing) const override;
   // Builds the RK shape functions; the particle spacing is the bond list's horizon over the
   // kernel's search radius per spacing (the list was searched with neighbor_options()).
   // A total Lagrangian kernel works on these rows (with their pre-cracks and breaks); the
   // others search their own neighbours. Committed states of particles seen before are kept.
   void initialise(const ParticleSet<dim>& particles, const BondList<dim>& bonds) override;
-  // InvalidInput if bonds may not break but a breaking criterion is set.
+  // Bonds break (by the SPG criteria) only when `allow_breaking`.
   std::size_t compute_forces(ParticleSet<dim>& particles, BondList<dim>& bonds,
                              bool allow_breaking) override;
   std::vector<double> stiffness_bound(const ParticleSet<dim>& particles,

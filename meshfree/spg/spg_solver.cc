@@ -155,7 +155,8 @@ void SPGSolver<dim>::compute_forces(ParticleSet<dim>& p) {
   const auto& rk = *rk_;
   const double* psi = rk.value.data();
   const Vector* grad = rk.gradient.data();
-  const std::size_t* rev = rk.reverse.data();
+  const double* psi_t = rk.value_at_partner.data();
+  const Vector* grad_t = rk.gradient_at_partner.data();
   const bool tl = mode_ == KernelUpdate::total_lagrangian;
   const bool adaptive = mode_ == KernelUpdate::adaptive_lagrangian;
 
@@ -270,11 +271,11 @@ void SPGSolver<dim>::compute_forces(ParticleSet<dim>& p) {
     }
     Vector f = -(stress_[I] * rk.self_gradient[I]);
     for_each_bond_of(bonds_, I,
-                     [&](std::size_t k, unsigned int N) { f -= stress_[N] * grad[rev[k]]; });
+                     [&](std::size_t k, unsigned int N) { f -= stress_[N] * grad_t[k]; });
     if (refresh) {
       Vector s = (rk.self_value[I] - 1.0) * kappa_[I] * residual_[I];
       for_each_bond_of(bonds_, I, [&](std::size_t k, unsigned int N) {
-        s += (kappa_[N] * psi[rev[k]]) * residual_[N];
+        s += (kappa_[N] * psi_t[k]) * residual_[N];
       });
       stab_force_[I] = s;
     }
@@ -283,7 +284,7 @@ void SPGSolver<dim>::compute_forces(ParticleSet<dim>& p) {
     if (has_contact) {
       Vector c = rk.self_value[I] * contact_[I];
       for_each_bond_of(bonds_, I,
-                       [&](std::size_t k, unsigned int N) { c += psi[rev[k]] * contact_[N]; });
+                       [&](std::size_t k, unsigned int N) { c += psi_t[k] * contact_[N]; });
       f += c;
     }
     force[I] = f;
@@ -312,6 +313,7 @@ void SPGSolver<dim>::break_bonds(ParticleSet<dim>& p) {
   std::vector<unsigned int> affected;
   const double ec = prm_.critical_plastic_strain, sc = prm_.critical_stretch;
   const bool any_driven = !driven_.empty();
+  const double stretch_limit_2 = (1.0 + sc) * (1.0 + sc);
   for (unsigned int i = 0; i < n; ++i) {
     if (!has_row_[i])
       continue;
@@ -324,9 +326,10 @@ void SPGSolver<dim>::break_bonds(ParticleSet<dim>& p) {
           0.5 * (state_[i].equivalent_plastic_strain + state_[j].equivalent_plastic_strain) > ec)
         brk = true;
       if (!brk && sc > 0.0) {
-        const double L0 = (X0_[j] - X0_[i]).norm();
-        const double L = (current_position(j) - current_position(i)).norm();
-        if (L0 > 0.0 && (L - L0) / L0 > sc)
+        // (L − L0) / L0 > s_c, compared as squares: no square root per bond and step.
+        const double L0_2 = (X0_[j] - X0_[i]).norm_square();
+        const double L_2 = (current_position(j) - current_position(i)).norm_square();
+        if (L0_2 > 0.0 && L_2 > stretch_limit_2 * L0_2)
           brk = true;
       }
       if (brk) {
@@ -470,8 +473,8 @@ std::vector<double> SPGSolver<dim>::stiffness_bound(const ParticleSet<dim>& p) c
     double s = volume_[I] * rk.self_gradient[I].norm() * G[I] * modulus_;
     double t = kappa_[I] * std::abs(1.0 - rk.self_value[I]) * R[I];
     for_each_bond_of(bonds_, I, [&](std::size_t k, unsigned int N) {
-      s += volume_[N] * rk.gradient[rk.reverse[k]].norm() * G[N] * modulus_;
-      t += kappa_[N] * std::abs(rk.value[rk.reverse[k]]) * R[N];
+      s += volume_[N] * rk.gradient_at_partner[k].norm() * G[N] * modulus_;
+      t += kappa_[N] * std::abs(rk.value_at_partner[k]) * R[N];
     });
     // ×2: the block rows of an isotropic C are bounded by (λ+2μ)|∇Ψ_I||∇Ψ_J| per component
     // pair only up to a factor; the bound must stay above the true row sum for stability.

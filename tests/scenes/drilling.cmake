@@ -110,17 +110,17 @@ spinesim_add_scene_test(scene.bone_drilling_ct
   LABELS "scene;drilling;mechanics;ct" TIMEOUT 600)
 
 # The trends, asserted on the quick sweep (600 and 1200 rpm at 0.06 mm/rev, dry and
-# irrigated, each run on two ranks; about 30 s): at a fixed feed per revolution the peak bone
+# irrigated, each run on one rank; about 65 s): at a fixed feed per revolution the peak bone
 # temperature rises with the speed (measured 96 -> 132 degC dry, 95 -> 120 irrigated: the same
 # cutting energy per hole delivered in half the time), and irrigation lowers the hottest
 # probe, the peak and the CEM43 necrosis reach (1.05 -> 0.77 mm at 600 rpm). The probes 1 mm
 # and more from the wall are not asserted against the speed: in this model (Kienzle
 # coefficients without a speed term) they see nearly the same energy per length of hole at
 # any speed and change by tenths of a degree either way (docs/drilling.md, the sweep).
-# The study starts each run on two ranks itself (Sweep/Ranks): it holds two of ctest's slots,
-# or it shares the cores with other tests and takes five times as long.
+# The runs take one rank each (Sweep/Ranks = 1), so the study holds one of ctest's slots; the
+# full sweep below starts its runs on two ranks and holds two.
 spinesim_add_scene_test(study.drilling_sweep_quick
-  SCENE ${PROJECT_SOURCE_DIR}/tests/data/drilling_sweep_quick.prm PROCESSORS 2
+  SCENE ${PROJECT_SOURCE_DIR}/tests/data/drilling_sweep_quick.prm
   EXPECT "status==ok;failed_runs<=0;all_figures_finite>=1;png_valid>=1;trend_peak_temperature_C_vs_axis1>=1;trend_peak_temperature_C_vs_axis2<=-1;trend_max_probe_temperature_C_vs_axis2<=-1;trend_necrotic_distance_cem43_mm_vs_axis2<=-1"
   LABELS "scene;study;drilling" TIMEOUT 600)
 # The full sweep: 500/1000/2000 rpm × 0.03/0.06/0.12 mm/rev × dry/irrigated at the scene's
