@@ -458,7 +458,7 @@ spinesim_add_scene_test(scene.cracked_plate_nosb SCENE ${_plate_nosb} OUT ${_run
   SET "Simulation/Write VTU=false"
   EXPECT "status==ok;griffith_ratio>=0.9;griffith_ratio<=1.1;crack_path_rms_y_m<=0.0125;crack_extent_max_x_m>=0.45;crack_extent_min_x_m<=-0.45;crack_angle_deg>=-2;crack_angle_deg<=2;conversion_mass_change_relative<=1e-12;conversion_momentum_change_relative<=1e-11"
   LABELS "scene;coupling" TIMEOUT 900 FIXTURE plate_nosb)
-# The same plate fully in NOSB particles (25 600 particles, about 30 s) and the required
+# The same plate fully in NOSB particles (25 600 particles, 56 s alone) and the required
 # agreement: peak loads within 5 % (1.3 % measured), crack paths within two spacings (0.05 mm).
 spinesim_add_scene_test(scene.cracked_plate_nosb_all_particles SCENE ${_plate_nosb}
   OUT ${_runs}/cracked_plate_nosb_all_particles
@@ -478,7 +478,7 @@ spinesim_add_comparison_test(benchmark.cracked_plate_nosb_speedup
 # SPG fracture in a coupled run: the cracked plate with SPG particles in the band |y| <= 0.055 m
 # from t = 0 (critical stretch 7e-4). The overlap splice diverges once the crack has split the
 # plate (a particle past the P-wave speed; docs/coupling.md, limits); the energy splice runs
-# through. Against the plate fully in SPG particles (25 600, about 30 s): peak loads within 5 %
+# through. Against the plate fully in SPG particles (25 600, 76 s alone): peak loads within 5 %
 # (1.9 % measured, 3.946e6 against 3.874e6 N/m), the same straight crack (RMS 3.1 mm off y = 0 in
 # both; bound two particle spacings).
 set(_spg_plate "Effects/Particles method=spg" "Coupling/SPG/Critical stretch=7e-4"

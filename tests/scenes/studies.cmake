@@ -1,7 +1,7 @@
 # Accuracy against cost (applications/studies/, docs/accuracy-cost.md).
 set(_studies ${PROJECT_SOURCE_DIR}/applications/studies)
 
-# The quick study (81 s on two cores alone, one repetition; its budget is 90 s, not asserted
+# The quick study (about 50 s on two cores, one repetition; its budget is 90 s, not asserted
 # here: a timed test on a shared machine is no measurement): the Timoshenko cantilever with FEM
 # Q1 (refinements 3, 4), Q2 (2, 3), NOSB-PD (h = 2, 1 m) and the LSMFM. The exact solution is cubic
 # and imposed at both ends, so Q1 and Q2 show their asymptotic L2 orders 2 and 3 already on
