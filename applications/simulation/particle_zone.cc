@@ -430,6 +430,17 @@ ParticleZone<dim>::ParticleZone(dealii::ParameterHandler& prm, const std::string
   prm.enter_subsection("Particles");
   meshfree::ParticleMethodMaker<dim> make;
   try {
+    // SPG in a zone works on the zone's rows (its pre-cracks, breaks, ghosts and checkpoint):
+    // only the total Lagrangian kernel uses them, the others search their own.
+    if (method == "spg") {
+      prm.enter_subsection("SPG");
+      const std::string update = prm.get("Kernel update");
+      prm.leave_subsection();
+      if (update != "total_lagrangian")
+        throw InvalidInput("Particles/SPG/Kernel update", "'" + update + "' in a particle zone",
+                           "total_lagrangian (the zone's bonds, pre-cracks and breaks are its "
+                           "rows)");
+    }
     make = meshfree::particle_method_maker<dim>(method, prm, "Effects/Particles method");
   } catch (...) {
     prm.leave_subsection();
@@ -462,6 +473,14 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
   // the partial-volume shell), so the first-layer ghosts' rows are whole: for bond-based PD's
   // surface correction, for NOSB-PD's families.
   const bool distribute = ctx.n_ranks() > 1;
+  // An SPG break is decided on a row's current positions, u = Σ Ψ d, which a rank can form
+  // only for the rows it holds whole: the copies of a ghost's row on two ranks would break
+  // apart. Distributed SPG zones run without damage until the ranks share their breaks.
+  if (distribute && z.damage && z.method->name() == "spg")
+    throw InvalidInput("Effects/Damage",
+                       "true with SPG particles on " + std::to_string(ctx.n_ranks()) + " ranks",
+                       "one rank for SPG fracture in a particle zone, Damage = false, or "
+                       "Particles method = nosb or bond_based");
   if (distribute)
     z.particles = z.distributed_body(2.0 * (options.horizon + z.prm.spacing) * (1 + 1e-9));
   else
@@ -890,6 +909,9 @@ void ParticleZone<dim>::save(const std::string& file) const {
     // return-map the same F once more (equal only to round-off, ~1e-15).
     write(z.particles.forces().data(), z.particles.size() * sizeof(dealii::Tensor<1, dim>));
     write(&checkpoint_end_tag, sizeof checkpoint_end_tag); // a file cut inside the forces shows
+    // The stable step as breaks have shrunk it (it only falls during a run): a restart takes
+    // the same steps as the uninterrupted run. After the end tag: older files end without it.
+    write(&z.dt_stable, sizeof z.dt_stable);
     if (!out)
       throw std::runtime_error("cannot write particle checkpoint " + file);
   });
@@ -968,6 +990,10 @@ void ParticleZone<dim>::load(const std::string& file) {
       if (!in || !in.read(reinterpret_cast<char*>(&tag), sizeof tag) || tag != checkpoint_end_tag)
         throw InvalidInput(part, "particle checkpoint is truncated (it ends inside the forces)",
                            "a complete checkpoint");
+      double dt_stable = 0;
+      if (in.read(reinterpret_cast<char*>(&dt_stable), sizeof dt_stable) && dt_stable > 0 &&
+          std::isfinite(dt_stable))
+        z.dt_stable = dt_stable;
     }
     accelerations = z.particles.accelerations();
   });

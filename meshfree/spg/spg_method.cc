@@ -7,8 +7,11 @@
 #include "meshfree/bond_loop.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <istream>
 #include <limits>
+#include <ostream>
 #include <stdexcept>
 
 namespace spinesim::meshfree {
@@ -85,6 +88,8 @@ void SpgMethod<dim>::initialise(const ParticleSet<dim>& particles, const BondLis
       prm_, *law_, particles, bonds.horizon / search_radius(1.0), use_rows ? &bonds : nullptr);
   solver_->set_deferred_commit(true);
   solver_->set_breaking(breaking_);
+  solver_->set_break_observer(
+      [this](const std::vector<unsigned int>& rows, bool after) { observe_breaks(rows, after); });
   solver_->set_reference_temperature(reference_temperature_);
   if (driven)
     solver_->set_driven(driven_);
@@ -100,7 +105,9 @@ std::size_t SpgMethod<dim>::compute_forces(ParticleSet<dim>& particles, BondList
   // before the breaks, for the forces they remove) evaluates the forces on the bonds as they are.
   const std::size_t before = solver().n_broken_bonds();
   solver_->set_breaking(breaking_ && allow_breaking);
+  pass_particles_ = &particles;
   solver_->compute_forces(particles);
+  pass_particles_ = nullptr;
   solver_->set_breaking(breaking_);
   const std::size_t broken = solver_->n_broken_bonds() - before;
   // The caller's rows carry the breaks too (the same rows, unless the kernel searched its own).
@@ -117,7 +124,9 @@ std::vector<std::pair<unsigned int, unsigned int>> SpgMethod<dim>::take_broken_p
 template <int dim>
 void SpgMethod<dim>::break_pairs(ParticleSet<dim>& particles, BondList<dim>& bonds,
                                  const std::vector<std::pair<unsigned int, unsigned int>>& pairs) {
+  pass_particles_ = &particles;
   solver().break_pairs(particles, pairs);
+  pass_particles_ = nullptr;
   if (solver_->bonds().n_bonds() == bonds.n_bonds())
     bonds.broken = solver_->bonds().broken;
 }
@@ -153,6 +162,10 @@ template <int dim>
 double SpgMethod<dim>::energy_density(unsigned int i, const ParticleSet<dim>& particles) const {
   if (!solver_)
     throw std::logic_error("SpgMethod: initialise() before use");
+  // The share of stress kept after breaks (fracture damage D_f) scales the energy with it.
+  const double kept = 1.0 - solver_->committed_states()[i].fracture_damage;
+  if (!(kept > 0.0))
+    return 0.0;
   // 4-point Gauss–Legendre on [0, 1].
   const double a = std::sqrt(3.0 / 7.0 - 2.0 / 7.0 * std::sqrt(6.0 / 5.0));
   const double b = std::sqrt(3.0 / 7.0 + 2.0 / 7.0 * std::sqrt(6.0 / 5.0));
@@ -169,10 +182,10 @@ double SpgMethod<dim>::energy_density(unsigned int i, const ParticleSet<dim>& pa
   if (const auto* j2 = dynamic_cast<const materials::J2Plasticity*>(law_.get())) {
     // The stored energy of small-strain J2, not the path integral (which would count the
     // plastic strain as stored): the FEM and NOSB-PD take the same.
-    return j2->stored_energy_density(
-        dealii::symmetrize(law_->finite_strain_stress(materials::embed_plane_strain(F), dT,
-                                                      solver_->committed_states()[i])
-                               .first_piola));
+    return kept * j2->stored_energy_density(dealii::symmetrize(
+                      law_->finite_strain_stress(materials::embed_plane_strain(F), dT,
+                                                 solver_->committed_states()[i])
+                          .first_piola));
   }
   materials::Tensor2 H;
   for (unsigned int r = 0; r < dim; ++r)
@@ -184,14 +197,62 @@ double SpgMethod<dim>::energy_density(unsigned int i, const ParticleSet<dim>& pa
     const auto r = law_->finite_strain_stress(Ft, dT, solver_->committed_states()[i]);
     W += w[q] * dealii::scalar_product(r.first_piola, H);
   }
-  return W;
+  return kept * W;
+}
+
+template <int dim>
+void SpgMethod<dim>::observe_breaks(const std::vector<unsigned int>& rows, bool after) {
+  if (!pass_particles_)
+    return;
+  const ParticleSet<dim>& p = *pass_particles_;
+  // A break rebuilds the RK rows of both ends from the bonds left; at the same coefficients
+  // F_i of such a row may grow (a row that lost its bonds across a crack extrapolates the
+  // opening from one side), and the stored energy with it, which an explicit run turns into
+  // kinetic energy (the SPG ring's fragments at 8 times the initial speed). A row whose energy
+  // rose keeps the share E_before / E_after of its stress: 1 − D_f ← (1 − D_f) E_before/E_after.
+  // Rises below the energy of a strain of 1e-8 over the particle's volume are round-off.
+  if (!after) {
+    // -1: no energy before (no row, or the law refused this F): nothing to compare after.
+    energy_before_break_.assign(rows.size(), -1.0);
+    for (std::size_t k = 0; k < rows.size(); ++k)
+      if (solver_->has_row(rows[k])) {
+        try {
+          energy_before_break_[k] = energy_density(rows[k], p) * p.volume(rows[k]);
+        } catch (const NumericalFailure&) {
+        }
+      }
+    return;
+  }
+  const double floor = 1e-16 * law_->youngs_modulus();
+  for (std::size_t k = 0; k < rows.size() && k < energy_before_break_.size(); ++k) {
+    const unsigned int i = rows[k];
+    if (!solver_->has_row(i))
+      continue;
+    const double before = energy_before_break_[k];
+    if (before < 0.0)
+      continue;
+    double now = 0;
+    try {
+      now = energy_density(i, p) * p.volume(i);
+    } catch (const NumericalFailure&) {
+      // The rebuilt row inverts F (det F <= 0 at the same coefficients): it measures no
+      // strain of the material left, and keeps no stress.
+      solver_->scale_kept(i, 0.0);
+      continue;
+    }
+    if (!(now > before + floor * p.volume(i)))
+      continue;
+    solver_->scale_kept(i, before > 0.0 ? before / now : 0.0);
+  }
 }
 
 template <int dim>
 std::vector<double> SpgMethod<dim>::strain_energy_density(const ParticleSet<dim>& particles,
                                                           const BondList<dim>&) const {
+  // A distributed zone's ghosts [first_ghost_, size) are counted by their owners.
   std::vector<double> W(particles.size(), 0.0);
-  for (unsigned int i = 0; solver_ && i < particles.size(); ++i)
+  const unsigned int n = std::min<unsigned int>(particles.size(), first_ghost_);
+  for (unsigned int i = 0; solver_ && i < n; ++i)
     W[i] = energy_density(i, particles);
   return W;
 }
@@ -223,7 +284,52 @@ double SpgMethod<dim>::bond_energy(const ParticleSet<dim>& particles, const Bond
 }
 
 template <int dim>
-void SpgMethod<dim>::update_damage(ParticleSet<dim>&, const BondList<dim>&) const {}
+void SpgMethod<dim>::update_damage(ParticleSet<dim>& particles, const BondList<dim>& bonds) const {
+  // The broken share of each row, as the solver sets it at a break (SPGSolver::after_breaks);
+  // from the bonds alone, so a restart that restored them restores it too.
+  for (unsigned int i = 0; i < particles.size() && i < bonds.n_particles(); ++i) {
+    unsigned int b = 0, t = 0;
+    for_each_bond_of(bonds, i, [&](std::size_t k, unsigned int) {
+      b += bonds.broken[k];
+      ++t;
+    });
+    particles.damage(i) = t ? double(b) / t : 0.0;
+  }
+}
+
+namespace {
+// First word of an SPG material history in a particle-zone checkpoint ("SPGHIST1").
+constexpr std::uint64_t spg_history_tag = 0x3154534948475053ULL;
+} // namespace
+
+template <int dim>
+void SpgMethod<dim>::save(std::ostream& out) const {
+  const std::uint64_t n = solver_ ? solver_->committed_states().size() : 0;
+  out.write(reinterpret_cast<const char*>(&spg_history_tag), sizeof(spg_history_tag));
+  out.write(reinterpret_cast<const char*>(&n), sizeof(n));
+  for (std::uint64_t i = 0; i < n; ++i) {
+    const auto v = materials::pack_state(solver_->committed_states()[i]);
+    out.write(reinterpret_cast<const char*>(v.data()), sizeof(double) * v.size());
+  }
+}
+
+template <int dim>
+void SpgMethod<dim>::load(std::istream& in) {
+  std::uint64_t tag = 0, n = 0;
+  in.read(reinterpret_cast<char*>(&tag), sizeof(tag));
+  in.read(reinterpret_cast<char*>(&n), sizeof(n));
+  const std::uint64_t expected = solver_ ? solver_->committed_states().size() : 0;
+  if (!in || tag != spg_history_tag || n != expected)
+    throw InvalidInput("SPG checkpoint", "the material history does not fit the particles",
+                       "a checkpoint written by the same run");
+  std::array<double, materials::material_state_doubles> v{};
+  for (std::uint64_t i = 0; i < n; ++i) {
+    in.read(reinterpret_cast<char*>(v.data()), sizeof(double) * v.size());
+    if (!in)
+      throw InvalidInput("SPG checkpoint", "truncated material history", "a complete checkpoint");
+    solver_->set_state(static_cast<unsigned int>(i), materials::unpack_state(v));
+  }
+}
 
 template <int dim>
 void SpgMethod<dim>::commit_state() {

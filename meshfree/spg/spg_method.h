@@ -53,6 +53,10 @@ class SpgMethod : public ParticleMethod<dim> {
     return !(prm_.stabilisation > 0.0) || prm_.smoothing_interval == 1;
   }
   void set_driven(std::vector<std::uint8_t> driven) override { driven_ = std::move(driven); }
+  void set_first_ghost(unsigned int first) override { first_ghost_ = first; }
+  // A particle zone's checkpoint: the committed material states (plastic strain, D_f).
+  void save(std::ostream& out) const override;
+  void load(std::istream& in) override;
   bool shares_bond_breaks() const override { return true; }
   std::vector<std::pair<unsigned int, unsigned int>> take_broken_pairs() override;
   void break_pairs(ParticleSet<dim>& particles, BondList<dim>& bonds,
@@ -113,11 +117,19 @@ class SpgMethod : public ParticleMethod<dim> {
   std::shared_ptr<const materials::ConstitutiveLaw> law_;
   double thickness_ = 1.0, reference_temperature_ = 0;
   std::vector<std::uint8_t> driven_;
-  bool breaking_ = true; // disable_breaking()
+  unsigned int first_ghost_ = ~0u; // set_first_ghost()
+  bool breaking_ = true;           // disable_breaking()
   // Committed states set before the solver exists (or across a re-initialisation).
   std::vector<materials::MaterialState> kept_;
   std::unique_ptr<SPGSolver<dim>> solver_;
   double energy_density(unsigned int i, const ParticleSet<dim>& particles) const; // W_i [J/m^3]
+  // The particles of the force pass under way (for the break observer) and the stored energies
+  // V_i W_i of the rows a break changes, taken before their rows are rebuilt [J].
+  const ParticleSet<dim>* pass_particles_ = nullptr;
+  std::vector<double> energy_before_break_;
+  // After breaks rebuilt rows: a row whose stored energy rose gets the fracture damage D_f that
+  // brings it back, so that a break never releases negative energy (as NosbPD does).
+  void observe_breaks(const std::vector<unsigned int>& rows, bool after);
   // The kernel's neighbour search radius for particle spacing h [m] (a√dim for cubic supports).
   double search_radius(double spacing) const;
 };

@@ -185,15 +185,21 @@ void SPGSolver<dim>::compute_forces(ParticleSet<dim>& p) {
     const Matrix F = tl ? Frel : Frel * Fr_[N];
     const materials::Tensor2 F3 = materials::embed_plane_strain(F);
     Matrix P;
+    // The share of stress kept after breaks raised the row's energy (fracture damage D_f,
+    // scale_kept): a row that kept none carries no stress, whatever its F (it may have inverted).
+    const double kept = 1.0 - committed_[N].fracture_damage;
     try {
-      const double dT = has_temperature ? temperature[N] - reference_temperature_ : 0.0;
-      const auto r = law_.finite_strain_stress(F3, dT, committed_[N]);
-      state_[N] = r.state;
+      if (kept > 0.0) {
+        const double dT = has_temperature ? temperature[N] - reference_temperature_ : 0.0;
+        const auto r = law_.finite_strain_stress(F3, dT, committed_[N]);
+        state_[N] = r.state;
+        for (unsigned int i = 0; i < dim; ++i)
+          for (unsigned int j = 0; j < dim; ++j)
+            P[i][j] = kept * r.first_piola[i][j];
+      } else
+        state_[N] = committed_[N];
       if (!deferred_commit_)
-        committed_[N] = r.state;
-      for (unsigned int i = 0; i < dim; ++i)
-        for (unsigned int j = 0; j < dim; ++j)
-          P[i][j] = r.first_piola[i][j];
+        committed_[N] = state_[N];
     } catch (const std::exception& e) {
       std::ostringstream where;
       where << "particle " << N << " at (" << current_position(N) << ")";
@@ -205,7 +211,9 @@ void SPGSolver<dim>::compute_forces(ParticleSet<dim>& p) {
     work[N] = 0.5 * volume_[N] * scalar_product(P + P_[N], F - F_[N]);
     F_[N] = F;
     P_[N] = P;
-    if (tl)
+    if (!(kept > 0.0))
+      stress_[N] = Matrix();
+    else if (tl)
       stress_[N] = volume_[N] * P;
     else if (!adaptive)
       stress_[N] = volume_[N] * (P * transpose(Fr_[N]));
@@ -218,7 +226,8 @@ void SPGSolver<dim>::compute_forces(ParticleSet<dim>& p) {
     }
     const double detF = dealii::determinant(F);
     const Matrix Finv = detF > 0 ? invert(F) : Matrix();
-    sigma[N] = detF > 0 ? 1.0 / Finv.norm() : 0.0;
+    // A row that keeps no stress adds no stiffness: its stretch does not limit the step.
+    sigma[N] = !(kept > 0.0) ? 1e300 : detF > 0 ? 1.0 / Finv.norm() : 0.0;
     Matrix dF = Frel;
     for (unsigned int i = 0; i < dim; ++i)
       dF[i][i] -= 1.0;
@@ -351,7 +360,16 @@ void SPGSolver<dim>::break_bonds(ParticleSet<dim>& p) {
 }
 
 template <int dim>
+void SPGSolver<dim>::scale_kept(unsigned int i, double factor) {
+  const double f = std::clamp(factor, 0.0, 1.0);
+  committed_[i].fracture_damage = 1.0 - (1.0 - committed_[i].fracture_damage) * f;
+  state_[i].fracture_damage = committed_[i].fracture_damage;
+}
+
+template <int dim>
 void SPGSolver<dim>::after_breaks(ParticleSet<dim>& p, const std::vector<unsigned int>& affected) {
+  if (break_observer_)
+    break_observer_(affected, false);
   for (const unsigned int i : affected) {
     if (!has_row_[i])
       continue;
@@ -366,6 +384,8 @@ void SPGSolver<dim>::after_breaks(ParticleSet<dim>& p, const std::vector<unsigne
       if (constraints_.is_constrained(i, c))
         constraints_ready_ = false;
   }
+  if (break_observer_)
+    break_observer_(affected, true);
 }
 
 template <int dim>

@@ -83,6 +83,7 @@
 #include <deal.II/base/tensor.h>
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <utility>
@@ -120,6 +121,14 @@ class SPGSolver {
   void set_breaking(bool on) { breaking_ = on; }
   void commit_state() { committed_ = state_; }
   void rollback_state() { state_ = committed_; }
+  // Called with the particles whose rows broken bonds change, before (after == false) and after
+  // (true) the rows are rebuilt, at the same coefficients: a break may raise a row's stored
+  // energy, which the observer can take back with scale_kept().
+  using BreakObserver = std::function<void(const std::vector<unsigned int>& rows, bool after)>;
+  void set_break_observer(BreakObserver observer) { break_observer_ = std::move(observer); }
+  // Multiplies the share of stress particle i keeps, 1 − D_f, by `factor` in [0, 1] (committed
+  // and trial states): its stress and stored energy scale by it (fracture damage).
+  void scale_kept(unsigned int i, double factor);
   // Sets particle i's committed (and trial) state.
   void set_state(unsigned int i, const materials::MaterialState& state) {
     committed_[i] = state_[i] = state;
@@ -206,6 +215,7 @@ class SPGSolver {
   bool external_rows_ = false, deferred_commit_ = false, breaking_ = true;
   double reference_temperature_ = 0;
   std::vector<std::pair<unsigned int, unsigned int>> newly_broken_;
+  BreakObserver break_observer_;
   std::vector<double> kappa_;
   EssentialBoundary<dim> constraints_;
   bool constraints_ready_ = false;

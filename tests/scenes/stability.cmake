@@ -98,13 +98,48 @@ spinesim_add_scene_test(stability.ring_breathing_spg_2d SCENE ${_ring}
 spinesim_add_scene_test(stability.ring_breathing_spg_3d SCENE ${_ring3}
   SET "Effects/Damage=false" "Effects/Particles method=spg"
   EXPECT "${_ring_spg_ok};initial_energy_J~14.098:1e-10" LABELS "scene;particles;validation;stability")
-# SPG fragmentation (critical stretch 0.01): a break rebuilds the RK rows of both ends from
-# the bonds left, and at the same coefficients the stored energy rises, as it did for NOSB-PD
-# families before their fracture damage D_f: measured fracture "dissipation" -4266 J/m (-1.2 K0),
-# fastest particle 429 m/s, balance error 7 %. Known failure until SPG breaks release energy.
+# SPG fragmentation (critical stretch 0.01). A break rebuilds the RK rows of both ends from the
+# bonds left, and at the same coefficients a row's stored energy can rise: without a remedy
+# the ring's fracture "dissipation" was -4266 J/m (-1.2 K0), its fastest particle 429 m/s and the
+# balance 7 % off. A row whose energy rose now keeps the share E_before/E_after of its stress
+# (fracture damage D_f, meshfree/spg/spg_method.h), as NOSB-PD families do. Measured: balance
+# 0.51 % (2-D ring) and 0.23 % (3-D tube, 40 us), dissipation 342 J/m (9.7 % of K0) and 1.04 J,
+# fastest particle 89 and 81 m/s, 124 and 40 fragments, max D_f 1.0 and 0.98 on 46 % and 6 % of
+# the volume. The ring's checks (balance 1 %, speed 100 m/s) and D_f: max above 1/2, and the
+# damaged share above 20 % (2-D) and 3 % (3-D), half the measured, so that a D_f that stopped
+# being raised fails. The balance is looser than NOSB-PD's (1.6e-4): the account's stored energy
+# leaves out SPG's stabilisation energy, which breaks change too.
 spinesim_add_scene_test(stability.ring_fragmentation_spg_2d SCENE ${_ring}
   SET "Effects/Particles method=spg" "Particles/SPG/Critical stretch=0.01"
-  EXPECT "${_ring_2d}" LABELS "scene;particles;validation;stability;known_failure")
+  OUT ${_ring_runs}/spg_2d FIXTURE ring_spg_2d
+  EXPECT "${_ring_2d};max_fracture_damage>=0.5;max_fracture_damage<=1;fracture_damaged_volume_fraction>=0.2"
+  LABELS "scene;particles;validation;stability")
+# Its checkpoint and restart: stopped after step 20 of 50 (bonds broken, D_f raised) and
+# restarted, the run ends with the uninterrupted run's figures (the SPG zone's checkpoint holds
+# the committed states with D_f; 1e-12 allows for nothing but printing).
+spinesim_add_scene_test(stability.ring_fragmentation_spg_2d_restart_first_half SCENE ${_ring}
+  SET "Effects/Particles method=spg" "Particles/SPG/Critical stretch=0.01"
+      "Simulation/Checkpoint interval=10" "Simulation/Stop after step=20"
+  OUT ${_ring_runs}/spg_2d_restart EXPECT "status==ok;last_step~20:0" FIXTURE ring_spg_half
+  LABELS "scene;particles;stability")
+spinesim_add_scene_test(stability.ring_fragmentation_spg_2d_restart_second_half
+  ARGS "run;--restart;${_ring_runs}/spg_2d_restart;--set;Simulation/Stop after step=0"
+  OUT ${_ring_runs}/spg_2d_restart EXPECT "status==ok;last_step~50:0" FIXTURE ring_spg_done
+  LABELS "scene;particles;stability")
+set_tests_properties(stability.ring_fragmentation_spg_2d_restart_second_half PROPERTIES
+                     FIXTURES_REQUIRED ring_spg_half)
+add_test(NAME stability.ring_fragmentation_spg_2d_restart_matches_uninterrupted
+         COMMAND ${CMAKE_COMMAND} -DA=${_ring_runs}/spg_2d_restart/summary.json
+                 -DB=${_ring_runs}/spg_2d/summary.json
+                 -DTOL=1e-12 -DFLOOR=1e-9 -P ${PROJECT_SOURCE_DIR}/tests/support/compare_summaries.cmake)
+set_tests_properties(stability.ring_fragmentation_spg_2d_restart_matches_uninterrupted PROPERTIES
+                     LABELS "scene;particles;stability"
+                     FIXTURES_REQUIRED "ring_spg_done;ring_spg_2d")
+spinesim_add_scene_test(stability.ring_fragmentation_spg_3d SCENE ${_ring3}
+  SET "Effects/Particles method=spg" "Particles/SPG/Critical stretch=0.01"
+      "Simulation/End time=4e-5" "Simulation/Steps=20"
+  EXPECT "${_ring_ok};initial_energy_J~14.098:1e-10;fracture_dissipation_J>=0.04;fragments>=2;max_fracture_damage>=0.5;max_fracture_damage<=1;fracture_damaged_volume_fraction>=0.03"
+  LABELS "scene;particles;validation;stability")
 spinesim_add_scene_test(stability.ring_fragmentation_bond_based_3d SCENE ${_ring3}
   EXPECT "${_ring_ok};initial_energy_J~14.098:1e-10;fracture_dissipation_J>=0.04;fragments>=2"
   LABELS "scene;particles;validation;stability")
