@@ -163,6 +163,12 @@ spinesim_add_hostile_test(spg_coupled_kernel_update
        --set "Effects/Particles method=spg" --set "Mechanics/Plane stress=false"
        --set "Coupling/SPG/Kernel update=updated_lagrangian"
   MATCH "SPG/Kernel update.*'updated_lagrangian' with given rows.*total_lagrangian")
+# An SPG particle zone works on the zone's rows (pre-cracks, breaks, checkpoint): kernels that
+# search their own are refused by name.
+spinesim_add_hostile_test(spg_zone_kernel_update
+  ARGS check ${PROJECT_SOURCE_DIR}/applications/validation/ring_fragmentation.prm
+       --set "Effects/Particles method=spg" --set "Particles/SPG/Kernel update=updated_lagrangian"
+  MATCH "Particles/SPG/Kernel update.*'updated_lagrangian' in a particle zone.*total_lagrangian")
 # SPG is plane strain: a plane-stress FEM bulk is refused.
 spinesim_add_hostile_test(spg_plane_model_mismatch
   ARGS check ${PROJECT_SOURCE_DIR}/applications/scenes/default.prm

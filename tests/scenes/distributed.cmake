@@ -45,6 +45,13 @@ spinesim_add_comparison_test(distributed.ring_3d_1_vs_2_ranks
   CHECKS "${_dist_checks};particle_memory_per_rank_max_bytes:ratio_max:0.6"
   REQUIRES "dist_ring_3d_1;dist_ring_3d_2" LABELS "scene;particles;stability;mpi")
 
+# SPG fracture in a distributed zone is refused (a break needs the row's positions u = Σ Ψ d,
+# whole only on the row's owner): exit 2 naming Effects/Damage and what is allowed.
+spinesim_add_scene_test(distributed.spg_zone_damage_refused SCENE ${_dist_ring} RANKS 2
+  SET "Effects/Particles method=spg" OUT ${_dist_runs}/spg_damage_refused EXIT 2
+  MATCH "Effects/Damage.*true with SPG particles on 2 ranks.*one rank for SPG fracture"
+  LABELS "scene;particles;hostile;mpi")
+
 # Checkpoint and restart of a distributed zone: each rank writes its part; stopped after step 20
 # of 50 and restarted on 2 ranks, the run ends with the figures of the uninterrupted 2-rank run
 # (measured bit for bit; 1e-12 allows for nothing but printing). On another rank count the
