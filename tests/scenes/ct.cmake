@@ -43,12 +43,10 @@ spinesim_add_scene_test(scene.vertebra_compression_2ranks SCENE ${_vertebra} RAN
 # round-off of the CG iterates) differ; figures to 1e-6 relative (solver tolerance 1e-10 on
 # the residual, condition number of a 3000:1 modulus contrast); balance errors below 1e-6
 # count as zero.
-add_test(NAME scene.vertebra_compression_ranks_agree
-         COMMAND ${CMAKE_COMMAND} -DA=${_runs}/scene.vertebra_compression/summary.json
-                 -DB=${_runs}/scene.vertebra_compression_2ranks/summary.json
-                 -DTOL=1e-6 -DFLOOR=1e-6 -P ${PROJECT_SOURCE_DIR}/tests/support/compare_summaries.cmake)
-set_tests_properties(scene.vertebra_compression_ranks_agree PROPERTIES LABELS "scene;fem;mpi"
-                     FIXTURES_REQUIRED "vertebra_1;vertebra_2")
+spinesim_add_summaries_match_test(scene.vertebra_compression_ranks_agree
+  A ${_runs}/scene.vertebra_compression/summary.json
+  B ${_runs}/scene.vertebra_compression_2ranks/summary.json TOL 1e-6 FLOOR 1e-6
+  REQUIRES "vertebra_1;vertebra_2" LABELS "scene;fem;mpi")
 
 # Nonlinear variant (J2 bone, kopperdahl2002 yield), 3 mm cells, 0.6 mm in 12 steps (~10 s).
 # Published QCT/FE and experimental failure loads of (osteoporotic) lumbar vertebral bodies

@@ -78,13 +78,9 @@ spinesim_add_scene_test(distributed.ring_restart_second_half RANKS 2
   LABELS "scene;particles")
 set_tests_properties(distributed.ring_restart_second_half PROPERTIES
                      FIXTURES_REQUIRED "dist_restart_half;dist_restart_refused")
-add_test(NAME distributed.ring_restart_matches_uninterrupted
-         COMMAND ${CMAKE_COMMAND} -DA=${_dist_runs}/ring_restart/summary.json
-                 -DB=${_dist_runs}/ring_2d_2/summary.json
-                 -DTOL=1e-12 -DFLOOR=1e-9 -P ${PROJECT_SOURCE_DIR}/tests/support/compare_summaries.cmake)
-set_tests_properties(distributed.ring_restart_matches_uninterrupted PROPERTIES
-                     LABELS "scene;particles;mpi"
-                     FIXTURES_REQUIRED "dist_restart_done;dist_ring_2d_2")
+spinesim_add_summaries_match_test(distributed.ring_restart_matches_uninterrupted
+  A ${_dist_runs}/ring_restart/summary.json B ${_dist_runs}/ring_2d_2/summary.json
+  TOL 1e-12 FLOOR 1e-9 REQUIRES "dist_restart_done;dist_ring_2d_2" LABELS "scene;particles;mpi")
 
 # A non-finite force on one rank stops every rank with that rank's report (the others would
 # otherwise wait in the next ghost exchange): the particles at the bottom of the ring

@@ -37,12 +37,9 @@ spinesim_add_scene_test(implants.screw_pullout_restart_second_half
   OUT ${_screw_runs}/restart EXPECT "status==ok;peak_passed>=1" LABELS "scene;implants")
 set_tests_properties(implants.screw_pullout_restart_second_half PROPERTIES
                      FIXTURES_REQUIRED screw_restart_half FIXTURES_SETUP screw_restart_done)
-add_test(NAME implants.screw_pullout_restart_matches_uninterrupted
-         COMMAND ${CMAKE_COMMAND} -DA=${_screw_runs}/restart/summary.json
-                 -DB=${_screw_runs}/quick/summary.json -DTOL=1e-8 -DFLOOR=1e-9
-                 -P ${PROJECT_SOURCE_DIR}/tests/support/compare_summaries.cmake)
-set_tests_properties(implants.screw_pullout_restart_matches_uninterrupted PROPERTIES
-                     LABELS "scene;implants" FIXTURES_REQUIRED "screw_restart_done;screw_quick")
+spinesim_add_summaries_match_test(implants.screw_pullout_restart_matches_uninterrupted
+  A ${_screw_runs}/restart/summary.json B ${_screw_runs}/quick/summary.json TOL 1e-8 FLOOR 1e-9
+  REQUIRES "screw_restart_done;screw_quick" LABELS "scene;implants")
 
 # Without Effects/Damage the foam is perfectly plastic: no softening, so no peak is passed and
 # the force keeps its plateau (the run goes to the end, the last force within 5 % of the

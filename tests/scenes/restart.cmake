@@ -11,12 +11,10 @@ set_tests_properties(scene.restart_second_half PROPERTIES FIXTURES_REQUIRED rest
                      FIXTURES_SETUP restart_done)
 # Same figures as the run without interruption, to 1e-8 relative: the restart reloads the
 # exact vectors and history, so only solver round-off separates the two.
-add_test(NAME scene.restart_matches_uninterrupted
-         COMMAND ${CMAKE_COMMAND} -DA=${_runs}/scene.restart_first_half/summary.json
-                 -DB=${PROJECT_BINARY_DIR}/tests/cli/runs/cli.default_scene/summary.json
-                 -DTOL=1e-8 -DFLOOR=1e-9 -P ${PROJECT_SOURCE_DIR}/tests/support/compare_summaries.cmake)
-set_tests_properties(scene.restart_matches_uninterrupted PROPERTIES LABELS "scene"
-                     FIXTURES_REQUIRED "restart_done;default_run")
+spinesim_add_summaries_match_test(scene.restart_matches_uninterrupted
+  A ${_runs}/scene.restart_first_half/summary.json
+  B ${PROJECT_BINARY_DIR}/tests/cli/runs/cli.default_scene/summary.json TOL 1e-8 FLOOR 1e-9
+  REQUIRES "restart_done;default_run" LABELS "scene")
 
 # The same for the thermo-mechanical demo (heat + quasi-static mechanics checkpoints).
 set(_drill ${PROJECT_SOURCE_DIR}/applications/scenes/plate_drilling.prm)
@@ -27,9 +25,7 @@ spinesim_add_scene_test(scene.restart_drilling_second_half
   OUT ${_runs}/scene.restart_drilling_first_half EXPECT "status==ok;last_step~10:0")
 set_tests_properties(scene.restart_drilling_second_half PROPERTIES FIXTURES_REQUIRED drill_half
                      FIXTURES_SETUP drill_done)
-add_test(NAME scene.restart_drilling_matches_uninterrupted
-         COMMAND ${CMAKE_COMMAND} -DA=${_runs}/scene.restart_drilling_first_half/summary.json
-                 -DB=${PROJECT_BINARY_DIR}/tests/cli/runs/scene.plate_drilling/summary.json
-                 -DTOL=1e-8 -DFLOOR=1e-9 -P ${PROJECT_SOURCE_DIR}/tests/support/compare_summaries.cmake)
-set_tests_properties(scene.restart_drilling_matches_uninterrupted PROPERTIES LABELS "scene"
-                     FIXTURES_REQUIRED "drill_done;drill_run")
+spinesim_add_summaries_match_test(scene.restart_drilling_matches_uninterrupted
+  A ${_runs}/scene.restart_drilling_first_half/summary.json
+  B ${PROJECT_BINARY_DIR}/tests/cli/runs/scene.plate_drilling/summary.json TOL 1e-8 FLOOR 1e-9
+  REQUIRES "drill_done;drill_run" LABELS "scene")

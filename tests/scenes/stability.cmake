@@ -128,13 +128,9 @@ spinesim_add_scene_test(stability.ring_fragmentation_spg_2d_restart_second_half
   LABELS "scene;particles;stability")
 set_tests_properties(stability.ring_fragmentation_spg_2d_restart_second_half PROPERTIES
                      FIXTURES_REQUIRED ring_spg_half)
-add_test(NAME stability.ring_fragmentation_spg_2d_restart_matches_uninterrupted
-         COMMAND ${CMAKE_COMMAND} -DA=${_ring_runs}/spg_2d_restart/summary.json
-                 -DB=${_ring_runs}/spg_2d/summary.json
-                 -DTOL=1e-12 -DFLOOR=1e-9 -P ${PROJECT_SOURCE_DIR}/tests/support/compare_summaries.cmake)
-set_tests_properties(stability.ring_fragmentation_spg_2d_restart_matches_uninterrupted PROPERTIES
-                     LABELS "scene;particles;stability"
-                     FIXTURES_REQUIRED "ring_spg_done;ring_spg_2d")
+spinesim_add_summaries_match_test(stability.ring_fragmentation_spg_2d_restart_matches_uninterrupted
+  A ${_ring_runs}/spg_2d_restart/summary.json B ${_ring_runs}/spg_2d/summary.json
+  TOL 1e-12 FLOOR 1e-9 REQUIRES "ring_spg_done;ring_spg_2d" LABELS "scene;particles;stability")
 spinesim_add_scene_test(stability.ring_fragmentation_spg_3d SCENE ${_ring3}
   SET "Effects/Particles method=spg" "Particles/SPG/Critical stretch=0.01"
       "Simulation/End time=4e-5" "Simulation/Steps=20"
