@@ -135,7 +135,7 @@ void CoupledIntegrator<dim>::advance(double dt, double a, double load_time, bool
       // The forces before this pass's breaks, for the work the breaks take out of the motion
       // (ParticleEnergy::after_forces): one pass more per step while the account is on. Only
       // where the forces derive from the booked energy (else the term has no meaning).
-      state_.method->compute_forces(particles, state_.bonds, false);
+      state_.method->compute_forces_before_breaks(particles, state_.bonds);
       energy_.record_forces_before_breaks();
     }
     const auto start = std::chrono::steady_clock::now();

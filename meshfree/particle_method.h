@@ -107,6 +107,13 @@ class ParticleMethod {
   virtual std::size_t compute_forces(ParticleSet<dim>& particles, BondList<dim>& bonds,
                                      bool allow_breaking) = 0;
 
+  // The forces of this step before its breaks (an energy account's extra pass): like
+  // compute_forces(..., false), but it is not a step of its own for the method's counters
+  // (SPG's smoothing and kernel-reset cadence), so the step's breaking pass follows.
+  virtual void compute_forces_before_breaks(ParticleSet<dim>& particles, BondList<dim>& bonds) {
+    compute_forces(particles, bonds, false);
+  }
+
   // S_i: a bound of particle i's stiffness row per volume [N/m^4] (the fictitious density of
   // adaptive dynamic relaxation, Kilic & Madenci 2010).
   virtual std::vector<double> stiffness_bound(const ParticleSet<dim>& particles,
@@ -126,6 +133,11 @@ class ParticleMethod {
                              unsigned int i, std::size_t k) const = 0;
   // Damage φ_i ∈ [0, 1] into particles.damage().
   virtual void update_damage(ParticleSet<dim>& particles, const BondList<dim>& bonds) const = 0;
+
+  // Failure criteria the user switched on for this method (e.g. "Critical stretch = 0.01"),
+  // empty when breaking follows only from the fracture energy or is off: a scene with
+  // Effects/Damage = false names them in its log as not applied.
+  virtual std::string user_failure_criteria() const { return {}; }
 
   // For a probe of the intact material (coupling/energy_splice.h): from now on no bond breaks,
   // whatever the failure criteria, and compute_forces(..., false) is no error.

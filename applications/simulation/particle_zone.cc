@@ -257,7 +257,7 @@ struct ParticleZone<dim>::Impl {
     // before them (the price: two force passes a step with Damage on).
     const double before = method->strain_energy(p, bonds);
     if (damage) {
-      method->compute_forces(p, bonds, false);
+      method->compute_forces_before_breaks(p, bonds);
       forces_before = p.forces();
     }
     const std::size_t broke = method->compute_forces(p, bonds, damage);
@@ -576,6 +576,12 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
               << z.partition->load_imbalance()
               << " (equal cells: " << z.partition->load_imbalance_unweighted()
               << "), ghosts per owned " << (z.sum(held) - z.sum(owned)) / z.sum(owned) << "\n";
+  }
+  if (!z.damage) {
+    const std::string criteria = z.method->user_failure_criteria();
+    if (!criteria.empty())
+      ctx.log() << "  Effects/Damage = false: no bond breaks, so the particles' " << criteria
+                << " is not applied\n";
   }
   for (const auto& message : take_messages())
     ctx.log() << "  " << message << "\n";

@@ -309,8 +309,9 @@ void HeatSolver<dim>::assemble_step(double dt, bool rebuild_matrix) {
   const QGauss<dim - 1> face_quadrature(fe_->degree + 1);
   const unsigned int n_q = quadrature.size(), n_face_q = face_quadrature.size();
   FEValues<dim> fe_values(*fe_, quadrature,
-                          update_values | update_gradients | update_quadrature_points |
-                              update_JxW_values);
+                          update_values | update_quadrature_points | update_JxW_values);
+  FEValues<dim> fe_matrix_values(*fe_, quadrature,
+                                 update_values | update_gradients | update_JxW_values);
   FEFaceValues<dim> fe_face(*fe_, face_quadrature,
                             update_values | update_quadrature_points | update_JxW_values);
   FESubfaceValues<dim> fe_subface(*fe_, face_quadrature, update_values | update_JxW_values);
@@ -326,6 +327,28 @@ void HeatSolver<dim>::assemble_step(double dt, bool rebuild_matrix) {
 
   FullMatrix<double> cell_mass(n_dofs, n_dofs), cell_stiffness(n_dofs, n_dofs),
       cell_matrix(n_dofs, n_dofs);
+  // Volume parts of the last integrated cell. With constant coefficients a translated copy
+  // of that cell (same material) has the same matrices, so they are copied instead of
+  // integrated again: structured and locally refined meshes are mostly such runs of cells
+  // in p4est's order. deal.II's own CellSimilarity needs bitwise equal vertex offsets, which
+  // computed coordinates (lo + i h) rarely have; the offsets here agree to 1e-12 of the cell
+  // size, which changes the matrices far below the linear solver's tolerance.
+  FullMatrix<double> volume_mass(n_dofs, n_dofs), volume_stiffness(n_dofs, n_dofs);
+  types::material_id volume_material = numbers::invalid_material_id;
+  std::vector<Tensor<1, dim>> volume_offsets;
+  double volume_tolerance = 0;
+  auto is_translate_of_volume_cell = [&](const auto& cell) {
+    if (cell->material_id() != volume_material || volume_offsets.size() + 1 != cell->n_vertices())
+      return false;
+    const Point<dim> origin = cell->vertex(0);
+    for (unsigned int v = 1; v < cell->n_vertices(); ++v) {
+      const Tensor<1, dim> offset = cell->vertex(v) - origin;
+      for (unsigned int d = 0; d < dim; ++d)
+        if (std::abs(offset[d] - volume_offsets[v - 1][d]) > volume_tolerance)
+          return false;
+    }
+    return true;
+  };
   Vector<double> cell_source(n_dofs), cell_rhs(n_dofs), old_values(n_dofs), tmp(n_dofs);
   std::vector<types::global_dof_index> dofs(n_dofs);
   std::vector<double> q_old(n_q), q_new(n_q), q_cell(n_q), g_old(n_face_q), g_new(n_face_q);
@@ -371,9 +394,37 @@ void HeatSolver<dim>::assemble_step(double dt, bool rebuild_matrix) {
     }
     fe_values.reinit(cell);
     const ThermalMaterial& mat = material(cell->material_id());
-    const double rho_c = mat.density * mat.specific_heat;
-    cell_mass = 0;
-    cell_stiffness = 0;
+    if (!is_translate_of_volume_cell(cell)) {
+      fe_matrix_values.reinit(cell);
+      const double rho_c = mat.density * mat.specific_heat;
+      volume_mass = 0;
+      volume_stiffness = 0;
+      for (unsigned int q = 0; q < n_q; ++q) {
+        const double JxW = fe_matrix_values.JxW(q);
+        for (unsigned int i = 0; i < n_dofs; ++i) {
+          const double phi_i = fe_matrix_values.shape_value(i, q);
+          const Tensor<1, dim> grad_i = fe_matrix_values.shape_grad(i, q);
+          for (unsigned int j = 0; j < n_dofs; ++j) {
+            const double phi_j = fe_matrix_values.shape_value(j, q);
+            volume_mass(i, j) += rho_c * phi_i * phi_j * JxW;
+            volume_stiffness(i, j) +=
+                (mat.conductivity * grad_i * fe_matrix_values.shape_grad(j, q) +
+                 perfusion * phi_i * phi_j) *
+                JxW;
+          }
+        }
+      }
+      volume_material = cell->material_id();
+      volume_offsets.resize(cell->n_vertices() - 1);
+      double size = 0;
+      for (unsigned int v = 1; v < cell->n_vertices(); ++v) {
+        volume_offsets[v - 1] = cell->vertex(v) - cell->vertex(0);
+        size = std::max(size, volume_offsets[v - 1].norm());
+      }
+      volume_tolerance = 1e-12 * size;
+    }
+    cell_mass = volume_mass;
+    cell_stiffness = volume_stiffness;
     cell_source = 0;
 
     // Source at the quadrature points, theta-weighted between the old and the new time.
@@ -385,12 +436,13 @@ void HeatSolver<dim>::assemble_step(double dt, bool rebuild_matrix) {
     if (cell_source_)
       cell_source_(typename Triangulation<dim>::active_cell_iterator(cell),
                    fe_values.get_quadrature_points(), t_new, q_cell);
+    const Point<dim> cell_centre = moving_.empty() ? Point<dim>() : cell->center();
+    const double cell_diameter = moving_.empty() ? 0.0 : cell->diameter();
     for (unsigned int s = 0; s < moving_.size(); ++s)
       for (unsigned int k = 0; k < 2; ++k) {
         const double w = k == 1 ? theta * scale_new[s] : (1.0 - theta) * scale_old[s];
         const Point<dim>& centre = k == 1 ? centres_new[s] : centres_old[s];
-        if (w == 0 ||
-            cell->center().distance(centre) > moving_[s].cutoff_distance() + cell->diameter())
+        if (w == 0 || cell_centre.distance(centre) > moving_[s].cutoff_distance() + cell_diameter)
           continue;
         for (unsigned int q = 0; q < n_q; ++q)
           q_cell[q] += w * moving_[s].density_about(fe_values.quadrature_point(q), centre);
@@ -401,14 +453,6 @@ void HeatSolver<dim>::assemble_step(double dt, bool rebuild_matrix) {
       const double source = theta * q_new[q] + (1.0 - theta) * q_old[q] + q_cell[q];
       for (unsigned int i = 0; i < n_dofs; ++i) {
         const double phi_i = fe_values.shape_value(i, q);
-        const Tensor<1, dim> grad_i = fe_values.shape_grad(i, q);
-        for (unsigned int j = 0; j < n_dofs; ++j) {
-          const double phi_j = fe_values.shape_value(j, q);
-          cell_mass(i, j) += rho_c * phi_i * phi_j * JxW;
-          cell_stiffness(i, j) +=
-              (mat.conductivity * grad_i * fe_values.shape_grad(j, q) + perfusion * phi_i * phi_j) *
-              JxW;
-        }
         cell_source(i) += source * phi_i * JxW;
         local_sources += dt * source * phi_i * JxW;
         if (perfusion > 0) {

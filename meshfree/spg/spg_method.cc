@@ -12,6 +12,7 @@
 #include <istream>
 #include <limits>
 #include <ostream>
+#include <sstream>
 #include <stdexcept>
 
 namespace spinesim::meshfree {
@@ -114,6 +115,30 @@ std::size_t SpgMethod<dim>::compute_forces(ParticleSet<dim>& particles, BondList
   if (broken > 0 && solver_->bonds().n_bonds() == bonds.n_bonds())
     bonds.broken = solver_->bonds().broken;
   return broken;
+}
+
+template <int dim>
+void SpgMethod<dim>::compute_forces_before_breaks(ParticleSet<dim>& particles,
+                                                  BondList<dim>& bonds) {
+  solver().set_counting_step(false);
+  try {
+    compute_forces(particles, bonds, false);
+  } catch (...) {
+    solver_->set_counting_step(true);
+    throw;
+  }
+  solver_->set_counting_step(true);
+}
+
+template <int dim>
+std::string SpgMethod<dim>::user_failure_criteria() const {
+  std::ostringstream out;
+  if (prm_.critical_stretch > 0.0)
+    out << "Critical stretch = " << prm_.critical_stretch;
+  if (prm_.critical_plastic_strain > 0.0)
+    out << (out.tellp() > 0 ? ", " : "")
+        << "Critical plastic strain = " << prm_.critical_plastic_strain;
+  return out.str();
 }
 
 template <int dim>

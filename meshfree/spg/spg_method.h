@@ -57,6 +57,7 @@ class SpgMethod : public ParticleMethod<dim> {
   // A particle zone's checkpoint: the committed material states (plastic strain, D_f).
   void save(std::ostream& out) const override;
   void load(std::istream& in) override;
+  std::string user_failure_criteria() const override;
   bool shares_bond_breaks() const override { return true; }
   std::vector<std::pair<unsigned int, unsigned int>> take_broken_pairs() override;
   void break_pairs(ParticleSet<dim>& particles, BondList<dim>& bonds,
@@ -73,6 +74,7 @@ class SpgMethod : public ParticleMethod<dim> {
   // Bonds break (by the SPG criteria) only when `allow_breaking`.
   std::size_t compute_forces(ParticleSet<dim>& particles, BondList<dim>& bonds,
                              bool allow_breaking) override;
+  void compute_forces_before_breaks(ParticleSet<dim>& particles, BondList<dim>& bonds) override;
   std::vector<double> stiffness_bound(const ParticleSet<dim>& particles,
                                       const BondList<dim>& bonds) override;
   // `safety` times SPG's own step (CFL h σ_min / c_p, from the last force evaluation).

@@ -134,7 +134,7 @@ void SPGSolver<dim>::compute_forces(ParticleSet<dim>& p) {
   if (n != X0_.size())
     throw InvalidInput("SPGSolver::compute_forces", "the particle count changed",
                        "the particle set the solver was built for");
-  if (calls_ > 0) {
+  if (calls_ > 0 && counting_step_) {
     const bool reset =
         (mode_ == KernelUpdate::updated_lagrangian && calls_ % prm_.reset_interval == 0) ||
         (mode_ == KernelUpdate::adaptive_lagrangian && max_rel_ > prm_.adaptive_threshold);
@@ -312,7 +312,8 @@ void SPGSolver<dim>::compute_forces(ParticleSet<dim>& p) {
     break_bonds(p);
   if (mode_ != KernelUpdate::total_lagrangian)
     d_last_ = d;
-  ++calls_;
+  if (counting_step_)
+    ++calls_;
 }
 
 template <int dim>

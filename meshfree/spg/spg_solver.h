@@ -119,6 +119,11 @@ class SPGSolver {
   void set_deferred_commit(bool deferred) { deferred_commit_ = deferred; }
   // Off: no bond breaks whatever the criteria (a probe of the intact material).
   void set_breaking(bool on) { breaking_ = on; }
+  // Off: the next compute_forces() is a repeat of the coming step (forces before its breaks),
+  // which neither resets the kernel nor advances the step count of the smoothing and reset
+  // cadence. Its material update is the step's own (committed from the same state, it is
+  // repeated unchanged by the step's pass).
+  void set_counting_step(bool on) { counting_step_ = on; }
   void commit_state() { committed_ = state_; }
   void rollback_state() { state_ = committed_; }
   // Called with the particles whose rows broken bonds change, before (after == false) and after
@@ -212,7 +217,7 @@ class SPGSolver {
   std::vector<Matrix> F_, P_, Fr_, stress_;
   std::vector<materials::MaterialState> state_, committed_;
   std::vector<std::uint8_t> has_row_, complete_, driven_;
-  bool external_rows_ = false, deferred_commit_ = false, breaking_ = true;
+  bool external_rows_ = false, deferred_commit_ = false, breaking_ = true, counting_step_ = true;
   double reference_temperature_ = 0;
   std::vector<std::pair<unsigned int, unsigned int>> newly_broken_;
   BreakObserver break_observer_;

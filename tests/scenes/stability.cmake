@@ -92,9 +92,29 @@ spinesim_add_scene_test(stability.ring_breathing_nosb_2d SCENE ${_ring}
 # and tube conserve K + U to 1.35e-5 and 3.0e-5 of K0 over 100 us (velocity Verlet's O(dt^2)
 # defect); bound 1e-3, far below what a missing or one-sided force term leaves.
 set(_ring_spg_ok "status==ok;energy_balance_error_relative<=1e-3;max_particle_speed<=100;fragments<=1")
+# The 2-D ring keeps the fragmenting run's critical stretch: with Damage = false the log must
+# say it is not applied, and the ring stays whole.
 spinesim_add_scene_test(stability.ring_breathing_spg_2d SCENE ${_ring}
-  SET "Effects/Damage=false" "Effects/Particles method=spg"
+  SET "Effects/Damage=false" "Effects/Particles method=spg" "Particles/SPG/Critical stretch=0.01"
+  MATCH "Damage = false: no bond breaks, so the particles' Critical stretch = 0.01 is not applied"
   EXPECT "${_ring_spg_ok};initial_energy_J~3524.5:1e-10" LABELS "scene;particles;validation;stability")
+# With Damage on, the energy account takes one more force pass a step (the forces before its
+# breaks). That pass must not count as a step of SPG's own: with the smoothing force refreshed
+# every second step, a ring that cannot break (no criterion) ends exactly as with Damage off.
+# Counted as a step, it refreshed every step: kinetic energy 5e-5 apart.
+spinesim_add_scene_test(stability.ring_breathing_spg_2d_smoothing_2_damage_on SCENE ${_ring}
+  SET "Effects/Particles method=spg" "Particles/SPG/Smoothing interval=2"
+  OUT ${_ring_runs}/spg_smoothing_2_damage_on FIXTURE ring_spg_smoothing_on
+  EXPECT "${_ring_spg_ok}" LABELS "scene;particles;stability")
+spinesim_add_scene_test(stability.ring_breathing_spg_2d_smoothing_2_damage_off SCENE ${_ring}
+  SET "Effects/Damage=false" "Effects/Particles method=spg" "Particles/SPG/Smoothing interval=2"
+  OUT ${_ring_runs}/spg_smoothing_2_damage_off FIXTURE ring_spg_smoothing_off
+  EXPECT "${_ring_spg_ok}" LABELS "scene;particles;stability")
+spinesim_add_comparison_test(stability.spg_account_pass_is_not_a_step
+  A ${_ring_runs}/spg_smoothing_2_damage_on/summary.json
+  B ${_ring_runs}/spg_smoothing_2_damage_off/summary.json
+  CHECKS "kinetic_energy_J:rel:1e-12;strain_energy_J:rel:1e-12;max_particle_speed:rel:1e-12;energy_balance_error_relative:abs:1e-12"
+  REQUIRES "ring_spg_smoothing_on;ring_spg_smoothing_off" LABELS "scene;particles;stability")
 spinesim_add_scene_test(stability.ring_breathing_spg_3d SCENE ${_ring3}
   SET "Effects/Damage=false" "Effects/Particles method=spg"
   EXPECT "${_ring_spg_ok};initial_energy_J~14.098:1e-10" LABELS "scene;particles;validation;stability")
