@@ -184,6 +184,13 @@ class ParticleMethod {
   virtual bool shares_bond_breaks() const { return false; }
   // Pairs (i, j) broken by compute_forces since the last call.
   virtual std::vector<std::pair<unsigned int, unsigned int>> take_broken_pairs() { return {}; }
+  // Where copies of a row live on several ranks (a distributed particle zone): compute_forces
+  // decides only the pairs `decides` accepts, one rank per pair, and breaks nothing itself;
+  // take_broken_pairs() returns those decisions, and the caller hands every rank's to
+  // break_pairs() on every rank, so all copies of a row lose the same bonds at once.
+  virtual void set_break_decider(std::function<bool(unsigned int, unsigned int)> decides) {
+    (void)decides;
+  }
   // Breaks these pairs (decided by another rank) in `bonds` and in the method's rows.
   virtual void break_pairs(ParticleSet<dim>& particles, BondList<dim>& bonds,
                            const std::vector<std::pair<unsigned int, unsigned int>>& pairs) {

@@ -244,28 +244,94 @@ struct ParticleZone<dim>::Impl {
   void compute_forces(meshfree::ParticleSet<dim>& p) {
     if (partition)
       partition->update_ghosts(p.displacements()); // the ghosts' positions of this pass
-    collectively([&] { compute_forces_here(p); }); // one reduction a force pass
+    double before = 0;
+    std::size_t broke = 0;
+    collectively([&] { broke = force_pass(p, before); }); // one reduction a force pass
+    if (!shares_breaks())
+      return collectively([&] { book_breaks(p, before, broke); });
+    // A distributed SPG zone (meshfree::ParticleMethod::set_break_decider): the pass decided
+    // this rank's pairs; every rank breaks everyone's now, before the next pass.
+    std::size_t n_decided = 0; // over all ranks
+    const std::vector<std::pair<unsigned int, unsigned int>> pairs = gather_broken_pairs(n_decided);
+    if (n_decided == 0)
+      return collectively([&] { book_breaks(p, before, 0); });
+    collectively([&] {
+      method->break_pairs(p, bonds, pairs);
+      book_breaks(p, before, 2 * n_decided);
+    });
   }
 
-  void compute_forces_here(meshfree::ParticleSet<dim>& p) {
-    if (!account) {
-      broke_since_step_check += method->compute_forces(p, bonds, damage);
-      return;
-    }
+  // Forces at the current displacements; returns the bond ends broken. With an account,
+  // `before` is the stored energy before the pass's breaks.
+  std::size_t force_pass(meshfree::ParticleSet<dim>& p, double& before) {
+    if (!account)
+      return method->compute_forces(p, bonds, damage);
     // The breaks of this pass release the stored energy they take away at these displacements
     // and the forces they remove (zone_energy.h): a pass without breaking gives the forces
     // before them (the price: two force passes a step with Damage on).
-    const double before = method->strain_energy(p, bonds);
+    before = method->strain_energy(p, bonds);
     if (damage) {
       method->compute_forces_before_breaks(p, bonds);
       forces_before = p.forces();
     }
-    const std::size_t broke = method->compute_forces(p, bonds, damage);
+    return method->compute_forces(p, bonds, damage);
+  }
+
+  void book_breaks(const meshfree::ParticleSet<dim>& p, double before, std::size_t broke) {
     broke_since_step_check += broke;
+    if (!account)
+      return;
     if (broke > 0)
       energy.force_pass(p, before, method->strain_energy(p, bonds), &forces_before);
     else
       energy.force_pass(p, before, before, nullptr);
+  }
+
+  // Whether copies of rows on several ranks share their breaks (SPG on more than one rank).
+  bool shares_breaks() const { return partition && damage && method->shares_bond_breaks(); }
+
+  // This rank's local index of lattice point `id`, or ~0u if it holds no such point (owned
+  // and ghost ids are each ascending, zone_partition.h).
+  unsigned int local_index(std::uint64_t id) const {
+    const auto& ids = partition->ids();
+    const auto owned_end = ids.begin() + partition->n_owned();
+    for (const auto& [first, last] :
+         {std::pair(ids.begin(), owned_end), std::pair(owned_end, ids.end())}) {
+      const auto it = std::lower_bound(first, last, id);
+      if (it != last && *it == id)
+        return static_cast<unsigned int>(it - ids.begin());
+    }
+    return ~0u;
+  }
+
+  // Every rank's decided pairs of the last pass (`n_decided` of them), in this rank's indices,
+  // without the pairs it does not hold both ends of. Collective.
+  std::vector<std::pair<unsigned int, unsigned int>> gather_broken_pairs(std::size_t& n_decided) {
+    const auto& ids = partition->ids();
+    std::vector<std::uint64_t> mine;
+    for (const auto& [i, j] : method->take_broken_pairs()) {
+      mine.push_back(ids[i]);
+      mine.push_back(ids[j]);
+    }
+    const int ranks = static_cast<int>(dealii::Utilities::MPI::n_mpi_processes(comm));
+    const int count = static_cast<int>(mine.size());
+    std::vector<int> counts(ranks), offsets(ranks + 1, 0);
+    MPI_Allgather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, comm);
+    for (int r = 0; r < ranks; ++r)
+      offsets[r + 1] = offsets[r] + counts[r];
+    n_decided = offsets[ranks] / 2;
+    if (n_decided == 0)
+      return {};
+    std::vector<std::uint64_t> all(offsets[ranks]);
+    MPI_Allgatherv(mine.data(), count, MPI_UINT64_T, all.data(), counts.data(), offsets.data(),
+                   MPI_UINT64_T, comm);
+    std::vector<std::pair<unsigned int, unsigned int>> pairs;
+    for (std::size_t k = 0; k + 1 < all.size(); k += 2) {
+      const unsigned int i = local_index(all[k]), j = local_index(all[k + 1]);
+      if (i != ~0u && j != ~0u) // a row holds the bond only where both ends are
+        pairs.emplace_back(i, j);
+    }
+    return pairs;
   }
 
   // Whether lattice point x lies in the body's shape (the Centre was checked in setup()).
@@ -473,14 +539,6 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
   // the partial-volume shell), so the first-layer ghosts' rows are whole: for bond-based PD's
   // surface correction, for NOSB-PD's families.
   const bool distribute = ctx.n_ranks() > 1;
-  // An SPG break is decided on a row's current positions, u = Σ Ψ d, which a rank can form
-  // only for the rows it holds whole: the copies of a ghost's row on two ranks would break
-  // apart. Distributed SPG zones run without damage until the ranks share their breaks.
-  if (distribute && z.damage && z.method->name() == "spg")
-    throw InvalidInput("Effects/Damage",
-                       "true with SPG particles on " + std::to_string(ctx.n_ranks()) + " ranks",
-                       "one rank for SPG fracture in a particle zone, Damage = false, or "
-                       "Particles method = nosb or bond_based");
   if (distribute)
     z.particles = z.distributed_body(2.0 * (options.horizon + z.prm.spacing) * (1 + 1e-9));
   else
@@ -515,6 +573,15 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
       z.bonds.keep_rows(z.partition->n_owned());
     z.drop_unbonded_ghosts(); // collective: keep_ghosts rebuilds the exchange
     z.method->set_first_ghost(z.partition->n_owned());
+    // An SPG break is decided on both ends' positions u = Σ Ψ d, which only a rank holding
+    // both rows whole can form, and it reshapes both rows, copies of which live on other
+    // ranks: the owner of the end with the lower lattice id decides, and all ranks break
+    // the decided pairs together (compute_forces).
+    if (z.shares_breaks())
+      z.method->set_break_decider([&z](unsigned int i, unsigned int j) {
+        const auto& ids = z.partition->ids();
+        return z.partition->is_owned(ids[i] < ids[j] ? i : j);
+      });
   }
   z.broken_initially = std::size_t(z.sum(z.owned_broken_ends()));
   z.n_bonds_global = std::uint64_t(z.sum(z.owned_bond_ends())) / 2;

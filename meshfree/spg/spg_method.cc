@@ -92,6 +92,7 @@ void SpgMethod<dim>::initialise(const ParticleSet<dim>& particles, const BondLis
   solver_->set_break_observer(
       [this](const std::vector<unsigned int>& rows, bool after) { observe_breaks(rows, after); });
   solver_->set_reference_temperature(reference_temperature_);
+  solver_->set_break_decider(break_decider_);
   if (driven)
     solver_->set_driven(driven_);
   for (unsigned int i = 0; i < kept_.size() && i < particles.size(); ++i)
@@ -139,6 +140,13 @@ std::string SpgMethod<dim>::user_failure_criteria() const {
     out << (out.tellp() > 0 ? ", " : "")
         << "Critical plastic strain = " << prm_.critical_plastic_strain;
   return out.str();
+}
+
+template <int dim>
+void SpgMethod<dim>::set_break_decider(std::function<bool(unsigned int, unsigned int)> decides) {
+  break_decider_ = std::move(decides);
+  if (solver_)
+    solver_->set_break_decider(break_decider_);
 }
 
 template <int dim>

@@ -60,6 +60,7 @@ class SpgMethod : public ParticleMethod<dim> {
   std::string user_failure_criteria() const override;
   bool shares_bond_breaks() const override { return true; }
   std::vector<std::pair<unsigned int, unsigned int>> take_broken_pairs() override;
+  void set_break_decider(std::function<bool(unsigned int, unsigned int)> decides) override;
   void break_pairs(ParticleSet<dim>& particles, BondList<dim>& bonds,
                    const std::vector<std::pair<unsigned int, unsigned int>>& pairs) override;
   std::vector<dealii::Tensor<1, dim>>
@@ -119,8 +120,9 @@ class SpgMethod : public ParticleMethod<dim> {
   std::shared_ptr<const materials::ConstitutiveLaw> law_;
   double thickness_ = 1.0, reference_temperature_ = 0;
   std::vector<std::uint8_t> driven_;
-  unsigned int first_ghost_ = ~0u; // set_first_ghost()
-  bool breaking_ = true;           // disable_breaking()
+  unsigned int first_ghost_ = ~0u;                                // set_first_ghost()
+  std::function<bool(unsigned int, unsigned int)> break_decider_; // set_break_decider()
+  bool breaking_ = true;                                          // disable_breaking()
   // Committed states set before the solver exists (or across a re-initialisation).
   std::vector<materials::MaterialState> kept_;
   std::unique_ptr<SPGSolver<dim>> solver_;

@@ -342,6 +342,11 @@ void SPGSolver<dim>::break_bonds(ParticleSet<dim>& p) {
         if (L0_2 > 0.0 && L_2 > stretch_limit_2 * L0_2)
           brk = true;
       }
+      if (brk && break_decider_) { // shared: decided here, broken by break_pairs()
+        if (break_decider_(i, j))
+          newly_broken_.emplace_back(i, j);
+        return;
+      }
       if (brk) {
         bonds_.broken[k] = 1;
         bonds_.broken[rk.reverse[k]] = 1;

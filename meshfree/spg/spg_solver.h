@@ -141,6 +141,13 @@ class SPGSolver {
   const std::vector<materials::MaterialState>& committed_states() const { return committed_; }
   // Pairs (i < j) broken since the last call.
   std::vector<std::pair<unsigned int, unsigned int>> take_broken_pairs();
+  // Breaks shared between solvers that hold copies of the same rows (a distributed zone):
+  // compute_forces() then only decides the pairs `decides` accepts (one holder per pair) and
+  // keeps them for take_broken_pairs() without breaking them; the caller gathers every
+  // holder's decisions and breaks them all with break_pairs(), on every holder in one call, so
+  // each copy of a row loses the same bonds at once. Empty: breaks apply where decided.
+  using BreakDecider = std::function<bool(unsigned int i, unsigned int j)>;
+  void set_break_decider(BreakDecider decides) { break_decider_ = std::move(decides); }
   // Breaks these pairs where this solver holds them (another owner decided) and recomputes the
   // rows they touch; particles.damage() of those rows is updated.
   void break_pairs(ParticleSet<dim>& particles,
@@ -221,6 +228,7 @@ class SPGSolver {
   double reference_temperature_ = 0;
   std::vector<std::pair<unsigned int, unsigned int>> newly_broken_;
   BreakObserver break_observer_;
+  BreakDecider break_decider_;
   std::vector<double> kappa_;
   EssentialBoundary<dim> constraints_;
   bool constraints_ready_ = false;

@@ -154,6 +154,7 @@ spinesim_add_summaries_match_test(stability.ring_fragmentation_spg_2d_restart_ma
 spinesim_add_scene_test(stability.ring_fragmentation_spg_3d SCENE ${_ring3}
   SET "Effects/Particles method=spg" "Particles/SPG/Critical stretch=0.01"
       "Simulation/End time=4e-5" "Simulation/Steps=20"
+  OUT ${_ring_runs}/spg_3d FIXTURE ring_spg_3d
   EXPECT "${_ring_ok};initial_energy_J~14.098:1e-10;fracture_dissipation_J>=0.04;fragments>=2;max_fracture_damage>=0.5;max_fracture_damage<=1;fracture_damaged_volume_fraction>=0.03"
   LABELS "scene;particles;validation;stability")
 spinesim_add_scene_test(stability.ring_fragmentation_bond_based_3d SCENE ${_ring3}
