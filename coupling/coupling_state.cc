@@ -170,8 +170,9 @@ void CouplingState<dim>::prepare() {
                        "plastic strain and hardening of converted cells end at conversion (" +
                        law->name() + " in the FEM); nosb or spg continue them");
   if (!prm.damage && !method->user_failure_criteria().empty())
-    messages.push_back("Effects/Damage = false: no bond breaks, so the particles' " +
-                       method->user_failure_criteria() + " is not applied");
+    messages.push_back("Effects/Damage = false: no bond breaks, so the particles' failure "
+                       "criteria are not applied (" +
+                       method->user_failure_criteria() + ")");
   if (dim == 2 && method->thickness() != 1.0)
     throw InvalidInput(section + "/Thickness", "2-D FEM works per unit thickness",
                        "1 (results are per metre of thickness) [m]");

@@ -109,7 +109,9 @@ class ParticleMethod {
 
   // The forces of this step before its breaks (an energy account's extra pass): like
   // compute_forces(..., false), but it is not a step of its own for the method's counters
-  // (SPG's smoothing and kernel-reset cadence), so the step's breaking pass follows.
+  // (SPG's smoothing and kernel-reset cadence), so the step's breaking pass follows. Meant for
+  // total Lagrangian SPG kernels (the only ones zones and coupled runs take): an updated
+  // kernel would reset its reference in the step's own pass, after this one.
   virtual void compute_forces_before_breaks(ParticleSet<dim>& particles, BondList<dim>& bonds) {
     compute_forces(particles, bonds, false);
   }

@@ -368,6 +368,9 @@ void BoneDrilling::run(RunContext& ctx) {
   hp.perfusion.arterial_temperature = cooling_.body_temperature;
   hp.solver_tolerance = 1e-12;
   fem::HeatSolver<3> heat(tria, hp);
+  if (bone_.ct.enabled() && bone_.thermal_from_density) // failed bone conducts as before
+    heat.set_cell_material(
+        [this](const auto& cell) { return bone_.thermal_at_density(ct_density(cell->center())); });
   {
     dealii::TimerOutput::Scope t(ctx.timer(), "heat setup");
     heat.setup();
@@ -387,25 +390,28 @@ void BoneDrilling::run(RunContext& ctx) {
   S.cem43.reinit(heat.locally_owned_dofs(), comm);
   S.above.reinit(heat.locally_owned_dofs(), comm);
 
-  const auto density_of = [&](dealii::types::material_id id) {
-    return layer_of(id) == 1 ? bone_.cancellous.density : bone_.cortical.density;
+  // The mass of a kept cell: its type's density, or its own from the CT density.
+  const auto mass_of = [&](const auto& cell) {
+    return heat.cell_material(cell).density * cell->measure();
   };
   double initial_mass = 0;
   for (const auto& cell : tria.active_cell_iterators())
     if (cell->is_locally_owned())
-      initial_mass += density_of(cell->material_id()) * cell->measure();
+      initial_mass += mass_of(cell);
   initial_mass = dealii::Utilities::MPI::sum(initial_mass, comm);
   // A CT block: its volume-mean calibrated density and the cortical share of its volume.
-  double ct_mean_density = 0, cortical_fraction = 0, block_volume = 0;
+  double ct_mean_density = 0, cortical_fraction = 0, block_volume = 0, ct_mean_conductivity = 0;
   if (bone_.ct.enabled()) {
     for (const auto& cell : tria.active_cell_iterators())
       if (cell->is_locally_owned()) {
         ct_mean_density += ct_density(cell->center()) * cell->measure();
+        ct_mean_conductivity += heat.cell_material(cell).conductivity * cell->measure();
         cortical_fraction += (layer_of(cell->material_id()) == 0 ? 1.0 : 0.0) * cell->measure();
         block_volume += cell->measure();
       }
     block_volume = dealii::Utilities::MPI::sum(block_volume, comm);
     ct_mean_density = dealii::Utilities::MPI::sum(ct_mean_density, comm) / block_volume;
+    ct_mean_conductivity = dealii::Utilities::MPI::sum(ct_mean_conductivity, comm) / block_volume;
     cortical_fraction = dealii::Utilities::MPI::sum(cortical_fraction, comm) / block_volume;
     ctx.log() << "  CT block from " << bone_.ct.image_file << ": mean density " << ct_mean_density
               << " g/cm^3, cortical " << 100 * cortical_fraction << " % of the volume\n";
@@ -452,9 +458,9 @@ void BoneDrilling::run(RunContext& ctx) {
     for (const auto& cell : tria.active_cell_iterators())
       if (!cell->is_artificial() && goes(cell)) {
         if (cell->is_locally_owned()) {
-          const auto& m = heat.material(cell->material_id());
+          const auto m = heat.cell_material(cell);
           volume += cell->measure();
-          mass += density_of(cell->material_id()) * cell->measure();
+          mass += m.density * cell->measure();
           capacity += m.density * m.specific_heat * cell->measure();
           ++n;
         }
@@ -1104,7 +1110,7 @@ void BoneDrilling::run(RunContext& ctx) {
   double kept_mass = 0;
   for (const auto& cell : tria.active_cell_iterators())
     if (cell->is_locally_owned() && cell->material_id() != removed_id)
-      kept_mass += density_of(cell->material_id()) * cell->measure();
+      kept_mass += mass_of(cell);
   kept_mass = dealii::Utilities::MPI::sum(kept_mass, comm);
   const double content = heat.heat_content();
   const double balance = content - initial_content + S.chips_heat - heat.supplied_energy();
@@ -1228,6 +1234,7 @@ void BoneDrilling::run(RunContext& ctx) {
   if (bone_.ct.enabled()) {
     sum.set_figure("ct_mean_density_g_cm3", ct_mean_density, "g/cm^3");
     sum.set_figure("ct_cortical_volume_fraction", cortical_fraction, "-");
+    sum.set_figure("ct_mean_conductivity_W_per_mK", ct_mean_conductivity, "W/(m K)");
   }
   sum.set_figure("drill_cell_size_m", h_drill, "m");
   sum.set_figure("cells", tria.n_global_active_cells(), "-");

@@ -4,6 +4,7 @@
 #include "base/exceptions.h"
 #include "base/list_parsing.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
@@ -205,6 +206,17 @@ void BoneSection::declare(dealii::ParameterHandler& prm) {
                     "strengths then scale with the cell's modulus over its type's: failure "
                     "strains that do not depend on density, as Morgan & Keaveny 2001 found "
                     "within a site) [g/cm^3].");
+  prm.declare_entry("Thermal properties", "by type", Selection("by type|from density"),
+                    "by type: each cell conducts and stores heat as its type (Cortical or "
+                    "Cancellous). from density: k, rho and rho c linear in the cell's calibrated "
+                    "density between the Cancellous values at Cancellous reference density and "
+                    "the Cortical values at Cortical density, clamped outside. Bone and marrow "
+                    "mixed by volume: rho and rho c are then exact volume averages if the bone "
+                    "volume fraction is linear in the calibrated density, and k is the parallel "
+                    "(Voigt) bound, an upper estimate across the trabeculae [-].");
+  prm.declare_entry("Cancellous reference density", "0.15", Double(),
+                    "Calibrated density at which from-density properties are the Cancellous "
+                    "ones; below Cortical density [g/cm^3].");
   prm.leave_subsection();
   declare_bone_type(prm, "Cortical", 0.54, 1900, 1300, 200, 300,
                     "Davidson & James (2000, Med. Eng. Phys. 22:741) measured 0.53-0.58 for "
@@ -231,11 +243,34 @@ void BoneSection::parse(dealii::ParameterHandler& prm) {
   prm.enter_subsection("CT");
   ct.parse(prm, "Bone block/CT/", applications::ct::resolve_data_file);
   cortical_density = prm.get_double("Cortical density");
+  thermal_from_density = prm.get("Thermal properties") == "from density";
+  cancellous_reference_density = prm.get_double("Cancellous reference density");
   prm.leave_subsection();
+  if (thermal_from_density && !(cancellous_reference_density < cortical_density))
+    throw InvalidInput("Bone block/CT/Cancellous reference density",
+                       std::to_string(cancellous_reference_density) + " g/cm^3",
+                       "below Cortical density (" + std::to_string(cortical_density) +
+                           " g/cm^3) with Thermal properties = from density");
   require_positive(width, "Bone block/Width", "[mm]");
   require_positive(height, "Bone block/Height", "[mm]");
   cortical = parse_bone_type(prm, "Cortical");
   cancellous = parse_bone_type(prm, "Cancellous");
+}
+
+fem::ThermalMaterial BoneSection::thermal_at_density(double density) const {
+  const double t = std::clamp((density - cancellous_reference_density) /
+                                  (cortical_density - cancellous_reference_density),
+                              0.0, 1.0);
+  const auto mix = [t](double cancellous, double cortical) {
+    return (1.0 - t) * cancellous + t * cortical;
+  };
+  fem::ThermalMaterial m;
+  m.conductivity = mix(cancellous.conductivity, cortical.conductivity);
+  m.density = mix(cancellous.density, cortical.density);
+  m.specific_heat = mix(cancellous.density * cancellous.specific_heat,
+                        cortical.density * cortical.specific_heat) /
+                    m.density;
+  return m;
 }
 
 bool BoneSection::inside(const dealii::Point<3>& x, double tolerance) const {

@@ -13,6 +13,7 @@
 //   Drilling run    time stepping, the cooling time after the last hole, output.
 
 #include "fem/ct/ct_box.h"
+#include "fem/heat/heat_parameters.h"
 #include "instruments/drilling_programme.h"
 
 #include <deal.II/base/parameter_handler.h>
@@ -66,6 +67,12 @@ struct BoneSection {
   // density (cortical at and above cortical_density [g/cm^3]) and, with mechanics, its modulus.
   fem::CtBoxParameters ct;
   double cortical_density = 0.8;
+  // Bone block/CT/Thermal properties = from density: k, ρ and ρc of each cell linear in its
+  // calibrated density between the Cancellous values at cancellous_reference_density and the
+  // Cortical values at cortical_density, clamped outside [g/cm^3].
+  bool thermal_from_density = false;
+  double cancellous_reference_density = 0.15;
+  fem::ThermalMaterial thermal_at_density(double density) const;
   static void declare(dealii::ParameterHandler& prm);
   void parse(dealii::ParameterHandler& prm);
   // Whether x is in the block [−W/2, W/2]² × [−H, 0] (with a relative tolerance).

@@ -183,7 +183,10 @@ struct ParticleZone<dim>::Impl {
   std::vector<dealii::Tensor<1, dim>> forces_before; // of the last force pass, before breaks
   double max_speed = 0;                              // over the run [m/s]
   std::size_t broke_since_step_check = 0; // bond ends broken since the stable step was taken
-  bool account_restored = true;           // false: a restart from a checkpoint without the account
+  // Off for the pass a restart makes at the checkpoint's displacements: its breaks were taken
+  // there already, and the rows they rebuilt must not break again before the next step.
+  bool passes_break = true;
+  bool account_restored = true; // false: a restart from a checkpoint without the account
   unsigned int explicit_steps = 0, relaxation_iterations = 0;
   double advance_seconds = 0;       // wall time in advance_to [s]
   std::size_t broken_initially = 0; // bond ends cut by pre-cracks, over all ranks
@@ -244,17 +247,32 @@ struct ParticleZone<dim>::Impl {
   void compute_forces(meshfree::ParticleSet<dim>& p) {
     if (partition)
       partition->update_ghosts(p.displacements()); // the ghosts' positions of this pass
-    double before = 0;
-    std::size_t broke = 0;
-    collectively([&] { broke = force_pass(p, before); }); // one reduction a force pass
-    if (!shares_breaks())
-      return collectively([&] { book_breaks(p, before, broke); });
+    if (!shares_breaks()) {
+      collectively([&] { // one reduction a force pass
+        double before = 0;
+        const std::size_t broke = force_pass(p, before);
+        book_breaks(p, before, broke);
+      });
+      return;
+    }
     // A distributed SPG zone (meshfree::ParticleMethod::set_break_decider): the pass decided
-    // this rank's pairs; every rank breaks everyone's now, before the next pass.
+    // this rank's pairs (as lattice ids); every rank breaks everyone's now, before the next
+    // pass. Only MPI calls run between the two reductions.
+    double before = 0;
+    std::vector<std::uint64_t> decided;
+    collectively([&] {
+      force_pass(p, before);
+      const auto& ids = partition->ids();
+      for (const auto& [i, j] : method->take_broken_pairs()) {
+        decided.push_back(ids[i]);
+        decided.push_back(ids[j]);
+      }
+    });
     std::size_t n_decided = 0; // over all ranks
-    const std::vector<std::pair<unsigned int, unsigned int>> pairs = gather_broken_pairs(n_decided);
+    const std::vector<std::pair<unsigned int, unsigned int>> pairs =
+        gather_broken_pairs(decided, n_decided);
     if (n_decided == 0)
-      return collectively([&] { book_breaks(p, before, 0); });
+      return book_breaks(p, before, 0); // throws nothing
     collectively([&] {
       method->break_pairs(p, bonds, pairs);
       book_breaks(p, before, 2 * n_decided);
@@ -264,17 +282,18 @@ struct ParticleZone<dim>::Impl {
   // Forces at the current displacements; returns the bond ends broken. With an account,
   // `before` is the stored energy before the pass's breaks.
   std::size_t force_pass(meshfree::ParticleSet<dim>& p, double& before) {
+    const bool breaking = damage && passes_break;
     if (!account)
-      return method->compute_forces(p, bonds, damage);
+      return method->compute_forces(p, bonds, breaking);
     // The breaks of this pass release the stored energy they take away at these displacements
     // and the forces they remove (zone_energy.h): a pass without breaking gives the forces
     // before them (the price: two force passes a step with Damage on).
     before = method->strain_energy(p, bonds);
-    if (damage) {
+    if (breaking) {
       method->compute_forces_before_breaks(p, bonds);
       forces_before = p.forces();
     }
-    return method->compute_forces(p, bonds, damage);
+    return method->compute_forces(p, bonds, breaking);
   }
 
   void book_breaks(const meshfree::ParticleSet<dim>& p, double before, std::size_t broke) {
@@ -287,8 +306,12 @@ struct ParticleZone<dim>::Impl {
       energy.force_pass(p, before, before, nullptr);
   }
 
-  // Whether copies of rows on several ranks share their breaks (SPG on more than one rank).
-  bool shares_breaks() const { return partition && damage && method->shares_bond_breaks(); }
+  // Whether copies of rows on several ranks share their breaks (SPG with a failure criterion
+  // on more than one rank).
+  bool shares_breaks() const {
+    return partition && damage && method->shares_bond_breaks() &&
+           !method->user_failure_criteria().empty();
+  }
 
   // This rank's local index of lattice point `id`, or ~0u if it holds no such point (owned
   // and ghost ids are each ascending, zone_partition.h).
@@ -304,15 +327,11 @@ struct ParticleZone<dim>::Impl {
     return ~0u;
   }
 
-  // Every rank's decided pairs of the last pass (`n_decided` of them), in this rank's indices,
-  // without the pairs it does not hold both ends of. Collective.
-  std::vector<std::pair<unsigned int, unsigned int>> gather_broken_pairs(std::size_t& n_decided) {
-    const auto& ids = partition->ids();
-    std::vector<std::uint64_t> mine;
-    for (const auto& [i, j] : method->take_broken_pairs()) {
-      mine.push_back(ids[i]);
-      mine.push_back(ids[j]);
-    }
+  // Every rank's decided pairs of the last pass (`mine`: this rank's, lattice ids in pairs;
+  // `n_decided` of them over all ranks), in this rank's indices, without the pairs it does not
+  // hold both ends of. Collective (MPI_Allgather, and MPI_Allgatherv when any pair broke).
+  std::vector<std::pair<unsigned int, unsigned int>>
+  gather_broken_pairs(const std::vector<std::uint64_t>& mine, std::size_t& n_decided) const {
     const int ranks = static_cast<int>(dealii::Utilities::MPI::n_mpi_processes(comm));
     const int count = static_cast<int>(mine.size());
     std::vector<int> counts(ranks), offsets(ranks + 1, 0);
@@ -647,8 +666,9 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
   if (!z.damage) {
     const std::string criteria = z.method->user_failure_criteria();
     if (!criteria.empty())
-      ctx.log() << "  Effects/Damage = false: no bond breaks, so the particles' " << criteria
-                << " is not applied\n";
+      ctx.log() << "  Effects/Damage = false: no bond breaks, so the particles' failure "
+                   "criteria are not applied ("
+                << criteria << ")\n";
   }
   for (const auto& message : take_messages())
     ctx.log() << "  " << message << "\n";
@@ -1072,7 +1092,9 @@ void ParticleZone<dim>::load(const std::string& file) {
   });
   // The pass refreshes the method's own per-pass data (deformation gradients for output, the
   // trial history the next step replaces); the saved forces, where present, then stand.
+  z.passes_break = false;
   z.verlet->initialise(z.particles);
+  z.passes_break = true;
   z.method->take_messages(); // families lost before the checkpoint were reported then
   if (!forces.empty()) {
     z.particles.forces() = forces;

@@ -64,6 +64,30 @@ HeatSolver<dim>::material(types::material_id id) const {
 }
 
 template <int dim>
+void HeatSolver<dim>::set_cell_material(CellMaterialCallback callback) {
+  cell_material_ = std::move(callback);
+  matrix_dt_ = -1;
+}
+
+template <int dim>
+typename HeatSolver<dim>::ThermalMaterial HeatSolver<dim>::cell_material(
+    const typename Triangulation<dim>::active_cell_iterator& cell) const {
+  if (!cell_material_)
+    return material(cell->material_id());
+  const ThermalMaterial m = cell_material_(cell);
+  for (const double v : {m.conductivity, m.density, m.specific_heat})
+    if (!(v > 0) || !std::isfinite(v)) {
+      std::ostringstream where;
+      where << "cell at (" << cell->center() << ")";
+      throw NumericalFailure(
+          "non-positive or non-finite thermal property: k = " + format_number(m.conductivity) +
+              ", rho = " + format_number(m.density) + ", c = " + format_number(m.specific_heat),
+          where.str(), "check the law that gives the cell's properties");
+    }
+  return m;
+}
+
+template <int dim>
 void HeatSolver<dim>::set_removal(const Removal& removal) {
   if (!(removal.wall_heat_transfer_coefficient >= 0) ||
       !std::isfinite(removal.wall_heat_transfer_coefficient))
@@ -328,17 +352,22 @@ void HeatSolver<dim>::assemble_step(double dt, bool rebuild_matrix) {
   FullMatrix<double> cell_mass(n_dofs, n_dofs), cell_stiffness(n_dofs, n_dofs),
       cell_matrix(n_dofs, n_dofs);
   // Volume parts of the last integrated cell. With constant coefficients a translated copy
-  // of that cell (same material) has the same matrices, so they are copied instead of
+  // of that cell (same properties) has the same matrices, so they are copied instead of
   // integrated again: structured and locally refined meshes are mostly such runs of cells
-  // in p4est's order. deal.II's own CellSimilarity needs bitwise equal vertex offsets, which
-  // computed coordinates (lo + i h) rarely have; the offsets here agree to 1e-12 of the cell
-  // size, which changes the matrices far below the linear solver's tolerance.
+  // in p4est's order. FEValues' own CellSimilarity did not fire on these meshes (measured: the
+  // Jacobians and gradients were computed for every cell of the Rosenthal block). The offsets
+  // here agree to 1e-12 of the cell size, which changes the matrices far below the linear
+  // solver's tolerance. The reuse assumes a mapping fixed by the vertices (MappingQ1) and
+  // coefficients constant per cell (cell_material()); a curved mapping or properties varying
+  // within a cell would need the matrices integrated for every cell.
   FullMatrix<double> volume_mass(n_dofs, n_dofs), volume_stiffness(n_dofs, n_dofs);
-  types::material_id volume_material = numbers::invalid_material_id;
+  ThermalMaterial volume_material{-1.0, -1.0, -1.0};
   std::vector<Tensor<1, dim>> volume_offsets;
   double volume_tolerance = 0;
-  auto is_translate_of_volume_cell = [&](const auto& cell) {
-    if (cell->material_id() != volume_material || volume_offsets.size() + 1 != cell->n_vertices())
+  auto is_translate_of_volume_cell = [&](const auto& cell, const ThermalMaterial& m) {
+    if (m.conductivity != volume_material.conductivity || m.density != volume_material.density ||
+        m.specific_heat != volume_material.specific_heat ||
+        volume_offsets.size() + 1 != cell->n_vertices())
       return false;
     const Point<dim> origin = cell->vertex(0);
     for (unsigned int v = 1; v < cell->n_vertices(); ++v) {
@@ -393,8 +422,9 @@ void HeatSolver<dim>::assemble_step(double dt, bool rebuild_matrix) {
       continue;
     }
     fe_values.reinit(cell);
-    const ThermalMaterial& mat = material(cell->material_id());
-    if (!is_translate_of_volume_cell(cell)) {
+    const ThermalMaterial mat =
+        cell_material(typename Triangulation<dim>::active_cell_iterator(cell));
+    if (!is_translate_of_volume_cell(cell, mat)) {
       fe_matrix_values.reinit(cell);
       const double rho_c = mat.density * mat.specific_heat;
       volume_mass = 0;
@@ -414,7 +444,7 @@ void HeatSolver<dim>::assemble_step(double dt, bool rebuild_matrix) {
           }
         }
       }
-      volume_material = cell->material_id();
+      volume_material = mat;
       volume_offsets.resize(cell->n_vertices() - 1);
       double size = 0;
       for (unsigned int v = 1; v < cell->n_vertices(); ++v) {
@@ -693,7 +723,8 @@ double HeatSolver<dim>::heat_content_where(
       continue;
     fe_values.reinit(cell);
     fe_values.get_function_values(solution_, values);
-    const ThermalMaterial& mat = material(cell->material_id());
+    const ThermalMaterial mat =
+        cell_material(typename Triangulation<dim>::active_cell_iterator(cell));
     for (unsigned int q = 0; q < quadrature.size(); ++q)
       local += mat.density * mat.specific_heat * values[q] * fe_values.JxW(q);
   }

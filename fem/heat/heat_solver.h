@@ -43,6 +43,12 @@ class HeatSolver {
       const typename dealii::Triangulation<dim>::active_cell_iterator& cell,
       const std::vector<dealii::Point<dim>>& points, double time, std::vector<double>& values)>;
 
+  // A cell's thermal properties where they vary within a material (e.g. with a CT image's
+  // density): called for every locally owned cell at each assembly and energy sum, in place of
+  // the material of the cell's id. Values must be positive and finite.
+  using CellMaterialCallback = std::function<ThermalMaterial(
+      const typename dealii::Triangulation<dim>::active_cell_iterator& cell)>;
+
   HeatSolver(dealii::parallel::distributed::Triangulation<dim>& triangulation,
              const Parameters& parameters);
   ~HeatSolver();
@@ -63,6 +69,12 @@ class HeatSolver {
   void add_source_vector(const dealii::TrilinosWrappers::MPI::Vector& nodal_power);
   // Persistent per-quadrature-point source (e.g. plastic-work heating); empty = none.
   void set_cell_source(CellSourceCallback callback) { cell_source_ = std::move(callback); }
+  // Per-cell properties (CellMaterialCallback); empty = by material id. The next step
+  // rebuilds the matrix.
+  void set_cell_material(CellMaterialCallback callback);
+  // The properties the solver uses on `cell` (locally owned).
+  ThermalMaterial
+  cell_material(const typename dealii::Triangulation<dim>::active_cell_iterator& cell) const;
 
   // Temperature at `unit_points` of `cell` (locally owned or ghost). For thermal expansion at
   // the mechanics' quadrature points: pass quadrature.get_points().
@@ -204,6 +216,7 @@ class HeatSolver {
   mutable std::vector<double> scale_cache_;
   mutable double scale_cache_time_ = -1;
   CellSourceCallback cell_source_;
+  CellMaterialCallback cell_material_;
 
   struct Transfer;
   std::unique_ptr<Transfer> transfer_;

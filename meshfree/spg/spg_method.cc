@@ -332,18 +332,25 @@ void SpgMethod<dim>::update_damage(ParticleSet<dim>& particles, const BondList<d
 
 namespace {
 // First word of an SPG material history in a particle-zone checkpoint ("SPGHIST1").
-constexpr std::uint64_t spg_history_tag = 0x3154534948475053ULL;
+constexpr std::uint64_t spg_history_tag = 0x3154534948475053ULL;   // "SPGHIST1"
+constexpr std::uint64_t spg_history_tag_2 = 0x3254534948475053ULL; // "SPGHIST2": with cadence
 } // namespace
 
 template <int dim>
 void SpgMethod<dim>::save(std::ostream& out) const {
   const std::uint64_t n = solver_ ? solver_->committed_states().size() : 0;
-  out.write(reinterpret_cast<const char*>(&spg_history_tag), sizeof(spg_history_tag));
+  out.write(reinterpret_cast<const char*>(&spg_history_tag_2), sizeof(spg_history_tag_2));
   out.write(reinterpret_cast<const char*>(&n), sizeof(n));
   for (std::uint64_t i = 0; i < n; ++i) {
     const auto v = materials::pack_state(solver_->committed_states()[i]);
     out.write(reinterpret_cast<const char*>(v.data()), sizeof(double) * v.size());
   }
+  // The smoothing cadence (Smoothing interval > 1 reuses the last refresh's forces).
+  const std::uint64_t calls = solver_ ? solver_->step_count() : 0;
+  out.write(reinterpret_cast<const char*>(&calls), sizeof(calls));
+  if (n > 0)
+    out.write(reinterpret_cast<const char*>(solver_->smoothing_forces().data()),
+              sizeof(dealii::Tensor<1, dim>) * n);
 }
 
 template <int dim>
@@ -352,7 +359,7 @@ void SpgMethod<dim>::load(std::istream& in) {
   in.read(reinterpret_cast<char*>(&tag), sizeof(tag));
   in.read(reinterpret_cast<char*>(&n), sizeof(n));
   const std::uint64_t expected = solver_ ? solver_->committed_states().size() : 0;
-  if (!in || tag != spg_history_tag || n != expected)
+  if (!in || (tag != spg_history_tag && tag != spg_history_tag_2) || n != expected)
     throw InvalidInput("SPG checkpoint", "the material history does not fit the particles",
                        "a checkpoint written by the same run");
   std::array<double, materials::material_state_doubles> v{};
@@ -362,6 +369,17 @@ void SpgMethod<dim>::load(std::istream& in) {
       throw InvalidInput("SPG checkpoint", "truncated material history", "a complete checkpoint");
     solver_->set_state(static_cast<unsigned int>(i), materials::unpack_state(v));
   }
+  if (tag != spg_history_tag_2 || n == 0)
+    return; // written before the cadence was kept: the restart refreshes on its own count
+  std::uint64_t calls = 0;
+  std::vector<dealii::Tensor<1, dim>> smoothing(n);
+  in.read(reinterpret_cast<char*>(&calls), sizeof(calls));
+  in.read(reinterpret_cast<char*>(smoothing.data()), sizeof(dealii::Tensor<1, dim>) * n);
+  if (!in)
+    throw InvalidInput("SPG checkpoint", "truncated smoothing state", "a complete checkpoint");
+  // The restart's first force pass repeats the checkpoint's last one (same displacements):
+  // it counts again, so the count resumes one lower and the cadence continues unbroken.
+  solver_->set_cadence(calls > 0 ? calls - 1 : 0, std::move(smoothing));
 }
 
 template <int dim>

@@ -317,6 +317,16 @@ void SPGSolver<dim>::compute_forces(ParticleSet<dim>& p) {
 }
 
 template <int dim>
+void SPGSolver<dim>::set_cadence(unsigned long step_count,
+                                 std::vector<dealii::Tensor<1, dim>> smoothing_forces) {
+  if (smoothing_forces.size() != stab_force_.size())
+    throw InvalidInput("SPG checkpoint", "smoothing forces for another particle count",
+                       "a checkpoint written by the same run");
+  calls_ = step_count;
+  stab_force_ = std::move(smoothing_forces);
+}
+
+template <int dim>
 void SPGSolver<dim>::break_bonds(ParticleSet<dim>& p) {
   const unsigned int n = p.size();
   const auto& rk = *rk_;

@@ -139,6 +139,11 @@ class SPGSolver {
     committed_[i] = state_[i] = state;
   }
   const std::vector<materials::MaterialState>& committed_states() const { return committed_; }
+  // The smoothing cadence across a checkpoint: force passes counted so far and the smoothing
+  // forces of the last refresh (reused between refreshes when Smoothing interval > 1).
+  unsigned long step_count() const { return calls_; }
+  const std::vector<dealii::Tensor<1, dim>>& smoothing_forces() const { return stab_force_; }
+  void set_cadence(unsigned long step_count, std::vector<dealii::Tensor<1, dim>> smoothing_forces);
   // Pairs (i < j) broken since the last call.
   std::vector<std::pair<unsigned int, unsigned int>> take_broken_pairs();
   // Breaks shared between solvers that hold copies of the same rows (a distributed zone):

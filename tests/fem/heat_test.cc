@@ -594,6 +594,53 @@ void check_removal_energy() {
   EXPECT_NEAR(heat.heat_content() - e0 + chips, heat.supplied_energy(), 1e-9 * flows);
 }
 
+// Per-cell properties (HeatSolver::set_cell_material): a bar whose left half has k = 1,
+// ρc = 1 and right half k = 4, ρc = 3, from the cells' centres (one material id). Fixed
+// T = 0 at x = 0 and T = 1 at x = 1, steady: the halves are thermal resistances in series,
+// flux q = 1 / (0.5/1 + 0.5/4) = 1.6, T(0.5) = 0.8, T(0.25) = 0.4, T(0.75) = 0.9; heat
+// content Σ ρc ∫ T = (0.2 + 3 × 0.45) W^(dim-1). A non-positive conductivity stops the step
+// with NumericalFailure naming the cell.
+template <int dim>
+void check_cell_material() {
+  auto p = unit_material_parameters<dim>();
+  p.time_step = 1000; // slowest decay time L²/(π² κ) < 0.11 s: three steps leave < 1e-12
+  p.fixed_temperatures.push_back({0, "0"});
+  p.fixed_temperatures.push_back({1, "1"});
+  const double width = 0.125;
+  Tria<dim> tria(MPI_COMM_WORLD);
+  make_bar(tria, 1.0, width, 8);
+  HeatSolver<dim> heat(tria, p);
+  heat.setup();
+  heat.set_cell_material([](const auto& cell) {
+    return cell->center()[0] < 0.5 ? spinesim::fem::ThermalMaterial{1.0, 1.0, 1.0}
+                                   : spinesim::fem::ThermalMaterial{4.0, 1.5, 2.0};
+  });
+  for (unsigned int s = 0; s < 3; ++s)
+    heat.advance();
+  const auto values = heat.temperature_at_points(
+      {on_axis<dim>(0.25, width), on_axis<dim>(0.5, width), on_axis<dim>(0.75, width)});
+  // Q1 nodal values of a 1-D problem with k constant per cell are exact (the interface is a
+  // node), and T is linear in each cell: 1e-9 covers the 1e-12 CG tolerance.
+  EXPECT_NEAR(values[0], 0.4, 1e-9);
+  EXPECT_NEAR(values[1], 0.8, 1e-9);
+  EXPECT_NEAR(values[2], 0.9, 1e-9);
+  // T linear per cell: 2-point Gauss integrates ρc T exactly.
+  EXPECT_NEAR(heat.heat_content(), (0.2 + 3.0 * 0.45) * std::pow(width, dim - 1), 1e-9);
+
+  // Every cell (every rank that owns one throws; the solver's collectives come after).
+  heat.set_cell_material([](const auto&) {
+    return spinesim::fem::ThermalMaterial{-4.0, 1.0, 1.0};
+  });
+  EXPECT_THROW(heat.advance(), spinesim::NumericalFailure);
+}
+
+TEST(HeatSolver, PerCellPropertiesInSeries2D) {
+  check_cell_material<2>();
+}
+TEST(HeatSolver, PerCellPropertiesInSeries3D) {
+  check_cell_material<3>();
+}
+
 TEST(HeatSolver, RemovalEnergyBalance2D) {
   check_removal_energy<2>();
 }

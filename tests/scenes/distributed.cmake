@@ -51,8 +51,8 @@ spinesim_add_comparison_test(distributed.ring_3d_1_vs_2_ranks
 # decides, and every rank breaks all decided pairs at once after the pass (particle_zone.cc),
 # so each copy of a row loses the same bonds in the same grouping as on one rank. Measured
 # against one rank: energies and the balance 3e-12 (2 ranks) and 4e-11 (4 ranks) apart in 2-D,
-# 1.3e-11 in 3-D; the same 2964 and 10424 broken bonds, 124 and 48 fragments. Tolerances as
-# above: 1e-9, counts exact.
+# 2e-14 in 3-D (1.3e-11 over the full 100 us); the same 2964 and 8096 broken bonds, 124 and
+# 40 fragments. Tolerances as above: 1e-9, counts exact.
 set(_spg_ring_runs ${CMAKE_CURRENT_BINARY_DIR}/runs/ring_fragmentation)
 set(_spg_checks "${_dist_checks};energy_balance_error_relative:abs:1e-9;fracture_dissipation_J:rel:1e-9;max_fracture_damage:rel:1e-9;fracture_damaged_volume_fraction:rel:1e-9")
 foreach(_ranks 2 4)

@@ -105,9 +105,28 @@ spinesim_add_scene_test(scene.bone_drilling_cancellous_cracks SCENE ${_drill} RA
 # reaches the cortical 0.8 g/cm^3.
 spinesim_add_scene_test(scene.bone_drilling_ct
   SCENE ${PROJECT_SOURCE_DIR}/applications/scenes/bone_drilling_ct.prm RANKS 2
-  OUT ${_drill_runs}/ct SET "Mesh/Cells across diameter=8" "Drilling run/Cooling time=10"
+  OUT ${_drill_runs}/ct FIXTURE drilling_ct SET "Mesh/Cells across diameter=8" "Drilling run/Cooling time=10"
   EXPECT "status==ok;heat_input_error_relative<=1e-6;heat_balance_error_relative<=1e-6;mass_balance_error_relative<=1e-12;support_reaction_error_relative<=1e-8;ct_mean_density_g_cm3>=0.070;ct_mean_density_g_cm3<=0.086;ct_cortical_volume_fraction<=0;peak_temperature_C>=40;max_failure_index>=0.001"
   LABELS "scene;drilling;mechanics;ct" TIMEOUT 600)
+
+# The same block with Thermal properties = from density and the cancellous anchor moved to
+# -1 g/cm^3, so that no cell of this block is clamped and every cell's k is linear in its
+# density: the volume mean of k is then the law at the mean density, 0.30 + 0.24 (0.08097 + 1)
+# / 1.8 = 0.44413 W/(m K) (the mean density is the by-type run's, the same cells; 1e-4 covers
+# its printed digits). The books close with per-cell ρ and ρc as with two types (heat content,
+# removed mass), and the block conducts half again as well as the by-type one, so the hottest
+# bone is cooler (ratio at most 0.97; measured in the comparison's comment).
+spinesim_add_scene_test(scene.bone_drilling_ct_thermal_from_density
+  SCENE ${PROJECT_SOURCE_DIR}/applications/scenes/bone_drilling_ct.prm RANKS 2
+  OUT ${_drill_runs}/ct_from_density FIXTURE drilling_ct_from_density
+  SET "Mesh/Cells across diameter=8" "Drilling run/Cooling time=10"
+      "Bone block/CT/Thermal properties=from density" "Bone block/CT/Cancellous reference density=-1"
+  EXPECT "status==ok;heat_input_error_relative<=1e-6;heat_balance_error_relative<=1e-6;mass_balance_error_relative<=1e-12;ct_mean_conductivity_W_per_mK~0.44413:1e-4"
+  LABELS "scene;drilling;mechanics;ct" TIMEOUT 600)
+spinesim_add_comparison_test(scene.bone_drilling_ct_from_density_cooler
+  A ${_drill_runs}/ct/summary.json B ${_drill_runs}/ct_from_density/summary.json
+  CHECKS "peak_temperature_C:ratio_max:0.97" REQUIRES "drilling_ct;drilling_ct_from_density"
+  LABELS "scene;drilling;ct")
 
 # The trends, asserted on the quick sweep (600 and 1200 rpm at 0.06 mm/rev, dry and
 # irrigated, each run on one rank; about 65 s): at a fixed feed per revolution the peak bone

@@ -96,20 +96,43 @@ set(_ring_spg_ok "status==ok;energy_balance_error_relative<=1e-3;max_particle_sp
 # say it is not applied, and the ring stays whole.
 spinesim_add_scene_test(stability.ring_breathing_spg_2d SCENE ${_ring}
   SET "Effects/Damage=false" "Effects/Particles method=spg" "Particles/SPG/Critical stretch=0.01"
-  MATCH "Damage = false: no bond breaks, so the particles' Critical stretch = 0.01 is not applied"
+  MATCH "Damage = false: no bond breaks, so the particles' failure criteria are not applied \\(Critical stretch = 0.01\\)"
   EXPECT "${_ring_spg_ok};initial_energy_J~3524.5:1e-10" LABELS "scene;particles;validation;stability")
 # With Damage on, the energy account takes one more force pass a step (the forces before its
 # breaks). That pass must not count as a step of SPG's own: with the smoothing force refreshed
 # every second step, a ring that cannot break (no criterion) ends exactly as with Damage off.
-# Counted as a step, it refreshed every step: kinetic energy 5e-5 apart.
+# Were it counted as a step, the force would be refreshed every step: measured 5e-5 apart in
+# kinetic energy. The account is switched on explicitly: without it there is no extra pass.
 spinesim_add_scene_test(stability.ring_breathing_spg_2d_smoothing_2_damage_on SCENE ${_ring}
   SET "Effects/Particles method=spg" "Particles/SPG/Smoothing interval=2"
+      "Simulation/Energy account=true"
   OUT ${_ring_runs}/spg_smoothing_2_damage_on FIXTURE ring_spg_smoothing_on
   EXPECT "${_ring_spg_ok}" LABELS "scene;particles;stability")
 spinesim_add_scene_test(stability.ring_breathing_spg_2d_smoothing_2_damage_off SCENE ${_ring}
   SET "Effects/Damage=false" "Effects/Particles method=spg" "Particles/SPG/Smoothing interval=2"
+      "Simulation/Energy account=true"
   OUT ${_ring_runs}/spg_smoothing_2_damage_off FIXTURE ring_spg_smoothing_off
   EXPECT "${_ring_spg_ok}" LABELS "scene;particles;stability")
+# The smoothing cadence survives a restart: the damage-on ring above stopped after step 21 (odd,
+# so the refresh phase matters) and restarted ends with its figures. The checkpoint keeps
+# the pass count and the last refresh's forces, and the restart's pass at the checkpoint's
+# displacements neither counts as a new step nor breaks bonds.
+spinesim_add_scene_test(stability.ring_breathing_spg_2d_smoothing_2_restart_first_half SCENE ${_ring}
+  SET "Effects/Particles method=spg" "Particles/SPG/Smoothing interval=2"
+      "Simulation/Energy account=true" "Simulation/Checkpoint interval=7" "Simulation/Stop after step=21"
+  OUT ${_ring_runs}/spg_smoothing_2_restart EXPECT "status==ok;last_step~21:0"
+  FIXTURE ring_spg_smoothing_half LABELS "scene;particles;stability")
+spinesim_add_scene_test(stability.ring_breathing_spg_2d_smoothing_2_restart_second_half
+  ARGS "run;--restart;${_ring_runs}/spg_smoothing_2_restart;--set;Simulation/Stop after step=0"
+  OUT ${_ring_runs}/spg_smoothing_2_restart EXPECT "status==ok;last_step~50:0"
+  FIXTURE ring_spg_smoothing_done LABELS "scene;particles;stability")
+set_tests_properties(stability.ring_breathing_spg_2d_smoothing_2_restart_second_half PROPERTIES
+                     FIXTURES_REQUIRED ring_spg_smoothing_half)
+spinesim_add_comparison_test(stability.ring_breathing_spg_smoothing_2_restart_matches
+  A ${_ring_runs}/spg_smoothing_2_damage_on/summary.json
+  B ${_ring_runs}/spg_smoothing_2_restart/summary.json
+  CHECKS "kinetic_energy_J:rel:1e-12;strain_energy_J:rel:1e-12;max_particle_speed:rel:1e-12;energy_balance_error_relative:abs:1e-12"
+  REQUIRES "ring_spg_smoothing_on;ring_spg_smoothing_done" LABELS "scene;particles;stability")
 spinesim_add_comparison_test(stability.spg_account_pass_is_not_a_step
   A ${_ring_runs}/spg_smoothing_2_damage_on/summary.json
   B ${_ring_runs}/spg_smoothing_2_damage_off/summary.json
