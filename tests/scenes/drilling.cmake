@@ -110,18 +110,21 @@ spinesim_add_scene_test(scene.bone_drilling_ct
   LABELS "scene;drilling;mechanics;ct" TIMEOUT 600)
 
 # The same block with Thermal properties = from density and the cancellous anchor moved to
-# -1 g/cm^3, so that no cell of this block is clamped and every cell's k is linear in its
-# density: the volume mean of k is then the law at the mean density, 0.30 + 0.24 (0.08097 + 1)
-# / 1.8 = 0.44413 W/(m K) (the mean density is the by-type run's, the same cells; 1e-4 covers
-# its printed digits). The books close with per-cell ρ and ρc as with two types (heat content,
-# removed mass), and the block conducts half again as well as the by-type one, so the hottest
-# bone is cooler (ratio at most 0.97; measured in the comparison's comment).
+# -1 g/cm^3, so that no cell of this block is clamped and k is linear in the density: the
+# volume mean of k is the law at the mean density, 0.30 + 0.24 (0.08097 + 1) / 1.8 = 0.44413
+# W/(m K) with the active cells' mean density (the by-type run's figure). The properties are
+# sampled at the coarse ancestors' centres (docs/drilling.md), whose mean density differs by
+# sampling: measured 0.444236, 2.4e-4 off; bound 1e-3 (a by-type 0.30 or swapped anchors miss
+# by far more). The books close with per-cell ρ and ρc as with two types (heat content,
+# removed mass; measured 9e-8 and 5e-15), and the block conducts half again as well as the
+# by-type one, so the hottest bone is cooler: measured 57.8 against 62.2 degC (0.93); bound
+# 0.97.
 spinesim_add_scene_test(scene.bone_drilling_ct_thermal_from_density
   SCENE ${PROJECT_SOURCE_DIR}/applications/scenes/bone_drilling_ct.prm RANKS 2
   OUT ${_drill_runs}/ct_from_density FIXTURE drilling_ct_from_density
   SET "Mesh/Cells across diameter=8" "Drilling run/Cooling time=10"
       "Bone block/CT/Thermal properties=from density" "Bone block/CT/Cancellous reference density=-1"
-  EXPECT "status==ok;heat_input_error_relative<=1e-6;heat_balance_error_relative<=1e-6;mass_balance_error_relative<=1e-12;ct_mean_conductivity_W_per_mK~0.44413:1e-4"
+  EXPECT "status==ok;heat_input_error_relative<=1e-6;heat_balance_error_relative<=1e-6;mass_balance_error_relative<=1e-12;ct_mean_conductivity_W_per_mK~0.44413:1e-3"
   LABELS "scene;drilling;mechanics;ct" TIMEOUT 600)
 spinesim_add_comparison_test(scene.bone_drilling_ct_from_density_cooler
   A ${_drill_runs}/ct/summary.json B ${_drill_runs}/ct_from_density/summary.json
