@@ -74,12 +74,9 @@ spinesim_add_scene_test(distributed.ring_spg_2d_restart_first_half SCENE ${_dist
       "Simulation/Checkpoint interval=10" "Simulation/Stop after step=20"
   OUT ${_dist_runs}/ring_spg_restart EXPECT "status==ok;last_step~20:0"
   FIXTURE dist_ring_spg_half LABELS "scene;particles")
-spinesim_add_scene_test(distributed.ring_spg_2d_restart_second_half RANKS 2
-  ARGS "run;--restart;${_dist_runs}/ring_spg_restart;--set;Simulation/Stop after step=0"
+spinesim_add_restart_test(distributed.ring_spg_2d_restart_second_half RANKS 2
   OUT ${_dist_runs}/ring_spg_restart EXPECT "status==ok;last_step~50:0"
-  FIXTURE dist_ring_spg_done LABELS "scene;particles")
-set_tests_properties(distributed.ring_spg_2d_restart_second_half PROPERTIES
-                     FIXTURES_REQUIRED dist_ring_spg_half)
+  REQUIRES dist_ring_spg_half FIXTURE dist_ring_spg_done LABELS "scene;particles")
 spinesim_add_summaries_match_test(distributed.ring_spg_2d_restart_matches
   A ${_dist_runs}/ring_spg_2d_2/summary.json B ${_dist_runs}/ring_spg_restart/summary.json
   TOL 1e-12 FLOOR 1e-9 REQUIRES "dist_ring_spg_2d_2;dist_ring_spg_done"
@@ -115,12 +112,10 @@ spinesim_add_scene_test(distributed.ring_restart_on_3_ranks_refused RANKS 3
 set_tests_properties(distributed.ring_restart_on_1_rank_refused
                      distributed.ring_restart_on_3_ranks_refused PROPERTIES
                      FIXTURES_REQUIRED dist_restart_half FIXTURES_SETUP dist_restart_refused)
-spinesim_add_scene_test(distributed.ring_restart_second_half RANKS 2
-  ARGS "run;--restart;${_dist_runs}/ring_restart;--set;Simulation/Stop after step=0"
-  OUT ${_dist_runs}/ring_restart EXPECT "status==ok;last_step~50:0" FIXTURE dist_restart_done
+spinesim_add_restart_test(distributed.ring_restart_second_half RANKS 2
+  OUT ${_dist_runs}/ring_restart EXPECT "status==ok;last_step~50:0"
+  REQUIRES "dist_restart_half;dist_restart_refused" FIXTURE dist_restart_done
   LABELS "scene;particles")
-set_tests_properties(distributed.ring_restart_second_half PROPERTIES
-                     FIXTURES_REQUIRED "dist_restart_half;dist_restart_refused")
 spinesim_add_summaries_match_test(distributed.ring_restart_matches_uninterrupted
   A ${_dist_runs}/ring_restart/summary.json B ${_dist_runs}/ring_2d_2/summary.json
   TOL 1e-12 FLOOR 1e-9 REQUIRES "dist_restart_done;dist_ring_2d_2" LABELS "scene;particles;mpi")
@@ -208,12 +203,9 @@ spinesim_add_scene_test(distributed.nosb_ring_j2_restart_first_half SCENE ${_dis
   SET ${_nosb_j2_set} "Simulation/Checkpoint interval=10" "Simulation/Stop after step=20"
   OUT ${_dist_runs}/nosb_j2_restart EXPECT "status==ok;last_step~20:0"
   FIXTURE dist_nosb_j2_half LABELS "scene;particles")
-spinesim_add_scene_test(distributed.nosb_ring_j2_restart_second_half RANKS 2
-  ARGS "run;--restart;${_dist_runs}/nosb_j2_restart;--set;Simulation/Stop after step=0"
+spinesim_add_restart_test(distributed.nosb_ring_j2_restart_second_half RANKS 2
   OUT ${_dist_runs}/nosb_j2_restart EXPECT "status==ok;last_step~50:0"
-  FIXTURE dist_nosb_j2_done LABELS "scene;particles")
-set_tests_properties(distributed.nosb_ring_j2_restart_second_half PROPERTIES
-                     FIXTURES_REQUIRED dist_nosb_j2_half)
+  REQUIRES dist_nosb_j2_half FIXTURE dist_nosb_j2_done LABELS "scene;particles")
 spinesim_add_comparison_test(distributed.nosb_ring_j2_1_vs_2_ranks
   A ${_dist_runs}/nosb_j2_1/summary.json B ${_dist_runs}/nosb_j2_2/summary.json
   CHECKS "${_nosb_checks}" REQUIRES "dist_nosb_j2_1;dist_nosb_j2_2"

@@ -32,11 +32,10 @@ spinesim_add_comparison_test(implants.screw_pullout_ranks_agree
 spinesim_add_scene_test(implants.screw_pullout_restart_first_half SCENE ${_screw}
   OUT ${_screw_runs}/restart SET ${_screw_quick} "Pullout/Stop after step=5"
   EXPECT "status==ok;load_steps~5:0" LABELS "scene;implants" FIXTURE screw_restart_half)
-spinesim_add_scene_test(implants.screw_pullout_restart_second_half
-  ARGS "run;--restart;${_screw_runs}/restart;--set;Pullout/Stop after step=0;--progress;lines"
-  OUT ${_screw_runs}/restart EXPECT "status==ok;peak_passed>=1" LABELS "scene;implants")
-set_tests_properties(implants.screw_pullout_restart_second_half PROPERTIES
-                     FIXTURES_REQUIRED screw_restart_half FIXTURES_SETUP screw_restart_done)
+spinesim_add_restart_test(implants.screw_pullout_restart_second_half
+  OUT ${_screw_runs}/restart STOP "Pullout/Stop after step" ARGS --progress lines
+  EXPECT "status==ok;peak_passed>=1" LABELS "scene;implants"
+  REQUIRES screw_restart_half FIXTURE screw_restart_done)
 spinesim_add_summaries_match_test(implants.screw_pullout_restart_matches_uninterrupted
   A ${_screw_runs}/restart/summary.json B ${_screw_runs}/quick/summary.json TOL 1e-8 FLOOR 1e-9
   REQUIRES "screw_restart_done;screw_quick" LABELS "scene;implants")

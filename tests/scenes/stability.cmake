@@ -122,12 +122,10 @@ spinesim_add_scene_test(stability.ring_breathing_spg_2d_smoothing_2_restart_firs
       "Simulation/Energy account=true" "Simulation/Checkpoint interval=7" "Simulation/Stop after step=21"
   OUT ${_ring_runs}/spg_smoothing_2_restart EXPECT "status==ok;last_step~21:0"
   FIXTURE ring_spg_smoothing_half LABELS "scene;particles;stability")
-spinesim_add_scene_test(stability.ring_breathing_spg_2d_smoothing_2_restart_second_half
-  ARGS "run;--restart;${_ring_runs}/spg_smoothing_2_restart;--set;Simulation/Stop after step=0"
+spinesim_add_restart_test(stability.ring_breathing_spg_2d_smoothing_2_restart_second_half
   OUT ${_ring_runs}/spg_smoothing_2_restart EXPECT "status==ok;last_step~50:0"
-  FIXTURE ring_spg_smoothing_done LABELS "scene;particles;stability")
-set_tests_properties(stability.ring_breathing_spg_2d_smoothing_2_restart_second_half PROPERTIES
-                     FIXTURES_REQUIRED ring_spg_smoothing_half)
+  REQUIRES ring_spg_smoothing_half FIXTURE ring_spg_smoothing_done
+  LABELS "scene;particles;stability")
 spinesim_add_comparison_test(stability.ring_breathing_spg_smoothing_2_restart_matches
   A ${_ring_runs}/spg_smoothing_2_damage_on/summary.json
   B ${_ring_runs}/spg_smoothing_2_restart/summary.json
@@ -165,12 +163,9 @@ spinesim_add_scene_test(stability.ring_fragmentation_spg_2d_restart_first_half S
       "Simulation/Checkpoint interval=10" "Simulation/Stop after step=20"
   OUT ${_ring_runs}/spg_2d_restart EXPECT "status==ok;last_step~20:0" FIXTURE ring_spg_half
   LABELS "scene;particles;stability")
-spinesim_add_scene_test(stability.ring_fragmentation_spg_2d_restart_second_half
-  ARGS "run;--restart;${_ring_runs}/spg_2d_restart;--set;Simulation/Stop after step=0"
-  OUT ${_ring_runs}/spg_2d_restart EXPECT "status==ok;last_step~50:0" FIXTURE ring_spg_done
-  LABELS "scene;particles;stability")
-set_tests_properties(stability.ring_fragmentation_spg_2d_restart_second_half PROPERTIES
-                     FIXTURES_REQUIRED ring_spg_half)
+spinesim_add_restart_test(stability.ring_fragmentation_spg_2d_restart_second_half
+  OUT ${_ring_runs}/spg_2d_restart EXPECT "status==ok;last_step~50:0"
+  REQUIRES ring_spg_half FIXTURE ring_spg_done LABELS "scene;particles;stability")
 spinesim_add_summaries_match_test(stability.ring_fragmentation_spg_2d_restart_matches_uninterrupted
   A ${_ring_runs}/spg_2d_restart/summary.json B ${_ring_runs}/spg_2d/summary.json
   TOL 1e-12 FLOOR 1e-9 REQUIRES "ring_spg_done;ring_spg_2d" LABELS "scene;particles;stability")
@@ -223,12 +218,9 @@ spinesim_add_scene_test(stability.ring_fragmentation_nosb_penalty_2d SCENE ${_ri
 spinesim_add_scene_test(stability.ring_fragmentation_restart_first_half SCENE ${_ring}
   OUT ${_ring_runs}/restart SET "Simulation/Stop after step=20"
   EXPECT "status==ok;last_step~20:0" FIXTURE ring_half LABELS "scene;particles;stability")
-spinesim_add_scene_test(stability.ring_fragmentation_restart_second_half
-  ARGS "run;--restart;${_ring_runs}/restart;--set;Simulation/Stop after step=0;--progress;lines"
-  OUT ${_ring_runs}/restart EXPECT "status==ok;last_step~50:0;${_ring_2d}"
-  LABELS "scene;particles;stability")
-set_tests_properties(stability.ring_fragmentation_restart_second_half PROPERTIES
-                     FIXTURES_REQUIRED ring_half FIXTURES_SETUP ring_restarted)
+spinesim_add_restart_test(stability.ring_fragmentation_restart_second_half
+  OUT ${_ring_runs}/restart ARGS --progress lines EXPECT "status==ok;last_step~50:0;${_ring_2d}"
+  REQUIRES ring_half FIXTURE ring_restarted LABELS "scene;particles;stability")
 spinesim_add_comparison_test(stability.ring_fragmentation_restart_matches
   A ${_ring_runs}/bond_based_2d_1/summary.json B ${_ring_runs}/restart/summary.json
   CHECKS "energy_balance_error_relative:rel:1e-12;fracture_dissipation_J:rel:1e-12;kinetic_energy_J:rel:1e-12;max_particle_speed:rel:1e-12;broken_bonds:abs:0;fragments:abs:0"
