@@ -27,3 +27,9 @@ spinesim_add_hostile_test(drill_with_particles
 spinesim_add_hostile_test(drill_ct_block_outside_the_image
   ARGS check ${PROJECT_SOURCE_DIR}/applications/scenes/bone_drilling_ct.prm
        --set "Bone block/CT/Top centre=0,0,0" MATCH "Bone block/CT/Top centre.*outside")
+# From-density thermal properties need the cancellous anchor below the cortical one.
+spinesim_add_hostile_test(drill_ct_thermal_anchors_swapped
+  ARGS check ${PROJECT_SOURCE_DIR}/applications/scenes/bone_drilling_ct.prm
+       --set "Bone block/CT/Thermal properties=from density"
+       --set "Bone block/CT/Cancellous reference density=0.9"
+  MATCH "Bone block/CT/Cancellous reference density.*below Cortical density")
