@@ -5,6 +5,7 @@
 
 #include <deal.II/base/symmetric_tensor.h>
 
+#include <Eigen/CholmodSupport>
 #include <Eigen/Dense>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
@@ -91,8 +92,17 @@ class LsmfmSolver<dim>::LinearSystem {
  public:
   Eigen::SparseMatrix<double> K;
   Eigen::VectorXd F;
+  // Supernodal Cholesky (CHOLMOD; dense blocks through BLAS): the meshfree supports fill the
+  // factor far more than a FEM stencil does, and the simplicial LDLT of Eigen spent two
+  // thirds of a plastic run in its column loop. It also tests positive definiteness: a
+  // Newton matrix that is not fails, and the step takes the Gauss-Newton direction.
+  Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>> llt;
+  // For a Gauss-Newton matrix that is positive semi-definite only at round-off (a pivot of
+  // -1e-17 fails LLT but not LDLT): the simplicial LDLT, analysed when first needed.
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
-  bool analysed = false;
+  bool analysed = false, ldlt_analysed = false;
+
+  LinearSystem() { llt.cholmod().print = 0; } // a failed LLT is handled, not printed
 };
 
 template <int dim>
@@ -278,7 +288,8 @@ void LsmfmSolver<dim>::build_pattern() {
     set_offsets(s);
   system_->F.resize(n_unknowns_);
   system_->analysed = false;
-  system_->ldlt.analyzePattern(K);
+  system_->llt.analyzePattern(K);
+  system_->ldlt_analysed = false;
   system_->analysed = true;
 }
 
@@ -942,13 +953,13 @@ void LsmfmSolver<dim>::newton(StepResult& result, double g0) {
     // Newton direction with the second-order term; Gauss–Newton (always a descent direction,
     // JᵀJ being positive semi-definite) when that matrix is not positive definite or its
     // direction does not descend.
-    auto& ldlt = system_->ldlt;
+    auto& llt = system_->llt;
     Eigen::VectorXd dU;
     bool newton_ok = false;
     if (plastic > 0) {
-      ldlt.factorize(system_->K);
-      if (ldlt.info() == Eigen::Success && (ldlt.vectorD().array() > 0).all()) {
-        dU = ldlt.solve(system_->F);
+      llt.factorize(system_->K);
+      if (llt.info() == Eigen::Success) {
+        dU = llt.solve(system_->F);
         newton_ok = system_->F.dot(dU) > 0;
       }
       if (!newton_ok) {
@@ -958,14 +969,24 @@ void LsmfmSolver<dim>::newton(StepResult& result, double g0) {
       }
     }
     if (!newton_ok) {
-      ldlt.factorize(system_->K);
-      if (ldlt.info() != Eigen::Success)
-        throw NumericalFailure("LSMFM system matrix is singular",
-                               "load step " + std::to_string(step_) + ", iteration " +
-                                   std::to_string(it),
-                               "every node needs integration points in its influence domain; "
-                               "raise LSMFM/Support ratio");
-      dU = ldlt.solve(system_->F);
+      llt.factorize(system_->K);
+      if (llt.info() == Eigen::Success)
+        dU = llt.solve(system_->F);
+      else {
+        auto& ldlt = system_->ldlt;
+        if (!system_->ldlt_analysed) {
+          ldlt.analyzePattern(system_->K);
+          system_->ldlt_analysed = true;
+        }
+        ldlt.factorize(system_->K);
+        if (ldlt.info() != Eigen::Success)
+          throw NumericalFailure("LSMFM system matrix is singular",
+                                 "load step " + std::to_string(step_) + ", iteration " +
+                                     std::to_string(it),
+                                 "every node needs integration points in its influence domain; "
+                                 "raise LSMFM/Support ratio");
+        dU = ldlt.solve(system_->F);
+      }
     }
     // Line search on I along dU (eq. 39). The full step is taken when it decreases I enough
     // (Armijo, I'(0) = −2 F·dU < 0 for the Gauss–Newton direction). Otherwise I(α) is
