@@ -344,7 +344,9 @@ class MechanicsSolver {
                                  const dealii::AffineConstraints<double>& constraints) const;
 
   // ---- quasi-static Newton (mechanics_solver_quasi_static.cc)
-  unsigned int solve_linear(VectorType& du);
+  // The AMG hierarchy of one Newton solve, kept across its iterations (solve_linear).
+  struct NewtonPreconditioner;
+  unsigned int solve_linear(VectorType& du, NewtonPreconditioner* kept = nullptr);
   bool newton(double load_factor, LoadStepReport& report);
 
   // ---- explicit integrator (mechanics_solver_explicit.cc)

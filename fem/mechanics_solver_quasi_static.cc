@@ -23,22 +23,28 @@ namespace spinesim::fem {
 
 using namespace dealii;
 
+// The AMG of the first Newton iteration of a load step serves the later ones: the tangent
+// changes little within a step (plastic points and damage move it, the sparsity stays), and
+// the set-up of ML's hierarchy (the Galerkin products) cost as much as the GMRES iterations
+// on the foam pull-out. It is rebuilt when the kept one needs more than twice the iterations
+// of its first solve plus 10, or fails. A new hierarchy at every step's first iteration keeps
+// a restarted run on the same path as an uninterrupted one.
 template <int dim>
-unsigned int MechanicsSolver<dim>::solve_linear(VectorType& du) {
+struct MechanicsSolver<dim>::NewtonPreconditioner {
+  TrilinosWrappers::PreconditionAMG amg;
+  bool built = false, stale = false;
+  unsigned int fresh_iterations = 0;
+};
+
+template <int dim>
+unsigned int MechanicsSolver<dim>::solve_linear(VectorType& du, NewtonPreconditioner* kept) {
   ScopedTime timer(timings_.linear_solve);
   du.reinit(owned_, comm_);
   const double rhs_norm = rhs_.l2_norm();
   if (rhs_norm == 0.0)
     return 0;
   SolverControl control(prm_.max_linear_iterations, prm_.linear_tolerance * rhs_norm);
-  try {
-    if (prm_.linear_solver == "direct") {
-      TrilinosWrappers::SolverDirect solver(control);
-      solver.solve(matrix_, du, rhs_);
-      linear_iterations_.push_back(1);
-      return 1;
-    }
-    TrilinosWrappers::PreconditionAMG amg;
+  const auto build = [&](TrilinosWrappers::PreconditionAMG& amg) {
     TrilinosWrappers::PreconditionAMG::AdditionalData data;
     data.elliptic = true;
     data.higher_order_elements = prm_.fe_degree > 1;
@@ -64,6 +70,8 @@ unsigned int MechanicsSolver<dim>::solve_linear(VectorType& du) {
     list.set("null space: dimension", static_cast<int>(rigid_modes_.size()));
     list.set("null space: vectors", modes.data());
     amg.initialize(matrix_, list);
+  };
+  const auto iterate = [&](const TrilinosWrappers::PreconditionAMG& amg) {
     if (prm_.linear_solver == "cg") {
       SolverCG<VectorType> solver(control);
       solver.solve(matrix_, du, rhs_, amg);
@@ -74,6 +82,41 @@ unsigned int MechanicsSolver<dim>::solve_linear(VectorType& du) {
       SolverGMRES<VectorType> solver(control,
                                      typename SolverGMRES<VectorType>::AdditionalData(100, true));
       solver.solve(matrix_, du, rhs_, amg);
+    }
+  };
+  try {
+    if (prm_.linear_solver == "direct") {
+      TrilinosWrappers::SolverDirect solver(control);
+      solver.solve(matrix_, du, rhs_);
+      linear_iterations_.push_back(1);
+      return 1;
+    }
+    if (!kept) {
+      TrilinosWrappers::PreconditionAMG amg;
+      build(amg);
+      iterate(amg);
+    } else if (kept->built && !kept->stale) {
+      bool done = true;
+      try {
+        iterate(kept->amg);
+      } catch (const SolverControl::NoConvergence&) {
+        done = false;
+      }
+      if (!done || control.last_step() > 2 * kept->fresh_iterations + 10)
+        kept->stale = true;
+      if (!done) { // the same system with a new hierarchy, from zero
+        du = 0;
+        build(kept->amg);
+        iterate(kept->amg);
+        kept->fresh_iterations = control.last_step();
+        kept->stale = false;
+      }
+    } else {
+      build(kept->amg);
+      kept->built = true;
+      kept->stale = false;
+      iterate(kept->amg);
+      kept->fresh_iterations = control.last_step();
     }
   } catch (const SolverControl::NoConvergence& e) {
     throw NumericalFailure("linear solver (" + prm_.linear_solver + ") did not converge in " +
@@ -94,6 +137,7 @@ template <int dim>
 bool MechanicsSolver<dim>::newton(double load_factor, LoadStepReport& report) {
   const double tol = prm_.newton_tolerance;
   VectorType du, u_start = u_, u_old;
+  NewtonPreconditioner preconditioner;
   double last_du_norm = std::numeric_limits<double>::infinity();
   for (unsigned int it = 0; it <= prm_.max_newton_iterations; ++it) {
     make_constraints(newton_constraints_, false, load_factor);
@@ -116,7 +160,7 @@ bool MechanicsSolver<dim>::newton(double load_factor, LoadStepReport& report) {
     if (it == prm_.max_newton_iterations)
       return false;
 
-    report.linear_iterations.push_back(solve_linear(du));
+    report.linear_iterations.push_back(solve_linear(du, &preconditioner));
     newton_constraints_.distribute(du);
     last_du_norm = du.l2_norm();
     if (!std::isfinite(last_du_norm))
@@ -234,7 +278,7 @@ MechanicsSolver<dim>::solve_quasi_static(double time) {
 
 // Explicit instantiation of the members defined in this file.
 #define SPINESIM_INSTANTIATE(dim)                                                                  \
-  template unsigned int MechanicsSolver<dim>::solve_linear(VectorType&);                           \
+  template unsigned int MechanicsSolver<dim>::solve_linear(VectorType&, NewtonPreconditioner*);                         \
   template bool MechanicsSolver<dim>::newton(double, LoadStepReport&);                             \
   template std::vector<typename MechanicsSolver<dim>::LoadStepReport>                              \
   MechanicsSolver<dim>::solve_quasi_static(double);
