@@ -21,10 +21,36 @@ void MaterialIdTransfer<dim>::prepare() {
 }
 
 template <int dim>
+void MaterialIdTransfer<dim>::prepare_for_serialization() {
+  ids_.reinit(tria_.n_active_cells());
+  for (const auto& cell : tria_.active_cell_iterators())
+    if (cell->is_locally_owned())
+      ids_[cell->active_cell_index()] = cell->material_id();
+  transfer_ = std::make_unique<
+      dealii::parallel::distributed::CellDataTransfer<dim, dim, dealii::Vector<float>>>(tria_);
+  transfer_->prepare_for_serialization(ids_);
+}
+
+template <int dim>
+void MaterialIdTransfer<dim>::deserialize() {
+  transfer_ = std::make_unique<
+      dealii::parallel::distributed::CellDataTransfer<dim, dim, dealii::Vector<float>>>(tria_);
+  dealii::Vector<float> ids(tria_.n_active_cells());
+  transfer_->deserialize(ids);
+  transfer_.reset();
+  set_owned(ids);
+}
+
+template <int dim>
 void MaterialIdTransfer<dim>::finish() {
   dealii::Vector<float> ids(tria_.n_active_cells());
   transfer_->unpack(ids);
   transfer_.reset();
+  set_owned(ids);
+}
+
+template <int dim>
+void MaterialIdTransfer<dim>::set_owned(const dealii::Vector<float>& ids) {
   for (const auto& cell : tria_.active_cell_iterators())
     if (cell->is_locally_owned())
       cell->set_material_id(

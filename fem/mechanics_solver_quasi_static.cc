@@ -278,7 +278,7 @@ MechanicsSolver<dim>::solve_quasi_static(double time) {
 
 // Explicit instantiation of the members defined in this file.
 #define SPINESIM_INSTANTIATE(dim)                                                                  \
-  template unsigned int MechanicsSolver<dim>::solve_linear(VectorType&, NewtonPreconditioner*);                         \
+  template unsigned int MechanicsSolver<dim>::solve_linear(VectorType&, NewtonPreconditioner*);    \
   template bool MechanicsSolver<dim>::newton(double, LoadStepReport&);                             \
   template std::vector<typename MechanicsSolver<dim>::LoadStepReport>                              \
   MechanicsSolver<dim>::solve_quasi_static(double);

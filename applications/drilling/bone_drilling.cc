@@ -22,8 +22,12 @@
 
 #include "applications/drilling/drilling_sections.h"
 #include "applications/drilling/thermal_dose.h"
+#include "applications/framework/checkpoint_manifest.h"
+#include "applications/framework/output_directory.h"
 #include "applications/framework/parse_section.h"
+#include "applications/framework/root_decides.h"
 #include "applications/framework/run_context.h"
+#include "applications/framework/run_stops.h"
 #include "applications/framework/scenario.h"
 #include "applications/simulation/pvd_record.h"
 #include "applications/studies/child_run.h"
@@ -45,9 +49,13 @@
 #include <deal.II/fe/fe_values.h>
 #include <deal.II/grid/grid_generator.h>
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <iomanip>
 #include <limits>
 #include <memory>
@@ -93,6 +101,91 @@ double segment_distance(double a, double r, double a0, double r0, double a1, dou
   const double da = a1 - a0, dr = r1 - r0, len2 = da * da + dr * dr;
   const double t = len2 > 0 ? std::clamp(((a - a0) * da + (r - r0) * dr) / len2, 0.0, 1.0) : 0.0;
   return std::hypot(a - (a0 + t * da), r - (r0 + t * dr));
+}
+
+// One mechanics solve of a drilling run: its loads and what the stresses gave.
+struct MechanicsSnapshot {
+  double time = 0, tip = 0, thrust = 0, torque = 0, applied_thrust = 0;
+  double max_von_mises = 0, max_principal = 0, min_principal = 0, max_failure_index = 0;
+  double failure_distance = 0; // of the worst point from the drilled surface [m]
+  double failing_volume = 0;   // kept bone with failure index ≥ 1, or failed [m^3]
+  double reaction_error = std::numeric_limits<double>::quiet_NaN();
+  unsigned int hole = 0, new_failures = 0, rounds = 0, newton_iterations = 0;
+  double seconds = 0;
+};
+
+// JSON has no NaN: a number or null, read back as NaN.
+nlohmann::json number_or_null(double v) {
+  return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
+}
+double number_of(const nlohmann::json& j) {
+  return j.is_null() ? std::numeric_limits<double>::quiet_NaN() : j.get<double>();
+}
+
+nlohmann::json to_json(const MechanicsSnapshot& m) {
+  return {{"time", m.time},
+          {"tip", m.tip},
+          {"thrust", m.thrust},
+          {"torque", m.torque},
+          {"applied_thrust", m.applied_thrust},
+          {"max_von_mises", m.max_von_mises},
+          {"max_principal", m.max_principal},
+          {"min_principal", m.min_principal},
+          {"max_failure_index", m.max_failure_index},
+          {"failure_distance", number_or_null(m.failure_distance)},
+          {"failing_volume", m.failing_volume},
+          {"reaction_error", number_or_null(m.reaction_error)},
+          {"hole", m.hole},
+          {"new_failures", m.new_failures},
+          {"rounds", m.rounds},
+          {"newton_iterations", m.newton_iterations},
+          {"seconds", m.seconds}};
+}
+
+MechanicsSnapshot snapshot_from_json(const nlohmann::json& j) {
+  MechanicsSnapshot m;
+  m.time = j.at("time");
+  m.tip = j.at("tip");
+  m.thrust = j.at("thrust");
+  m.torque = j.at("torque");
+  m.applied_thrust = j.at("applied_thrust");
+  m.max_von_mises = j.at("max_von_mises");
+  m.max_principal = j.at("max_principal");
+  m.min_principal = j.at("min_principal");
+  m.max_failure_index = j.at("max_failure_index");
+  m.failure_distance = number_of(j.at("failure_distance"));
+  m.failing_volume = j.at("failing_volume");
+  m.reaction_error = number_of(j.at("reaction_error"));
+  m.hole = j.at("hole");
+  m.new_failures = j.at("new_failures");
+  m.rounds = j.at("rounds");
+  m.newton_iterations = j.at("newton_iterations");
+  m.seconds = j.at("seconds");
+  return m;
+}
+
+nlohmann::json to_json(const instruments::DrillState& d) {
+  return {{"hole", d.hole},
+          {"phase", static_cast<int>(d.phase)},
+          {"tip", d.tip},
+          {"phase_time", d.phase_time},
+          {"deepest", d.deepest}};
+}
+
+instruments::DrillState drill_state_from_json(const nlohmann::json& j, std::size_t n_holes) {
+  instruments::DrillState d;
+  d.hole = j.at("hole");
+  const int phase = j.at("phase");
+  if (phase < 0 || phase > static_cast<int>(DrillPhase::done))
+    throw std::runtime_error("drill phase " + std::to_string(phase) + " out of range");
+  d.phase = static_cast<DrillPhase>(phase);
+  d.tip = j.at("tip");
+  d.phase_time = j.at("phase_time");
+  d.deepest = j.at("deepest").get<std::vector<double>>();
+  if (d.deepest.size() != n_holes)
+    throw std::runtime_error("the checkpoint has " + std::to_string(d.deepest.size()) +
+                             " holes, the scene " + std::to_string(n_holes));
+  return d;
 }
 
 struct DrillingRun;
@@ -225,6 +318,10 @@ class BoneDrilling : public Scenario {
   void write_fields(RunContext& ctx, DrillingRun& S, unsigned int counter, double time) const;
   // probes.csv and probes.png (gnuplot): 1 valid, 0 not, NaN without gnuplot or probes.
   double plot_probes(RunContext& ctx, const std::vector<std::vector<double>>& series) const;
+  // The state of the run's checkpoint, after verifying its manifest; NothingToRestart for a
+  // run that has finished or stopped where Stop after step asks, InvalidInput for a missing
+  // or unreadable checkpoint.
+  nlohmann::json read_checkpoint(RunContext& ctx) const;
 
   bool mechanics_on_, thermal_expansion_, damage_on_;
   std::unique_ptr<fem::CtBox> ct_box_; // Bone block/CT
@@ -264,6 +361,15 @@ void BoneDrilling::run(RunContext& ctx) {
                           " mm/rev)")
             << "; heat partition " << drill_.heat_partition << "; "
             << (cooling_.irrigation ? "irrigated" : "dry") << "\n";
+
+  // ---- restart: the state the last checkpoint kept (mesh and fields are read below).
+  const std::filesystem::path checkpoint = ctx.checkpoint_dir();
+  const bool restarting = ctx.restarting();
+  const nlohmann::json saved = restarting ? read_checkpoint(ctx) : nlohmann::json();
+  const auto unreadable = [&](const std::exception& e) {
+    return InvalidInput(checkpoint.string(), std::string("checkpoint unreadable: ") + e.what(),
+                        "the checkpoint as the run wrote it");
+  };
 
   // ---- mesh: coarse cells of h_drill 2^k, refined where the bit will pass.
   dealii::parallel::distributed::Triangulation<3> tria(
@@ -322,8 +428,66 @@ void BoneDrilling::run(RunContext& ctx) {
       }
     return dealii::Utilities::MPI::sum(flagged, comm);
   };
-  // Initially: the entry of the first hole, and the whole of every hole with a pilot.
-  {
+  // Cells the bit will refine (within the margin of a hole's final swept solid) whose pieces
+  // at the wall resolution are of both types (cortical and cancellous, by the layer or the CT
+  // density): refined to that resolution at the start. A type is then a cell's for good: the
+  // refinement that follows the bit only splits cells of one type, so no piece of bone
+  // changes its density or heat capacity, and the mass and heat books stay closed (a 3 mm
+  // shell over 2 mm coarse cells, reclassified at each refinement, left them open by 2.7e-4
+  // and 0.8 %).
+  const auto in_drilling_zone = [&](const auto& cell) {
+    const double half_diagonal = 0.5 * std::sqrt(3.0) * cell->extent_in_direction(0);
+    for (const auto& hole : drill_.holes) {
+      const double a = hole.axis.axial(cell->center()), r = hole.axis.radial(cell->center());
+      const double lo = hole.axis.entry[2] / -hole.axis.direction[2] - mesh_.margin;
+      const double da = a < lo ? lo - a : std::max(0.0, a - hole.depth - mesh_.margin);
+      const double dr = std::max(0.0, r - R - mesh_.margin);
+      if (std::hypot(da, dr) <= half_diagonal)
+        return true;
+    }
+    return false;
+  };
+  const auto mixed_types = [&](const auto& cell) {
+    const double h = cell->extent_in_direction(0);
+    const unsigned int n = std::max(1u, static_cast<unsigned int>(std::lround(h / h_wall)));
+    const dealii::Point<3> lower = cell->vertex(0); // axis-aligned boxes: the lowest corner
+    int first = -1;
+    for (unsigned int i = 0; i < n; ++i)
+      for (unsigned int j = 0; j < n; ++j)
+        for (unsigned int k = 0; k < n; ++k) {
+          const dealii::Point<3> x =
+              lower +
+              dealii::Tensor<1, 3>({(i + 0.5) * h / n, (j + 0.5) * h / n, (k + 0.5) * h / n});
+          const int type = static_cast<int>(layer_at(x));
+          if (first < 0)
+            first = type;
+          else if (type != first)
+            return true;
+        }
+    return false;
+  };
+  const auto flag_mixed = [&]() {
+    unsigned int flagged = 0;
+    for (const auto& cell : tria.active_cell_iterators())
+      if (cell->is_locally_owned() && cell->extent_in_direction(0) > h_wall * (1 + 1e-9) &&
+          !cell->refine_flag_set() && in_drilling_zone(cell) && mixed_types(cell)) {
+        cell->set_refine_flag();
+        ++flagged;
+      }
+    return dealii::Utilities::MPI::sum(flagged, comm);
+  };
+  // Initially: the entry of the first hole, and the whole of every hole with a pilot. A
+  // restart loads the checkpoint's mesh with its cells' ids (removed, failed) instead.
+  if (restarting) {
+    dealii::TimerOutput::Scope t(ctx.timer(), "mesh");
+    try {
+      tria.load((checkpoint / "mesh").string());
+      fem::MaterialIdTransfer<3>(tria).deserialize();
+    } catch (const std::exception& e) {
+      throw unreadable(e);
+    }
+    classify();
+  } else {
     dealii::TimerOutput::Scope t(ctx.timer(), "mesh");
     for (unsigned int round = 0; round < 12; ++round) {
       // Thermocouples read the field at drill resolution: cells within a drill cell of a probe.
@@ -345,6 +509,7 @@ void BoneDrilling::run(RunContext& ctx) {
                                                   : drill_.holes[j].axis.entry[2] /
                                                             -drill_.holes[j].axis.direction[2] +
                                                         mesh_.lookahead);
+      flagged += flag_mixed();
       if (flagged == 0)
         break;
       tria.execute_coarsening_and_refinement();
@@ -382,8 +547,20 @@ void BoneDrilling::run(RunContext& ctx) {
     });
   {
     dealii::TimerOutput::Scope t(ctx.timer(), "heat setup");
-    heat.setup();
+    if (restarting) {
+      try {
+        heat.deserialize();
+        heat.set_time(saved.at("t"), saved.at("heat_supplied"));
+        heat.set_energy_parts(saved.at("heat_source"), saved.at("heat_convected"),
+                              saved.at("heat_perfused"));
+      } catch (const std::exception& e) {
+        throw unreadable(e);
+      }
+    } else
+      heat.setup();
     heat.set_removal({removed_id, cooling_.wall_h(), cooling_.wall_temperature()});
+    if (restarting)
+      heat.cells_removed();
   }
   // The hole walls convect fully once open; while a bit fills its hole, only what its flutes
   // carry (Cooling/Flute irrigation fraction).
@@ -398,16 +575,34 @@ void BoneDrilling::run(RunContext& ctx) {
   DrillingRun S{tria, heat, {}, {}};
   S.cem43.reinit(heat.locally_owned_dofs(), comm);
   S.above.reinit(heat.locally_owned_dofs(), comm);
+  if (restarting) {
+    try {
+      dealii::parallel::distributed::SolutionTransfer<3, Vector> doses(heat.dof_handler());
+      std::vector<Vector*> fields{&S.cem43, &S.above};
+      doses.deserialize(fields);
+      const auto& books = saved.at("books");
+      S.removed_volume = books.at("removed_volume");
+      S.removed_mass = books.at("removed_mass");
+      S.chips_heat = books.at("chips_heat");
+      S.removed_capacity = books.at("removed_capacity");
+      S.refinements = books.at("refinements");
+      S.pvd.from_json(saved.at("pvd"));
+    } catch (const std::exception& e) {
+      throw unreadable(e);
+    }
+  }
 
   // The mass of a kept cell: its type's density, or its own from the CT density.
   const auto mass_of = [&](const auto& cell) {
     return heat.cell_material(cell).density * cell->measure();
   };
+  // The books' starting values are the intact block's: a restart reads them.
   double initial_mass = 0;
   for (const auto& cell : tria.active_cell_iterators())
     if (cell->is_locally_owned())
       initial_mass += mass_of(cell);
-  initial_mass = dealii::Utilities::MPI::sum(initial_mass, comm);
+  initial_mass = restarting ? saved.at("books").at("initial_mass").get<double>()
+                            : dealii::Utilities::MPI::sum(initial_mass, comm);
   // A CT block: its volume-mean calibrated density and the cortical share of its volume.
   double ct_mean_density = 0, cortical_fraction = 0, block_volume = 0, ct_mean_conductivity = 0;
   if (bone_.ct.enabled()) {
@@ -422,10 +617,17 @@ void BoneDrilling::run(RunContext& ctx) {
     ct_mean_density = dealii::Utilities::MPI::sum(ct_mean_density, comm) / block_volume;
     ct_mean_conductivity = dealii::Utilities::MPI::sum(ct_mean_conductivity, comm) / block_volume;
     cortical_fraction = dealii::Utilities::MPI::sum(cortical_fraction, comm) / block_volume;
+    if (restarting) {
+      const auto& books = saved.at("books");
+      ct_mean_density = books.at("ct_mean_density");
+      ct_mean_conductivity = books.at("ct_mean_conductivity");
+      cortical_fraction = books.at("ct_cortical_fraction");
+    }
     ctx.log() << "  CT block from " << bone_.ct.image_file << ": mean density " << ct_mean_density
               << " g/cm^3, cortical " << 100 * cortical_fraction << " % of the volume\n";
   }
-  const double initial_content = heat.heat_content();
+  const double initial_content =
+      restarting ? saved.at("books").at("initial_content").get<double>() : heat.heat_content();
 
   // Refines near hole j to `reach`, carrying temperature and doses over.
   const auto refine = [&](unsigned int j, double reach) {
@@ -481,7 +683,7 @@ void BoneDrilling::run(RunContext& ctx) {
     if (dealii::Utilities::MPI::sum(n, comm) > 0)
       heat.cells_removed();
   };
-  if (bit.pilot_diameter > 0) {
+  if (bit.pilot_diameter > 0 && !restarting) {
     dealii::TimerOutput::Scope t(ctx.timer(), "removal");
     remove([&](const dealii::Point<3>& x) {
       for (const auto& h : drill_.holes)
@@ -615,15 +817,6 @@ void BoneDrilling::run(RunContext& ctx) {
   // the moment about the axis is M. Failure: Rankine's maximum principal stress criterion
   // per quadrature point (BoneType::failure_index); with Effects/Damage a failed cell keeps
   // Residual stiffness × E and the solve is repeated while cells keep failing.
-  struct MechanicsSnapshot {
-    double time = 0, tip = 0, thrust = 0, torque = 0, applied_thrust = 0;
-    double max_von_mises = 0, max_principal = 0, min_principal = 0, max_failure_index = 0;
-    double failure_distance = 0; // of the worst point from the drilled surface [m]
-    double failing_volume = 0;   // kept bone with failure index ≥ 1, or failed [m^3]
-    double reaction_error = std::numeric_limits<double>::quiet_NaN();
-    unsigned int hole = 0, new_failures = 0, rounds = 0, newton_iterations = 0;
-    double seconds = 0;
-  };
   std::vector<MechanicsSnapshot> snapshots;
   PvdRecord mechanics_pvd("drilling_mechanics.pvd");
   const auto support_ids = [&]() {
@@ -865,13 +1058,15 @@ void BoneDrilling::run(RunContext& ctx) {
   ctx.log() << "  mesh: " << tria.n_global_active_cells() << " cells, drill cells " << h_drill * 1e3
             << " mm (" << mesh_.cells_across_diameter << " across the diameter); "
             << heat.dof_handler().n_dofs() << " DoFs at the start\n";
-  ctx.set_cost({"fem_heat", double(heat.dof_handler().n_dofs()) * nominal_end / feed_dt,
-                double(heat.dof_handler().n_dofs())});
+  if (!restarting)
+    ctx.set_cost({"fem_heat", double(heat.dof_handler().n_dofs()) * nominal_end / feed_dt,
+                  double(heat.dof_handler().n_dofs())});
   ctx.progress().start("bone drilling", static_cast<unsigned int>(std::ceil(nominal_end / feed_dt)),
                        nominal_end);
   const auto start = std::chrono::steady_clock::now();
   double t = 0, done_at = -1, peak_T = cooling_.body_temperature, max_thrust = 0, max_torque = 0;
   double cutting_energy = 0, friction_energy = 0, offered_heat = 0, max_dofs = 0;
+  double earlier_solve_time = 0; // of the segments before a restart [s]
   unsigned int step = 0, output_counter = 0;
   struct CutLoad {
     unsigned int hole = 0;
@@ -879,6 +1074,134 @@ void BoneDrilling::run(RunContext& ctx) {
   } last_cut;
   double next_mechanics =
       mechanics_.interval > 0 ? mechanics_.interval : std::numeric_limits<double>::infinity();
+
+  // The checkpoint: ids, temperature and doses with the mesh (in the order a restart reads
+  // them), the rest as state.json, and the history so far; written into a fresh directory and
+  // swapped in, so the previous checkpoint survives a crash while writing.
+  const auto state_json = [&](bool finished) {
+    nlohmann::json snaps = nlohmann::json::array();
+    for (const auto& m : snapshots)
+      snaps.push_back(to_json(m));
+    return nlohmann::json{
+        {"finished", finished},
+        {"step", step},
+        {"t", t},
+        {"done_at", done_at},
+        {"peak_T", peak_T},
+        {"max_thrust", max_thrust},
+        {"max_torque", max_torque},
+        {"cutting_energy", cutting_energy},
+        {"friction_energy", friction_energy},
+        {"offered_heat", offered_heat},
+        {"max_dofs", max_dofs},
+        {"solve_time",
+         earlier_solve_time +
+             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()},
+        {"output_counter", output_counter},
+        {"last_cut", {last_cut.hole, last_cut.tip, last_cut.thrust, last_cut.torque}},
+        {"next_mechanics", number_or_null(next_mechanics)},
+        {"drill", to_json(state)},
+        {"refined_to", refined_to},
+        {"probe_peak", probe_peak},
+        {"probe_above", probe_above},
+        {"probe_T", probe_T},
+        {"probe_series", probe_series},
+        {"snapshots", snaps},
+        {"pvd", S.pvd.to_json()},
+        {"mechanics_pvd", mechanics_pvd.to_json()},
+        {"heat_supplied", heat.supplied_energy()},
+        {"heat_source", heat.source_energy()},
+        {"heat_convected", heat.convected_energy()},
+        {"heat_perfused", heat.perfused_energy()},
+        {"books",
+         {{"removed_volume", S.removed_volume},
+          {"removed_mass", S.removed_mass},
+          {"chips_heat", S.chips_heat},
+          {"removed_capacity", S.removed_capacity},
+          {"refinements", S.refinements},
+          {"initial_mass", initial_mass},
+          {"initial_content", initial_content},
+          {"ct_mean_density", ct_mean_density},
+          {"ct_mean_conductivity", ct_mean_conductivity},
+          {"ct_cortical_fraction", cortical_fraction}}}};
+  };
+  const auto write_checkpoint = [&](bool finished) {
+    namespace fs = std::filesystem;
+    dealii::TimerOutput::Scope scope(ctx.timer(), "checkpoint");
+    const fs::path final_dir = ctx.checkpoint_dir();
+    const fs::path tmp_dir = final_dir.string() + ".new";
+    if (ctx.is_root()) {
+      fs::remove_all(tmp_dir);
+      fs::create_directories(tmp_dir);
+    }
+    MPI_Barrier(comm);
+    fem::MaterialIdTransfer<3> ids(tria);
+    ids.prepare_for_serialization();
+    heat.prepare_for_serialization();
+    Vector cem_g(heat.locally_owned_dofs(), heat.locally_relevant_dofs(), comm),
+        above_g(heat.locally_owned_dofs(), heat.locally_relevant_dofs(), comm);
+    cem_g = S.cem43;
+    above_g = S.above;
+    dealii::parallel::distributed::SolutionTransfer<3, Vector> doses(heat.dof_handler());
+    doses.prepare_for_serialization(std::vector<const Vector*>{&cem_g, &above_g});
+    tria.save((tmp_dir / "mesh").string());
+    const nlohmann::json json = state_json(finished); // collective-free: rank 0's copy
+    if (ctx.is_root()) {
+      write_file_atomic(tmp_dir / "state.json", json.dump(1));
+      ctx.flush_history();
+      fs::copy_file(ctx.output().path() / "history.csv", tmp_dir / "history.csv",
+                    fs::copy_options::overwrite_existing);
+      publish_checkpoint(tmp_dir, final_dir);
+    }
+    MPI_Barrier(comm);
+  };
+
+  if (restarting) {
+    try {
+      step = saved.at("step");
+      t = saved.at("t");
+      done_at = saved.at("done_at");
+      peak_T = saved.at("peak_T");
+      max_thrust = saved.at("max_thrust");
+      max_torque = saved.at("max_torque");
+      cutting_energy = saved.at("cutting_energy");
+      friction_energy = saved.at("friction_energy");
+      offered_heat = saved.at("offered_heat");
+      max_dofs = saved.at("max_dofs");
+      earlier_solve_time = saved.at("solve_time");
+      output_counter = saved.at("output_counter");
+      const auto& cut = saved.at("last_cut");
+      last_cut = {cut.at(0).get<unsigned int>(), cut.at(1).get<double>(), cut.at(2).get<double>(),
+                  cut.at(3).get<double>()};
+      next_mechanics = saved.at("next_mechanics").is_null()
+                           ? std::numeric_limits<double>::infinity()
+                           : saved.at("next_mechanics").get<double>();
+      state = drill_state_from_json(saved.at("drill"), drill_.holes.size());
+      refined_to = saved.at("refined_to").get<std::vector<double>>();
+      probe_peak = saved.at("probe_peak").get<std::vector<double>>();
+      probe_above = saved.at("probe_above").get<std::vector<double>>();
+      probe_T = saved.at("probe_T").get<std::vector<double>>();
+      probe_series = saved.at("probe_series").get<std::vector<std::vector<double>>>();
+      for (const auto& m : saved.at("snapshots"))
+        snapshots.push_back(snapshot_from_json(m));
+      mechanics_pvd.from_json(saved.at("mechanics_pvd"));
+      if (refined_to.size() != drill_.holes.size() || probe_peak.size() != n_probes ||
+          probe_above.size() != n_probes || probe_T.size() != n_probes)
+        throw std::runtime_error("holes or probes differ from the scene's");
+    } catch (const std::exception& e) {
+      throw unreadable(e);
+    }
+    // Rows written after the checkpoint came from a segment that did not survive.
+    if (ctx.is_root()) {
+      ctx.history().load(checkpoint / "history.csv");
+      ctx.history().truncate_after("time_s", t * (1 + 1e-12));
+    }
+    S.pvd.truncate_after(t);
+    mechanics_pvd.truncate_after(t);
+    ctx.log() << "  restarting after step " << step << ", t = " << fmt(t) << " s\n";
+    ctx.progress().update(step, t);
+  }
+  bool stopped = false;
   const auto write_mechanics_csv = [&]() {
     if (!ctx.is_root())
       return;
@@ -1032,15 +1355,36 @@ void BoneDrilling::run(RunContext& ctx) {
         while (next_mechanics <= t + 1e-12)
           next_mechanics += mechanics_.interval;
     }
-    ctx.flush_history();
+    // Checkpoints: at the interval, where Stop after step ends the run, and on SIGINT/SIGTERM
+    // (then stop after this complete step). The run's last one is written after the loop.
+    const bool finished = !(done_at < 0 || t < done_at + run_.cooling_time - 1e-12);
+    const bool stop = run_.stop_after_step > 0 && step >= run_.stop_after_step && !finished;
+    const int signal = finished ? 0 : ctx.interrupt_signal();
+    if (!finished && (stop || signal != 0 ||
+                      (run_.checkpoint_interval > 0 && step % run_.checkpoint_interval == 0)))
+      write_checkpoint(false);
+    else
+      ctx.flush_history();
+    if (signal != 0) {
+      ctx.progress().finish();
+      throw Interrupted(signal, "after step " + std::to_string(step) + ", t = " + fmt(t) + " s");
+    }
     ctx.progress().update(step, t);
+    if (stop) {
+      ctx.log() << "  stopped after step " << step << " (Drilling run/Stop after step)\n";
+      stopped = true;
+      break;
+    }
   }
   ctx.progress().finish();
-  if (mechanics_on_) { // the residual thermal stresses after cooling
+  if (mechanics_on_ && !stopped) { // the residual thermal stresses after cooling
     solve_mechanics(t, last_cut.hole, state.deepest[last_cut.hole], 0.0, 0.0);
     write_mechanics_csv();
   }
+  if (!stopped) // the end: a restart of this run has nothing to do
+    write_checkpoint(true);
   const double solve_time =
+      earlier_solve_time +
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   // ---- thermal damage in the remaining bone.
@@ -1125,7 +1469,7 @@ void BoneDrilling::run(RunContext& ctx) {
   const double balance = content - initial_content + S.chips_heat - heat.supplied_energy();
   const double into_bone = drill_.heat_partition * (cutting_energy + friction_energy);
 
-  if (run_.write_vtu) {
+  if (run_.write_vtu && !stopped) {
     dealii::TimerOutput::Scope timer(ctx.timer(), "output");
     write_fields(ctx, S, output_counter + 1, t);
   }
@@ -1262,6 +1606,37 @@ void BoneDrilling::run(RunContext& ctx) {
             << " N mm; heat into bone " << heat.source_energy() << " J of "
             << cutting_energy + friction_energy << " J; removed " << S.removed_volume * 1e9
             << " mm^3 of " << swept * 1e9 << " mm^3 swept\n";
+}
+
+nlohmann::json BoneDrilling::read_checkpoint(RunContext& ctx) const {
+  namespace fs = std::filesystem;
+  const fs::path dir = ctx.checkpoint_dir();
+  if (!fs::exists(dir / "state.json"))
+    throw InvalidInput("--restart " + ctx.output().path().string(), "no checkpoint in this run",
+                       "a run directory with checkpoint/state.json");
+  root_decides(ctx.comm(), [&] { verify_checkpoint_manifest(dir); });
+  nlohmann::json state;
+  try {
+    std::ifstream in(dir / "state.json");
+    state = nlohmann::json::parse(in);
+    for (const char* key : {"finished", "step", "t", "done_at", "books", "drill", "pvd"})
+      if (!state.contains(key))
+        throw std::runtime_error(std::string("no \"") + key + "\"");
+  } catch (const std::exception& e) {
+    throw InvalidInput((dir / "state.json").string(),
+                       std::string("checkpoint state unreadable: ") + e.what(),
+                       "the checkpoint as the run wrote it");
+  }
+  const unsigned int step = state.at("step");
+  if (state.at("finished").get<bool>())
+    throw NothingToRestart("the run in " + ctx.output().path().string() + " finished at step " +
+                           std::to_string(step) + " (t = " + fmt(state.at("t")) + " s)");
+  if (run_.stop_after_step > 0 && step >= run_.stop_after_step)
+    throw NothingToRestart(
+        "the run in " + ctx.output().path().string() + " stopped at step " + std::to_string(step) +
+        " as Drilling run/Stop after step = " + std::to_string(run_.stop_after_step) +
+        " asks; continue with --set \"Drilling run/Stop after step=0\"");
+  return state;
 }
 
 void BoneDrilling::write_fields(RunContext& ctx, DrillingRun& S, unsigned int counter,

@@ -384,6 +384,13 @@ void RunSection::declare(dealii::ParameterHandler& prm) {
                     "Write the VTU every this many steps; 0 = at the end only [-].");
   prm.declare_entry("Write VTU", "true", Bool(),
                     "Temperature, CEM43 dose, time above the necrosis temperature, material [-].");
+  prm.declare_entry("Checkpoint interval", "25", Integer(0),
+                    "Write a checkpoint every this many steps (and at the end, and on "
+                    "SIGINT/SIGTERM); `spinesim run --restart` continues from it; 0 = at the "
+                    "end and on a signal only [steps].");
+  prm.declare_entry("Stop after step", "0", Integer(0),
+                    "End the run after this step with a checkpoint, for staged runs that "
+                    "continue with `spinesim run --restart`; 0 = run to the end [-].");
 }
 
 void RunSection::parse(dealii::ParameterHandler& prm) {
@@ -393,6 +400,8 @@ void RunSection::parse(dealii::ParameterHandler& prm) {
   substeps = prm.get_integer("Drill substeps");
   output_interval = prm.get_integer("Output interval");
   write_vtu = prm.get_bool("Write VTU");
+  checkpoint_interval = prm.get_integer("Checkpoint interval");
+  stop_after_step = prm.get_integer("Stop after step");
   require_positive(max_time_step, "Drilling run/Maximum time step", "[s]");
   require_positive(cells_per_step, "Drilling run/Cells per step", "[-]");
 }

@@ -131,6 +131,7 @@ struct MechanicsSection {
 struct RunSection {
   double cooling_time = 30, max_time_step = 0.5, cells_per_step = 0.5;
   unsigned int substeps = 8, output_interval = 0;
+  unsigned int checkpoint_interval = 25, stop_after_step = 0;
   bool write_vtu = true;
   static void declare(dealii::ParameterHandler& prm);
   void parse(dealii::ParameterHandler& prm);
