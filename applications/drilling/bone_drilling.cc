@@ -430,11 +430,10 @@ void BoneDrilling::run(RunContext& ctx) {
   };
   // Cells the bit will refine (within the margin of a hole's final swept solid) whose pieces
   // at the wall resolution are of both types (cortical and cancellous, by the layer or the CT
-  // density): refined to that resolution at the start. A type is then a cell's for good: the
-  // refinement that follows the bit only splits cells of one type, so no piece of bone
-  // changes its density or heat capacity, and the mass and heat books stay closed (a 3 mm
-  // shell over 2 mm coarse cells, reclassified at each refinement, left them open by 2.7e-4
-  // and 0.8 %).
+  // density): refined to that resolution at the start. Types are set once, on the initial
+  // mesh; later refinement hands a cell's type to its children, so no piece of bone changes
+  // its density or heat capacity and the mass and heat books stay closed, and the type
+  // boundary is still resolved where the bit goes (docs/drilling.md, data flow).
   const auto in_drilling_zone = [&](const auto& cell) {
     const double half_diagonal = 0.5 * std::sqrt(3.0) * cell->extent_in_direction(0);
     for (const auto& hole : drill_.holes) {
@@ -486,7 +485,6 @@ void BoneDrilling::run(RunContext& ctx) {
     } catch (const std::exception& e) {
       throw unreadable(e);
     }
-    classify();
   } else {
     dealii::TimerOutput::Scope t(ctx.timer(), "mesh");
     for (unsigned int round = 0; round < 12; ++round) {
@@ -653,7 +651,8 @@ void BoneDrilling::run(RunContext& ctx) {
       S.above.reinit(heat.locally_owned_dofs(), comm);
       t_cem.interpolate(S.cem43);
       t_above.interpolate(S.above);
-      classify();
+      // No reclassification: children keep their parent's type (and failed or removed
+      // state), so refinement changes no piece of bone's density or heat capacity.
       heat.cells_removed();
       ++S.refinements;
     }
@@ -1125,6 +1124,8 @@ void BoneDrilling::run(RunContext& ctx) {
           {"ct_mean_conductivity", ct_mean_conductivity},
           {"ct_cortical_fraction", cortical_fraction}}}};
   };
+  // The run's last checkpoint only says that it finished (a restart has nothing to do): the
+  // state, without mesh and fields.
   const auto write_checkpoint = [&](bool finished) {
     namespace fs = std::filesystem;
     dealii::TimerOutput::Scope scope(ctx.timer(), "checkpoint");
@@ -1135,19 +1136,21 @@ void BoneDrilling::run(RunContext& ctx) {
       fs::create_directories(tmp_dir);
     }
     MPI_Barrier(comm);
-    fem::MaterialIdTransfer<3> ids(tria);
-    ids.prepare_for_serialization();
-    heat.prepare_for_serialization();
-    Vector cem_g(heat.locally_owned_dofs(), heat.locally_relevant_dofs(), comm),
-        above_g(heat.locally_owned_dofs(), heat.locally_relevant_dofs(), comm);
-    cem_g = S.cem43;
-    above_g = S.above;
-    dealii::parallel::distributed::SolutionTransfer<3, Vector> doses(heat.dof_handler());
-    doses.prepare_for_serialization(std::vector<const Vector*>{&cem_g, &above_g});
-    tria.save((tmp_dir / "mesh").string());
-    const nlohmann::json json = state_json(finished); // collective-free: rank 0's copy
+    if (!finished) {
+      fem::MaterialIdTransfer<3> ids(tria);
+      ids.prepare_for_serialization();
+      heat.prepare_for_serialization();
+      Vector cem_g(heat.locally_owned_dofs(), heat.locally_relevant_dofs(), comm),
+          above_g(heat.locally_owned_dofs(), heat.locally_relevant_dofs(), comm);
+      cem_g = S.cem43;
+      above_g = S.above;
+      dealii::parallel::distributed::SolutionTransfer<3, Vector> doses(heat.dof_handler());
+      doses.prepare_for_serialization(std::vector<const Vector*>{&cem_g, &above_g});
+      tria.save((tmp_dir / "mesh").string());
+      MPI_Barrier(comm); // every rank's part written before rank 0 hashes them
+    }
     if (ctx.is_root()) {
-      write_file_atomic(tmp_dir / "state.json", json.dump(1));
+      write_file_atomic(tmp_dir / "state.json", state_json(finished).dump(1));
       ctx.flush_history();
       fs::copy_file(ctx.output().path() / "history.csv", tmp_dir / "history.csv",
                     fs::copy_options::overwrite_existing);
@@ -1186,7 +1189,8 @@ void BoneDrilling::run(RunContext& ctx) {
         snapshots.push_back(snapshot_from_json(m));
       mechanics_pvd.from_json(saved.at("mechanics_pvd"));
       if (refined_to.size() != drill_.holes.size() || probe_peak.size() != n_probes ||
-          probe_above.size() != n_probes || probe_T.size() != n_probes)
+          probe_above.size() != n_probes || probe_T.size() != n_probes ||
+          last_cut.hole >= drill_.holes.size())
         throw std::runtime_error("holes or probes differ from the scene's");
     } catch (const std::exception& e) {
       throw unreadable(e);
@@ -1369,7 +1373,15 @@ void BoneDrilling::run(RunContext& ctx) {
       ctx.progress().finish();
       throw Interrupted(signal, "after step " + std::to_string(step) + ", t = " + fmt(t) + " s");
     }
-    ctx.progress().update(step, t);
+    if (!finished) { // the last step ends the run whatever the signals (it checkpoints below)
+      try {
+        ctx.progress().update(step, t); // asks for signals again and may throw Interrupted
+      } catch (const Interrupted&) {    // one that came while the step was written
+        write_checkpoint(false);
+        ctx.progress().finish();
+        throw;
+      }
+    }
     if (stop) {
       ctx.log() << "  stopped after step " << step << " (Drilling run/Stop after step)\n";
       stopped = true;
@@ -1619,9 +1631,13 @@ nlohmann::json BoneDrilling::read_checkpoint(RunContext& ctx) const {
   try {
     std::ifstream in(dir / "state.json");
     state = nlohmann::json::parse(in);
-    for (const char* key : {"finished", "step", "t", "done_at", "books", "drill", "pvd"})
-      if (!state.contains(key))
-        throw std::runtime_error(std::string("no \"") + key + "\"");
+    // What is read before the loaders' own checks (which name the checkpoint themselves).
+    state.at("finished").get<bool>();
+    state.at("step").get<unsigned int>();
+    state.at("t").get<double>();
+    for (const char* key : {"initial_mass", "initial_content", "ct_mean_density",
+                            "ct_mean_conductivity", "ct_cortical_fraction"})
+      state.at("books").at(key).get<double>();
   } catch (const std::exception& e) {
     throw InvalidInput((dir / "state.json").string(),
                        std::string("checkpoint state unreadable: ") + e.what(),

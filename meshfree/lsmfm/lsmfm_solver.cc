@@ -94,15 +94,30 @@ class LsmfmSolver<dim>::LinearSystem {
   Eigen::VectorXd F;
   // Supernodal Cholesky (CHOLMOD; dense blocks through BLAS): the meshfree supports fill the
   // factor far more than a FEM stencil does, and the simplicial LDLT of Eigen spent two
-  // thirds of a plastic run in its column loop. It also tests positive definiteness: a
-  // Newton matrix that is not fails, and the step takes the Gauss-Newton direction.
+  // thirds of a plastic run in its column loop (docs/lsmfm.md, the nonlinear solution). It also
+  // tests positive definiteness: a Newton matrix that is not fails, and the step takes the
+  // Gauss-Newton direction.
   Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>> llt;
   // For a Gauss-Newton matrix that is positive semi-definite only at round-off (a pivot of
   // -1e-17 fails LLT but not LDLT): the simplicial LDLT, analysed when first needed.
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
   bool analysed = false, ldlt_analysed = false;
 
-  LinearSystem() { llt.cholmod().print = 0; } // a failed LLT is handled, not printed
+  // A matrix that is not positive definite is handled, not printed (CHOLMOD prints that
+  // warning at any print level above 0); its errors are checked by factorize() below.
+  LinearSystem() { llt.cholmod().print = 0; }
+  // LLT of K; false if K is not positive definite. CHOLMOD's errors (out of memory, invalid
+  // input) are a numerical failure naming the step, not a fall-back.
+  bool factorize(unsigned int step, unsigned int iteration) {
+    llt.factorize(K);
+    if (llt.cholmod().status < 0)
+      throw NumericalFailure("CHOLMOD failed to factorise the LSMFM system (status " +
+                                 std::to_string(llt.cholmod().status) + ")",
+                             "load step " + std::to_string(step) + ", iteration " +
+                                 std::to_string(iteration),
+                             "fewer nodes, or more memory");
+    return llt.info() == Eigen::Success;
+  }
 };
 
 template <int dim>
@@ -957,8 +972,7 @@ void LsmfmSolver<dim>::newton(StepResult& result, double g0) {
     Eigen::VectorXd dU;
     bool newton_ok = false;
     if (plastic > 0) {
-      llt.factorize(system_->K);
-      if (llt.info() == Eigen::Success) {
+      if (system_->factorize(step_, it)) {
         dU = llt.solve(system_->F);
         newton_ok = system_->F.dot(dU) > 0;
       }
@@ -969,8 +983,7 @@ void LsmfmSolver<dim>::newton(StepResult& result, double g0) {
       }
     }
     if (!newton_ok) {
-      llt.factorize(system_->K);
-      if (llt.info() == Eigen::Success)
+      if (system_->factorize(step_, it))
         dU = llt.solve(system_->F);
       else {
         auto& ldlt = system_->ldlt;

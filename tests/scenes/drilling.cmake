@@ -102,26 +102,32 @@ spinesim_add_scene_test(scene.bone_drilling_cancellous_cracks SCENE ${_drill}
   EXPECT "status==ok;max_failure_index>=1;failed_cells>=10;failing_volume_mm3>=1;support_reaction_error_relative<=1e-8;heat_balance_error_relative<=1e-6;mass_balance_error_relative<=1e-12"
   LABELS "scene;drilling;mechanics" TIMEOUT 600 FIXTURE drill_cancellous)
 
-# Checkpoint and restart: the cracking run above stopped after step 40 of 68 (cooling, after
-# the 556 cells failed at the end of the feed) and continued with --restart ends with the
-# uninterrupted run's figures (figures.cmake: every numeric figure but timings). The
-# checkpoint keeps the mesh with its cells' ids (removed, failed), the temperature and dose
-# fields, the drill's state, the books, the probes and the mechanics solves so far. Measured:
-# the failed cells, removed volume, cutting energy and failure index equal; the probes'
-# peaks within 1.9e-8 relative, the heat convected 1.5e-9, the residual stress of the final
-# solve 1.6e-8: the restarted heat solves start with a new AMG hierarchy, and CG stops at
-# 1e-12 of the right-hand side on another iterate. Bound 1e-7; figures below 1e-6 (round-off
-# measures such as the heat balance, 1.3e-7 against 1.5e-7) count as zero.
-spinesim_add_scene_test(scene.bone_drilling_restart_first_half SCENE ${_drill}
+# Checkpoint and restart on two ranks: the cracking run above stopped after step 40 of 68
+# (cooling, after the 556 cells failed at the end of the feed) and continued with --restart
+# ends with the one-rank uninterrupted run's figures (compare_summaries.cmake: every numeric
+# figure but those in s, 1/s and iterations; the times next). The checkpoint keeps the mesh
+# (p4est, each rank its part) with its cells' ids (removed, failed), the temperature and dose
+# fields, the drill's state, the books, the probes and the mechanics solves so far. Measured
+# (two ranks against one): failed cells and removed volume equal, the failure index 4e-10
+# relative, the probes' peaks within 2.6e-8, the chips' heat 4e-8, the residual stress 4e-9
+# (on one rank for both halves: 1.9e-8 and 1.6e-8; the restarted heat solves start with a
+# new AMG hierarchy and CG stops at 1e-12 of the right-hand side on another iterate). Bound
+# 1e-6, the bound of the drilling runs on one and two ranks above (bone_drilling_ranks_agree);
+# figures below 1e-6 (round-off measures such as the heat balance) count as zero.
+spinesim_add_scene_test(scene.bone_drilling_restart_first_half SCENE ${_drill} RANKS 2
   OUT ${_drill_runs}/restart SET ${_drill_cancellous} "Drilling run/Stop after step=40"
-  EXPECT "status==ok;time_steps~40:0" LABELS "scene;drilling" TIMEOUT 600
+  EXPECT "status==ok;time_steps~40:0" LABELS "scene;drilling;mpi" TIMEOUT 600
   FIXTURE drill_restart_half)
 spinesim_add_restart_test(scene.bone_drilling_restart_second_half OUT ${_drill_runs}/restart
-  STOP "Drilling run/Stop after step" EXPECT "status==ok;time_steps~68:0;failed_cells>=10"
-  LABELS "scene;drilling" REQUIRES drill_restart_half FIXTURE drill_restart_done)
+  RANKS 2 STOP "Drilling run/Stop after step" EXPECT "status==ok;time_steps~68:0;failed_cells>=10"
+  LABELS "scene;drilling;mpi" REQUIRES drill_restart_half FIXTURE drill_restart_done)
 spinesim_add_summaries_match_test(scene.bone_drilling_restart_matches_uninterrupted
   A ${_drill_runs}/restart/summary.json B ${_drill_runs}/cancellous_cracks/summary.json
-  TOL 1e-7 FLOOR 1e-6 REQUIRES "drill_restart_done;drill_cancellous" LABELS "scene;drilling")
+  TOL 1e-6 FLOOR 1e-6 REQUIRES "drill_restart_done;drill_cancellous" LABELS "scene;drilling;mpi")
+spinesim_add_comparison_test(scene.bone_drilling_restart_same_times
+  A ${_drill_runs}/restart/summary.json B ${_drill_runs}/cancellous_cracks/summary.json
+  CHECKS "simulated_time_s:rel:1e-12;max_failure_index_time_s:rel:1e-12"
+  REQUIRES "drill_restart_done;drill_cancellous" LABELS "scene;drilling;mpi")
 
 # A CT block (applications/scenes/bone_drilling_ct.prm: a box of the verse004 vertebral body
 # under its cranial endplate) at 8 cells across the bit on two ranks: the same books as the
