@@ -10,24 +10,24 @@ MaterialIdTransfer<dim>::MaterialIdTransfer(
     : tria_(triangulation) {}
 
 template <int dim>
-void MaterialIdTransfer<dim>::prepare() {
+void MaterialIdTransfer<dim>::collect() {
   ids_.reinit(tria_.n_active_cells());
   for (const auto& cell : tria_.active_cell_iterators())
     if (cell->is_locally_owned())
       ids_[cell->active_cell_index()] = cell->material_id();
   transfer_ = std::make_unique<
       dealii::parallel::distributed::CellDataTransfer<dim, dim, dealii::Vector<float>>>(tria_);
+}
+
+template <int dim>
+void MaterialIdTransfer<dim>::prepare() {
+  collect();
   transfer_->prepare_for_coarsening_and_refinement(ids_);
 }
 
 template <int dim>
 void MaterialIdTransfer<dim>::prepare_for_serialization() {
-  ids_.reinit(tria_.n_active_cells());
-  for (const auto& cell : tria_.active_cell_iterators())
-    if (cell->is_locally_owned())
-      ids_[cell->active_cell_index()] = cell->material_id();
-  transfer_ = std::make_unique<
-      dealii::parallel::distributed::CellDataTransfer<dim, dim, dealii::Vector<float>>>(tria_);
+  collect();
   transfer_->prepare_for_serialization(ids_);
 }
 

@@ -37,6 +37,8 @@ class MaterialIdTransfer {
   static void update_ghosts(dealii::parallel::distributed::Triangulation<dim>& triangulation);
 
  private:
+  // The owned cells' ids into ids_, and a new transfer for them.
+  void collect();
   // Owned cells' ids from `ids` (by active cell index), then the ghosts' from their owners.
   void set_owned(const dealii::Vector<float>& ids);
 
