@@ -7,6 +7,39 @@ option(SPINESIM_SANITIZE "Build the project's code with -fsanitize=address,undef
 set(SPINESIM_SANITIZE_FLAGS -fsanitize=address,undefined -fno-sanitize-recover=undefined
                             -fno-omit-frame-pointer)
 
+# Start-up time. Every process of the project loads deal.II and its 225 libraries, and the
+# dynamic loader binds about 350 000 symbols before main(): each lookup walks the global scope
+# (the executable's DT_NEEDED list, breadth first) until a library defines the symbol, and most
+# lookups come from a few large libraries binding their own symbols (C++ vtables, typeinfo,
+# PLT entries) that sit more than 100 libraries deep (LD_DEBUG=bindings,scopes). Naming those
+# libraries first in the executable's DT_NEEDED list puts them at the front of the scope:
+# `spinesim --version` 0.78 -> 0.67 s on Debian 12 (median of 7). Only the order of the
+# search changes: every one of these libraries is loaded anyway (deal.II needs them), and one
+# that is not installed under that name is left out.
+set(SPINESIM_EARLY_LIBRARIES gmsh openblas TKSTEPBase trilinos_teuchosparameterlist TKBO TKIGES
+                             TKGeomAlgo TKMath TKernel)
+function(spinesim_early_symbol_scope target)
+  if(NOT TARGET ${DEAL_II_TARGET_RELEASE})
+    return()
+  endif()
+  get_target_property(_dealii_location ${DEAL_II_TARGET_RELEASE} IMPORTED_LOCATION_DEBUGRELEASE)
+  if(NOT _dealii_location)
+    return()
+  endif()
+  get_filename_component(_dir ${_dealii_location} DIRECTORY)
+  set(_files ${_dealii_location})
+  foreach(_name ${SPINESIM_EARLY_LIBRARIES})
+    file(GLOB _found ${_dir}/lib${_name}.so.[0-9]*)
+    if(_found)
+      list(SORT _found)
+      list(GET _found 0 _file)
+      list(APPEND _files ${_file})
+    endif()
+  endforeach()
+  target_link_options(${target} PRIVATE "LINKER:--push-state,--no-as-needed" ${_files}
+                      "LINKER:--pop-state")
+endfunction()
+
 # spinesim_setup_target(<target>): deal.II flags and libraries and warnings for the project's
 # own code. No include directory of the project: each module exposes its own (below).
 function(spinesim_setup_target target)
@@ -22,6 +55,9 @@ function(spinesim_setup_target target)
   # Release run reads it. Debug and sanitizer builds keep theirs (their -g comes later).
   target_compile_options(${target} PRIVATE $<$<CONFIG:Release>:-g0>)
   target_link_libraries(${target} OpenMP::OpenMP_CXX)
+  if(_type STREQUAL "EXECUTABLE")
+    spinesim_early_symbol_scope(${target})
+  endif()
   if(SPINESIM_SANITIZE)
     # After the build type's -O3: the last -O wins.
     target_compile_options(${target} PRIVATE ${SPINESIM_SANITIZE_FLAGS} -O1 -g)
