@@ -1,6 +1,9 @@
 #include "applications/framework/history.h"
 
+#include "base/exceptions.h"
+
 #include <algorithm>
+#include <cstdlib>
 #include <fstream>
 #include <iomanip>
 #include <sstream>
@@ -32,18 +35,36 @@ void History::load(const std::filesystem::path& file) {
     return;
   columns_.clear();
   rows_.clear();
+  if (!line.empty() && line.back() == '\r')
+    line.pop_back();
   std::stringstream header(line);
   std::string name;
   while (std::getline(header, name, ','))
     columns_.push_back(name);
-  while (std::getline(in, line)) {
+  const std::string allowed = "the history.csv the run wrote: a header, then rows of " +
+                              std::to_string(columns_.size()) + " numbers separated by commas";
+  for (unsigned int line_number = 2; std::getline(in, line); ++line_number) {
+    const std::string where = file.string() + ":" + std::to_string(line_number);
+    if (!line.empty() && line.back() == '\r') // written on another system
+      line.pop_back();
+    if (!line.empty() && line.back() == ',')
+      throw InvalidInput(where, "history row ends with an empty value", allowed);
     std::stringstream ss(line);
     std::string cell;
     std::vector<double> values;
-    while (std::getline(ss, cell, ','))
-      values.push_back(std::stod(cell));
-    if (values.size() == columns_.size())
-      rows_.push_back(values);
+    while (std::getline(ss, cell, ',')) {
+      char* end = nullptr;
+      const double v = std::strtod(cell.c_str(), &end);
+      if (cell.empty() || end != cell.c_str() + cell.size())
+        throw InvalidInput(where, "history value '" + cell + "' is not a number", allowed);
+      values.push_back(v);
+    }
+    if (values.size() != columns_.size())
+      throw InvalidInput(where,
+                         "history row has " + std::to_string(values.size()) + " values for " +
+                             std::to_string(columns_.size()) + " columns",
+                         allowed);
+    rows_.push_back(values);
   }
 }
 

@@ -17,7 +17,8 @@ class History {
 
   // Appends a row; the first row fixes the columns, later rows must name the same ones.
   void add(const Row& row);
-  // Reads an existing history.csv (restart) so later rows continue it.
+  // Reads an existing history.csv (restart) so later rows continue it. InvalidInput naming
+  // the file and line for a value that is not a number or a row of the wrong length.
   void load(const std::filesystem::path& file);
   // Drops rows whose `column` value exceeds `limit` (rows written after the checkpoint).
   void truncate_after(const std::string& column, double limit);

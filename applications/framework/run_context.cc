@@ -22,8 +22,9 @@ RunContext::RunContext(MPI_Comm comm, const std::filesystem::path& output,
   // in memory until it starts (see start()).
   if (!restarting_)
     log_.open_file((output_.path() / "log.txt").string(), false);
-  if (restarting_ && is_root_)
-    history_.load(output_.path() / "history.csv");
+  // A restart's history comes from its checkpoint (each scenario loads checkpoint/history.csv,
+  // which the manifest guards), not from the run directory's copy, which may hold rows of a
+  // segment that did not survive.
   progress_.on_start([this] { start(); });
   progress_.on_update([this] {
     if (const int signal = interrupt_signal())

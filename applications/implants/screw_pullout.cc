@@ -27,6 +27,7 @@
 #include "applications/common_sections.h"
 #include "applications/ct/ct_sections.h"
 #include "applications/framework/checkpoint_manifest.h"
+#include "applications/framework/checkpoint_writer.h"
 #include "applications/framework/output_directory.h"
 #include "applications/framework/parse_section.h"
 #include "applications/framework/root_decides.h"
@@ -530,10 +531,10 @@ class ScrewPullout : public Scenario {
                              "the checkpoint as the run wrote it");
         }
         // Rows written after the checkpoint came from a segment that did not survive.
-        if (ctx.is_root()) {
+        root_decides(ctx.comm(), [&] {
           ctx.history().load(checkpoint / "history.csv");
           ctx.history().truncate_after("displacement_mm", p.disp.back() * 1e3 * (1 + 1e-12));
-        }
+        });
         ctx.log() << "  restarting after step " << p.step << ", " << p.disp.back() * 1e3 << " mm\n";
       } else
         solver.setup();
@@ -781,26 +782,14 @@ class ScrewPullout : public Scenario {
   void write_checkpoint(RunContext& ctx, fem::MechanicsSolver<3>& solver,
                         dealii::parallel::distributed::Triangulation<3>& tria,
                         const PulloutProgress& p) const {
-    namespace fs = std::filesystem;
-    dealii::TimerOutput::Scope scope(ctx.timer(), "checkpoint");
-    const fs::path final_dir = ctx.checkpoint_dir();
-    const fs::path tmp_dir = final_dir.string() + ".new";
-    if (ctx.is_root()) {
-      fs::remove_all(tmp_dir);
-      fs::create_directories(tmp_dir);
-    }
-    MPI_Barrier(ctx.comm());
-    const std::string mesh_file = (tmp_dir / "mesh").string();
-    solver.prepare_for_serialization(mesh_file);
-    tria.save(mesh_file);
-    if (ctx.is_root()) {
-      write_file_atomic(tmp_dir / "state.json", p.to_json().dump(1));
-      ctx.flush_history();
-      fs::copy_file(ctx.output().path() / "history.csv", tmp_dir / "history.csv",
-                    fs::copy_options::overwrite_existing);
-      publish_checkpoint(tmp_dir, final_dir);
-    }
-    MPI_Barrier(ctx.comm());
+    write_run_checkpoint(
+        ctx,
+        [&](const std::filesystem::path& staged) {
+          const std::string mesh_file = (staged / "mesh").string();
+          solver.prepare_for_serialization(mesh_file);
+          tria.save(mesh_file);
+        },
+        [&] { return p.to_json(); });
   }
 
   // The progress of the checkpoint, after verifying its manifest; NothingToRestart for a run

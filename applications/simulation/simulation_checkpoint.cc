@@ -1,6 +1,7 @@
 #include "applications/simulation/simulation_scenario.h"
 
 #include "applications/framework/checkpoint_manifest.h"
+#include "applications/framework/checkpoint_writer.h"
 #include "applications/framework/root_decides.h"
 #include "applications/framework/run_stops.h"
 #include "base/exceptions.h"
@@ -18,31 +19,22 @@ namespace fs = std::filesystem;
 
 template <int dim>
 void Simulation<dim>::write_checkpoint(unsigned int step, double time, RunContext& ctx) {
-  dealii::TimerOutput::Scope scope(ctx.timer(), "checkpoint");
-  // Written into a fresh directory and swapped in, so the previous checkpoint survives a
-  // crash during writing.
-  const fs::path final_dir = ctx.checkpoint_dir();
-  const fs::path tmp_dir = final_dir.string() + ".new";
-  if (ctx.is_root()) {
-    fs::remove_all(tmp_dir);
-    fs::create_directories(tmp_dir);
-  }
-  MPI_Barrier(ctx.comm());
-  const std::string mesh_file = (tmp_dir / "mesh").string();
-  // Order matters: deserialisation below must follow the same order.
-  if (heat_)
-    heat_->prepare_for_serialization();
-  if (mechanics_)
-    mechanics_->prepare_for_serialization(mesh_file);
-  if (triangulation_)
-    triangulation_->save(mesh_file);
-  if (particles_ && (ctx.is_root() || particles_->distributed())) // distributed: a file per rank
-    particles_->save((tmp_dir / "particles.bin").string());
-  MPI_Barrier(ctx.comm()); // every rank's files are complete before rank 0 publishes them
-  if (coupled_)
-    coupled_->save((tmp_dir / "coupling.txt").string());
-  const nlohmann::json crack_json = crack_ ? crack_->to_json(ctx.comm()) : nlohmann::json();
-  if (ctx.is_root()) {
+  // Order matters: deserialisation in load_checkpoint follows the same order.
+  const auto write_parts = [&](const fs::path& staged) {
+    const std::string mesh_file = (staged / "mesh").string();
+    if (heat_)
+      heat_->prepare_for_serialization();
+    if (mechanics_)
+      mechanics_->prepare_for_serialization(mesh_file);
+    if (triangulation_)
+      triangulation_->save(mesh_file);
+    if (particles_ && (ctx.is_root() || particles_->distributed())) // distributed: a file per rank
+      particles_->save((staged / "particles.bin").string());
+    if (coupled_)
+      coupled_->save((staged / "coupling.txt").string());
+  };
+  const auto state = [&] {
+    const nlohmann::json crack_json = crack_ ? crack_->to_json(ctx.comm()) : nlohmann::json();
     nlohmann::json state;
     state["step"] = step;
     state["time"] = time;
@@ -65,13 +57,9 @@ void Simulation<dim>::write_checkpoint(unsigned int step, double time, RunContex
       state["heat_supplied_energy"] = heat_->supplied_energy();
       state["initial_heat_content"] = initial_heat_content_;
     }
-    write_file_atomic(tmp_dir / "state.json", state.dump(2));
-    ctx.flush_history();
-    fs::copy_file(ctx.output().path() / "history.csv", tmp_dir / "history.csv",
-                  fs::copy_options::overwrite_existing);
-    publish_checkpoint(tmp_dir, final_dir);
-  }
-  MPI_Barrier(ctx.comm());
+    return state;
+  };
+  write_run_checkpoint(ctx, write_parts, state);
 }
 
 template <int dim>
@@ -153,10 +141,10 @@ unsigned int Simulation<dim>::load_checkpoint(RunContext& ctx) {
   }
   const double time = state["time"];
   // Rows written after the checkpoint came from a segment that did not survive.
-  if (ctx.is_root()) {
+  root_decides(ctx.comm(), [&] {
     ctx.history().load(dir / "history.csv");
     ctx.history().truncate_after("time", time * (1 + 1e-12));
-  }
+  });
   ctx.log() << "  restarting after step " << step << ", t = " << time << " s\n";
   return step;
 }
