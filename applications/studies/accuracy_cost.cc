@@ -424,8 +424,10 @@ class AccuracyCost : public Scenario {
     r.h_unit = figures[c.size_figure].value("unit", "");
     r.cells = figure("cells", 0);
     r.particles = figure("free_particles", figure("particles", 0));
-    // FEM DoFs and particle displacements; a run with neither names its unknowns (the LSMFM).
-    r.unknowns = figure("mechanics_dofs", 0) + where.value("dimension", 0u) * r.particles;
+    // FEM DoFs (mechanics and heat) and particle displacements; a run with none of them names
+    // its unknowns (the LSMFM).
+    r.unknowns = figure("mechanics_dofs", 0) + figure("heat_dofs", 0) +
+                 where.value("dimension", 0u) * r.particles;
     if (r.unknowns == 0)
       r.unknowns = figure("unknowns", 0);
     r.threads = where.value("threads_per_rank", study_.threads);
