@@ -1,5 +1,6 @@
 #include "instruments/drilling_force_model.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace spinesim::instruments {
@@ -12,8 +13,9 @@ double CuttingCoefficients::thrust_at(double h) const {
   return thrust * std::pow(h / reference_chip_thickness, -exponent);
 }
 
-DrillingForceModel::DrillingForceModel(DrillBit bit, unsigned int lip_samples)
-    : bit_(bit), samples_(lip_samples) {
+DrillingForceModel::DrillingForceModel(DrillBit bit, unsigned int lip_samples,
+                                       unsigned int azimuth_samples)
+    : bit_(bit), samples_(lip_samples), azimuths_(std::max(1u, azimuth_samples)) {
   bit_.validate();
 }
 
@@ -27,17 +29,24 @@ DrillingLoad DrillingForceModel::load(double tip, double feed_per_rev, double sp
   const double r0 = bit_.pilot_radius(), r1 = bit_.radius(), dr = (r1 - r0) / samples_;
   unsigned int engaged = 0;
   for (unsigned int i = 0; i < samples_; ++i) {
-    const double r = r0 + (i + 0.5) * dr;
-    const CuttingCoefficients* c = material(tip - r / t, r);
-    if (!c)
-      continue;
-    ++engaged;
-    out.torque += c->tangential_at(h) * feed_per_rev * r * dr;
-    out.thrust += c->thrust_at(h) * feed_per_rev * s * dr;
+    const double r = r0 + (i + 0.5) * dr, a = tip - r / t;
+    // K(h) averaged over the revolution (zero where the circle is in no bone); the midpoint
+    // rule in θ is exact for trigonometric polynomials of degree below azimuths_.
+    double kc = 0, kt = 0;
+    for (unsigned int k = 0; k < azimuths_; ++k) {
+      const std::optional<CuttingCoefficients> c = material(a, r, 2 * pi * (k + 0.5) / azimuths_);
+      if (!c)
+        continue;
+      ++engaged;
+      kc += c->tangential_at(h);
+      kt += c->thrust_at(h);
+    }
+    out.torque += kc / azimuths_ * feed_per_rev * r * dr;
+    out.thrust += kt / azimuths_ * feed_per_rev * s * dr;
   }
   const double omega = 2 * pi * spindle_rpm / 60.0, v = feed_per_rev * spindle_rpm / 60.0;
   out.power = out.torque * omega + out.thrust * v;
-  out.engaged_fraction = double(engaged) / samples_;
+  out.engaged_fraction = double(engaged) / (samples_ * azimuths_);
   return out;
 }
 

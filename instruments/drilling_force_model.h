@@ -13,13 +13,15 @@
 // with the size effect K(h) = K_ref (h / h_ref)^(−m) (thinner chips cost more energy per
 // volume). Integrated by the midpoint rule over the lip samples that lie in bone (the pilot
 // hole, air above the surface and holes already drilled cut nothing), each with its own
-// material. Cutting power P = M ω + F v_f (ω = 2π n / 60, v_f = f n / 60).
+// material, averaged over the circle each lip sample sweeps in a revolution (the lips turn
+// many times in a step). Cutting power P = M ω + F v_f (ω = 2π n / 60, v_f = f n / 60).
 // The chisel edge is not modelled (it adds thrust, not torque; Lee et al. 2012 treat it as
 // indentation): thrusts are those of the lips, a lower bound without a pilot hole.
 
 #include "instruments/drill_bit.h"
 
 #include <functional>
+#include <optional>
 
 namespace spinesim::instruments {
 
@@ -36,16 +38,21 @@ struct DrillingLoad {
   double torque = 0;           // M [N m]
   double thrust = 0;           // F [N]
   double power = 0;            // M ω + F v_f [W]
-  double engaged_fraction = 0; // share of the lip samples in bone [-]
+  double engaged_fraction = 0; // share of the lip samples (radius × azimuth) in bone [-]
 };
 
 class DrillingForceModel {
  public:
-  // The coefficients of the bone at the lip point (axial a, radius r) of the current hole, or
-  // nullptr where the lip is in no bone.
-  using MaterialAt = std::function<const CuttingCoefficients*(double a, double r)>;
+  // The coefficients of the bone at the lip point (axial a, radius r, azimuth θ about the
+  // hole's axis) of the current hole, or none where that point is in no bone.
+  using MaterialAt =
+      std::function<std::optional<CuttingCoefficients>(double a, double r, double theta)>;
 
-  explicit DrillingForceModel(DrillBit bit, unsigned int lip_samples = 64);
+  // Each lip sample's coefficients are averaged over `azimuth_samples` equally spaced azimuths:
+  // a time step spans many revolutions, so a lip element cuts, per revolution, whatever lies
+  // on its circle (bone on part of it, a CT block's density varying round it).
+  explicit DrillingForceModel(DrillBit bit, unsigned int lip_samples = 64,
+                              unsigned int azimuth_samples = 16);
 
   // Forces with the tip at axial depth `tip`, feed `feed_per_rev` [m], speed [rev/min].
   DrillingLoad load(double tip, double feed_per_rev, double spindle_rpm,
@@ -58,7 +65,7 @@ class DrillingForceModel {
 
  private:
   DrillBit bit_;
-  unsigned int samples_;
+  unsigned int samples_, azimuths_;
 };
 
 } // namespace spinesim::instruments

@@ -69,7 +69,8 @@ double DrillingProgramme::nominal_duration() const {
 
 DrillInterval DrillingProgramme::advance(
     DrillState& st, double dt, unsigned int substeps,
-    const std::function<const CuttingCoefficients*(unsigned int, double, double)>& material) const {
+    const std::function<std::optional<CuttingCoefficients>(unsigned int, double, double, double)>&
+        material) const {
   DrillInterval out;
   const double omega = 2 * pi * schedule_.spindle_rpm / 60.0;
   const double h = dt / std::max(1u, substeps);
@@ -82,7 +83,9 @@ DrillInterval DrillingProgramme::advance(
     while (sub > 0 && st.phase != DrillPhase::done) {
       const DrillHole& hole = holes_[st.hole];
       const unsigned int hole_index = st.hole;
-      const auto mat = [&](double a, double r) { return material(hole_index, a, r); };
+      const auto mat = [&](double a, double r, double theta) {
+        return material(hole_index, a, r, theta);
+      };
       double used = sub;
       const DrillPhase phase_before = st.phase;
       const double tip_before = st.tip;
@@ -119,6 +122,7 @@ DrillInterval DrillingProgramme::advance(
         // Forces at the middle of the part (midpoint rule in time).
         const DrillingLoad L = model_.load(st.tip + 0.5 * v * used, f, schedule_.spindle_rpm, mat);
         out.cutting_energy += L.power * used;
+        out.torque_energy += L.torque * omega * used;
         out.max_thrust = std::max(out.max_thrust, L.thrust);
         out.max_torque = std::max(out.max_torque, L.torque);
         out.feed_per_rev = f;

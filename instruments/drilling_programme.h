@@ -46,6 +46,7 @@ struct DrillState {
 
 struct DrillInterval {
   double cutting_energy = 0;             // ∫ (M ω + F v) dt [J]
+  double torque_energy = 0;              // ∫ M ω dt [J], the lips' torque part of it
   double friction_energy = 0;            // ∫ M_margin ω dt while the drill is in its hole [J]
   double max_thrust = 0, max_torque = 0; // [N], [N m]
   double feed_per_rev = 0;               // at the end of the interval's last feeding sub-step [m]
@@ -59,11 +60,11 @@ class DrillingProgramme {
 
   DrillState initial_state() const;
   // Advances `state` by dt in `substeps` equal parts (phase ends split them exactly);
-  // material(hole, a, r) gives the coefficients at a lip point of hole `hole`.
-  DrillInterval
-  advance(DrillState& state, double dt, unsigned int substeps,
-          const std::function<const CuttingCoefficients*(unsigned int, double, double)>& material)
-      const;
+  // material(hole, a, r, θ) gives the coefficients at a lip point of hole `hole`.
+  DrillInterval advance(
+      DrillState& state, double dt, unsigned int substeps,
+      const std::function<std::optional<CuttingCoefficients>(unsigned int, double, double, double)>&
+          material) const;
   // Time the programme takes with the feed rate (thrust control: an estimate at Feed rate) [s].
   double nominal_duration() const;
   // Speed of the tip while feeding at Feed rate [m/s] (the time step follows it).

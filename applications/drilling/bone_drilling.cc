@@ -23,6 +23,7 @@
 #include "applications/drilling/drilling_sections.h"
 #include "applications/drilling/thermal_dose.h"
 #include "applications/framework/checkpoint_manifest.h"
+#include "applications/framework/checkpoint_writer.h"
 #include "applications/framework/output_directory.h"
 #include "applications/framework/parse_section.h"
 #include "applications/framework/root_decides.h"
@@ -211,6 +212,13 @@ class BoneDrilling : public Scenario {
     check_geometry();
     if (bone_.ct.enabled())
       load_ct_block();
+    // The density laws need a density: a scene that asks for them without an image would run
+    // by type without saying so.
+    for (const auto& [entry, on] : {std::pair{"Thermal properties", bone_.thermal_from_density},
+                                    std::pair{"Cutting coefficients", bone_.cutting_from_density}})
+      if (on && !bone_.ct.enabled())
+        throw InvalidInput(std::string("Bone block/CT/") + entry, "from density",
+                           "by type without a CT block (Bone block/CT/Image file empty)");
   }
 
   void run(RunContext& ctx) override;
@@ -294,23 +302,42 @@ class BoneDrilling : public Scenario {
                                                 drill_.bit.radius(), drill_.bit.half_angle());
   }
 
-  // The coefficients of the bone at a lip point of hole j, or none.
-  const instruments::CuttingCoefficients* bone_at(unsigned int j, double a, double r,
-                                                  const std::vector<double>& deepest) const {
-    const auto& axis = drill_.holes[j].axis;
-    // Any direction normal to the axis: the block is the same all round at this scale.
-    dealii::Tensor<1, 3> n =
+  // Two unit vectors normal to the hole's axis: the azimuth θ of a lip point is measured from
+  // the first towards the second.
+  static std::pair<dealii::Tensor<1, 3>, dealii::Tensor<1, 3>>
+  lip_frame(const instruments::HoleAxis& axis) {
+    dealii::Tensor<1, 3> e1 =
         dealii::cross_product_3d(axis.direction, dealii::Tensor<1, 3>({1, 0, 0}));
-    if (n.norm() < 1e-6)
-      n = dealii::cross_product_3d(axis.direction, dealii::Tensor<1, 3>({0, 1, 0}));
-    const dealii::Point<3> x = axis.point(a) + r * n / n.norm();
+    if (e1.norm() < 1e-6)
+      e1 = dealii::cross_product_3d(axis.direction, dealii::Tensor<1, 3>({0, 1, 0}));
+    e1 /= e1.norm();
+    return {e1, dealii::cross_product_3d(axis.direction, e1)};
+  }
+
+  // The coefficients the lips of hole j meet at x: none outside the block, above its top face
+  // or in a hole drilled before; else the type's, or the law of the CT density at x
+  // (Bone block/CT/Cutting coefficients).
+  std::optional<instruments::CuttingCoefficients>
+  cutting_at(unsigned int j, const dealii::Point<3>& x, const std::vector<double>& deepest) const {
     if (!bone_.inside(x) || x[2] > 0)
-      return nullptr;
+      return std::nullopt;
     for (unsigned int k = 0; k < j; ++k) // holes drilled before
       if (instruments::in_swept_solid(drill_.holes[k].axis.axial(x), drill_.holes[k].axis.radial(x),
                                       deepest[k], drill_.bit.radius(), drill_.bit.half_angle()))
-        return nullptr;
-    return layer_at(x) == 0 ? &bone_.cortical.cutting : &bone_.cancellous.cutting;
+        return std::nullopt;
+    if (bone_.ct.enabled() && bone_.cutting_from_density)
+      return bone_.cutting_at_density(ct_density(x));
+    return layer_at(x) == 0 ? bone_.cortical.cutting : bone_.cancellous.cutting;
+  }
+
+  // The coefficients at the lip point (axial a, radius r, azimuth θ) of hole j.
+  std::optional<instruments::CuttingCoefficients>
+  bone_at(unsigned int j, double a, double r, double theta,
+          const std::vector<double>& deepest) const {
+    const auto& axis = drill_.holes[j].axis;
+    const auto [e1, e2] = lip_frame(axis);
+    return cutting_at(j, axis.point(a) + r * (std::cos(theta) * e1 + std::sin(theta) * e2),
+                      deepest);
   }
 
   // VTU of temperature, CEM43 dose, time above the necrosis temperature and material, with
@@ -1064,7 +1091,7 @@ void BoneDrilling::run(RunContext& ctx) {
                        nominal_end);
   const auto start = std::chrono::steady_clock::now();
   double t = 0, done_at = -1, peak_T = cooling_.body_temperature, max_thrust = 0, max_torque = 0;
-  double cutting_energy = 0, friction_energy = 0, offered_heat = 0, max_dofs = 0;
+  double cutting_energy = 0, torque_energy = 0, friction_energy = 0, offered_heat = 0, max_dofs = 0;
   double earlier_solve_time = 0; // of the segments before a restart [s]
   unsigned int step = 0, output_counter = 0;
   struct CutLoad {
@@ -1090,6 +1117,7 @@ void BoneDrilling::run(RunContext& ctx) {
         {"max_thrust", max_thrust},
         {"max_torque", max_torque},
         {"cutting_energy", cutting_energy},
+        {"torque_energy", torque_energy},
         {"friction_energy", friction_energy},
         {"offered_heat", offered_heat},
         {"max_dofs", max_dofs},
@@ -1127,36 +1155,23 @@ void BoneDrilling::run(RunContext& ctx) {
   // The run's last checkpoint only says that it finished (a restart has nothing to do): the
   // state, without mesh and fields.
   const auto write_checkpoint = [&](bool finished) {
-    namespace fs = std::filesystem;
-    dealii::TimerOutput::Scope scope(ctx.timer(), "checkpoint");
-    const fs::path final_dir = ctx.checkpoint_dir();
-    const fs::path tmp_dir = final_dir.string() + ".new";
-    if (ctx.is_root()) {
-      fs::remove_all(tmp_dir);
-      fs::create_directories(tmp_dir);
-    }
-    MPI_Barrier(comm);
-    if (!finished) {
-      fem::MaterialIdTransfer<3> ids(tria);
-      ids.prepare_for_serialization();
-      heat.prepare_for_serialization();
-      Vector cem_g(heat.locally_owned_dofs(), heat.locally_relevant_dofs(), comm),
-          above_g(heat.locally_owned_dofs(), heat.locally_relevant_dofs(), comm);
-      cem_g = S.cem43;
-      above_g = S.above;
-      dealii::parallel::distributed::SolutionTransfer<3, Vector> doses(heat.dof_handler());
-      doses.prepare_for_serialization(std::vector<const Vector*>{&cem_g, &above_g});
-      tria.save((tmp_dir / "mesh").string());
-      MPI_Barrier(comm); // every rank's part written before rank 0 hashes them
-    }
-    if (ctx.is_root()) {
-      write_file_atomic(tmp_dir / "state.json", state_json(finished).dump(1));
-      ctx.flush_history();
-      fs::copy_file(ctx.output().path() / "history.csv", tmp_dir / "history.csv",
-                    fs::copy_options::overwrite_existing);
-      publish_checkpoint(tmp_dir, final_dir);
-    }
-    MPI_Barrier(comm);
+    write_run_checkpoint(
+        ctx,
+        [&](const std::filesystem::path& staged) {
+          if (finished)
+            return;
+          fem::MaterialIdTransfer<3> ids(tria);
+          ids.prepare_for_serialization();
+          heat.prepare_for_serialization();
+          Vector cem_g(heat.locally_owned_dofs(), heat.locally_relevant_dofs(), comm),
+              above_g(heat.locally_owned_dofs(), heat.locally_relevant_dofs(), comm);
+          cem_g = S.cem43;
+          above_g = S.above;
+          dealii::parallel::distributed::SolutionTransfer<3, Vector> doses(heat.dof_handler());
+          doses.prepare_for_serialization(std::vector<const Vector*>{&cem_g, &above_g});
+          tria.save((staged / "mesh").string());
+        },
+        [&] { return state_json(finished); });
   };
 
   if (restarting) {
@@ -1168,6 +1183,8 @@ void BoneDrilling::run(RunContext& ctx) {
       max_thrust = saved.at("max_thrust");
       max_torque = saved.at("max_torque");
       cutting_energy = saved.at("cutting_energy");
+      // Unknown in a checkpoint written before the torque work was kept: NaN, reported as such.
+      torque_energy = saved.value("torque_energy", std::numeric_limits<double>::quiet_NaN());
       friction_energy = saved.at("friction_energy");
       offered_heat = saved.at("offered_heat");
       max_dofs = saved.at("max_dofs");
@@ -1196,10 +1213,10 @@ void BoneDrilling::run(RunContext& ctx) {
       throw unreadable(e);
     }
     // Rows written after the checkpoint came from a segment that did not survive.
-    if (ctx.is_root()) {
+    root_decides(ctx.comm(), [&] {
       ctx.history().load(checkpoint / "history.csv");
       ctx.history().truncate_after("time_s", t * (1 + 1e-12));
-    }
+    });
     S.pvd.truncate_after(t);
     mechanics_pvd.truncate_after(t);
     ctx.log() << "  restarting after step " << step << ", t = " << fmt(t) << " s\n";
@@ -1223,8 +1240,8 @@ void BoneDrilling::run(RunContext& ctx) {
           << m.newton_iterations << "," << m.reaction_error << "," << m.seconds << "\n";
     ctx.output().write_atomic("mechanics.csv", csv.str());
   };
-  const auto material = [&](unsigned int j, double a, double r) {
-    return bone_at(j, a, r, state.deepest);
+  const auto material = [&](unsigned int j, double a, double r, double theta) {
+    return bone_at(j, a, r, theta, state.deepest);
   };
   while (done_at < 0 || t < done_at + run_.cooling_time - 1e-12) {
     ++step;
@@ -1237,11 +1254,13 @@ void BoneDrilling::run(RunContext& ctx) {
       const auto& axis =
           drill_.holes[std::min<unsigned int>(state.hole, drill_.holes.size() - 1)].axis;
       const double engaged = std::max(state.tip, axis.entry[2] / -axis.direction[2] + Lc);
-      const double v =
-          std::max(1e-9, programme.model().feed_for_thrust(
-                             engaged, drill_.schedule.thrust_force, drill_.schedule.spindle_rpm,
-                             [&](double a, double r) { return material(state.hole, a, r); }, 1e-3) *
-                             drill_.schedule.spindle_rpm / 60.0);
+      const double v = std::max(
+          1e-9,
+          programme.model().feed_for_thrust(
+              engaged, drill_.schedule.thrust_force, drill_.schedule.spindle_rpm,
+              [&](double a, double r, double theta) { return material(state.hole, a, r, theta); },
+              1e-3) *
+              drill_.schedule.spindle_rpm / 60.0);
       dt = std::min(run_.max_time_step, run_.cells_per_step * h_drill / v);
     }
     if (done_at >= 0)
@@ -1256,6 +1275,7 @@ void BoneDrilling::run(RunContext& ctx) {
       interval = programme.advance(state, dt, run_.substeps, material);
     }
     cutting_energy += interval.cutting_energy;
+    torque_energy += interval.torque_energy;
     friction_energy += interval.friction_energy;
     max_thrust = std::max(max_thrust, interval.max_thrust);
     max_torque = std::max(max_torque, interval.max_torque);
@@ -1446,31 +1466,44 @@ void BoneDrilling::run(RunContext& ctx) {
   }
 
   // ---- books: swept volume (cylindrical midpoint rule per hole, within the block), mass,
-  // energy.
-  double swept = 0;
+  // energy. At a constant chip thickness (feed rate control) also the work the lips' torque
+  // must have done, K_c(h) integrated over the bone they swept (outside the pilot radius, not
+  // in earlier holes): every lip element spends K_c(h) per volume it removes, whatever the
+  // cone's engagement (M ω / (π (R² − r_p²) v_f) = K_c). The run integrates M ω in time at lip
+  // samples averaged round their circles; this integrates in space on a finer grid.
+  const bool constant_chip = !drill_.schedule.thrust_control;
+  const double chip =
+      0.5 * drill_.schedule.feed_rate * 60.0 / drill_.schedule.spindle_rpm * std::sin(kappa);
+  double swept = 0, lips_work = 0;
   for (unsigned int k = 0; k < drill_.holes.size(); ++k) {
     const auto& axis = drill_.holes[k].axis;
     const unsigned int na = 400, nr = 80, nt = 64;
     const double a_lo = -axis.entry[2] / -axis.direction[2] - R, a_hi = state.deepest[k];
-    dealii::Tensor<1, 3> e1 =
-        dealii::cross_product_3d(axis.direction, dealii::Tensor<1, 3>({1, 0, 0}));
-    if (e1.norm() < 1e-6)
-      e1 = dealii::cross_product_3d(axis.direction, dealii::Tensor<1, 3>({0, 1, 0}));
-    e1 /= e1.norm();
-    const dealii::Tensor<1, 3> e2 = dealii::cross_product_3d(axis.direction, e1);
-    const double da = (a_hi - a_lo) / na, dr = R / nr, dth = 2 * instruments::pi / nt;
-    for (unsigned int ia = 0; ia < na; ++ia)
-      for (unsigned int ir = 0; ir < nr; ++ir) {
-        const double a = a_lo + (ia + 0.5) * da, r = (ir + 0.5) * dr;
-        if (!instruments::in_swept_solid(a, r, a_hi, R, kappa))
-          continue;
-        for (unsigned int it = 0; it < nt; ++it) {
-          const double th = (it + 0.5) * dth;
-          const dealii::Point<3> x = axis.point(a) + r * (std::cos(th) * e1 + std::sin(th) * e2);
-          if (bone_.inside(x))
-            swept += r * dr * da * dth;
+    const auto [e1, e2] = lip_frame(axis);
+    const double da = (a_hi - a_lo) / na, dth = 2 * instruments::pi / nt;
+    const double r_pilot = drill_.bit.pilot_radius();
+    // The volume over [0, R], the lips' work over [r_p, R] (each its own radial grid).
+    for (const bool work : {false, true}) {
+      if (work && !constant_chip)
+        break;
+      const double r0 = work ? r_pilot : 0.0, dr = (R - r0) / nr;
+      for (unsigned int ia = 0; ia < na; ++ia)
+        for (unsigned int ir = 0; ir < nr; ++ir) {
+          const double a = a_lo + (ia + 0.5) * da, r = r0 + (ir + 0.5) * dr;
+          if (!instruments::in_swept_solid(a, r, a_hi, R, kappa))
+            continue;
+          for (unsigned int it = 0; it < nt; ++it) {
+            const double th = (it + 0.5) * dth;
+            const dealii::Point<3> x = axis.point(a) + r * (std::cos(th) * e1 + std::sin(th) * e2);
+            const double dv = r * dr * da * dth;
+            if (!work && bone_.inside(x))
+              swept += dv;
+            if (work)
+              if (const auto c = cutting_at(k, x, state.deepest))
+                lips_work += c->tangential_at(chip) * dv;
+          }
         }
-      }
+    }
   }
   double kept_mass = 0;
   for (const auto& cell : tria.active_cell_iterators())
@@ -1538,6 +1571,12 @@ void BoneDrilling::run(RunContext& ctx) {
   sum.set_figure("max_thrust_force_N", max_thrust, "N");
   sum.set_figure("max_torque_Nmm", max_torque * 1e3, "N mm");
   sum.set_figure("cutting_energy_J", cutting_energy, "J");
+  sum.set_figure("torque_energy_J", torque_energy, "J");
+  if (constant_chip)
+    sum.set_figure("torque_energy_error_relative",
+                   lips_work > 0 ? std::abs(torque_energy - lips_work) / lips_work
+                                 : std::numeric_limits<double>::quiet_NaN(),
+                   "-");
   sum.set_figure("friction_energy_J", friction_energy, "J");
   sum.set_figure("heat_into_bone_J", heat.source_energy(), "J");
   sum.set_figure("heat_input_error_relative",

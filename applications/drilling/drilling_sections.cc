@@ -214,6 +214,14 @@ void BoneSection::declare(dealii::ParameterHandler& prm) {
                     "mixed by volume: rho and rho c are then exact volume averages if the bone "
                     "volume fraction is linear in the calibrated density, and k is the parallel "
                     "(Voigt) bound, an upper estimate across the trabeculae [-].");
+  prm.declare_entry("Cutting coefficients", "by type", Selection("by type|from density"),
+                    "by type: the lips cut each point with its type's coefficients (Cortical "
+                    "or Cancellous). from density: K_c and K_t linear in the calibrated density "
+                    "at the point, between the Cancellous values at Cancellous reference "
+                    "density and the Cortical values at Cortical density, clamped outside: the "
+                    "lips cut the bone and not the marrow, so the work per volume follows the "
+                    "bone volume fraction, linear in the calibrated density. Needs the same "
+                    "Chip thickness exponent and Reference chip thickness in both types [-].");
   prm.declare_entry("Cancellous reference density", "0.15", Double(),
                     "Calibrated density at which from-density properties are the Cancellous "
                     "ones; below Cortical density [g/cm^3].");
@@ -244,23 +252,53 @@ void BoneSection::parse(dealii::ParameterHandler& prm) {
   ct.parse(prm, "Bone block/CT/", applications::ct::resolve_data_file);
   cortical_density = prm.get_double("Cortical density");
   thermal_from_density = prm.get("Thermal properties") == "from density";
+  cutting_from_density = prm.get("Cutting coefficients") == "from density";
   cancellous_reference_density = prm.get_double("Cancellous reference density");
   prm.leave_subsection();
-  if (thermal_from_density && !(cancellous_reference_density < cortical_density))
+  if ((thermal_from_density || cutting_from_density) &&
+      !(cancellous_reference_density < cortical_density))
     throw InvalidInput("Bone block/CT/Cancellous reference density",
                        std::to_string(cancellous_reference_density) + " g/cm^3",
                        "below Cortical density (" + std::to_string(cortical_density) +
-                           " g/cm^3) with Thermal properties = from density");
+                           " g/cm^3) with Thermal properties or Cutting coefficients = from "
+                           "density");
   require_positive(width, "Bone block/Width", "[mm]");
   require_positive(height, "Bone block/Height", "[mm]");
   cortical = parse_bone_type(prm, "Cortical");
   cancellous = parse_bone_type(prm, "Cancellous");
+  if (cutting_from_density) {
+    // K_ref mixes linearly only at one size-effect law.
+    const auto& a = cortical.cutting;
+    const auto& b = cancellous.cutting;
+    if (a.exponent != b.exponent)
+      throw InvalidInput("Bone block/Cancellous/Chip thickness exponent",
+                         std::to_string(b.exponent),
+                         "the Cortical value (" + std::to_string(a.exponent) +
+                             ") with Bone block/CT/Cutting coefficients = from density");
+    if (a.reference_chip_thickness != b.reference_chip_thickness)
+      throw InvalidInput("Bone block/Cancellous/Reference chip thickness",
+                         std::to_string(b.reference_chip_thickness * 1e3) + " mm",
+                         "the Cortical value (" + std::to_string(a.reference_chip_thickness * 1e3) +
+                             " mm) with Bone block/CT/Cutting coefficients = from density");
+  }
+}
+
+double BoneSection::density_fraction(double density) const {
+  return std::clamp((density - cancellous_reference_density) /
+                        (cortical_density - cancellous_reference_density),
+                    0.0, 1.0);
+}
+
+instruments::CuttingCoefficients BoneSection::cutting_at_density(double density) const {
+  const double t = density_fraction(density);
+  instruments::CuttingCoefficients c = cortical.cutting;
+  c.tangential = (1.0 - t) * cancellous.cutting.tangential + t * cortical.cutting.tangential;
+  c.thrust = (1.0 - t) * cancellous.cutting.thrust + t * cortical.cutting.thrust;
+  return c;
 }
 
 fem::ThermalMaterial BoneSection::thermal_at_density(double density) const {
-  const double t = std::clamp((density - cancellous_reference_density) /
-                                  (cortical_density - cancellous_reference_density),
-                              0.0, 1.0);
+  const double t = density_fraction(density);
   const auto mix = [t](double cancellous, double cortical) {
     return (1.0 - t) * cancellous + t * cortical;
   };

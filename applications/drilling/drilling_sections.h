@@ -71,8 +71,15 @@ struct BoneSection {
   // calibrated density between the Cancellous values at cancellous_reference_density and the
   // Cortical values at cortical_density, clamped outside [g/cm^3].
   bool thermal_from_density = false;
+  // Bone block/CT/Cutting coefficients = from density: K_c and K_t at a lip point linear in
+  // the density there, between the same two points (one size-effect law for both types).
+  bool cutting_from_density = false;
   double cancellous_reference_density = 0.15;
+  // Where `density` lies between cancellous_reference_density (0) and cortical_density (1),
+  // clamped.
+  double density_fraction(double density) const;
   fem::ThermalMaterial thermal_at_density(double density) const;
+  instruments::CuttingCoefficients cutting_at_density(double density) const;
   static void declare(dealii::ParameterHandler& prm);
   void parse(dealii::ParameterHandler& prm);
   // Whether x is in the block [−W/2, W/2]² × [−H, 0] (with a relative tolerance).

@@ -33,3 +33,16 @@ spinesim_add_hostile_test(drill_ct_thermal_anchors_swapped
        --set "Bone block/CT/Thermal properties=from density"
        --set "Bone block/CT/Cancellous reference density=0.9"
   MATCH "Bone block/CT/Cancellous reference density.*below Cortical density")
+# A drilling run's checkpoint, damaged: bad input naming the file, and the run's directory
+# stays as it was (a shallow coarse hole stopped after step 2; heat only).
+set(_drill_staged "Mesh/Cells across diameter=6" "Drill/Hole 1/Depth=2" "Drilling run/Cooling time=1"
+    "Effects/Mechanics=false" "Effects/Thermal expansion=false")
+spinesim_add_hostile_test(restart_drilling_truncated_state PREPARE staged:${_drill}
+  STAGE "Drilling run" PREPARE_SET ${_drill_staged} TRUNCATE checkpoint/state.json
+  ARGS run --restart @KEEP@ MATCH "state.json.*truncated")
+spinesim_add_hostile_test(restart_drilling_altered_mesh PREPARE staged:${_drill}
+  STAGE "Drilling run" PREPARE_SET ${_drill_staged} FLIP checkpoint/mesh
+  ARGS run --restart @KEEP@ MATCH "checkpoint/mesh.*altered")
+spinesim_add_hostile_test(drill_cutting_from_density_without_ct
+  ARGS check ${_drill} --set "Bone block/CT/Cutting coefficients=from density"
+  MATCH "Bone block/CT/Cutting coefficients.*without a CT block")

@@ -41,7 +41,9 @@ TEST(DrillingForces, FullyEngagedLipsMatchClosedForm) {
   const CuttingCoefficients c = cortical();
   for (const double pilot : {0.0, 1.5e-3}) {
     const DrillingForceModel model(bit(pilot));
-    const auto everywhere = [&](double, double) { return &c; };
+    const auto everywhere = [&](double, double, double) {
+      return std::optional<CuttingCoefficients>(c);
+    };
     const double f = 0.06e-3, rpm = 1000, tip = 20e-3;
     const DrillingLoad L = model.load(tip, f, rpm, everywhere);
     const double kappa = 59.0 * pi / 180, h = 0.5 * f * std::sin(kappa);
@@ -60,8 +62,11 @@ TEST(DrillingForces, FullyEngagedLipsMatchClosedForm) {
 TEST(DrillingForces, PartialEngagementAtEntry) {
   const CuttingCoefficients c = cortical();
   const DrillingForceModel model(bit(), 256);
-  const auto bone_below_surface = [&](double a, double) -> const CuttingCoefficients* {
-    return a >= 0 ? &c : nullptr;
+  const auto bone_below_surface = [&](double a, double,
+                                      double) -> std::optional<CuttingCoefficients> {
+    if (a < 0)
+      return std::nullopt;
+    return c;
   };
   const double f = 0.06e-3, kappa = 59.0 * pi / 180, h = 0.5 * f * std::sin(kappa);
   const double s = 0.5e-3, re = s * std::tan(kappa), R = 2e-3, dr = R / 256;
@@ -74,13 +79,48 @@ TEST(DrillingForces, PartialEngagementAtEntry) {
 TEST(DrillingForces, ThrustControlInvertsTheModel) {
   const CuttingCoefficients c = cortical();
   const DrillingForceModel model(bit());
-  const auto everywhere = [&](double, double) { return &c; };
+  const auto everywhere = [&](double, double, double) {
+    return std::optional<CuttingCoefficients>(c);
+  };
   const double f = model.feed_for_thrust(5e-3, 40.0, 1200, everywhere, 1e-3);
   EXPECT_NEAR(model.load(5e-3, f, 1200, everywhere).thrust, 40.0, 1e-8);
   // Nothing to cut: no feed from thrust.
   EXPECT_EQ(model.feed_for_thrust(
-                5e-3, 40.0, 1200, [](double, double) { return nullptr; }, 1e-3),
+                5e-3, 40.0, 1200,
+                [](double, double, double) { return std::optional<CuttingCoefficients>(); }, 1e-3),
             0.0);
+}
+
+// Per revolution a lip element cuts what lies on its circle: bone on half the circle (an
+// edge, an earlier hole) halves the forces, and K_ref (1 + cos θ) averages to K_ref. Both
+// exact for the midpoint rule in θ (a step function split at sample boundaries, a cosine of
+// degree below the sample count): round-off.
+TEST(DrillingForces, LipsAverageTheirCircle) {
+  const CuttingCoefficients c = cortical();
+  const DrillingForceModel model(bit());
+  const double f = 0.06e-3, rpm = 1000, tip = 20e-3;
+  const auto everywhere = [&](double, double, double) {
+    return std::optional<CuttingCoefficients>(c);
+  };
+  const DrillingLoad full = model.load(tip, f, rpm, everywhere);
+  const auto half = [&](double, double, double theta) -> std::optional<CuttingCoefficients> {
+    if (theta > pi)
+      return std::nullopt;
+    return c;
+  };
+  const DrillingLoad L = model.load(tip, f, rpm, half);
+  EXPECT_NEAR(L.torque, 0.5 * full.torque, 1e-12 * full.torque);
+  EXPECT_NEAR(L.thrust, 0.5 * full.thrust, 1e-12 * full.thrust);
+  EXPECT_DOUBLE_EQ(L.engaged_fraction, 0.5);
+  const auto varying = [&](double, double, double theta) {
+    CuttingCoefficients v = c;
+    v.tangential *= 1 + std::cos(theta);
+    v.thrust *= 1 + std::cos(theta);
+    return std::optional<CuttingCoefficients>(v);
+  };
+  const DrillingLoad V = model.load(tip, f, rpm, varying);
+  EXPECT_NEAR(V.torque, full.torque, 1e-12 * full.torque);
+  EXPECT_NEAR(V.thrust, full.thrust, 1e-12 * full.thrust);
 }
 
 // Two holes at constant feed: the phases take depth/v, the dwell, depth/v_r and the pause;
@@ -104,17 +144,21 @@ TEST(DrillingProgramme, PhasesAndCuttingEnergy) {
   DrillHole second = hole;
   second.axis.entry = dealii::Point<3>(8e-3, 0, 0);
   const DrillingProgramme programme(DrillingForceModel(bit()), {hole, second}, sched);
-  const auto material = [&](unsigned int, double a, double) -> const CuttingCoefficients* {
-    return a >= 0 ? &c : nullptr;
+  const auto material = [&](unsigned int, double a, double,
+                            double) -> std::optional<CuttingCoefficients> {
+    if (a < 0)
+      return std::nullopt;
+    return c;
   };
   DrillState st = programme.initial_state();
   const double feed_time = 5.0, total = programme.nominal_duration();
   EXPECT_NEAR(total, 2 * (5.0 + 0.5 + 1.0 + 1.0), 1e-12);
-  double cutting = 0, friction = 0, in_bone = 0, t = 0;
+  double cutting = 0, torque_part = 0, friction = 0, in_bone = 0, t = 0;
   const double dt = feed_time / 400;
   while (t < feed_time - 1e-12) {
     const DrillInterval I = programme.advance(st, dt, 1, material);
     cutting += I.cutting_energy;
+    torque_part += I.torque_energy;
     friction += I.friction_energy;
     in_bone += I.time_in_bone;
     t += dt;
@@ -128,6 +172,7 @@ TEST(DrillingProgramme, PhasesAndCuttingEnergy) {
   const double thrust_energy =
       c.thrust_at(h) * f * std::sin(kappa) * R * v * ((5e-3 - Lc) / v + Lc / (2 * v));
   EXPECT_NEAR(cutting, torque_energy + thrust_energy, 2e-3 * cutting);
+  EXPECT_NEAR(torque_part, torque_energy, 2e-3 * torque_energy);
   // The rest of the programme in one call, split exactly at the phase ends.
   const DrillInterval rest = programme.advance(st, total - feed_time + 1.0, 50, material);
   EXPECT_EQ(st.phase, DrillPhase::done);
@@ -194,13 +239,18 @@ TEST(DrillingProgramme, ThrustControlDoesNotOvershootAtTheEntry) {
   hole.axis.direction = dealii::Tensor<1, 3>({0, 0, -1});
   hole.depth = 4e-3;
   const DrillingProgramme programme(DrillingForceModel(bit()), {hole}, sched);
-  const auto material = [&](unsigned int, double a, double) -> const CuttingCoefficients* {
-    return a >= 0 ? &c : nullptr;
+  const auto material = [&](unsigned int, double a, double,
+                            double) -> std::optional<CuttingCoefficients> {
+    if (a < 0)
+      return std::nullopt;
+    return c;
   };
   DrillState st = programme.initial_state();
   const DrillingForceModel model(bit());
-  const auto in_bone = [&](double a, double) -> const CuttingCoefficients* {
-    return a >= 0 ? &c : nullptr;
+  const auto in_bone = [&](double a, double, double) -> std::optional<CuttingCoefficients> {
+    if (a < 0)
+      return std::nullopt;
+    return c;
   };
   double max_thrust = 0, max_end_thrust = 0;
   for (unsigned int step = 0; step < 400 && st.phase == DrillPhase::feed; ++step) {

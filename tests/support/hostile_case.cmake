@@ -8,6 +8,9 @@
 #   PREPARE           how KEEP is made before the command:
 #                       run:SCENE        a finished run of SCENE (a fresh spinesim run)
 #                       staged:SCENE     a run of SCENE stopped after step 2 (restartable)
+#   STAGE             the section holding Stop after step and Checkpoint interval for staged:
+#                     (default Simulation; e.g. "Drilling run")
+#   PREPARE_SET       "path=value|..." settings of the preparing run (--set)
 #                       files            a directory of unrelated files
 #                       copy:FILE        a directory with a copy of FILE
 #                       gunzip:FILE.gz   a directory with FILE.gz uncompressed
@@ -57,10 +60,19 @@ file(REMOVE_RECURSE ${KEEP} ${ABSENT})
 file(MAKE_DIRECTORY ${_parent})
 set(_cwd ${_parent}) # preparing happens beside KEEP; the command runs in WORKDIR
 if(PREPARE MATCHES "^(run|staged):(.*)$")
-  set(_prep run ${CMAKE_MATCH_2} --output ${KEEP} --progress off --set "Simulation/Write VTU=true")
-  if(CMAKE_MATCH_1 STREQUAL "staged")
-    list(APPEND _prep --set "Simulation/Stop after step=2" --set "Simulation/Checkpoint interval=1")
+  set(_kind ${CMAKE_MATCH_1})
+  set(_prep run ${CMAKE_MATCH_2} --output ${KEEP} --progress off)
+  if(NOT STAGE)
+    set(STAGE Simulation)
+    list(APPEND _prep --set "Simulation/Write VTU=true")
   endif()
+  if(_kind STREQUAL "staged")
+    list(APPEND _prep --set "${STAGE}/Stop after step=2" --set "${STAGE}/Checkpoint interval=1")
+  endif()
+  string(REPLACE "|" ";" _prepare_set "${PREPARE_SET}")
+  foreach(_s ${_prepare_set})
+    list(APPEND _prep --set "${_s}")
+  endforeach()
   run_spinesim(_rc _text ${_prep})
   if(NOT _rc EQUAL 0)
     message(FATAL_ERROR "preparing ${KEEP} failed (exit ${_rc}):\n${_text}")
