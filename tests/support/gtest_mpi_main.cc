@@ -25,9 +25,9 @@ class RankFailurePrinter : public ::testing::EmptyTestEventListener {
 } // namespace
 
 int main(int argc, char** argv) {
-  // Each test entry is a process of its own on one machine: Open MPI's ob1 pml saves the
-  // 0.2 s a singleton spends opening the cm pml's psm/psm2/ofi transports. A value set by the
-  // caller (mpiexec, the environment) wins.
+  // The unit tests run on one machine: Open MPI's ob1 pml saves the 0.2 s a singleton spends
+  // opening the cm pml's psm/psm2/ofi transports. A value set by the caller (mpiexec, the
+  // environment) wins.
   setenv("OMPI_MCA_pml", "ob1", 0);
   dealii::Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
   ::testing::InitGoogleTest(&argc, argv);
