@@ -86,6 +86,11 @@ void ParticleZoneParameters::declare(dealii::ParameterHandler& prm) {
                       "Lower corner of the box whose particles are prescribed; empty = slot "
                       "unused [m].");
     prm.declare_entry("Upper corner", "", Anything(), "Upper corner of the box [m].");
+    prm.declare_entry("Radial range", "", Anything(),
+                      "Optional 'r1, r2': only the box's particles at a distance r1 <= r <= r2 "
+                      "from Particles/Centre, r in the x-y plane (a ring, in 3-D a tube along "
+                      "z), e.g. a volume-constraint layer round a hole; empty = the whole box "
+                      "[m].");
     prm.declare_entry("Components", "x,y", Anything(),
                       "Prescribed components, letters from x,y,z [-].");
     prm.declare_entry("Values", "0; 0", Anything(),
@@ -137,6 +142,13 @@ void ParticleZoneParameters::parse(dealii::ParameterHandler& prm) {
       Region r;
       r.lower = doubles(prm.get("Lower corner"), where + "/Lower corner", 2);
       r.upper = doubles(prm.get("Upper corner"), where + "/Upper corner", 2);
+      if (!prm.get("Radial range").empty()) {
+        r.radial_range = doubles(prm.get("Radial range"), where + "/Radial range", 2);
+        if (r.radial_range.size() != 2 || !(r.radial_range[0] >= 0) ||
+            !(r.radial_range[1] > r.radial_range[0]))
+          throw InvalidInput(where + "/Radial range", prm.get("Radial range"),
+                             "two radii 0 <= r1 < r2 [m]");
+      }
       r.components = prm.get("Components");
       r.values = prm.get("Values");
       regions.push_back(r);
@@ -628,6 +640,10 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
       bool inside = true;
       for (unsigned int d = 0; d < dim; ++d)
         inside = inside && x[d] >= r.lower[d] && x[d] <= r.upper[d];
+      if (inside && !r.radial_range.empty()) {
+        const double radius = std::hypot(x[0] - z.prm.centre[0], x[1] - z.prm.centre[1]);
+        inside = radius >= r.radial_range[0] && radius <= r.radial_range[1];
+      }
       if (inside) {
         region.particles.push_back(i);
         for (const unsigned int c : region.components)

@@ -40,8 +40,11 @@ struct ParticleZoneParameters {
 
   struct Region {
     std::vector<double> lower, upper; // box corners [m]
-    std::string components;           // "x,y"
-    std::string values;               // one expression per component, ';'-separated [m]
+    // Optional r1, r2: only the box's particles with r1 <= r <= r2 from the zone's centre (r in
+    // the x-y plane, as for Shape = annulus) [m]; empty = the whole box.
+    std::vector<double> radial_range;
+    std::string components; // "x,y"
+    std::string values;     // one expression per component, ';'-separated [m]
   };
 
   std::vector<double> lower{-0.5, -0.5, -0.5}, upper{0.5, 0.5, 0.5};

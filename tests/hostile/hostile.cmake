@@ -215,3 +215,6 @@ spinesim_add_hostile_test(lsmfm_perfect_plasticity PREPARE run:${_quick}
        --output @KEEP@ --force --set "Material/Hardening modulus=0"
        --set "LSMFM/Flow rule residual=complementary"
   MATCH "Material/Hardening modulus.*return_mapping")
+spinesim_add_hostile_test(particle_region_radial_range_reversed
+  ARGS check ${PROJECT_SOURCE_DIR}/applications/validation/thick_cylinder_nosb.prm
+  --set "Particles/Region 1/Radial range=3, 2" MATCH "Particles/Region 1/Radial range.*0 <= r1 < r2")
