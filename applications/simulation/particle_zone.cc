@@ -57,7 +57,8 @@ void ParticleZoneParameters::declare(dealii::ParameterHandler& prm) {
                     "distance in space). The lattice stays uniform (spacing h), which keeps "
                     "bond-based PD's calibration.");
   prm.declare_entry("Centre", "0, 0, 0", Anything(),
-                    "Centre of the annulus or shell (dim values) [m].");
+                    "Centre of the annulus or shell, and of the regions' Radial range (dim "
+                    "values) [m].");
   prm.declare_entry("Inner radius", "0", Double(0), "Inner radius of the annulus or shell [m].");
   prm.declare_entry("Outer radius", "0", Double(0),
                     "Outer radius of the annulus or shell; must exceed the inner radius [m].");
@@ -121,8 +122,8 @@ void ParticleZoneParameters::parse(dealii::ParameterHandler& prm) {
   shape = prm.get("Shape");
   inner_radius = prm.get_double("Inner radius");
   outer_radius = prm.get_double("Outer radius");
+  centre = doubles(prm.get("Centre"), "Particles/Centre", 2); // also the Radial ranges'
   if (shape != "box") {
-    centre = doubles(prm.get("Centre"), "Particles/Centre", 2);
     if (!(outer_radius > inner_radius))
       throw InvalidInput("Particles/Outer radius",
                          std::to_string(outer_radius) + " is not above the Inner radius " +
@@ -146,7 +147,8 @@ void ParticleZoneParameters::parse(dealii::ParameterHandler& prm) {
         r.radial_range = doubles(prm.get("Radial range"), where + "/Radial range", 2);
         if (r.radial_range.size() != 2 || !(r.radial_range[0] >= 0) ||
             !(r.radial_range[1] > r.radial_range[0]))
-          throw InvalidInput(where + "/Radial range", prm.get("Radial range"),
+          throw InvalidInput(where + "/Radial range",
+                             "'" + prm.get("Radial range") + "' is not a range of radii",
                              "two radii 0 <= r1 < r2 [m]");
       }
       r.components = prm.get("Components");

@@ -43,7 +43,7 @@ spinesim_add_scene_test(stability.thick_cylinder_standard_element_locks SCENE ${
 # pressurised from outside through a volume-constraint layer, the bore traction free, so that
 # the answer depends on nu (B / A = a^2 / (1 - 2 nu)). Within the required 1 % of Lamé:
 # measured 0.53 % at nu = 0.49 and 0.39 % at nu = 0.4999 with h = 0.1 m (948 free
-# particles, 4-6 s), falling to 0.20 % and 0.17 % at h = 0.05 m (the free bore's surface
+# particles, 3-5 s), falling to 0.19 % and 0.18 % at h = 0.05 m (the free bore's surface
 # effect). No locking: the correspondence model's deformation gradient carries the
 # volumetric strain without a constraint count. The check discriminates: a material of
 # nu = 0.3 misses the nu = 0.49 field by 32 % (bound >= 10 %). 2-D only: the particle zone
