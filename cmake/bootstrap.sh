@@ -28,6 +28,7 @@ packages=(
   libeigen3-dev libcli11-dev nlohmann-json3-dev libgtest-dev
   libinsighttoolkit5-dev  # CT volumes: NIfTI, NRRD, MetaImage readers
   zlib1g-dev              # checking that compressed CT data is complete
+  libcgal-dev             # STL implant surfaces: reading, repair, point-in-solid queries
   gnuplot-nox             # PNG plots of studies and benchmarks
   clang-format            # the format-check target (.ci/run)
 )

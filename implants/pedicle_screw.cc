@@ -71,27 +71,12 @@ void PedicleScrewGeometry::validate() const {
     throw InvalidInput("Screw/Direction", "zero or not finite", "a non-zero vector");
 }
 
-PedicleScrew::PedicleScrew(PedicleScrewGeometry geometry) : g_(geometry) {
-  g_.validate();
-  g_.direction /= g_.direction.norm();
+PedicleScrew::PedicleScrew(PedicleScrewGeometry geometry) : ScrewSolid(geometry) {
   tan_lead_ = std::tan(deg(g_.lead_flank_angle));
   tan_trail_ = std::tan(deg(g_.trail_flank_angle));
-  // A frame about the axis for the thread's angle: e1 ⟂ direction, e2 = direction × e1.
-  const dealii::Tensor<1, 3>& a = g_.direction;
-  dealii::Tensor<1, 3> helper;
-  helper[std::abs(a[0]) < 0.9 ? 0 : 1] = 1;
-  e1_ = helper - (helper * a) * a;
-  e1_ /= e1_.norm();
-  e2_ = dealii::cross_product_3d(a, e1_);
-}
-
-double PedicleScrew::axial(const dealii::Point<3>& x) const {
-  return (x - g_.entry) * g_.direction;
-}
-
-double PedicleScrew::radial(const dealii::Point<3>& x) const {
-  const dealii::Tensor<1, 3> d = x - g_.entry;
-  return (d - (d * g_.direction) * g_.direction).norm();
+  const double r_max =
+      std::max(0.5 * g_.major_diameter, g_.head_length > 0 ? 0.5 * g_.head_diameter : 0.0);
+  set_bounding_cylinder(-g_.head_length, g_.length, r_max);
 }
 
 bool PedicleScrew::in_tooth(double zeta, double y) const {
@@ -101,42 +86,53 @@ bool PedicleScrew::in_tooth(double zeta, double y) const {
   return zeta >= left && zeta <= right;
 }
 
+double PedicleScrew::tip_scale(double s) const {
+  const double tip_start = g_.length - g_.tip_length;
+  return s > tip_start ? 1.0 - (1.0 - g_.tip_ratio) * (s - tip_start) / g_.tip_length : 1.0;
+}
+
+double PedicleScrew::helical_zeta(double s, double theta) const {
+  double zeta = s - g_.pitch * theta / (2 * pi);
+  zeta -= g_.pitch * std::floor(zeta / g_.pitch);
+  return zeta;
+}
+
 bool PedicleScrew::inside(const dealii::Point<3>& x) const {
-  const dealii::Tensor<1, 3> d = x - g_.entry;
-  const double s = d * g_.direction;
+  const double s = axial(x);
   if (s < -g_.head_length || s > g_.length)
     return false;
-  const dealii::Tensor<1, 3> radial_part = d - s * g_.direction;
-  const double r = radial_part.norm();
+  const double r = radial(x);
   if (r < 0.5 * g_.cannulation_diameter)
     return false;
   if (s < 0)
     return r <= 0.5 * g_.head_diameter;
   // Conical tip: core and thread scaled by k(s).
-  const double tip_start = g_.length - g_.tip_length;
-  const double k =
-      s > tip_start ? 1.0 - (1.0 - g_.tip_ratio) * (s - tip_start) / g_.tip_length : 1.0;
+  const double k = tip_scale(s);
   const double y = r / k - 0.5 * g_.minor_diameter;
   if (y <= 0)
     return true;
   if (y > g_.thread_depth())
     return false;
-  // Axial coordinate along the helix: one turn advances one pitch.
-  const double theta = std::atan2(radial_part * e2_, radial_part * e1_);
-  double zeta = s - g_.pitch * theta / (2 * pi);
-  zeta -= g_.pitch * std::floor(zeta / g_.pitch);
-  return in_tooth(zeta, y);
+  return in_tooth(helical_zeta(s, angle(x)), y);
 }
 
-double PedicleScrew::bounding_radius() const {
-  return std::max(0.5 * g_.major_diameter, g_.head_length > 0 ? 0.5 * g_.head_diameter : 0.0);
-}
-
-double PedicleScrew::distance_to_bounding_cylinder(const dealii::Point<3>& x) const {
-  const double s = axial(x), r = radial(x);
-  const double ds = s < -g_.head_length ? -g_.head_length - s : (s > g_.length ? s - g_.length : 0);
-  const double dr = std::max(0.0, r - bounding_radius());
-  return std::hypot(ds, dr);
+double PedicleScrew::surface_radius(double s, double theta) const {
+  if (s < 0)
+    return 0.5 * g_.head_diameter;
+  // The tooth's height at ζ: the largest y <= d with left(y) <= ζ <= right(y) (in_tooth's
+  // bounds, each linear in y), 0 outside the root.
+  const double zeta = helical_zeta(s, theta);
+  const double w = g_.root_width(), p = g_.pitch, d = g_.thread_depth();
+  const double from_left = zeta - 0.5 * (p - w), from_right = 0.5 * (p + w) - zeta;
+  double y = 0;
+  if (from_left >= 0 && from_right >= 0) {
+    y = d;
+    if (tan_lead_ > 0)
+      y = std::min(y, from_left / tan_lead_);
+    if (tan_trail_ > 0)
+      y = std::min(y, from_right / tan_trail_);
+  }
+  return tip_scale(s) * (0.5 * g_.minor_diameter + y);
 }
 
 double PedicleScrew::volume() const {

@@ -20,67 +20,38 @@
 // Volume per pitch of the thread = 2π ∫ r dA over the tooth profile exactly (a helical sweep
 // has the volume of the revolution of its profile), which the unit tests check.
 
-#include <deal.II/base/point.h>
-#include <deal.II/base/tensor.h>
+#include "implants/pedicle_screw_geometry.h"
+#include "implants/screw_solid.h"
 
 #include <string>
 
 namespace spinesim::implants {
 
-struct PedicleScrewGeometry {
-  double major_diameter = 6.5e-3;   // [m]
-  double minor_diameter = 4.5e-3;   // [m]
-  double pitch = 2.8e-3;            // [m]
-  double crest_width = 0.2e-3;      // [m]
-  double lead_flank_angle = 5;      // [deg], from the radial plane
-  double trail_flank_angle = 30;    // [deg]
-  double length = 40e-3;            // threaded shaft [m]
-  double tip_length = 4e-3;         // conical tip [m], <= length
-  double tip_ratio = 0.5;           // tip diameter / shaft diameter at s = length [-]
-  double cannulation_diameter = 0;  // [m], 0 = solid
-  double head_diameter = 8e-3;      // [m]
-  double head_length = 4e-3;        // [m], 0 = no head
-  dealii::Point<3> entry;           // [m]
-  dealii::Tensor<1, 3> direction{}; // into the bone (normalised by validate())
-
-  double thread_depth() const { return 0.5 * (major_diameter - minor_diameter); }
-  // Axial width of a tooth at its root [m].
-  double root_width() const;
-  // InvalidInput naming the entry (the names of the Screw section) for an impossible screw:
-  // a pitch not above the thread depth, teeth wider than the pitch, a core not above the
-  // cannulation, a tip longer than the shaft, a zero direction, a head narrower than the core.
-  void validate() const;
-};
-
-class PedicleScrew {
+class PedicleScrew : public ScrewSolid {
  public:
   // Validates and normalises the direction.
   explicit PedicleScrew(PedicleScrewGeometry geometry);
 
-  const PedicleScrewGeometry& geometry() const { return g_; }
-  bool inside(const dealii::Point<3>& x) const;
-  // Axial coordinate s and distance r from the axis of x [m].
-  double axial(const dealii::Point<3>& x) const;
-  double radial(const dealii::Point<3>& x) const;
-  // The point on the axis at axial coordinate s.
-  dealii::Point<3> axis_point(double s) const { return g_.entry + s * g_.direction; }
-  // Radius of the smallest coaxial cylinder holding the screw [m].
-  double bounding_radius() const;
-  // Distance from x to that cylinder (−head_length <= s <= length, r <= bounding_radius);
-  // 0 inside it [m].
-  double distance_to_bounding_cylinder(const dealii::Point<3>& x) const;
+  bool inside(const dealii::Point<3>& x) const override;
   // Volume of the solid [m^3] in closed form (exact up to the tip cone's thread, which is
   // counted with its linearly scaled profile).
-  double volume() const;
-  // One line with the dimensions in mm, for logs.
-  std::string describe() const;
+  double volume() const override;
+  std::string describe() const override;
+  // The surface in the screw's frame: the solid is {r_c <= r <= R(s, θ), −head_length <= s <=
+  // length} (r_c the cannulation's radius); R is the head's radius for s < 0 and the core's
+  // radius plus the tooth's height at the helical coordinate of (s, θ), scaled in the tip.
+  // The flanks lean less than 90° from the radial plane, so every ray from the axis leaves
+  // the solid once: R is single-valued and the surface is its graph (screw_tessellation.h).
+  double surface_radius(double s, double theta) const;
 
  private:
   // Whether (ζ, y) lies in the tooth profile, ζ in [0, p).
   bool in_tooth(double zeta, double y) const;
-  PedicleScrewGeometry g_;
+  // Scale of core and thread at s (1 on the shaft, linear to tip_ratio over the tip).
+  double tip_scale(double s) const;
+  // Axial coordinate along the helix, in [0, p): one turn advances one pitch.
+  double helical_zeta(double s, double theta) const;
   double tan_lead_, tan_trail_;
-  dealii::Tensor<1, 3> e1_, e2_; // a frame about the axis
 };
 
 } // namespace spinesim::implants

@@ -205,6 +205,8 @@ int run_command(const RunOptions& options) {
     std::vector<std::filesystem::path> protected_paths;
     if (source.file && !options.restart_dir)
       protected_paths.emplace_back(*source.file);
+    for (const auto& file : scene.input_files())
+      protected_paths.emplace_back(file);
     context = std::make_unique<RunContext>(MPI_COMM_WORLD, output, mode,
                                            Progress::parse_style(options.progress), scene.prm(),
                                            effects, protected_paths);

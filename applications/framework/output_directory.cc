@@ -32,11 +32,12 @@ bool contains(const fs::path& ancestor, const fs::path& p) {
 // What a spinesim run writes at the top of its directory: its own files, VTU/PVTU/PVD
 // output, CSV and Markdown tables, plots and their gnuplot scripts, HDF5 particle files, the
 // checkpoint and its swap directories, the temporaries of atomic writes, and what scenarios write
-// for other tools: the CT phantom image (ct_phantom_cylinder) and the LAMMPS inputs of the
-// throughput benchmark; a study's runs (runs/, each a run directory of its own).
+// for other tools: the CT phantom image (ct_phantom_cylinder), the screw's surface
+// (screw_pullout) and the LAMMPS inputs of the throughput benchmark; a study's runs (runs/, each a
+// run directory of its own).
 bool written_by_a_run(const fs::directory_entry& entry) {
   static const std::regex file_pattern(
-      R"((\.spinesim-run|parameters\.prm|log\.txt|summary\.json|.*\.(vtu|pvtu|pvd|vtk|csv|dat|md|png|svg|gp|h5|xdmf|json|log|prm)|.*\.tmp[0-9]+|phantom\.(mha|mhd|raw|nrrd|nii|nii\.gz)|lammps_(vars|reference)\.txt))");
+      R"((\.spinesim-run|parameters\.prm|log\.txt|summary\.json|.*\.(vtu|pvtu|pvd|vtk|csv|dat|md|png|svg|gp|h5|xdmf|json|log|prm)|.*\.tmp[0-9]+|phantom\.(mha|mhd|raw|nrrd|nii|nii\.gz)|screw\.stl|lammps_(vars|reference)\.txt))");
   static const std::regex dir_pattern(
       R"((checkpoint|checkpoint\.new|checkpoint\.old|runs|\.spinesim-.*))");
   const std::string name = entry.path().filename().string();

@@ -207,6 +207,28 @@ void Scene::resolve_file_parameters(const std::string& directory) {
   walk(nlohmann::json::parse(out.str()));
 }
 
+std::vector<std::string> Scene::input_files() const {
+  namespace fs = std::filesystem;
+  std::ostringstream out;
+  prm_.print_parameters(out, dealii::ParameterHandler::JSON);
+  std::vector<std::string> files;
+  std::function<void(const nlohmann::json&)> walk = [&](const nlohmann::json& node) {
+    for (const auto& [key, value] : node.items()) {
+      if (!value.contains("value")) {
+        walk(value);
+        continue;
+      }
+      const std::string v = value["value"].get<std::string>();
+      std::error_code ec;
+      if (value["pattern_description"].get<std::string>().find("FileName") != std::string::npos &&
+          !v.empty() && fs::is_regular_file(v, ec))
+        files.push_back(v);
+    }
+  };
+  walk(nlohmann::json::parse(out.str()));
+  return files;
+}
+
 void Scene::load_text(const std::string& text, const std::string& name) {
   source_name_ = name;
   std::istringstream in(text);

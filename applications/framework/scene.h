@@ -29,6 +29,10 @@ class Scene {
   // "Section/Sub/Parameter=value", checked like a file entry.
   void apply_override(const std::string& assignment);
 
+  // Existing files named by file parameters (pattern FileName): what a run reads besides the
+  // scene, which --force must never delete.
+  std::vector<std::string> input_files() const;
+
   const dealii::ParameterHandler& prm() const { return prm_; }
   dealii::ParameterHandler& prm() { return prm_; }
   const std::string& source_name() const { return source_name_; }

@@ -5,13 +5,13 @@
 // Model. The block [−W/2, W/2]² × [−H, 0] is one hexahedral mesh, refined with p4est around
 // the screw until the cells there are pitch / (Cells per pitch) wide. A cell is implant
 // (material 1, Screw/Material) when at least half of 4×4×4 sample points lie in the screw
-// solid (implants/pedicle_screw.h), else foam (material 0); the bone–implant interface is
-// bonded. The block's bottom is held; the screw's section in the block's surface (the
-// implant faces on z = 0, boundary id 6) is displaced axially with its lateral motion held:
-// the grip of the testing machine on the screw, whose head above the surface carries no
-// foam and is not meshed. Displacement in load steps of the quasi-static Newton solver with
-// step cutting (a softening solid near its peak needs smaller steps, which the cuts provide;
-// a failed cut sequence is a NumericalFailure naming the step).
+// solid (the parametric implants/pedicle_screw.h, or a surface from STL: implants/stl_screw.h),
+// else foam (material 0); the bone–implant interface is bonded. The block's bottom is held; the
+// screw's section in the block's surface (the implant faces on z = 0, boundary id 6) is displaced
+// axially with its lateral motion held: the grip of the testing machine on the screw, whose head
+// above the surface carries no foam and is not meshed. Displacement in load steps of the
+// quasi-static Newton solver with step cutting (a softening solid near its peak needs smaller
+// steps, which the cuts provide; a failed cut sequence is a NumericalFailure naming the step).
 //
 // Foam. Small-strain J2 with the yield stress from the foam's shear strength (σ_y = √3 S, a
 // von Mises solid fails in shear at σ_y/√3) or its compressive strength (σ_y = σ_c); with
@@ -46,6 +46,8 @@
 #include "fem/mesh.h"
 #include "implants/pedicle_screw.h"
 #include "implants/screw_parameters.h"
+#include "implants/screw_tessellation.h"
+#include "implants/stl_screw.h"
 
 #include <deal.II/base/mpi.h>
 #include <deal.II/distributed/tria.h>
@@ -64,6 +66,8 @@
 #include <memory>
 #include <sstream>
 
+#include <unistd.h>
+
 namespace spinesim::applications {
 
 using namespace framework;
@@ -78,16 +82,25 @@ constexpr dealii::types::boundary_id grip_id = 6;
 
 struct ScrewSection {
   implants::PedicleScrewGeometry geometry;
+  implants::ScrewShape shape;
+  bool write_surface = false;
   materials::LawParameters material;
 
   static void declare(dealii::ParameterHandler& prm) {
     implants::declare_screw_geometry(prm);
+    prm.declare_entry("Write surface", "false", dealii::Patterns::Bool(),
+                      "Write the screw's surface as it sits in the block to screw.stl in the "
+                      "output directory (binary STL in mm; the parametric screw tessellated with "
+                      "128 rays and 48 rings per pitch), for ParaView or as an STL file of another "
+                      "scene [-].");
     prm.enter_subsection("Material");
     materials::LawParameters::declare(prm, "ti6al4v");
     prm.leave_subsection();
   }
   void parse(dealii::ParameterHandler& prm) {
     geometry = implants::parse_screw_geometry(prm);
+    shape = implants::parse_screw_shape(prm);
+    write_surface = prm.get_bool("Write surface");
     prm.enter_subsection("Material");
     material.parse(prm);
     prm.leave_subsection();
@@ -351,6 +364,12 @@ class ScrewPullout : public Scenario {
       ct_box_->require_inside(dealii::Point<3>(-half, -half, -block_.depth),
                               dealii::Point<3>(half, half, 0), "Block/CT/");
     }
+    // The solid now, so that a bad STL surface is bad input before the run starts. The screw
+    // enters the block's top face at its centre, along −z.
+    implants::PedicleScrewGeometry placed = g;
+    placed.entry = dealii::Point<3>(0, 0, 0);
+    placed.direction = dealii::Tensor<1, 3>({0, 0, -1});
+    solid_ = implants::make_screw_solid(placed, screw_.shape);
     const double outer = 0.5 * g.major_diameter;
     if (!(outer + pull_.margin < 0.5 * block_.width))
       throw InvalidInput("Block/Width", fmt(block_.width * 1e3, 6) + " mm",
@@ -361,11 +380,11 @@ class ScrewPullout : public Scenario {
   bool check_by_building() const override { return false; }
 
   void run(RunContext& ctx) override {
-    implants::PedicleScrewGeometry g = screw_.geometry;
-    g.entry = dealii::Point<3>(0, 0, 0);
-    g.direction = dealii::Tensor<1, 3>({0, 0, -1});
-    const implants::PedicleScrew screw(g);
+    const implants::ScrewSolid& screw = *solid_;
+    const implants::PedicleScrewGeometry& g = screw.geometry();
     ctx.log() << "  " << screw.describe() << "\n";
+    if (screw_.write_surface)
+      write_surface(ctx, screw);
 
     dealii::parallel::distributed::Triangulation<3> tria(
         ctx.comm(), dealii::Triangulation<3>::limit_level_difference_at_vertices);
@@ -680,6 +699,10 @@ class ScrewPullout : public Scenario {
     sum.set_figure("failed_fraction_near_threads", fail.near_fraction, "-");
     sum.set_figure("cells", tria.n_global_active_cells(), "-");
     sum.set_figure("implant_cells", implant_cells_, "-");
+    // The solid's volume (head included) and the part of it in the block as the cells' 4 × 4 × 4
+    // sample points see it (what the material classification works from).
+    sum.set_figure("screw_volume_mm3", solid_->volume() * 1e9, "mm^3");
+    sum.set_figure("screw_volume_sampled_mm3", screw_volume_sampled_ * 1e9, "mm^3");
     sum.set_figure("thread_cell_size_m", thread_h, "m");
     sum.set_figure("cells_per_pitch", g.pitch / thread_h, "-");
     sum.set_figure("mechanics_dofs", dofs, "-");
@@ -700,9 +723,30 @@ class ScrewPullout : public Scenario {
   }
 
  private:
+  // screw.stl (binary, mm) on the root: the tessellation of a parametric screw, or the placed
+  // surface of an STL screw.
+  static void write_surface(RunContext& ctx, const implants::ScrewSolid& screw) {
+    if (!ctx.is_root())
+      return;
+    implants::Tessellation t;
+    if (const auto* stl = dynamic_cast<const implants::StlScrew*>(&screw)) {
+      t.points = stl->surface().vertices();
+      t.triangles = stl->surface().triangles();
+    } else
+      t = implants::tessellate(dynamic_cast<const implants::PedicleScrew&>(screw));
+    for (auto& p : t.points)
+      p *= 1e3;
+    const auto file = ctx.output() / "screw.stl";
+    // The atomic writes' temporary name (OutputDirectory::write_atomic), then a rename.
+    const auto staged = ctx.output() / ("screw.stl.tmp" + std::to_string(::getpid()));
+    implants::TriangleSolid::write_stl(staged.string(), t.points, t.triangles);
+    std::filesystem::rename(staged, file);
+    ctx.log() << "  surface: " << t.triangles.size() << " triangles in screw.stl (mm)\n";
+  }
+
   // The block's coarse mesh: cells of h_target 2^k.
   void build_coarse_mesh(dealii::parallel::distributed::Triangulation<3>& tria,
-                         const implants::PedicleScrew&, double h_target) const {
+                         const implants::ScrewSolid&, double h_target) const {
     // Coarse cells of h_target 2^k (k from Coarse cell size), rounded up in number to fill
     // the block: k refinements then give cells of at most h_target, and above h_target / 2.
     const double W = block_.width;
@@ -719,7 +763,7 @@ class ScrewPullout : public Scenario {
 
   // Refines to h_target within Refinement margin of the threaded shaft's cylinder.
   void refine_around_screw(dealii::parallel::distributed::Triangulation<3>& tria,
-                           const implants::PedicleScrew& screw, double h_target) const {
+                           const implants::ScrewSolid& screw, double h_target) const {
     const auto& g = screw.geometry();
     for (unsigned int round = 0; round < 12; ++round) {
       unsigned int flagged = 0;
@@ -744,12 +788,19 @@ class ScrewPullout : public Scenario {
   // Material id per cell (1 implant, 0 foam); the implant's faces on the surface z = 0 get
   // the grip's boundary id.
   void classify_cells(dealii::parallel::distributed::Triangulation<3>& tria,
-                      const implants::PedicleScrew& screw) {
+                      const implants::ScrewSolid& screw) {
     unsigned int implant = 0, foam = 0;
+    double sampled = 0;
     const unsigned int n = 4;
     for (const auto& cell : tria.active_cell_iterators()) {
       if (cell->is_artificial())
         continue;
+      // Far from the screw: foam without sampling (an STL screw's query is a ray cast).
+      if (screw.distance_to_bounding_cylinder(cell->center()) > 0.5 * cell->diameter()) {
+        cell->set_material_id(0);
+        foam += cell->is_locally_owned();
+        continue;
+      }
       const dealii::Point<3> lo = cell->vertex(0), hi = cell->vertex(7);
       unsigned int in = 0;
       for (unsigned int i = 0; i < n; ++i)
@@ -766,11 +817,14 @@ class ScrewPullout : public Scenario {
         for (const unsigned int f : cell->face_indices())
           if (cell->face(f)->at_boundary() && cell->face(f)->boundary_id() == 5)
             cell->face(f)->set_boundary_id(grip_id);
-      if (cell->is_locally_owned())
+      if (cell->is_locally_owned()) {
         (is_implant ? implant : foam) += 1;
+        sampled += cell->measure() * in / (n * n * n);
+      }
     }
     const MPI_Comm comm = tria.get_communicator();
     implant_cells_ = dealii::Utilities::MPI::sum(implant, comm);
+    screw_volume_sampled_ = dealii::Utilities::MPI::sum(sampled, comm);
     foam_cells_ = dealii::Utilities::MPI::sum(foam, comm);
     if (implant_cells_ == 0)
       throw InvalidInput("Pullout/Cells per pitch", fmt(pull_.cells_per_pitch, 6),
@@ -829,8 +883,7 @@ class ScrewPullout : public Scenario {
   // Failed foam: half its stiffness lost (D >= D_max/2); without damage, plastic strain past
   // the damage onset. "Near the threads": r <= r_major + thread depth along the shaft, the
   // band a stripped thread leaves (Chapman's shear cylinder) rather than a cone of foam.
-  Failure failure(const fem::MechanicsSolver<3>& solver,
-                  const implants::PedicleScrew& screw) const {
+  Failure failure(const fem::MechanicsSolver<3>& solver, const implants::ScrewSolid& screw) const {
     const auto& g = screw.geometry();
     solver.refresh_states();
     dealii::FEValues<3> fv(solver.mapping(), solver.fe(), solver.quadrature(),
@@ -897,6 +950,8 @@ class ScrewPullout : public Scenario {
   PulloutSection pull_;
   typename fem::MechanicsSolver<3>::Parameters mech_;
   unsigned int implant_cells_ = 0, foam_cells_ = 0;
+  double screw_volume_sampled_ = 0; // the screw's share of the cells' sample points [m^3]
+  std::unique_ptr<implants::ScrewSolid> solid_;
 };
 
 } // namespace screw_pullout

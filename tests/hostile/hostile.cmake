@@ -218,3 +218,10 @@ spinesim_add_hostile_test(lsmfm_perfect_plasticity PREPARE run:${_quick}
 spinesim_add_hostile_test(particle_region_radial_range_reversed
   ARGS check ${PROJECT_SOURCE_DIR}/applications/validation/thick_cylinder_nosb.prm
   --set "Particles/Region 1/Radial range=3, 2" MATCH "Particles/Region 1/Radial range.*0 <= r1 < r2")
+# Nor a directory holding a file the scene reads through a file parameter (a mesh here; CT
+# images and STL surfaces alike), even one whose name a run could have written.
+spinesim_add_hostile_test(force_directory_of_input_file PREPARE run:${_quick}
+  EXTRA_COPY ${PROJECT_SOURCE_DIR}/tests/data/bar_2d.vtk:mesh.vtk
+  ARGS run ${_quick} --output @KEEP@ --force --set "Geometry/Shape=file"
+       --set "Geometry/Mesh file=@KEEP@/mesh.vtk"
+  MATCH "holds .*mesh.vtk, which this run reads")

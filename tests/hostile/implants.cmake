@@ -20,3 +20,20 @@ spinesim_add_hostile_test(screw_ct_block_outside_the_image
   ARGS check ${_screw_ct} --set "Block/CT/Top centre=250,-83,223" MATCH "Block/CT/Top centre.*outside")
 spinesim_add_hostile_test(screw_ct_block_axis_zero
   ARGS check ${_screw_ct} --set "Block/CT/Block z axis=0,0,0" MATCH "Block/CT/Block z axis.*non-zero")
+
+# Screws from STL: a surface with a hole (a tetrahedron missing a face), a file that is not STL,
+# a missing file and a missing entry are bad input naming Screw/STL file and the file, found
+# by `check` before any output exists (wrong units and placement: test_implants_stl_screw).
+spinesim_add_hostile_test(screw_stl_not_closed
+  ARGS check ${_screw} --set "Screw/Shape=stl"
+       --set "Screw/STL file=${CMAKE_CURRENT_SOURCE_DIR}/data/open_tetrahedron.stl"
+  MATCH "Screw/STL file.*open_tetrahedron.stl: the surface is not closed \\(3 edges border a hole\\)")
+spinesim_add_hostile_test(screw_stl_not_stl
+  ARGS check ${_screw} --set "Screw/Shape=stl" --set "Screw/STL file=${_screw}"
+  MATCH "Screw/STL file.*screw_pullout_foam.prm: not a readable STL file")
+spinesim_add_hostile_test(screw_stl_missing
+  ARGS check ${_screw} --set "Screw/Shape=stl"
+       --set "Screw/STL file=${CMAKE_CURRENT_SOURCE_DIR}/data/no_such_screw.stl"
+  MATCH "Screw/STL file.*no_such_screw.stl: no such file")
+spinesim_add_hostile_test(screw_stl_without_file
+  ARGS check ${_screw} --set "Screw/Shape=stl" MATCH "Screw/STL file.*an STL file when Shape = stl")
