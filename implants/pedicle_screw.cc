@@ -64,9 +64,11 @@ void PedicleScrewGeometry::validate() const {
                            mm(tip_ratio * minor_diameter) + ")");
   if (!(head_length >= 0))
     throw InvalidInput("Screw/Head length", mm(head_length), "a length >= 0 [mm]");
-  if (head_length > 0 && !(head_diameter > cannulation_diameter))
+  // A head narrower than the thread would fold the surface where it meets the shaft.
+  if (head_length > 0 && !(head_diameter >= major_diameter))
     throw InvalidInput("Screw/Head diameter", mm(head_diameter),
-                       "a diameter above the cannulation (" + mm(cannulation_diameter) + ")");
+                       "at least the Major diameter (" + mm(major_diameter) +
+                           "), or Head length = 0 for no head");
   if (!(direction.norm() > 0) || !std::isfinite(direction.norm()))
     throw InvalidInput("Screw/Direction", "zero or not finite", "a non-zero vector");
 }

@@ -30,7 +30,7 @@ struct PedicleScrewGeometry {
   double root_width() const;
   // InvalidInput naming the entry (the names of the Screw section) for an impossible screw:
   // a pitch not above the thread depth, teeth wider than the pitch, a core not above the
-  // cannulation, a tip longer than the shaft, a zero direction, a head narrower than the core.
+  // cannulation, a tip longer than the shaft, a zero direction, a head narrower than the thread.
   void validate() const;
 };
 

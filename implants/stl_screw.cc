@@ -31,17 +31,24 @@ StlScrew::StlScrew(PedicleScrewGeometry geometry, const StlPlacement& placement,
   const dealii::Point<3> entry_file = placement.unit * placement.entry;
   solid_.transform([&](const dealii::Point<3>& x) { return g_.entry + R * (x - entry_file); });
 
-  // The bounding cylinder and the shaft's dimensions, from the vertices.
+  // The bounding cylinder from the vertices; the shaft's outer radius from points along every
+  // edge as well (a long triangle of a plain shaft may have no vertex between its ends).
   double s_min = 1e300, s_max = -1e300, r_max = 0;
-  for (const auto& x : solid_.vertices()) {
-    const double s = axial(x), r = radial(x);
-    s_min = std::min(s_min, s);
-    s_max = std::max(s_max, s);
-    r_max = std::max(r_max, r);
-    // The shaft between its ends: the head's rim and the tip's cone do not count.
-    if (s >= 0.1 * g_.length && s <= 0.9 * g_.length)
-      shaft_radius_ = std::max(shaft_radius_, r);
+  const auto& v = solid_.vertices();
+  for (const auto& x : v) {
+    s_min = std::min(s_min, axial(x));
+    s_max = std::max(s_max, axial(x));
+    r_max = std::max(r_max, radial(x));
   }
+  for (const auto& t : solid_.triangles())
+    for (unsigned int e = 0; e < 3; ++e)
+      for (unsigned int k = 0; k <= 8; ++k) {
+        const dealii::Point<3> x = v[t[e]] + (k / 8.0) * (v[t[(e + 1) % 3]] - v[t[e]]);
+        const double s = axial(x);
+        // The shaft between its ends: the head's rim and the tip's cone do not count.
+        if (s >= 0.1 * g_.length && s <= 0.9 * g_.length)
+          shaft_radius_ = std::max(shaft_radius_, radial(x));
+      }
   shaft_length_ = s_max;
   set_bounding_cylinder(s_min, s_max, r_max);
   const double tolerance = 0.05;

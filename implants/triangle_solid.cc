@@ -8,6 +8,7 @@
 #include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/orientation.h>
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
+#include <CGAL/Polygon_mesh_processing/repair_degeneracies.h>
 #include <CGAL/Polygon_mesh_processing/repair_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Side_of_triangle_mesh.h>
@@ -35,7 +36,8 @@ struct TriangleSolid::Impl {
 };
 
 TriangleSolid::TriangleSolid(const std::string& file, const std::string& where, double scale) {
-  if (!std::filesystem::is_regular_file(file))
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(file, ec))
     throw InvalidInput(where, file + ": no such file", "an STL file (binary or ASCII)");
   std::vector<CgalPoint> points;
   std::vector<std::vector<std::size_t>> polygons;
@@ -103,6 +105,17 @@ void TriangleSolid::build(std::vector<dealii::Point<3>> points,
     throw InvalidInput(where,
                        file + ": the surface is not closed (" + std::to_string(border) +
                            " edges border a hole)",
+                       allowed);
+  // Zero-area slivers (collinear corners, common in CAD exports) would count as
+  // self-intersections: collapse them first, keeping the surface closed.
+  const std::size_t faces_before = mesh.number_of_faces();
+  PMP::remove_degenerate_faces(mesh);
+  mesh.collect_garbage();
+  if (!CGAL::is_closed(mesh) || mesh.number_of_faces() == 0)
+    throw InvalidInput(where,
+                       file + ": removing its " +
+                           std::to_string(faces_before - mesh.number_of_faces()) +
+                           " zero-area triangles opened the surface",
                        allowed);
   if (PMP::does_self_intersect(mesh))
     throw InvalidInput(where, file + ": the surface intersects itself", allowed);

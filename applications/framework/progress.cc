@@ -1,6 +1,7 @@
 #include "applications/framework/progress.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <iomanip>
 #include <sstream>
@@ -57,17 +58,22 @@ void Progress::update(unsigned int step, double time) {
     return;
   const auto now = std::chrono::steady_clock::now();
   const double since_last = std::chrono::duration<double>(now - last_).count();
-  const bool last_step = step >= total_;
+  // Simulated time measures the way to the end; the step count only when there is no end
+  // time (runs that cut or refine their steps take more than they planned).
+  const double fraction = std::clamp(
+      end_time_ > 0 && std::isfinite(time) ? time / end_time_ : double(step) / total_, 0.0, 1.0);
+  const bool last_step = fraction >= 1;
   // Bars redraw at 10 Hz; lines every 5 s so logs stay short.
   if (!last_step && since_last < (style_ == Style::bar ? 0.1 : 5.0))
     return;
   last_ = now;
   const double elapsed = std::chrono::duration<double>(now - start_).count();
-  const double fraction = std::min(1.0, double(step) / total_);
   const double eta = fraction > 0 ? elapsed * (1 - fraction) / fraction : -1;
   std::ostringstream line;
-  line << label_ << " step " << step << "/" << total_ << "  t = " << std::setprecision(4) << time
-       << " s";
+  line << label_ << " step " << step;
+  if (step <= total_)
+    line << "/" << total_;
+  line << "  t = " << std::setprecision(4) << time << " s";
   if (style_ == Style::bar) {
     const int width = 30, filled = static_cast<int>(fraction * width);
     out_ << "\r[" << std::string(filled, '#') << std::string(width - filled, '.') << "] "

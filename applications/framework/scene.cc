@@ -220,8 +220,9 @@ std::vector<std::string> Scene::input_files() const {
       }
       const std::string v = value["value"].get<std::string>();
       std::error_code ec;
-      if (value["pattern_description"].get<std::string>().find("FileName") != std::string::npos &&
-          !v.empty() && fs::is_regular_file(v, ec))
+      const std::string pattern = value["pattern_description"].get<std::string>();
+      if (pattern.find("FileName") != std::string::npos &&
+          pattern.find("input") != std::string::npos && !v.empty() && fs::is_regular_file(v, ec))
         files.push_back(v);
     }
   };

@@ -42,6 +42,7 @@
 #include "fem/materials/j2_damage.h"
 #include "fem/materials/j2_plasticity.h"
 #include "fem/materials/law_parameters.h"
+#include "fem/materials/linear_elastic.h"
 #include "fem/mechanics_solver.h"
 #include "fem/mesh.h"
 #include "implants/pedicle_screw.h"
@@ -173,6 +174,7 @@ struct BlockSection {
   double width = 30e-3, depth = 40e-3, coarse_cell = 5e-3;
   // Block/CT: a box of a CT image instead of the homogeneous foam (fem/ct/ct_box.h).
   fem::CtBoxParameters ct;
+  double soft_tissue_modulus = 1e6; // [Pa] cells outside the bone labels
   static void declare(dealii::ParameterHandler& prm) {
     using namespace dealii::Patterns;
     prm.enter_subsection("CT");
@@ -182,7 +184,13 @@ struct BlockSection {
         "yield stress from the law's density-yield relation (kopperdahl2002: 37.4 rho^1.39 MPa) "
         "or, for laws without one, the foam's yield strain times its modulus; the Foam section "
         "keeps the Poisson ratio, hardening ratio, damage curve and fracture energy",
-        "kopperdahl2002");
+        "kopperdahl2002", true);
+    prm.declare_entry("Soft tissue modulus", "1", Double(0),
+                      "With a Label file: Young's modulus of the cells whose centre is not bone "
+                      "(background: soft tissue, marrow, air), linear elastic with the foam's "
+                      "Poisson ratio [MPa]. Far below the bone's floor (0.01 g/cm^3: 23 MPa by "
+                      "kopperdahl2002), so it carries little load, but it keeps every cell of "
+                      "the block connected and the stiffness regular.");
     prm.leave_subsection();
     prm.declare_entry("Width", "30", Double(0),
                       "Edge of the square block's top face, centred on the screw [mm].");
@@ -197,7 +205,10 @@ struct BlockSection {
     depth = 1e-3 * prm.get_double("Depth");
     coarse_cell = 1e-3 * prm.get_double("Coarse cell size");
     prm.enter_subsection("CT");
-    ct.parse(prm, "Block/CT/", ct::resolve_data_file);
+    ct.parse(prm, "Block/CT/", ct::resolve_data_file, true);
+    soft_tissue_modulus = 1e6 * prm.get_double("Soft tissue modulus");
+    if (!ct.label_file.empty() && !(soft_tissue_modulus > 0))
+      throw InvalidInput("Block/CT/Soft tissue modulus", "0", "a positive modulus [MPa]");
     prm.leave_subsection();
     for (const auto& [name, v] : {std::pair{"Block/Width", width},
                                   {"Block/Depth", depth},
@@ -375,9 +386,62 @@ class ScrewPullout : public Scenario {
       throw InvalidInput("Block/Width", fmt(block_.width * 1e3, 6) + " mm",
                          "more than 2 × (screw radius + Pullout/Refinement margin) = " +
                              fmt(2e3 * (outer + pull_.margin), 6) + " mm");
+    if (ct_box_ && ct_box_->has_labels())
+      check_trajectory();
   }
 
   bool check_by_building() const override { return false; }
+
+  // With a Label file: the screw's part in the block, sampled on a 0.25 mm grid of its
+  // bounding cylinder, must lie in bone labels or background only (a screw through a PMMA cap
+  // is not a pull-out from bone), and at least half of it in bone (a trajectory that misses
+  // the pedicle is a wrong Top centre or Block z axis, not a weak screw).
+  void check_trajectory() {
+    const implants::ScrewSolid& screw = *solid_;
+    const double step = 0.25e-3, R = screw.bounding_radius();
+    const double s_end = screw.bounding_s_max();
+    std::map<int, unsigned int> count;
+    unsigned int in_screw = 0;
+    for (double sa = 0.5 * step; sa < s_end; sa += step)
+      for (double x = -R; x <= R; x += step)
+        for (double y = -R; y <= R; y += step) {
+          const dealii::Point<3> p(x, y, -sa);
+          if (!screw.inside(p))
+            continue;
+          ++in_screw;
+          ++count[ct_box_->label(p)];
+        }
+    unsigned int bone = 0;
+    std::ostringstream labels;
+    for (const auto& [label, n] : count) {
+      labels << (labels.tellp() > 0 ? ", " : "")
+             << (label < 0 ? std::string("outside the image") : "label " + std::to_string(label))
+             << ": " << fmt(100.0 * n / in_screw, 3) << " %";
+      if (ct_box_->is_bone_label(label))
+        bone += n;
+    }
+    for (const auto& [label, n] : count)
+      if (!ct_box_->is_bone_label(label) && label != 0)
+        throw InvalidInput("Block/CT/Top centre",
+                           (label < 0
+                                ? std::string("the screw leaves the image")
+                                : "the screw crosses voxels of label " + std::to_string(label) +
+                                      ", neither bone nor background") +
+                               " (" + fmt(n * step * step * step * 1e9, 4) +
+                               " mm^3 of the screw; " + labels.str() + ")",
+                           "a trajectory through Bone labels and background only: move Top "
+                           "centre, turn Block z axis, or list the label in Bone labels if it "
+                           "is bone");
+    trajectory_bone_fraction_ = in_screw > 0 ? double(bone) / in_screw : 0.0;
+    trajectory_labels_ = labels.str();
+    if (!(trajectory_bone_fraction_ >= 0.5))
+      throw InvalidInput("Block/CT/Top centre",
+                         "the screw misses bone: " + fmt(100 * trajectory_bone_fraction_, 3) +
+                             " % of its volume in the block lies in Bone labels (" +
+                             trajectory_labels_ + ")",
+                         "a trajectory with at least half the screw in bone: move Top centre, "
+                         "turn Block z axis, or check Bone labels");
+  }
 
   void run(RunContext& ctx) override {
     const implants::ScrewSolid& screw = *solid_;
@@ -496,11 +560,18 @@ class ScrewPullout : public Scenario {
                    ? box->law().yield_stress(rho)
                    : box->law().modulus(rho) * foam.yield_stress() / foam.youngs_modulus;
       };
+      // Background cells (with a Label file): elastic soft tissue, one law for all of them.
+      const auto soft = box->has_labels()
+                            ? std::make_shared<materials::LinearElastic>(
+                                  block_.soft_tissue_modulus, foam.poisson_ratio, foam.density, 0)
+                            : nullptr;
       solver.set_cell_laws(
-          [box, foam, damage,
-           yield_at](const auto& cell) -> std::shared_ptr<const materials::ConstitutiveLaw> {
+          [box, foam, damage, yield_at,
+           soft](const auto& cell) -> std::shared_ptr<const materials::ConstitutiveLaw> {
             if (cell->material_id() != 0)
               return nullptr;
+            if (!box->is_bone(cell->center()))
+              return soft;
             const double E = box->modulus(cell->center()), sy_cell = yield_at(cell->center());
             const materials::IsotropicHardening h(sy_cell, foam.hardening_ratio * E);
             if (!damage)
@@ -517,10 +588,14 @@ class ScrewPullout : public Scenario {
       // The bone the thread engages: cells within a millimetre of the thread's crest along the
       // threaded length (volume means).
       double volume = 0;
+      unsigned int bone_cells = 0, soft_cells = 0;
       for (const auto& cell : tria.active_cell_iterators())
         if (cell->is_locally_owned() && cell->material_id() == 0) {
           const auto c = cell->center();
-          if (std::hypot(c[0], c[1]) <= 0.5 * g.major_diameter + 1e-3 && -c[2] <= g.length) {
+          const bool bone = box->is_bone(c);
+          (bone ? bone_cells : soft_cells) += 1;
+          if (bone && std::hypot(c[0], c[1]) <= 0.5 * g.major_diameter + 1e-3 &&
+              -c[2] <= g.length) {
             engaged_density += box->density(c) * cell->measure();
             engaged_yield += yield_at(c) * cell->measure();
             volume += cell->measure();
@@ -536,6 +611,14 @@ class ScrewPullout : public Scenario {
       ctx.log() << "  CT bone from " << block_.ct.image_file << " (" << law.name()
                 << "): at the thread, mean density " << engaged_density << " g/cm^3, yield stress "
                 << engaged_yield / 1e6 << " MPa\n";
+      if (box->has_labels()) {
+        bone_cells_ = dealii::Utilities::MPI::sum(bone_cells, ctx.comm());
+        soft_cells_ = dealii::Utilities::MPI::sum(soft_cells, ctx.comm());
+        ctx.log() << "  labels from " << block_.ct.label_file << ": " << bone_cells_
+                  << " bone cells, " << soft_cells_ << " soft-tissue cells (E "
+                  << block_.soft_tissue_modulus / 1e6
+                  << " MPa); the screw's volume in the block: " << trajectory_labels_ << "\n";
+      }
     }
     auto& bc = solver.boundary_conditions();
     bc.add_dirichlet(4, "x,y,z", "0; 0; 0");
@@ -692,6 +775,8 @@ class ScrewPullout : public Scenario {
     sum.set_figure("stiffness_N_per_mm", p.stiffness / 1e3, "N/mm");
     sum.set_figure("energy_to_peak_mJ", p.energy_to_peak * 1e3, "mJ");
     sum.set_figure("final_force_N", p.force.back(), "N");
+    sum.set_figure("final_displacement_mm", p.disp.back() * 1e3, "mm");
+    sum.set_figure("displacement_past_peak_mm", (p.disp.back() - p.peak_d) * 1e3, "mm");
     // 1 when the force fell by Stop after drop past the peak: a true peak was passed.
     sum.set_figure("peak_passed", p.dropped ? 1.0 : 0.0, "-");
     sum.set_figure("post_peak_drop", 1 - p.force.back() / p.peak, "-");
@@ -702,6 +787,11 @@ class ScrewPullout : public Scenario {
     // The solid's volume (head included) and the part of it in the block as the cells' 4 × 4 × 4
     // sample points see it (what the material classification works from).
     sum.set_figure("screw_volume_mm3", solid_->volume() * 1e9, "mm^3");
+    if (ct_box_ && ct_box_->has_labels()) {
+      sum.set_figure("screw_in_bone_fraction", trajectory_bone_fraction_, "-");
+      sum.set_figure("bone_cells", bone_cells_, "-");
+      sum.set_figure("soft_tissue_cells", soft_cells_, "-");
+    }
     sum.set_figure("screw_volume_sampled_mm3", screw_volume_sampled_ * 1e9, "mm^3");
     sum.set_figure("thread_cell_size_m", thread_h, "m");
     sum.set_figure("cells_per_pitch", g.pitch / thread_h, "-");
@@ -726,8 +816,19 @@ class ScrewPullout : public Scenario {
   // screw.stl (binary, mm) on the root: the tessellation of a parametric screw, or the placed
   // surface of an STL screw.
   static void write_surface(RunContext& ctx, const implants::ScrewSolid& screw) {
-    if (!ctx.is_root())
-      return;
+    // On the root, with its failure (a full disk, say) brought to every rank.
+    std::string failure;
+    if (ctx.is_root())
+      try {
+        write_surface_on_root(ctx, screw);
+      } catch (const std::exception& e) {
+        failure = e.what();
+      }
+    failure = dealii::Utilities::MPI::broadcast(ctx.comm(), failure, 0);
+    if (!failure.empty())
+      throw std::runtime_error("writing screw.stl: " + failure);
+  }
+  static void write_surface_on_root(RunContext& ctx, const implants::ScrewSolid& screw) {
     implants::Tessellation t;
     if (const auto* stl = dynamic_cast<const implants::StlScrew*>(&screw)) {
       t.points = stl->surface().vertices();
@@ -740,7 +841,10 @@ class ScrewPullout : public Scenario {
     // The atomic writes' temporary name (OutputDirectory::write_atomic), then a rename.
     const auto staged = ctx.output() / ("screw.stl.tmp" + std::to_string(::getpid()));
     implants::TriangleSolid::write_stl(staged.string(), t.points, t.triangles);
-    std::filesystem::rename(staged, file);
+    std::error_code ec;
+    std::filesystem::rename(staged, file, ec);
+    if (ec)
+      throw std::runtime_error("cannot rename " + staged.string() + ": " + ec.message());
     ctx.log() << "  surface: " << t.triangles.size() << " triangles in screw.stl (mm)\n";
   }
 
@@ -950,7 +1054,10 @@ class ScrewPullout : public Scenario {
   PulloutSection pull_;
   typename fem::MechanicsSolver<3>::Parameters mech_;
   unsigned int implant_cells_ = 0, foam_cells_ = 0;
-  double screw_volume_sampled_ = 0; // the screw's share of the cells' sample points [m^3]
+  double screw_volume_sampled_ = 0;     // the screw's share of the cells' sample points [m^3]
+  double trajectory_bone_fraction_ = 1; // the screw's volume in bone labels [-]
+  unsigned int bone_cells_ = 0, soft_cells_ = 0; // with a Label file
+  std::string trajectory_labels_;
   std::unique_ptr<implants::ScrewSolid> solid_;
 };
 

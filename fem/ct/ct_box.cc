@@ -4,6 +4,7 @@
 #include "base/list_parsing.h"
 #include "fem/ct/density_calibration.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -12,9 +13,9 @@
 namespace spinesim::fem {
 
 void CtBoxParameters::declare(dealii::ParameterHandler& prm, const std::string& what,
-                              const std::string& default_law) {
+                              const std::string& default_law, bool labels) {
   using namespace dealii::Patterns;
-  prm.declare_entry("Image file", "", Anything(),
+  prm.declare_entry("Image file", "", FileName(FileName::input),
                     "A CT image whose box replaces " + what +
                         " (empty: no CT); relative to the project or absolute [-]. Each cell "
                         "takes the calibrated density of the voxel nearest its centre.");
@@ -31,19 +32,49 @@ void CtBoxParameters::declare(dealii::ParameterHandler& prm, const std::string& 
                     "E(rho) of each cell (fem/ct/density_modulus_law.h) [-].");
   prm.declare_entry("Minimum density", "0.01", Double(0),
                     "Floor of the density before the law (voxels of marrow or air) [g/cm^3].");
+  if (!labels)
+    return;
+  prm.declare_entry("Label file", "", FileName(FileName::input),
+                    "Segmentation of the image on its grid (integer labels; relative to the "
+                    "project or absolute), e.g. the _seg file of verse004; empty: every voxel "
+                    "is bone [-]. Voxels of Bone labels are bone, label 0 is background (soft "
+                    "tissue, air), any other label (PMMA caps) is neither.");
+  prm.declare_entry("Bone labels", "", List(Integer(1), 0, 255),
+                    "Labels that are bone, comma list (empty: every non-zero label) [-].");
 }
 
 void CtBoxParameters::parse(const dealii::ParameterHandler& prm, const std::string& where,
-                            const std::function<std::string(const std::string&)>& resolve) {
+                            const std::function<std::string(const std::string&)>& resolve,
+                            bool labels) {
   image_file = prm.get("Image file");
   value_type = prm.get("Value type");
   intercept = prm.get_double("Calibration intercept");
   slope = prm.get_double("Calibration slope");
   modulus_law = prm.get("Density modulus law");
   minimum_density = prm.get_double("Minimum density");
-  if (!enabled())
+  label_file.clear();
+  bone_labels.clear();
+  if (labels) {
+    label_file = prm.get("Label file");
+    for (const auto& l : dealii::Utilities::split_string_list(prm.get("Bone labels"), ','))
+      bone_labels.push_back(dealii::Utilities::string_to_int(l));
+    if (label_file.empty() && !bone_labels.empty())
+      throw InvalidInput(where + "Bone labels", prm.get("Bone labels"),
+                         "empty without a Label file (there are no labels to choose from)");
+  }
+  if (!enabled()) {
+    if (!label_file.empty())
+      throw InvalidInput(where + "Label file", label_file, "empty without an Image file");
     return;
+  }
   image_file = resolve(image_file);
+  if (!label_file.empty()) {
+    label_file = resolve(label_file);
+    if (!std::filesystem::exists(label_file))
+      throw InvalidInput(where + "Label file", label_file,
+                         "an existing label image on the grid of the Image file, relative to the "
+                         "project or absolute");
+  }
   const auto c = parse_numbers(prm.get("Top centre"), where + "Top centre", 3, "[mm]");
   top_centre = dealii::Point<3>(1e-3 * c[0], 1e-3 * c[1], 1e-3 * c[2]);
   const auto z = parse_numbers(prm.get("Block z axis"), where + "Block z axis", 3);
@@ -78,18 +109,62 @@ CtBox::CtBox(const CtBoxParameters& parameters)
   density_ = DensityCalibration(DensityCalibration::parse_value_type(prm_.value_type),
                                 prm_.intercept, prm_.slope)
                  .densities(image);
+  if (!prm_.label_file.empty()) {
+    const LabelVolume labels = read_label_volume(prm_.label_file);
+    if (!labels.same_grid(image)) {
+      std::ostringstream have, want;
+      auto describe = [](std::ostringstream& o, const VolumeGeometry& g) {
+        o << g.size[0] << " x " << g.size[1] << " x " << g.size[2] << " voxels of "
+          << g.spacing[0] * 1e3 << " x " << g.spacing[1] * 1e3 << " x " << g.spacing[2] * 1e3
+          << " mm from (" << g.origin[0] * 1e3 << ", " << g.origin[1] * 1e3 << ", "
+          << g.origin[2] * 1e3 << ") mm";
+      };
+      describe(have, labels);
+      describe(want, image);
+      throw InvalidInput(prm_.label_file,
+                         "a label image on another grid: " + have.str() +
+                             " (or other axis directions)",
+                         "the grid of " + prm_.image_file + ": " + want.str());
+    }
+    labels_ = labels.labels;
+  }
 }
 
-double CtBox::density(const dealii::Point<3>& x) const {
+bool CtBox::voxel_of(const dealii::Point<3>& x, std::size_t& index) const {
   const auto idx = geometry_.index_of(prm_.top_centre + prm_.axes * x);
   unsigned int ijk[3];
   for (unsigned int d = 0; d < 3; ++d) {
     const double i = std::round(idx[d]);
     if (!(i >= 0 && i < geometry_.size[d]))
-      return std::numeric_limits<double>::quiet_NaN();
+      return false;
     ijk[d] = static_cast<unsigned int>(i);
   }
-  return density_[geometry_.linear_index(ijk[0], ijk[1], ijk[2])];
+  index = geometry_.linear_index(ijk[0], ijk[1], ijk[2]);
+  return true;
+}
+
+double CtBox::density(const dealii::Point<3>& x) const {
+  std::size_t i;
+  return voxel_of(x, i) ? density_[i] : std::numeric_limits<double>::quiet_NaN();
+}
+
+int CtBox::label(const dealii::Point<3>& x) const {
+  std::size_t i;
+  if (!voxel_of(x, i))
+    return -1;
+  return labels_.empty() ? 0 : labels_[i];
+}
+
+bool CtBox::is_bone_label(int l) const {
+  if (labels_.empty())
+    return true;
+  if (prm_.bone_labels.empty())
+    return l > 0;
+  return std::find(prm_.bone_labels.begin(), prm_.bone_labels.end(), l) != prm_.bone_labels.end();
+}
+
+bool CtBox::is_bone(const dealii::Point<3>& x) const {
+  return labels_.empty() || is_bone_label(label(x));
 }
 
 void CtBox::require_inside(const dealii::Point<3>& lower, const dealii::Point<3>& upper,

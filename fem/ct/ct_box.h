@@ -32,15 +32,21 @@ struct CtBoxParameters {
   dealii::Tensor<2, 3> axes = dealii::unit_symmetric_tensor<3>(); // columns: block x, y, z
   std::string modulus_law = "morgan2003_vertebra";
   double minimum_density = 0.01; // [g/cm^3] floor before the law
+  // Segmentation on the image's grid (declared with `labels`): voxels of bone_labels (every
+  // non-zero label if empty) are bone, label 0 is background (soft tissue, air), and other
+  // labels (PMMA caps, say) are neither. Empty: every voxel is bone.
+  std::string label_file;
+  std::vector<int> bone_labels;
   bool enabled() const { return !image_file.empty(); }
 
   // `what` completes the help texts: what the box replaces, e.g. "the layered block".
+  // `labels`: also declare Label file and Bone labels (scenarios that use them).
   static void declare(dealii::ParameterHandler& prm, const std::string& what,
-                      const std::string& default_law = "morgan2003_vertebra");
+                      const std::string& default_law = "morgan2003_vertebra", bool labels = false);
   // `where` prefixes the parameter names in errors, e.g. "Bone block/CT/". The image file is
   // resolved by `resolve` (e.g. against the project) and must exist.
   void parse(const dealii::ParameterHandler& prm, const std::string& where,
-             const std::function<std::string(const std::string&)>& resolve);
+             const std::function<std::string(const std::string&)>& resolve, bool labels = false);
 };
 
 class CtBox {
@@ -51,6 +57,12 @@ class CtBox {
   double density(const dealii::Point<3>& x) const;
   // Young's modulus [Pa] of the law at x (floors applied).
   double modulus(const dealii::Point<3>& x) const { return law_.modulus(density(x)); }
+  bool has_labels() const { return !labels_.empty(); }
+  // The label of the voxel nearest x (0 without a label file), −1 outside the image.
+  int label(const dealii::Point<3>& x) const;
+  // Whether x is bone: always without a label file; otherwise its label is a bone label.
+  bool is_bone(const dealii::Point<3>& x) const;
+  bool is_bone_label(int label) const;
   const DensityModulusLaw& law() const { return law_; }
   // InvalidInput naming `where` + "Top centre" if a corner of the box [lower, upper] (block
   // coordinates) lies outside the image.
@@ -59,9 +71,12 @@ class CtBox {
   const CtBoxParameters& parameters() const { return prm_; }
 
  private:
+  // The voxel nearest x, false outside the image.
+  bool voxel_of(const dealii::Point<3>& x, std::size_t& index) const;
   CtBoxParameters prm_;
   VolumeGeometry geometry_;
   std::vector<double> density_; // [g/cm^3] per voxel
+  std::vector<int> labels_;     // per voxel, empty without a label file
   DensityModulusLaw law_;
 };
 

@@ -37,3 +37,18 @@ spinesim_add_hostile_test(screw_stl_missing
   MATCH "Screw/STL file.*no_such_screw.stl: no such file")
 spinesim_add_hostile_test(screw_stl_without_file
   ARGS check ${_screw} --set "Screw/Shape=stl" MATCH "Screw/STL file.*an STL file when Shape = stl")
+
+# A screw in the CT vertebra with a segmentation (applications/scenes/vertebra_screw_pullout.prm):
+# a trajectory through a label that is neither bone nor background (here the posterior
+# elements, once Bone labels leaves them out; a PMMA cap alike), and one that misses bone (the
+# block moved 12 mm laterally into soft tissue), are bad input naming Block/CT/Top centre.
+set(_vertebra_screw ${PROJECT_SOURCE_DIR}/applications/scenes/vertebra_screw_pullout.prm)
+spinesim_add_hostile_test(screw_crosses_a_label_not_bone
+  ARGS check ${_vertebra_screw} --set "Block/CT/Bone labels=1,2"
+  MATCH "Block/CT/Top centre.*crosses voxels of label 3, neither bone nor background")
+spinesim_add_hostile_test(screw_misses_bone
+  ARGS check ${_vertebra_screw} --set "Block/CT/Top centre=331.756, -119.667, 229.281"
+  MATCH "Block/CT/Top centre.*the screw misses bone: 12.2 % of its volume")
+spinesim_add_hostile_test(ct_label_file_missing
+  ARGS check ${_vertebra_screw} --set "Block/CT/Label file=meshes/verse004/no_such_seg.nii.gz"
+  MATCH "Block/CT/Label file.*no_such_seg.nii.gz")
