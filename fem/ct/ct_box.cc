@@ -16,7 +16,9 @@ void CtBoxParameters::declare(dealii::ParameterHandler& prm, const std::string& 
                               const std::string& default_law, bool labels) {
   using namespace dealii::Patterns;
   prm.declare_entry("Image file", "", FileName(FileName::input),
-                    "A CT image whose box replaces " + what +
+                    "A CT image (NIfTI, NRRD, MetaImage, or a directory of one DICOM series) "
+                    "whose box replaces " +
+                        what +
                         " (empty: no CT); relative to the project or absolute [-]. Each cell "
                         "takes the calibrated density of the voxel nearest its centre.");
   DensityCalibration::declare(prm);

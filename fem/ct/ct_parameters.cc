@@ -19,8 +19,10 @@ void CtParameters::declare_volume(dealii::ParameterHandler& prm) {
   using namespace dealii::Patterns;
   prm.declare_entry(
       "Image file", "", FileName(FileName::input),
-      "CT volume: NIfTI (.nii, .nii.gz), NRRD (.nrrd, .nhdr) or MetaImage (.mha, "
-      ".mhd); spacing read as mm and converted to m; relative to the scene file [-].");
+      "CT volume: NIfTI (.nii, .nii.gz), NRRD (.nrrd, .nhdr), MetaImage (.mha, .mhd), or a "
+      "directory holding one DICOM series (read through GDCM, Rescale Slope/Intercept "
+      "applied: HU for CT); spacing read as mm and converted to m; relative to the scene file "
+      "[-].");
   prm.declare_entry("Label file", "", FileName(FileName::input),
                     "Segmentation on the image grid (integer labels), needed when Labels is "
                     "not empty; relative to the scene file [-].");

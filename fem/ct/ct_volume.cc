@@ -3,9 +3,14 @@
 #include "base/exceptions.h"
 #include "fem/ct/image_file_check.h"
 
+#include <itkGDCMImageIO.h>
+#include <itkGDCMSeriesFileNames.h>
 #include <itkImage.h>
 #include <itkImageFileReader.h>
 #include <itkImageFileWriter.h>
+#include <itkImageSeriesReader.h>
+#include <itkImageSeriesWriter.h>
+#include <itkMetaDataObject.h>
 #include <itkMetaImageIO.h>
 #include <itkNiftiImageIO.h>
 #include <itkNrrdImageIO.h>
@@ -13,7 +18,10 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
+#include <iomanip>
+#include <memory>
 #include <sstream>
 
 namespace spinesim::fem {
@@ -43,9 +51,107 @@ itk::ImageIOBase::Pointer image_io_for(const std::string& file_name) {
 
 using DoubleImage = itk::Image<double, 3>;
 
+// The image's grid in metres; InvalidInput for an empty image or a non-positive spacing.
+void take_geometry(const DoubleImage& image, const std::string& file_name,
+                   VolumeGeometry& geometry) {
+  const auto region = image.GetLargestPossibleRegion();
+  for (unsigned int d = 0; d < 3; ++d) {
+    geometry.size[d] = static_cast<unsigned int>(region.GetSize()[d]);
+    geometry.spacing[d] = image.GetSpacing()[d] * metres_per_mm;
+    geometry.origin[d] = image.GetOrigin()[d] * metres_per_mm;
+    for (unsigned int c = 0; c < 3; ++c)
+      geometry.direction[d][c] = image.GetDirection()(d, c);
+  }
+  if (geometry.n_voxels() == 0)
+    throw InvalidInput(file_name, "image has no voxels", "a non-empty 3-D scalar volume");
+  for (unsigned int d = 0; d < 3; ++d)
+    if (!(geometry.spacing[d] > 0) || !std::isfinite(geometry.spacing[d]))
+      throw InvalidInput(file_name, "non-positive voxel spacing along axis " + std::to_string(d),
+                         "positive spacings");
+}
+
+// A directory holding one DICOM series (GDCM through ITK: slices sorted by their position
+// along the slice normal, Rescale Slope/Intercept applied, so CT values arrive in HU). More
+// than one series, a single slice, or slices not evenly spaced (a missing slice would
+// otherwise stretch the volume) are bad input naming the directory.
+DoubleImage::Pointer read_dicom_series(const std::string& directory, VolumeGeometry& geometry) {
+  auto names = itk::GDCMSeriesFileNames::New();
+  std::vector<std::string> uids, files;
+  try {
+    names->SetUseSeriesDetails(true);
+    names->SetDirectory(directory);
+    uids = names->GetSeriesUIDs();
+    if (uids.size() == 1)
+      files = names->GetFileNames(uids.front());
+  } catch (const itk::ExceptionObject& e) {
+    throw InvalidInput(directory, std::string("cannot scan for DICOM files: ") + e.GetDescription(),
+                       accepted_image_formats());
+  }
+  if (uids.empty())
+    throw InvalidInput(directory, "no DICOM series in this directory", accepted_image_formats());
+  if (uids.size() > 1) {
+    std::string list;
+    for (const auto& u : uids)
+      list += (list.empty() ? "" : ", ") + u;
+    throw InvalidInput(
+        directory, std::to_string(uids.size()) + " DICOM series in one directory (" + list + ")",
+        "a directory holding one series: move the others out");
+  }
+  if (files.size() < 2)
+    throw InvalidInput(directory, "the DICOM series has " + std::to_string(files.size()) + " slice",
+                       "a 3-D series of at least two slices");
+  auto io = itk::GDCMImageIO::New();
+  auto reader = itk::ImageSeriesReader<DoubleImage>::New();
+  reader->SetImageIO(io);
+  reader->SetFileNames(files);
+  try {
+    reader->Update();
+  } catch (const itk::ExceptionObject& e) {
+    throw InvalidInput(directory,
+                       std::string("cannot read the DICOM series: ") + e.GetDescription(),
+                       "complete DICOM files of one series");
+  }
+  DoubleImage::Pointer image = reader->GetOutput();
+  take_geometry(*image, directory, geometry);
+  // Even slices: every slice's Image Position (0020,0032) along the normal, against the first.
+  const auto& dictionaries = *reader->GetMetaDataDictionaryArray();
+  std::vector<double> along;
+  for (std::size_t n = 0; n < dictionaries.size(); ++n) {
+    std::string position;
+    if (!itk::ExposeMetaData<std::string>(*dictionaries[n], "0020|0032", position))
+      throw InvalidInput(files[n], "no Image Position (Patient) (0020,0032)",
+                         "CT slices with their positions");
+    std::replace(position.begin(), position.end(), '\\', ' ');
+    std::istringstream in(position);
+    double x[3];
+    if (!(in >> x[0] >> x[1] >> x[2]))
+      throw InvalidInput(files[n], "Image Position (Patient) '" + position + "' unreadable",
+                         "three numbers");
+    double a = 0;
+    for (unsigned int r = 0; r < 3; ++r)
+      a += x[r] * metres_per_mm * geometry.direction[r][2];
+    along.push_back(a);
+  }
+  const double h = geometry.spacing[2];
+  for (std::size_t n = 1; n < along.size(); ++n)
+    if (std::abs(std::abs(along[n] - along[0]) - n * h) > 0.01 * h)
+      throw InvalidInput(directory,
+                         "slice " + std::to_string(n) + " (" + files[n] + ") lies " +
+                             std::to_string(std::abs(along[n] - along[0]) * 1e3) +
+                             " mm from the first, not " + std::to_string(n * h * 1e3) +
+                             " mm: slices are missing or unevenly spaced",
+                         "a complete series of evenly spaced slices");
+  return image;
+}
+
 // Reads any scalar 3-D image as double, with its geometry converted to metres.
 template <class Volume>
 DoubleImage::Pointer read_double_image(const std::string& file_name, Volume& geometry) {
+  if (std::filesystem::is_directory(file_name)) {
+    auto image = read_dicom_series(file_name, geometry);
+    geometry.file_name = file_name;
+    return image;
+  }
   if (!std::filesystem::is_regular_file(file_name))
     throw InvalidInput(file_name, "image file not found", accepted_image_formats());
   auto io = image_io_for(file_name);
@@ -82,21 +188,7 @@ DoubleImage::Pointer read_double_image(const std::string& file_name, Volume& geo
                        accepted_image_formats());
   }
   DoubleImage::Pointer image = reader->GetOutput();
-  const auto region = image->GetLargestPossibleRegion();
-  for (unsigned int d = 0; d < 3; ++d) {
-    geometry.size[d] = static_cast<unsigned int>(region.GetSize()[d]);
-    geometry.spacing[d] = image->GetSpacing()[d] * metres_per_mm;
-    geometry.origin[d] = image->GetOrigin()[d] * metres_per_mm;
-    for (unsigned int c = 0; c < 3; ++c)
-      geometry.direction[d][c] = image->GetDirection()(d, c);
-  }
-  if (geometry.n_voxels() == 0)
-    throw InvalidInput(file_name, "image has no voxels", "a non-empty 3-D scalar volume");
-  for (unsigned int d = 0; d < 3; ++d)
-    if (!(geometry.spacing[d] > 0) || !std::isfinite(geometry.spacing[d]))
-      throw InvalidInput(file_name, "non-positive voxel spacing along axis " + std::to_string(d),
-                         "positive spacings");
-  geometry.file_name = file_name;
+  take_geometry(*image, file_name, geometry);
   return image;
 }
 
@@ -195,8 +287,8 @@ std::size_t LabelVolume::count(int label) const {
 }
 
 std::string accepted_image_formats() {
-  return "a 3-D scalar image: NIfTI (.nii, .nii.gz), NRRD (.nrrd, .nhdr) or MetaImage (.mha, "
-         ".mhd)";
+  return "a 3-D scalar image: NIfTI (.nii, .nii.gz), NRRD (.nrrd, .nhdr), MetaImage (.mha, "
+         ".mhd), or a directory holding one DICOM series";
 }
 
 CtVolume read_ct_volume(const std::string& file_name) {
@@ -230,6 +322,90 @@ LabelVolume read_label_volume(const std::string& file_name) {
 
 void write_ct_volume(const CtVolume& volume, const std::string& file_name) {
   write_image<double>(volume, volume.values, file_name);
+}
+
+void write_dicom_series(const CtVolume& volume, const std::string& directory,
+                        const std::string& series_uid) {
+  using Image = itk::Image<short, 3>;
+  using Slice = itk::Image<short, 2>;
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  fs::create_directories(directory, ec);
+  auto image = Image::New();
+  Image::RegionType region;
+  Image::SizeType size;
+  Image::SpacingType spacing;
+  Image::PointType origin;
+  Image::DirectionType direction;
+  for (unsigned int d = 0; d < 3; ++d) {
+    size[d] = volume.size[d];
+    spacing[d] = volume.spacing[d] / metres_per_mm;
+    origin[d] = volume.origin[d] / metres_per_mm;
+    for (unsigned int c = 0; c < 3; ++c)
+      direction(d, c) = volume.direction[d][c];
+  }
+  region.SetSize(size);
+  image->SetRegions(region);
+  image->SetSpacing(spacing);
+  image->SetOrigin(origin);
+  image->SetDirection(direction);
+  image->Allocate();
+  for (std::size_t n = 0; n < volume.values.size(); ++n) {
+    const double v = std::round(volume.values[n]);
+    if (!(v >= -32768 && v <= 32767))
+      throw InvalidInput(directory, "value " + std::to_string(volume.values[n]) + " too large",
+                         "values in [-32768, 32767] (DICOM's 16-bit pixels, slope 1)");
+    image->GetBufferPointer()[n] = static_cast<short>(v);
+  }
+  // One dictionary per slice: the series' orientation and spacing, the slice's position.
+  std::ostringstream orientation, pixel_spacing;
+  orientation << std::setprecision(12) << direction(0, 0) << "\\" << direction(1, 0) << "\\"
+              << direction(2, 0) << "\\" << direction(0, 1) << "\\" << direction(1, 1) << "\\"
+              << direction(2, 1);
+  pixel_spacing << std::setprecision(12) << spacing[1] << "\\" << spacing[0];
+  std::vector<std::unique_ptr<itk::MetaDataDictionary>> owned;
+  itk::ImageSeriesReader<Image>::DictionaryArrayType dictionaries;
+  std::vector<std::string> files;
+  for (unsigned int k = 0; k < volume.size[2]; ++k) {
+    owned.push_back(std::make_unique<itk::MetaDataDictionary>());
+    auto& dict = *owned.back();
+    Image::IndexType index;
+    index[0] = 0;
+    index[1] = 0;
+    index[2] = k;
+    Image::PointType position;
+    image->TransformIndexToPhysicalPoint(index, position);
+    std::ostringstream pos;
+    pos << std::setprecision(12) << position[0] << "\\" << position[1] << "\\" << position[2];
+    itk::EncapsulateMetaData<std::string>(dict, "0008|0060", "CT");
+    itk::EncapsulateMetaData<std::string>(dict, "0020|0032", pos.str());
+    itk::EncapsulateMetaData<std::string>(dict, "0020|0037", orientation.str());
+    itk::EncapsulateMetaData<std::string>(dict, "0028|0030", pixel_spacing.str());
+    itk::EncapsulateMetaData<std::string>(dict, "0018|0050", std::to_string(spacing[2]));
+    itk::EncapsulateMetaData<std::string>(dict, "0020|0013", std::to_string(k + 1));
+    itk::EncapsulateMetaData<std::string>(dict, "0028|1052", "0");
+    itk::EncapsulateMetaData<std::string>(dict, "0028|1053", "1");
+    itk::EncapsulateMetaData<std::string>(dict, "0020|000e", series_uid);
+    itk::EncapsulateMetaData<std::string>(dict, "0020|000d", "1.2.826.0.1.3680043.2.1125.1.2");
+    dictionaries.push_back(&dict);
+    char name[32];
+    std::snprintf(name, sizeof name, "slice_%04u.dcm", k);
+    files.push_back((fs::path(directory) / name).string());
+  }
+  auto io = itk::GDCMImageIO::New();
+  io->KeepOriginalUIDOn();
+  auto writer = itk::ImageSeriesWriter<Image, Slice>::New();
+  writer->SetInput(image);
+  writer->SetImageIO(io);
+  writer->SetFileNames(files);
+  writer->SetMetaDataDictionaryArray(&dictionaries);
+  try {
+    writer->Update();
+  } catch (const itk::ExceptionObject& e) {
+    throw InvalidInput(directory,
+                       std::string("cannot write the DICOM series: ") + e.GetDescription(),
+                       "a writable directory");
+  }
 }
 
 void write_label_volume(const LabelVolume& volume, const std::string& file_name) {

@@ -71,8 +71,8 @@ struct LabelVolume : VolumeGeometry {
 std::string accepted_image_formats();
 
 // Reads a 3-D scalar volume, any pixel type converted to double (NIfTI scl_slope/scl_inter
-// applied by ITK). InvalidInput naming the file for a missing, unreadable, non-scalar or
-// non-3-D image.
+// applied by ITK); a directory is read as a DICOM series (Rescale Slope/Intercept applied).
+// InvalidInput naming the file for a missing, unreadable, non-scalar or non-3-D image.
 CtVolume read_ct_volume(const std::string& file_name);
 
 // Reads a 3-D label volume. Non-integral values (a label map stored as float that was
@@ -84,6 +84,12 @@ LabelVolume read_label_volume(const std::string& file_name);
 // density maps.
 void write_ct_volume(const CtVolume& volume, const std::string& file_name);
 void write_label_volume(const LabelVolume& volume, const std::string& file_name);
+// Writes a CT volume as a DICOM series into `directory` (one file per slice along the image's
+// third axis, 16-bit values rounded, Rescale Slope 1 and Intercept 0), readable back through
+// read_ct_volume(directory). For tests, and for viewers that take DICOM only.
+// `series_uid`: the Series Instance UID (0020,000E) of the slices.
+void write_dicom_series(const CtVolume& volume, const std::string& directory,
+                        const std::string& series_uid = "1.2.826.0.1.3680043.2.1125.1.1");
 
 } // namespace spinesim::fem
 
