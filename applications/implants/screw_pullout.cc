@@ -37,6 +37,7 @@
 #include "applications/studies/child_run.h"
 #include "applications/studies/study_plot.h"
 #include "base/exceptions.h"
+#include "base/list_parsing.h"
 #include "fem/ct/ct_box.h"
 #include "fem/displacement_error.h"
 #include "fem/materials/j2_damage.h"
@@ -230,8 +231,26 @@ struct PulloutSection {
   unsigned int checkpoint_interval = 10;
   unsigned int stop_after_step = 0;
   bool write_vtu = true;
+  // Toggling before the pull-out: cycles of the grip moved ±amplitude along a direction normal
+  // to the axis (block frame), in steps per cycle.
+  unsigned int toggle_cycles = 0, toggle_steps = 8;
+  double toggle_amplitude = 0.2e-3;
+  dealii::Tensor<1, 3> toggle_direction{{1, 0, 0}};
   static void declare(dealii::ParameterHandler& prm) {
     using namespace dealii::Patterns;
+    prm.declare_entry("Toggle cycles", "0", Integer(0),
+                      "Cycles of cranio-caudal toggling before the pull-out: the grip moves "
+                      "sinusoidally by ±Toggle amplitude along Toggle direction and back, as in "
+                      "the toggle tests of screw loosening (Law, Tencer & Anderson 1993); 0 = "
+                      "none [-].");
+    prm.declare_entry("Toggle amplitude", "0.2", Double(0),
+                      "Amplitude of the grip's transverse displacement while toggling [mm].");
+    prm.declare_entry("Toggle direction", "1, 0, 0", Anything(),
+                      "Direction of the toggling in the block's frame (z along the screw axis, "
+                      "out of the block), normal to the axis: its z component must be 0 [-].");
+    prm.declare_entry("Toggle steps per cycle", "8", Integer(4),
+                      "Load steps per toggle cycle, a multiple of 4 (the extremes ±amplitude "
+                      "are steps) [-].");
     prm.declare_entry(
         "Displacement", "2", Double(0),
         "Largest axial displacement of the screw at the block surface (the grip) [mm].");
@@ -283,6 +302,21 @@ struct PulloutSection {
     write_vtu = prm.get_bool("Write VTU");
     if (!(displacement > 0))
       throw InvalidInput("Pullout/Displacement", "0", "a positive displacement [mm]");
+    toggle_cycles = prm.get_integer("Toggle cycles");
+    toggle_amplitude = 1e-3 * prm.get_double("Toggle amplitude");
+    toggle_steps = prm.get_integer("Toggle steps per cycle");
+    if (toggle_steps % 4 != 0)
+      throw InvalidInput("Pullout/Toggle steps per cycle", std::to_string(toggle_steps),
+                         "a multiple of 4 (the extremes of each cycle are steps)");
+    const auto d = parse_numbers(prm.get("Toggle direction"), "Pullout/Toggle direction", 3);
+    toggle_direction = dealii::Tensor<1, 3>({d[0], d[1], d[2]});
+    if (!(toggle_direction.norm() > 0) || std::abs(d[2]) > 1e-12 * toggle_direction.norm())
+      throw InvalidInput("Pullout/Toggle direction", prm.get("Toggle direction"),
+                         "a non-zero direction normal to the screw axis (z component 0)");
+    toggle_direction /= toggle_direction.norm();
+    if (toggle_cycles > 0 && !(toggle_amplitude > 0))
+      throw InvalidInput("Pullout/Toggle amplitude", "0",
+                         "a positive amplitude [mm] when Toggle cycles > 0");
   }
 };
 
@@ -301,6 +335,9 @@ struct PulloutProgress {
   double failed_before = 0; // failed foam volume after the last step [m^3]
   unsigned int newton = 0, linear = 0, relaxation = 0, relaxed_steps = 0, peak_step = 0;
   bool dropped = false;
+  // Toggling: steps done, and the transverse force at +amplitude and −amplitude per cycle [N].
+  unsigned int toggle_step = 0;
+  std::vector<double> toggle_plus, toggle_minus;
 
   bool finished() const { return dropped || t >= 1 - 1e-12; }
   nlohmann::json to_json() const {
@@ -321,7 +358,10 @@ struct PulloutProgress {
             {"relaxation", relaxation},
             {"relaxed_steps", relaxed_steps},
             {"peak_step", peak_step},
-            {"dropped", dropped}};
+            {"dropped", dropped},
+            {"toggle_step", toggle_step},
+            {"toggle_plus", toggle_plus},
+            {"toggle_minus", toggle_minus}};
   }
   void from_json(const nlohmann::json& j) {
     step = j.at("step");
@@ -342,6 +382,9 @@ struct PulloutProgress {
     relaxed_steps = j.at("relaxed_steps");
     peak_step = j.at("peak_step");
     dropped = j.at("dropped");
+    toggle_step = j.at("toggle_step");
+    toggle_plus = j.at("toggle_plus").get<std::vector<double>>();
+    toggle_minus = j.at("toggle_minus").get<std::vector<double>>();
     if (disp.empty() || disp.size() != force.size() || !(increment > 0))
       throw std::runtime_error("inconsistent pull-out curve");
   }
@@ -622,7 +665,19 @@ class ScrewPullout : public Scenario {
     }
     auto& bc = solver.boundary_conditions();
     bc.add_dirichlet(4, "x,y,z", "0; 0; 0");
-    bc.add_dirichlet(grip_id, "x,y,z", "0; 0; " + fmt(pull_.displacement) + "*t");
+    // The grip in load time τ: toggling for τ in [0, N] (one unit a cycle, sinusoidal about
+    // the axis), then the pull-out for τ = N + t, t in [0, 1] of Displacement.
+    const double n_toggle = pull_.toggle_cycles;
+    {
+      const std::string toggling = "*sin(6.283185307179586*t)*(t<=" + fmt(n_toggle) + ")";
+      std::string lateral[2];
+      for (unsigned int c = 0; c < 2; ++c)
+        lateral[c] =
+            n_toggle > 0 ? fmt(pull_.toggle_amplitude * pull_.toggle_direction[c]) + toggling : "0";
+      bc.add_dirichlet(grip_id, "x,y,z",
+                       lateral[0] + "; " + lateral[1] + "; " + fmt(pull_.displacement) + "*(t-" +
+                           fmt(n_toggle) + ")*(t>" + fmt(n_toggle) + ")");
+    }
     {
       dealii::TimerOutput::Scope t(ctx.timer(), "mechanics setup");
       if (ctx.restarting()) {
@@ -635,7 +690,7 @@ class ScrewPullout : public Scenario {
         // Rows written after the checkpoint came from a segment that did not survive.
         root_decides(ctx.comm(), [&] {
           ctx.history().load(checkpoint / "history.csv");
-          ctx.history().truncate_after("displacement_mm", p.disp.back() * 1e3 * (1 + 1e-12));
+          ctx.history().truncate_after("load_time", load_time(p) * (1 + 1e-12));
         });
         ctx.log() << "  restarting after step " << p.step << ", " << p.disp.back() * 1e3 << " mm\n";
       } else
@@ -651,22 +706,28 @@ class ScrewPullout : public Scenario {
     const double chapman = shear_strength * pi * g.major_diameter * g.length * tsf;
 
     if (!ctx.restarting()) {
-      ctx.history().add({{"displacement_mm", 0.0},
+      ctx.history().add({{"load_time", 0.0},
+                         {"displacement_mm", 0.0},
                          {"force_N", 0.0},
+                         {"toggle_mm", 0.0},
+                         {"toggle_force_N", 0.0},
                          {"failed_volume_mm3", 0.0},
                          {"newton_iterations", 0.0},
                          {"linear_iterations", 0.0},
                          {"relaxation_steps", 0.0}});
       ctx.set_cost({"fem_quasi_static", dofs * pull_.steps, dofs});
     }
-    ctx.progress().start("screw pull-out", pull_.steps, 1.0);
+    const unsigned int toggle_total = pull_.toggle_cycles * pull_.toggle_steps;
+    ctx.progress().start("screw pull-out", toggle_total + pull_.steps, n_toggle + 1.0);
     const auto start = std::chrono::steady_clock::now();
     // Steps of Displacement/Steps, halved down to 1/Peak refinement of that once the secant
     // stiffness falls below three quarters of the first step's: the peak is sampled finely.
     const double base_increment = 1.0 / pull_.steps;
     while (!p.finished()) {
       const unsigned int step = p.step + 1;
-      const double t = std::min(1.0, p.t + p.increment);
+      const bool toggling = p.toggle_step < toggle_total;
+      const double t = toggling ? 0.0 : std::min(1.0, p.t + p.increment);
+      const double tau = toggling ? double(p.toggle_step + 1) / pull_.toggle_steps : n_toggle + t;
       unsigned int it = 0, linear = 0, relaxation = 0;
       {
         dealii::TimerOutput::Scope timer(ctx.timer(), "mechanics");
@@ -674,7 +735,7 @@ class ScrewPullout : public Scenario {
           // Relaxation only once foam has failed: before that, a Newton failure is a problem of
           // the model.
           const auto result = solver.solve_quasi_static_or_relax(
-              t, damage_on_ && p.failed_before > 0, pull_.relaxation_tolerance,
+              tau, damage_on_ && p.failed_before > 0, pull_.relaxation_tolerance,
               pull_.relaxation_steps);
           for (const auto& r : result.reports) {
             it += r.newton_iterations;
@@ -690,46 +751,77 @@ class ScrewPullout : public Scenario {
                       << relaxation << " pseudo-steps\n";
           }
         } catch (NumericalFailure& f) {
-          f.set_step(step, t);
+          f.set_step(step, tau);
           throw;
         }
       }
       p.newton += it;
       p.linear += linear;
-      const double F = solver.reaction_force(grip_id)[2];
-      const double d = pull_.displacement * t;
-      if (!std::isfinite(F))
-        throw NumericalFailure("pull-out force",
-                               "screw grip (its section in the block surface), step " +
-                                   std::to_string(step),
-                               "check the foam and screw constants");
-      p.energy += 0.5 * (F + p.force.back()) * (d - p.disp.back());
-      const double secant = (F - p.force.back()) / (d - p.disp.back());
-      p.stiffness = std::max(p.stiffness, secant);
-      if (step == 1)
-        p.first_stiffness = secant;
-      if (secant < 0.75 * p.first_stiffness)
-        p.increment = std::max(0.5 * p.increment, base_increment / pull_.peak_refinement);
-      p.disp.push_back(d);
-      p.force.push_back(F);
-      if (F > p.peak) {
-        p.peak = F;
-        p.peak_d = d;
-        p.peak_step = step;
-        p.energy_to_peak = p.energy;
+      if (toggling) {
+        // The transverse force on the grip; its values at the extremes give the cycle's
+        // stiffness. Failed bone counts for the relaxation switch as in the pull-out.
+        const auto R = solver.reaction_force(grip_id);
+        const dealii::Tensor<1, 3> e = pull_.toggle_direction;
+        const double F_t = R[0] * e[0] + R[1] * e[1];
+        if (!std::isfinite(F_t))
+          throw NumericalFailure("toggle force", "screw grip, step " + std::to_string(step),
+                                 "check the foam and screw constants");
+        const unsigned int within = (p.toggle_step + 1) % pull_.toggle_steps;
+        if (within == pull_.toggle_steps / 4)
+          p.toggle_plus.push_back(F_t);
+        if (within == 3 * pull_.toggle_steps / 4)
+          p.toggle_minus.push_back(F_t);
+        ++p.toggle_step;
+        const Failure fail = failure(solver, screw);
+        p.failed_before = fail.failed_volume;
+        ctx.history().add({{"load_time", tau},
+                           {"displacement_mm", 0.0},
+                           {"force_N", R[2]},
+                           {"toggle_mm", 1e3 * pull_.toggle_amplitude * std::sin(2 * pi * tau)},
+                           {"toggle_force_N", F_t},
+                           {"failed_volume_mm3", fail.failed_volume * 1e9},
+                           {"newton_iterations", double(it)},
+                           {"linear_iterations", double(linear)},
+                           {"relaxation_steps", double(relaxation)}});
+      } else {
+        const double F = solver.reaction_force(grip_id)[2];
+        const double d = pull_.displacement * t;
+        if (!std::isfinite(F))
+          throw NumericalFailure("pull-out force",
+                                 "screw grip (its section in the block surface), step " +
+                                     std::to_string(step),
+                                 "check the foam and screw constants");
+        p.energy += 0.5 * (F + p.force.back()) * (d - p.disp.back());
+        const double secant = (F - p.force.back()) / (d - p.disp.back());
+        p.stiffness = std::max(p.stiffness, secant);
+        if (p.disp.size() == 1) // the pull-out's first step
+          p.first_stiffness = secant;
+        if (secant < 0.75 * p.first_stiffness)
+          p.increment = std::max(0.5 * p.increment, base_increment / pull_.peak_refinement);
+        p.disp.push_back(d);
+        p.force.push_back(F);
+        if (F > p.peak) {
+          p.peak = F;
+          p.peak_d = d;
+          p.peak_step = step;
+          p.energy_to_peak = p.energy;
+        }
+        const Failure fail = failure(solver, screw);
+        p.failed_before = fail.failed_volume;
+        ctx.history().add({{"load_time", tau},
+                           {"displacement_mm", d * 1e3},
+                           {"force_N", F},
+                           {"toggle_mm", 0.0},
+                           {"toggle_force_N", 0.0},
+                           {"failed_volume_mm3", fail.failed_volume * 1e9},
+                           {"newton_iterations", double(it)},
+                           {"linear_iterations", double(linear)},
+                           {"relaxation_steps", double(relaxation)}});
+        p.t = t;
+        if (p.peak_step < step && F < (1 - pull_.stop_drop) * p.peak)
+          p.dropped = true;
       }
-      const Failure fail = failure(solver, screw);
-      p.failed_before = fail.failed_volume;
-      ctx.history().add({{"displacement_mm", d * 1e3},
-                         {"force_N", F},
-                         {"failed_volume_mm3", fail.failed_volume * 1e9},
-                         {"newton_iterations", double(it)},
-                         {"linear_iterations", double(linear)},
-                         {"relaxation_steps", double(relaxation)}});
       p.step = step;
-      p.t = t;
-      if (p.peak_step < step && F < (1 - pull_.stop_drop) * p.peak)
-        p.dropped = true;
       const bool checkpointed =
           p.finished() || (pull_.checkpoint_interval > 0 && step % pull_.checkpoint_interval == 0);
       if (checkpointed)
@@ -741,10 +833,11 @@ class ScrewPullout : public Scenario {
         if (!checkpointed)
           write_checkpoint(ctx, solver, tria, p);
         ctx.progress().finish();
-        throw Interrupted(signal,
-                          "after step " + std::to_string(step) + ", " + fmt(d * 1e3, 6) + " mm");
+        throw Interrupted(signal, "after step " + std::to_string(step) + ", " +
+                                      (toggling ? "toggle cycle " + fmt(tau, 4)
+                                                : fmt(p.disp.back() * 1e3, 6) + " mm"));
       }
-      ctx.progress().update(step, t);
+      ctx.progress().update(step, tau);
       if (pull_.stop_after_step > 0 && step >= pull_.stop_after_step && !p.finished()) {
         if (!checkpointed)
           write_checkpoint(ctx, solver, tria, p);
@@ -776,6 +869,23 @@ class ScrewPullout : public Scenario {
     sum.set_figure("energy_to_peak_mJ", p.energy_to_peak * 1e3, "mJ");
     sum.set_figure("final_force_N", p.force.back(), "N");
     sum.set_figure("final_displacement_mm", p.disp.back() * 1e3, "mm");
+    if (pull_.toggle_cycles > 0) {
+      // Transverse secant stiffness of each cycle, (F(+a) − F(−a)) / 2a: loosening lowers it.
+      const std::size_t n = std::min(p.toggle_plus.size(), p.toggle_minus.size());
+      auto k = [&](std::size_t c) {
+        return (p.toggle_plus[c] - p.toggle_minus[c]) / (2 * pull_.toggle_amplitude);
+      };
+      const double first = n > 0 ? k(0) : std::numeric_limits<double>::quiet_NaN();
+      const double last = n > 0 ? k(n - 1) : std::numeric_limits<double>::quiet_NaN();
+      sum.set_figure("toggle_cycles", double(n), "-");
+      sum.set_figure("toggle_stiffness_first_N_per_mm", first / 1e3, "N/mm");
+      sum.set_figure("toggle_stiffness_last_N_per_mm", last / 1e3, "N/mm");
+      sum.set_figure("toggle_stiffness_ratio", last / first, "-");
+      sum.set_figure("toggle_force_first_N", n > 0 ? p.toggle_plus.front() : first, "N");
+      ctx.log() << "  toggling: " << n << " cycles of ±" << pull_.toggle_amplitude * 1e3
+                << " mm; transverse stiffness " << first / 1e3 << " -> " << last / 1e3
+                << " N/mm (ratio " << last / first << ")\n";
+    }
     sum.set_figure("displacement_past_peak_mm", (p.disp.back() - p.peak_d) * 1e3, "mm");
     // 1 when the force fell by Stop after drop past the peak: a true peak was passed.
     sum.set_figure("peak_passed", p.dropped ? 1.0 : 0.0, "-");
@@ -813,6 +923,13 @@ class ScrewPullout : public Scenario {
   }
 
  private:
+  // The load time τ the progress has reached: toggle cycles done, then N + t.
+  double load_time(const PulloutProgress& p) const {
+    const unsigned int total = pull_.toggle_cycles * pull_.toggle_steps;
+    return p.toggle_step < total ? double(p.toggle_step) / pull_.toggle_steps
+                                 : pull_.toggle_cycles + p.t;
+  }
+
   // screw.stl (binary, mm) on the root: the tessellation of a parametric screw, or the placed
   // surface of an STL screw.
   static void write_surface(RunContext& ctx, const implants::ScrewSolid& screw) {

@@ -10,6 +10,12 @@ spinesim_add_hostile_test(screw_cannulation_wider_than_core
   ARGS check ${_screw} --set "Screw/Cannulation diameter=3" MATCH "Screw/Cannulation diameter")
 spinesim_add_hostile_test(screw_leaves_the_block
   ARGS check ${_screw} --set "Block/Depth=15" MATCH "Block/Depth.*leave the block")
+spinesim_add_hostile_test(screw_toggle_along_the_axis
+  ARGS check ${_screw} --set "Pullout/Toggle cycles=2" --set "Pullout/Toggle direction=1,0,1"
+  MATCH "Pullout/Toggle direction.*normal to the screw axis")
+spinesim_add_hostile_test(screw_toggle_steps_not_quarters
+  ARGS check ${_screw} --set "Pullout/Toggle steps per cycle=6"
+  MATCH "Pullout/Toggle steps per cycle.*multiple of 4")
 spinesim_add_hostile_test(screw_block_too_narrow
   ARGS check ${_screw} --set "Block/Width=8" MATCH "Block/Width")
 spinesim_add_hostile_test(foam_without_residual_stiffness
