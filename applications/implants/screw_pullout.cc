@@ -382,9 +382,10 @@ struct PulloutProgress {
     relaxed_steps = j.at("relaxed_steps");
     peak_step = j.at("peak_step");
     dropped = j.at("dropped");
-    toggle_step = j.at("toggle_step");
-    toggle_plus = j.at("toggle_plus").get<std::vector<double>>();
-    toggle_minus = j.at("toggle_minus").get<std::vector<double>>();
+    // Checkpoints from before toggling existed have no toggle state: none was done.
+    toggle_step = j.value("toggle_step", 0u);
+    toggle_plus = j.value("toggle_plus", std::vector<double>{});
+    toggle_minus = j.value("toggle_minus", std::vector<double>{});
     if (disp.empty() || disp.size() != force.size() || !(increment > 0))
       throw std::runtime_error("inconsistent pull-out curve");
   }
@@ -690,7 +691,11 @@ class ScrewPullout : public Scenario {
         // Rows written after the checkpoint came from a segment that did not survive.
         root_decides(ctx.comm(), [&] {
           ctx.history().load(checkpoint / "history.csv");
-          ctx.history().truncate_after("load_time", load_time(p) * (1 + 1e-12));
+          // Half the smallest step beyond the checkpoint's row: the CSV's rounding of load
+          // times (12 digits) cannot drop that row.
+          ctx.history().truncate_after("load_time",
+                                       load_time(p) + 0.5 / (pull_.steps * pull_.peak_refinement *
+                                                             std::max(1u, pull_.toggle_steps)));
         });
         ctx.log() << "  restarting after step " << p.step << ", " << p.disp.back() * 1e3 << " mm\n";
       } else
@@ -715,7 +720,8 @@ class ScrewPullout : public Scenario {
                          {"newton_iterations", 0.0},
                          {"linear_iterations", 0.0},
                          {"relaxation_steps", 0.0}});
-      ctx.set_cost({"fem_quasi_static", dofs * pull_.steps, dofs});
+      ctx.set_cost({"fem_quasi_static",
+                    dofs * (pull_.steps + pull_.toggle_cycles * pull_.toggle_steps), dofs});
     }
     const unsigned int toggle_total = pull_.toggle_cycles * pull_.toggle_steps;
     ctx.progress().start("screw pull-out", toggle_total + pull_.steps, n_toggle + 1.0);
@@ -772,6 +778,9 @@ class ScrewPullout : public Scenario {
         if (within == 3 * pull_.toggle_steps / 4)
           p.toggle_minus.push_back(F_t);
         ++p.toggle_step;
+        // The pull starts from the axial force toggling left (its curve's first point).
+        if (p.toggle_step == toggle_total)
+          p.force.front() = R[2];
         const Failure fail = failure(solver, screw);
         p.failed_before = fail.failed_volume;
         ctx.history().add({{"load_time", tau},

@@ -113,7 +113,9 @@ CtBox::CtBox(const CtBoxParameters& parameters)
                  .densities(image);
   if (!prm_.label_file.empty()) {
     const LabelVolume labels = read_label_volume(prm_.label_file);
-    if (!labels.same_grid(image)) {
+    // 1e-3 of a voxel: nearest-voxel lookups need no more, and a float32 NIfTI header beside
+    // a DICOM series' decimal positions differs by about 1e-5 mm at 500 mm.
+    if (!labels.same_grid(image, 1e-3)) {
       std::ostringstream have, want;
       auto describe = [](std::ostringstream& o, const VolumeGeometry& g) {
         o << g.size[0] << " x " << g.size[1] << " x " << g.size[2] << " voxels of "

@@ -113,9 +113,13 @@ DoubleImage::Pointer read_dicom_series(const std::string& directory, VolumeGeome
   }
   DoubleImage::Pointer image = reader->GetOutput();
   take_geometry(*image, directory, geometry);
-  // Even slices: every slice's Image Position (0020,0032) along the normal, against the first.
+  // Even slices: slice n's Image Position (0020,0032) must be the first's plus n h along the
+  // slice normal (ITK's third axis, h its spacing from the first and last slices). Positions are
+  // decimal strings a scanner rounds: 1 % of h or 0.01 mm, whichever is larger, is allowed.
   const auto& dictionaries = *reader->GetMetaDataDictionaryArray();
-  std::vector<double> along;
+  const double h = geometry.spacing[2];
+  const double tolerance = std::max(0.01 * h, 1e-5);
+  dealii::Point<3> first;
   for (std::size_t n = 0; n < dictionaries.size(); ++n) {
     std::string position;
     if (!itk::ExposeMetaData<std::string>(*dictionaries[n], "0020|0032", position))
@@ -127,20 +131,31 @@ DoubleImage::Pointer read_dicom_series(const std::string& directory, VolumeGeome
     if (!(in >> x[0] >> x[1] >> x[2]))
       throw InvalidInput(files[n], "Image Position (Patient) '" + position + "' unreadable",
                          "three numbers");
-    double a = 0;
+    const dealii::Point<3> p(x[0] * metres_per_mm, x[1] * metres_per_mm, x[2] * metres_per_mm);
+    if (n == 0) {
+      first = p;
+      continue;
+    }
+    dealii::Tensor<1, 3> offset = p - first, normal;
     for (unsigned int r = 0; r < 3; ++r)
-      a += x[r] * metres_per_mm * geometry.direction[r][2];
-    along.push_back(a);
-  }
-  const double h = geometry.spacing[2];
-  for (std::size_t n = 1; n < along.size(); ++n)
-    if (std::abs(std::abs(along[n] - along[0]) - n * h) > 0.01 * h)
+      normal[r] = geometry.direction[r][2];
+    const double along = offset * normal;
+    const double across = (offset - along * normal).norm();
+    if (across > tolerance)
       throw InvalidInput(directory,
                          "slice " + std::to_string(n) + " (" + files[n] + ") lies " +
-                             std::to_string(std::abs(along[n] - along[0]) * 1e3) +
-                             " mm from the first, not " + std::to_string(n * h * 1e3) +
+                             std::to_string(across * 1e3) +
+                             " mm off the slice normal through the first: a tilted-gantry or "
+                             "sheared series",
+                         "slices stacked along their normal (resample a tilted series first)");
+    if (std::abs(along - n * h) > tolerance)
+      throw InvalidInput(directory,
+                         "slice " + std::to_string(n) + " (" + files[n] + ") lies " +
+                             std::to_string(along * 1e3) + " mm from the first, not " +
+                             std::to_string(n * h * 1e3) +
                              " mm: slices are missing or unevenly spaced",
                          "a complete series of evenly spaced slices");
+  }
   return image;
 }
 
@@ -189,6 +204,7 @@ DoubleImage::Pointer read_double_image(const std::string& file_name, Volume& geo
   }
   DoubleImage::Pointer image = reader->GetOutput();
   take_geometry(*image, file_name, geometry);
+  geometry.file_name = file_name;
   return image;
 }
 
@@ -358,11 +374,16 @@ void write_dicom_series(const CtVolume& volume, const std::string& directory,
     image->GetBufferPointer()[n] = static_cast<short>(v);
   }
   // One dictionary per slice: the series' orientation and spacing, the slice's position.
-  std::ostringstream orientation, pixel_spacing;
-  orientation << std::setprecision(12) << direction(0, 0) << "\\" << direction(1, 0) << "\\"
-              << direction(2, 0) << "\\" << direction(0, 1) << "\\" << direction(1, 1) << "\\"
-              << direction(2, 1);
-  pixel_spacing << std::setprecision(12) << spacing[1] << "\\" << spacing[0];
+  // DICOM decimal strings hold at most 16 characters: 10 digits, round-off zeroed.
+  auto ds = [](double v) {
+    std::ostringstream o;
+    o << std::setprecision(10) << (std::abs(v) < 1e-12 ? 0.0 : v);
+    return o.str();
+  };
+  const std::string orientation = ds(direction(0, 0)) + "\\" + ds(direction(1, 0)) + "\\" +
+                                  ds(direction(2, 0)) + "\\" + ds(direction(0, 1)) + "\\" +
+                                  ds(direction(1, 1)) + "\\" + ds(direction(2, 1));
+  const std::string pixel_spacing = ds(spacing[1]) + "\\" + ds(spacing[0]);
   std::vector<std::unique_ptr<itk::MetaDataDictionary>> owned;
   itk::ImageSeriesReader<Image>::DictionaryArrayType dictionaries;
   std::vector<std::string> files;
@@ -375,13 +396,12 @@ void write_dicom_series(const CtVolume& volume, const std::string& directory,
     index[2] = k;
     Image::PointType position;
     image->TransformIndexToPhysicalPoint(index, position);
-    std::ostringstream pos;
-    pos << std::setprecision(12) << position[0] << "\\" << position[1] << "\\" << position[2];
+    const std::string pos = ds(position[0]) + "\\" + ds(position[1]) + "\\" + ds(position[2]);
     itk::EncapsulateMetaData<std::string>(dict, "0008|0060", "CT");
-    itk::EncapsulateMetaData<std::string>(dict, "0020|0032", pos.str());
-    itk::EncapsulateMetaData<std::string>(dict, "0020|0037", orientation.str());
-    itk::EncapsulateMetaData<std::string>(dict, "0028|0030", pixel_spacing.str());
-    itk::EncapsulateMetaData<std::string>(dict, "0018|0050", std::to_string(spacing[2]));
+    itk::EncapsulateMetaData<std::string>(dict, "0020|0032", pos);
+    itk::EncapsulateMetaData<std::string>(dict, "0020|0037", orientation);
+    itk::EncapsulateMetaData<std::string>(dict, "0028|0030", pixel_spacing);
+    itk::EncapsulateMetaData<std::string>(dict, "0018|0050", ds(spacing[2]));
     itk::EncapsulateMetaData<std::string>(dict, "0020|0013", std::to_string(k + 1));
     itk::EncapsulateMetaData<std::string>(dict, "0028|1052", "0");
     itk::EncapsulateMetaData<std::string>(dict, "0028|1053", "1");

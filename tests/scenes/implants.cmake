@@ -64,16 +64,18 @@ spinesim_add_comparison_test(implants.screw_pullout_stl_matches_parametric
   REQUIRES "screw_stl;screw_stl_source" LABELS "scene;implants")
 
 # Toggling before the pull-out (Pullout/Toggle cycles): the quick screw moved ±0.3 mm
-# transversely at the surface for 3 cycles, then pulled. Damage and plastic strain only grow
-# (zero hardening), so the transverse stiffness of the last cycle cannot exceed the first's;
-# the foam failing at the entry on every reversal lowers it (measured 1612 -> 1320 N/mm, ratio
-# 0.82; bound 0.95), and the loosened screw pulls out at a lower peak than the untoggled quick
-# screw on the same mesh (measured 647 against 864 N, ratio 0.75; bound 0.95), the loss the
-# toggle tests of Law, Tencer & Anderson (1993) measure.
+# transversely at the surface for 3 cycles, then pulled. The transverse secant stiffness of the
+# first cycle is positive (the force follows the imposed displacement: measured 1612 N/mm;
+# bound 500). Damage and plastic strain only grow (zero hardening), and the foam fails at the
+# entry on every reversal, so the last cycle's stiffness is lower (measured 1320 N/mm, ratio
+# 0.82; bound 0.95; part of the drop is the first cycle's loading from rest, the rest is
+# loosening over the cycles). The loosened screw pulls out at a lower peak than the untoggled
+# quick screw on the same mesh (measured 647 against 864 N, ratio 0.75; bound 0.95), the loss
+# the toggle tests of Law, Tencer & Anderson (1993) measure.
 set(_screw_toggle "Pullout/Toggle cycles=3" "Pullout/Toggle amplitude=0.3")
 spinesim_add_scene_test(implants.screw_pullout_toggled SCENE ${_screw}
   OUT ${_screw_runs}/toggled SET ${_screw_quick} ${_screw_toggle}
-  EXPECT "status==ok;toggle_cycles~3:0;toggle_stiffness_ratio<=0.95;peak_passed>=1"
+  EXPECT "status==ok;toggle_cycles~3:0;toggle_stiffness_first_N_per_mm>=500;toggle_stiffness_ratio<=0.95;peak_passed>=1"
   LABELS "scene;validation;implants" FIXTURE screw_toggled)
 spinesim_add_comparison_test(implants.screw_pullout_toggling_loosens
   A ${_screw_runs}/quick/summary.json B ${_screw_runs}/toggled/summary.json
@@ -84,7 +86,7 @@ spinesim_add_comparison_test(implants.screw_pullout_toggling_loosens
 spinesim_add_scene_test(implants.screw_pullout_toggled_restart_first_half SCENE ${_screw}
   OUT ${_screw_runs}/toggled_restart SET ${_screw_quick} ${_screw_toggle}
       "Pullout/Stop after step=11"
-  EXPECT "status==ok" LABELS "scene;implants" FIXTURE screw_toggled_half)
+  EXPECT "status==ok;load_steps~11:0" LABELS "scene;implants" FIXTURE screw_toggled_half)
 spinesim_add_restart_test(implants.screw_pullout_toggled_restart_second_half
   OUT ${_screw_runs}/toggled_restart STOP "Pullout/Stop after step" ARGS --progress lines
   EXPECT "status==ok;toggle_cycles~3:0" LABELS "scene;implants"
