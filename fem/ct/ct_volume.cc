@@ -208,14 +208,10 @@ DoubleImage::Pointer read_double_image(const std::string& file_name, Volume& geo
   return image;
 }
 
+// An ITK image on the grid g (mm, as ITK's readers and writers keep it), allocated.
 template <class Pixel>
-void write_image(const VolumeGeometry& g, const std::vector<Pixel>& data,
-                 const std::string& file_name) {
+typename itk::Image<Pixel, 3>::Pointer allocate_image(const VolumeGeometry& g) {
   using Image = itk::Image<Pixel, 3>;
-  if (data.size() != g.n_voxels())
-    throw InvalidInput(file_name, "voxel array does not match the grid size",
-                       "one value per voxel");
-  auto io = image_io_for(file_name);
   auto image = Image::New();
   typename Image::RegionType region;
   typename Image::SizeType size;
@@ -235,6 +231,18 @@ void write_image(const VolumeGeometry& g, const std::vector<Pixel>& data,
   image->SetOrigin(origin);
   image->SetDirection(direction);
   image->Allocate();
+  return image;
+}
+
+template <class Pixel>
+void write_image(const VolumeGeometry& g, const std::vector<Pixel>& data,
+                 const std::string& file_name) {
+  using Image = itk::Image<Pixel, 3>;
+  if (data.size() != g.n_voxels())
+    throw InvalidInput(file_name, "voxel array does not match the grid size",
+                       "one value per voxel");
+  auto io = image_io_for(file_name);
+  auto image = allocate_image<Pixel>(g);
   std::copy(data.begin(), data.end(), image->GetBufferPointer());
 
   auto writer = itk::ImageFileWriter<Image>::New();
@@ -347,25 +355,9 @@ void write_dicom_series(const CtVolume& volume, const std::string& directory,
   namespace fs = std::filesystem;
   std::error_code ec;
   fs::create_directories(directory, ec);
-  auto image = Image::New();
-  Image::RegionType region;
-  Image::SizeType size;
-  Image::SpacingType spacing;
-  Image::PointType origin;
-  Image::DirectionType direction;
-  for (unsigned int d = 0; d < 3; ++d) {
-    size[d] = volume.size[d];
-    spacing[d] = volume.spacing[d] / metres_per_mm;
-    origin[d] = volume.origin[d] / metres_per_mm;
-    for (unsigned int c = 0; c < 3; ++c)
-      direction(d, c) = volume.direction[d][c];
-  }
-  region.SetSize(size);
-  image->SetRegions(region);
-  image->SetSpacing(spacing);
-  image->SetOrigin(origin);
-  image->SetDirection(direction);
-  image->Allocate();
+  auto image = allocate_image<short>(volume);
+  const auto spacing = image->GetSpacing();
+  const auto direction = image->GetDirection();
   for (std::size_t n = 0; n < volume.values.size(); ++n) {
     const double v = std::round(volume.values[n]);
     if (!(v >= -32768 && v <= 32767))
