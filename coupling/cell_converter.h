@@ -8,7 +8,8 @@
 // cell removes from the lumped FEM mass; the velocities are the cell's mean velocity plus the
 // interpolated fluctuation about it, scaled so that they carry the kinetic energy the nodes
 // lose. Mass, linear momentum and kinetic energy are conserved to round-off (kinetic energy
-// only with more than one particle per cell; the defect is reported).
+// only with more than one particle per cell; the defect is reported). Points inside
+// Coupling/Hole make no particle; what they carried is reported apart.
 
 #include "coupling/coupling_state.h"
 #include "coupling/particle_record.h"
@@ -32,6 +33,11 @@ struct ConversionReport {
   dealii::Tensor<1, dim> momentum_before, momentum_after; // [kg m/s]
   double kinetic_before = 0, kinetic_after = 0;           // [J]
   double max_velocity_scale = 1; // largest λ on the velocity fluctuation of a cell [-]
+  // What the points inside Coupling/Hole took away with their cells: the FEM carried material
+  // there that the body does not have. The changes below are measured net of it.
+  double hole_mass = 0;                 // [kg]
+  dealii::Tensor<1, dim> hole_momentum; // [kg m/s]
+  double hole_kinetic = 0;              // [J]
   // Methods that carry material state: ∫ ε̄_p dV over the cells (their quadrature) and
   // Σ V_i ε̄_p,i over their particles [m^3]; equal when every state arrived (nearest quadrature
   // point, n = 2 particles per direction on Q1 with 2 × 2 Gauss: one particle per point).
@@ -96,8 +102,11 @@ class CellConverter {
   using DoFCell = typename CouplingState<dim>::DoFCell;
   // Whether the criteria may convert this cell (Conversion region; everywhere when unset).
   bool in_conversion_region(const DoFCell& cell) const;
+  // The mass, momentum and kinetic energy of points inside the hole go into `hole` (as its
+  // *_before members, this rank's share).
   std::vector<ParticleRecord<dim>> make_records(const std::set<std::string>& todo,
-                                                double& max_velocity_scale) const;
+                                                double& max_velocity_scale,
+                                                ConversionReport<dim>& hole) const;
 
   CouplingState<dim>& state_;
   std::function<void()> rebuild_layers_;

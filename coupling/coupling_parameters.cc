@@ -3,6 +3,8 @@
 #include "base/exceptions.h"
 #include "base/list_parsing.h"
 
+#include <cmath>
+
 namespace spinesim::coupling {
 
 using namespace dealii;
@@ -102,6 +104,15 @@ void CouplingParameters<dim>::declare(ParameterHandler& prm) {
   prm.declare_entry("Relaxation max iterations", "200000", Integer(1),
                     "Quasi-static coupled runs: pseudo-time steps allowed per step before the "
                     "run stops as not converged [-].");
+  prm.declare_entry("Hole centre", "", Anything(),
+                    "Centre of a hole the FEM mesh does not model (a plate's hole, a pilot "
+                    "hole): no particle is made inside it, and the cells it reaches (within half "
+                    "a cell diagonal) are particles from t = 0, so the hole is a free surface of "
+                    "the particle zone at the lattice's resolution. A disc in 2-D, a cylinder "
+                    "along Hole axis in 3-D; empty = no hole [m].");
+  prm.declare_entry("Hole radius", "0", Double(0), "Radius of that hole; 0 = no hole [m].");
+  prm.declare_entry("Hole axis", "0, 0, 1", Anything(),
+                    "3-D: direction of the hole's axis (any length; ignored in 2-D) [-].");
   // One subsection per registered particle method ("Bond based", "NOSB", ...).
   meshfree::declare_particle_method_sections(prm);
   for (unsigned int k = 1; k <= 4; ++k) {
@@ -147,6 +158,30 @@ void CouplingParameters<dim>::parse(ParameterHandler& prm, const std::string& me
   relaxation_tolerance = prm.get_double("Relaxation tolerance");
   relaxation_max_iterations = prm.get_integer("Relaxation max iterations");
   check_box_corners<dim>(refine_lower, refine_upper, "Coupling/Refinement region lower corner");
+  const auto centre = parse_doubles(prm.get("Hole centre"), "Coupling/Hole centre");
+  hole_radius = prm.get_double("Hole radius");
+  if (centre.empty() != (hole_radius == 0) || (!centre.empty() && centre.size() != dim))
+    throw InvalidInput("Coupling/Hole centre",
+                       "a hole needs a centre of " + std::to_string(dim) +
+                           " coordinates and a radius above 0 (centre '" + prm.get("Hole centre") +
+                           "', radius " + prm.get("Hole radius") + ")",
+                       "both unset (no hole), or 'x,y" + std::string(dim == 3 ? ",z" : "") +
+                           "' [m] with Hole radius > 0 [m]");
+  for (unsigned int d = 0; d < centre.size(); ++d)
+    hole_centre[d] = centre[d];
+  hole_axis = Tensor<1, dim>();
+  if (dim == 3) {
+    const auto axis = parse_doubles(prm.get("Hole axis"), "Coupling/Hole axis");
+    double norm = 0;
+    for (const double a : axis)
+      norm += a * a;
+    norm = std::sqrt(norm);
+    if (axis.size() != 3 || !(norm > 0) || !std::isfinite(norm))
+      throw InvalidInput("Coupling/Hole axis", "'" + prm.get("Hole axis") + "' is not a direction",
+                         "three numbers, not all zero, e.g. '0, 0, 1' [-]");
+    for (unsigned int d = 0; d < dim; ++d)
+      hole_axis[d] = axis[d] / norm;
+  }
   particles_method = method;
   make_method = meshfree::particle_method_maker<dim>(method, prm, "Effects/Particles method");
   cracks.clear();
@@ -159,6 +194,14 @@ void CouplingParameters<dim>::parse(ParameterHandler& prm, const std::string& me
     cracks.push_back(
         parse_crack_corners(corners, "Coupling/Crack " + std::to_string(k) + "/Corners", dim));
   }
+}
+
+template <int dim>
+double CouplingParameters<dim>::distance_from_hole_axis(const Point<dim>& x) const {
+  Tensor<1, dim> r = x - hole_centre;
+  if (dim == 3)
+    r -= (r * hole_axis) * hole_axis;
+  return r.norm();
 }
 
 template struct CouplingParameters<2>;

@@ -7,6 +7,7 @@
 #include "meshfree/particle_method.h"
 
 #include <deal.II/base/parameter_handler.h>
+#include <deal.II/base/point.h>
 
 #include <string>
 #include <vector>
@@ -44,6 +45,17 @@ struct CouplingParameters {
   std::string particles_method = "bond_based";
   meshfree::ParticleMethodMaker<dim> make_method;
   std::vector<std::vector<double>> cracks; // flattened corners per pre-crack [m]
+  // A hole the FEM mesh does not model (a disc; 3-D: a cylinder along hole_axis): no particle
+  // is made inside it, and the cells it reaches are particles from t = 0. Radius 0 = none.
+  dealii::Point<dim> hole_centre;
+  dealii::Tensor<1, dim> hole_axis; // unit vector (3-D)
+  double hole_radius = 0;           // [m]
+  bool has_hole() const { return hole_radius > 0; }
+  // Distance from the hole's centre (2-D) or axis (3-D) [m].
+  double distance_from_hole_axis(const dealii::Point<dim>& x) const;
+  bool in_hole(const dealii::Point<dim>& x) const {
+    return has_hole() && distance_from_hole_axis(x) < hole_radius;
+  }
 
   static void declare(dealii::ParameterHandler& prm);
   // `particles_method` is the registered name the scene chose (Effects/Particles method).

@@ -181,6 +181,7 @@ class FemParticleCoupling {
 
   // Wall time of the conversions by phase, summed over the run [s].
   const Timings& timings() const { return state_.timings; }
+  const CouplingParameters<dim>& parameters() const { return state_.prm; }
 
   // Every rank's copy of u, v, damage and temperature of all particles from their owners
   // (collective; output, checkpoints and figures read the replicated set).

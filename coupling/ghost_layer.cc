@@ -59,6 +59,8 @@ void GhostLayer<dim>::extend() {
     at_points.reinit(cell);
     const double rho = state_.fem.cell_material(cell).density();
     for (unsigned int q = 0; q < np; ++q) {
+      if (state_.prm.in_hole(xs[q])) // cells the hole reaches are particles from t = 0
+        continue;
       ParticleRecord<dim> r; // a ghost: state from the FEM once the layer is built
       r.cell = id;
       r.point = q;

@@ -240,6 +240,8 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
       s.set_figure("conversion_plastic_strain_error_relative", c.plastic_strain, "-");
     if (c.reaction_jump >= 0)
       s.set_figure("conversion_reaction_jump_relative", c.reaction_jump, "-");
+    if (coupled_->parameters().has_hole()) // the material the FEM had in the hole, not the body's
+      s.set_figure("hole_mass_kg", c.hole_mass, dim == 2 ? "kg/m" : "kg");
     const auto& t = coupled_->timings();
     for (const auto& [name, value] : {std::pair<const char*, double>{"criteria", t.criteria},
                                       {"records", t.records},
@@ -341,6 +343,7 @@ typename Simulation<dim>::ConversionExtremes Simulation<dim>::conversion_extreme
       c.momentum = std::max(c.momentum, r.momentum_change_relative());
       c.kinetic = std::max(c.kinetic, r.kinetic_change_relative());
       c.velocity_scale = std::max(c.velocity_scale, r.max_velocity_scale);
+      c.hole_mass += r.hole_mass;
       if (r.carries_state)
         c.plastic_strain = std::max(c.plastic_strain, r.plastic_strain_change_relative());
       if (r.reaction_before > 0 && r.reaction_after > 0)
@@ -356,7 +359,8 @@ nlohmann::json Simulation<dim>::ConversionExtremes::to_json() const {
           {"kinetic", kinetic},
           {"velocity_scale", velocity_scale},
           {"plastic_strain", plastic_strain},
-          {"reaction_jump", reaction_jump}};
+          {"reaction_jump", reaction_jump},
+          {"hole_mass", hole_mass}};
 }
 
 template <int dim>
@@ -367,6 +371,7 @@ void Simulation<dim>::ConversionExtremes::from_json(const nlohmann::json& j) {
   velocity_scale = j.value("velocity_scale", 1.0);
   plastic_strain = j.value("plastic_strain", -1.0);
   reaction_jump = j.value("reaction_jump", -1.0);
+  hole_mass = j.value("hole_mass", 0.0);
 }
 
 // The members defined here, not the nested struct: `template class Simulation<dim>` in
@@ -394,11 +399,15 @@ void Simulation<dim>::report_exact_error(RunContext& ctx) {
   if (coupled_) {
     const auto& p = coupled_->particles();
     const auto u = coupled_->physical_particle_displacements();
-    // Free particles on their owners: ghosts and fixed particles are the FEM's or prescribed.
+    // Free particles on their owners: ghosts are the FEM's, and particles fixed in every
+    // component are prescribed. A particle fixed in some components only (a roller) counts
+    // whole: its prescribed components add the boundary's own error, zero when the condition
+    // is the exact field.
     particles = meshfree::displacement_error_sums(
         p, *exact_displacement_,
         [&](unsigned int i) {
-          return coupled_->is_free(i) && coupled_->is_owned(i) && !p.is_fixed(i);
+          return coupled_->is_free(i) && coupled_->is_owned(i) &&
+                 !p.is_fixed_in_every_component(i);
         },
         &u);
     has_particles = coupled_->n_free_particles() > 0;
@@ -410,7 +419,10 @@ void Simulation<dim>::report_exact_error(RunContext& ctx) {
     if (ctx.is_root() || particles_->distributed())
       particles = meshfree::displacement_error_sums(
           p, *exact_displacement_,
-          [&](unsigned int i) { return particles_->is_owned(i) && !p.is_fixed(i); }, &u);
+          [&](unsigned int i) {
+            return particles_->is_owned(i) && !p.is_fixed_in_every_component(i);
+          },
+          &u);
     has_particles = true;
   }
   const auto sum = [&](ErrorSums e) {
