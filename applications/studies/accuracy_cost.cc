@@ -39,7 +39,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr unsigned int n_case_slots = 24;
+constexpr unsigned int n_case_slots = 32;
 
 struct StudyCase {
   unsigned int index = 0; // 1-based slot
