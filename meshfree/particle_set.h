@@ -76,9 +76,7 @@ class ParticleSet {
     return (fixed_[i] >> component) & 1u;
   }
   bool is_fixed(unsigned int i) const { return fixed_[i] != 0; }
-  bool is_fixed_in_every_component(unsigned int i) const {
-    return fixed_[i] == (1u << dim) - 1u;
-  }
+  bool is_fixed_in_every_component(unsigned int i) const { return fixed_[i] == (1u << dim) - 1u; }
   std::uint8_t fixed_mask(unsigned int i) const { return fixed_[i]; }
   void set_fixed(unsigned int i, unsigned int component, bool fixed = true);
   void set_fixed(unsigned int i, bool fixed = true); // all components

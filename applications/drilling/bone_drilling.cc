@@ -650,6 +650,7 @@ void BoneDrilling::run(RunContext& ctx) {
     }
     ctx.log() << "  CT block from " << bone_.ct.image_file << ": mean density " << ct_mean_density
               << " g/cm^3, cortical " << 100 * cortical_fraction << " % of the volume\n";
+    ctx.log() << "  CT " << ct_box_->frame_description() << "\n";
   }
   const double initial_content =
       restarting ? saved.at("books").at("initial_content").get<double>() : heat.heat_content();

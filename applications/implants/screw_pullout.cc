@@ -655,6 +655,7 @@ class ScrewPullout : public Scenario {
       ctx.log() << "  CT bone from " << block_.ct.image_file << " (" << law.name()
                 << "): at the thread, mean density " << engaged_density << " g/cm^3, yield stress "
                 << engaged_yield / 1e6 << " MPa\n";
+      ctx.log() << "  CT " << box->frame_description() << "\n";
       if (box->has_labels()) {
         bone_cells_ = dealii::Utilities::MPI::sum(bone_cells, ctx.comm());
         soft_cells_ = dealii::Utilities::MPI::sum(soft_cells, ctx.comm());

@@ -406,8 +406,7 @@ void Simulation<dim>::report_exact_error(RunContext& ctx) {
     particles = meshfree::displacement_error_sums(
         p, *exact_displacement_,
         [&](unsigned int i) {
-          return coupled_->is_free(i) && coupled_->is_owned(i) &&
-                 !p.is_fixed_in_every_component(i);
+          return coupled_->is_free(i) && coupled_->is_owned(i) && !p.is_fixed_in_every_component(i);
         },
         &u);
     has_particles = coupled_->n_free_particles() > 0;

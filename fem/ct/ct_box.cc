@@ -30,6 +30,12 @@ void CtBoxParameters::declare(dealii::ParameterHandler& prm, const std::string& 
                     "the top face (a tool entering the top face moves along minus this); the "
                     "block's x axis is the image's x (its y if z is along x) made normal to it "
                     "[-].");
+  prm.declare_entry("Top centre frame", "physical", Selection("physical|voxel"),
+                    "Frame of Top centre and Block z axis [-]. physical: the image's physical "
+                    "frame in mm (LPS for medical images). voxel: image indices i, j, k as a "
+                    "viewer shows them (0-based, fractions allowed), and the axis a direction "
+                    "in index space, which the voxel spacing and the image's direction matrix "
+                    "map to the physical frame; the log gives both.");
   prm.declare_entry("Density modulus law", default_law, Selection(DensityModulusLaw::names()),
                     "E(rho) of each cell (fem/ct/density_modulus_law.h) [-].");
   prm.declare_entry("Minimum density", "0.01", Double(0),
@@ -77,12 +83,30 @@ void CtBoxParameters::parse(const dealii::ParameterHandler& prm, const std::stri
                          "an existing label image on the grid of the Image file, relative to the "
                          "project or absolute");
   }
-  const auto c = parse_numbers(prm.get("Top centre"), where + "Top centre", 3, "[mm]");
-  top_centre = dealii::Point<3>(1e-3 * c[0], 1e-3 * c[1], 1e-3 * c[2]);
+  voxel_frame = prm.get("Top centre frame") == "voxel";
+  const auto c = parse_numbers(prm.get("Top centre"), where + "Top centre", 3,
+                               voxel_frame ? "[voxel indices i, j, k]" : "[mm]");
   const auto z = parse_numbers(prm.get("Block z axis"), where + "Block z axis", 3);
-  dealii::Tensor<1, 3> ez({z[0], z[1], z[2]});
-  if (!(ez.norm() > 0))
+  const dealii::Tensor<1, 3> ez({z[0], z[1], z[2]});
+  if (!(ez.norm() > 0) || !std::isfinite(ez.norm()))
     throw InvalidInput(where + "Block z axis", prm.get("Block z axis"), "a non-zero direction");
+  if (voxel_frame) { // mapped by CtBox once the image's grid is read
+    top_centre_voxel = {{c[0], c[1], c[2]}};
+    z_axis_voxel = {{z[0], z[1], z[2]}};
+  } else {
+    set_frame(dealii::Point<3>(1e-3 * c[0], 1e-3 * c[1], 1e-3 * c[2]), ez);
+  }
+  if (!std::filesystem::exists(image_file))
+    throw InvalidInput(where + "Image file", image_file,
+                       "an existing image file (" + accepted_image_formats() +
+                           "), relative to the project or absolute");
+  if (!(minimum_density > 0))
+    throw InvalidInput(where + "Minimum density", std::to_string(minimum_density),
+                       "a positive density [g/cm^3]");
+}
+
+void CtBoxParameters::set_frame(const dealii::Point<3>& centre, dealii::Tensor<1, 3> ez) {
+  top_centre = centre;
   ez /= ez.norm();
   dealii::Tensor<1, 3> ex({1, 0, 0});
   if (std::abs(ex * ez) > 0.9)
@@ -95,19 +119,25 @@ void CtBoxParameters::parse(const dealii::ParameterHandler& prm, const std::stri
     axes[r][1] = ey[r];
     axes[r][2] = ez[r];
   }
-  if (!std::filesystem::exists(image_file))
-    throw InvalidInput(where + "Image file", image_file,
-                       "an existing image file (" + accepted_image_formats() +
-                           "), relative to the project or absolute");
-  if (!(minimum_density > 0))
-    throw InvalidInput(where + "Minimum density", std::to_string(minimum_density),
-                       "a positive density [g/cm^3]");
 }
 
 CtBox::CtBox(const CtBoxParameters& parameters)
     : prm_(parameters), law_(parameters.modulus_law, 1e9, parameters.minimum_density, 1e6) {
   const CtVolume image = read_ct_volume(prm_.image_file);
   geometry_ = image;
+  if (prm_.voxel_frame) {
+    // x = origin + D diag(spacing) i (ct_volume.h); a direction maps by D diag(spacing) alone.
+    dealii::Point<3> centre;
+    dealii::Tensor<1, 3> z;
+    for (unsigned int r = 0; r < 3; ++r) {
+      centre[r] = image.origin[r];
+      for (unsigned int c = 0; c < 3; ++c) {
+        centre[r] += image.direction[r][c] * image.spacing[c] * prm_.top_centre_voxel[c];
+        z[r] += image.direction[r][c] * image.spacing[c] * prm_.z_axis_voxel[c];
+      }
+    }
+    prm_.set_frame(centre, z);
+  }
   density_ = DensityCalibration(DensityCalibration::parse_value_type(prm_.value_type),
                                 prm_.intercept, prm_.slope)
                  .densities(image);
@@ -132,6 +162,19 @@ CtBox::CtBox(const CtBoxParameters& parameters)
     }
     labels_ = labels.labels;
   }
+}
+
+std::string CtBox::frame_description() const {
+  std::ostringstream o;
+  o.precision(6);
+  if (prm_.voxel_frame)
+    o << "voxel (" << prm_.top_centre_voxel[0] << ", " << prm_.top_centre_voxel[1] << ", "
+      << prm_.top_centre_voxel[2] << ") along index direction (" << prm_.z_axis_voxel[0] << ", "
+      << prm_.z_axis_voxel[1] << ", " << prm_.z_axis_voxel[2] << "): ";
+  o << "top centre (" << 1e3 * prm_.top_centre[0] << ", " << 1e3 * prm_.top_centre[1] << ", "
+    << 1e3 * prm_.top_centre[2] << ") mm, block z axis (" << prm_.axes[0][2] << ", "
+    << prm_.axes[1][2] << ", " << prm_.axes[2][2] << ") in the image's physical frame";
+  return o.str();
 }
 
 bool CtBox::voxel_of(const dealii::Point<3>& x, std::size_t& index) const {
@@ -178,8 +221,11 @@ void CtBox::require_inside(const dealii::Point<3>& lower, const dealii::Point<3>
                              (corner & 4) ? upper[2] : lower[2]);
     if (!std::isfinite(density(x))) {
       std::ostringstream s;
+      const auto idx = geometry_.index_of(prm_.top_centre + prm_.axes * x);
       s << "the block's corner (" << x[0] * 1e3 << ", " << x[1] * 1e3 << ", " << x[2] * 1e3
-        << ") mm lies outside " << prm_.image_file;
+        << ") mm (block frame; voxel (" << idx[0] << ", " << idx[1] << ", " << idx[2]
+        << ")) lies outside " << prm_.image_file << " (" << geometry_.size[0] << " x "
+        << geometry_.size[1] << " x " << geometry_.size[2] << " voxels); " << frame_description();
       throw InvalidInput(where + "Top centre", s.str(),
                          "a top centre that keeps the block inside the image");
     }

@@ -17,6 +17,7 @@
 #include <deal.II/base/symmetric_tensor.h>
 #include <deal.II/base/tensor.h>
 
+#include <array>
 #include <functional>
 #include <memory>
 #include <string>
@@ -30,6 +31,13 @@ struct CtBoxParameters {
   double intercept = 0, slope = 1e-3; // rho = a + b HU [g/cm^3] (hu)
   dealii::Point<3> top_centre;        // image point at the block's local origin [m]
   dealii::Tensor<2, 3> axes = dealii::unit_symmetric_tensor<3>(); // columns: block x, y, z
+  // Top centre frame = voxel: Top centre is a (fractional) voxel index and Block z axis a
+  // direction in index space, as read; CtBox maps both to the physical frame once the image's
+  // geometry is known (top_centre and axes are set then).
+  bool voxel_frame = false;
+  std::array<double, 3> top_centre_voxel{{0, 0, 0}}, z_axis_voxel{{0, 0, 1}};
+  // top_centre and the axes from a physical point [m] and the block's z direction (non-zero).
+  void set_frame(const dealii::Point<3>& centre, dealii::Tensor<1, 3> z);
   std::string modulus_law = "morgan2003_vertebra";
   double minimum_density = 0.01; // [g/cm^3] floor before the law
   // Segmentation on the image's grid (declared with `labels`): voxels of bone_labels (every
@@ -69,6 +77,9 @@ class CtBox {
   void require_inside(const dealii::Point<3>& lower, const dealii::Point<3>& upper,
                       const std::string& where) const;
   const CtBoxParameters& parameters() const { return prm_; }
+  // "top centre (x, y, z) mm, z axis (a, b, c)" in the image's physical frame, preceded by the
+  // voxel index and index-space axis when they were given that way; for the log.
+  std::string frame_description() const;
 
  private:
   // The voxel nearest x, false outside the image.

@@ -3,6 +3,7 @@
 // volumes in every format, voxel meshing (counts, volume, components, orientation, ids),
 // mass conservation under coarsening, and the mesh -> particle conversion's conservation.
 #include "base/exceptions.h"
+#include "fem/ct/ct_box.h"
 #include "fem/ct/ct_cell_laws.h"
 #include "fem/ct/ct_model.h"
 #include "fem/ct/ct_parameters.h"
@@ -30,6 +31,7 @@
 #include <map>
 #include <numeric>
 #include <set>
+#include <sstream>
 
 using namespace dealii;
 using namespace spinesim;
@@ -779,4 +781,57 @@ TEST(CtCellLaws, TwoDensityBarInSeriesHasTheSeriesStiffness) {
     if (cell->is_locally_owned()) {
       EXPECT_EQ(solver.cell_material(cell).youngs_modulus(), cell->center()[2] < 0.5 * L ? E1 : E2);
     }
+}
+
+// Top centre frame = voxel: an index and an index-space direction map through the spacing and
+// the direction matrix, x = origin + D diag(s) i (ct_volume.h), on an anisotropic rotated grid.
+// The box placed by voxel and the box placed by the same point in mm must agree to round-off,
+// and both read the voxel at that index.
+TEST(CtBox, VoxelFrameMapsThroughSpacingAndDirection) {
+  const CtVolume v = cylinder_volume();
+  const std::string file = scratch("cylinder_frame.mha");
+  write_ct_volume(v, file);
+  const std::array<double, 3> index{{7, 6, 11}}, axis{{1, 1, 1}};
+  dealii::Point<3> centre;
+  dealii::Tensor<1, 3> z;
+  for (unsigned int r = 0; r < 3; ++r) {
+    centre[r] = v.origin[r];
+    for (unsigned int c = 0; c < 3; ++c) {
+      centre[r] += v.direction[r][c] * v.spacing[c] * index[c];
+      z[r] += v.direction[r][c] * v.spacing[c] * axis[c];
+    }
+  }
+  z /= z.norm();
+  auto box_from = [&](const std::string& frame, const std::string& top, const std::string& ax) {
+    dealii::ParameterHandler prm;
+    CtBoxParameters::declare(prm, "the test block");
+    prm.set("Image file", file);
+    prm.set("Top centre frame", frame);
+    prm.set("Top centre", top);
+    prm.set("Block z axis", ax);
+    CtBoxParameters p;
+    p.parse(prm, "CT/", [](const std::string& f) { return f; });
+    return CtBox(p);
+  };
+  const CtBox by_voxel = box_from("voxel", "7, 6, 11", "1, 1, 1");
+  std::ostringstream mm, direction;
+  mm.precision(17);
+  direction.precision(17);
+  mm << 1e3 * centre[0] << ", " << 1e3 * centre[1] << ", " << 1e3 * centre[2];
+  direction << z[0] << ", " << z[1] << ", " << z[2];
+  const CtBox by_mm = box_from("physical", mm.str(), direction.str());
+  for (unsigned int r = 0; r < 3; ++r) {
+    // 1e-15 m: the two paths differ by the round-off of a few products of mm-sized numbers.
+    EXPECT_NEAR(by_voxel.parameters().top_centre[r], centre[r], 1e-15) << r;
+    for (unsigned int c = 0; c < 3; ++c)
+      EXPECT_NEAR(by_voxel.parameters().axes[r][c], by_mm.parameters().axes[r][c], 1e-14)
+          << r << "," << c;
+  }
+  // The block's origin reads voxel (7, 6, 11): value 800 + 0.001 (7 + 16 * 6 + 224 * 11) mg/cm^3.
+  const double expected = 1e-3 * (800.0 + 0.001 * (7 + 16 * 6 + 224 * 11));
+  EXPECT_NEAR(by_voxel.density(dealii::Point<3>()), expected, 1e-12);
+  EXPECT_NEAR(by_mm.density(dealii::Point<3>()), expected, 1e-12);
+  const std::string description = by_voxel.frame_description();
+  EXPECT_NE(description.find("voxel (7, 6, 11)"), std::string::npos) << description;
+  std::filesystem::remove(file);
 }

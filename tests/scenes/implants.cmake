@@ -171,6 +171,26 @@ spinesim_add_comparison_test(implants.vertebra_screw_pullout_ranks_agree
   A ${_screw_runs}/vertebra_quick/summary.json B ${_screw_runs}/vertebra_quick_2ranks/summary.json
   CHECKS "peak_pullout_force_N:rel:0.01;displacement_at_peak_mm:rel:0.01"
   REQUIRES "vertebra_screw_quick;vertebra_screw_quick_2ranks" LABELS "scene;implants;mpi")
+# The trajectory in voxel indices (Block/CT/Top centre frame = voxel): the scene's top centre
+# minus the image origin (250.81, -145.072, 182.081) mm, on verse004's 1 mm identity grid,
+# gives the same block. One 0.05 mm step each (3 s): the same cells are bone, soft tissue and
+# screw, and the forces agree to 1e-4 (the origin is float32 in the NIfTI header, so the two
+# placements differ by 2.4e-6 mm; measured 2e-6).
+set(_vertebra_screw_step "Pullout/Steps=1" "Pullout/Displacement=0.05")
+spinesim_add_scene_test(implants.vertebra_screw_physical_frame SCENE ${_vertebra_screw}
+  OUT ${_screw_runs}/vertebra_physical_frame SET ${_vertebra_screw_step}
+  EXPECT "status==ok;bone_cells>=1000" LABELS "scene;implants;ct" FIXTURE vertebra_physical_frame)
+spinesim_add_scene_test(implants.vertebra_screw_voxel_frame SCENE ${_vertebra_screw}
+  OUT ${_screw_runs}/vertebra_voxel_frame
+  SET ${_vertebra_screw_step} "Block/CT/Top centre frame=voxel"
+      "Block/CT/Top centre=68.946, 25.405, 47.2"
+  EXPECT "status==ok;bone_cells>=1000" MATCH "CT voxel .68.946, 25.405, 47.2."
+  LABELS "scene;implants;ct" FIXTURE vertebra_voxel_frame)
+spinesim_add_comparison_test(implants.vertebra_screw_voxel_frame_agrees
+  A ${_screw_runs}/vertebra_physical_frame/summary.json
+  B ${_screw_runs}/vertebra_voxel_frame/summary.json
+  CHECKS "bone_cells:abs:0.5;soft_tissue_cells:abs:0.5;screw_volume_sampled_mm3:rel:1e-12;screw_in_bone_fraction:rel:1e-12;peak_pullout_force_N:rel:1e-4"
+  REQUIRES "vertebra_physical_frame;vertebra_voxel_frame" LABELS "scene;implants;ct")
 # The scene as shipped: 2 mm past the peak and more without an unconverged step (13 minutes;
 # benchmark label).
 spinesim_add_scene_test(implants.vertebra_screw_pullout SCENE ${_vertebra_screw}
