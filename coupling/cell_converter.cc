@@ -106,6 +106,7 @@ template <int dim>
 std::vector<CellId> CellConverter<dim>::initial_cells() const {
   const MPI_Comm comm = state_.fem.mpi_communicator();
   std::vector<std::string> initial;
+  bool coarse_in_hole = false; // a cell the hole reaches is off the particle lattice
   for (const auto& [id, cell] : state_.owned_cells) {
     bool inside = state_.prm.all_particles;
     if (!inside && !state_.prm.region_lower.empty()) {
@@ -116,11 +117,22 @@ std::vector<CellId> CellConverter<dim>::initial_cells() const {
     }
     // A hole the mesh does not model: the cells it may reach are particles from the start, so
     // no FEM cell carries material inside it (bounding-sphere test, conservative).
-    inside |= state_.prm.has_hole() && state_.prm.distance_from_hole_axis(cell->center()) <
-                                           state_.prm.hole_radius + 0.5 * cell->diameter();
+    if (state_.prm.has_hole() && state_.prm.distance_from_hole_axis(cell->center()) <
+                                     state_.prm.hole_radius + 0.5 * cell->diameter()) {
+      inside = true;
+      coarse_in_hole |= cell->minimum_vertex_distance() >
+                        1.5 * state_.spacing * state_.prm.particles_per_direction;
+    }
     if (inside)
       initial.push_back(id);
   }
+  // Decided together: a rank alone throwing would leave the others in the gather below.
+  if (Utilities::MPI::logical_or(coarse_in_hole, comm))
+    throw InvalidInput("Coupling/Hole radius",
+                       "the hole reaches cells coarser than the particle lattice (" +
+                           std::to_string(state_.spacing) + " m spacing)",
+                       "a hole inside the refinement box (Refinement region, Region "
+                       "refinements) or on a uniform mesh, with half a cell diagonal to spare");
   return gather_cell_ids(comm, initial);
 }
 

@@ -35,7 +35,7 @@ struct ConversionReport {
   double max_velocity_scale = 1; // largest λ on the velocity fluctuation of a cell [-]
   // What the points inside Coupling/Hole took away with their cells: the FEM carried material
   // there that the body does not have. The changes below are measured net of it.
-  double hole_mass = 0;                 // [kg]
+  double hole_mass = 0;                 // [kg] (2-D: per unit thickness, kg/m)
   dealii::Tensor<1, dim> hole_momentum; // [kg m/s]
   double hole_kinetic = 0;              // [J]
   // Methods that carry material state: ∫ ε̄_p dV over the cells (their quadrature) and

@@ -170,7 +170,7 @@ void CouplingParameters<dim>::parse(ParameterHandler& prm, const std::string& me
   for (unsigned int d = 0; d < centre.size(); ++d)
     hole_centre[d] = centre[d];
   hole_axis = Tensor<1, dim>();
-  if (dim == 3) {
+  if (dim == 3 && has_hole()) {
     const auto axis = parse_doubles(prm.get("Hole axis"), "Coupling/Hole axis");
     double norm = 0;
     for (const double a : axis)

@@ -22,6 +22,13 @@ CouplingState<dim>::CouplingState(const CouplingParameters<dim>& parameters,
       points(QMidpoint<1>(), parameters.particles_per_direction),
       particles(1.0) { // 2-D coupled runs are per unit thickness (prepare())
   rank = Utilities::MPI::this_mpi_process(fem.mpi_communicator());
+  // The heat solver keeps every cell (it has no inactive cells), so a hole the mesh does not
+  // model would still conduct and store heat, and hand that field to the particles.
+  if (prm.has_hole() && heat)
+    throw InvalidInput("Coupling/Hole radius",
+                       "a hole cut from the particles in a run with Effects/Heat: the heat "
+                       "equation would still run through the hole",
+                       "Hole radius = 0 with heat, or a mesh that models the hole");
   if (fem.parameters().time_integration != "explicit" &&
       fem.parameters().time_integration != "quasi_static")
     throw InvalidInput("Mechanics/Time integration",

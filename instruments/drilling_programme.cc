@@ -24,6 +24,9 @@ void DrillingSchedule::validate() const {
                        "a positive speed [mm/s]");
   if (!(pause >= 0))
     throw InvalidInput("Drill/Pause between holes", std::to_string(pause), "a time >= 0 [s]");
+  if (!(peck_depth >= 0) || !std::isfinite(peck_depth))
+    throw InvalidInput("Drill/Peck depth", std::to_string(peck_depth * 1e3),
+                       "a depth >= 0 [mm] (0: one continuous feed)");
   if (!(margin_friction_torque >= 0))
     throw InvalidInput("Drill/Margin friction torque", std::to_string(margin_friction_torque * 1e3),
                        "a torque >= 0 [N mm]");
@@ -41,6 +44,10 @@ std::string to_string(DrillPhase phase) {
     return "pause";
   case DrillPhase::done:
     return "done";
+  case DrillPhase::peck_retract:
+    return "peck_retract";
+  case DrillPhase::peck_return:
+    return "peck_return";
   }
   return "?";
 }
@@ -61,9 +68,14 @@ DrillState DrillingProgramme::initial_state() const {
 
 double DrillingProgramme::nominal_duration() const {
   double t = 0;
-  for (const auto& h : holes_)
+  for (const auto& h : holes_) {
     t += h.depth / schedule_.feed_rate + schedule_.dwell + h.depth / schedule_.retraction_speed +
          schedule_.pause;
+    // Each peck ending above the full depth withdraws to the entry and comes back.
+    for (double d = schedule_.peck_depth; schedule_.peck_depth > 0 && d < h.depth * (1 - 1e-12);
+         d += schedule_.peck_depth)
+      t += 2 * d / schedule_.retraction_speed;
+  }
   return t;
 }
 
@@ -118,7 +130,11 @@ DrillInterval DrillingProgramme::advance(
           f = hi;
         }
         const double v = f * schedule_.spindle_rpm / 60.0;
-        used = std::min(sub, (hole.depth - st.tip) / v);
+        // This peck ends at its depth, or at the hole's.
+        const bool pecking = schedule_.peck_depth > 0 &&
+                             st.peck_start + schedule_.peck_depth < hole.depth * (1 - 1e-12);
+        const double stop = pecking ? st.peck_start + schedule_.peck_depth : hole.depth;
+        used = std::min(sub, std::max(0.0, stop - st.tip) / v);
         // Forces at the middle of the part (midpoint rule in time).
         const DrillingLoad L = model_.load(st.tip + 0.5 * v * used, f, schedule_.spindle_rpm, mat);
         out.cutting_energy += L.power * used;
@@ -126,10 +142,32 @@ DrillInterval DrillingProgramme::advance(
         out.max_thrust = std::max(out.max_thrust, L.thrust);
         out.max_torque = std::max(out.max_torque, L.torque);
         out.feed_per_rev = f;
-        st.tip = std::min(hole.depth, st.tip + v * used);
-        if (st.tip >= hole.depth * (1 - 1e-12)) {
-          st.tip = hole.depth;
-          st.phase = DrillPhase::dwell;
+        st.tip = std::min(stop, st.tip + v * used);
+        if (st.tip >= stop - 1e-12 * hole.depth) {
+          st.tip = stop;
+          st.phase = pecking ? DrillPhase::peck_retract : DrillPhase::dwell;
+          st.phase_time = 0;
+          st.pecks += pecking ? 1 : 0;
+        }
+        break;
+      }
+      case DrillPhase::peck_retract: // out to the entry point, as in the final retraction
+        used = std::min(sub, st.tip / schedule_.retraction_speed);
+        st.tip -= schedule_.retraction_speed * used;
+        if (st.tip <= 1e-12 * hole.depth) {
+          st.tip = 0;
+          st.phase = DrillPhase::peck_return;
+          st.phase_time = 0;
+        }
+        break;
+      case DrillPhase::peck_return: { // back down the hole cut so far; nothing to cut
+        const double bottom = st.deepest[hole_index];
+        used = std::min(sub, std::max(0.0, bottom - st.tip) / schedule_.retraction_speed);
+        st.tip = std::min(bottom, st.tip + schedule_.retraction_speed * used);
+        if (st.tip >= bottom - 1e-12 * hole.depth) {
+          st.tip = bottom;
+          st.peck_start = bottom;
+          st.phase = DrillPhase::feed;
           st.phase_time = 0;
         }
         break;
@@ -157,6 +195,7 @@ DrillInterval DrillingProgramme::advance(
           used = 0;
           ++st.hole;
           st.tip = 0;
+          st.peck_start = 0;
           st.phase = st.hole < holes_.size() ? DrillPhase::feed : DrillPhase::done;
           st.phase_time = 0;
         }

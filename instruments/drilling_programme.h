@@ -3,10 +3,12 @@
 
 // What the drill does over time: holes in sequence, each fed from its entry point to its
 // depth (at a constant feed rate, or at the feed that holds a constant thrust), a dwell at
-// depth, the retraction, and a pause before the next hole. advance() integrates a time
-// interval in sub-steps, splitting them exactly where a phase ends, and returns the cutting
-// and margin-friction energies of the interval, so heat input over any step is the integral
-// of the power, not a sample of it.
+// depth, the retraction, and a pause before the next hole. With a peck depth the feed stops
+// after each peck: the bit withdraws to the entry point (chips out, irrigation in) and
+// returns down its own hole at the retraction speed, cutting nothing, before the next peck.
+// advance() integrates a time interval in sub-steps, splitting them exactly where a phase ends, and
+// returns the cutting and margin-friction energies of the interval, so heat input over any step is
+// the integral of the power, not a sample of it.
 
 #include "instruments/drilling_force_model.h"
 
@@ -28,12 +30,14 @@ struct DrillingSchedule {
   double dwell = 0;                  // at depth, rotating [s]
   double retraction_speed = 5e-3;    // [m/s]
   double pause = 0;                  // after leaving a hole, before the next [s]
+  double peck_depth = 0;             // tip travel per peck [m]; 0 = one continuous feed
   double margin_friction_torque = 0; // of the margins on the hole wall [N m]
   // InvalidInput naming the Drill entry: speed or feed not positive, negative times.
   void validate() const;
 };
 
-enum class DrillPhase { feed, dwell, retract, pause, done };
+// The peck phases come last so that checkpoints written before them keep their numbers.
+enum class DrillPhase { feed, dwell, retract, pause, done, peck_retract, peck_return };
 std::string to_string(DrillPhase phase);
 
 struct DrillState {
@@ -42,6 +46,8 @@ struct DrillState {
   double tip = 0;              // axial depth of the tip in the current hole [m]
   double phase_time = 0;       // time spent in the current phase [s]
   std::vector<double> deepest; // per hole, the deepest tip reached [m]
+  double peck_start = 0;       // tip depth where the current peck's feed began [m]
+  unsigned int pecks = 0;      // peck withdrawals so far, all holes [-]
 };
 
 struct DrillInterval {

@@ -166,23 +166,24 @@ MechanicsSnapshot snapshot_from_json(const nlohmann::json& j) {
 }
 
 nlohmann::json to_json(const instruments::DrillState& d) {
-  return {{"hole", d.hole},
-          {"phase", static_cast<int>(d.phase)},
-          {"tip", d.tip},
-          {"phase_time", d.phase_time},
-          {"deepest", d.deepest}};
+  return {{"hole", d.hole},       {"phase", static_cast<int>(d.phase)},
+          {"tip", d.tip},         {"phase_time", d.phase_time},
+          {"deepest", d.deepest}, {"peck_start", d.peck_start},
+          {"pecks", d.pecks}};
 }
 
 instruments::DrillState drill_state_from_json(const nlohmann::json& j, std::size_t n_holes) {
   instruments::DrillState d;
   d.hole = j.at("hole");
   const int phase = j.at("phase");
-  if (phase < 0 || phase > static_cast<int>(DrillPhase::done))
+  if (phase < 0 || phase > static_cast<int>(DrillPhase::peck_return))
     throw std::runtime_error("drill phase " + std::to_string(phase) + " out of range");
   d.phase = static_cast<DrillPhase>(phase);
   d.tip = j.at("tip");
   d.phase_time = j.at("phase_time");
   d.deepest = j.at("deepest").get<std::vector<double>>();
+  d.peck_start = j.value("peck_start", 0.0); // checkpoints from before pecking: no pecks
+  d.pecks = j.value("pecks", 0u);
   if (d.deepest.size() != n_holes)
     throw std::runtime_error("the checkpoint has " + std::to_string(d.deepest.size()) +
                              " holes, the scene " + std::to_string(n_holes));
@@ -1571,6 +1572,7 @@ void BoneDrilling::run(RunContext& ctx) {
   sum.set_figure("necrotic_distance_cem43_mm", distance_cem * 1e3, "mm");
   sum.set_figure("max_thrust_force_N", max_thrust, "N");
   sum.set_figure("max_torque_Nmm", max_torque * 1e3, "N mm");
+  sum.set_figure("pecks", state.pecks, "-"); // withdrawals between pecks, all holes
   sum.set_figure("cutting_energy_J", cutting_energy, "J");
   sum.set_figure("torque_energy_J", torque_energy, "J");
   if (constant_chip)

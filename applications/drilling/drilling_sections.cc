@@ -116,6 +116,11 @@ void DrillSection::declare(dealii::ParameterHandler& prm) {
   prm.declare_entry("Thrust force", "40", Double(0), "Axial force with Feed control = thrust [N].");
   prm.declare_entry("Dwell", "0", Double(0), "Time the bit turns at full depth [s].");
   prm.declare_entry("Retraction speed", "10", Double(0), "Axial speed when withdrawing [mm/s].");
+  prm.declare_entry("Peck depth", "0", Double(0),
+                    "Peck drilling: tip travel per peck (the first from the entry point); after "
+                    "each peck short of the full depth the bit withdraws to the entry point and "
+                    "returns down its hole at the Retraction speed, cutting nothing, so chips "
+                    "clear and the irrigation reaches the hole; 0 = one continuous feed [mm].");
   prm.declare_entry("Pause between holes", "5", Double(0),
                     "Time from leaving a hole to starting the next [s].");
   prm.declare_entry("Margin friction torque", "2", Double(0),
@@ -156,6 +161,7 @@ void DrillSection::parse(dealii::ParameterHandler& prm) {
   schedule.thrust_force = prm.get_double("Thrust force");
   schedule.dwell = prm.get_double("Dwell");
   schedule.retraction_speed = 1e-3 * prm.get_double("Retraction speed");
+  schedule.peck_depth = 1e-3 * prm.get_double("Peck depth");
   schedule.pause = prm.get_double("Pause between holes");
   schedule.margin_friction_torque = 1e-3 * prm.get_double("Margin friction torque");
   schedule.validate();

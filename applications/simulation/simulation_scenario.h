@@ -112,7 +112,7 @@ class Simulation : public framework::Scenario {
     // reactions across one (quasi-static); −1 = none measured (no state carried, or no
     // conversion inside a relaxation).
     double plastic_strain = -1, reaction_jump = -1;
-    double hole_mass = 0; // mass the points inside Coupling/Hole took away, summed [kg]
+    double hole_mass = 0; // mass the points inside Coupling/Hole took away, summed [kg; 2-D kg/m]
     nlohmann::json to_json() const;
     void from_json(const nlohmann::json& j);
   };

@@ -24,12 +24,14 @@ void CtBoxParameters::declare(dealii::ParameterHandler& prm, const std::string& 
   DensityCalibration::declare(prm);
   prm.declare_entry("Top centre", "", Anything(),
                     "The image point at the centre of the block's top face, where x = y = z = 0 "
-                    "of the block, in the image's physical frame (LPS for medical images) [mm].");
+                    "of the block: in the image's physical frame (LPS for medical images) [mm], "
+                    "or with Top centre frame = voxel as image indices i, j, k [-].");
   prm.declare_entry("Block z axis", "0,0,1", Anything(),
-                    "The block's z axis in the image's frame, pointing out of the bone through "
-                    "the top face (a tool entering the top face moves along minus this); the "
-                    "block's x axis is the image's x (its y if z is along x) made normal to it "
-                    "[-].");
+                    "The block's z axis, pointing out of the bone through the top face (a tool "
+                    "entering the top face moves along minus this): a direction in the image's "
+                    "physical frame, or in index space with Top centre frame = voxel. The "
+                    "block's x axis is the physical x (its y if z is along x) made normal to "
+                    "it, in either frame [-].");
   prm.declare_entry("Top centre frame", "physical", Selection("physical|voxel"),
                     "Frame of Top centre and Block z axis [-]. physical: the image's physical "
                     "frame in mm (LPS for medical images). voxel: image indices i, j, k as a "
@@ -106,6 +108,10 @@ void CtBoxParameters::parse(const dealii::ParameterHandler& prm, const std::stri
 }
 
 void CtBoxParameters::set_frame(const dealii::Point<3>& centre, dealii::Tensor<1, 3> ez) {
+  // A voxel-frame axis is checked again once mapped (a tiny index direction can underflow).
+  if (!(ez.norm() > 0) || !std::isfinite(ez.norm()))
+    throw InvalidInput("CT/Block z axis", "a direction of length " + std::to_string(ez.norm()),
+                       "a non-zero direction");
   top_centre = centre;
   ez /= ez.norm();
   dealii::Tensor<1, 3> ex({1, 0, 0});

@@ -185,6 +185,77 @@ TEST(DrillingProgramme, PhasesAndCuttingEnergy) {
   EXPECT_NEAR(friction, 2e-3 * omega * in_bone, 1e-12);
 }
 
+// Peck drilling: 5 mm in pecks of 2 mm. The bit withdraws to the entry after the pecks ending
+// at 2 and 4 mm and returns down its hole at the retraction speed, so the programme takes
+// 5 / v + 5 / v_r + 2 (2 + 4) / v_r. The cutting is that of the continuous feed: the phases
+// between pecks cut nothing and the feed resumes on the bottom it left (the lips fully engaged
+// from 1.2 mm on, where both runs still take the same steps), so the energies agree to
+// round-off. The returning tip never passes the bottom cut so far.
+TEST(DrillingProgramme, PeckDrillingWithdrawsBetweenPecks) {
+  const CuttingCoefficients c = cortical();
+  DrillingSchedule sched;
+  sched.spindle_rpm = 1000;
+  sched.feed_rate = 1e-3;
+  sched.retraction_speed = 5e-3;
+  DrillHole hole;
+  hole.axis.entry = dealii::Point<3>(0, 0, 0);
+  hole.axis.direction = dealii::Tensor<1, 3>({0, 0, -1});
+  hole.depth = 5e-3;
+  const auto material = [&](unsigned int, double a, double,
+                            double) -> std::optional<CuttingCoefficients> {
+    if (a < 0)
+      return std::nullopt;
+    return c;
+  };
+  const DrillingProgramme continuous(DrillingForceModel(bit()), {hole}, sched);
+  sched.peck_depth = 2e-3;
+  const DrillingProgramme pecking(DrillingForceModel(bit()), {hole}, sched);
+  EXPECT_NEAR(pecking.nominal_duration(), 5.0 + 1.0 + 2 * (2.0 + 4.0) / 5.0, 1e-12);
+
+  auto run = [&](const DrillingProgramme& programme, std::vector<DrillPhase>& phases) {
+    DrillState st = programme.initial_state();
+    double cutting = 0, in_bone = 0;
+    const double dt = 0.0117; // no phase ends on a step's end: dwell 0 and pause 0 never show
+    for (unsigned int step = 0; step < 2000 && st.phase != DrillPhase::done; ++step) {
+      const DrillInterval I = programme.advance(st, dt, 1, material);
+      cutting += I.cutting_energy;
+      in_bone += I.time_in_bone;
+      if (phases.empty() || phases.back() != st.phase)
+        phases.push_back(st.phase);
+      EXPECT_LE(st.tip, st.deepest[0] + 1e-15) << "step " << step;
+    }
+    EXPECT_EQ(st.phase, DrillPhase::done);
+    EXPECT_NEAR(st.deepest[0], 5e-3, 1e-15);
+    return std::make_tuple(cutting, in_bone, st.pecks);
+  };
+  std::vector<DrillPhase> phases_continuous, phases_pecking;
+  const auto [cut_c, bone_c, pecks_c] = run(continuous, phases_continuous);
+  const auto [cut_p, bone_p, pecks_p] = run(pecking, phases_pecking);
+  EXPECT_EQ(pecks_c, 0u);
+  EXPECT_EQ(pecks_p, 2u);
+  EXPECT_NEAR(cut_p, cut_c, 1e-9 * cut_c);
+  EXPECT_NEAR(bone_c, 5.0 + 1.0, 1e-9);
+  EXPECT_NEAR(bone_p, 5.0 + 1.0 + 2.4, 1e-9);
+  const std::vector<DrillPhase> expected{
+      DrillPhase::feed, DrillPhase::peck_retract, DrillPhase::peck_return,
+      DrillPhase::feed, DrillPhase::peck_retract, DrillPhase::peck_return,
+      DrillPhase::feed, DrillPhase::retract,      DrillPhase::done};
+  std::vector<std::string> got, want;
+  for (const auto p : phases_pecking)
+    got.push_back(to_string(p));
+  for (const auto p : expected)
+    want.push_back(to_string(p));
+  EXPECT_EQ(got, want);
+
+  sched.peck_depth = -1e-3;
+  try {
+    sched.validate();
+    ADD_FAILURE() << "a negative peck depth was accepted";
+  } catch (const spinesim::InvalidInput& e) {
+    EXPECT_EQ(e.where(), "Drill/Peck depth");
+  }
+}
+
 TEST(DrillBit, DistanceToSweptSolid) {
   const double R = 2e-3, kappa = 59.0 * pi / 180, tip = 10e-3, Lc = R / std::tan(kappa);
   EXPECT_EQ(distance_to_swept_solid(5e-3, 1e-3, tip, R, kappa), 0.0);
