@@ -738,3 +738,16 @@ spinesim_add_scene_test(coupling.kirsch_hole_3d
 spinesim_add_scene_test(coupling.kirsch_hole_bad_centre SCENE ${_kirsch}
   OUT ${_kirsch_runs}/bad_centre SET "Coupling/Hole centre=0" EXIT 2
   MATCH "Coupling/Hole centre" LABELS "scene;coupling;hostile")
+# The heat solver keeps every cell, so a hole cut from the particles cannot carry heat; a hole
+# reaching cells coarser than the particle lattice has no particles to be cut from (decided on
+# every rank, so two ranks stop together).
+spinesim_add_scene_test(coupling.kirsch_hole_with_heat SCENE ${_kirsch}
+  OUT ${_kirsch_runs}/with_heat SET "Effects/Heat=true" EXIT 2
+  MATCH "Coupling/Hole radius" LABELS "scene;coupling;hostile")
+spinesim_add_scene_test(coupling.kirsch_hole_reaches_coarse_cells SCENE ${_kirsch} RANKS 2
+  OUT ${_kirsch_runs}/coarse_cells
+  SET "Coupling/Hole radius=1.9" "Coupling/Initial region lower corner=-1,-1"
+      "Coupling/Initial region upper corner=1,1" "Coupling/Refinement region lower corner=-1,-1"
+      "Coupling/Refinement region upper corner=1,1" "Coupling/Region refinements=1"
+  EXIT 2 MATCH "reaches cells coarser than the particle lattice"
+  LABELS "scene;coupling;hostile;mpi")
