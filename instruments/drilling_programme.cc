@@ -56,6 +56,12 @@ DrillingProgramme::DrillingProgramme(DrillingForceModel model, std::vector<Drill
                                      DrillingSchedule schedule)
     : model_(std::move(model)), holes_(std::move(holes)), schedule_(schedule) {
   schedule_.validate();
+  // Clinical pecks are 0.5-2 mm on holes of 5-40 mm; a thousand a hole bounds the work.
+  for (const auto& h : holes_)
+    if (schedule_.peck_depth > 0 && schedule_.peck_depth < 1e-3 * h.depth)
+      throw InvalidInput("Drill/Peck depth", std::to_string(schedule_.peck_depth * 1e3) + " mm",
+                         "0 (no pecks) or at least 1e-3 of the hole's depth (" +
+                             std::to_string(h.depth * 1e-3 * 1e3) + " mm)");
 }
 
 DrillState DrillingProgramme::initial_state() const {
@@ -109,6 +115,10 @@ DrillInterval DrillingProgramme::advance(
         // holding it at the part's start bounds it from above. Taken at the start, a point
         // entering the bone with few lips engaged ran away (60 N gave 650 N by the end of the
         // first step). Where no lip cuts yet, the bit approaches at the Feed rate.
+        // This peck ends at its depth, or at the hole's.
+        const bool pecking = schedule_.peck_depth > 0 &&
+                             st.peck_start + schedule_.peck_depth < hole.depth * (1 - 1e-12);
+        const double stop = pecking ? st.peck_start + schedule_.peck_depth : hole.depth;
         double f = schedule_.feed_rate * 60.0 / schedule_.spindle_rpm;
         if (schedule_.thrust_control) {
           const double rev = schedule_.spindle_rpm / 60.0, F = schedule_.thrust_force;
@@ -116,7 +126,7 @@ DrillInterval DrillingProgramme::advance(
               model_.feed_for_thrust(st.tip, F, schedule_.spindle_rpm, mat, 100 * f);
           double hi = start > 0 ? start : f;
           const auto end_thrust = [&](double feed) {
-            const double advance = std::min(feed * rev * sub, hole.depth - st.tip);
+            const double advance = std::min(feed * rev * sub, stop - st.tip);
             return model_.load(st.tip + advance, feed, schedule_.spindle_rpm, mat).thrust;
           };
           if (end_thrust(hi) > F * (1 + 1e-9)) {
@@ -130,10 +140,6 @@ DrillInterval DrillingProgramme::advance(
           f = hi;
         }
         const double v = f * schedule_.spindle_rpm / 60.0;
-        // This peck ends at its depth, or at the hole's.
-        const bool pecking = schedule_.peck_depth > 0 &&
-                             st.peck_start + schedule_.peck_depth < hole.depth * (1 - 1e-12);
-        const double stop = pecking ? st.peck_start + schedule_.peck_depth : hole.depth;
         used = std::min(sub, std::max(0.0, stop - st.tip) / v);
         // Forces at the middle of the part (midpoint rule in time).
         const DrillingLoad L = model_.load(st.tip + 0.5 * v * used, f, schedule_.spindle_rpm, mat);
@@ -143,6 +149,7 @@ DrillInterval DrillingProgramme::advance(
         out.max_torque = std::max(out.max_torque, L.torque);
         out.feed_per_rev = f;
         st.tip = std::min(stop, st.tip + v * used);
+        out.cut_tip = st.tip;
         if (st.tip >= stop - 1e-12 * hole.depth) {
           st.tip = stop;
           st.phase = pecking ? DrillPhase::peck_retract : DrillPhase::dwell;

@@ -57,10 +57,15 @@ struct DrillInterval {
   double max_thrust = 0, max_torque = 0; // [N], [N m]
   double feed_per_rev = 0;               // at the end of the interval's last feeding sub-step [m]
   double time_in_bone = 0;               // of the interval, with the tip below its entry [s]
+  // Tip depth at the end of the interval's last feeding sub-step: where the lips were when they
+  // last cut (a peck or the feed may end mid-interval and the bit withdraw) [m].
+  double cut_tip = 0;
 };
 
 class DrillingProgramme {
  public:
+  // InvalidInput naming Drill/Peck depth for pecks under 1e-3 of a hole's depth (more than a
+  // thousand pecks a hole).
   DrillingProgramme(DrillingForceModel model, std::vector<DrillHole> holes,
                     DrillingSchedule schedule);
 

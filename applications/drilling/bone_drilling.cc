@@ -1249,7 +1249,9 @@ void BoneDrilling::run(RunContext& ctx) {
     ++step;
     // The step: a fraction of a drill cell while feeding, the largest otherwise.
     double dt = state.phase == DrillPhase::done ? run_.max_time_step : feed_dt;
-    if (state.phase == DrillPhase::feed && drill_.schedule.thrust_control) {
+    // Under thrust control a step may resume the feed after a peck's return.
+    if ((state.phase == DrillPhase::feed || state.phase == DrillPhase::peck_return) &&
+        drill_.schedule.thrust_control) {
       // The feed the thrust drives with the whole point in bone: while the point enters, less
       // engaged lips let the same thrust feed faster, and a step sized on them would carry
       // the bit through the entry in one go (first steps of 3.7 mm and 950 N were seen).
@@ -1305,7 +1307,10 @@ void BoneDrilling::run(RunContext& ctx) {
     offered_heat += (cut + wall) * dt;
     if (cut + wall > 0) {
       dealii::TimerOutput::Scope timer(ctx.timer(), "heat input");
-      heat.add_source_vector(heat_input(j, state.tip, cut, wall));
+      // The lips' heat where they last cut: a feed or peck ending mid-step leaves the bit
+      // withdrawing by the step's end. Margin friction alone follows the bit.
+      const double source_tip = interval.cutting_energy > 0 ? interval.cut_tip : state.tip;
+      heat.add_source_vector(heat_input(j, source_tip, cut, wall));
     }
     set_wall(!drilling);
     const Vector old_T = heat.solution();

@@ -119,8 +119,10 @@ void DrillSection::declare(dealii::ParameterHandler& prm) {
   prm.declare_entry("Peck depth", "0", Double(0),
                     "Peck drilling: tip travel per peck (the first from the entry point); after "
                     "each peck short of the full depth the bit withdraws to the entry point and "
-                    "returns down its hole at the Retraction speed, cutting nothing, so chips "
-                    "clear and the irrigation reaches the hole; 0 = one continuous feed [mm].");
+                    "returns down its hole at the Retraction speed, cutting nothing, and the bone "
+                    "cools meanwhile (chip clearing and coolant reaching the bottom are not "
+                    "modelled); 0 = one continuous feed, else at least 1e-3 of each hole's "
+                    "depth [mm].");
   prm.declare_entry("Pause between holes", "5", Double(0),
                     "Time from leaving a hole to starting the next [s].");
   prm.declare_entry("Margin friction torque", "2", Double(0),

@@ -190,7 +190,8 @@ TEST(DrillingProgramme, PhasesAndCuttingEnergy) {
 // 5 / v + 5 / v_r + 2 (2 + 4) / v_r. The cutting is that of the continuous feed: the phases
 // between pecks cut nothing and the feed resumes on the bottom it left (the lips fully engaged
 // from 1.2 mm on, where both runs still take the same steps), so the energies agree to
-// round-off. The returning tip never passes the bottom cut so far.
+// round-off. Between pecks nothing deepens the hole, and each peck starts where the last one
+// stopped (0, 2 and 4 mm).
 TEST(DrillingProgramme, PeckDrillingWithdrawsBetweenPecks) {
   const CuttingCoefficients c = cortical();
   DrillingSchedule sched;
@@ -215,14 +216,28 @@ TEST(DrillingProgramme, PeckDrillingWithdrawsBetweenPecks) {
   auto run = [&](const DrillingProgramme& programme, std::vector<DrillPhase>& phases) {
     DrillState st = programme.initial_state();
     double cutting = 0, in_bone = 0;
+    std::vector<double> peck_starts{st.peck_start};
     const double dt = 0.0117; // no phase ends on a step's end: dwell 0 and pause 0 never show
     for (unsigned int step = 0; step < 2000 && st.phase != DrillPhase::done; ++step) {
+      const DrillPhase before = st.phase;
+      const double deepest_before = st.deepest[0];
       const DrillInterval I = programme.advance(st, dt, 1, material);
       cutting += I.cutting_energy;
       in_bone += I.time_in_bone;
       if (phases.empty() || phases.back() != st.phase)
         phases.push_back(st.phase);
-      EXPECT_LE(st.tip, st.deepest[0] + 1e-15) << "step " << step;
+      if (st.phase != DrillPhase::done && st.peck_start != peck_starts.back())
+        peck_starts.push_back(st.peck_start);
+      if ((before == DrillPhase::peck_retract || before == DrillPhase::peck_return) &&
+          st.phase != DrillPhase::feed)
+        EXPECT_EQ(st.deepest[0], deepest_before) << "step " << step;
+    }
+    if (st.pecks > 0) {
+      EXPECT_EQ(peck_starts.size(), 3u);
+      if (peck_starts.size() == 3) {
+        EXPECT_NEAR(peck_starts[1], 2e-3, 1e-15);
+        EXPECT_NEAR(peck_starts[2], 4e-3, 1e-15);
+      }
     }
     EXPECT_EQ(st.phase, DrillPhase::done);
     EXPECT_NEAR(st.deepest[0], 5e-3, 1e-15);
@@ -247,6 +262,14 @@ TEST(DrillingProgramme, PeckDrillingWithdrawsBetweenPecks) {
     want.push_back(to_string(p));
   EXPECT_EQ(got, want);
 
+  // Pecks under 1e-3 of the hole (more than a thousand) are refused.
+  sched.peck_depth = 1e-6;
+  try {
+    DrillingProgramme(DrillingForceModel(bit()), {hole}, sched);
+    ADD_FAILURE() << "a 1 um peck in a 5 mm hole was accepted";
+  } catch (const spinesim::InvalidInput& e) {
+    EXPECT_EQ(e.where(), "Drill/Peck depth");
+  }
   sched.peck_depth = -1e-3;
   try {
     sched.validate();

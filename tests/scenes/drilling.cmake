@@ -90,19 +90,19 @@ spinesim_add_comparison_test(scene.bone_drilling_ranks_agree
 # the entry after the pecks ending at 2 and 4 mm. The books close as in the continuous run
 # (same bounds). Against the continuous quick run:
 # - the same cut: the removed volume, and the cutting energy to 1e-9 (the programme splits its
-#   sub-steps where a phase ends and the feed resumes fully engaged on the bottom it left;
-#   measured equal to round-off);
-# - a smaller CEM43 necrotic volume (measured 25.2 against 28.5 mm^3, ratio 0.88; bound 0.97)
-#   and a hottest probe no hotter (40.33 against 40.59 degC): the bone cools while the bit is
-#   out. The peak bone temperature at the lips is not lower (103.6 against 102.8 degC, just
-#   after the first re-entry at this coarse resolution; docs/drilling.md) and is not asserted.
+#   sub-steps where a phase ends and the feed resumes fully engaged on the bottom it left, in
+#   the quick block's one bone type; measured equal to round-off);
+# - a smaller CEM43 necrotic volume (measured 25.7 against 28.5 mm^3, ratio 0.90; bound 0.97):
+#   the bone cools while the bit is out. The hottest probe (39.98 against 40.59 degC) and the
+#   peak bone temperature at the lips (103.6 against 102.8 degC, just after the first
+#   re-entry at this coarse resolution; docs/drilling.md) are reported, not asserted.
 spinesim_add_scene_test(scene.bone_drilling_quick_pecking SCENE ${_drill}
   OUT ${_drill_runs}/quick_pecking SET ${_drill_quick} "Drill/Peck depth=2"
-  EXPECT "status==ok;pecks~2:0;heat_input_error_relative<=1e-6;heat_balance_error_relative<=1e-6;mass_balance_error_relative<=1e-12;removed_volume_error_relative<=0.05;peak_temperature_C>=37"
+  EXPECT "status==ok;pecks~2:0;heat_input_error_relative<=1e-6;heat_balance_error_relative<=1e-6;mass_balance_error_relative<=1e-12;torque_energy_error_relative<=5e-3;removed_volume_error_relative<=0.05;peak_temperature_C>=37"
   LABELS "scene;heat;drilling" FIXTURE drill_quick_pecking)
 spinesim_add_comparison_test(scene.bone_drilling_pecking_lowers_dose
   A ${_drill_runs}/quick/summary.json B ${_drill_runs}/quick_pecking/summary.json
-  CHECKS "cutting_energy_J:rel:1e-9;removed_volume_mm3:rel:1e-12;necrotic_volume_cem43_mm3:ratio_max:0.97;max_probe_temperature_C:ratio_max:1"
+  CHECKS "cutting_energy_J:rel:1e-9;removed_volume_mm3:rel:1e-12;necrotic_volume_cem43_mm3:ratio_max:0.97"
   REQUIRES "drill_quick;drill_quick_pecking" LABELS "scene;drilling")
 
 # Weak bone cracks: a 3 mm cortical shell over cancellous bone (E 300 MPa, strengths 2.1 / 2.3
