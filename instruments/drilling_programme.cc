@@ -158,12 +158,13 @@ DrillInterval DrillingProgramme::advance(
         }
         break;
       }
-      case DrillPhase::peck_retract: // out to the entry point, as in the final retraction
+      case DrillPhase::retract:
+      case DrillPhase::peck_retract: // out to the entry point; then the pause, or the return
         used = std::min(sub, st.tip / schedule_.retraction_speed);
         st.tip -= schedule_.retraction_speed * used;
         if (st.tip <= 1e-12 * hole.depth) {
           st.tip = 0;
-          st.phase = DrillPhase::peck_return;
+          st.phase = st.phase == DrillPhase::retract ? DrillPhase::pause : DrillPhase::peck_return;
           st.phase_time = 0;
         }
         break;
@@ -184,15 +185,6 @@ DrillInterval DrillingProgramme::advance(
         if (used <= 0) {
           used = 0;
           st.phase = DrillPhase::retract;
-          st.phase_time = 0;
-        }
-        break;
-      case DrillPhase::retract:
-        used = std::min(sub, st.tip / schedule_.retraction_speed);
-        st.tip -= schedule_.retraction_speed * used;
-        if (st.tip <= 1e-12 * hole.depth) {
-          st.tip = 0;
-          st.phase = DrillPhase::pause;
           st.phase_time = 0;
         }
         break;
