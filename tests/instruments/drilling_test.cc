@@ -279,6 +279,61 @@ TEST(DrillingProgramme, PeckDrillingWithdrawsBetweenPecks) {
   }
 }
 
+// Pecks under thrust control: each peck stops exactly at its depth (2 and 4 mm: the deepest
+// point when the withdrawal starts), the thrust never passes the set 60 N (the bisection's
+// 1e-6), and fully engaged in one bone the feed after a return is the feed before it (the same
+// thrust balance).
+TEST(DrillingProgramme, PecksUnderThrustControl) {
+  const CuttingCoefficients c = cortical();
+  DrillingSchedule sched;
+  sched.spindle_rpm = 1000;
+  sched.feed_rate = 1e-3;
+  sched.thrust_control = true;
+  sched.thrust_force = 60;
+  sched.peck_depth = 2e-3;
+  DrillHole hole;
+  hole.axis.entry = dealii::Point<3>(0, 0, 0);
+  hole.axis.direction = dealii::Tensor<1, 3>({0, 0, -1});
+  hole.depth = 5e-3;
+  const DrillingProgramme programme(DrillingForceModel(bit()), {hole}, sched);
+  const auto material = [&](unsigned int, double a, double,
+                            double) -> std::optional<CuttingCoefficients> {
+    if (a < 0)
+      return std::nullopt;
+    return c;
+  };
+  DrillState st = programme.initial_state();
+  double max_thrust = 0;
+  std::vector<double> deepest_at_withdrawal, feed_before, feed_after;
+  double last_feed = 0;
+  for (unsigned int step = 0; step < 4000 && st.phase != DrillPhase::done; ++step) {
+    const DrillPhase before = st.phase;
+    const DrillInterval I = programme.advance(st, 0.05, 8, material);
+    max_thrust = std::max(max_thrust, I.max_thrust);
+    if (before == DrillPhase::feed && st.phase == DrillPhase::peck_retract) {
+      deepest_at_withdrawal.push_back(st.deepest[0]);
+      feed_before.push_back(last_feed);
+    }
+    if (before == DrillPhase::peck_return && st.phase == DrillPhase::feed)
+      feed_after.push_back(I.feed_per_rev);
+    if (I.feed_per_rev > 0)
+      last_feed = I.feed_per_rev;
+    if (st.phase == DrillPhase::feed)
+      EXPECT_LE(st.tip, st.peck_start + 2e-3 + 1e-15) << "step " << step;
+  }
+  EXPECT_EQ(st.phase, DrillPhase::done);
+  EXPECT_EQ(st.pecks, 2u);
+  EXPECT_LE(max_thrust, 60.0 * (1 + 1e-6));
+  ASSERT_EQ(deepest_at_withdrawal.size(), 2u);
+  EXPECT_NEAR(deepest_at_withdrawal[0], 2e-3, 1e-15);
+  EXPECT_NEAR(deepest_at_withdrawal[1], 4e-3, 1e-15);
+  ASSERT_EQ(feed_after.size(), 2u);
+  for (unsigned int k = 0; k < 2; ++k) {
+    EXPECT_GT(feed_before[k], 0.0);
+    EXPECT_NEAR(feed_after[k], feed_before[k], 1e-6 * feed_before[k]) << "peck " << k;
+  }
+}
+
 TEST(DrillBit, DistanceToSweptSolid) {
   const double R = 2e-3, kappa = 59.0 * pi / 180, tip = 10e-3, Lc = R / std::tan(kappa);
   EXPECT_EQ(distance_to_swept_solid(5e-3, 1e-3, tip, R, kappa), 0.0);
