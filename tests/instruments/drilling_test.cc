@@ -32,6 +32,22 @@ DrillBit bit(double pilot = 0) {
   return b;
 }
 
+// A hole fed along -z from (x, 0, 0), the block's top face at z = 0.
+DrillHole downward_hole(double depth, double x = 0) {
+  DrillHole h;
+  h.axis.entry = dealii::Point<3>(x, 0, 0);
+  h.axis.direction = dealii::Tensor<1, 3>({0, 0, -1});
+  h.depth = depth;
+  return h;
+}
+
+// The programme's material: cortical bone below the top face (a >= 0), air above it.
+std::optional<CuttingCoefficients> cortical_below_top(unsigned int, double a, double, double) {
+  if (a < 0)
+    return std::nullopt;
+  return cortical();
+}
+
 } // namespace
 
 // Fully engaged in one material: M = K_c(h) f (R² − r_p²)/2 and F = K_t(h) f sin κ (R − r_p)
@@ -137,19 +153,10 @@ TEST(DrillingProgramme, PhasesAndCuttingEnergy) {
   sched.retraction_speed = 5e-3;
   sched.pause = 1.0;
   sched.margin_friction_torque = 2e-3;
-  DrillHole hole;
-  hole.axis.entry = dealii::Point<3>(0, 0, 0);
-  hole.axis.direction = dealii::Tensor<1, 3>({0, 0, -1});
-  hole.depth = 5e-3;
-  DrillHole second = hole;
-  second.axis.entry = dealii::Point<3>(8e-3, 0, 0);
+  const DrillHole hole = downward_hole(5e-3);
+  const DrillHole second = downward_hole(5e-3, 8e-3);
   const DrillingProgramme programme(DrillingForceModel(bit()), {hole, second}, sched);
-  const auto material = [&](unsigned int, double a, double,
-                            double) -> std::optional<CuttingCoefficients> {
-    if (a < 0)
-      return std::nullopt;
-    return c;
-  };
+  const auto material = cortical_below_top;
   DrillState st = programme.initial_state();
   const double feed_time = 5.0, total = programme.nominal_duration();
   EXPECT_NEAR(total, 2 * (5.0 + 0.5 + 1.0 + 1.0), 1e-12);
@@ -193,21 +200,12 @@ TEST(DrillingProgramme, PhasesAndCuttingEnergy) {
 // round-off. Between pecks nothing deepens the hole, and each peck starts where the last one
 // stopped (0, 2 and 4 mm).
 TEST(DrillingProgramme, PeckDrillingWithdrawsBetweenPecks) {
-  const CuttingCoefficients c = cortical();
   DrillingSchedule sched;
   sched.spindle_rpm = 1000;
   sched.feed_rate = 1e-3;
   sched.retraction_speed = 5e-3;
-  DrillHole hole;
-  hole.axis.entry = dealii::Point<3>(0, 0, 0);
-  hole.axis.direction = dealii::Tensor<1, 3>({0, 0, -1});
-  hole.depth = 5e-3;
-  const auto material = [&](unsigned int, double a, double,
-                            double) -> std::optional<CuttingCoefficients> {
-    if (a < 0)
-      return std::nullopt;
-    return c;
-  };
+  const DrillHole hole = downward_hole(5e-3);
+  const auto material = cortical_below_top;
   const DrillingProgramme continuous(DrillingForceModel(bit()), {hole}, sched);
   sched.peck_depth = 2e-3;
   const DrillingProgramme pecking(DrillingForceModel(bit()), {hole}, sched);
@@ -229,8 +227,9 @@ TEST(DrillingProgramme, PeckDrillingWithdrawsBetweenPecks) {
       if (st.phase != DrillPhase::done && st.peck_start != peck_starts.back())
         peck_starts.push_back(st.peck_start);
       if ((before == DrillPhase::peck_retract || before == DrillPhase::peck_return) &&
-          st.phase != DrillPhase::feed)
+          st.phase != DrillPhase::feed) {
         EXPECT_EQ(st.deepest[0], deepest_before) << "step " << step;
+      }
     }
     if (st.pecks > 0) {
       EXPECT_EQ(peck_starts.size(), 3u);
@@ -284,24 +283,15 @@ TEST(DrillingProgramme, PeckDrillingWithdrawsBetweenPecks) {
 // 1e-6), and fully engaged in one bone the feed after a return is the feed before it (the same
 // thrust balance).
 TEST(DrillingProgramme, PecksUnderThrustControl) {
-  const CuttingCoefficients c = cortical();
   DrillingSchedule sched;
   sched.spindle_rpm = 1000;
   sched.feed_rate = 1e-3;
   sched.thrust_control = true;
   sched.thrust_force = 60;
   sched.peck_depth = 2e-3;
-  DrillHole hole;
-  hole.axis.entry = dealii::Point<3>(0, 0, 0);
-  hole.axis.direction = dealii::Tensor<1, 3>({0, 0, -1});
-  hole.depth = 5e-3;
+  const DrillHole hole = downward_hole(5e-3);
   const DrillingProgramme programme(DrillingForceModel(bit()), {hole}, sched);
-  const auto material = [&](unsigned int, double a, double,
-                            double) -> std::optional<CuttingCoefficients> {
-    if (a < 0)
-      return std::nullopt;
-    return c;
-  };
+  const auto material = cortical_below_top;
   DrillState st = programme.initial_state();
   double max_thrust = 0;
   std::vector<double> deepest_at_withdrawal, feed_before, feed_after;
@@ -318,8 +308,9 @@ TEST(DrillingProgramme, PecksUnderThrustControl) {
       feed_after.push_back(I.feed_per_rev);
     if (I.feed_per_rev > 0)
       last_feed = I.feed_per_rev;
-    if (st.phase == DrillPhase::feed)
+    if (st.phase == DrillPhase::feed) {
       EXPECT_LE(st.tip, st.peck_start + 2e-3 + 1e-15) << "step " << step;
+    }
   }
   EXPECT_EQ(st.phase, DrillPhase::done);
   EXPECT_EQ(st.pecks, 2u);
@@ -383,17 +374,9 @@ TEST(DrillingProgramme, ThrustControlDoesNotOvershootAtTheEntry) {
   sched.feed_rate = 1e-3;
   sched.thrust_control = true;
   sched.thrust_force = 60;
-  DrillHole hole;
-  hole.axis.entry = dealii::Point<3>(0, 0, 0);
-  hole.axis.direction = dealii::Tensor<1, 3>({0, 0, -1});
-  hole.depth = 4e-3;
+  const DrillHole hole = downward_hole(4e-3);
   const DrillingProgramme programme(DrillingForceModel(bit()), {hole}, sched);
-  const auto material = [&](unsigned int, double a, double,
-                            double) -> std::optional<CuttingCoefficients> {
-    if (a < 0)
-      return std::nullopt;
-    return c;
-  };
+  const auto material = cortical_below_top;
   DrillState st = programme.initial_state();
   const DrillingForceModel model(bit());
   const auto in_bone = [&](double a, double, double) -> std::optional<CuttingCoefficients> {
