@@ -1,11 +1,12 @@
 #ifndef SPINESIM_INSTRUMENTS_DRILLING_FORCE_MODEL_H
 #define SPINESIM_INSTRUMENTS_DRILLING_FORCE_MODEL_H
 
-// Mechanistic drilling forces: thrust, torque and cutting power of a two-lip twist drill from
-// its feed per revolution, in the specific-cutting-force form of Kienzle (1952) used for bone
+// Mechanistic drilling forces: thrust, torque and cutting power of a two-lip twist (or step) drill
+// from its feed per revolution, in the specific-cutting-force form of Kienzle (1952) used for bone
 // by the mechanistic drilling models of Lee, Gozen & Ozdoganlar (2012, J. Biomech. 45:1076).
 //
-// Each lip is a straight cutting edge at the half point angle κ. At radius r the uncut chip
+// Each lip is a straight cutting edge at its half angle κ (the point's; a step drill's shoulder
+// has its own, DrillBit). At radius r the uncut chip
 // is h = (f/2) sin κ thick and dr / sin κ wide (f the feed per revolution, shared by the
 // two lips), so per lip the cutting force is K_c(h) h dr / sin κ and the edge-normal force
 // K_t(h) h dr / sin κ, whose axial part is × sin κ. Summed over both lips:

@@ -1,4 +1,4 @@
-// The `bone_drilling` scenario: a twist drill cutting holes in a cortical/cancellous bone
+// The `bone_drilling` scenario: a twist or step drill cutting holes in a cortical/cancellous bone
 // block, with the heat its cutting produces, the bone it removes, and the thermal damage it
 // leaves (docs/drilling.md).
 //
@@ -95,13 +95,6 @@ std::string mm_point(const dealii::Point<3>& x) {
   std::ostringstream s;
   s << "(" << x[0] * 1e3 << ", " << x[1] * 1e3 << ", " << x[2] * 1e3 << ") mm";
   return s.str();
-}
-
-// Distance in the (a, r) plane from (a, r) to the segment (a0, r0)–(a1, r1).
-double segment_distance(double a, double r, double a0, double r0, double a1, double r1) {
-  const double da = a1 - a0, dr = r1 - r0, len2 = da * da + dr * dr;
-  const double t = len2 > 0 ? std::clamp(((a - a0) * da + (r - r0) * dr) / len2, 0.0, 1.0) : 0.0;
-  return std::hypot(a - (a0 + t * da), r - (r0 + t * dr));
 }
 
 // One mechanics solve of a drilling run: its loads and what the stresses gave.
@@ -299,8 +292,7 @@ class BoneDrilling : public Scenario {
 
   double final_hole_distance(unsigned int j, const dealii::Point<3>& x) const {
     const auto& h = drill_.holes[j];
-    return instruments::distance_to_swept_solid(h.axis.axial(x), h.axis.radial(x), h.depth,
-                                                drill_.bit.radius(), drill_.bit.half_angle());
+    return drill_.bit.distance_outside(h.axis.axial(x), h.axis.radial(x), h.depth);
   }
 
   // Two unit vectors normal to the hole's axis: the azimuth θ of a lip point is measured from
@@ -323,8 +315,8 @@ class BoneDrilling : public Scenario {
     if (!bone_.inside(x) || x[2] > 0)
       return std::nullopt;
     for (unsigned int k = 0; k < j; ++k) // holes drilled before
-      if (instruments::in_swept_solid(drill_.holes[k].axis.axial(x), drill_.holes[k].axis.radial(x),
-                                      deepest[k], drill_.bit.radius(), drill_.bit.half_angle()))
+      if (drill_.bit.swept(drill_.holes[k].axis.axial(x), drill_.holes[k].axis.radial(x),
+                           deepest[k]))
         return std::nullopt;
     if (bone_.ct.enabled() && bone_.cutting_from_density)
       return bone_.cutting_at_density(ct_density(x));
@@ -376,7 +368,7 @@ struct DrillingRun {
 void BoneDrilling::run(RunContext& ctx) {
   const MPI_Comm comm = ctx.comm();
   const auto& bit = drill_.bit;
-  const double R = bit.radius(), kappa = bit.half_angle(), Lc = bit.cone_length();
+  const double R = bit.radius();
   const double h_drill = bit.diameter / mesh_.cells_across_diameter;
   const instruments::DrillingProgramme programme(instruments::DrillingForceModel(bit), drill_.holes,
                                                  drill_.schedule);
@@ -443,11 +435,7 @@ void BoneDrilling::run(RunContext& ctx) {
         if (std::hypot(da, dr) > half_diagonal)
           continue;
         // Distance to the final hole's surface: outside, or inside to the wall or the cone.
-        const double outside = instruments::distance_to_swept_solid(a, r, hole.depth, R, kappa);
-        const double to_surface =
-            outside > 0
-                ? outside
-                : std::min(R - r, ((hole.depth - a) * std::tan(kappa) - r) * std::cos(kappa));
+        const double to_surface = bit.distance_to_surface(a, r, hole.depth);
         const bool on_wall = to_surface <= half_diagonal && a <= reach + mesh_.margin;
         if (h > h_drill * (1 + 1e-9) || on_wall) {
           cell->set_refine_flag();
@@ -713,10 +701,10 @@ void BoneDrilling::run(RunContext& ctx) {
   };
   if (bit.pilot_diameter > 0 && !restarting) {
     dealii::TimerOutput::Scope t(ctx.timer(), "removal");
+    const instruments::DrillBit pilot = bit.pilot_hole();
     remove([&](const dealii::Point<3>& x) {
       for (const auto& h : drill_.holes)
-        if (instruments::in_swept_solid(h.axis.axial(x), h.axis.radial(x), h.depth,
-                                        bit.pilot_radius(), kappa))
+        if (pilot.swept(h.axis.axial(x), h.axis.radial(x), h.depth))
           return true;
       return false;
     });
@@ -734,14 +722,12 @@ void BoneDrilling::run(RunContext& ctx) {
                                         dealii::update_values | dealii::update_JxW_values);
   const auto for_each_zone_face = [&](unsigned int j, double tip, double reach, const auto& f) {
     const auto& axis = drill_.holes[j].axis;
-    const double r0 = bit.pilot_radius();
     const auto classify_face = [&](const dealii::Point<3>& c, bool wall) -> int {
       const double a = axis.axial(c), r = axis.radial(c);
-      // The lips: the cone from (tip − R/tan κ, R) to (tip − r_p/tan κ, r_p).
-      if (segment_distance(a, r, tip - R / std::tan(kappa), R, tip - r0 / std::tan(kappa), r0) <=
-          reach)
+      // The lips beyond the pilot hole (a step drill's two), then the margins behind them.
+      if (bit.distance_to_lips(a, r, tip) <= reach)
         return 1;
-      if (wall && std::abs(r - R) <= reach && a >= -reach && a <= tip - Lc)
+      if (wall && a >= -reach && bit.distance_to_margins(a, r, tip) <= reach)
         return 2;
       return 0;
     };
@@ -872,10 +858,9 @@ void BoneDrilling::run(RunContext& ctx) {
     snap.thrust = thrust;
     snap.torque = torque;
     const auto& axis = drill_.holes[j].axis;
-    const double r0 = bit.pilot_radius(), reach = 1.5 * h_drill;
+    const double reach = 1.5 * h_drill;
     const auto on_point = [&](const dealii::Point<3>& x) {
-      return segment_distance(axis.axial(x), axis.radial(x), tip - R / std::tan(kappa), R,
-                              tip - r0 / std::tan(kappa), r0) <= reach;
+      return bit.distance_to_lips(axis.axial(x), axis.radial(x), tip) <= reach;
     };
     const dealii::Tensor<1, 3> d = axis.direction;
     const auto arm = [&](const dealii::Point<3>& x) { return x - axis.point(axis.axial(x)); };
@@ -884,9 +869,8 @@ void BoneDrilling::run(RunContext& ctx) {
       double distance = std::numeric_limits<double>::max();
       for (unsigned int k = 0; k < drill_.holes.size(); ++k) {
         const auto& ak = drill_.holes[k].axis;
-        distance = std::min(
-            distance, instruments::distance_to_swept_solid(
-                          ak.axial(x), ak.radial(x), k == j ? tip : state.deepest[k], R, kappa));
+        distance = std::min(distance, bit.distance_outside(ak.axial(x), ak.radial(x),
+                                                           k == j ? tip : state.deepest[k]));
       }
       return distance;
     };
@@ -1257,7 +1241,8 @@ void BoneDrilling::run(RunContext& ctx) {
       // the bit through the entry in one go (first steps of 3.7 mm and 950 N were seen).
       const auto& axis =
           drill_.holes[std::min<unsigned int>(state.hole, drill_.holes.size() - 1)].axis;
-      const double engaged = std::max(state.tip, axis.entry[2] / -axis.direction[2] + Lc);
+      const double engaged =
+          std::max(state.tip, axis.entry[2] / -axis.direction[2] + bit.full_diameter_depth());
       const double v = std::max(
           1e-9,
           programme.model().feed_for_thrust(
@@ -1297,9 +1282,8 @@ void BoneDrilling::run(RunContext& ctx) {
       dealii::TimerOutput::Scope timer(ctx.timer(), "removal");
       const double tip = state.deepest[j];
       const auto& axis = drill_.holes[j].axis;
-      remove([&](const dealii::Point<3>& x) {
-        return instruments::in_swept_solid(axis.axial(x), axis.radial(x), tip, R, kappa);
-      });
+      remove(
+          [&](const dealii::Point<3>& x) { return bit.swept(axis.axial(x), axis.radial(x), tip); });
     }
     // Heat into the bone over the step, as a constant power.
     const double cut = drill_.heat_partition * interval.cutting_energy / dt;
@@ -1453,8 +1437,7 @@ void BoneDrilling::run(RunContext& ctx) {
           for (unsigned int k = 0; k < drill_.holes.size(); ++k) {
             const auto& axis = drill_.holes[k].axis;
             const auto& x = fv.quadrature_point(q);
-            d = std::min(d, instruments::distance_to_swept_solid(axis.axial(x), axis.radial(x),
-                                                                 state.deepest[k], R, kappa));
+            d = std::min(d, bit.distance_outside(axis.axial(x), axis.radial(x), state.deepest[k]));
           }
           if (by_time) {
             necrotic_47 += fv.JxW(q);
@@ -1476,11 +1459,14 @@ void BoneDrilling::run(RunContext& ctx) {
   // energy. At a constant chip thickness (feed rate control) also the work the lips' torque
   // must have done, K_c(h) integrated over the bone they swept (outside the pilot radius, not
   // in earlier holes): every lip element spends K_c(h) per volume it removes, whatever the
-  // cone's engagement (M ω / (π (R² − r_p²) v_f) = K_c). The run integrates M ω in time at lip
-  // samples averaged round their circles; this integrates in space on a finer grid.
+  // cone's engagement (M ω / (π (R² − r_p²) v_f) = K_c for one lip angle). The run integrates M ω
+  // in time at lip samples averaged round their circles; this integrates in space on a finer grid.
   const bool constant_chip = !drill_.schedule.thrust_control;
-  const double chip =
-      0.5 * drill_.schedule.feed_rate * 60.0 / drill_.schedule.spindle_rpm * std::sin(kappa);
+  // The chip a lip at radius r cuts, (f/2) sin κ(r) (a step drill's shoulder has its own κ).
+  const auto chip = [&](double r) {
+    return 0.5 * drill_.schedule.feed_rate * 60.0 / drill_.schedule.spindle_rpm *
+           std::sin(bit.half_angle_at(r));
+  };
   double swept = 0, lips_work = 0;
   for (unsigned int k = 0; k < drill_.holes.size(); ++k) {
     const auto& axis = drill_.holes[k].axis;
@@ -1497,7 +1483,7 @@ void BoneDrilling::run(RunContext& ctx) {
       for (unsigned int ia = 0; ia < na; ++ia)
         for (unsigned int ir = 0; ir < nr; ++ir) {
           const double a = a_lo + (ia + 0.5) * da, r = r0 + (ir + 0.5) * dr;
-          if (!instruments::in_swept_solid(a, r, a_hi, R, kappa))
+          if (!bit.swept(a, r, a_hi))
             continue;
           for (unsigned int it = 0; it < nt; ++it) {
             const double th = (it + 0.5) * dth;
@@ -1507,7 +1493,7 @@ void BoneDrilling::run(RunContext& ctx) {
               swept += dv;
             if (work)
               if (const auto c = cutting_at(k, x, state.deepest))
-                lips_work += c->tangential_at(chip) * dv;
+                lips_work += c->tangential_at(chip(r)) * dv;
           }
         }
     }
@@ -1547,8 +1533,7 @@ void BoneDrilling::run(RunContext& ctx) {
       for (unsigned int k = 0; k < drill_.holes.size(); ++k) {
         const auto& axis = drill_.holes[k].axis;
         const auto& x = damage_.probes[p];
-        const double d = instruments::distance_to_swept_solid(axis.axial(x), axis.radial(x),
-                                                              state.deepest[k], R, kappa);
+        const double d = bit.distance_outside(axis.axial(x), axis.radial(x), state.deepest[k]);
         if (d < distance[p]) {
           distance[p] = d;
           nearest[p] = k;
@@ -1752,20 +1737,18 @@ double BoneDrilling::plot_probes(RunContext& ctx,
 
 } // namespace bone_drilling
 
-SPINESIM_REGISTER_SCENARIO(bone_drilling, "bone_drilling",
-                           "a twist drill cutting holes in a cortical/cancellous bone block: "
-                           "mechanistic cutting heat, material removal, irrigation, probe "
-                           "temperatures, CEM43 and 47 degC necrosis; with Mechanics, "
-                           "thermo-elastic stresses under the thrust and torque and the bone "
-                           "they break.",
-                           "heat|mechanics|thermal expansion|damage",
-                           create_scenario<bone_drilling::BoneDrilling>,
-                           {"Drilling mechanics", drilling::MechanicsSection::declare},
-                           {"Drill", drilling::DrillSection::declare},
-                           {"Bone block", drilling::BoneSection::declare},
-                           {"Mesh", drilling::MeshSection::declare},
-                           {"Cooling", drilling::CoolingSection::declare},
-                           {"Thermal damage", drilling::DamageSection::declare},
-                           {"Drilling run", drilling::RunSection::declare})
+SPINESIM_REGISTER_SCENARIO(
+    bone_drilling, "bone_drilling",
+    "a twist or step drill cutting holes in a cortical/cancellous bone block: "
+    "mechanistic cutting heat, material removal, irrigation, probe "
+    "temperatures, CEM43 and 47 degC necrosis; with Mechanics, "
+    "thermo-elastic stresses under the thrust and torque and the bone "
+    "they break.",
+    "heat|mechanics|thermal expansion|damage", create_scenario<bone_drilling::BoneDrilling>,
+    {"Drilling mechanics", drilling::MechanicsSection::declare},
+    {"Drill", drilling::DrillSection::declare}, {"Bone block", drilling::BoneSection::declare},
+    {"Mesh", drilling::MeshSection::declare}, {"Cooling", drilling::CoolingSection::declare},
+    {"Thermal damage", drilling::DamageSection::declare},
+    {"Drilling run", drilling::RunSection::declare})
 
 } // namespace spinesim::applications

@@ -100,9 +100,20 @@ void DrillSection::declare(dealii::ParameterHandler& prm) {
   prm.declare_entry("Point angle", "118", Double(0, 180),
                     "Included angle of the point [deg] (118 standard, 90 some bone drills).");
   prm.declare_entry("Pilot diameter", "0", Double(0),
-                    "Diameter of a pilot hole drilled before, as deep as each hole (a step "
-                    "drill's pilot): it is removed at the start and the lips cut only the "
-                    "annulus beyond it [mm]; 0 = none.");
+                    "Diameter of a pilot hole drilled before, as deep as each hole: it is "
+                    "removed at the start and the lips cut only the annulus beyond it [mm]; "
+                    "0 = none. A step drill cuts its own pilot in the same pass (Step drill).");
+  prm.enter_subsection("Step drill");
+  prm.declare_entry("Leading diameter", "0", Double(0),
+                    "Diameter of a step drill's leading section, below Drill/Diameter [mm]; its "
+                    "point (Point angle) cuts a pilot that the shoulder behind it widens to the "
+                    "full Diameter in the same pass. 0 = a twist drill of one diameter.");
+  prm.declare_entry("Leading length", "3", Double(0),
+                    "Axial length of the leading section, from the tip to where the shoulder "
+                    "starts, at least its own point's length [mm].");
+  prm.declare_entry("Shoulder angle", "118", Double(0, 180),
+                    "Included angle of the shoulder's lips [deg] (90 and 118 are usual).");
+  prm.leave_subsection();
   prm.declare_entry("Spindle speed", "1000", Double(0), "Rotational speed n [rev/min].");
   prm.declare_entry("Feed control", "feed rate", Selection("feed rate|feed per revolution|thrust"),
                     "What sets the feed [-]: the Feed rate; the Feed per revolution (the feed "
@@ -149,6 +160,11 @@ void DrillSection::parse(dealii::ParameterHandler& prm) {
   bit.diameter = 1e-3 * prm.get_double("Diameter");
   bit.point_angle = prm.get_double("Point angle");
   bit.pilot_diameter = 1e-3 * prm.get_double("Pilot diameter");
+  prm.enter_subsection("Step drill");
+  bit.step_diameter = 1e-3 * prm.get_double("Leading diameter");
+  bit.step_length = 1e-3 * prm.get_double("Leading length");
+  bit.shoulder_angle = prm.get_double("Shoulder angle");
+  prm.leave_subsection();
   bit.validate();
   schedule.spindle_rpm = prm.get_double("Spindle speed");
   schedule.thrust_control = prm.get("Feed control") == "thrust";

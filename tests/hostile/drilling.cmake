@@ -16,6 +16,11 @@ spinesim_add_hostile_test(drill_probe_in_the_hole
   ARGS check ${_drill} --set "Thermal damage/Probes=1,0,-2" MATCH "Thermal damage/Probes.*lies in hole 1")
 spinesim_add_hostile_test(drill_pilot_wider_than_the_bit
   ARGS check ${_drill} --set "Drill/Pilot diameter=5" MATCH "Drill/Pilot diameter")
+# A step drill whose leading section is shorter than its own point (1.25 mm / tan 59 deg =
+# 0.75 mm).
+spinesim_add_hostile_test(drill_step_shorter_than_its_point
+  ARGS check ${_drill} --set "Drill/Step drill/Leading diameter=2.5"
+       --set "Drill/Step drill/Leading length=0.5" MATCH "Drill/Step drill/Leading length.*0.75")
 # The drilling scenario runs on its heat model and has no particles (yet): switching heat off
 # or asking for a particle method is bad input naming the entry.
 spinesim_add_hostile_test(drill_without_heat

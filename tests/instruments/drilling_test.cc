@@ -1,7 +1,8 @@
-// The twist drill: the mechanistic force model integrates to its closed forms (Kienzle's
-// specific cutting force over a straight lip), the thrust control inverts it, the programme
-// runs its phases for the times they should take and integrates the cutting power exactly
-// where the closed form is known, and the swept solid's distance is right on its three parts.
+// The twist and step drills: the mechanistic force model integrates to its closed forms
+// (Kienzle's specific cutting force over straight lips), the thrust control inverts it, the
+// programme runs its phases for the times they should take and integrates the cutting power
+// exactly where the closed form is known, and the swept solid's distance is right on each
+// part of the bit's profile.
 
 #include "base/exceptions.h"
 #include "instruments/drilling_programme.h"
@@ -326,21 +327,114 @@ TEST(DrillingProgramme, PecksUnderThrustControl) {
 }
 
 TEST(DrillBit, DistanceToSweptSolid) {
+  const DrillBit b = bit();
   const double R = 2e-3, kappa = 59.0 * pi / 180, tip = 10e-3, Lc = R / std::tan(kappa);
-  EXPECT_EQ(distance_to_swept_solid(5e-3, 1e-3, tip, R, kappa), 0.0);
-  EXPECT_NEAR(distance_to_swept_solid(5e-3, 3.5e-3, tip, R, kappa), 1.5e-3, 1e-15); // wall
+  EXPECT_EQ(b.distance_outside(5e-3, 1e-3, tip), 0.0);
+  EXPECT_NEAR(b.distance_outside(5e-3, 3.5e-3, tip), 1.5e-3, 1e-15); // wall
   // Straight below the tip on the axis: the tip itself is nearest.
-  EXPECT_NEAR(distance_to_swept_solid(tip + 1e-3, 0, tip, R, kappa), 1e-3, 1e-15);
+  EXPECT_NEAR(b.distance_outside(tip + 1e-3, 0, tip), 1e-3, 1e-15);
   // Normal to the cone from a point beside the point: (distance along the normal) exactly.
   const dealii::Tensor<1, 2> normal({std::sin(kappa), std::cos(kappa)}); // (a, r), outward
   const double am = tip - 0.5 * Lc, rm = 0.5 * R;                        // cone midpoint
-  EXPECT_NEAR(
-      distance_to_swept_solid(am + 0.3e-3 * normal[0], rm + 0.3e-3 * normal[1], tip, R, kappa),
-      0.3e-3, 1e-15);
+  EXPECT_NEAR(b.distance_outside(am + 0.3e-3 * normal[0], rm + 0.3e-3 * normal[1], tip), 0.3e-3,
+              1e-15);
+  // The same point mirrored inside: as far from the surface, and swept.
+  EXPECT_NEAR(b.distance_to_surface(am - 0.3e-3 * normal[0], rm - 0.3e-3 * normal[1], tip), 0.3e-3,
+              1e-15);
+  EXPECT_EQ(b.distance_outside(am - 0.3e-3 * normal[0], rm - 0.3e-3 * normal[1], tip), 0.0);
   // Beyond the rim, outwards and below: the corner at (tip − L_c, R).
-  EXPECT_NEAR(distance_to_swept_solid(tip - Lc + 3e-3, R + 4e-3, tip, R, kappa), 5e-3, 1e-12);
-  EXPECT_TRUE(in_swept_solid(tip - 1e-9, 0, tip, R, kappa));
-  EXPECT_FALSE(in_swept_solid(tip - Lc + 1e-9, R - 1e-9, tip, R, kappa));
+  EXPECT_NEAR(b.distance_outside(tip - Lc + 3e-3, R + 4e-3, tip), 5e-3, 1e-12);
+  EXPECT_TRUE(b.swept(tip - 1e-9, 0, tip));
+  EXPECT_FALSE(b.swept(tip - Lc + 1e-9, R - 1e-9, tip));
+  EXPECT_DOUBLE_EQ(b.full_diameter_depth(), Lc);
+}
+
+namespace {
+// A step drill: a 2.5 mm leading section 4 mm long (point 118°) and a 90° shoulder to 4 mm.
+DrillBit step_drill(double pilot = 0) {
+  DrillBit b = bit(pilot);
+  b.step_diameter = 2.5e-3;
+  b.step_length = 4e-3;
+  b.shoulder_angle = 90;
+  return b;
+}
+} // namespace
+
+// The profile z(r) of a step drill is the leading point out to r_s, then the shoulder from
+// (L_s, r_s) at 45° to (L_s + R − r_s, R); its four segments join, and the distances measure
+// to the right one of them.
+TEST(DrillBit, StepDrillProfile) {
+  const DrillBit b = step_drill();
+  const double kappa = 59.0 * pi / 180, rs = 1.25e-3, Ls = 4e-3, R = 2e-3, tip = 10e-3;
+  EXPECT_NEAR(b.lip_depth(1e-3), 1e-3 / std::tan(kappa), 1e-15);
+  EXPECT_NEAR(b.lip_depth(1.5e-3), Ls + 0.25e-3, 1e-15); // tan 45° = 1
+  EXPECT_NEAR(b.full_diameter_depth(), Ls + R - rs, 1e-15);
+  EXPECT_DOUBLE_EQ(b.half_angle_at(1e-3), kappa);
+  EXPECT_DOUBLE_EQ(b.half_angle_at(1.5e-3), pi / 4);
+  const auto p = b.profile(20e-3);
+  ASSERT_EQ(p.size(), 4u);
+  for (unsigned int i = 1; i < p.size(); ++i) {
+    EXPECT_DOUBLE_EQ(p[i].z0, p[i - 1].z1);
+    EXPECT_DOUBLE_EQ(p[i].r0, p[i - 1].r1);
+  }
+  EXPECT_TRUE(p[0].cutting && !p[1].cutting && p[2].cutting && !p[3].cutting);
+  // Beside the leading section, in the ring the shoulder has not reached: not swept, and
+  // nearest the leading margin.
+  EXPECT_FALSE(b.swept(tip - 2e-3, 1.5e-3, tip));
+  EXPECT_NEAR(b.distance_outside(tip - 2e-3, 1.5e-3, tip), 0.25e-3, 1e-15);
+  EXPECT_NEAR(b.distance_to_margins(tip - 2e-3, 1.5e-3, tip), 0.25e-3, 1e-15);
+  // Behind the shoulder: swept; its distance to the shoulder's lip along the 45° normal.
+  const double a = tip - Ls - 0.5e-3, r = 1.5e-3; // the lip passes (tip − Ls − 0.25e-3, 1.5e-3)
+  EXPECT_TRUE(b.swept(a, r, tip));
+  EXPECT_NEAR(b.distance_to_lips(a, r, tip), 0.25e-3 / std::sqrt(2.0), 1e-15);
+  // A pilot hole of 2 mm clips the leading point's lip to r >= 1 mm and leaves the shoulder.
+  const auto lips = step_drill(2e-3).cutting_edges();
+  ASSERT_EQ(lips.size(), 2u);
+  EXPECT_DOUBLE_EQ(lips[0].r0, 1e-3);
+  EXPECT_NEAR(lips[0].z0, 1e-3 / std::tan(kappa), 1e-15);
+  EXPECT_DOUBLE_EQ(lips[1].r0, rs);
+  // Pilot as wide as the leading section: only the shoulder cuts.
+  EXPECT_EQ(step_drill(2.5e-3).cutting_edges().size(), 1u);
+}
+
+// Fully engaged, each lip gives its closed form at its own chip thickness h = (f/2) sin κ:
+//   M = Σ K_c(h_i) f (r_hi² − r_lo²)/2,  F = Σ K_t(h_i) f sin κ_i (r_hi − r_lo),
+// exact for the midpoint rule (round-off). While only the leading section is in bone (the
+// shoulder above the surface), the forces are those of a twist drill of the leading diameter.
+TEST(DrillingForces, StepDrillLipsMatchClosedForm) {
+  const CuttingCoefficients c = cortical();
+  const double f = 0.06e-3, rpm = 1000, R = 2e-3, rs = 1.25e-3;
+  const double k1 = 59.0 * pi / 180, k2 = pi / 4;
+  const double h1 = 0.5 * f * std::sin(k1), h2 = 0.5 * f * std::sin(k2);
+  for (const double pilot : {0.0, 1e-3}) {
+    const DrillingForceModel model(step_drill(pilot));
+    const auto everywhere = [&](double, double, double) {
+      return std::optional<CuttingCoefficients>(c);
+    };
+    const DrillingLoad L = model.load(20e-3, f, rpm, everywhere);
+    const double rp = 0.5 * pilot;
+    const double M = c.tangential_at(h1) * f * (rs * rs - rp * rp) / 2 +
+                     c.tangential_at(h2) * f * (R * R - rs * rs) / 2;
+    const double F = c.thrust_at(h1) * f * std::sin(k1) * (rs - rp) +
+                     c.thrust_at(h2) * f * std::sin(k2) * (R - rs);
+    EXPECT_NEAR(L.torque, M, 1e-12 * M) << "pilot " << pilot;
+    EXPECT_NEAR(L.thrust, F, 1e-12 * F) << "pilot " << pilot;
+    EXPECT_DOUBLE_EQ(L.engaged_fraction, 1.0);
+  }
+  // Tip 3.5 mm into a half space a >= 0: the leading point is in, the shoulder (4 mm behind the
+  // tip) still above the surface.
+  const auto below_surface = [&](double a, double, double) -> std::optional<CuttingCoefficients> {
+    if (a < 0)
+      return std::nullopt;
+    return c;
+  };
+  DrillBit leading = bit();
+  leading.diameter = 2.5e-3;
+  const DrillingLoad S = DrillingForceModel(step_drill()).load(3.5e-3, f, rpm, below_surface);
+  const DrillingLoad T = DrillingForceModel(leading).load(3.5e-3, f, rpm, below_surface);
+  EXPECT_NEAR(S.torque, T.torque, 1e-12 * T.torque);
+  EXPECT_NEAR(S.thrust, T.thrust, 1e-12 * T.thrust);
+  EXPECT_NEAR(S.thrust, c.thrust_at(h1) * f * std::sin(k1) * rs, 1e-12 * S.thrust);
 }
 
 TEST(DrillBit, BadInputNamesTheEntry) {
@@ -351,6 +445,23 @@ TEST(DrillBit, BadInputNamesTheEntry) {
   } catch (const InvalidInput& e) {
     EXPECT_EQ(e.where(), "Drill/Pilot diameter");
   }
+  // Step drills: a leading section as wide as the drill, one shorter than its own point
+  // (1.25 mm / tan 59° = 0.75 mm), a pilot hole wider than the leading section.
+  const auto names = [](DrillBit b, const std::string& entry) {
+    try {
+      b.validate();
+      ADD_FAILURE() << "accepted: " << b.describe();
+    } catch (const InvalidInput& e) {
+      EXPECT_EQ(e.where(), entry);
+    }
+  };
+  DrillBit wide = step_drill();
+  wide.step_diameter = 4e-3;
+  names(wide, "Drill/Step drill/Leading diameter");
+  DrillBit short_lead = step_drill();
+  short_lead.step_length = 0.7e-3;
+  names(short_lead, "Drill/Step drill/Leading length");
+  names(step_drill(3e-3), "Drill/Pilot diameter");
   DrillingSchedule s;
   s.spindle_rpm = 0;
   try {

@@ -105,6 +105,22 @@ spinesim_add_comparison_test(scene.bone_drilling_pecking_lowers_dose
   CHECKS "cutting_energy_J:rel:1e-9;removed_volume_mm3:rel:1e-12;necrotic_volume_cem43_mm3:ratio_max:0.97"
   REQUIRES "drill_quick;drill_quick_pecking" LABELS "scene;drilling")
 
+# A step drill (the quick hole without its pilot: a 2.5 mm leading section 3 mm long, a 90 deg
+# shoulder to 4 mm) cuts its own pilot and widens it in one pass. Fully engaged in the one bone
+# type, each lip gives Kienzle's closed form at its own chip thickness h = (f/2) sin kappa
+# (f = 0.06 mm/rev; kappa 59 deg at the point, 45 deg at the shoulder):
+#   F = K_t(h1) f sin(59) r_s + K_t(h2) f sin(45) (R - r_s) = 35.890 N,
+#   M = K_c(h1) f r_s^2 / 2 + K_c(h2) f (R^2 - r_s^2) / 2 = 30.360 N mm,
+# exact for the midpoint rule over the lips and round the uniform block (measured to round-off;
+# bound 1e-6, the digits given here). The books close as in the quick run (same bounds): the torque's work in time
+# against K_c(h(r)) over the swept bone in space checks the two lips' chips and the profile.
+spinesim_add_scene_test(scene.bone_drilling_quick_step_drill SCENE ${_drill}
+  OUT ${_drill_runs}/quick_step SET "Mesh/Cells across diameter=8" "Drill/Hole 1/Depth=5"
+    "Drilling run/Cooling time=10" "Drill/Step drill/Leading diameter=2.5"
+    "Drill/Step drill/Leading length=3" "Drill/Step drill/Shoulder angle=90"
+  EXPECT "status==ok;max_thrust_force_N~35.890198:1e-6;max_torque_Nmm~30.359689:1e-6;heat_input_error_relative<=1e-6;heat_balance_error_relative<=1e-6;mass_balance_error_relative<=1e-12;torque_energy_error_relative<=5e-3;removed_volume_error_relative<=0.05;peak_temperature_C>=47"
+  LABELS "scene;heat;drilling")
+
 # Weak bone cracks: a 3 mm cortical shell over cancellous bone (E 300 MPa, strengths 2.1 / 2.3
 # MPa after Morgan & Keaveny 2001), the bit pushed at 60 N, Effects/Damage on. The cancellous
 # bone round the point fails in tension (failure index measured 5.1; bound 1), cells crack
