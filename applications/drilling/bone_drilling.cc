@@ -1621,7 +1621,8 @@ void BoneDrilling::run(RunContext& ctx) {
     sum.set_figure("max_failure_index_time_s", worst.time, "s");
     sum.set_figure("max_failure_index_distance_mm", worst.failure_distance * 1e3, "mm");
     sum.set_figure("failing_volume_mm3", failing * 1e9, "mm^3");
-    sum.set_figure("failed_cells", damage_on_ ? double(failures) : nan, "-");
+    if (damage_on_) // cells only crack with Effects/Damage; without it the figure does not apply
+      sum.set_figure("failed_cells", failures, "-");
     sum.set_figure("support_reaction_error_relative", reaction_error >= 0 ? reaction_error : nan,
                    "-");
     sum.set_figure("residual_max_von_mises_MPa",

@@ -105,6 +105,28 @@ spinesim_add_comparison_test(scene.bone_drilling_pecking_lowers_dose
   CHECKS "cutting_energy_J:rel:1e-9;removed_volume_mm3:rel:1e-12;necrotic_volume_cem43_mm3:ratio_max:0.97"
   REQUIRES "drill_quick;drill_quick_pecking" LABELS "scene;drilling")
 
+# Restart in the middle of a peck's withdrawal: the pecking run stopped after step 19 (the bit
+# rising from 3 mm, at 0.5 mm below the entry, its second peck's bottom at 4 mm; history.csv)
+# and restarted from its checkpoint ends as the uninterrupted pecking run, with every figure
+# within 1e-6 (the bound of the drilling restart above, for the same reason: the restarted
+# heat solves start from a new AMG hierarchy) and the same times, pecks and cut.
+spinesim_add_scene_test(scene.bone_drilling_pecking_restart_first_half SCENE ${_drill}
+  OUT ${_drill_runs}/pecking_restart SET ${_drill_quick} "Drill/Peck depth=2"
+  "Drilling run/Stop after step=19" EXPECT "status==ok;time_steps~19:0"
+  LABELS "scene;drilling" FIXTURE drill_pecking_restart_half)
+spinesim_add_restart_test(scene.bone_drilling_pecking_restart_second_half
+  OUT ${_drill_runs}/pecking_restart STOP "Drilling run/Stop after step"
+  EXPECT "status==ok;pecks~2:0" LABELS "scene;drilling" REQUIRES drill_pecking_restart_half
+  FIXTURE drill_pecking_restart_done)
+spinesim_add_summaries_match_test(scene.bone_drilling_pecking_restart_matches_uninterrupted
+  A ${_drill_runs}/pecking_restart/summary.json B ${_drill_runs}/quick_pecking/summary.json
+  TOL 1e-6 FLOOR 1e-6 REQUIRES "drill_pecking_restart_done;drill_quick_pecking"
+  LABELS "scene;drilling")
+spinesim_add_comparison_test(scene.bone_drilling_pecking_restart_same_cut
+  A ${_drill_runs}/pecking_restart/summary.json B ${_drill_runs}/quick_pecking/summary.json
+  CHECKS "simulated_time_s:rel:1e-12;time_steps:rel:0;pecks:rel:0;removed_volume_mm3:rel:1e-12;cutting_energy_J:rel:1e-12"
+  REQUIRES "drill_pecking_restart_done;drill_quick_pecking" LABELS "scene;drilling")
+
 # A step drill (the quick hole without its pilot: a 2.5 mm leading section 3 mm long, a 90 deg
 # shoulder to 4 mm) cuts its own pilot and widens it in one pass. Fully engaged in the one bone
 # type, each lip gives Kienzle's closed form at its own chip thickness h = (f/2) sin kappa
