@@ -15,13 +15,15 @@ void MechanicsParameters<dim>::declare(ParameterHandler& prm) {
   prm.declare_entry("Plane stress", "false", Patterns::Bool(),
                     "2-D only, small strain: sigma_zz = 0 instead of plane strain [-].");
   prm.declare_entry(
-      "Volumetric locking", "none", Patterns::Selection("none|bbar"),
-      "Treatment of volumetric locking [-]: none (standard displacement element) or bbar "
+      "Volumetric locking", "none", Patterns::Selection("none|bbar|fbar"),
+      "Treatment of volumetric locking [-]: none (standard displacement element); bbar "
       "(B-bar by mean dilatation, Hughes 1980: every quadrature point of a cell takes the "
-      "cell-average volumetric strain, the deviatoric strain stays point-wise). Switch it on "
-      "for nearly incompressible materials (Poisson ratio above about 0.45, e.g. soft tissue, "
-      "or J2 plastic flow), where the standard Q1 element is far too stiff. Small strain, "
-      "plane strain or 3-D only.");
+      "cell-average volumetric strain, the deviatoric strain stays point-wise; small strain); "
+      "or fbar (F-bar, de Souza Neto et al. 1996: F scaled to the cell's mean volume change; "
+      "finite strain, explicit steps and dynamic relaxation only, as it has no Newton "
+      "tangent). Switch it on for nearly incompressible materials (Poisson ratio above about "
+      "0.45, e.g. soft tissue, or J2 plastic flow), where the standard Q1 element is far too "
+      "stiff. Plane strain or 3-D only.");
   prm.declare_entry("Time integration", "quasi_static",
                     Patterns::Selection("quasi_static|explicit"),
                     "Implicit quasi-static Newton or explicit central differences [-].");
@@ -90,18 +92,24 @@ void MechanicsParameters<dim>::parse(const ParameterHandler& prm) {
 
 template <int dim>
 void check_volumetric_locking(const MechanicsParameters<dim>& p) {
-  if (p.volumetric_locking != "none" && p.volumetric_locking != "bbar")
-    throw InvalidInput("Volumetric locking", "unknown '" + p.volumetric_locking + "'", "none|bbar");
+  if (p.volumetric_locking != "none" && p.volumetric_locking != "bbar" &&
+      p.volumetric_locking != "fbar")
+    throw InvalidInput("Volumetric locking", "unknown '" + p.volumetric_locking + "'",
+                       "none|bbar|fbar");
   if (p.volumetric_locking == "bbar" && p.kinematics != "small_strain")
     throw InvalidInput("Volumetric locking",
-                       "bbar is the small-strain mean dilatation; Kinematics = " + p.kinematics +
-                           " (laws j2_finite_strain, neo_hookean) would need F-bar, which is "
-                           "not implemented",
-                       "none, or Kinematics = small_strain");
-  if (p.volumetric_locking == "bbar" && p.plane_stress)
+                       "bbar is the small-strain mean dilatation; Kinematics = " + p.kinematics,
+                       "fbar with Kinematics = finite_strain (explicit steps), or bbar with "
+                       "Kinematics = small_strain");
+  if (p.volumetric_locking == "fbar" && p.kinematics != "finite_strain")
     throw InvalidInput("Volumetric locking",
-                       "plane stress does not lock (the out-of-plane strain is free), and bbar "
-                       "replaces the 3-D dilatation of plane strain",
+                       "fbar scales the deformation gradient; Kinematics = " + p.kinematics,
+                       "bbar with Kinematics = small_strain, or fbar with Kinematics = "
+                       "finite_strain");
+  if (p.volumetric_locking != "none" && p.plane_stress)
+    throw InvalidInput("Volumetric locking",
+                       "plane stress does not lock (the out-of-plane strain is free), and " +
+                           p.volumetric_locking + " replaces the volume change of plane strain",
                        "none with Plane stress = true");
 }
 

@@ -19,7 +19,7 @@ struct MechanicsParameters {
   std::string kinematics = "small_strain";       // small_strain | finite_strain
   std::string time_integration = "quasi_static"; // quasi_static | explicit
   bool plane_stress = false;                     // 2-D small strain only
-  std::string volumetric_locking = "none";       // none | bbar (mean dilatation)
+  std::string volumetric_locking = "none";       // none | bbar (mean dilatation) | fbar
   unsigned int load_steps = 1;
   double newton_tolerance = 1e-8;
   unsigned int max_newton_iterations = 25;

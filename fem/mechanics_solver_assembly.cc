@@ -3,14 +3,20 @@
 
 #include "fem/mechanics_solver.h"
 
+#include "base/collective_failure.h"
 #include "base/exceptions.h"
 #include "base/scoped_time.h"
+#include "fem/f_bar.h"
 #include "fem/mean_dilatation.h"
 
 #include <deal.II/fe/fe_values.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <optional>
+#include <stdexcept>
+#include <string>
 
 namespace spinesim::fem {
 
@@ -93,168 +99,207 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
   double average_dilatation = 0;
   std::vector<double> beta(n);
   std::vector<std::array<double, 9>> wb(bbar ? n : 0);
+  // F-bar (f_bar.h): P̄ = P(F̄) at the points and its own force; no tangent.
+  const bool fbar = prm_.volumetric_locking == "fbar";
+  if (fbar && with_matrix)
+    throw std::logic_error("F-bar has no consistent tangent: explicit steps only");
+  FBar<dim> f_bar;
+  std::vector<double> fbar_force(fbar ? n : 0);
 
+  // A point that fails (inverted, non-finite) ends this rank's loop; every rank then meets in
+  // raise_on_every_rank before the collective compress below.
+  std::optional<NumericalFailure> failure;
   for (const auto& cell : dof_handler_.active_cell_iterators()) {
-    if (!cell->is_locally_owned() ||
-        !(assembly_cells_ ? (*assembly_cells_)[cell->active_cell_index()] : is_active(cell)))
-      continue;
-    fe_values.reinit(cell);
-    const materials::ConstitutiveLaw& law = cell_material(cell);
-    cell_matrix = 0;
-    cell_fint = 0;
-    cell_fext = 0;
-    fe_values[displacements].get_function_gradients(u_ghost_, grads);
-    if (bbar) {
-      mean_dilatation.reinit(fe_values, comp);
-      average_dilatation = mean_dilatation.average_dilatation(grads);
-    }
-
-    for (unsigned int q = 0; q < nq; ++q) {
-      const std::size_t idx = cell->active_cell_index() * nq + q;
-      const QuadraturePointData& old = committed_[idx];
-      QuadraturePointData& tr = trial_[idx];
-      const Point<dim>& xq = fe_values.quadrature_point(q);
-      double dT = 0.0;
-      if (temperature_field_) // blended like load_blend(): from the previous solve's field
-        dT = load_factor * dT_target_[idx] +
-             (loaded_ && load_factor < 1.0 ? (1.0 - load_factor) * dT_start_[idx] : 0.0);
-      else if (temperature_change_)
-        dT = load_blend(*temperature_change_, xq, 0, load_factor);
-      Tensor2 H;
-      for (unsigned int i = 0; i < dim; ++i)
-        for (unsigned int j = 0; j < dim; ++j)
-          H[i][j] = grads[q][i][j];
-      if (bbar)
-        MeanDilatation<dim>::project(H, average_dilatation);
-
-      Tensor2 S; // stress conjugate to ∇u: σ or P
-      try {
-        S = point_update_(law, H, dT, old, tr, with_matrix ? A : nullptr);
-      } catch (const NumericalFailure& e) {
-        throw NumericalFailure(e.what_failed(), quadrature_point_location<dim>(cell, q), e.hint());
+    if (failure)
+      break;
+    try {
+      if (!cell->is_locally_owned() ||
+          !(assembly_cells_ ? (*assembly_cells_)[cell->active_cell_index()] : is_active(cell)))
+        continue;
+      fe_values.reinit(cell);
+      const materials::ConstitutiveLaw& law = cell_material(cell);
+      cell_matrix = 0;
+      cell_fint = 0;
+      cell_fext = 0;
+      fe_values[displacements].get_function_gradients(u_ghost_, grads);
+      if (bbar) {
+        mean_dilatation.reinit(fe_values, comp);
+        average_dilatation = mean_dilatation.average_dilatation(grads);
       }
-      const double JxW = fe_values.JxW(q);
-      Tensor<1, dim> body;
-      if (body_force_)
-        for (unsigned int c = 0; c < dim; ++c)
-          body[c] = load_blend(*body_force_, xq, c, load_factor);
-      if (bbar)
-        for (unsigned int i = 0; i < n; ++i)
-          beta[i] = mean_dilatation.beta(i, q);
-      const double trace_S = bbar ? S[0][0] + S[1][1] + S[2][2] : 0.0;
-      double trace_A[3][3] = {}; // Σ_a A(a,a,k,l)
-      if (bbar && with_matrix)
-        for (unsigned int k = 0; k < 3; ++k)
-          for (unsigned int l = 0; l < 3; ++l)
-            for (unsigned int a = 0; a < 3; ++a)
-              trace_A[k][l] += A[a][a][k][l];
-      for (unsigned int i = 0; i < n; ++i) {
-        const unsigned int ci = comp[i];
-        const Tensor<1, dim>& g = fe_values.shape_grad(i, q);
-        double f = 0;
-        for (unsigned int J = 0; J < dim; ++J)
-          f += S[ci][J] * g[J];
+      if (fbar) {
+        unsigned int worst = 0;
+        if (!f_bar.reinit(fe_values, comp, grads, worst))
+          throw NumericalFailure(
+              "inverted element (det F = " + std::to_string(f_bar.jacobian(worst)) +
+                  ", cell mean " + std::to_string(f_bar.mean_jacobian()) + ")",
+              quadrature_point_location<dim>(cell, worst),
+              "the cell is crushed: take a smaller CFL safety factor, refine "
+              "where it folds, or convert such cells to particles");
+        std::fill(fbar_force.begin(), fbar_force.end(), 0.0);
+      }
+
+      for (unsigned int q = 0; q < nq; ++q) {
+        const std::size_t idx = cell->active_cell_index() * nq + q;
+        const QuadraturePointData& old = committed_[idx];
+        QuadraturePointData& tr = trial_[idx];
+        const Point<dim>& xq = fe_values.quadrature_point(q);
+        double dT = 0.0;
+        if (temperature_field_) // blended like load_blend(): from the previous solve's field
+          dT = load_factor * dT_target_[idx] +
+               (loaded_ && load_factor < 1.0 ? (1.0 - load_factor) * dT_start_[idx] : 0.0);
+        else if (temperature_change_)
+          dT = load_blend(*temperature_change_, xq, 0, load_factor);
+        Tensor2 H;
+        for (unsigned int i = 0; i < dim; ++i)
+          for (unsigned int j = 0; j < dim; ++j)
+            H[i][j] = grads[q][i][j];
         if (bbar)
-          f += beta[i] * trace_S;
-        cell_fint(i) += f * JxW;
-        cell_fext(i) += body[ci] * fe_values.shape_value(i, q) * JxW;
-        if (with_matrix && bbar)
-          for (unsigned int k = 0; k < 3; ++k)
-            for (unsigned int l = 0; l < 3; ++l) {
-              double s = beta[i] * trace_A[k][l];
-              for (unsigned int J = 0; J < dim; ++J)
-                s += g[J] * A[ci][J][k][l];
-              wb[i][3 * k + l] = s * JxW;
-            }
-        else if (with_matrix)
-          for (unsigned int d = 0; d < dim; ++d)
-            for (unsigned int L = 0; L < dim; ++L) {
-              double s = 0;
-              for (unsigned int J = 0; J < dim; ++J)
-                s += g[J] * A[ci][J][d][L];
-              w[i][d * dim + L] = s * JxW;
-            }
-      }
-      if (with_matrix && bbar)
-        for (unsigned int i = 0; i < n; ++i) {
-          const double trace_w = wb[i][0] + wb[i][4] + wb[i][8];
-          for (unsigned int j = 0; j < n; ++j) {
-            const Tensor<1, dim>& g = fe_values.shape_grad(j, q);
-            double s = beta[j] * trace_w;
-            for (unsigned int L = 0; L < dim; ++L)
-              s += wb[i][3 * comp[j] + L] * g[L];
-            cell_matrix(i, j) += s;
-          }
-        }
-      else if (with_matrix)
-        for (unsigned int i = 0; i < n; ++i)
-          for (unsigned int j = 0; j < n; ++j) {
-            const Tensor<1, dim>& g = fe_values.shape_grad(j, q);
-            double s = 0;
-            for (unsigned int L = 0; L < dim; ++L)
-              s += w[i][comp[j] * dim + L] * g[L];
-            cell_matrix(i, j) += s;
-          }
-    }
+          MeanDilatation<dim>::project(H, average_dilatation);
+        if (fbar)
+          H = f_bar.modified_gradient(q);
 
-    // Tractions and pressures on the reference configuration.
-    if (cell->at_boundary() && (!bcs_.traction().empty() || !bcs_.pressure().empty()))
-      for (const unsigned int f : cell->face_indices()) {
-        if (!cell->face(f)->at_boundary())
-          continue;
-        const types::boundary_id bid = cell->face(f)->boundary_id();
-        const Point<dim> centre = cell->face(f)->center(); // by boundary id or region
-        bool loaded = false;
-        for (const auto& t : bcs_.traction())
-          loaded |= t.acts_on(bid, centre);
-        for (const auto& p : bcs_.pressure())
-          loaded |= p.acts_on(bid, centre);
-        if (!loaded)
-          continue;
-        fe_face.reinit(cell, f);
-        for (unsigned int q = 0; q < face_quadrature_.size(); ++q) {
-          const Point<dim>& xq = fe_face.quadrature_point(q);
-          Tensor<1, dim> t;
-          for (const auto& tr : bcs_.traction())
-            if (tr.acts_on(bid, centre))
-              for (unsigned int c = 0; c < dim; ++c)
-                t[c] += load_blend(*tr.function, xq, c, load_factor);
-          for (const auto& p : bcs_.pressure())
-            if (p.acts_on(bid, centre))
-              t -= load_blend(*p.function, xq, 0, load_factor) * fe_face.normal_vector(q);
+        Tensor2 S; // stress conjugate to ∇u: σ or P
+        try {
+          S = point_update_(law, H, dT, old, tr, with_matrix ? A : nullptr);
+        } catch (const NumericalFailure& e) {
+          throw NumericalFailure(e.what_failed(), quadrature_point_location<dim>(cell, q),
+                                 e.hint());
+        }
+        const double JxW = fe_values.JxW(q);
+        Tensor<1, dim> body;
+        if (body_force_)
+          for (unsigned int c = 0; c < dim; ++c)
+            body[c] = load_blend(*body_force_, xq, c, load_factor);
+        if (bbar)
           for (unsigned int i = 0; i < n; ++i)
-            cell_fext(i) += t[comp[i]] * fe_face.shape_value(i, q) * fe_face.JxW(q);
+            beta[i] = mean_dilatation.beta(i, q);
+        const double trace_S = bbar ? S[0][0] + S[1][1] + S[2][2] : 0.0;
+        double trace_A[3][3] = {}; // Σ_a A(a,a,k,l)
+        if (bbar && with_matrix)
+          for (unsigned int k = 0; k < 3; ++k)
+            for (unsigned int l = 0; l < 3; ++l)
+              for (unsigned int a = 0; a < 3; ++a)
+                trace_A[k][l] += A[a][a][k][l];
+        if (fbar)
+          f_bar.add_point_forces(q, S, fbar_force);
+        for (unsigned int i = 0; i < n; ++i) {
+          const unsigned int ci = comp[i];
+          const Tensor<1, dim>& g = fe_values.shape_grad(i, q);
+          double f = 0;
+          if (!fbar)
+            for (unsigned int J = 0; J < dim; ++J)
+              f += S[ci][J] * g[J];
+          if (bbar)
+            f += beta[i] * trace_S;
+          cell_fint(i) += f * JxW;
+          cell_fext(i) += body[ci] * fe_values.shape_value(i, q) * JxW;
+          if (with_matrix && bbar)
+            for (unsigned int k = 0; k < 3; ++k)
+              for (unsigned int l = 0; l < 3; ++l) {
+                double s = beta[i] * trace_A[k][l];
+                for (unsigned int J = 0; J < dim; ++J)
+                  s += g[J] * A[ci][J][k][l];
+                wb[i][3 * k + l] = s * JxW;
+              }
+          else if (with_matrix)
+            for (unsigned int d = 0; d < dim; ++d)
+              for (unsigned int L = 0; L < dim; ++L) {
+                double s = 0;
+                for (unsigned int J = 0; J < dim; ++J)
+                  s += g[J] * A[ci][J][d][L];
+                w[i][d * dim + L] = s * JxW;
+              }
         }
+        if (with_matrix && bbar)
+          for (unsigned int i = 0; i < n; ++i) {
+            const double trace_w = wb[i][0] + wb[i][4] + wb[i][8];
+            for (unsigned int j = 0; j < n; ++j) {
+              const Tensor<1, dim>& g = fe_values.shape_grad(j, q);
+              double s = beta[j] * trace_w;
+              for (unsigned int L = 0; L < dim; ++L)
+                s += wb[i][3 * comp[j] + L] * g[L];
+              cell_matrix(i, j) += s;
+            }
+          }
+        else if (with_matrix)
+          for (unsigned int i = 0; i < n; ++i)
+            for (unsigned int j = 0; j < n; ++j) {
+              const Tensor<1, dim>& g = fe_values.shape_grad(j, q);
+              double s = 0;
+              for (unsigned int L = 0; L < dim; ++L)
+                s += w[i][comp[j] * dim + L] * g[L];
+              cell_matrix(i, j) += s;
+            }
       }
 
-    // Tractions on the cavity wall (time-independent: in full once loaded).
-    if (cavity_traction_ && !active_.empty()) {
-      const double scale = loaded_ ? 1.0 : load_factor;
-      cavity_wall::for_each_face<dim>(
-          cell, [&](const auto& other) { return active_[other->active_cell_index()]; }, fe_face,
-          fe_subface,
-          [&](const FEFaceValuesBase<dim>& fv) {
-            for (unsigned int q = 0; q < fv.n_quadrature_points; ++q) {
-              const Tensor<1, dim> t =
-                  scale * cavity_traction_(fv.quadrature_point(q), fv.normal_vector(q));
-              for (unsigned int i = 0; i < n; ++i)
-                cell_fext(i) += t[comp[i]] * fv.shape_value(i, q) * fv.JxW(q);
-            }
-          });
-    }
+      if (fbar) {
+        f_bar.finish_cell(fbar_force);
+        for (unsigned int i = 0; i < n; ++i)
+          cell_fint(i) += fbar_force[i];
+      }
 
-    cell->get_dof_indices(dofs);
-    for (unsigned int i = 0; i < n; ++i)
-      cell_rhs(i) = cell_fext(i) - cell_fint(i);
-    if (assembly_sign_ != 1.0)
-      cell_matrix *= assembly_sign_;
-    if (with_matrix)
-      constraints.distribute_local_to_global(cell_matrix, cell_rhs, dofs, matrix, rhs_);
-    else
-      constraints.distribute_local_to_global(cell_rhs, dofs, rhs_);
-    f_int.add(dofs, cell_fint);
-    f_ext.add(dofs, cell_fext);
+      // Tractions and pressures on the reference configuration.
+      if (cell->at_boundary() && (!bcs_.traction().empty() || !bcs_.pressure().empty()))
+        for (const unsigned int f : cell->face_indices()) {
+          if (!cell->face(f)->at_boundary())
+            continue;
+          const types::boundary_id bid = cell->face(f)->boundary_id();
+          const Point<dim> centre = cell->face(f)->center(); // by boundary id or region
+          bool loaded = false;
+          for (const auto& t : bcs_.traction())
+            loaded |= t.acts_on(bid, centre);
+          for (const auto& p : bcs_.pressure())
+            loaded |= p.acts_on(bid, centre);
+          if (!loaded)
+            continue;
+          fe_face.reinit(cell, f);
+          for (unsigned int q = 0; q < face_quadrature_.size(); ++q) {
+            const Point<dim>& xq = fe_face.quadrature_point(q);
+            Tensor<1, dim> t;
+            for (const auto& tr : bcs_.traction())
+              if (tr.acts_on(bid, centre))
+                for (unsigned int c = 0; c < dim; ++c)
+                  t[c] += load_blend(*tr.function, xq, c, load_factor);
+            for (const auto& p : bcs_.pressure())
+              if (p.acts_on(bid, centre))
+                t -= load_blend(*p.function, xq, 0, load_factor) * fe_face.normal_vector(q);
+            for (unsigned int i = 0; i < n; ++i)
+              cell_fext(i) += t[comp[i]] * fe_face.shape_value(i, q) * fe_face.JxW(q);
+          }
+        }
+
+      // Tractions on the cavity wall (time-independent: in full once loaded).
+      if (cavity_traction_ && !active_.empty()) {
+        const double scale = loaded_ ? 1.0 : load_factor;
+        cavity_wall::for_each_face<dim>(
+            cell, [&](const auto& other) { return active_[other->active_cell_index()]; }, fe_face,
+            fe_subface,
+            [&](const FEFaceValuesBase<dim>& fv) {
+              for (unsigned int q = 0; q < fv.n_quadrature_points; ++q) {
+                const Tensor<1, dim> t =
+                    scale * cavity_traction_(fv.quadrature_point(q), fv.normal_vector(q));
+                for (unsigned int i = 0; i < n; ++i)
+                  cell_fext(i) += t[comp[i]] * fv.shape_value(i, q) * fv.JxW(q);
+              }
+            });
+      }
+
+      cell->get_dof_indices(dofs);
+      for (unsigned int i = 0; i < n; ++i)
+        cell_rhs(i) = cell_fext(i) - cell_fint(i);
+      if (assembly_sign_ != 1.0)
+        cell_matrix *= assembly_sign_;
+      if (with_matrix)
+        constraints.distribute_local_to_global(cell_matrix, cell_rhs, dofs, matrix, rhs_);
+      else
+        constraints.distribute_local_to_global(cell_rhs, dofs, rhs_);
+      f_int.add(dofs, cell_fint);
+      f_ext.add(dofs, cell_fext);
+    } catch (const NumericalFailure& e) {
+      failure = e;
+    }
   }
+  raise_on_every_rank(failure, comm_);
   if (with_matrix)
     matrix.compress(VectorOperation::add);
   if (with_matrix && !assembly_cells_ && !assemble_into_explicit_matrix_)

@@ -15,6 +15,7 @@
 
 #include <cmath>
 #include <limits>
+#include <vector>
 
 namespace spinesim::fem {
 
@@ -23,11 +24,26 @@ using namespace dealii;
 template <int dim>
 double MechanicsSolver<dim>::stable_time_step() const {
   double dt = std::numeric_limits<double>::max();
+  // Finite strain: the cells as they are now (an impact can shorten them several times).
+  const bool current = prm_.kinematics == "finite_strain";
+  std::vector<Point<dim>> x(GeometryInfo<dim>::vertices_per_cell);
   for (const auto& cell : dof_handler_.active_cell_iterators())
     if (cell->is_locally_owned() && is_active(cell)) {
-      // The shortest edge (not the diameter) bounds the highest mode of distorted cells;
-      // degree p splits the edge into p node spacings.
-      const double h = cell->minimum_vertex_distance() / prm_.fe_degree;
+      // The shortest distance between two vertices (not the diameter) bounds the highest mode
+      // of distorted cells; degree p splits the edge into p node spacings.
+      double shortest = cell->minimum_vertex_distance();
+      if (current) {
+        for (const unsigned int v : cell->vertex_indices()) {
+          x[v] = cell->vertex(v);
+          for (unsigned int c = 0; c < dim; ++c)
+            x[v][c] += u_ghost_(cell->vertex_dof_index(v, c));
+        }
+        shortest = std::numeric_limits<double>::max();
+        for (unsigned int a = 0; a < x.size(); ++a)
+          for (unsigned int b = a + 1; b < x.size(); ++b)
+            shortest = std::min(shortest, x[a].distance(x[b]));
+      }
+      const double h = shortest / prm_.fe_degree;
       const auto& law = cell_material(cell);
       // Plane stress carries the in-plane P wave sqrt(E / ((1 − ν²) ρ)), slower than the
       // 3-D one.

@@ -21,6 +21,9 @@ class Progress {
   void start(const std::string& label, unsigned int total_steps, double end_time);
   // Reports step `step` at simulated time `time`; cheap enough to call every step.
   void update(unsigned int step, double time);
+  // Revises the phase's step count, for runs whose step changes as they go (a CFL step that
+  // shrinks with the cells).
+  void set_total_steps(unsigned int total_steps) { total_ = total_steps > 0 ? total_steps : 1u; }
   void finish();
 
   static Style parse_style(const std::string& name);

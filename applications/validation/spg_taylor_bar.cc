@@ -2,6 +2,7 @@
 // (Taylor test; the converged reference values of the classical benchmark — v0 = 227 m/s,
 // L0 = 32.4 mm, R0 = 3.2 mm, E = 117 GPa, ν = 0.35, σY = 400 MPa, linear hardening 100 MPa —
 // are a final length of about 21.4–21.5 mm and an impact-face radius of about 7.1–7.2 mm).
+// With Effects/Mechanics the bar is FEM cells instead (fem_taylor_bar.h); else SPG particles.
 // SPG particles in 3-D with the finite-strain J2 law; optionally (Quarter model) a quarter whose
 // symmetry planes x = 0 and y = 0 are essential conditions (u_x = 0, u_y = 0) imposed by the
 // transformation method, which is 4× cheaper than the full bar.
@@ -15,8 +16,11 @@
 #include "applications/framework/parse_section.h"
 #include "applications/framework/run_context.h"
 #include "applications/framework/scenario.h"
+#include "applications/validation/fem_taylor_bar.h"
+#include "applications/validation/taylor_bar_parameters.h"
 #include "base/exceptions.h"
 #include "fem/materials/law_parameters.h"
+#include "fem/mechanics_parameters.h"
 #include "meshfree/spg/spg_solver.h"
 #include "meshfree/spg/spg_vtu_writer.h"
 #include "meshfree/velocity_verlet.h"
@@ -31,44 +35,6 @@ namespace spinesim::applications {
 using namespace framework;
 
 namespace {
-
-struct TaylorParameters {
-  double length = 32.4e-3, radius = 3.2e-3, velocity = 227.0, end_time = 80e-6, spacing = 0.8e-3;
-  double output_interval = 10e-6;
-  bool quarter = true;
-  unsigned int history_steps = 50;
-
-  static void declare(dealii::ParameterHandler& prm) {
-    using namespace dealii::Patterns;
-    prm.declare_entry("Length", "32.4e-3", Double(0.0), "Initial bar length L0 [m].");
-    prm.declare_entry("Radius", "3.2e-3", Double(0.0), "Initial bar radius R0 [m].");
-    prm.declare_entry("Impact velocity", "227", Double(0.0), "Initial velocity v0 [m/s].");
-    prm.declare_entry("End time", "80e-6", Double(0.0), "Simulated time [s].");
-    prm.declare_entry("Particle spacing", "0.8e-3", Double(0.0),
-                      "Nominal particle spacing h (axial layers and rings) [m].");
-    prm.declare_entry("Quarter model", "true", Bool(),
-                      "Model a quarter with symmetry planes x = 0, y = 0 (else the full bar) [-].");
-    prm.declare_entry("History interval", "50", Integer(1), "Steps between history rows [steps].");
-    prm.declare_entry("Output interval", "10e-6", Double(0.0),
-                      "Time between particles_<cycle>.vtu outputs (0 = initial and final "
-                      "state only) [s].");
-  }
-  void parse(const dealii::ParameterHandler& prm) {
-    length = prm.get_double("Length");
-    radius = prm.get_double("Radius");
-    velocity = prm.get_double("Impact velocity");
-    end_time = prm.get_double("End time");
-    spacing = prm.get_double("Particle spacing");
-    quarter = prm.get_bool("Quarter model");
-    history_steps = prm.get_integer("History interval");
-    output_interval = prm.get_double("Output interval");
-    if (!(length > 0 && radius > 0 && end_time > 0))
-      throw InvalidInput("Taylor bar/Length, Radius, End time", "not positive", "> 0");
-    if (!(spacing > 0 && spacing <= 0.5 * radius))
-      throw InvalidInput("Taylor bar/Particle spacing", "= " + std::to_string(spacing),
-                         "0 < h <= R0/2 [m] (at least two rings)");
-  }
-};
 
 struct BarLayout {
   meshfree::ParticleSet<3> particles;
@@ -130,9 +96,37 @@ class TaylorBar : public Scenario {
     parse_section(prm, "Material", law_);
     parse_section(prm, "SPG", spg_);
     parse_section(prm, "Taylor bar", bar_);
+    // The bar is SPG particles or FEM cells: one of the two effects, not both.
+    fem_ = args.effects.particles_method == "none";
+    if (fem_ && !args.effects.mechanics)
+      throw InvalidInput("Effects/Mechanics", "false, and no particle method",
+                         "true (the bar in FEM) or Effects/Particles method = spg");
+    if (!fem_ && args.effects.mechanics)
+      throw InvalidInput("Effects/Mechanics", "true beside SPG particles",
+                         "false with Particles method = spg (the bar is particles or cells; a "
+                         "coupled Taylor bar is not modelled)");
+    if (fem_ && args.effects.contact)
+      throw InvalidInput("Effects/Contact", "true for the FEM bar",
+                         "false: the FEM bar's impact face is held on the wall z = 0 "
+                         "(frictionless), without a contact search");
+    if (fem_) {
+      parse_section(prm, "Mechanics", mech_);
+      if (mech_.kinematics != "finite_strain")
+        throw InvalidInput("Mechanics/Kinematics", mech_.kinematics,
+                           "finite_strain (the bar shortens by a third)");
+      if (mech_.time_integration != "explicit")
+        throw InvalidInput("Mechanics/Time integration", mech_.time_integration,
+                           "explicit (an impact)");
+    }
   }
 
   void run(RunContext& ctx) override {
+    if (fem_) {
+      std::shared_ptr<const materials::ConstitutiveLaw> law = materials::create_law(law_);
+      ctx.log() << "  material: " << law_.describe() << "\n";
+      run_fem_taylor_bar(ctx, law, bar_, mech_);
+      return;
+    }
     const auto wall_start = std::chrono::steady_clock::now();
     const auto law = materials::create_law(law_);
     ctx.log() << "  material: " << law_.describe() << "\n";
@@ -301,15 +295,18 @@ class TaylorBar : public Scenario {
   materials::LawParameters law_;
   meshfree::SpgParameters spg_;
   TaylorParameters bar_;
+  bool fem_ = false;
+  fem::MechanicsParameters<3> mech_;
 };
 
 } // namespace
 
 SPINESIM_REGISTER_SCENARIO(taylor_bar, "taylor_bar",
-                           "Taylor impact of a copper bar on a rigid wall with SPG particles "
-                           "(final length, impact radius, energy balance).",
-                           "particles:spg|contact", create_scenario<TaylorBar>,
-                           sections::material(), sections::spg(),
+                           "Taylor impact of a copper bar on a rigid wall with SPG particles or "
+                           "explicit finite-strain FEM (final length, impact radius, energy "
+                           "balance).",
+                           "mechanics|particles:spg|contact", create_scenario<TaylorBar>,
+                           sections::material(), sections::spg(), sections::mechanics(),
                            {"Taylor bar", TaylorParameters::declare})
 
 } // namespace spinesim::applications

@@ -225,3 +225,15 @@ spinesim_add_hostile_test(force_directory_of_input_file PREPARE run:${_quick}
   ARGS run ${_quick} --output @KEEP@ --force --set "Geometry/Shape=file"
        --set "Geometry/Mesh file=@KEEP@/mesh.vtk"
   MATCH "holds .*mesh.vtk, which this run reads")
+
+# The FEM Taylor bar: a contact search it does not run, linearised kinematics for a bar that
+# shortens by a third, and F-bar where a Newton solve needs a tangent it does not have.
+set(_taylor_fem ${PROJECT_SOURCE_DIR}/applications/validation/taylor_bar_fem.prm)
+spinesim_add_hostile_test(taylor_fem_with_contact
+  ARGS check ${_taylor_fem} --set "Effects/Contact=true" MATCH "Effects/Contact.*FEM bar")
+spinesim_add_hostile_test(taylor_fem_small_strain
+  ARGS check ${_taylor_fem} --set "Mechanics/Kinematics=small_strain"
+       --set "Mechanics/Volumetric locking=none" MATCH "Mechanics/Kinematics.*finite_strain")
+spinesim_add_hostile_test(fbar_in_a_newton_solve
+  ARGS run ${_quick} --output @KEEP@ --set "Mechanics/Kinematics=finite_strain"
+       --set "Mechanics/Volumetric locking=fbar" MATCH "Volumetric locking.*Newton")
