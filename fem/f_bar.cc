@@ -19,18 +19,23 @@ bool FBar<dim>::reinit(const dealii::FEValues<dim>& fe_values,
   pressure_sum_ = 0;
   double volume = 0, deformed = 0;
   worst = 0;
+  bool bad = false; // a point with J <= 0 or J not finite (NaN compares false)
   for (unsigned int q = 0; q < nq; ++q) {
     F_[q] = grads[q];
     for (unsigned int d = 0; d < dim; ++d)
       F_[q][d][d] += 1.0;
     J_[q] = dealii::determinant(F_[q]);
-    if (J_[q] < J_[worst])
+    if (!bad && !(J_[q] > 0 && std::isfinite(J_[q]))) {
+      bad = true;
       worst = q;
+    } else if (!bad && J_[q] < J_[worst]) {
+      worst = q;
+    }
     volume += fe_values.JxW(q);
     deformed += J_[q] * fe_values.JxW(q);
   }
   mean_J_ = deformed / volume;
-  if (!(J_[worst] > 0) || !(mean_J_ > 0))
+  if (bad || !(mean_J_ > 0))
     return false;
   for (unsigned int q = 0; q < nq; ++q) {
     F_inverse_[q] = dealii::invert(F_[q]);

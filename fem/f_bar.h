@@ -15,9 +15,11 @@
 // so for shape function i of component c_i and reference gradient g_i
 //   f_i = Σ_q [α P̄[c_i]·g_i − p_q F⁻¹[·][c_i]·g_i] JxW + (Σ_q p_q JxW) δJ̄_i / J̄,
 //   p_q = (α/d) P̄_d : F   (P̄_d the dim × dim block).
-// For small strains it is the mean dilatation of fem/mean_dilatation.h. Only the force is
-// formed here: there is no consistent tangent, so F-bar serves explicit dynamics and dynamic
-// relaxation (MechanicsParameters refuses it for Newton solves).
+// For small strains in 3-D it is the mean dilatation of fem/mean_dilatation.h; in plane strain
+// it spreads the cell's mean over the in-plane block (halves) where B-bar spreads it over all
+// three normal strains (thirds). Only the force is formed here: there is no consistent
+// tangent, so F-bar serves explicit dynamics; MechanicsSolver::solve_quasi_static refuses it
+// (InvalidInput naming Mechanics/Volumetric locking).
 
 #include "fem/materials/constitutive_law.h"
 
@@ -32,8 +34,8 @@ class FBar {
  public:
   // From the displacement gradients ∇u at the quadrature points of the cell fe_values was last
   // reinit()ed on (gradients and JxW) and the component of each shape function. Returns false
-  // where some point or the cell's mean is inverted (J <= 0 or J̄ <= 0); `worst` is then the
-  // quadrature point of the smallest J.
+  // where some point or the cell's mean is inverted or not finite (J <= 0, J̄ <= 0, NaN);
+  // `worst` is then the first such point, or the point of the smallest J.
   bool reinit(const dealii::FEValues<dim>& fe_values, const std::vector<unsigned int>& component,
               const std::vector<dealii::Tensor<2, dim>>& grads, unsigned int& worst);
   // H̄ = F̄ − I at point q, 3 × 3 zero-padded.

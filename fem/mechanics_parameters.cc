@@ -20,8 +20,8 @@ void MechanicsParameters<dim>::declare(ParameterHandler& prm) {
       "(B-bar by mean dilatation, Hughes 1980: every quadrature point of a cell takes the "
       "cell-average volumetric strain, the deviatoric strain stays point-wise; small strain); "
       "or fbar (F-bar, de Souza Neto et al. 1996: F scaled to the cell's mean volume change; "
-      "finite strain, explicit steps and dynamic relaxation only, as it has no Newton "
-      "tangent). Switch it on for nearly incompressible materials (Poisson ratio above about "
+      "finite strain, explicit steps only, as it has no Newton tangent). Switch it on for nearly "
+      "incompressible materials (Poisson ratio above about "
       "0.45, e.g. soft tissue, or J2 plastic flow), where the standard Q1 element is far too "
       "stiff. Plane strain or 3-D only.");
   prm.declare_entry("Time integration", "quasi_static",

@@ -107,7 +107,7 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
   std::vector<double> fbar_force(fbar ? n : 0);
 
   // A point that fails (inverted, non-finite) ends this rank's loop; every rank then meets in
-  // raise_on_every_rank before the collective compress below.
+  // raise_on_every_rank after the collective compresses below.
   std::optional<NumericalFailure> failure;
   for (const auto& cell : dof_handler_.active_cell_iterators()) {
     if (failure)
@@ -299,14 +299,16 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
       failure = e;
     }
   }
-  raise_on_every_rank(failure, comm_);
+  // The compresses first (collective, every rank reaches them): entries bound for other ranks
+  // must not stay buffered in the vectors into the next assembly after a failure.
   if (with_matrix)
     matrix.compress(VectorOperation::add);
-  if (with_matrix && !assembly_cells_ && !assemble_into_explicit_matrix_)
-    regularise_untouched_rows(matrix, constraints);
   rhs_.compress(VectorOperation::add);
   f_int.compress(VectorOperation::add);
   f_ext.compress(VectorOperation::add);
+  raise_on_every_rank(failure, comm_);
+  if (with_matrix && !assembly_cells_ && !assemble_into_explicit_matrix_)
+    regularise_untouched_rows(matrix, constraints);
   raw_residual_ = f_int;
   raw_residual_ -= f_ext;
 

@@ -219,9 +219,10 @@ template <int dim>
 std::vector<typename MechanicsSolver<dim>::LoadStepReport>
 MechanicsSolver<dim>::solve_quasi_static(double time) {
   if (prm_.volumetric_locking == "fbar")
-    throw InvalidInput("Mechanics/Volumetric locking", "fbar",
-                       "none or bbar for quasi-static Newton solves (F-bar has no consistent "
-                       "tangent here: use it with Time integration = explicit)");
+    throw InvalidInput("Mechanics/Volumetric locking", "fbar in a quasi-static Newton solve",
+                       "none with finite strain (bbar with small strain) for Newton solves; "
+                       "F-bar has no consistent tangent here, it needs Time integration = "
+                       "explicit");
   if (!is_setup_)
     setup();
   previous_time_ = time_;

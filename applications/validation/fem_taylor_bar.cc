@@ -78,7 +78,8 @@ void run_fem_taylor_bar(framework::RunContext& ctx,
   dealii::parallel::distributed::Triangulation<3> tria(comm);
   {
     dealii::TimerOutput::Scope t(ctx.timer(), "mesh");
-    // Axial cells about as long as the coarse cross-section's (5 cells across 2 R0).
+    // Axial cells about as long as the coarse cross-section's (5 cells in the disc, 3 across
+    // its diameter).
     const unsigned int axial = std::max(1u, unsigned(std::lround(bar.length / bar.radius)));
     dealii::GridGenerator::subdivided_cylinder(tria, axial, bar.radius, 0.5 * bar.length);
     // Axis x on [−L0/2, L0/2] → z on [0, L0]: (x, y, z) → (y, z, x + L0/2), a cyclic

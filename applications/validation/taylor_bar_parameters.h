@@ -30,10 +30,11 @@ struct TaylorParameters {
     prm.declare_entry("Quarter model", "true", Bool(),
                       "Model a quarter with symmetry planes x = 0, y = 0 (else the full bar) "
                       "[-]; SPG only.");
-    prm.declare_entry("FEM refinements", "2", Integer(0, 6),
-                      "FEM (Effects/Mechanics): global refinements of the coarse cylinder mesh "
-                      "(5 cells across, axial cells about R0 long) [-]; 2 gives cells of about "
-                      "0.8 mm, each more halves them.");
+    prm.declare_entry(
+        "FEM refinements", "2", Integer(0, 6),
+        "FEM (Effects/Mechanics): global refinements of the coarse cylinder mesh "
+        "(5 cells in the cross-section, axial cells R0 long) [-]; 2 gives cells of about "
+        "0.8 mm, each more halves them.");
     prm.declare_entry("History interval", "50", Integer(1), "Steps between history rows [steps].");
     prm.declare_entry("Output interval", "10e-6", Double(0.0),
                       "Time between particles_<cycle>.vtu (SPG) or solution_<cycle>.vtu (FEM) "

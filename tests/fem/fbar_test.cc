@@ -150,8 +150,9 @@ double fbar_energy(const MechanicsSolver<dim>& mech, const TrilinosWrappers::MPI
 } // namespace
 
 // A uniform deformation has J = J̄ at every point, so F̄ = F and the F-bar force is the
-// standard one, to round-off; both vanish at interior nodes (uniform P), which the largest
-// interior force measures against the largest force.
+// standard one, to round-off. There the −p F⁻ᵀ and δJ̄ terms of the force cancel exactly, so
+// this checks the α P̄ part and the point update of F̄; the energy-derivative test below
+// checks the other two.
 template <int dim>
 void uniform_deformation() {
   parallel::distributed::Triangulation<dim> tria(comm());

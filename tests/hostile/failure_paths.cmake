@@ -8,6 +8,12 @@ spinesim_add_hostile_test(fails_inverted_element EXIT 1 STATUS failed LABELS sta
   ARGS run ${_quick} --output @KEEP@ --progress off --set "Mechanics/Kinematics=finite_strain"
        --set "Mechanics/Boundary conditions/Dirichlet 2/Values=-2*t"
   MATCH "inverted element \\(det F = -?[0-9.e-]+\\) at cell .* centred at .*${_report}")
+# The FEM Taylor bar at 500 m/s on its coarsest mesh (50 cells): the F-bar assembly finds a
+# cell folded through itself (measured at step 180, 22.8 us, det F = -0.73 at the impact face).
+spinesim_add_hostile_test(fails_inverted_element_fbar EXIT 1 STATUS failed LABELS stability cli
+  ARGS run ${PROJECT_SOURCE_DIR}/applications/validation/taylor_bar_fem.prm --output @KEEP@
+       --progress off --set "Taylor bar/FEM refinements=0" --set "Taylor bar/Impact velocity=500"
+  MATCH "inverted element \\(det F = -?[0-9.e-]+, cell mean -?[0-9.e-]+\\).*where: cell .* centred at .*${_report}")
 # J2 plasticity far past yield with 2 Newton iterations and no step cuts: no convergence.
 spinesim_add_hostile_test(fails_newton_divergence EXIT 1 STATUS failed LABELS stability cli
   ARGS run ${_quick} --output @KEEP@ --progress off --set "Material/Model=j2_plasticity"
