@@ -194,6 +194,17 @@ int run_command(const RunOptions& options) {
       source.file = *options.restart_dir + "/parameters.prm";
       output = *options.restart_dir;
       mode = OutputDirectory::Mode::restart;
+      // It continues that run: an entry changed now would act from here on while what was
+      // built from it before (a mesh, a hole cut at t = 0, a schedule) stays, half one model
+      // and half another. Only where the run stops may change.
+      for (const auto& assignment : source.overrides) {
+        const std::string path = assignment.substr(0, assignment.find('='));
+        const std::string stop = "Stop after step";
+        if (path.size() < stop.size() || path.compare(path.size() - stop.size(), stop.size(), stop))
+          throw InvalidInput("--set " + path, "on a restart",
+                             "only a 'Stop after step' entry when continuing a run; start a new "
+                             "run (without --restart) to change the model");
+      }
     }
     load(scene, source);
     effects = scene.effects();

@@ -237,3 +237,9 @@ spinesim_add_hostile_test(taylor_fem_small_strain
 spinesim_add_hostile_test(fbar_in_a_newton_solve
   ARGS run ${_quick} --output @KEEP@ --set "Mechanics/Kinematics=finite_strain"
        --set "Mechanics/Volumetric locking=fbar" MATCH "Volumetric locking.*Newton")
+
+# A restart continues the run it was: changing the model on the way (here the load) is bad
+# input naming the entry, and the run directory stays as it was.
+spinesim_add_hostile_test(restart_changes_the_model PREPARE run:${_quick}
+  ARGS run --restart @KEEP@ --set "Mechanics/Boundary conditions/Dirichlet 2/Values=-1e-3*t"
+  MATCH "--set Mechanics/Boundary conditions/Dirichlet 2/Values.*only a 'Stop after step'")
