@@ -4,6 +4,7 @@
 // standard element's results at ν = 0.3, and the inputs B-bar rejects. Every assertion
 // compares with a rank-independent reference, so the binary also runs on 2 MPI ranks.
 #include "base/exceptions.h"
+#include "distorted_box.h"
 #include "fem/materials/j2_plasticity.h"
 #include "fem/materials/linear_elastic.h"
 #include "fem/mechanics_solver.h"
@@ -24,6 +25,8 @@
 using namespace dealii;
 using namespace spinesim;
 using namespace spinesim::fem;
+using spinesim::testing::distorted_box;
+using spinesim::testing::Smooth;
 
 namespace {
 
@@ -32,23 +35,6 @@ MPI_Comm comm() {
 }
 bool root() {
   return Utilities::MPI::this_mpi_process(comm()) == 0;
-}
-
-// The unit square / cube in 4^dim cells, vertices moved by a smooth map so that no cell is a
-// parallelogram (the mean of a shape gradient then differs from its point values).
-template <int dim>
-void distorted_box(parallel::distributed::Triangulation<dim>& tria) {
-  GridGenerator::subdivided_hyper_cube(tria, 4, 0.0, 1.0); // boundary id 0, material 0
-  GridTools::transform(
-      [](const Point<dim>& x) {
-        Point<dim> y = x;
-        y[0] += 0.06 * std::sin(M_PI * x[0]) * std::sin(2 * M_PI * x[1]);
-        y[1] += 0.05 * std::sin(2 * M_PI * x[0]) * std::sin(M_PI * x[1]);
-        if (dim == 3)
-          y[dim - 1] += 0.04 * std::sin(M_PI * x[0]) * std::sin(M_PI * x[dim - 1]);
-        return y;
-      },
-      tria);
 }
 
 // An affine field u = G x + c.
@@ -63,22 +49,6 @@ class Affine : public Function<dim> {
     return v;
   }
   static constexpr double G[3][3] = {{1e-3, 4e-4, -2e-4}, {-3e-4, -6e-4, 5e-4}, {1e-4, 2e-4, 8e-4}};
-};
-
-// A smooth non-affine field of amplitude `a` (its phase `k` picks one of several).
-template <int dim>
-class Smooth : public Function<dim> {
- public:
-  Smooth(double a, double k) : Function<dim>(dim), a_(a), k_(k) {}
-  double value(const Point<dim>& x, unsigned int c) const override {
-    double v = std::sin(k_ + (c + 1) * x[0]) * std::cos(0.7 * k_ + 2 * x[1] - c);
-    if (dim == 3)
-      v *= std::cos(1.3 * x[dim - 1] + c * k_);
-    return a_ * (v + 0.5 * x[c] * x[(c + 1) % dim]);
-  }
-
- private:
-  double a_, k_;
 };
 
 template <int dim>

@@ -4,6 +4,7 @@
 // and the inputs F-bar refuses are named. Every assertion compares rank-independent sums, so
 // the binary also runs on 2 MPI ranks.
 #include "base/exceptions.h"
+#include "distorted_box.h"
 #include "fem/materials/neo_hookean.h"
 #include "fem/mechanics_solver.h"
 
@@ -23,6 +24,8 @@
 using namespace dealii;
 using namespace spinesim;
 using namespace spinesim::fem;
+using spinesim::testing::distorted_box;
+using spinesim::testing::Smooth;
 
 namespace {
 
@@ -31,23 +34,6 @@ MPI_Comm comm() {
 }
 bool root() {
   return Utilities::MPI::this_mpi_process(comm()) == 0;
-}
-
-// The unit square / cube in 4^dim cells with no parallelogram among them (a shape gradient's
-// point values then differ from its cell mean, and J varies within a cell).
-template <int dim>
-void distorted_box(parallel::distributed::Triangulation<dim>& tria) {
-  GridGenerator::subdivided_hyper_cube(tria, 4, 0.0, 1.0);
-  GridTools::transform(
-      [](const Point<dim>& x) {
-        Point<dim> y = x;
-        y[0] += 0.06 * std::sin(M_PI * x[0]) * std::sin(2 * M_PI * x[1]);
-        y[1] += 0.05 * std::sin(2 * M_PI * x[0]) * std::sin(M_PI * x[1]);
-        if (dim == 3)
-          y[dim - 1] += 0.04 * std::sin(M_PI * x[0]) * std::sin(M_PI * x[dim - 1]);
-        return y;
-      },
-      tria);
 }
 
 // u = G x: a uniform finite deformation F = I + G with J = det F ≈ 1.13 (3-D).
@@ -62,22 +48,6 @@ class Affine : public Function<dim> {
     return v;
   }
   static constexpr double G[3][3] = {{0.10, 0.04, -0.02}, {-0.03, -0.06, 0.05}, {0.01, 0.02, 0.08}};
-};
-
-// A smooth non-affine field of amplitude `a` (its phase `k` picks one of several).
-template <int dim>
-class Smooth : public Function<dim> {
- public:
-  Smooth(double a, double k) : Function<dim>(dim), a_(a), k_(k) {}
-  double value(const Point<dim>& x, unsigned int c) const override {
-    double v = std::sin(k_ + (c + 1) * x[0]) * std::cos(0.7 * k_ + 2 * x[1] - c);
-    if (dim == 3)
-      v *= std::cos(1.3 * x[dim - 1] + c * k_);
-    return a_ * (v + 0.5 * x[c] * x[(c + 1) % dim]);
-  }
-
- private:
-  double a_, k_;
 };
 
 constexpr double E = 1e6, nu = 0.45;
