@@ -51,15 +51,20 @@ struct RelaxationSums {
   }
 };
 
-// The damped central-difference update of one component at step dt with damping c.
+// The damped central-difference update of one component (Belytschko, Liu & Moran, Nonlinear
+// Finite Elements, 2000, Box 6.1, where the step may change from one step to the next):
+//   v^{n+½} = ((1 − c h/2) v^{n−½} + h a^n) / (1 + c h/2),  u^{n+1} = u^n + Δt v^{n+½},
+// with Δt = t^{n+1} − t^n the step and h = t^{n+½} − t^{n−½} = ½ (Δt^{n−½} + Δt) the interval
+// between the half-step velocities (h = Δt at a constant step).
 class DampedCentralDifference {
  public:
-  DampedCentralDifference(double dt, double damping)
-      : dt_(dt), keep_(1.0 - 0.5 * damping * dt), denominator_(1.0 + 0.5 * damping * dt) {}
+  DampedCentralDifference(double dt, double damping) : DampedCentralDifference(dt, dt, damping) {}
+  DampedCentralDifference(double h, double dt, double damping)
+      : h_(h), dt_(dt), keep_(1.0 - 0.5 * damping * h), denominator_(1.0 + 0.5 * damping * h) {}
 
   // v^{n−½} → v^{n+½}, u^n → u^{n+1} with the acceleration a^n [m/s²].
   void advance(double& v, double& u, double acceleration) const {
-    v = (keep_ * v + dt_ * acceleration) / denominator_;
+    v = (keep_ * v + h_ * acceleration) / denominator_;
     u += dt_ * v;
   }
   // The first step from rest: v^{½} = dt a⁰ / 2.
@@ -69,8 +74,16 @@ class DampedCentralDifference {
   }
 
  private:
-  double dt_, keep_, denominator_;
+  double h_, dt_, keep_, denominator_;
 };
+
+// The velocity interval h of the step dt after a step of `previous` (see above). previous = 0
+// is a start at integer time, v^0 given: h = Δt/2, v^{½} = v^0 + ½ Δt a^0 (Box 6.1's first
+// step). previous < 0 means none (the first step, v^0 taken as v^{−½}, or a checkpoint that did
+// not keep it): h = Δt.
+inline double central_difference_interval(double previous, double dt) {
+  return previous < 0 ? dt : 0.5 * (previous + dt);
+}
 
 } // namespace spinesim
 

@@ -125,6 +125,9 @@ void CoupledIntegrator<dim>::advance(double dt, double a, double load_time, bool
   // A relaxation step (sums given) holds the loads at load_time and adds this rank's sums of
   // the free particles to the FEM's.
   auto& particles = state_.particles;
+  // The velocity interval of this step (steps change where a run lands on its output times):
+  // the FEM's, so both models advance their velocities alike; relaxation keeps one pseudo-step.
+  const double h = sums ? dt : state_.fem.velocity_interval(dt);
   if (state_.n_free_particles() > 0) {
     // With heat, bonds breaking in this force pass release their energy (at the state of t_n)
     // into their particle's heat account.
@@ -172,7 +175,7 @@ void CoupledIntegrator<dim>::advance(double dt, double a, double load_time, bool
     };
     auto& previous = relax_acceleration_;
     // The damped central-difference update of one component, in both loops below.
-    const DampedCentralDifference step(dt, a);
+    const DampedCentralDifference step(h, dt, a);
     const auto advance_component = [&](unsigned int i, unsigned int d, double acc) {
       step.advance(particles.velocity(i)[d], particles.displacement(i)[d], acc);
     };
@@ -212,14 +215,14 @@ void CoupledIntegrator<dim>::advance(double dt, double a, double load_time, bool
     }
     boundary_.apply(load_time, dt);
     if (!sums)
-      energy_.after_update(time_, dt, a);
+      energy_.after_update(time_, dt, h, a);
     halo_.exchange(); // partners and interface stencils at t_{n+1}
     interface_.update();
   };
   if (state_.n_free_particles() > 0 && !energy_splice)
     move_particles(false);
   if (!sums && state_.n_free_particles() == 0)
-    energy_.after_update(time_, dt, a); // no particles (yet): their share is zero
+    energy_.after_update(time_, dt, h, a); // no particles (yet): their share is zero
   {
     // The hook lives for this step only (also when the step throws).
     struct HookGuard {

@@ -85,21 +85,22 @@ void ParticleEnergy<dim>::after_forces() {
 }
 
 template <int dim>
-void ParticleEnergy<dim>::after_update(double time, double dt, double damping) {
+void ParticleEnergy<dim>::after_update(double time, double dt, double h, double damping) {
   if (!on_)
     return;
   if (state_.n_free_particles() == 0)
     stored_ = 0;
   const auto& p = state_.particles;
   fem::ExplicitEnergy::Step step;
-  // u_n − u_{n−1} = dt_back v_{n−½}: steps differ where a run lands on its output times.
-  const double dt_back = account_.valid && time > account_.time ? time - account_.time : dt;
+  // u_n − u_{n−1} = dt_back v_{n−½}, h = ½ (dt_back + dt): steps differ where a run lands on
+  // its output times (dt_back = dt at the first step).
+  const double dt_back = 2 * h - dt;
   for (unsigned int i = 0; i < p.size(); ++i) {
     if (!state_.free[i] || !state_.is_owned(i) || i >= velocity_before_.size())
       continue;
     for (unsigned int d = 0; d < dim; ++d) {
       const double fe = p.external_force(i)[d];
-      step.add(p.mass(i), velocity_before_[i][d], p.velocity(i)[d], dt, p.force(i)[d] + fe, fe,
+      step.add(p.mass(i), velocity_before_[i][d], p.velocity(i)[d], dt, h, p.force(i)[d] + fe, fe,
                p.is_fixed(i, d), damping);
     }
   }

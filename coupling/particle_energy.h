@@ -48,8 +48,9 @@ class ParticleEnergy {
   // motion did not pay: central differences applied the removed forces over half of the last
   // step only, ½ (f_before − f_after) · (u_n − u_{n−1}) (docs/coupling.md, Energy account).
   void after_forces();
-  // After the particle update and the fixed components' motion to t_{n+1}: the step's sums.
-  void after_update(double time, double dt, double damping);
+  // After the particle update and the fixed components' motion to t_{n+1}: the step's sums
+  // (step dt, velocity interval h, base/dynamic_relaxation.h).
+  void after_update(double time, double dt, double h, double damping);
 
   // This rank's share at the last force pass [J] (2-D: J/m).
   const fem::ExplicitEnergy& account() const { return account_; }

@@ -10,8 +10,8 @@
 // sum S_n = W(t_n) + ½ G_n · Δt v_{n+½}. Every figure refers to t_n, the state of the last
 // force pass (one step before the state the step leaves).
 //
-// Kinetic energy at t_n: K = ½ Σ m v̄², v̄ = ½ (v_{n−½} + v_{n+½}) (the integer-time velocity
-// of the reference above). For a linear, undamped, symmetric system the trapezoidal works
+// Kinetic energy at t_n: K = ½ Σ m v_n², v_n = v_{n−½} + ½ Δt_{n−½} a_n the integer-time
+// velocity of the reference above (½ (v_{n−½} + v_{n+½}) at a constant step). For a linear, undamped, symmetric system the trapezoidal works
 // close exactly with the central-difference energy K* = ½ Σ m v_{n−½} v_{n+½} = K − ⅛ Δt² Σ m a²,
 // so W_ext − (U + K* + D) isolates what the time integration does not explain.
 
@@ -43,7 +43,7 @@ struct ExplicitEnergy {
   TrapezoidWork interface;    // done through driven unknowns (the coupling interface)
   TrapezoidWork damping;      // dissipated by mass-proportional damping
   TrapezoidWork internal;     // ∫ f_int · du (paths without a stored-energy formula)
-  double kinetic = 0;         // K(t_n) = ½ Σ m v̄²
+  double kinetic = 0;         // K(t_n) = ½ Σ m v_n²
   double kinetic_central = 0; // K*(t_n) = ½ Σ m v_{n−½} v_{n+½}
   // Stored energy U(t_n): ½ u_nᵀ K u_n on the linear explicit path; NaN where only the
   // internal work is known (nonlinear laws: it also holds the plastic dissipation).
@@ -53,24 +53,28 @@ struct ExplicitEnergy {
   // U(t_n) where known, else the internal work (stored energy plus plastic dissipation).
   double stored_or_internal() const { return std::isnan(strain) ? internal.at_force_pass : strain; }
 
-  // One unknown of mass m with velocities vo = v_{n−½}, vn = v_{n+½} over dt, the net force
+  // One unknown of mass m with velocities vo = v_{n−½}, vn = v_{n+½} over the step dt with the
+  // velocity interval h = ½ (dt_back + dt) (base/dynamic_relaxation.h), the net force
   // F = f_ext − f_int of its model at t_n, the external (load) part f_ext of F and damping
   // a [1/s]; `prescribed` unknowns (Dirichlet, driven) take the support force the motion
-  // needs, R = m (vn − vo)/dt − F, into `prescribed_back/forward`.
+  // needs, R = m (vn − vo)/h − F, into `prescribed_back/forward`.
   struct Step {
     double external_back = 0, external_forward = 0;
     double prescribed_back = 0, prescribed_forward = 0;
     double damping_back = 0, damping_forward = 0;
     double kinetic = 0, kinetic_central = 0;
-    void add(double m, double vo, double vn, double dt, double F, double f_ext, bool prescribed,
-             double a) {
+    void add(double m, double vo, double vn, double dt, double h, double F, double f_ext,
+             bool prescribed, double a) {
+      // The damped update's mean velocity, and the velocity at t_n, v_{n−½} + ½ dt_back a_n
+      // (½ (vo + vn) at a constant step; vo at the start, dt_back = 0).
       const double vbar = 0.5 * (vo + vn), back = 0.5 * dt * vo, forward = 0.5 * dt * vn;
-      kinetic += 0.5 * m * vbar * vbar;
+      const double vn_time = vo + (1.0 - 0.5 * dt / h) * (vn - vo);
+      kinetic += 0.5 * m * vn_time * vn_time;
       kinetic_central += 0.5 * m * vo * vn;
       external_back += f_ext * back;
       external_forward += f_ext * forward;
       if (prescribed) {
-        const double R = m * (vn - vo) / dt - F;
+        const double R = m * (vn - vo) / h - F;
         prescribed_back += R * back;
         prescribed_forward += R * forward;
       } else if (a != 0) { // the damping force −a m v̄ dissipates a m v̄ · du
@@ -88,7 +92,7 @@ struct EnergyBalance {
   double external_work = 0;          // W_ext: supports and loads, on the body
   double interface_work = 0;         // done on the FEM through its driven (interface) DoFs
   double strain_energy = 0;          // U
-  double kinetic_energy = 0;         // K = ½ Σ m v̄²
+  double kinetic_energy = 0;         // K = ½ Σ m v_n²
   double kinetic_energy_central = 0; // K* = ½ Σ m v_{n−½} v_{n+½}
   double fracture_dissipation = 0;   // Σ ΔU_break (particles)
   double damping_dissipation = 0;    // mass-proportional damping

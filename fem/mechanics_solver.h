@@ -142,8 +142,18 @@ class MechanicsSolver {
   std::vector<LoadStepReport> solve_quasi_static(double time = 1.0);
 
   // Explicit: the CFL-limited stable step [s] and one central-difference step of size dt.
+  // Steps may change from one to the next (landing on output times, a step from the current
+  // cells): the velocities advance over the interval between half steps, ½ (Δt_previous + dt),
+  // base/dynamic_relaxation.h. The first step (after setup() or clear_velocity()) takes the
+  // velocities it finds as those of t_{−½}: h = dt, so the energy account books the Dirichlet
+  // DoFs' jump to their prescribed velocity (an impact face stopped at t = 0) as support work.
   double stable_time_step() const;
   void explicit_step(double dt);
+  // The velocity interval of an explicit step of dt taken next [s] (the coupling moves its
+  // particles over the same interval).
+  double velocity_interval(double dt) const {
+    return central_difference_interval(previous_step_, dt);
+  }
   // The energy account of explicit steps (fem/explicit_energy.h): off by default; on, every
   // explicit_step() adds to it (a pass over the owned DoFs). energy_account() is this rank's
   // share at the last step's force pass (t − dt).
@@ -361,7 +371,8 @@ class MechanicsSolver {
   void build_step_tables();
   // Adds step dt (damping a) to energy_ from the state before the step (u_previous_,
   // v_previous_, the net forces of central_difference) and the state after it.
-  void account_energy(double dt, double a, bool linear);
+  // h is the velocity interval of the step.
+  void account_energy(double dt, double h, double a, bool linear);
 
   MPI_Comm comm_;
   dealii::parallel::distributed::Triangulation<dim>& tria_;
@@ -463,6 +474,9 @@ class MechanicsSolver {
   std::vector<double> plastic_work_mark_;
   double plastic_work_mark_time_ = 0;
   double time_ = 0, previous_time_ = 0, target_time_ = 0;
+  // The last explicit step [s]; −1 before the first (after clear_velocity()) and when a
+  // checkpoint did not keep it: h = dt (base/dynamic_relaxation.h, central_difference_interval).
+  double previous_step_ = -1;
   bool loaded_ = false; // loads of previous_time_ are active (false before the first solve)
   bool is_setup_ = false;
 

@@ -14,7 +14,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <optional>
+#include <exception>
 #include <stdexcept>
 #include <string>
 
@@ -106,9 +106,10 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
   FBar<dim> f_bar;
   std::vector<double> fbar_force(fbar ? n : 0);
 
-  // A point that fails (inverted, non-finite) ends this rank's loop; every rank then meets in
-  // raise_on_every_rank after the collective compresses below.
-  std::optional<NumericalFailure> failure;
+  // A point that fails (inverted, non-finite), or anything else thrown in the loop, ends this
+  // rank's loop; every rank then meets in raise_on_every_rank after the collective compresses
+  // below.
+  std::exception_ptr failure;
   for (const auto& cell : dof_handler_.active_cell_iterators()) {
     if (failure)
       break;
@@ -295,8 +296,8 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
         constraints.distribute_local_to_global(cell_rhs, dofs, rhs_);
       f_int.add(dofs, cell_fint);
       f_ext.add(dofs, cell_fext);
-    } catch (const NumericalFailure& e) {
-      failure = e;
+    } catch (...) {
+      failure = std::current_exception();
     }
   }
   // The compresses first (collective, every rank reaches them): entries bound for other ranks

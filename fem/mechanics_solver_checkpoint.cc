@@ -10,6 +10,7 @@
 #include <deal.II/distributed/solution_transfer.h>
 
 #include <cstring>
+#include <cmath>
 #include <fstream>
 
 namespace spinesim::fem {
@@ -42,7 +43,9 @@ void MechanicsSolver<dim>::prepare_for_serialization(const std::string& filename
   if (Utilities::MPI::this_mpi_process(comm_) == 0) {
     std::ofstream out(filename + ".solver");
     out.precision(17);
-    out << "spinesim_mechanics 1\n" << time_ << " " << loaded_ << " " << prm_.fe_degree << "\n";
+    // Version 2 adds the last explicit step (the next step's velocity interval needs it).
+    out << "spinesim_mechanics 2\n"
+        << time_ << " " << loaded_ << " " << prm_.fe_degree << " " << previous_step_ << "\n";
   }
 }
 
@@ -65,6 +68,14 @@ void MechanicsSolver<dim>::deserialize(const std::string& filename) {
   if (!(in >> tag >> version >> time_ >> loaded_ >> degree) || tag != "spinesim_mechanics")
     throw InvalidInput(filename + ".solver", "missing or unreadable solver checkpoint",
                        "a file written by MechanicsSolver::save_checkpoint");
+  if (version == 2 && !(in >> previous_step_ && std::isfinite(previous_step_)))
+    throw InvalidInput(filename + ".solver", "the last explicit step is missing or unreadable",
+                       "a file written by MechanicsSolver::save_checkpoint");
+  if (version == 1)
+    previous_step_ = -1; // not kept: the next step takes the interval of a constant step
+  if (version < 1 || version > 2)
+    throw InvalidInput(filename + ".solver", "solver checkpoint version " + std::to_string(version),
+                       "version 1 or 2 (a file written by MechanicsSolver::save_checkpoint)");
   if (degree != prm_.fe_degree)
     throw InvalidInput("Finite element degree", "checkpoint has degree " + std::to_string(degree),
                        "the degree the checkpoint was written with");

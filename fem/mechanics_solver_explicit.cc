@@ -3,6 +3,7 @@
 
 #include "fem/mechanics_solver.h"
 
+#include "base/collective_failure.h"
 #include "base/dynamic_relaxation.h"
 #include "base/exceptions.h"
 #include "base/scoped_time.h"
@@ -15,6 +16,7 @@
 
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <vector>
 
 namespace spinesim::fem {
@@ -75,6 +77,7 @@ void MechanicsSolver<dim>::explicit_step(double dt) {
       energy_.valid = true;
     }
     time_ += dt;
+    previous_step_ = dt;
     return;
   }
   target_time_ = time_;
@@ -82,6 +85,7 @@ void MechanicsSolver<dim>::explicit_step(double dt) {
   if (!states_stale_)
     commit_history();
   time_ += dt;
+  previous_step_ = dt;
   update_ghosts();
 }
 
@@ -113,6 +117,7 @@ void MechanicsSolver<dim>::commit_relaxation() {
 template <int dim>
 void MechanicsSolver<dim>::clear_velocity() {
   v_ = 0;
+  previous_step_ = -1; // at rest: the next step starts as the first
   update_ghosts();
 }
 
@@ -215,13 +220,17 @@ void MechanicsSolver<dim>::central_difference(double dt, double a, double bc_tim
     if (step_force_hook_)
       step_force_hook_(StepForces(linear ? raw_residual_.begin() : rhs_.begin(), sign,
                                   step_skip_.data(), step_dirichlet_.data(), step_driven_.data()));
+    // A DoF without mass ends this rank's update; every rank raises it before the compresses.
+    std::optional<NumericalFailure> failure;
     const auto zero_mass = [&](std::size_t k) {
       return NumericalFailure("zero lumped mass at dof " +
                                   std::to_string(owned_.nth_index_in_set(k)),
                               "explicit step", "every material needs a positive density");
     };
-    // The damped central-difference update of one DoF, in both loops below.
-    const DampedCentralDifference step(dt, a);
+    // The damped central-difference update of one DoF, in both loops below; relaxation steps
+    // keep one pseudo-step.
+    const double h = sums ? dt : velocity_interval(dt);
+    const DampedCentralDifference step(h, dt, a);
     const auto advance_dof = [&](std::size_t k, double acc) { step.advance(v[k], u[k], acc); };
     if (!sums) {
       // Independent DoFs, split among the threads as the sparse product splits its rows (the
@@ -239,14 +248,16 @@ void MechanicsSolver<dim>::central_difference(double dt, double a, double bc_tim
         advance_dof(k, sign * r[k] / m);
       }
       if (first_bad < static_cast<long>(n))
-        throw zero_mass(static_cast<std::size_t>(first_bad));
+        failure = zero_mass(static_cast<std::size_t>(first_bad));
     }
-    for (std::size_t k = 0; sums && k < n; ++k) { // relaxation: sums in a fixed order
+    for (std::size_t k = 0; sums && !failure && k < n; ++k) { // relaxation: a fixed order
       if (step_skip_[k])
         continue;
       const double m = mass[k];
-      if (!(m > 0))
-        throw zero_mass(k);
+      if (!(m > 0)) {
+        failure = zero_mass(k);
+        break;
+      }
       const double acc = sign * r[k] / m;
       // Driven DoFs (the coupling interface; boundary values win where both apply) carry
       // internal forces of the coupled system: neither residual nor reaction.
@@ -259,6 +270,7 @@ void MechanicsSolver<dim>::central_difference(double dt, double a, double bc_tim
       }
       advance_dof(k, acc);
     }
+    raise_on_every_rank(failure, comm_);
     // Later conditions overwrite earlier ones on shared DoFs (as interpolate_boundary_values);
     // boundary values take precedence over driven values.
     for (unsigned int k = 0; k < bcs_.dirichlet().size(); ++k) {
@@ -284,7 +296,7 @@ void MechanicsSolver<dim>::central_difference(double dt, double a, double bc_tim
   hanging_lines_.distribute(u_);
   hanging_lines_.distribute(v_);
   if (!sums && energy_account_on_)
-    account_energy(dt, a, linear);
+    account_energy(dt, velocity_interval(dt), a, linear);
   // NaN must not pass silently: the first non-finite owned entry (a scan of the local array;
   // Epetra's norm is a serial, scaled BLAS call), then every rank learns of any.
   const double* uu = u_.begin();
@@ -330,7 +342,7 @@ inline void scale_back(ExplicitEnergy::Step& step, double ratio) {
 } // namespace
 
 template <int dim>
-void MechanicsSolver<dim>::account_energy(double dt, double a, bool linear) {
+void MechanicsSolver<dim>::account_energy(double dt, double h, double a, bool linear) {
   // Per unknown (fem/explicit_energy.h): the net force F of the update (−K u on the linear
   // path, the condensed f_ext − f_int else), the raw load f_ext and f_int = raw residual +
   // f_ext on the nonlinear path. Hanging DoFs (after distribute, so their u and v are
@@ -343,8 +355,9 @@ void MechanicsSolver<dim>::account_energy(double dt, double a, bool linear) {
   const double* f_ext = linear ? nullptr : external_force_.begin();
   const double sign = linear ? -1.0 : 1.0;
   ExplicitEnergy::Step supported, driven; // Dirichlet and free DoFs; driven DoFs
-  // u_n − u_{n−1} = dt_back v_{n−½}: steps differ where a run lands on its output times.
-  const double dt_back = energy_.valid && time_ > energy_.time ? time_ - energy_.time : dt;
+  // u_n − u_{n−1} = dt_back v_{n−½}, h = ½ (dt_back + dt): steps differ where a run lands on
+  // its output times (dt_back = dt at the first step).
+  const double dt_back = 2 * h - dt;
   double internal_back = 0, internal_forward = 0;
   for (std::size_t k = 0; k < n; ++k) {
     const double vo = v_previous_[k], vn = v_new[k], fe = f_ext ? f_ext[k] : 0.0;
@@ -362,7 +375,7 @@ void MechanicsSolver<dim>::account_energy(double dt, double a, bool linear) {
     const bool is_driven = step_driven_[k] && !step_dirichlet_[k];
     const bool massless = is_driven && massless_driven_; // only its loads' work is booked
     (is_driven ? driven : supported)
-        .add(massless ? 0.0 : mass[k], vo, vn, dt, sign * r[k], fe,
+        .add(massless ? 0.0 : mass[k], vo, vn, dt, h, sign * r[k], fe,
              step_dirichlet_[k] || (is_driven && !massless), a);
   }
   scale_back(supported, dt_back / dt);
@@ -493,7 +506,7 @@ MechanicsSolver<dim>::solve_quasi_static_or_relax(double time, bool relax, doubl
   template void MechanicsSolver<dim>::assemble_explicit_matrix();                                  \
   template void MechanicsSolver<dim>::cache_dirichlet_dofs();                                      \
   template void MechanicsSolver<dim>::build_step_tables();                                         \
-  template void MechanicsSolver<dim>::account_energy(double, double, bool);                        \
+  template void MechanicsSolver<dim>::account_energy(double, double, double, bool);                \
   template double MechanicsSolver<dim>::linear_stored_energy();
 SPINESIM_INSTANTIATE(2)
 SPINESIM_INSTANTIATE(3)

@@ -580,13 +580,13 @@ set(_bar3 ${_val}/notched_bar_nosb_3d.prm)
 set(_bar2 ${_val}/notched_bar_nosb_2d.prm)
 set(_bar_runs ${CMAKE_CURRENT_BINARY_DIR}/runs/notched_bar)
 set(_fem_only "Effects/Coupling=false" "Effects/Particles method=none" "Effects/Damage=false")
-# FEM alone (3-D, 8 s): the trapezoidal works against U = ½ uᵀKu and K closes to 1.6e-5. Not
-# round-off: the integrator takes the velocity update of a shorter last step (landing on each
-# output time) with that step's size, which is first order at the 40 step-size changes; the
-# unit test ExplicitEnergy.* closes to 1e-12 at a fixed step. Bound 1e-4.
+# FEM alone (3-D, 8 s): the trapezoidal works against U = ½ uᵀKu and K close to 2.2e-10, the
+# round-off of 880 steps. The 40 shorter steps landing on output times cost nothing: the
+# velocities advance over the interval between half steps (base/dynamic_relaxation.h); with
+# the constant-step update applied to them the balance read 1.6e-5. Bound 1e-8.
 spinesim_add_scene_test(coupling.energy_fem_3d SCENE ${_bar3} OUT ${_bar_runs}/fem_3d
   SET ${_fem_only}
-  EXPECT "status==ok;energy_balance_error_relative<=1e-4;external_work_J>=0.5;fracture_dissipation_J<=0"
+  EXPECT "status==ok;energy_balance_error_relative<=1e-8;external_work_J>=0.5;fracture_dissipation_J<=0"
   LABELS "scene;validation;coupling")
 # Coupled, elastic (no bond breaks; 13 s): the Dirichlet-Dirichlet splice is not energy
 # conserving. Measured 0.99 %: the FEM gives 0.131 J to the particles through the interface
@@ -596,14 +596,18 @@ spinesim_add_scene_test(coupling.energy_elastic_3d SCENE ${_bar3} OUT ${_bar_run
   SET "Effects/Damage=false"
   EXPECT "status==ok;energy_balance_error_relative<=0.02;fracture_dissipation_J<=0;external_work_J>=0.5"
   LABELS "scene;validation;coupling")
-# The fracture run, 1 and 2 ranks (22 s on one core): the grips' work equals strain + kinetic
-# energy + the stored energy the breaks released, to 2.65 % measured (bound 4 %). The penalty
-# control's hourglass force is not the gradient of an energy, and its work at the breaks is
-# outside the account (tests/scenes/stability.cmake, ring_fragmentation_nosb_penalty_2d). It
-# read 0.07 % while a break could raise the stored energy (before the fracture damage D_f of
-# NosbPD), which offset it. The crack runs from the notch tip (y = -10 mm) through the far face
+# The fracture run, 1 and 2 ranks (22 s on one core): the grips' work against strain + kinetic
+# energy + the stored energy the breaks released. Measured 6.5 % at the end; it rises from
+# 1.2 % to 11.8 % while the crack runs (0.13–0.18 ms) and swings between 6 and 10 % after it.
+# The penalty control's hourglass force is not the gradient of an energy, and its work at the
+# breaks is outside the account (tests/scenes/stability.cmake,
+# ring_fragmentation_nosb_penalty_2d); the overlap splice is not energy conserving either. The
+# end value read 2.65 % while the velocities of the 40 shorter steps landing on output times
+# advanced over those steps, an error of the opposite sign; and 0.07 % while a break could raise
+# the stored energy (before the fracture damage D_f of NosbPD). Bound 8 %: a guard against a
+# growing defect, not a closed balance. The crack runs from the notch tip (y = -10 mm) through the far face
 # (last particle row at 18.75 mm) in the particle layers next to x = 0 (RMS 1.32 mm ~ h/2).
-set(_bar_checks "status==ok;energy_balance_error_relative<=0.04;fracture_dissipation_J>=0.01;crack_extent_max_y_m>=0.015;crack_extent_min_y_m<=-0.009;crack_path_rms_x_m<=0.0025")
+set(_bar_checks "status==ok;energy_balance_error_relative<=0.08;fracture_dissipation_J>=0.01;crack_extent_max_y_m>=0.015;crack_extent_min_y_m<=-0.009;crack_path_rms_x_m<=0.0025")
 spinesim_add_scene_test(coupling.notched_bar_nosb_3d SCENE ${_bar3} OUT ${_bar_runs}/fracture_3d
   EXPECT "${_bar_checks}" LABELS "scene;validation;coupling" TIMEOUT 300 FIXTURE bar_1)
 spinesim_add_scene_test(coupling.notched_bar_nosb_3d_2ranks SCENE ${_bar3}
@@ -640,12 +644,13 @@ spinesim_add_comparison_test(coupling.energy_conversion_3d_ranks_agree
   A ${_bar_runs}/conversion_3d/summary.json B ${_bar_runs}/conversion_3d_2ranks/summary.json
   CHECKS "conversion_energy_J:rel:1e-9;external_work_J:rel:1e-9;energy_balance_error_relative:rel:1e-6;converted_cells:abs:0"
   REQUIRES "conv_1;conv_2" LABELS "scene;coupling;mpi")
-# The same in plane strain (J/m, about 1 s each): FEM alone 3.4e-5, coupled elastic 1.21 %
+# The same in plane strain (J/m, about 1 s each): FEM alone 6.1e-10 (3.4e-5 with the
+# constant-step update at the output times; bound 1e-8), coupled elastic 1.21 %
 # (the splice loses 0.34 J/m of 28.3). The 2-D fracture run does not close (33 %: after the
 # bar has split, the splice makes energy, docs/coupling.md), so it has no balance test yet.
 spinesim_add_scene_test(coupling.energy_fem_2d SCENE ${_bar2} OUT ${_bar_runs}/fem_2d
   SET ${_fem_only}
-  EXPECT "status==ok;energy_balance_error_relative<=1e-4;external_work_J>=25"
+  EXPECT "status==ok;energy_balance_error_relative<=1e-8;external_work_J>=25"
   LABELS "scene;validation;coupling")
 spinesim_add_scene_test(coupling.energy_elastic_2d SCENE ${_bar2} OUT ${_bar_runs}/elastic_2d
   SET "Effects/Damage=false"

@@ -88,25 +88,29 @@ spinesim_add_scene_test(validation.lsmfm_perforated_plate
 # The Taylor bar in explicit finite-strain FEM (applications/validation/taylor_bar_fem.prm):
 # Q1 cells with F-bar, total-Lagrangian J2 (j2_finite_strain), the impact face held on the
 # wall. Published converged values: final length 21.4-21.5 mm, impact radius 7.1-7.2 mm.
-# Measured (final length, mean rim radius, energy balance): 50 cells 21.77 / 6.67 mm; 400
-# cells 21.53 / 6.95 mm / 9.6e-4 (33 s on two ranks, the figures equal to 1e-14 on one);
-# 3 200 cells 21.454 / 7.093 mm / 4.7e-4 (809 s on one rank). The coarse mesh's cross-section is
+# Measured (final length, mean rim radius, energy balance): 50 cells 21.77 / 6.66 mm; 400
+# cells 21.54 / 6.94 mm / 6.3e-5 (33 s on two ranks, the figures equal to 1e-14 on one);
+# 3 200 cells 21.454 / 7.093 mm (809 s on one rank). The coarse mesh's cross-section is
 # a polygon of 8 sides, 10 % short of the disc's area (mesh_volume_error_relative, bound 0.11;
 # 2.5 % with 16 sides): the length depends on rho v0^2 / sigma_y, not on the section, and is
 # held to 1 % of 21.45 mm; the rim, which the polygon pulls in, to 5 % of 7.15 mm. The energy
-# balance (the supports take the wall face's momentum at t = 0) to 2e-3, twice the measured.
+# balance at the end (the supports take the wall face's momentum at t = 0) to 3e-4: the steps
+# change every step, and with the velocities advanced over each step instead of the interval
+# between half steps it read 9.6e-4. Its largest value over the run (6.1e-4, at the impact)
+# to 2e-3.
 spinesim_add_scene_test(validation.taylor_bar_fem_coarse
   SCENE ${_val}/taylor_bar_fem.prm RANKS 2 SET "Taylor bar/FEM refinements=1"
   OUT ${CMAKE_CURRENT_BINARY_DIR}/runs/taylor_bar_fem_coarse
-  EXPECT "status==ok;final_length_mm~21.45:0.01;impact_radius_mm~7.15:0.05;energy_balance_error<=2e-3;max_energy_balance_error<=2e-3;mesh_volume_error_relative<=0.11;cells~400:0"
+  EXPECT "status==ok;final_length_mm~21.45:0.01;impact_radius_mm~7.15:0.05;energy_balance_error<=3e-4;max_energy_balance_error<=2e-3;mesh_volume_error_relative<=0.11;cells~400:0"
   LABELS "scene;validation;mpi" TIMEOUT 600 FIXTURE taylor_fem_coarse)
 # Without F-bar the same cells lock: plastic flow cannot keep each point's volume, the bar
-# barely spreads (impact radius 4.59 against 6.95 mm measured, ratio 0.66; bound 0.8).
+# barely spreads (impact radius 4.59 against 6.94 mm measured, ratio 0.66; bound 0.8). Energy
+# balance 4.8e-6 measured.
 spinesim_add_scene_test(validation.taylor_bar_fem_coarse_locking
   SCENE ${_val}/taylor_bar_fem.prm
   SET "Taylor bar/FEM refinements=1" "Mechanics/Volumetric locking=none"
   OUT ${CMAKE_CURRENT_BINARY_DIR}/runs/taylor_bar_fem_coarse_locking
-  EXPECT "status==ok;energy_balance_error<=2e-3" LABELS "scene;validation"
+  EXPECT "status==ok;energy_balance_error<=3e-4" LABELS "scene;validation"
   TIMEOUT 600 FIXTURE taylor_fem_locking)
 spinesim_add_comparison_test(validation.taylor_bar_fem_fbar_relieves_locking
   A ${CMAKE_CURRENT_BINARY_DIR}/runs/taylor_bar_fem_coarse/summary.json
