@@ -64,12 +64,7 @@ FiniteStrainStress J2FiniteStrain::respond(const Tensor2& F, double dT,
   const Tensor2 G = F * Cp_inv; // b_tr = G Fᵀ
   const SymTensor2 b_tr = dealii::symmetrize(G * dealii::transpose(F));
 
-  // QL with implicit shifts (deal.II's default): on the FEM Taylor bar (400 cells, 2.5 million
-  // point updates) 12 % faster than Jacobi's rotations, which took a quarter of the run, and the
-  // figures the same to 1e-14. Kopp's hybrid method was no faster: b_tr is near I (elastic
-  // strains of 1e-3), where it falls back to QL.
-  const auto eig =
-      dealii::eigenvectors(b_tr, dealii::SymmetricTensorEigenvectorMethod::ql_implicit_shifts);
+  const auto eig = dealii::eigenvectors(b_tr, dealii::SymmetricTensorEigenvectorMethod::jacobi);
   std::array<double, 3> lam, log_lam;
   for (unsigned int a = 0; a < 3; ++a) {
     lam[a] = eig[a].first;
