@@ -11,9 +11,10 @@
 // force pass (one step before the state the step leaves).
 //
 // Kinetic energy at t_n: K = ½ Σ m v_n², v_n = v_{n−½} + ½ Δt_{n−½} a_n the integer-time
-// velocity of the reference above (½ (v_{n−½} + v_{n+½}) at a constant step). For a linear, undamped, symmetric system the trapezoidal works
-// close exactly with the central-difference energy K* = ½ Σ m v_{n−½} v_{n+½} = K − ⅛ Δt² Σ m a²,
-// so W_ext − (U + K* + D) isolates what the time integration does not explain.
+// velocity of the reference above (½ (v_{n−½} + v_{n+½}) at a constant step). For a linear,
+// undamped, symmetric system the trapezoidal works close exactly with the central-difference energy
+// K* = ½ Σ m v_{n−½} v_{n+½} = K − ⅛ Δt² Σ m a², so W_ext − (U + K* + D) isolates what the time
+// integration does not explain.
 
 #include <mpi.h>
 

@@ -87,6 +87,7 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
   Vector<double> cell_rhs(n), cell_fint(n), cell_fext(n);
   std::vector<types::global_dof_index> dofs(n);
   std::vector<Tensor<2, dim>> grads(nq);
+  std::vector<double> local_u(n);
   std::vector<unsigned int> comp(n);
   for (unsigned int i = 0; i < n; ++i)
     comp[i] = fe_.system_to_component_index(i).first;
@@ -122,7 +123,10 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
       cell_matrix = 0;
       cell_fint = 0;
       cell_fext = 0;
-      fe_values[displacements].get_function_gradients(u_ghost_, grads);
+      // The cell's values through the cached local indices (element access to a Trilinos
+      // vector is a map lookup per DoF).
+      get_cell_values(u_ghost_, cell, local_u);
+      fe_values[displacements].get_function_gradients_from_local_dof_values(local_u, grads);
       if (bbar) {
         mean_dilatation.reinit(fe_values, comp);
         average_dilatation = mean_dilatation.average_dilatation(grads);
@@ -150,10 +154,7 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
                (loaded_ && load_factor < 1.0 ? (1.0 - load_factor) * dT_start_[idx] : 0.0);
         else if (temperature_change_)
           dT = load_blend(*temperature_change_, xq, 0, load_factor);
-        Tensor2 H;
-        for (unsigned int i = 0; i < dim; ++i)
-          for (unsigned int j = 0; j < dim; ++j)
-            H[i][j] = grads[q][i][j];
+        Tensor2 H = padded_gradient<dim>(grads[q]);
         if (bbar)
           MeanDilatation<dim>::project(H, average_dilatation);
         if (fbar)

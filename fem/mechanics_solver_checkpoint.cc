@@ -9,8 +9,8 @@
 #include <deal.II/base/mpi.h>
 #include <deal.II/distributed/solution_transfer.h>
 
-#include <cstring>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 
 namespace spinesim::fem {

@@ -85,10 +85,7 @@ void MechanicsSolver<dim>::refresh_states() const {
         const materials::ConstitutiveLaw& law = cell_material(cell);
         for (unsigned int q = 0; q < nq; ++q) {
           const std::size_t idx = cell->active_cell_index() * nq + q;
-          Tensor2 H;
-          for (unsigned int i = 0; i < dim; ++i)
-            for (unsigned int j = 0; j < dim; ++j)
-              H[i][j] = grads[q][i][j];
+          Tensor2 H = padded_gradient<dim>(grads[q]);
           if (bbar)
             MeanDilatation<dim>::project(H, average_dilatation);
           try {

@@ -30,6 +30,16 @@ class ConstitutivePointUpdate {
   bool finite_strain_, plane_stress_;
 };
 
+// ∇u of a dim-dimensional field zero-padded to the 3×3 gradient the point update takes.
+template <int dim>
+inline materials::Tensor2 padded_gradient(const dealii::Tensor<2, dim>& grad) {
+  materials::Tensor2 H;
+  for (unsigned int i = 0; i < dim; ++i)
+    for (unsigned int j = 0; j < dim; ++j)
+      H[i][j] = grad[i][j];
+  return H;
+}
+
 // "cell <id> (active index i) centred at (x, y[, z]), quadrature point q": where a point
 // update failed, for the NumericalFailure the caller rethrows.
 template <int dim>
