@@ -47,10 +47,14 @@ FemParticleCoupling<dim>::step_spectrum(double dt, unsigned int max_unknowns) {
     pv0.push_back(particles.velocity(i));
   }
   const double t0 = integrator_.time(), fem_t0 = solver.time();
+  // The map of a step at a constant dt: every probe advances its velocities over dt, whatever
+  // step came before (restored at the end).
+  const double previous_step = solver.previous_step();
   // Perturbations small against any breaking stretch or yield strain; the map is linear in them.
   const double du = 1e-8 * state_.spacing, dv = du / dt;
 
-  // Sets (u, v) = state + perturbation of entry `k` of the 2n-vector (k < 0: none).
+  // Sets (u, v) = state + perturbation of entry `k` of the 2n-vector (k < 0: none; −2: the
+  // state as it was, with its last step).
   VectorType u(solver.lumped_mass()), v(solver.lumped_mass());
   const auto set_state = [&](int k) {
     for (unsigned int j = 0; j < n_fem; ++j) {
@@ -61,6 +65,7 @@ FemParticleCoupling<dim>::step_spectrum(double dt, unsigned int max_unknowns) {
     v.compress(VectorOperation::insert);
     solver.set_state(u, v);
     solver.set_time(fem_t0);
+    solver.set_previous_step(k == -2 ? previous_step : dt);
     for (unsigned int p = 0; p < free_particles.size(); ++p) {
       particles.displacement(free_particles[p]) = pu0[p];
       particles.velocity(free_particles[p]) = pv0[p];
@@ -103,7 +108,7 @@ FemParticleCoupling<dim>::step_spectrum(double dt, unsigned int max_unknowns) {
     for (unsigned int r = 0; r < 2 * n; ++r)
       G(r, c) = (probe[r] - base[r]) / (r < n ? du : dv);
   }
-  set_state(-1); // the state as it was
+  set_state(-2); // the state as it was
   G.compute_eigenvalues();
   std::vector<std::complex<double>> mu(2 * n);
   for (unsigned int k = 0; k < 2 * n; ++k)

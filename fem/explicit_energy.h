@@ -12,9 +12,10 @@
 //
 // Kinetic energy at t_n: K = ½ Σ m v_n², v_n = v_{n−½} + ½ Δt_{n−½} a_n the integer-time
 // velocity of the reference above (½ (v_{n−½} + v_{n+½}) at a constant step). For a linear,
-// undamped, symmetric system the trapezoidal works close exactly with the central-difference energy
-// K* = ½ Σ m v_{n−½} v_{n+½} = K − ⅛ Δt² Σ m a², so W_ext − (U + K* + D) isolates what the time
-// integration does not explain.
+// undamped, symmetric system at a constant step the trapezoidal works close exactly with the
+// central-difference energy K* = ½ Σ m v_{n−½} v_{n+½} = K − ⅛ Δt² Σ m a², so W_ext − (U + K* +
+// D) isolates what the time integration does not explain. Where the step changes (landing on
+// output times) that identity holds only to second order in the step.
 
 #include <mpi.h>
 
@@ -67,7 +68,7 @@ struct ExplicitEnergy {
     void add(double m, double vo, double vn, double dt, double h, double F, double f_ext,
              bool prescribed, double a) {
       // The damped update's mean velocity, and the velocity at t_n, v_{n−½} + ½ dt_back a_n
-      // (½ (vo + vn) at a constant step; vo at the start, dt_back = 0).
+      // (½ (vo + vn) at a constant step, dt_back = 2h − dt).
       const double vbar = 0.5 * (vo + vn), back = 0.5 * dt * vo, forward = 0.5 * dt * vn;
       const double vn_time = vo + (1.0 - 0.5 * dt / h) * (vn - vo);
       kinetic += 0.5 * m * vn_time * vn_time;
@@ -123,8 +124,9 @@ struct EnergyBalance {
     const double scale = std::max(std::abs(in), std::abs(out));
     return scale > 0 ? std::abs(in - out) / scale : 0.0;
   }
-  // W_ext + E0 − (U + K* + D): zero to round-off for a linear, symmetric, undamped model;
-  // what remains is energy made or lost other than by the time integration.
+  // W_ext + E0 − (U + K* + D): zero to round-off for a linear, symmetric, undamped model at a
+  // constant step (to second order where it changes); what remains is energy made or lost
+  // other than by the time integration.
   double defect_central() const {
     return supplied() -
            (strain_energy + kinetic_energy_central + fracture_dissipation + damping_dissipation);

@@ -144,9 +144,10 @@ class MechanicsSolver {
   // Explicit: the CFL-limited stable step [s] and one central-difference step of size dt.
   // Steps may change from one to the next (landing on output times, a step from the current
   // cells): the velocities advance over the interval between half steps, ½ (Δt_previous + dt),
-  // base/dynamic_relaxation.h. The first step (after setup() or clear_velocity()) takes the
-  // velocities it finds as those of t_{−½}: h = dt, so the energy account books the Dirichlet
-  // DoFs' jump to their prescribed velocity (an impact face stopped at t = 0) as support work.
+  // base/dynamic_relaxation.h. The first step (of a new solver, or after clear_velocity()) takes
+  // the velocities it finds as those of t_{−½}: h = dt, so the energy account books the
+  // Dirichlet DoFs' jump to their prescribed velocity (an impact face stopped at t = 0) as
+  // support work. set_state() keeps the last step (set_previous_step() sets it).
   double stable_time_step() const;
   void explicit_step(double dt);
   // The velocity interval of an explicit step of dt taken next [s] (the coupling moves its
@@ -257,6 +258,10 @@ class MechanicsSolver {
   double time() const { return time_; }
   // Sets the clock of explicit steps [s] (a probe that repeats one step from the same time).
   void set_time(double time) { time_ = previous_time_ = target_time_ = time; }
+  // The last explicit step [s] (−1: none), which sets the next step's velocity interval; a
+  // probe that repeats one step sets and restores it.
+  double previous_step() const { return previous_step_; }
+  void set_previous_step(double step) { previous_step_ = step; }
   const VectorType& displacement() const { return u_ghost_; } // ghosted
   const VectorType& velocity() const { return v_ghost_; }     // ghosted, at t - dt/2
   // Force the supports exert on the body on boundary `id` (sum of f_int − f_ext over the

@@ -62,23 +62,27 @@ void MechanicsSolver<dim>::deserialize(const std::string& filename) {
   ScopedTime timer(timings_.checkpoint);
   serialization_transfer_.reset();
   std::ifstream in(filename + ".solver");
+  // Read into locals: a rejected file leaves the solver as it was.
   std::string tag;
   int version = 0;
   unsigned int degree = 0;
-  if (!(in >> tag >> version >> time_ >> loaded_ >> degree) || tag != "spinesim_mechanics")
+  double time = 0, previous_step = -1; // version 1 did not keep the step: a constant one's
+  bool loaded = false;
+  if (!(in >> tag >> version >> time >> loaded >> degree) || tag != "spinesim_mechanics")
     throw InvalidInput(filename + ".solver", "missing or unreadable solver checkpoint",
                        "a file written by MechanicsSolver::save_checkpoint");
-  if (version == 2 && !(in >> previous_step_ && std::isfinite(previous_step_)))
-    throw InvalidInput(filename + ".solver", "the last explicit step is missing or unreadable",
-                       "a file written by MechanicsSolver::save_checkpoint");
-  if (version == 1)
-    previous_step_ = -1; // not kept: the next step takes the interval of a constant step
   if (version < 1 || version > 2)
     throw InvalidInput(filename + ".solver", "solver checkpoint version " + std::to_string(version),
                        "version 1 or 2 (a file written by MechanicsSolver::save_checkpoint)");
+  if (version == 2 && !(in >> previous_step && std::isfinite(previous_step)))
+    throw InvalidInput(filename + ".solver", "the last explicit step is missing or unreadable",
+                       "a file written by MechanicsSolver::save_checkpoint");
   if (degree != prm_.fe_degree)
     throw InvalidInput("Finite element degree", "checkpoint has degree " + std::to_string(degree),
                        "the degree the checkpoint was written with");
+  time_ = time;
+  loaded_ = loaded;
+  previous_step_ = previous_step;
   previous_time_ = target_time_ = time_;
   setup();
   parallel::distributed::SolutionTransfer<dim, VectorType> transfer(dof_handler_);

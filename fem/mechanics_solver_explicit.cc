@@ -368,7 +368,7 @@ void MechanicsSolver<dim>::account_energy(double dt, double h, double a, bool li
       internal_forward += f_int * forward;
     }
     if (step_skip_[k]) {
-      supported.external_back += fe * back;
+      supported.external_back += fe * 0.5 * dt * vo; // scaled to dt_back below, as the rest
       supported.external_forward += fe * forward;
       continue;
     }

@@ -480,7 +480,7 @@ TEST(Mechanics, CheckpointRestoresSolutionAndHistory) {
 }
 
 namespace {
-// The damped plane-stress bar of ExplicitDampedBarSettlesOnStaticSolution on its 4 × 1 cells,
+// The plane-stress bar of ExplicitDampedBarSettlesOnStaticSolution (4 × 1 cells refined once),
 // without damping, pulled at its end.
 std::unique_ptr<MechanicsSolver<2>> pulled_bar(parallel::distributed::Triangulation<2>& tria) {
   MechanicsSolver<2>::Parameters prm;
