@@ -80,9 +80,9 @@ class ParticleMethod {
   // of its neighbours, as in NOSB-PD and SPG: a coupled run then keeps rows for the driven
   // particles within a horizon of the free ones.
   virtual bool needs_neighbour_rows() const { return false; }
-  // Whether the forces are the negative gradient of strain_energy() (not so with NOSB-PD's
-  // penalty springs or SPG's smoothing refreshed every n > 1 steps): energy accounts that
-  // correct the work of forces a break removes rely on it.
+  // Whether the forces are the negative gradient of strain_energy() (not so with SPG's
+  // smoothing refreshed every n > 1 steps): energy accounts that correct the work of forces a
+  // break removes rely on it.
   virtual bool forces_derive_from_energy() const { return false; }
   // Particles whose motion is prescribed from outside (the ghosts of a coupled run): a bond
   // between two of them never breaks. Empty = none. Call before initialise().

@@ -8,8 +8,9 @@
 //    Σ ½ (R_n + R_{n+1}) · (u_{n+1} − u_n), with R = −(f_int + f_ext) (a prescribed component
 //    has no acceleration and zero velocity in the zone, so the support carries the force),
 //    plus the external forces on free components, the same way;
-//  * U is the stored energy of the method (for NOSB-PD the correspondence energy, not the
-//    penalty hourglass springs), K = ½ Σ m v_n² with the integer-time Verlet velocities;
+//  * U is the stored energy of the method (for NOSB-PD the correspondence energy and the
+//    penalty hourglass springs, whose force is its gradient), K = ½ Σ m v_n² with the
+//    integer-time Verlet velocities;
 //  * D = fracture + damping (the kinetic energy the velocity decay removes, exactly). The
 //    fracture dissipation of a force pass at t_{n+1} that breaks bonds is what the breaks take
 //    out of the discrete motion: U_before − U_after (stored energy with the bonds before and

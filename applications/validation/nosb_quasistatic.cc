@@ -257,7 +257,7 @@ class NosbQuasistatic : public Scenario {
       reaction_pd /= model_.thickness;
     const double reaction_fem = fem_solver.reaction_force(top)[v];
     const auto hg = model.hourglass(particles, bonds);
-    const double energy = model.strain_energy(particles);
+    const double energy = model.strain_energy(particles, bonds);
 
     ctx.log() << "  FEM: " << fem_solver.dof_handler().n_dofs() << " dofs; relative L2 "
               << "displacement difference over " << compared.size() << " particles: " << error

@@ -128,14 +128,14 @@ double NosbMethod<dim>::stable_time_step(const ParticleSet<dim>& particles,
 
 template <int dim>
 std::vector<double> NosbMethod<dim>::strain_energy_density(const ParticleSet<dim>& particles,
-                                                           const BondList<dim>&) const {
-  return pd_.strain_energy_density(particles);
+                                                           const BondList<dim>& bonds) const {
+  return pd_.strain_energy_density(particles, bonds);
 }
 
 template <int dim>
 double NosbMethod<dim>::strain_energy(const ParticleSet<dim>& particles,
-                                      const BondList<dim>&) const {
-  return pd_.strain_energy(particles);
+                                      const BondList<dim>& bonds) const {
+  return pd_.strain_energy(particles, bonds);
 }
 
 template <int dim>
@@ -152,7 +152,7 @@ double NosbMethod<dim>::bond_energy(const ParticleSet<dim>& particles, const Bon
   if (!(all > 0.0))
     return 0.0;
   const double share = bonds.influence[k] * bonds.volume_factor(k) * V[bonds.neighbor[k]] / all;
-  return share * pd_.particle_strain_energy(i, particles);
+  return share * pd_.particle_strain_energy(i, particles, bonds);
 }
 
 template <int dim>
@@ -205,11 +205,9 @@ NosbMethod<dim>::driven_reactions(const ParticleSet<dim>& particles, const BondL
 template <int dim>
 std::optional<std::vector<double>>
 NosbMethod<dim>::splice_energy_by_row(const ParticleSet<dim>& particles,
-                                      const BondList<dim>&) const {
-  if (pd_.parameters().stabilization == NosbStabilization::penalty &&
-      pd_.parameters().stabilization_coefficient > 0)
-    return std::nullopt; // the hourglass force is not the gradient of an energy
-  auto E = pd_.strain_energy_density(particles); // by family centre, per volume
+                                      const BondList<dim>& bonds) const {
+  // By family centre, per volume; the penalty springs of a family go with it.
+  auto E = pd_.strain_energy_density(particles, bonds);
   for (unsigned int i = 0; i < particles.size(); ++i)
     E[i] *= particles.volume(i);
   return E;

@@ -53,10 +53,8 @@ class NosbMethod : public ParticleMethod<dim> {
   std::size_t memory_bytes() const override { return pd_.memory_bytes() + driven_.capacity(); }
   // A particle's force gathers the families of its neighbours (f_m = −Σ_e w_e P_e G_m).
   bool needs_neighbour_rows() const override { return true; }
-  bool forces_derive_from_energy() const override {
-    return pd_.parameters().stabilization != NosbStabilization::penalty ||
-           !(pd_.parameters().stabilization_coefficient > 0);
-  }
+  // Every stabilisation: the penalty springs' force is the gradient of their energy too.
+  bool forces_derive_from_energy() const override { return true; }
   void set_driven(std::vector<std::uint8_t> driven) override {
     driven_ = driven;
     pd_.set_driven(std::move(driven));

@@ -13,6 +13,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <tuple>
 
 namespace spinesim::meshfree {
 
@@ -242,9 +243,12 @@ void NosbPD<dim>::compute_forces(ParticleSet<dim>& particles, const BondList<dim
   const long n_fam = fam.n_families();
   auto& P = family_stress_;
   P.resize(n_fam);
+  const bool penalty = penalty_on(); // particle families then: centre(e) is the particle
   parallel_for_rethrow(n_fam, parallel_particle_threshold, [&](long e) {
     const auto F = fam.deformation_gradient(e, u);
     P[e] = evaluate(e, F, particles, &trial_[fam.history_index(e)], false).P;
+    if (penalty)
+      P[e] += penalty_part(fam.centre(e), F, particles, bonds).stress;
   });
   // f_m = −Σ_e w_e P_e G_m: each family's forces sum to zero (Σ_m G_m = 0). Gathered per
   // particle over its family entries in ascending order: the sums of a scatter over families,
@@ -261,20 +265,20 @@ void NosbPD<dim>::compute_forces(ParticleSet<dim>& particles, const BondList<dim
     f[m] = fm;
   });
 
-  if (prm_.stabilization == Stabilization::penalty && prm_.stabilization_coefficient > 0) {
+  if (penalty) {
+    // The pair part of −∂E_hg/∂u (the part through F_i is in P above).
     const auto& V = particles.volumes();
     const double Gc = prm_.stabilization_coefficient * c_;
     const long n = particles.size();
     // Each particle adds to its own force only (same order as serially).
 #pragma omp parallel for schedule(static) if (n > parallel_particle_threshold)
     for (long i = 0; i < n; ++i) {
-      if (failed(i))
-        continue;
       for_each_penalty_bond(bonds, i, Gc, [&](std::size_t k, unsigned int j, double kappa) {
         const Vec& xi = bonds.xi[k];
         const Vec eta = u[j] - u[i];
-        // s_i z_ij − s_j z_ji = s_i (η − (F_i − I)ξ) + s_j (η − (F_j − I)ξ), each end's part
-        // scaled like its stress by s = 1 − D_f (antisymmetric in i↔j still)
+        // s_i z_ij − s_j z_ji = s_i (η − (F_i − I)ξ) + s_j (η − (F_j − I)ξ): the springs of
+        // i's family and of j's, each scaled like its stress by s = 1 − D_f (0 without a
+        // family; a failed particle still feels its neighbours' springs)
         const double si = penalty_kept(i), sj = penalty_kept(j);
         const Vec dz =
             si * (eta - (F_particle_[i] * xi - xi)) + sj * (eta - (F_particle_[j] * xi - xi));
@@ -300,8 +304,10 @@ std::size_t NosbPD<dim>::break_bonds(ParticleSet<dim>& particles, BondList<dim>&
     return 0;
   const auto& u = particles.displacements();
   const bool any_driven = !driven_.empty();
-  // Each bond decides alone (the reversed bond sees the same stretch bit for bit): a map.
-  std::vector<std::uint8_t> touched(particles.size(), 0);
+  // Each bond decides alone (the reversed bond sees the same stretch bit for bit): a map. The
+  // bonds break after the stored energy before the breaks is taken (the springs' part reads the
+  // intact bonds).
+  std::vector<std::uint8_t> touched(particles.size(), 0), breaking(bonds.n_bonds(), 0);
   std::atomic<std::size_t> n_broken{0};
   for_each_bond(bonds, [&](unsigned int i, std::size_t k, unsigned int j) {
     if (bonds.broken[k] || (any_driven && driven_[i] && driven_[j]))
@@ -309,7 +315,7 @@ std::size_t NosbPD<dim>::break_bonds(ParticleSet<dim>& particles, BondList<dim>&
     const auto y = bonds.xi[k] + (u[j] - u[i]);
     const double limit = (1.0 + s0_) * bonds.length[k];
     if (y.norm_square() > limit * limit) { // |y| > (1 + s0) L, without a square root
-      bonds.broken[k] = 1;
+      breaking[k] = 1;
       touched[i] = 1; // the reversed bond marks j: each thread writes its own rows only
       n_broken.fetch_add(1, std::memory_order_relaxed);
     }
@@ -322,9 +328,11 @@ std::size_t NosbPD<dim>::break_bonds(ParticleSet<dim>& particles, BondList<dim>&
     std::vector<double> before(changed.size());
     parallel_for_rethrow(
         static_cast<long>(changed.size()), parallel_particle_threshold,
-        [&](long c) { before[c] = particle_strain_energy(changed[c], particles); });
+        [&](long c) { before[c] = particle_strain_energy(changed[c], particles, bonds); });
+    for (std::size_t k = 0; k < breaking.size(); ++k)
+      bonds.broken[k] |= breaking[k];
     update_families(particles, bonds);
-    release_energy_at_breaks(particles, changed, before);
+    release_energy_at_breaks(particles, bonds, changed, before);
     update_damage(particles, bonds);
   }
   return n_broken;
@@ -332,6 +340,7 @@ std::size_t NosbPD<dim>::break_bonds(ParticleSet<dim>& particles, BondList<dim>&
 
 template <int dim>
 void NosbPD<dim>::release_energy_at_breaks(const ParticleSet<dim>& particles,
+                                           const BondList<dim>& bonds,
                                            const std::vector<unsigned int>& changed,
                                            const std::vector<double>& before) {
   // A break rebuilds the families of both ends (K and F from the bonds left). At the same
@@ -347,7 +356,7 @@ void NosbPD<dim>::release_energy_at_breaks(const ParticleSet<dim>& particles,
   const auto& V = particles.volumes();
   parallel_for_rethrow(static_cast<long>(changed.size()), parallel_particle_threshold, [&](long c) {
     const unsigned int i = changed[c];
-    const double after = particle_strain_energy(i, particles);
+    const double after = particle_strain_energy(i, particles, bonds);
     if (!(after > before[c] + 1e-16 * modulus_ * V[i]))
       return;
     const double ratio = before[c] > 0.0 ? before[c] / after : 0.0;
@@ -374,12 +383,9 @@ void NosbPD<dim>::assemble_tangent(const ParticleSet<dim>& particles, const Bond
   using Vec = dealii::Tensor<1, dim>;
   const unsigned int n = particles.size();
   const auto& fam = families();
-  const auto& pfam = particle_families_;
-  const bool penalty =
-      prm_.stabilization == Stabilization::penalty && prm_.stabilization_coefficient > 0;
-  std::vector<int> pfam_of(n, -1);
-  for (unsigned int e = 0; e < pfam.n_families(); ++e)
-    pfam_of[pfam.centre(e)] = static_cast<int>(e);
+  // The penalty springs' Hessian couples the nodes of one particle family, as its stress does
+  // (see below): the families' pattern holds it.
+  const bool penalty = penalty_on();
 
   if (pattern.empty() || pattern_version_ != families_version_ || pattern.n_rows() != n * dim) {
     dealii::DynamicSparsityPattern nodes(n, n);
@@ -394,19 +400,8 @@ void NosbPD<dim>::assemble_tangent(const ParticleSet<dim>& particles, const Bond
     };
     for (unsigned int e = 0; e < fam.n_families(); ++e)
       add_family(fam, e);
-    for (unsigned int i = 0; i < n; ++i) {
+    for (unsigned int i = 0; i < n; ++i)
       nodes.add(i, i); // every particle keeps a diagonal (failed ones get an identity row)
-      if (penalty && pfam_of[i] >= 0)
-        for_each_bond_of(bonds, i, [&](std::size_t, unsigned int j) {
-          const int ej = pfam_of[j];
-          if (ej < 0)
-            return;
-          for (std::size_t q = pfam.begin(ej); q < pfam.end(ej); ++q)
-            nodes.add(i, pfam.node(q));
-          for (std::size_t q = pfam.begin(pfam_of[i]); q < pfam.end(pfam_of[i]); ++q)
-            nodes.add(i, pfam.node(q));
-        });
-    }
     dealii::DynamicSparsityPattern dofs(n * dim, n * dim);
     for (unsigned int m = 0; m < n; ++m)
       for (auto it = nodes.begin(m); it != nodes.end(m); ++it)
@@ -421,11 +416,41 @@ void NosbPD<dim>::assemble_tangent(const ParticleSet<dim>& particles, const Bond
     matrix = 0;
 
   const auto& u = particles.displacements();
+  const auto& V = particles.volumes();
+  const double Gc = prm_.stabilization_coefficient * c_;
   std::vector<dealii::types::global_dof_index> cols(dim);
   double vals[dim];
+  // Penalty springs of a particle family i (E_hg in the header): z_ij = Σ_m c_m u_m with
+  // c_m = δ_mj − δ_mi − G_m·ξ_ij over the family's nodes m, so E_hg is quadratic in u and its
+  // Hessian, per component (× I), is
+  //   K_mp = s_i V_i Σ_j κ_ij V_j c_m c_p = s_i V_i [E_mp − G_p·b_m − G_m·b_p + G_m·M G_p],
+  // E from the δ parts alone, b_m = Σ_j κ_ij V_j (δ_mj − δ_mi) ξ_ij, M = Σ_j κ_ij V_j ξ⊗ξ:
+  // O(family size²) a family, like its stress block.
+  std::vector<int> local(penalty ? n : 0, -1); // node -> position in the current family
+  std::vector<Vec> b_of;
   for (unsigned int e = 0; e < fam.n_families(); ++e) {
     const Response r = evaluate(e, fam.deformation_gradient(e, u), particles, nullptr, true);
     const double w = fam.weight(e);
+    const unsigned int i = fam.centre(e);
+    double sV = 0;
+    dealii::Tensor<2, dim> M;
+    if (penalty) {
+      sV = penalty_kept(i) * V[i];
+      b_of.assign(fam.end(e) - fam.begin(e), Vec());
+      for (std::size_t q = fam.begin(e); q < fam.end(e); ++q)
+        local[fam.node(q)] = static_cast<int>(q - fam.begin(e));
+      for_each_penalty_bond(bonds, i, Gc, [&](std::size_t k, unsigned int j, double kappa) {
+        const double kv = kappa * V[j];
+        const Vec& xi = bonds.xi[k];
+        b_of[local[j]] += kv * xi; // j is a member: an intact bond
+        b_of[0] -= kv * xi;        // the centre is the family's first node
+        M += kv * dealii::outer_product(xi, xi);
+        for (const auto& [row, col, sign] : {std::tuple(j, j, 1.0), std::tuple(i, i, 1.0),
+                                             std::tuple(i, j, -1.0), std::tuple(j, i, -1.0)})
+          for (unsigned int d = 0; d < dim; ++d)
+            matrix.add(row * dim + d, col * dim + d, sign * sV * kv);
+      });
+    }
     for (std::size_t qm = fam.begin(e); qm < fam.end(e); ++qm) {
       // T[a][b][L] = w Σ_J A_aJbL G_m[J]
       dealii::Tensor<3, dim> T;
@@ -436,46 +461,26 @@ void NosbPD<dim>::assemble_tangent(const ParticleSet<dim>& particles, const Bond
             for (unsigned int L = 0; L < dim; ++L)
               T[a][b][L] += w * r.A[a][J][b][L] * Gm[J];
       const unsigned int m = fam.node(qm);
+      const Vec bm = penalty ? b_of[qm - fam.begin(e)] : Vec();
+      const Vec MGm = M * Gm;
       for (std::size_t qp = fam.begin(e); qp < fam.end(e); ++qp) {
         const unsigned int p = fam.node(qp);
         const Vec& Gp = fam.gradient(qp);
+        const double spring =
+            penalty ? sV * (MGm * Gp - Gp * bm - Gm * b_of[qp - fam.begin(e)]) : 0.0;
         for (unsigned int b = 0; b < dim; ++b)
           cols[b] = p * dim + b;
         for (unsigned int a = 0; a < dim; ++a) {
           for (unsigned int b = 0; b < dim; ++b)
             vals[b] = T[a][b] * Gp;
+          vals[a] += spring;
           matrix.add(m * dim + a, dim, cols.data(), vals, false, true);
         }
       }
     }
-  }
-
-  if (penalty) {
-    // f_i += κ' (s_i z_ij − s_j z_ji), κ' = ½ G_s c ω β V_i V_j/|ξ|, s = 1 − D_f; stiffness
-    // −∂f_i/∂u_m = −κ' [(s_i + s_j)(δ_mj − δ_mi) − s_i G^i_m·ξ − s_j G^j_m·ξ] I.
-    const auto& V = particles.volumes();
-    const double Gc = prm_.stabilization_coefficient * c_;
-    auto add_scalar = [&](unsigned int i, unsigned int m, double s) {
-      for (unsigned int d = 0; d < dim; ++d)
-        matrix.add(i * dim + d, m * dim + d, s);
-    };
-    for (unsigned int i = 0; i < n; ++i) {
-      if (pfam_of[i] < 0)
-        continue;
-      for_each_bond_of(bonds, i, [&](std::size_t k, unsigned int j) {
-        if (bonds.broken[k] || pfam_of[j] < 0)
-          return;
-        const Vec& xi = bonds.xi[k];
-        const double kappa =
-            0.5 * Gc * bonds.influence[k] * bonds.volume_factor(k) / bonds.length[k] * V[i] * V[j];
-        const double si = penalty_kept(i), sj = penalty_kept(j);
-        add_scalar(i, j, -(si + sj) * kappa);
-        add_scalar(i, i, (si + sj) * kappa);
-        for (const auto& [e, s] : {std::make_pair(pfam_of[i], si), std::make_pair(pfam_of[j], sj)})
-          for (std::size_t q = pfam.begin(e); q < pfam.end(e); ++q)
-            add_scalar(i, pfam.node(q), s * kappa * (pfam.gradient(q) * xi));
-      });
-    }
+    if (penalty)
+      for (std::size_t q = fam.begin(e); q < fam.end(e); ++q)
+        local[fam.node(q)] = -1;
   }
 }
 
@@ -529,32 +534,30 @@ std::vector<double> NosbPD<dim>::stiffness_row_bound(const ParticleSet<dim>& par
   for (unsigned int i = 0; i < R.size(); ++i)
     for (unsigned int a = 0; a < dim; ++a)
       R[i] = std::max(R[i], rows[i][a]);
-  if (prm_.stabilization == Stabilization::penalty && prm_.stabilization_coefficient > 0) {
-    // The penalty force of row i, κ V_i V_j (s_i (η − (F_i − I)ξ) + s_j (η − (F_j − I)ξ)) per
-    // bond, depends on u_i, u_j ((s_i + s_j) κVV each) and on the nodes q of the particle
-    // families of i and j through
-    // (G_q · ξ) u_q: its row sum is at most
-    // Σ_j κ V_i V_j (2(s_i + s_j) + |ξ| (s_i Σ_q∈i |G_q| + s_j Σ_q∈j |G_q|)), s = 1 − D_f.
+  if (penalty_on()) {
+    // The springs' Hessian (assemble_tangent), family i: Σ_p |K_mp| ≤ s_i V_i Σ_j κ V_j |c_m|
+    // Σ_p |c_p| with Σ_p |c_p| ≤ S_j = 2 + |ξ_ij| Σ_q |G_q| and |c_m| ≤ δ_mi + δ_mj + |G_m| |ξ_ij|:
+    // row m gets s_i V_i (δ_mi A_i + δ_mj κ_ij V_j S_j + |G_m| B_i), A_i = Σ_j κ V_j S_j,
+    // B_i = Σ_j κ V_j |ξ_ij| S_j. O(family size) a family.
     const auto& pfam = particle_families_;
-    std::vector<double> gsum(particles.size(), 0.0); // Σ_q |G_q| of each particle family
-    for (unsigned int e = 0; e < pfam.n_families(); ++e)
-      for (std::size_t q = pfam.begin(e); q < pfam.end(e); ++q)
-        gsum[pfam.centre(e)] += pfam.gradient(q).norm();
     const auto& V = particles.volumes();
     const double Gc = prm_.stabilization_coefficient * c_;
-    const long n = particles.size();
-    // Each particle adds to its own row bound only (same order as serially).
-#pragma omp parallel for schedule(static) if (n > parallel_particle_threshold)
-    for (long i = 0; i < n; ++i) {
-      if (failed(i))
-        continue;
-      double r = 0;
+    for (unsigned int e = 0; e < pfam.n_families(); ++e) {
+      const unsigned int i = pfam.centre(e);
+      double gsum = 0;
+      for (std::size_t q = pfam.begin(e); q < pfam.end(e); ++q)
+        gsum += pfam.gradient(q).norm();
+      const double sV = penalty_kept(i) * V[i];
+      double A = 0, B = 0;
       for_each_penalty_bond(bonds, i, Gc, [&](std::size_t k, unsigned int j, double kappa) {
-        const double si = penalty_kept(i), sj = penalty_kept(j);
-        r += kappa * V[i] * V[j] *
-             (2.0 * (si + sj) + bonds.length[k] * (si * gsum[i] + sj * gsum[j]));
+        const double S = 2.0 + bonds.length[k] * gsum, kvs = kappa * V[j] * S;
+        A += kvs;
+        B += kvs * bonds.length[k];
+        R[j] += sV * kvs;
       });
-      R[i] += r;
+      R[i] += sV * A;
+      for (std::size_t q = pfam.begin(e); q < pfam.end(e); ++q)
+        R[pfam.node(q)] += sV * pfam.gradient(q).norm() * B;
     }
   }
   return R;
@@ -586,7 +589,45 @@ double NosbPD<dim>::stable_time_step(const ParticleSet<dim>& particles, const Bo
 }
 
 template <int dim>
-double NosbPD<dim>::family_energy(unsigned int e, const ParticleSet<dim>& particles) const {
+double NosbPD<dim>::family_energy(unsigned int e, const ParticleSet<dim>& particles,
+                                  const BondList<dim>& bonds) const {
+  const auto& fam = families();
+  const auto F = fam.deformation_gradient(e, particles.displacements());
+  const double springs =
+      penalty_on() ? penalty_part(fam.centre(e), F, particles, bonds).energy : 0.0;
+  return springs + stress_energy(e, F, particles);
+}
+
+template <int dim>
+typename NosbPD<dim>::PenaltyPart
+NosbPD<dim>::penalty_part(unsigned int i, const dealii::Tensor<2, dim>& F_i,
+                          const ParticleSet<dim>& particles, const BondList<dim>& bonds) const {
+  using Vec = dealii::Tensor<1, dim>;
+  PenaltyPart out;
+  const double s = penalty_kept(i);
+  if (!(s > 0.0) || failed(i))
+    return out;
+  const auto& u = particles.displacements();
+  const auto& V = particles.volumes();
+  const dealii::Tensor<2, dim> H =
+      F_i - dealii::Tensor<2, dim>(dealii::unit_symmetric_tensor<dim>());
+  double energy = 0;
+  for_each_penalty_bond(bonds, i, prm_.stabilization_coefficient * c_,
+                        [&](std::size_t k, unsigned int j, double kappa) {
+                          const Vec& xi = bonds.xi[k];
+                          const Vec z = (u[j] - u[i]) - H * xi;
+                          const double kv = kappa * V[j];
+                          energy += kv * z.norm_square();
+                          out.stress -= kv * dealii::outer_product(z, xi);
+                        });
+  out.energy = 0.5 * s * V[i] * energy;
+  out.stress *= s;
+  return out;
+}
+
+template <int dim>
+double NosbPD<dim>::stress_energy(unsigned int e, const dealii::Tensor<2, dim>& F,
+                                  const ParticleSet<dim>& particles) const {
   // W(F) = ∫_0^1 P(I + t(F−I)) : (F − I) dt by 4-point Gauss–Legendre on [0, 1].
   const double a = std::sqrt(3.0 / 7.0 - 2.0 / 7.0 * std::sqrt(6.0 / 5.0));
   const double b = std::sqrt(3.0 / 7.0 + 2.0 / 7.0 * std::sqrt(6.0 / 5.0));
@@ -594,7 +635,6 @@ double NosbPD<dim>::family_energy(unsigned int e, const ParticleSet<dim>& partic
   const double t[4] = {0.5 * (1 - b), 0.5 * (1 - a), 0.5 * (1 + a), 0.5 * (1 + b)};
   const double w[4] = {0.5 * wb, 0.5 * wa, 0.5 * wa, 0.5 * wb};
   const auto& fam = families();
-  const auto F = fam.deformation_gradient(e, particles.displacements());
   if (!(committed_[fam.history_index(e)].fracture_damage < 1.0))
     return 0.0; // no stress, no energy (evaluate)
   if (const auto* j2 = dynamic_cast<const materials::J2Plasticity*>(law_.get())) {
@@ -619,28 +659,30 @@ double NosbPD<dim>::family_energy(unsigned int e, const ParticleSet<dim>& partic
 }
 
 template <int dim>
-double NosbPD<dim>::strain_energy(const ParticleSet<dim>& particles) const {
+double NosbPD<dim>::strain_energy(const ParticleSet<dim>& particles,
+                                  const BondList<dim>& bonds) const {
   double E = 0;
   const auto& fam = families();
   for (unsigned int e = 0; e < fam.n_families() && fam.centre(e) < first_ghost_; ++e)
-    E += family_energy(e, particles); // families come in centre order: ghosts' last
+    E += family_energy(e, particles, bonds); // families come in centre order: ghosts' last
   return E;
 }
 
 template <int dim>
-std::vector<double> NosbPD<dim>::strain_energy_density(const ParticleSet<dim>& particles) const {
+std::vector<double> NosbPD<dim>::strain_energy_density(const ParticleSet<dim>& particles,
+                                                       const BondList<dim>& bonds) const {
   std::vector<double> W(particles.size(), 0.0);
   const auto& fam = families();
   for (unsigned int e = 0; e < fam.n_families(); ++e)
-    W[fam.centre(e)] += family_energy(e, particles);
+    W[fam.centre(e)] += family_energy(e, particles, bonds);
   for (unsigned int i = 0; i < particles.size(); ++i)
     W[i] /= particles.volume(i);
   return W;
 }
 
 template <int dim>
-double NosbPD<dim>::particle_strain_energy(unsigned int i,
-                                           const ParticleSet<dim>& particles) const {
+double NosbPD<dim>::particle_strain_energy(unsigned int i, const ParticleSet<dim>& particles,
+                                           const BondList<dim>& bonds) const {
   const auto& fam = families();
   unsigned int lo = 0, hi = fam.n_families(); // first family with centre >= i
   while (lo < hi) {
@@ -652,7 +694,7 @@ double NosbPD<dim>::particle_strain_energy(unsigned int i,
   }
   double E = 0;
   for (unsigned int e = lo; e < fam.n_families() && fam.centre(e) == i; ++e)
-    E += family_energy(e, particles);
+    E += family_energy(e, particles, bonds);
   return E;
 }
 

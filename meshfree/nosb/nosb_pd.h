@@ -15,14 +15,22 @@
 // Zero-energy-mode control (Parameters::stabilization):
 //  * none            the plain particle families: modes with F_i = I everywhere (e.g. the
 //                    checkerboard on a lattice) cost no energy.
-//  * penalty         Silling (2017) / Peridigm-style hourglass force on the non-uniform part
-//                    z_ij = (y_j − y_i) − F_i ξ_ij of the deformation state:
-//                        f_i += ½ G_s c ω β (z_ij − z_ji)/|ξ| V_i V_j
-//                    (pulls i along z_ij when the bond is longer than F_i predicts). c is the
-//                    bond-based (PMB) micromodulus matched to the bulk modulus (3-D: K, 2-D:
-//                    plane-strain k' = E/(2(1−ν−2ν²))), BondBasedPD::micromodulus: with G_s = 1
-//                    the penalty alone is a full PMB material on z. Antisymmetric in i↔j
-//                    (momentum conserved), not variational (energy not conserved exactly).
+//  * penalty         Silling (2017) / Peridigm-style hourglass springs on the non-uniform
+//                    part z_ij = (y_j − y_i) − F_i ξ_ij of the deformation state, with the
+//                    stored energy
+//                        E_hg = Σ_i s_i V_i ½ Σ_j κ_ij V_j |z_ij|²,  κ_ij = ½ G_s c ω β/|ξ|,
+//                    s = 1 − D_f. c is the bond-based (PMB) micromodulus matched to the bulk
+//                    modulus (3-D: K, 2-D: plane-strain k' = E/(2(1−ν−2ν²))),
+//                    BondBasedPD::micromodulus: with G_s = 1 the springs alone are a full PMB
+//                    material on z. The force is −∂E_hg/∂u: Silling's pair force
+//                        f_i += κ_ij V_i V_j (s_i z_ij − s_j z_ji)
+//                    plus the part through F_i, which enters the family stress as
+//                        P_i += −s_i Σ_j κ_ij V_j z_ij ⊗ ξ_ij.
+//                    The latter vanishes where κ_ij ∝ ω β (F_i is the ω β V-weighted least-
+//                    squares fit, so Σ_j ω β V_j z_ij ⊗ ξ_ij = 0) and is small otherwise (the
+//                    1/|ξ| weight), but without it the springs' work is not the change of any
+//                    energy and an energy account of a fracturing run cannot close. E_hg is
+//                    part of the stored energy below.
 //  * bond_associated bond-associated deformation gradients (Chen 2018; Breitzman & Dayal
 //                    2018): one family per bond, no coefficient.
 //
@@ -123,16 +131,19 @@ class NosbPD {
   double stable_time_step(const ParticleSet<dim>& particles, const BondList<dim>& bonds,
                           double safety);
 
-  // Stored energy Σ_e w_e W(F_e) [J] of the families centred on non-ghost particles; W(F) = ∫_0^1
-  // P(I + t(F−I)) : (F − I) dt (4-point Gauss; exact for St. Venant–Kirchhoff, the stored energy
-  // for any hyperelastic law).
-  double strain_energy(const ParticleSet<dim>& particles) const;
-  // The same energy per particle: each family's w_e W(F_e) goes to its centre particle, over
-  // that particle's volume [J/m^3].
-  std::vector<double> strain_energy_density(const ParticleSet<dim>& particles) const;
-  // Σ w_e W(F_e) over the families centred on particle i [J] (no sweep over all families:
-  // they are built in particle order).
-  double particle_strain_energy(unsigned int i, const ParticleSet<dim>& particles) const;
+  // Stored energy Σ_e w_e W(F_e) [J] of the families centred on non-ghost particles, plus the
+  // penalty springs' E_hg of those particles (the energy whose negative gradient the forces
+  // are); W(F) = ∫_0^1 P(I + t(F−I)) : (F − I) dt (4-point Gauss; exact for St. Venant–
+  // Kirchhoff, the stored energy for any hyperelastic law).
+  double strain_energy(const ParticleSet<dim>& particles, const BondList<dim>& bonds) const;
+  // The same energy per particle: each family's share goes to its centre particle, over that
+  // particle's volume [J/m^3].
+  std::vector<double> strain_energy_density(const ParticleSet<dim>& particles,
+                                            const BondList<dim>& bonds) const;
+  // The energy of the families centred on particle i [J] (no sweep over all families: they
+  // are built in particle order).
+  double particle_strain_energy(unsigned int i, const ParticleSet<dim>& particles,
+                                const BondList<dim>& bonds) const;
   HourglassMeasure hourglass(const ParticleSet<dim>& particles, const BondList<dim>& bonds) const;
 
   // φ_i = 1 − Σ_intact ωβV_j / Σ_all ωβV_j, 1 for failed particles, into particles.damage().
@@ -144,13 +155,14 @@ class NosbPD {
   const CorrespondenceFamilies<dim>& particle_families() const { return particle_families_; }
   const CorrespondenceFamilies<dim>& families() const;
   bool failed(unsigned int i) const { return particle_families_.failed(i); }
-  // body(k, j, κ) for every intact bond k = (i → j) whose far end has a family, with the
-  // penalty stiffness κ = ½ G_s c ω β / |ξ| of the hourglass force (Silling 2017), Gc = G_s c.
+  // body(k, j, κ) for every intact bond k = (i → j), with the penalty stiffness
+  // κ = ½ G_s c ω β / |ξ| of the hourglass springs (Silling 2017), Gc = G_s c: the springs of
+  // particle i's family (they need F_i only, whether or not j has a family of its own).
   template <class Body>
   void for_each_penalty_bond(const BondList<dim>& bonds, unsigned int i, double Gc,
                              Body&& body) const {
     for_each_bond_of(bonds, i, [&](std::size_t k, unsigned int j) {
-      if (bonds.broken[k] || failed(j))
+      if (bonds.broken[k])
         return;
       body(k, j, 0.5 * Gc * bonds.influence[k] * bonds.volume_factor(k) / bonds.length[k]);
     });
@@ -158,7 +170,10 @@ class NosbPD {
   // 1 − D_f of particle i's (particle) family: scales its end of the penalty hourglass force as
   // its stress, so a family that a break left without stress adds no hourglass force either.
   // The penalty control uses particle families, whose history index is the particle index.
+  // 0 for a failed particle (no family, no springs).
   double penalty_kept(unsigned int i) const {
+    if (failed(i))
+      return 0.0;
     return i < committed_.size() ? 1.0 - committed_[i].fracture_damage : 1.0;
   }
   // Messages about failed particles since the last call (for the run log).
@@ -215,12 +230,28 @@ class NosbPD {
                     const ParticleSet<dim>& particles, materials::MaterialState* trial,
                     bool with_tangent) const;
   void compute_particle_gradients(const ParticleSet<dim>& particles);
-  // w_e W(F_e) of family e at the current displacements [J].
-  double family_energy(unsigned int e, const ParticleSet<dim>& particles) const;
+  // w_e W(F_e) of family e at the current displacements, its penalty springs included [J].
+  double family_energy(unsigned int e, const ParticleSet<dim>& particles,
+                       const BondList<dim>& bonds) const;
+  // w_e W(F_e) of family e at its deformation gradient F [J]: the constitutive part alone.
+  double stress_energy(unsigned int e, const dealii::Tensor<2, dim>& F,
+                       const ParticleSet<dim>& particles) const;
+  bool penalty_on() const {
+    return prm_.stabilization == Stabilization::penalty && prm_.stabilization_coefficient > 0;
+  }
+  // The penalty springs of particle i's family at its deformation gradient F_i: their energy
+  // s_i V_i ½ Σ_j κ_ij V_j |z_ij|² [J] and its derivative by F_i per volume of i,
+  // −s_i Σ_j κ_ij V_j z_ij ⊗ ξ_ij [Pa] (the stress the family adds).
+  struct PenaltyPart {
+    double energy = 0;
+    dealii::Tensor<2, dim> stress;
+  };
+  PenaltyPart penalty_part(unsigned int i, const dealii::Tensor<2, dim>& F_i,
+                           const ParticleSet<dim>& particles, const BondList<dim>& bonds) const;
   void log_failed(const ParticleSet<dim>& particles, const std::vector<unsigned int>& newly);
   // After the families of the `changed` particles were rebuilt for broken bonds: raises D_f
   // of a particle's families where its stored energy exceeds `before` (its energy then).
-  void release_energy_at_breaks(const ParticleSet<dim>& particles,
+  void release_energy_at_breaks(const ParticleSet<dim>& particles, const BondList<dim>& bonds,
                                 const std::vector<unsigned int>& changed,
                                 const std::vector<double>& before);
 

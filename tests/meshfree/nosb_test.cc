@@ -451,7 +451,7 @@ double max_frequency_squared(Body<dim>& b) {
 
 template <int dim>
 double total_energy(Body<dim>& b) {
-  return b.particles.kinetic_energy() + b.model->strain_energy(b.particles);
+  return b.particles.kinetic_energy() + b.model->strain_energy(b.particles, b.bonds);
 }
 
 template <int dim>
@@ -522,21 +522,27 @@ void check_energy_conservation(Stab s) {
   // 200 (2-D) / 100 (3-D, to keep the test fast) steps at half the stable step.
   const double t_end =
       (dim == 2 ? 100 : 50) * probe.model->stable_time_step(probe.particles, probe.bonds, 1.0);
-  const double d1 = run(0.5, t_end).first, d2 = run(0.25, t_end).first;
+  const double d1 = run(0.25, t_end).first, d2 = run(0.125, t_end).first;
   std::cout << dim << "-D " << NosbParameters::name(cast<dim>(s)) << ": energy deviation " << d1
-            << " (dt = dt_s/2), " << d2 << " (dt_s/4)\n";
+            << " (dt = dt_s/4), " << d2 << " (dt_s/8)\n";
   // Velocity Verlet with conservative forces: the energy error is bounded and O(dt²), so
-  // halving the step divides it by ~4 (0.3 allows for the modes' different (ω dt)² terms);
-  // a non-conservative force would leave a drift that does not shrink like dt².
+  // halving the step divides it by ~4 (measured 0.250–0.253 from dt_s/4 to dt_s/8; from dt_s/2
+  // the penalty springs' stiff modes gave 0.30, not yet asymptotic; 0.3 allows for the modes'
+  // different (ω dt)² terms); a non-conservative force would leave a drift that does not
+  // shrink like dt².
   EXPECT_LT(d2, 0.3 * d1);
-  EXPECT_LT(d2, 0.02); // measured ≈ 1 % at dt_s/4 (the free edges excite the top modes)
+  EXPECT_LT(d1, 0.02); // measured ≈ 1 % at dt_s/4 (the free edges excite the top modes)
 }
+// All three controls: the penalty springs' force is −∂E_hg/∂u with its part through F_i.
+// Silling's pair force alone is not a gradient: measured without the part through F_i, the
+// penalty body drifted 2.8 % / 2.1 % (2-D, dt_s/4 and dt_s/8) and 1.9 % / 1.1 % (3-D), ratios
+// 0.76 and 0.59, and failed here.
 TEST(Nosb, EnergyConservationExplicit2D) {
-  for (auto s : {Stab::none, Stab::bond_associated})
+  for (auto s : all_stabs)
     check_energy_conservation<2>(s);
 }
 TEST(Nosb, EnergyConservationExplicit3D) {
-  for (auto s : {Stab::none, Stab::bond_associated})
+  for (auto s : all_stabs)
     check_energy_conservation<3>(s);
 }
 
@@ -680,7 +686,7 @@ void check_breaks_release_energy(Stab stab, double noise = 0.002, double stretch
     p.displacement(i)[0] += stretch * prm.critical_stretch * p.reference_position(i)[0];
   std::vector<double> before(p.size());
   for (unsigned int i = 0; i < p.size(); ++i)
-    before[i] = model.particle_strain_energy(i, p);
+    before[i] = model.particle_strain_energy(i, p, bonds);
   ASSERT_GT(model.break_bonds(p, bonds), 0u);
   const auto& states = model.committed_states();
   const auto& keys = model.history_keys();
@@ -693,7 +699,7 @@ void check_breaks_release_energy(Stab stab, double noise = 0.002, double stretch
   }
   unsigned int released = 0;
   for (unsigned int i = 0; i < p.size(); ++i) {
-    const double after = model.particle_strain_energy(i, p);
+    const double after = model.particle_strain_energy(i, p, bonds);
     ASSERT_TRUE(std::isfinite(after) && std::isfinite(before[i])) << "particle " << i;
     EXPECT_LE(after, before[i] * (1 + 1e-10)) << "particle " << i;
     if (damage[i] > 0) {
@@ -703,9 +709,10 @@ void check_breaks_release_energy(Stab stab, double noise = 0.002, double stretch
   }
   EXPECT_GT(released, 0u);
 
-  // The scaled forces are the scaled energy's: with bond-associated families (variational)
-  // f = −∂E/∂u by central differences at every dof of a few damaged particles. Tolerance as
-  // the tangent test: truncation ~ eps², far below 1e-6 of the largest force.
+  // The scaled forces are the scaled energy's (both controls are variational, the penalty
+  // springs' energy included): f = −∂E/∂u by central differences at every dof of a few damaged
+  // particles. Tolerance as the tangent test: truncation ~ eps², far below 1e-6 of the largest
+  // force.
   model.compute_forces(p, bonds);
   const auto f = p.forces();
   double largest = 0;
@@ -713,7 +720,7 @@ void check_breaks_release_energy(Stab stab, double noise = 0.002, double stretch
     largest = std::max(largest, f[i].norm());
   ASSERT_TRUE(std::isfinite(largest) && largest > 0);
   const double eps = 1e-6 * h;
-  if (stab == Stab::bond_associated) {
+  {
     unsigned int checked = 0;
     for (unsigned int i = 0; i < p.size() && checked < 5; ++i) {
       if (!(damage[i] > 0))
@@ -723,9 +730,9 @@ void check_breaks_release_energy(Stab stab, double noise = 0.002, double stretch
         auto& x = p.displacement(i)[d];
         const double x0 = x;
         x = x0 + eps;
-        const double Ep = model.strain_energy(p);
+        const double Ep = model.strain_energy(p, bonds);
         x = x0 - eps;
-        const double Em = model.strain_energy(p);
+        const double Em = model.strain_energy(p, bonds);
         x = x0;
         EXPECT_NEAR(f[i][d], -(Ep - Em) / (2 * eps), 1e-6 * largest) << "particle " << i;
       }

@@ -141,7 +141,8 @@ spinesim_add_scene_test(distributed.ring_nonfinite_force_on_one_rank SCENE ${_di
 # the balance agree to 2e-14 relative (the chaotic fragmenting run included: the same 18 656
 # broken bonds and 40 fragments, measured before the fracture damage D_f); the tolerances are
 # those of the bond-based ring above. The
-# 3-D tube fragments with the penalty control over 20 steps (before the fracture damage D_f
+# 3-D tube fragments with the penalty control over 20 steps and closes its balance to 1.2e-4
+# (bound 1e-3 as the 2-D penalty ring in stability.cmake; before the fracture damage D_f
 # of NosbPD it stopped at step 11 with det F < 0): the fracture damage is decided per particle
 # from the same exchanged displacements on every rank holding it, so the counts agree exactly.
 set(_nosb_checks "particle_kinetic_energy:rel:1e-9;particle_strain_energy:rel:1e-9;max_particle_speed:rel:1e-9")
@@ -173,7 +174,7 @@ foreach(_ranks 1 2)
     RANKS ${_ranks} SET "Effects/Particles method=nosb" "Particles/NOSB/Stabilization=penalty"
     "Simulation/End time=4e-5" "Simulation/Steps=20"
     OUT ${_dist_runs}/nosb_tube_${_ranks} FIXTURE dist_nosb_tube_${_ranks}
-    EXPECT "status==ok;particle_ranks~${_ranks}:0;particles~5936:0;fragments>=2;max_particle_speed<=100"
+    EXPECT "status==ok;particle_ranks~${_ranks}:0;particles~5936:0;fragments>=2;max_particle_speed<=100;energy_balance_error_relative<=1e-3"
     LABELS "scene;particles;stability" TIMEOUT 120)
 endforeach()
 spinesim_add_comparison_test(distributed.nosb_ring_fragmentation_1_vs_2_ranks
