@@ -60,6 +60,13 @@ void CoupledIntegrator<dim>::step(double dt) {
   // collective check; such a mode took about 30 steps per e-fold where it was seen).
   if (!splice_.on() || state_.n_free_particles() == 0 || ++steps_since_splice_check_ < 10)
     return;
+  check_splice_energy();
+}
+
+template <int dim>
+void CoupledIntegrator<dim>::check_splice_energy() {
+  if (!splice_.on() || state_.n_free_particles() == 0)
+    return;
   steps_since_splice_check_ = 0;
   if (!any_broken_)
     any_broken_ = std::find(state_.bonds.broken.begin(), state_.bonds.broken.end(),

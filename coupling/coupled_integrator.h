@@ -45,6 +45,10 @@ class CoupledIntegrator {
   // Whether any bond broke on any rank in the last step (collective). Breaking can stiffen a
   // NOSB family (a smaller shape tensor, larger gradients): the caller renews the stable step.
   bool bonds_broke_in_last_step() const;
+  // The energy splice's stored-energy check now (collective; nothing without the splice or
+  // before the first break): step() makes it every 10 steps, callers at each output time, so
+  // no state past its failure is written as a result.
+  void check_splice_energy();
   // Adaptive dynamic relaxation to equilibrium under the loads of `time`; with
   // `with_conversion`, the cells flagged at equilibrium convert and the state relaxes again.
   // Ends with zero velocities.

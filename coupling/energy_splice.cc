@@ -40,9 +40,8 @@ void EnergySplice<dim>::check() const {
     throw InvalidInput("Coupling/Splice",
                        "= energy with particle method '" + m.name() +
                            "' as configured (its forces are not the gradient of an energy: "
-                           "NOSB-PD's penalty stabilisation, SPG smoothing every n > 1 steps)",
-                       "bond_associated stabilisation (NOSB-PD), Smoothing interval = 1 (SPG), "
-                       "or Coupling/Splice = overlap");
+                           "SPG smoothing every n > 1 steps)",
+                       "Smoothing interval = 1 (SPG), or Coupling/Splice = overlap");
 }
 
 template <int dim>
@@ -89,10 +88,11 @@ void EnergySplice<dim>::check_stored_energy() {
          << " J, consistency correction " << correction << " J): a mode without stiffness grows";
     throw NumericalFailure(what.str(), "the FEM/particle interface",
                            "the correction was made for the intact material, and a crack that "
-                           "cuts the body next to the interface can leave it without positive "
-                           "stiffness; keep cracks inside the particles, away from the interface "
-                           "(a wider Coupling/Initial region or Conversion region, Coupling/"
-                           "Buffer), or use Coupling/Splice = overlap (docs/coupling.md)");
+                           "cuts the body apart, or cuts it next to the interface, can leave it "
+                           "without positive stiffness; keep cracks inside the particles, away "
+                           "from the interface (a wider Coupling/Initial region or Conversion "
+                           "region, Coupling/Buffer), end the run before the body separates, or "
+                           "use Coupling/Splice = overlap (docs/coupling.md)");
   }
 }
 

@@ -100,8 +100,8 @@ class EnergySplice {
   // none); not summed over ranks.
   double owned_particle_energy() const;
   // NumericalFailure if the stored energy E_FEM + E_PD + ½ uᵀ C u has turned negative
-  // (collective): C was made for the intact material, and a crack that cuts the body next to
-  // the interface can leave the sum without positive stiffness.
+  // (collective): C was made for the intact material, and a crack that cuts the body apart, or
+  // cuts it next to the interface, can leave the sum without positive stiffness.
   void check_stored_energy();
   // max |G a| / max |T a| over the affine modes before the correction (what it removes) [-].
   double ghost_force_relative() const { return ghost_force_relative_; }

@@ -96,6 +96,8 @@ class FemParticleCoupling {
   void step(double dt);
   // Whether bonds broke anywhere in the last step (collective; see CoupledIntegrator).
   bool bonds_broke_in_last_step() const { return integrator_.bonds_broke_in_last_step(); }
+  // CoupledIntegrator::check_splice_energy (collective).
+  void check_splice_energy() { integrator_.check_splice_energy(); }
   // Particle updates per second of the particle method's force passes, over all ranks
   // (updates summed, wall time of the slowest rank) [1/s]; 0 before any. Collective.
   double particle_updates_per_second() const;

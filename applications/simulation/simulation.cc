@@ -439,6 +439,9 @@ void Simulation<dim>::coupled_explicit(unsigned int, double time, double, RunCon
       }
     }
   }
+  // The state about to be written must not be past an energy-splice failure (checked every 10
+  // steps otherwise).
+  coupled_->check_splice_energy();
 }
 
 template <int dim>

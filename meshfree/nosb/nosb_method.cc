@@ -194,7 +194,9 @@ template <int dim>
 std::optional<std::vector<dealii::Tensor<1, dim>>>
 NosbMethod<dim>::driven_reactions(const ParticleSet<dim>& particles, const BondList<dim>&) const {
   // compute_forces() gathers f_m = −Σ_e w_e P_e G_m over every family with a row, on every
-  // member m: on a driven particle that is the gradient of the counted energy already.
+  // member m, and adds the penalty springs' pair forces of every row to both ends (to a
+  // partner without a row too): on a driven particle that is the gradient of the counted
+  // energy already.
   std::vector<dealii::Tensor<1, dim>> r(particles.size());
   for (unsigned int i = 0; i < particles.size() && driven_.size() == particles.size(); ++i)
     if (driven_[i])

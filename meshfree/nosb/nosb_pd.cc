@@ -114,6 +114,9 @@ void NosbPD<dim>::update_families(const ParticleSet<dim>& particles, const BondL
     if (i < first_ghost_ && (driven_.empty() || !driven_[i] || bonds.end(i) > bonds.begin(i)))
       reported.push_back(i);
   log_failed(particles, reported);
+  one_sided_rows_ = false;
+  for (std::size_t k = 0; k < bonds.n_bonds() && !one_sided_rows_; ++k)
+    one_sided_rows_ = bonds.end(bonds.neighbor[k]) == bonds.begin(bonds.neighbor[k]);
   ++families_version_;
 }
 
@@ -283,6 +286,20 @@ void NosbPD<dim>::compute_forces(ParticleSet<dim>& particles, const BondList<dim
         const Vec dz =
             si * (eta - (F_particle_[i] * xi - xi)) + sj * (eta - (F_particle_[j] * xi - xi));
         f[i] += (kappa * V[i] * V[j]) * dz;
+      });
+    }
+    // A partner without a bond row of its own (a coupled run's driven particle beyond the rows
+    // kept) walks no bonds above, yet i's springs pull it too: −s_i κ V_i V_j z_ij. Serial, in
+    // bond order, so the sums do not depend on the threads.
+    for (unsigned int i = 0; one_sided_rows_ && i < particles.size(); ++i) {
+      const double si = penalty_kept(i);
+      if (!(si > 0.0))
+        continue;
+      for_each_penalty_bond(bonds, i, Gc, [&](std::size_t k, unsigned int j, double kappa) {
+        if (bonds.end(j) > bonds.begin(j))
+          return;
+        const Vec z = (u[j] - u[i]) - (F_particle_[i] * bonds.xi[k] - bonds.xi[k]);
+        f[j] -= (si * kappa * V[i] * V[j]) * z;
       });
     }
   }
@@ -605,7 +622,7 @@ NosbPD<dim>::penalty_part(unsigned int i, const dealii::Tensor<2, dim>& F_i,
   using Vec = dealii::Tensor<1, dim>;
   PenaltyPart out;
   const double s = penalty_kept(i);
-  if (!(s > 0.0) || failed(i))
+  if (!(s > 0.0)) // failed particles included (penalty_kept)
     return out;
   const auto& u = particles.displacements();
   const auto& V = particles.volumes();
@@ -783,7 +800,7 @@ typename NosbPD<dim>::HourglassMeasure NosbPD<dim>::hourglass(const ParticleSet<
     if (failed(i))
       continue;
     for_each_bond_of(bonds, i, [&](std::size_t k, unsigned int j) {
-      if (bonds.broken[k] || failed(j))
+      if (bonds.broken[k])
         return;
       const Vec& xi = bonds.xi[k];
       const Vec eta = u[j] - u[i];

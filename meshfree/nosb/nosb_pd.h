@@ -70,8 +70,10 @@ class NosbPD {
   using Stabilization = NosbStabilization;
   using Parameters = NosbParameters;
 
-  // What the hourglass (zero-energy-mode) diagnostics measure, over intact bonds between
-  // non-failed particles, with z_ij = (y_j − y_i) − F_i ξ_ij (F_i of the particle family):
+  // What the hourglass (zero-energy-mode) diagnostics measure, over the intact bonds of the
+  // particles with a family, with z_ij = (y_j − y_i) − F_i ξ_ij (F_i of the particle family):
+  // the penalty springs' E_hg at G_s = 1 without fracture damage (s = 1), whatever the
+  // stabilisation.
   struct HourglassMeasure {
     double energy = 0;        // Σ_i Σ_j ¼ c ω β |z_ij|²/|ξ| V_i V_j [J]: a G_s = 1 penalty
     double relative_norm = 0; // sqrt(Σ ωβ V V |z|²/|ξ|²) / sqrt(Σ ωβ V V |η|²/|ξ|²) [-]
@@ -268,6 +270,7 @@ class NosbPD {
   double reference_temperature_ = 0;
   std::vector<std::uint8_t> driven_;
   unsigned int first_ghost_ = ~0u;
+  bool one_sided_rows_ = false; // some bond's partner has no bond row (update_families)
   std::vector<std::string> messages_;
   unsigned long families_version_ = 0, pattern_version_ = ~0ul;
   // Transpose of the families' node lists for the force gather: per particle, the entries q
