@@ -9,12 +9,15 @@
 #include "fem/f_bar.h"
 #include "fem/mean_dilatation.h"
 
+#include <deal.II/base/work_stream.h>
 #include <deal.II/fe/fe_values.h>
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <exception>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 
@@ -73,51 +76,117 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
   VectorType& f_ext = external_force_;
 
   const unsigned int nq = quadrature_.size(), n = fe_.n_dofs_per_cell();
-  FEValues<dim> fe_values(*mapping_, fe_, quadrature_,
-                          update_values | update_gradients | update_quadrature_points |
-                              update_JxW_values);
-  FEFaceValues<dim> fe_face(*mapping_, fe_, face_quadrature_,
-                            update_values | update_quadrature_points | update_normal_vectors |
-                                update_JxW_values);
-  FESubfaceValues<dim> fe_subface(*mapping_, fe_, face_quadrature_,
-                                  update_values | update_quadrature_points | update_normal_vectors |
-                                      update_JxW_values);
   const FEValuesExtractors::Vector displacements(0);
-  FullMatrix<double> cell_matrix(n, n);
-  Vector<double> cell_rhs(n), cell_fint(n), cell_fext(n);
-  std::vector<types::global_dof_index> dofs(n);
-  std::vector<Tensor<2, dim>> grads(nq);
-  std::vector<double> local_u(n);
   std::vector<unsigned int> comp(n);
   for (unsigned int i = 0; i < n; ++i)
     comp[i] = fe_.system_to_component_index(i).first;
-  std::vector<std::array<double, dim * dim>> w(n); // w_i[d][L] = Σ_J ∇N_i,J A(c_i,J,d,L) JxW
-  double A[3][3][3][3];
   // B-bar (mean_dilatation.h): H̄ at the points, δH̄_i = g_i ⊗ e_{c_i} + β_i I₃ in the force
   // and W_i = δH̄_i : A JxW (3×3, with zz in plane strain) in the tangent.
   const bool bbar = prm_.volumetric_locking == "bbar";
-  MeanDilatation<dim> mean_dilatation;
-  double average_dilatation = 0;
-  std::vector<double> beta(n);
-  std::vector<std::array<double, 9>> wb(bbar ? n : 0);
   // F-bar (f_bar.h): P̄ = P(F̄) at the points and its own force; no tangent.
   const bool fbar = prm_.volumetric_locking == "fbar";
   if (fbar && with_matrix)
     throw std::logic_error("F-bar has no consistent tangent: explicit steps only");
-  FBar<dim> f_bar;
-  std::vector<double> fbar_force(fbar ? n : 0);
 
-  // A point that fails (inverted, non-finite), or anything else thrown in the loop, ends this
-  // rank's loop; every rank then meets in raise_on_every_rank after the collective compresses
-  // below.
+  // Per thread: the finite-element values and the point loop's scratch.
+  struct Scratch {
+    Scratch(const Mapping<dim>& mapping, const FiniteElement<dim>& fe, const Quadrature<dim>& q,
+            const Quadrature<dim - 1>& face_q, bool bbar, bool fbar)
+        : fe_values(mapping, fe, q,
+                    update_values | update_gradients | update_quadrature_points |
+                        update_JxW_values),
+          fe_face(mapping, fe, face_q,
+                  update_values | update_quadrature_points | update_normal_vectors |
+                      update_JxW_values),
+          fe_subface(mapping, fe, face_q,
+                     update_values | update_quadrature_points | update_normal_vectors |
+                         update_JxW_values),
+          grads(q.size()), local_u(fe.n_dofs_per_cell()), w(fe.n_dofs_per_cell()),
+          beta(fe.n_dofs_per_cell()), wb(bbar ? fe.n_dofs_per_cell() : 0),
+          fbar_force(fbar ? fe.n_dofs_per_cell() : 0) {}
+    Scratch(const Scratch& o)
+        : fe_values(o.fe_values.get_mapping(), o.fe_values.get_fe(), o.fe_values.get_quadrature(),
+                    o.fe_values.get_update_flags()),
+          fe_face(o.fe_face.get_mapping(), o.fe_face.get_fe(), o.fe_face.get_quadrature(),
+                  o.fe_face.get_update_flags()),
+          fe_subface(o.fe_subface.get_mapping(), o.fe_subface.get_fe(),
+                     o.fe_subface.get_quadrature(), o.fe_subface.get_update_flags()),
+          grads(o.grads), local_u(o.local_u), w(o.w), beta(o.beta), wb(o.wb),
+          fbar_force(o.fbar_force) {}
+    FEValues<dim> fe_values;
+    FEFaceValues<dim> fe_face;
+    FESubfaceValues<dim> fe_subface;
+    std::vector<Tensor<2, dim>> grads;
+    std::vector<double> local_u;
+    std::vector<std::array<double, dim * dim>> w; // w_i[d][L] = Σ_J ∇N_i,J A(c_i,J,d,L) JxW
+    double A[3][3][3][3];
+    MeanDilatation<dim> mean_dilatation;
+    std::vector<double> beta;
+    std::vector<std::array<double, 9>> wb;
+    FBar<dim> f_bar;
+    std::vector<double> fbar_force;
+  };
+  // Per cell: what the copier adds to the global matrix and vectors.
+  struct Copy {
+    FullMatrix<double> cell_matrix;
+    Vector<double> cell_rhs, cell_fint, cell_fext;
+    std::vector<types::global_dof_index> dofs;
+    bool filled = false;
+  };
+
+  // The cells to assemble, in the active-cell order the serial loop took.
+  std::vector<typename DoFHandler<dim>::active_cell_iterator> cells;
+  for (const auto& cell : dof_handler_.active_cell_iterators())
+    if (cell->is_locally_owned() &&
+        (assembly_cells_ ? (*assembly_cells_)[cell->active_cell_index()] : is_active(cell)))
+      cells.push_back(cell);
+  // The load functions at the target time: the threads only read them (load_blend).
+  for (auto* f : {body_force_.get(), temperature_change_.get()})
+    if (f)
+      f->set_time(target_time_);
+  for (const auto& t : bcs_.traction())
+    t.function->set_time(target_time_);
+  for (const auto& p : bcs_.pressure())
+    p.function->set_time(target_time_);
+
+  // A point that fails (inverted, non-finite), or anything else thrown for a cell, stops the
+  // cells not yet begun; the first failing cell in the loop's order is kept, and every rank
+  // then meets in raise_on_every_rank after the collective compresses below.
   std::exception_ptr failure;
-  for (const auto& cell : dof_handler_.active_cell_iterators()) {
-    if (failure)
-      break;
+  std::size_t failure_at = cells.size();
+  std::mutex failure_mutex;
+  std::atomic<bool> failed{false};
+  using CellIt =
+      typename std::vector<typename DoFHandler<dim>::active_cell_iterator>::const_iterator;
+  const auto worker = [&](const CellIt& it, Scratch& scratch, Copy& copy) {
+    copy.filled = false;
+    if (failed.load(std::memory_order_relaxed))
+      return;
+    const auto& cell = *it;
+    auto& fe_values = scratch.fe_values;
+    auto& fe_face = scratch.fe_face;
+    auto& fe_subface = scratch.fe_subface;
+    auto& grads = scratch.grads;
+    auto& local_u = scratch.local_u;
+    auto& w = scratch.w;
+    auto& A = scratch.A;
+    auto& mean_dilatation = scratch.mean_dilatation;
+    auto& beta = scratch.beta;
+    auto& wb = scratch.wb;
+    auto& f_bar = scratch.f_bar;
+    auto& fbar_force = scratch.fbar_force;
+    auto& cell_matrix = copy.cell_matrix;
+    auto& cell_rhs = copy.cell_rhs;
+    auto& cell_fint = copy.cell_fint;
+    auto& cell_fext = copy.cell_fext;
+    auto& dofs = copy.dofs;
+    cell_matrix.reinit(with_matrix ? n : 0, with_matrix ? n : 0);
+    cell_rhs.reinit(n);
+    cell_fint.reinit(n);
+    cell_fext.reinit(n);
+    dofs.resize(n);
+    double average_dilatation = 0;
     try {
-      if (!cell->is_locally_owned() ||
-          !(assembly_cells_ ? (*assembly_cells_)[cell->active_cell_index()] : is_active(cell)))
-        continue;
       fe_values.reinit(cell);
       const materials::ConstitutiveLaw& law = cell_material(cell);
       cell_matrix = 0;
@@ -291,16 +360,40 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
         cell_rhs(i) = cell_fext(i) - cell_fint(i);
       if (assembly_sign_ != 1.0)
         cell_matrix *= assembly_sign_;
-      if (with_matrix)
-        constraints.distribute_local_to_global(cell_matrix, cell_rhs, dofs, matrix, rhs_);
-      else
-        constraints.distribute_local_to_global(cell_rhs, dofs, rhs_);
-      f_int.add(dofs, cell_fint);
-      f_ext.add(dofs, cell_fext);
+      copy.filled = true;
     } catch (...) {
-      failure = std::current_exception();
+      std::lock_guard<std::mutex> lock(failure_mutex);
+      const std::size_t at = static_cast<std::size_t>(it - cells.cbegin());
+      if (at < failure_at) {
+        failure = std::current_exception();
+        failure_at = at;
+      }
+      failed = true;
     }
-  }
+  };
+  const auto copier = [&](const Copy& copy) {
+    if (!copy.filled)
+      return;
+    if (with_matrix)
+      constraints.distribute_local_to_global(copy.cell_matrix, copy.cell_rhs, copy.dofs, matrix,
+                                             rhs_);
+    else
+      constraints.distribute_local_to_global(copy.cell_rhs, copy.dofs, rhs_);
+    f_int.add(copy.dofs, copy.cell_fint);
+    f_ext.add(copy.dofs, copy.cell_fext);
+  };
+  Scratch scratch(*mapping_, fe_, quadrature_, face_quadrature_, bbar, fbar);
+  Copy copy;
+  if (loaded_ && load_factor < 1.0) {
+    // Blending the loads sets the functions' times per value (load_blend): one thread.
+    for (auto it = cells.cbegin(); it != cells.cend(); ++it) {
+      worker(it, scratch, copy);
+      copier(copy);
+    }
+  } else
+    // The copier runs in the cells' order (a serial, in-order stage of WorkStream's pipeline):
+    // the sums are those of the serial loop, bit for bit, on any number of threads.
+    WorkStream::run(cells.cbegin(), cells.cend(), worker, copier, scratch, copy);
   // The compresses first (collective, every rank reaches them): entries bound for other ranks
   // must not stay buffered in the vectors into the next assembly after a failure.
   if (with_matrix)
