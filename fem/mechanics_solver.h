@@ -79,6 +79,9 @@ class MechanicsSolver {
   ~MechanicsSolver();
 
   // Setup inputs. Boundary conditions from the parameters are added in the constructor.
+  // The assembly evaluates the body force, temperature change, tractions, pressures and the
+  // cavity traction from several threads (WorkStream): their value() (or call) must be safe to
+  // run concurrently at a fixed time (deal.II's FunctionParser is).
   void set_material(dealii::types::material_id id,
                     std::shared_ptr<const materials::ConstitutiveLaw> law);
   BoundaryConditions<dim>& boundary_conditions() { return bcs_; }

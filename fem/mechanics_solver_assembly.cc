@@ -53,12 +53,14 @@ using materials::Tensor2;
 template <int dim>
 double MechanicsSolver<dim>::load_blend(Function<dim>& f, const Point<dim>& x, unsigned int c,
                                         double load_factor) const {
+  // Without a blend the function stays at target_time_, set once before the cell loop
+  // (assemble(), the only caller): the loop's threads only read it.
+  if (!(loaded_ && load_factor < 1.0))
+    return load_factor * f.value(x, c);
   f.set_time(target_time_);
   double value = load_factor * f.value(x, c);
-  if (loaded_ && load_factor < 1.0) {
-    f.set_time(previous_time_);
-    value += (1.0 - load_factor) * f.value(x, c);
-  }
+  f.set_time(previous_time_);
+  value += (1.0 - load_factor) * f.value(x, c);
   return value;
 }
 
@@ -153,14 +155,21 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
   // cells not yet begun; the first failing cell in the loop's order is kept, and every rank
   // then meets in raise_on_every_rank after the collective compresses below.
   std::exception_ptr failure;
-  std::size_t failure_at = cells.size();
+  std::atomic<std::size_t> failure_at{cells.size()};
   std::mutex failure_mutex;
-  std::atomic<bool> failed{false};
+  const auto record_failure = [&](std::size_t at) {
+    std::lock_guard<std::mutex> lock(failure_mutex);
+    if (at < failure_at.load()) {
+      failure = std::current_exception();
+      failure_at = at;
+    }
+  };
   using CellIt =
       typename std::vector<typename DoFHandler<dim>::active_cell_iterator>::const_iterator;
   const auto worker = [&](const CellIt& it, Scratch& scratch, Copy& copy) {
     copy.filled = false;
-    if (failed.load(std::memory_order_relaxed))
+    const std::size_t at = static_cast<std::size_t>(it - cells.cbegin());
+    if (at > failure_at.load(std::memory_order_relaxed)) // an earlier cell failed
       return;
     const auto& cell = *it;
     auto& fe_values = scratch.fe_values;
@@ -180,13 +189,13 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
     auto& cell_fint = copy.cell_fint;
     auto& cell_fext = copy.cell_fext;
     auto& dofs = copy.dofs;
-    cell_matrix.reinit(with_matrix ? n : 0, with_matrix ? n : 0);
-    cell_rhs.reinit(n);
-    cell_fint.reinit(n);
-    cell_fext.reinit(n);
-    dofs.resize(n);
     double average_dilatation = 0;
     try {
+      cell_matrix.reinit(with_matrix ? n : 0, with_matrix ? n : 0);
+      cell_rhs.reinit(n);
+      cell_fint.reinit(n);
+      cell_fext.reinit(n);
+      dofs.resize(n);
       fe_values.reinit(cell);
       const materials::ConstitutiveLaw& law = cell_material(cell);
       cell_matrix = 0;
@@ -362,25 +371,25 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
         cell_matrix *= assembly_sign_;
       copy.filled = true;
     } catch (...) {
-      std::lock_guard<std::mutex> lock(failure_mutex);
-      const std::size_t at = static_cast<std::size_t>(it - cells.cbegin());
-      if (at < failure_at) {
-        failure = std::current_exception();
-        failure_at = at;
-      }
-      failed = true;
+      record_failure(at);
     }
   };
+  // The copier runs one cell at a time, in order; what it throws (a Trilinos error) is
+  // recorded like a cell's failure, past every cell, and raised collectively below.
   const auto copier = [&](const Copy& copy) {
-    if (!copy.filled)
+    if (!copy.filled || failure_at.load() < cells.size())
       return;
-    if (with_matrix)
-      constraints.distribute_local_to_global(copy.cell_matrix, copy.cell_rhs, copy.dofs, matrix,
-                                             rhs_);
-    else
-      constraints.distribute_local_to_global(copy.cell_rhs, copy.dofs, rhs_);
-    f_int.add(copy.dofs, copy.cell_fint);
-    f_ext.add(copy.dofs, copy.cell_fext);
+    try {
+      if (with_matrix)
+        constraints.distribute_local_to_global(copy.cell_matrix, copy.cell_rhs, copy.dofs, matrix,
+                                               rhs_);
+      else
+        constraints.distribute_local_to_global(copy.cell_rhs, copy.dofs, rhs_);
+      f_int.add(copy.dofs, copy.cell_fint);
+      f_ext.add(copy.dofs, copy.cell_fext);
+    } catch (...) {
+      record_failure(cells.size() - 1);
+    }
   };
   Scratch scratch(*mapping_, fe_, quadrature_, face_quadrature_, bbar, fbar);
   Copy copy;

@@ -114,9 +114,11 @@ void NosbPD<dim>::update_families(const ParticleSet<dim>& particles, const BondL
     if (i < first_ghost_ && (driven_.empty() || !driven_[i] || bonds.end(i) > bonds.begin(i)))
       reported.push_back(i);
   log_failed(particles, reported);
-  one_sided_rows_ = false;
-  for (std::size_t k = 0; k < bonds.n_bonds() && !one_sided_rows_; ++k)
-    one_sided_rows_ = bonds.end(bonds.neighbor[k]) == bonds.begin(bonds.neighbor[k]);
+  one_sided_bonds_.clear();
+  for (unsigned int i = 0; i < particles.size(); ++i)
+    for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k)
+      if (bonds.end(bonds.neighbor[k]) == bonds.begin(bonds.neighbor[k]))
+        one_sided_bonds_.emplace_back(i, k);
   ++families_version_;
 }
 
@@ -291,16 +293,14 @@ void NosbPD<dim>::compute_forces(ParticleSet<dim>& particles, const BondList<dim
     // A partner without a bond row of its own (a coupled run's driven particle beyond the rows
     // kept) walks no bonds above, yet i's springs pull it too: −s_i κ V_i V_j z_ij. Serial, in
     // bond order, so the sums do not depend on the threads.
-    for (unsigned int i = 0; one_sided_rows_ && i < particles.size(); ++i) {
+    for (const auto& [i, k] : one_sided_bonds_) {
       const double si = penalty_kept(i);
-      if (!(si > 0.0))
+      if (bonds.broken[k] || !(si > 0.0))
         continue;
-      for_each_penalty_bond(bonds, i, Gc, [&](std::size_t k, unsigned int j, double kappa) {
-        if (bonds.end(j) > bonds.begin(j))
-          return;
-        const Vec z = (u[j] - u[i]) - (F_particle_[i] * bonds.xi[k] - bonds.xi[k]);
-        f[j] -= (si * kappa * V[i] * V[j]) * z;
-      });
+      const unsigned int j = bonds.neighbor[k];
+      const double kappa = 0.5 * Gc * bonds.influence[k] * bonds.volume_factor(k) / bonds.length[k];
+      const Vec z = (u[j] - u[i]) - (F_particle_[i] * bonds.xi[k] - bonds.xi[k]);
+      f[j] -= (si * kappa * V[i] * V[j]) * z;
     }
   }
   for (unsigned int i = 0; i < particles.size(); ++i)

@@ -219,7 +219,8 @@ class NosbPD {
             gather_entries_.capacity()) *
                sizeof(std::size_t) +
            (entry_family_.capacity() + gather_family_.capacity()) * sizeof(unsigned int) +
-           gather_gradient_.capacity() * sizeof(dealii::Tensor<1, dim>) + driven_.capacity();
+           gather_gradient_.capacity() * sizeof(dealii::Tensor<1, dim>) + driven_.capacity() +
+           one_sided_bonds_.capacity() * sizeof(std::pair<unsigned int, std::size_t>);
   }
 
  private:
@@ -270,7 +271,9 @@ class NosbPD {
   double reference_temperature_ = 0;
   std::vector<std::uint8_t> driven_;
   unsigned int first_ghost_ = ~0u;
-  bool one_sided_rows_ = false; // some bond's partner has no bond row (update_families)
+  // (row, bond) of the bonds whose partner has no bond row of its own, in bond order
+  // (update_families): the pair forces of compute_forces that no row of the partner adds.
+  std::vector<std::pair<unsigned int, std::size_t>> one_sided_bonds_;
   std::vector<std::string> messages_;
   unsigned long families_version_ = 0, pattern_version_ = ~0ul;
   // Transpose of the families' node lists for the force gather: per particle, the entries q
