@@ -298,7 +298,7 @@ void NosbPD<dim>::compute_forces(ParticleSet<dim>& particles, const BondList<dim
       if (bonds.broken[k] || !(si > 0.0))
         continue;
       const unsigned int j = bonds.neighbor[k];
-      const double kappa = 0.5 * Gc * bonds.influence[k] * bonds.volume_factor(k) / bonds.length[k];
+      const double kappa = penalty_stiffness(bonds, k, Gc);
       const Vec z = (u[j] - u[i]) - (F_particle_[i] * bonds.xi[k] - bonds.xi[k]);
       f[j] -= (si * kappa * V[i] * V[j]) * z;
     }

@@ -166,8 +166,12 @@ class NosbPD {
     for_each_bond_of(bonds, i, [&](std::size_t k, unsigned int j) {
       if (bonds.broken[k])
         return;
-      body(k, j, 0.5 * Gc * bonds.influence[k] * bonds.volume_factor(k) / bonds.length[k]);
+      body(k, j, penalty_stiffness(bonds, k, Gc));
     });
+  }
+  // κ = ½ G_s c ω β / |ξ| of bond k, Gc = G_s c [N/m^7 in 3-D].
+  static double penalty_stiffness(const BondList<dim>& bonds, std::size_t k, double Gc) {
+    return 0.5 * Gc * bonds.influence[k] * bonds.volume_factor(k) / bonds.length[k];
   }
   // 1 − D_f of particle i's (particle) family: scales its end of the penalty hourglass force as
   // its stress, so a family that a break left without stress adds no hourglass force either.
