@@ -76,6 +76,12 @@ Voigt project(const Voigt& s) { // s̄ = P σ (eq. 16e)
   return {{s[0] - mean, s[1] - mean, s[2] - mean, 2 * s[3], 2 * s[4], 2 * s[5]}};
 }
 
+// The coefficient of stress component v (Voigt) in the hoop terms of div σ in (r, z, θ):
+// (σ_rr − σ_θθ)/r in the r row, σ_rz/r in the z row.
+double hoop_sign(unsigned int v) {
+  return v == 0 ? 1.0 : v == 2 ? -1.0 : v == 3 ? 1.0 : 0.0;
+}
+
 std::string point_text(const double* x, int dim) {
   std::ostringstream s;
   s << "(";
@@ -162,6 +168,21 @@ LsmfmSolver<dim>::LsmfmSolver(const LsmfmParameters& parameters, const Material&
   else
     active_ = {0, 1, 2, 3};
   block_ = dim + active_.size();
+  axisymmetric_ = dim == 2 && prm_.plane_model == "axisymmetric";
+  if (axisymmetric_)
+    for (unsigned int q = 0; q < points_.size(); ++q) {
+      if (!(points_[q][0] > 0)) {
+        double c[dim];
+        for (unsigned int d = 0; d < dim; ++d)
+          c[d] = points_[q][d];
+        throw InvalidInput("LSMFM axisymmetric model",
+                           "integration point " + std::to_string(q) + " at " + point_text(c, dim) +
+                               " lies on or across the axis r = 0",
+                           "a body at r > 0 (x is the radius): the hoop terms 1/r are singular "
+                           "on the axis, so a solid cylinder is not supported");
+      }
+      weights_[q] *= 2.0 * dealii::numbers::PI * points_[q][0]; // the ring's volume element
+    }
   return_mapping_ = prm_.flow_rule == "return_mapping";
   jaumann_log_ = prm_.finite_strain() && prm_.stress_rate == "jaumann_log";
   if (jaumann_log_ && !return_mapping_)
@@ -309,11 +330,16 @@ void LsmfmSolver<dim>::build_pattern() {
 }
 
 template <int dim>
-dealii::Tensor<2, 3> LsmfmSolver<dim>::incremental_gradient(const Site& s,
-                                                            const std::vector<double>& U,
-                                                            const Tensor3& F_n_inverse) const {
-  // G = ∂ũ/∂x^n = Σ_J ũ_J ⊗ F_n⁻ᵀ ∇_X ψ_J.
+dealii::Tensor<2, 3>
+LsmfmSolver<dim>::incremental_gradient(const Site& s, const std::vector<double>& U,
+                                       const Tensor3& F_n_inverse, double r_n) const {
+  // G = ∂ũ/∂x^n = Σ_J ũ_J ⊗ F_n⁻ᵀ ∇_X ψ_J; axisymmetric: G_θθ = ũ_r / r_n (f_θθ = r_{n+1}/r_n).
   Tensor3 G;
+  if (axisymmetric_)
+    for (unsigned int k = 0; k < s.nodes.size(); ++k) {
+      const unsigned int base = s.nodes[k] * block_;
+      G[2][2] += s.value[k] * (U[base] - U_n_[base]) / r_n;
+    }
   for (unsigned int k = 0; k < s.nodes.size(); ++k) {
     const unsigned int base = s.nodes[k] * block_;
     dealii::Tensor<1, 3> g;
@@ -327,6 +353,12 @@ dealii::Tensor<2, 3> LsmfmSolver<dim>::incremental_gradient(const Site& s,
     }
   }
   return G;
+}
+
+template <int dim>
+double LsmfmSolver<dim>::radius_n(unsigned int q) const {
+  // F_n is the identity in small strain (the reference radius) and carries r_n/R in finite.
+  return points_[q][0] * state_[q].F_n[2][2];
 }
 
 template <int dim>
@@ -454,10 +486,22 @@ double LsmfmSolver<dim>::evaluate(const std::vector<double>& U, bool assemble,
   double I = 0;
   Eigen::MatrixXd J;
   Eigen::VectorXd r(rows);
+  // The entries (i, j) of the displacement gradient the strain residual depends on: the
+  // in-plane ones, and the hoop entry θθ when axisymmetric.
+  std::vector<std::pair<unsigned int, unsigned int>> gradient_entries;
+  for (unsigned int i = 0; i < dim; ++i)
+    for (unsigned int j = 0; j < dim; ++j)
+      gradient_entries.emplace_back(i, j);
+  if (axisymmetric_)
+    gradient_entries.emplace_back(2, 2);
   for (unsigned int q = 0; q < points_.size(); ++q) {
     const Site& s = point_sites_[q];
     const PointState& st = state_[q];
     const unsigned int n = s.nodes.size();
+    // Axisymmetric: the radius at t_n (the hoop gradient's scale) and at the iterate (the
+    // hoop terms of div σ); unused otherwise.
+    const double r_hoop = axisymmetric_ ? radius_n(q) : 1.0;
+    double r_now = r_hoop;
     // Stress (scaled by E) and gradients in the configuration at t_n.
     Voigt sig{};
     const Tensor3 Fn_inv = finite ? dealii::invert(st.F_n) : dealii::unit_symmetric_tensor<3>();
@@ -483,20 +527,22 @@ double LsmfmSolver<dim>::evaluate(const std::vector<double>& U, bool assemble,
         for (unsigned int i = 0; i < dim; ++i)
           for (unsigned int j = 0; j < 3; ++j)
             H[i][j] += U[base + i] * g[k][j];
+        if (axisymmetric_)
+          H[2][2] += s.value[k] * U[base] / r_hoop; // ε_θθ = u_r / r
       }
       R = to_engineering(H);
       const Voigt c = compliance(sig, 1.0, nu); // C σ with σ scaled by E: (E C)(σ/E)
       for (unsigned int a = 0; a < 6; ++a)
         R[a] -= st.ep[a] + c[a];
-      for (unsigned int i = 0; i < dim; ++i)
-        for (unsigned int j = 0; j < dim; ++j) {
-          Tensor3 e;
-          e[i][j] = 1.0;
-          dR_dH[i][j] = to_engineering(e);
-        }
+      for (const auto& [i, j] : gradient_entries) {
+        Tensor3 e;
+        e[i][j] = 1.0;
+        dR_dH[i][j] = to_engineering(e);
+      }
     } else {
-      const Tensor3 G = incremental_gradient(s, U, Fn_inv);
+      const Tensor3 G = incremental_gradient(s, U, Fn_inv, r_hoop);
       const Tensor3 f = dealii::unit_symmetric_tensor<3>() + G;
+      r_now = r_hoop * f[2][2];
       const double Jt = dealii::determinant(f);
       if (!(Jt > 0)) {
         double c[dim];
@@ -519,19 +565,18 @@ double LsmfmSolver<dim>::evaluate(const std::vector<double>& U, bool assemble,
       const Voigt cbar = compliance(to_voigt(sbar), 1.0, nu);
       for (unsigned int a = 0; a < 6; ++a)
         R[a] += -c[a] + cbar[a] / Jt;
-      for (unsigned int i = 0; i < dim; ++i)
-        for (unsigned int j = 0; j < dim; ++j) {
-          Tensor3 e;
-          e[i][j] = 1.0;
-          // δε̃ = sym(M δG f⁻¹); δ(σ̄/J̃) = (δG σ_n fᵀ + f σ_n δGᵀ)/J̃ − σ̄ tr(f⁻¹δG)/J̃.
-          const Tensor3 de = M * e * f_inv;
-          const Tensor3 dsbar = e * sn * dealii::transpose(f) + f * sn * dealii::transpose(e);
-          const Tensor3 dq = dsbar / Jt - sbar * (f_inv[j][i] / Jt);
-          const Voigt dcbar = compliance(to_voigt(dq), 1.0, nu);
-          dR_dH[i][j] = to_engineering(0.5 * (de + dealii::transpose(de)));
-          for (unsigned int a = 0; a < 6; ++a)
-            dR_dH[i][j][a] += dcbar[a];
-        }
+      for (const auto& [i, j] : gradient_entries) {
+        Tensor3 e;
+        e[i][j] = 1.0;
+        // δε̃ = sym(M δG f⁻¹); δ(σ̄/J̃) = (δG σ_n fᵀ + f σ_n δGᵀ)/J̃ − σ̄ tr(f⁻¹δG)/J̃.
+        const Tensor3 de = M * e * f_inv;
+        const Tensor3 dsbar = e * sn * dealii::transpose(f) + f * sn * dealii::transpose(e);
+        const Tensor3 dq = dsbar / Jt - sbar * (f_inv[j][i] / Jt);
+        const Voigt dcbar = compliance(to_voigt(dq), 1.0, nu);
+        dR_dH[i][j] = to_engineering(0.5 * (de + dealii::transpose(de)));
+        for (unsigned int a = 0; a < 6; ++a)
+          dR_dH[i][j][a] += dcbar[a];
+      }
       if (jaumann_log_) {
         // Rotation-neutralised update with logarithmic strain increments (the objective
         // update of Abaqus' hypoelastic J2 with the Jaumann rate, Hughes & Winget 1980 in the
@@ -558,16 +603,15 @@ double LsmfmSolver<dim>::evaluate(const std::vector<double>& U, bool assemble,
         for (unsigned int a = 0; a < 6; ++a)
           R[a] = e0[a] - c[a];
         if (assemble)
-          for (unsigned int i = 0; i < dim; ++i)
-            for (unsigned int j = 0; j < dim; ++j) {
-              const double h = 1e-7;
-              Tensor3 Gp = G, Gm = G;
-              Gp[i][j] += h;
-              Gm[i][j] -= h;
-              const Voigt ep = trial(Gp), em = trial(Gm);
-              for (unsigned int a = 0; a < 6; ++a)
-                dR_dH[i][j][a] = (ep[a] - em[a]) / (2 * h);
-            }
+          for (const auto& [i, j] : gradient_entries) {
+            const double h = 1e-7;
+            Tensor3 Gp = G, Gm = G;
+            Gp[i][j] += h;
+            Gm[i][j] -= h;
+            const Voigt ep = trial(Gp), em = trial(Gm);
+            for (unsigned int a = 0; a < 6; ++a)
+              dR_dH[i][j][a] = (ep[a] - em[a]) / (2 * h);
+          }
       }
     }
     // Return-mapping form: R_u = C σ_rm(e_tr) − C σ, with e_tr = R + Cσ the trial elastic
@@ -608,14 +652,13 @@ double LsmfmSolver<dim>::evaluate(const std::vector<double>& U, bool assemble,
               v += compliance_entry(a, k, E, nu) * rm.tangent[k][b];
             CD[a][b] = v;
           }
-        for (unsigned int i = 0; i < dim; ++i)
-          for (unsigned int j = 0; j < dim; ++j) {
-            Voigt d{};
-            for (unsigned int a = 0; a < 6; ++a)
-              for (unsigned int b = 0; b < 6; ++b)
-                d[a] += CD[a][b] * dR_dH[i][j][b];
-            dR_dH[i][j] = d;
-          }
+        for (const auto& [i, j] : gradient_entries) {
+          Voigt d{};
+          for (unsigned int a = 0; a < 6; ++a)
+            for (unsigned int b = 0; b < 6; ++b)
+              d[a] += CD[a][b] * dR_dH[i][j][b];
+          dR_dH[i][j] = d;
+        }
       }
     }
     // Plasticity at the current stress (eqs. 40–41a) and Σ of eq. (27), scaled by E.
@@ -666,6 +709,8 @@ double LsmfmSolver<dim>::evaluate(const std::vector<double>& U, bool assemble,
           r[nr + i] += ell_ * c * gc[k][j];
         if (i != j && j < dim)
           r[nr + j] += ell_ * c * gc[k][i];
+        if (axisymmetric_) // div σ in (r, z): + (σ_rr − σ_θθ)/r and + σ_rz/r
+          r[nr + (v == 3 ? 1 : 0)] += ell_ * c * s.value[k] * hoop_sign(v) / r_now;
       }
     }
     const double W = weights_[q] * Jn;
@@ -704,6 +749,8 @@ double LsmfmSolver<dim>::evaluate(const std::vector<double>& U, bool assemble,
             d += dR_dH[i][j][v] * g[k][j];
           J(a, c0 + i) = d;
         }
+        if (axisymmetric_) // through G_θθ = ũ_r / r_n (ε_θθ = u_r / r in small strain)
+          J(a, c0) += dR_dH[2][2][v] * s.value[k] / r_hoop;
         for (unsigned int b = 0; b < nr; ++b)
           J(a, c0 + dim + b) = -Sigma[v][active_[b]] * s.value[k];
       }
@@ -714,6 +761,8 @@ double LsmfmSolver<dim>::evaluate(const std::vector<double>& U, bool assemble,
           J(nr + i, c0 + dim + b) += ell_ * gc[k][j];
         if (i != j && j < dim)
           J(nr + j, c0 + dim + b) += ell_ * gc[k][i];
+        if (axisymmetric_)
+          J(nr + (v == 3 ? 1 : 0), c0 + dim + b) += ell_ * s.value[k] * hoop_sign(v) / r_now;
       }
     }
     // Full Newton: the curvature of the flow direction. With g = γn, γ = c φ̃, c = 3/(2K̄),
@@ -782,7 +831,7 @@ double LsmfmSolver<dim>::evaluate(const std::vector<double>& U, bool assemble,
     const unsigned int n = s.nodes.size();
     // Outward normal carried by the deformation at t_n: n ∝ F_n⁻ᵀ N.
     dealii::Tensor<1, dim> normal = c.normal;
-    if (finite) {
+    if (finite && !c.spatial_normal) {
       dealii::Tensor<2, dim> F = dealii::unit_symmetric_tensor<dim>();
       for (unsigned int k = 0; k < n; ++k)
         for (unsigned int i = 0; i < dim; ++i)
@@ -818,7 +867,26 @@ double LsmfmSolver<dim>::evaluate(const std::vector<double>& U, bool assemble,
 
 template <int dim>
 typename LsmfmSolver<dim>::StepResult LsmfmSolver<dim>::solve_step() {
-  ++step_;
+  const StepResult result = solve_trial();
+  accept_step();
+  return result;
+}
+
+template <int dim>
+void LsmfmSolver<dim>::accept_step() {
+  if (!open_step_)
+    throw std::logic_error("LsmfmSolver::accept_step without solve_trial");
+  commit();
+  open_step_ = false;
+}
+
+template <int dim>
+typename LsmfmSolver<dim>::StepResult LsmfmSolver<dim>::solve_trial() {
+  // A second trial of the same load step starts from the first one's solution.
+  const bool retry = open_step_;
+  if (!retry)
+    ++step_;
+  open_step_ = true;
   if (!system_->analysed)
     build_pattern();
   StepResult result;
@@ -826,11 +894,11 @@ typename LsmfmSolver<dim>::StepResult LsmfmSolver<dim>::solve_step() {
   plastic_set_ = flowed_;
   // The scale of the step: the gradient of I at the last converged state under the new
   // boundary values.
-  evaluate(U_, true, nullptr);
+  evaluate(U_n_, true, nullptr);
   const double g0 = system_->F.norm();
   // Predictor: the last increment again, when that lowers I: in steady plastic flow it
   // starts Newton close to the solution.
-  if (!last_increment_.empty()) {
+  if (!retry && !last_increment_.empty()) {
     std::vector<double> trial(n_unknowns_);
     const double I_n = evaluate(U_, false, nullptr);
     for (unsigned int i = 0; i < n_unknowns_; ++i)
@@ -922,7 +990,6 @@ typename LsmfmSolver<dim>::StepResult LsmfmSolver<dim>::solve_step() {
     }
   }
   result.iterations = total;
-  commit();
   return result;
 }
 
@@ -1108,7 +1175,8 @@ void LsmfmSolver<dim>::commit() {
     }
     if (finite) {
       const Tensor3 Fn_inv = dealii::invert(st.F_n);
-      const Tensor3 G = incremental_gradient(point_sites_[q], U_, Fn_inv);
+      const Tensor3 G =
+          incremental_gradient(point_sites_[q], U_, Fn_inv, axisymmetric_ ? radius_n(q) : 1.0);
       st.F_n = (dealii::unit_symmetric_tensor<3>() + G) * st.F_n;
       st.sigma_n = sigma;
     }
@@ -1144,6 +1212,22 @@ dealii::Tensor<2, 3> LsmfmSolver<dim>::point_deformation_gradient(unsigned int q
     for (unsigned int i = 0; i < dim; ++i)
       for (unsigned int j = 0; j < dim; ++j)
         F[i][j] += U_[s.nodes[k] * block_ + i] * s.gradient[k][j];
+  if (axisymmetric_)
+    for (unsigned int k = 0; k < s.nodes.size(); ++k)
+      F[2][2] += s.value[k] * U_[s.nodes[k] * block_] / points_[q][0];
+  return F;
+}
+
+template <int dim>
+dealii::Tensor<2, dim> LsmfmSolver<dim>::deformation_gradient(const dealii::Point<dim>& X) const {
+  typename MlsApproximation<dim>::Values v;
+  dealii::Tensor<2, dim> F = dealii::unit_symmetric_tensor<dim>();
+  if (!mls_.evaluate(X, v))
+    return F * std::numeric_limits<double>::quiet_NaN();
+  for (unsigned int k = 0; k < v.nodes.size(); ++k)
+    for (unsigned int i = 0; i < dim; ++i)
+      for (unsigned int j = 0; j < dim; ++j)
+        F[i][j] += v.gradient[k][j] * U_[v.nodes[k] * block_ + i];
   return F;
 }
 

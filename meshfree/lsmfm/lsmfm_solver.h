@@ -37,6 +37,17 @@
 // with fixed directions: d·u(x_A) = ū (d a unit vector) and d·(σ n)(x_A) = t̄ with n the
 // outward normal, carried by the deformation (n ∝ F_n⁻ᵀN) in finite strain. The curvature
 // terms of eqs. (74–83), which move the directions with the boundary, are not needed there.
+// A traction condition may instead hold its normal fixed in space (a flat rigid tool's
+// contact face: the friction traction on a platen).
+//
+// Axisymmetric (2-D, LSMFM/plane model = axisymmetric, as Kwon & Youn's ring compression,
+// section 6.3): x = (r, z), the hoop direction θ is the third one. σ_θθ is an unknown like
+// plane strain's σ_zz; the hoop strain is u_r/r (small strain) and the incremental hoop
+// stretch f_θθ = r_{n+1}/r_n (finite strain); the equilibrium residual gains the hoop terms
+// of div σ in cylindrical coordinates, (σ_rr − σ_θθ)/r and σ_rz/r, at the current radius;
+// the functional is integrated over the ring volume (weights × 2πr). Every integration point
+// must lie at r > 0: a body touching the axis (a solid cylinder) is refused, its 1/r terms
+// are singular there.
 
 #include "fem/materials/isotropic_hardening.h"
 #include "meshfree/lsmfm/lsmfm_parameters.h"
@@ -76,6 +87,8 @@ class LsmfmSolver {
     unsigned int node;
     dealii::Tensor<1, dim> normal, direction;
     double value;
+    // The normal is the current (spatial) one as given, not carried by the deformation.
+    bool spatial_normal = false;
   };
 
   // Voigt order of the stress and the engineering strain: 11, 22, 33, 12, 23, 13.
@@ -108,6 +121,11 @@ class LsmfmSolver {
   // One load step: Newton to convergence, then the plastic state is committed.
   // NumericalFailure (with the point and a hint) if Newton fails or a value is not finite.
   StepResult solve_step();
+  // The same in two parts, for conditions that depend on the solution (contact and friction):
+  // solve_trial() solves the load step and leaves it open; called again (after new
+  // set_conditions) it solves the same step from the last trial; accept_step() commits it.
+  StepResult solve_trial();
+  void accept_step();
 
   // Results.
   unsigned int n_nodes() const { return mls_.nodes().size(); }
@@ -117,6 +135,9 @@ class LsmfmSolver {
   // Total displacement u^h(X) and stress σ^h(X) [Pa] at a reference point (MLS evaluation).
   dealii::Tensor<1, dim> displacement(const dealii::Point<dim>& X) const;
   Voigt stress(const dealii::Point<dim>& X) const;
+  // Total deformation gradient I + ∇u^h at a reference point (in-plane part in 2-D).
+  dealii::Tensor<2, dim> deformation_gradient(const dealii::Point<dim>& X) const;
+  bool axisymmetric() const { return axisymmetric_; }
   // At integration point q: reference position, weight, Cauchy stress [Pa], effective plastic
   // strain q, current deformation gradient determinant.
   const dealii::Point<dim>& point(unsigned int q) const { return points_[q]; }
@@ -171,7 +192,9 @@ class LsmfmSolver {
   std::vector<double> last_increment_; // U_n − U_{n−1}: the predictor of the next step
   std::unique_ptr<LinearSystem> system_;
   unsigned int step_ = 0;
-  bool second_order_ = true; // assemble the Newton Hessian (else Gauss–Newton)
+  bool open_step_ = false;    // solve_trial() ran, accept_step() not yet
+  bool axisymmetric_ = false; // 2-D (r, z) with the hoop direction third
+  bool second_order_ = true;  // assemble the Newton Hessian (else Gauss–Newton)
   bool return_mapping_ = false;
   bool jaumann_log_ = false; // finite strain: Jaumann-type update with log strain increments    //
                              // flow-rule residual in the return-mapping form
@@ -196,8 +219,12 @@ class LsmfmSolver {
   ReturnMapped return_map(const Voigt& trial_strain, double q, int branch) const;
   // Newton on I with the plastic set fixed; result: iterations, I, gradient (over g0).
   void newton(StepResult& result, double g0);
+  // G = ∂ũ/∂x^n at a site; axisymmetric: G_θθ = ũ_r / r_n with r_n the radius at t_n.
   dealii::Tensor<2, 3> incremental_gradient(const Site& s, const std::vector<double>& U,
-                                            const dealii::Tensor<2, 3>& F_n_inverse) const;
+                                            const dealii::Tensor<2, 3>& F_n_inverse,
+                                            double r_n) const;
+  // The radius of integration point q at t_n (axisymmetric) [m].
+  double radius_n(unsigned int q) const;
 };
 
 } // namespace spinesim::meshfree
