@@ -87,8 +87,9 @@ struct LsmfmRunParameters {
                       "With the FEM comparison, draw plastic_zone.png (gnuplot): the plastic "
                       "points of both solutions side by side [-].");
     prm.declare_entry("Reaction boundary id", "-1", Integer(-1),
-                      "Boundary id whose load is reported: reaction_force_norm = |∫ σ^h n dA| "
-                      "over its faces (Gauss rule, the LSMFM's own stress field), per step in "
+                      "Boundary id whose load is reported: reaction_force_norm = |∫ σ^h n da| "
+                      "over its faces (Gauss rule, the LSMFM's own stress field; the current "
+                      "area in finite strain, by Nanson's formula), per step in "
                       "history.csv, and with the FEM comparison fem_reaction_force_norm; "
                       "-1 = none [N, per unit thickness in 2-D].");
     StretchReference::declare(prm);
@@ -356,10 +357,11 @@ class LsmfmScenario : public Scenario {
   std::vector<double> spacing_;
   std::vector<BoundaryNode<dim>> boundary_;
 
-  // ∫ σ^h n dA over the faces of Reaction boundary id: the force the boundary takes, from the
+  // ∫ σ^h n da over the faces of Reaction boundary id: the force the boundary takes, from the
   // LSMFM's stress unknowns (MLS-evaluated at 3 Gauss points per face direction; the stress
-  // field is linear within a support, so the rule is not the limit). Reference
-  // configuration: the plate of Table 2 is small strain.
+  // field is linear within a support, so the rule is not the limit). In finite strain the
+  // current area element by Nanson's formula, n da = J F⁻ᵀ N dA (F of u^h; plane strain:
+  // F_zz = 1).
   dealii::Tensor<1, dim> boundary_load(const dealii::Triangulation<dim>& tria,
                                        const dealii::Mapping<dim>& mapping,
                                        const meshfree::LsmfmSolver<dim>& solver) const {
@@ -380,7 +382,11 @@ class LsmfmScenario : public Scenario {
         fv.reinit(cell, f);
         for (unsigned int q = 0; q < quadrature.size(); ++q) {
           const auto sigma = solver.stress(fv.quadrature_point(q));
-          const auto n = fv.normal_vector(q);
+          auto n = fv.normal_vector(q);
+          if (lsmfm_.finite_strain()) {
+            const auto F = solver.deformation_gradient(fv.quadrature_point(q));
+            n = dealii::determinant(F) * (dealii::transpose(dealii::invert(F)) * n);
+          }
           for (unsigned int i = 0; i < dim; ++i)
             for (unsigned int j = 0; j < dim; ++j)
               force[i] += sigma[voigt[i][j]] * n[j] * fv.JxW(q);

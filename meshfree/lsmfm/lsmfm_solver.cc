@@ -765,6 +765,45 @@ double LsmfmSolver<dim>::evaluate(const std::vector<double>& U, bool assemble,
           J(nr + (v == 3 ? 1 : 0), c0 + dim + b) += ell_ * s.value[k] * hoop_sign(v) / r_now;
       }
     }
+    // Finite strain: div σ is taken in the configuration of the iterate, so its rows depend on
+    // the displacements too. With ∇ψ_k = f⁻ᵀ g_k, ∂(∇ψ_k)/∂u_m,a = −(∇ψ_k)_a ∇ψ_m, so
+    // ∂(div σ)_i/∂u_m,a = −Σ_j A_ija (∇ψ_m)_j with A_ija = Σ_k S_k,ij (∇ψ_k)_a (S_k node k's
+    // stress coefficients); the hoop terms h/r at r = r_n + ũ_r add −h ψ_m / r². Without these
+    // −Jᵀr is not the gradient of I where the residuals do not vanish: the iteration then
+    // stops at a point that is not I's minimiser, and its direction need not descend along I,
+    // which the line search measures. (On the ring compression the converged figures moved by
+    // 1e-3 relative; the iteration counts stayed within 20 %.)
+    if (finite) {
+      double A[dim][dim][dim] = {};
+      double hoop[2] = {0, 0};
+      for (unsigned int k = 0; k < n; ++k) {
+        const unsigned int base = s.nodes[k] * block_ + dim;
+        for (unsigned int b = 0; b < nr; ++b) {
+          const unsigned int v = active_[b];
+          const unsigned int i = voigt_i[v], j = voigt_j[v];
+          const double c = U[base + b];
+          if (i < dim && j < dim)
+            for (unsigned int a = 0; a < dim; ++a) {
+              A[i][j][a] += c * gc[k][a];
+              if (i != j)
+                A[j][i][a] += c * gc[k][a];
+            }
+          if (axisymmetric_)
+            hoop[v == 3 ? 1 : 0] += c * s.value[k] * hoop_sign(v);
+        }
+      }
+      for (unsigned int m = 0; m < n; ++m)
+        for (unsigned int i = 0; i < dim; ++i) {
+          for (unsigned int a = 0; a < dim; ++a) {
+            double d = 0;
+            for (unsigned int j = 0; j < dim; ++j)
+              d += A[i][j][a] * gc[m][j];
+            J(nr + i, m * block_ + a) -= ell_ * d;
+          }
+          if (axisymmetric_)
+            J(nr + i, m * block_) -= ell_ * hoop[i] * s.value[m] / (r_now * r_now);
+        }
+    }
     // Full Newton: the curvature of the flow direction. With g = γn, γ = c φ̃, c = 3/(2K̄),
     // H = ∂n/∂σ = (P − nnᵀ)/f and k = √(2/3)κ(q_n):
     //   Σ_a r_a ∂²g_a/∂σ² = c (k/f) [n (Hr)ᵀ + (Hr) nᵀ + (r·n) H],

@@ -29,7 +29,8 @@
 //  * finite strain: R_u is linearised exactly in the nodal increments through
 //    f = I + ∂ũ/∂x^n, instead of the configuration freeze of eq. (57) and the operators
 //    B_e1..B_e4 of eqs. (58–65); both give the same converged state, the exact one converges
-//    faster. div σ is taken in the configuration of the current iterate, as eq. (57) does;
+//    faster. div σ is taken in the configuration of the current iterate, as eq. (57) does,
+//    and differentiated there too (the paper freezes it), so Newton's gradient is I's;
 //  * stress in 2-D: plane strain keeps σ_zz as an unknown (ε_zz = 0 is a row of R_u);
 //    plane stress drops σ_zz and the zz row of R_u (ε_zz is then free, so that row holds
 //    identically).

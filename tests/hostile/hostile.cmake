@@ -215,6 +215,17 @@ spinesim_add_hostile_test(lsmfm_perfect_plasticity PREPARE run:${_quick}
        --output @KEEP@ --force --set "Material/Hardening modulus=0"
        --set "LSMFM/Flow rule residual=complementary"
   MATCH "Material/Hardening modulus.*return_mapping")
+spinesim_add_hostile_test(ring_compression_friction_not_a_number
+  ARGS check ${PROJECT_SOURCE_DIR}/applications/validation/lsmfm_ring_compression.prm
+  --set "Ring compression/Friction=0, 0.1x"
+  MATCH "Ring compression/Friction.*0.1x.*Coulomb coefficients >= 0 or `stick`")
+spinesim_add_hostile_test(ring_compression_in_3d
+  ARGS check ${PROJECT_SOURCE_DIR}/applications/validation/lsmfm_ring_compression.prm
+  --set "Dimension=3" MATCH "Dimension.*2: the ring compression is axisymmetric")
+spinesim_add_hostile_test(ring_compression_hole_larger_than_ring
+  ARGS check ${PROJECT_SOURCE_DIR}/applications/validation/lsmfm_ring_compression.prm
+  --set "Ring compression/Inner diameter=0.2"
+  MATCH "Ring compression/Inner diameter.*0 < inner diameter < outer diameter")
 spinesim_add_hostile_test(particle_region_radial_range_reversed
   ARGS check ${PROJECT_SOURCE_DIR}/applications/validation/thick_cylinder_nosb.prm
   --set "Particles/Region 1/Radial range=3, 2" MATCH "Particles/Region 1/Radial range.*0 <= r1 < r2")

@@ -1,0 +1,695 @@
+// The `lsmfm_ring_compression` scenario: the ring compression test of Kwon & Youn (2005,
+// section 6.3; the forming example of the least-squares meshfree method), the friction
+// calibration test of Male & Cockcroft (1964): a flat ring squeezed between rigid platens.
+// With low friction the metal flows outward and the hole grows; with high friction the flow
+// divides at a neutral radius, the hole shrinks and the sides barrel.
+//
+// Model. Axisymmetric LSMFM (meshfree/lsmfm/lsmfm_solver.h, plane model axisymmetric), finite
+// strain, a quarter of the ring's section: R_i <= r <= R_o, 0 <= z <= H/2, the mid-plane z = 0
+// a symmetry plane (u_z = 0, no shear). Nodes on a regular grid. The top platen moves down by
+// δ(t) = (Height reduction) H/2 t in Steps load steps.
+//
+// Contact (Kwon & Youn eqs. 95–99 in the penalty collocation of the LSMFM's boundary
+// conditions). Every node of the top and side faces is a contact candidate. A node in contact
+// holds u_z(x_A) = z_p − Z_A; tangentially it
+//   * sticks: u_r(x_A) held where it touched (Friction = stick, or Coulomb below the limit);
+//   * slips: the friction traction e_r·(σ e_z) = −μ p sign(slip) with p = −e_z·σ e_z its
+//     contact pressure (the platen's normal is fixed in space, so the traction condition
+//     takes it as the spatial normal), μ = 0 leaving it free.
+// The contact state is found per load step by repeated trial solves of the same step
+// (LsmfmSolver::solve_trial): a free node that crossed the platen comes into contact, a node
+// whose contact pressure is tensile leaves, a stuck node whose friction traction exceeds μ p
+// slips, a slipping node whose slip turned against its friction sticks, and the slip
+// tractions are updated from the pressures until they settle (Contact tolerance). A step whose
+// state does not settle in Contact rounds trials is a NumericalFailure.
+//
+// Figures. Per friction case (label L: mu0, mu0_05, ..., stick): the inner and outer diameter
+// change at the mid-plane [%] (the calibration measure: the mid-plane is where the hole's wall
+// bulges furthest in or out), the platen load [kN] (the mid-plane section's ∫ −σ_zz 2πr dr,
+// which equilibrium makes the platen force), and the contact rounds. Frictionless, the
+// compression is homogeneous and has a closed form (frictionless_*_error_relative).
+// ring_compression.csv and ring_compression.png hold the load–stroke curves and the
+// calibration curves (inner diameter change against height reduction).
+
+#include "applications/framework/parse_section.h"
+#include "applications/framework/run_context.h"
+#include "applications/framework/scenario.h"
+#include "applications/studies/study_plot.h"
+#include "base/exceptions.h"
+#include "fem/materials/law_parameters.h"
+#include "meshfree/lsmfm/lsmfm_solver.h"
+#include "meshfree/lsmfm/support_integration.h"
+#include "meshfree/particle_output.h"
+#include "meshfree/particle_set.h"
+
+#include <deal.II/base/quadrature_lib.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <iomanip>
+#include <limits>
+#include <sstream>
+
+namespace spinesim::applications {
+
+using namespace framework;
+
+// A named namespace (unity builds put several scenario files into one translation unit).
+namespace lsmfm_ring {
+
+constexpr double stick = std::numeric_limits<double>::infinity();
+
+struct RingParameters {
+  double outer_diameter = 0.12, inner_diameter = 0.06, height = 0.04; // [m]
+  double height_reduction = 0.5;                                      // [-]
+  unsigned int steps = 40;
+  double node_spacing = 2.5e-3; // [m]
+  std::vector<double> friction; // Coulomb μ per case, `stick` = infinity
+  std::vector<std::string> labels;
+  unsigned int contact_rounds = 20;
+  double contact_tolerance = 5e-3; // [-] of the yield stress
+  double slip_reversal = 0.05;     // [-] of the platen's travel in a step
+
+  static void declare(dealii::ParameterHandler& prm) {
+    using namespace dealii::Patterns;
+    prm.declare_entry("Outer diameter", "0.12", Double(0.0), "Outer diameter of the ring [m].");
+    prm.declare_entry("Inner diameter", "0.06", Double(0.0), "Inner diameter of the ring [m].");
+    prm.declare_entry("Height", "0.04", Double(0.0), "Height of the ring [m].");
+    prm.declare_entry("Height reduction", "0.5", Double(0.0, 0.8),
+                      "Final reduction of the height by the platens, over the height [-].");
+    prm.declare_entry("Steps", "40", Integer(1), "Load steps to the final reduction [-].");
+    prm.declare_entry("Node spacing", "2.5e-3", Double(0.0),
+                      "Spacing of the regular node grid over the quarter section; the counts "
+                      "along r and z are rounded to fit the section [m].");
+    prm.declare_entry("Friction", "0, 0.05, 0.2, stick", Anything(),
+                      "The friction cases, one run each: Coulomb coefficients >= 0 or `stick` "
+                      "(no slip where the ring touches a platen), comma-separated [-].");
+    prm.declare_entry("Contact rounds", "20", Integer(1),
+                      "Trial solves of a load step allowed to settle the contact and friction "
+                      "state [-].");
+    prm.declare_entry("Contact tolerance", "5e-3", Double(0.0, 1.0),
+                      "The slip tractions are settled when no contact pressure changed by more "
+                      "than this fraction of the yield stress between trials. The default is "
+                      "LSMFM/Yield tolerance's: a trial's plastic set is consistent to that "
+                      "fraction, and the set's changes move the pressures by about as much "
+                      "(measured: 1e-3 left the 0.2 friction case cycling at 0.9-1.3 MPa in "
+                      "its 33rd step) [-].");
+    prm.declare_entry("Slip reversal tolerance", "0.05", Double(0.0, 1.0),
+                      "A slipping node whose slip in the step runs with its friction traction "
+                      "sticks only once that slip exceeds this fraction of the platen's travel in "
+                      "the step: near the neutral radius the slip is about zero and its sign is "
+                      "noise, which would make the node switch between stick and slip every "
+                      "trial (the regularisation of Coulomb's law by a small reversible slip) "
+                      "[-].");
+  }
+
+  void parse(const dealii::ParameterHandler& prm) {
+    outer_diameter = prm.get_double("Outer diameter");
+    inner_diameter = prm.get_double("Inner diameter");
+    height = prm.get_double("Height");
+    height_reduction = prm.get_double("Height reduction");
+    steps = prm.get_integer("Steps");
+    node_spacing = prm.get_double("Node spacing");
+    contact_rounds = prm.get_integer("Contact rounds");
+    contact_tolerance = prm.get_double("Contact tolerance");
+    slip_reversal = prm.get_double("Slip reversal tolerance");
+    const auto where = "Ring compression/Friction";
+    friction.clear();
+    labels.clear();
+    std::stringstream list(prm.get("Friction"));
+    for (std::string item; std::getline(list, item, ',');) {
+      item.erase(0, item.find_first_not_of(" \t"));
+      item.erase(item.find_last_not_of(" \t") + 1);
+      if (item == "stick") {
+        friction.push_back(stick);
+        labels.push_back("stick");
+        continue;
+      }
+      std::size_t used = 0;
+      double mu = std::numeric_limits<double>::quiet_NaN();
+      try {
+        mu = std::stod(item, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (used != item.size() || item.empty() || !(mu >= 0) || !std::isfinite(mu))
+        throw InvalidInput(where, "'" + item + "'",
+                           "comma-separated Coulomb coefficients >= 0 or `stick`");
+      friction.push_back(mu);
+      std::string label = "mu" + item;
+      std::replace(label.begin(), label.end(), '.', '_');
+      labels.push_back(label);
+    }
+    if (friction.empty())
+      throw InvalidInput(where, "is empty", "at least one friction case");
+    if (!(inner_diameter > 0 && outer_diameter > inner_diameter))
+      throw InvalidInput("Ring compression/Inner diameter",
+                         "= " + std::to_string(inner_diameter) +
+                             " m with Outer diameter = " + std::to_string(outer_diameter) + " m",
+                         "0 < inner diameter < outer diameter [m] (the axisymmetric model "
+                         "needs a hole: its hoop terms are singular on the axis)");
+    if (!(height > 0))
+      throw InvalidInput("Ring compression/Height", "must be positive", "a height > 0 [m]");
+    if (!(node_spacing > 0) || node_spacing > 0.25 * (outer_diameter - inner_diameter) ||
+        node_spacing > 0.25 * height)
+      throw InvalidInput("Ring compression/Node spacing",
+                         "= " + std::to_string(node_spacing) + " m",
+                         "> 0 and at most a quarter of the wall thickness and of the height "
+                         "(at least 5 nodes across the section each way) [m]");
+    if (!(height_reduction > 0))
+      throw InvalidInput("Ring compression/Height reduction", "must be positive",
+                         "0 < reduction <= 0.8 [-]");
+  }
+};
+
+// One node of the top or side faces and its contact state.
+struct ContactNode {
+  unsigned int node;
+  bool on_top = false;    // the face z = H/2 (else an inner or outer side)
+  double side_normal = 0; // ±1: the reference normal ±e_r of a side node, else 0
+  // A top corner: its free side asks σ_rz = 0 there (Cauchy's lemma on the side face), so with
+  // Coulomb friction it takes no friction traction and slips; with sticking friction it sticks.
+  bool corner = false;
+  enum class State { free, stick, slip } state = State::free;
+  double r_stick = 0;       // current radius where it sticks [m]
+  double slip_traction = 0; // e_r·(σ e_z) when slipping [Pa]
+  double pressure = 0;      // last contact pressure p = −σ_zz [Pa]
+  // Stick/slip switches in the current load step. A node that switched twice keeps its state
+  // for the rest of the step (it chatters: each state's solution asks for the other one, a
+  // node whose slip changes sign within the step); such nodes are counted and reported.
+  unsigned int switches = 0;
+  bool held = false;
+};
+
+class RingCompression : public Scenario {
+ public:
+  explicit RingCompression(const ScenarioFactoryArgs& args) {
+    if (args.dim != 2)
+      throw InvalidInput("Dimension", std::to_string(args.dim),
+                         "2: the ring compression is axisymmetric (x = r, y = z)");
+    parse_section(args.prm, "Material", law_);
+    parse_section(args.prm, "LSMFM", lsmfm_);
+    parse_section(args.prm, "Ring compression", ring_);
+    if (law_.model != "j2_finite_strain" && law_.model != "j2_plasticity")
+      throw InvalidInput("Material/Model", "'" + law_.model + "' for the ring compression",
+                         "j2_finite_strain (or j2_plasticity: the LSMFM has its own J2 flow "
+                         "rule with linear hardening, Kwon & Youn eqs. 12-14)");
+    if (law_.saturation_stress > 0)
+      throw InvalidInput("Material/Saturation stress", "> 0 with the LSMFM",
+                         "0: the LSMFM's hardening is linear (Kwon & Youn eq. 12c)");
+    lsmfm_.plane_model = "axisymmetric";
+    lsmfm_.kinematics = "finite_strain"; // a 50 % reduction
+    lsmfm_.validate();
+  }
+
+  bool check_by_building() const override { return true; }
+
+  void run(RunContext& ctx) override {
+    if (ctx.n_ranks() != 1)
+      throw InvalidInput("MPI ranks", std::to_string(ctx.n_ranks()),
+                         "1: the LSMFM solver runs on one rank (its matrix is a serial "
+                         "sparse Cholesky factorisation)");
+    make_nodes();
+    ctx.log() << "  ring " << ring_.outer_diameter * 1e3 << " x " << ring_.inner_diameter * 1e3
+              << " x " << ring_.height * 1e3 << " mm, quarter section " << n_r_ << " x " << n_z_
+              << " node spacings (" << nodes_.size() << " nodes), " << ring_.steps << " steps to "
+              << ring_.height_reduction * 100 << " % height reduction\n"
+              << "  material: " << law_.describe() << "\n";
+    // The cost table's work: unknowns × load steps over the cases (LSMFM unknowns: u_r, u_z
+    // and four stress components per node).
+    const double unknowns = 6.0 * nodes_.size();
+    ctx.set_cost({"lsmfm_quasi_static", unknowns * ring_.steps * ring_.friction.size(), unknowns});
+    ctx.progress().start("ring compression", ring_.steps * ring_.friction.size(), 1.0);
+    std::ostringstream csv;
+    csv << "friction,height_reduction_percent,stroke_mm,load_kN,inner_diameter_change_percent,"
+           "outer_diameter_change_percent,contact_nodes,slipping_nodes,chattering_nodes,"
+           "contact_rounds\n";
+    Summary& s = ctx.summary();
+    std::vector<double> id_change;
+    unsigned int total_steps = 0;
+    for (unsigned int c = 0; c < ring_.friction.size(); ++c) {
+      const CaseResult r = run_case(ctx, c, csv, total_steps);
+      const std::string& L = ring_.labels[c];
+      s.set_figure("inner_diameter_change_percent_" + L, r.inner_change, "%");
+      s.set_figure("outer_diameter_change_percent_" + L, r.outer_change, "%");
+      s.set_figure("final_load_kN_" + L, r.load / 1e3, "kN");
+      // The same force through the top face: the two sections carry it equally where div σ
+      // = 0 holds; the LSMFM holds it in the least-squares sense only.
+      s.set_figure("load_sections_mismatch_relative_" + L,
+                   std::abs(r.top_load - r.load) / std::abs(r.load), "-");
+      s.set_figure("max_contact_rounds_" + L, r.max_rounds, "-");
+      // Nodes held in their stick or slip state after chattering, at most in a step.
+      s.set_figure("max_chattering_nodes_" + L, r.max_held, "-");
+      s.set_figure("newton_iterations_" + L, r.newton, "iterations");
+      s.set_figure("wall_time_s_" + L, r.seconds, "s");
+      id_change.push_back(r.inner_change);
+      if (ring_.friction[c] == 0) {
+        const auto h = homogeneous();
+        s.set_figure("frictionless_inner_diameter_error_relative",
+                     std::abs(r.inner_change - h.inner_change) / std::abs(h.inner_change), "-");
+        s.set_figure("frictionless_load_error_relative", std::abs(r.load - h.load) / h.load, "-");
+        s.set_figure("homogeneous_inner_diameter_change_percent", h.inner_change, "%");
+        s.set_figure("homogeneous_load_kN", h.load / 1e3, "kN");
+      }
+    }
+    // The calibration curve's order: with the cases listed by rising friction the hole's
+    // change falls from case to case; the smallest fall (negative where it rose).
+    if (id_change.size() > 1) {
+      bool rising = true;
+      for (unsigned int c = 1; c < ring_.friction.size(); ++c)
+        rising = rising && ring_.friction[c] > ring_.friction[c - 1];
+      if (rising) {
+        double smallest = std::numeric_limits<double>::infinity();
+        for (unsigned int c = 1; c < id_change.size(); ++c)
+          smallest = std::min(smallest, id_change[c - 1] - id_change[c]);
+        s.set_figure("inner_diameter_smallest_fall_with_friction_percent", smallest, "%");
+      }
+    }
+    s.set_figure("nodes", nodes_.size(), "-");
+    s.set_figure("node_spacing_m", std::max(dr_, dz_), "m");
+    ctx.progress().finish();
+    ctx.output().write_atomic("ring_compression.csv", csv.str());
+    s.set_figure("ring_compression_png_valid", plot(ctx), "-");
+  }
+
+ private:
+  materials::LawParameters law_;
+  meshfree::LsmfmParameters lsmfm_;
+  RingParameters ring_;
+  std::vector<dealii::Point<2>> nodes_;
+  std::vector<double> spacing_;
+  unsigned int n_r_ = 0, n_z_ = 0;
+  double r_i_ = 0, r_o_ = 0, half_ = 0, dr_ = 0, dz_ = 0;
+
+  struct CaseResult {
+    double inner_change = 0, outer_change = 0, load = 0, seconds = 0; // [%, %, N, s]
+    double top_load = 0; // the same integral over the top face [N]
+    unsigned int max_rounds = 0, newton = 0, max_held = 0;
+  };
+  struct Homogeneous {
+    double inner_change = 0, load = 0; // [%, N]
+  };
+
+  unsigned int index(unsigned int i, unsigned int j) const { return j * (n_r_ + 1) + i; }
+
+  void make_nodes() {
+    r_i_ = 0.5 * ring_.inner_diameter;
+    r_o_ = 0.5 * ring_.outer_diameter;
+    half_ = 0.5 * ring_.height;
+    n_r_ = std::max(1u, unsigned(std::lround((r_o_ - r_i_) / ring_.node_spacing)));
+    n_z_ = std::max(1u, unsigned(std::lround(half_ / ring_.node_spacing)));
+    dr_ = (r_o_ - r_i_) / n_r_;
+    dz_ = half_ / n_z_;
+    for (unsigned int j = 0; j <= n_z_; ++j)
+      for (unsigned int i = 0; i <= n_r_; ++i) {
+        nodes_.emplace_back(r_i_ + i * dr_, j * dz_);
+        spacing_.push_back(std::max(dr_, dz_));
+      }
+  }
+
+  // Uniform compression, no friction (a closed form): uniaxial stress σ_zz = −σ_f with the
+  // logarithmic strain ε_z = ln(1 − reduction). J2 with linear hardening and the additive
+  // split of the log strain (the Jaumann/log update is exact for a rotation-free path):
+  // ε̄_p = |ε_z| − σ_f/E, σ_f = σ_Y + K̄ ε̄_p, so σ_f = (σ_Y + K̄|ε_z|)/(1 + K̄/E); the radial
+  // strain ε_r = ν σ_f/E + ε̄_p/2 scales every radius by exp(ε_r), the load is σ_f π (r_o² − r_i²).
+  Homogeneous homogeneous() const {
+    const double E = law_.youngs_modulus, nu = law_.poisson_ratio;
+    const double H = law_.hardening_modulus, sy = law_.yield_stress;
+    const double ez = std::abs(std::log(1.0 - ring_.height_reduction));
+    const double sf = (sy + H * ez) / (1.0 + H / E);
+    const double ep = ez - sf / E;
+    const double er = nu * sf / E + 0.5 * ep;
+    const double stretch = std::exp(er);
+    Homogeneous h;
+    h.inner_change = 100.0 * (stretch - 1.0);
+    h.load = sf * dealii::numbers::PI * (r_o_ * r_o_ - r_i_ * r_i_) * stretch * stretch;
+    return h;
+  }
+
+  meshfree::IntegrationRule<2> integration_rule() const {
+    meshfree::IntegrationRule<2> rule;
+    if (lsmfm_.integration == "background_grid") {
+      const dealii::QGauss<2> quadrature(lsmfm_.grid_points);
+      for (unsigned int j = 0; j < n_z_; ++j)
+        for (unsigned int i = 0; i < n_r_; ++i)
+          for (unsigned int q = 0; q < quadrature.size(); ++q) {
+            const auto& p = quadrature.point(q);
+            rule.points.emplace_back(r_i_ + (i + p[0]) * dr_, (j + p[1]) * dz_);
+            rule.weights.push_back(quadrature.weight(q) * dr_ * dz_);
+          }
+      return rule;
+    }
+    const double eps = 1e-12 * (r_o_ + half_);
+    return meshfree::support_integration<2>(
+        nodes_, spacing_, lsmfm_.support_ratio, lsmfm_.integration_ratio,
+        [&](const dealii::Point<2>& x) {
+          return x[0] >= r_i_ - eps && x[0] <= r_o_ + eps && x[1] >= -eps && x[1] <= half_ + eps;
+        },
+        (r_o_ - r_i_) * half_);
+  }
+
+  CaseResult run_case(RunContext& ctx, unsigned int c, std::ostringstream& csv,
+                      unsigned int& total_steps) {
+    const auto start = std::chrono::steady_clock::now();
+    const double mu = ring_.friction[c];
+    const std::string& label = ring_.labels[c];
+    typename meshfree::LsmfmSolver<2>::Material mat;
+    mat.youngs_modulus = law_.youngs_modulus;
+    mat.poisson_ratio = law_.poisson_ratio;
+    mat.yield_stress = law_.yield_stress;
+    mat.hardening_modulus = law_.hardening_modulus;
+    const auto rule = integration_rule();
+    meshfree::LsmfmSolver<2> solver(lsmfm_, mat, nodes_, spacing_, rule.points, rule.weights);
+    if (c == 0)
+      ctx.log() << "  LSMFM: " << nodes_.size() << " nodes, " << rule.points.size()
+                << " integration points (" << lsmfm_.integration << "), " << solver.n_unknowns()
+                << " unknowns\n";
+
+    std::vector<ContactNode> contact;
+    for (unsigned int j = 0; j <= n_z_; ++j)
+      for (unsigned int i = 0; i <= n_r_; ++i) {
+        if (j < n_z_ && i != 0 && i != n_r_)
+          continue;
+        ContactNode n;
+        n.node = index(i, j);
+        n.on_top = j == n_z_;
+        n.side_normal = i == 0 ? -1.0 : i == n_r_ ? 1.0 : 0.0;
+        n.corner = n.on_top && n.side_normal != 0;
+        if (n.on_top) { // touching the platen at the start
+          n.state = std::isfinite(mu) && (mu == 0 || n.corner) ? ContactNode::State::slip
+                                                               : ContactNode::State::stick;
+          n.r_stick = nodes_[n.node][0];
+        }
+        contact.push_back(n);
+      }
+
+    CaseResult result;
+    const double sy = law_.yield_stress;
+    for (unsigned int step = 1; step <= ring_.steps; ++step) {
+      const double t = double(step) / ring_.steps;
+      const double stroke = ring_.height_reduction * half_ * t; // of the quarter [m]
+      const double z_platen = half_ - stroke;
+      std::vector<double> u_r_start(contact.size());
+      for (unsigned int k = 0; k < contact.size(); ++k) {
+        u_r_start[k] = solver.displacement(nodes_[contact[k].node])[0];
+        contact[k].switches = 0;
+        contact[k].held = false;
+      }
+      unsigned int round = 0;
+      ContactChanges last;
+      for (;; ++round) {
+        if (round == ring_.contact_rounds) {
+          std::ostringstream what;
+          what << "the contact and friction state did not settle in " << round
+               << " trial solves (the last changed " << last.states
+               << " stick/slip/contact states and moved " << last.tractions
+               << " slip tractions by up to " << last.max_pressure_change / 1e6
+               << " MPa of contact pressure; tolerance " << ring_.contact_tolerance * sy / 1e6
+               << " MPa)";
+          NumericalFailure f(what.str(), "ring compression, friction " + label,
+                             "take more load steps, or raise Ring compression/Contact rounds");
+          f.set_step(step, t);
+          throw f;
+        }
+        set_conditions(solver, contact, z_platen);
+        try {
+          result.newton += solver.solve_trial().iterations;
+        } catch (NumericalFailure& f) {
+          f.set_step(step, t);
+          throw;
+        }
+        const double travel = ring_.height_reduction * half_ / ring_.steps;
+        last = update_contact(solver, contact, u_r_start, z_platen, mu, sy, travel, round);
+        if (last.states + last.tractions == 0)
+          break;
+      }
+      solver.accept_step();
+      result.max_rounds = std::max(result.max_rounds, round + 1);
+
+      // Mid-plane section: inner and outer radius, load.
+      const double u_in = solver.displacement(dealii::Point<2>(r_i_, 0.0))[0];
+      const double u_out = solver.displacement(dealii::Point<2>(r_o_, 0.0))[0];
+      result.inner_change = 100.0 * u_in / r_i_;
+      result.outer_change = 100.0 * u_out / r_o_;
+      result.load = midplane_load(solver);
+      result.top_load = midplane_load(solver, half_);
+      unsigned int in_contact = 0, slipping = 0, held = 0;
+      for (const auto& n : contact) {
+        in_contact += n.state != ContactNode::State::free;
+        slipping += n.state == ContactNode::State::slip;
+        held += n.held;
+      }
+      result.max_held = std::max(result.max_held, held);
+      csv << label << "," << 100 * ring_.height_reduction * t << "," << 2e3 * stroke << ","
+          << std::setprecision(10) << result.load / 1e3 << "," << result.inner_change << ","
+          << result.outer_change << "," << in_contact << "," << slipping << "," << held << ","
+          << round + 1 << "\n";
+      ctx.history().add({{"case", double(c)},
+                         {"friction", std::isfinite(mu) ? mu : -1.0},
+                         {"time", t},
+                         {"height_reduction_percent", 100 * ring_.height_reduction * t},
+                         {"load_kN", result.load / 1e3},
+                         {"top_face_load_kN", result.top_load / 1e3},
+                         {"inner_diameter_change_percent", result.inner_change},
+                         {"outer_diameter_change_percent", result.outer_change},
+                         {"contact_nodes", double(in_contact)},
+                         {"slipping_nodes", double(slipping)},
+                         {"chattering_nodes", double(held)},
+                         {"contact_rounds", double(round + 1)}});
+      ctx.flush_history();
+      ++total_steps;
+      ctx.progress().update(total_steps,
+                            double(total_steps) / (ring_.steps * ring_.friction.size()));
+    }
+    ctx.log() << "  friction " << label << ": inner diameter " << std::showpos
+              << result.inner_change << " %, outer " << result.outer_change << std::noshowpos
+              << " %, load " << result.load / 1e3 << " kN, " << result.newton
+              << " Newton iterations, at most " << result.max_rounds << " contact rounds a step\n";
+    write_vtu(ctx, solver, label);
+    result.seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return result;
+  }
+
+  // The boundary conditions of a trial: symmetry on the mid-plane, free sides, the top's free
+  // part, and the contact conditions.
+  void set_conditions(meshfree::LsmfmSolver<2>& solver, const std::vector<ContactNode>& contact,
+                      double z_platen) const {
+    std::vector<typename meshfree::LsmfmSolver<2>::DisplacementCondition> uc;
+    std::vector<typename meshfree::LsmfmSolver<2>::TractionCondition> tc;
+    const dealii::Tensor<1, 2> er({1.0, 0.0}), ez({0.0, 1.0});
+    std::vector<const ContactNode*> by_node(nodes_.size(), nullptr);
+    for (const auto& n : contact)
+      by_node[n.node] = &n;
+    for (unsigned int j = 0; j <= n_z_; ++j)
+      for (unsigned int i = 0; i <= n_r_; ++i) {
+        const unsigned int A = index(i, j);
+        const auto& X = nodes_[A];
+        const ContactNode* cn = by_node[A];
+        const bool touching = cn && cn->state != ContactNode::State::free;
+        bool held_r = false, held_z = false;
+        if (j == 0) { // symmetry: u_z = 0, no shear
+          uc.push_back({A, ez, 0.0});
+          held_z = true;
+        }
+        if (touching) {
+          if (!held_z)
+            uc.push_back({A, ez, z_platen - X[1]});
+          held_z = true;
+          if (cn->state == ContactNode::State::stick) {
+            uc.push_back({A, er, cn->r_stick - X[0]});
+            held_r = true;
+          } else {
+            typename meshfree::LsmfmSolver<2>::TractionCondition f{A, ez, er, cn->slip_traction};
+            f.spatial_normal = true;
+            tc.push_back(f);
+            held_r = true; // the friction condition takes the radial traction on the platen
+          }
+        }
+        // Free faces: traction-free in the components nothing holds. A touching node drops
+        // the free condition of a face that now faces the platen (its top face, or a side
+        // folded onto the platen: the current normal within 60° of e_z).
+        const auto free_face = [&](const dealii::Tensor<1, 2>& N) {
+          if (touching) {
+            const auto F = solver.deformation_gradient(X);
+            auto n = dealii::transpose(dealii::invert(F)) * N;
+            n /= n.norm();
+            if (n * ez > 0.5)
+              return;
+          }
+          if (!held_r)
+            tc.push_back({A, N, er, 0.0});
+          if (!held_z)
+            tc.push_back({A, N, ez, 0.0});
+        };
+        if (j == 0) {
+          typename meshfree::LsmfmSolver<2>::TractionCondition f{A, -ez, er, 0.0};
+          f.spatial_normal = true; // the symmetry plane stays z = 0
+          tc.push_back(f);
+        }
+        if (i == 0)
+          free_face(-er);
+        if (i == n_r_)
+          free_face(er);
+        if (j == n_z_)
+          free_face(ez);
+      }
+    solver.set_conditions(std::move(uc), std::move(tc));
+  }
+
+  struct ContactChanges {
+    unsigned int states = 0, tractions = 0;
+    double max_pressure_change = 0; // of the moved slip tractions [Pa]
+  };
+  // Updates the contact state from the trial solution (no changes: settled).
+  ContactChanges update_contact(const meshfree::LsmfmSolver<2>& solver,
+                                std::vector<ContactNode>& contact,
+                                const std::vector<double>& u_r_start, double z_platen, double mu,
+                                double sy, double travel, unsigned int round) const {
+    ContactChanges changes;
+    const double release = 1e-2 * sy; // tensile contact pressure that separates [Pa]
+    const double gap_tolerance = 1e-6 * half_;
+    for (unsigned int k = 0; k < contact.size(); ++k) {
+      ContactNode& n = contact[k];
+      const auto& X = nodes_[n.node];
+      const auto u = solver.displacement(X);
+      const auto s = solver.stress(X);
+      const double p = -s[1];  // contact pressure −σ_zz [Pa]
+      const double t_r = s[3]; // e_r·(σ e_z) = σ_rz [Pa]
+      if (n.state == ContactNode::State::free) {
+        if (X[1] + u[1] - z_platen > gap_tolerance) { // crossed the platen
+          n.state = std::isfinite(mu) && (mu == 0 || n.corner) ? ContactNode::State::slip
+                                                               : ContactNode::State::stick;
+          n.r_stick = X[0] + u[0];
+          n.slip_traction = 0;
+          n.pressure = std::max(p, 0.0);
+          ++changes.states;
+        }
+        continue;
+      }
+      if (p < -release) { // pulled off the platen
+        n.state = ContactNode::State::free;
+        ++changes.states;
+        continue;
+      }
+      // Stick <-> slip, unless the node chatters (see ContactNode::switches).
+      const auto may_switch = [&n]() {
+        if (n.switches >= 2) {
+          n.held = true;
+          return false;
+        }
+        ++n.switches;
+        return true;
+      };
+      if (n.state == ContactNode::State::stick) {
+        if (!std::isfinite(mu))
+          continue; // sticks while pressed
+        const double limit = mu * std::max(p, 0.0);
+        if (std::abs(t_r) > limit + ring_.contact_tolerance * sy && may_switch()) {
+          n.state = ContactNode::State::slip;
+          n.slip_traction = std::copysign(limit, t_r);
+          n.pressure = p;
+          ++changes.states;
+        }
+        continue;
+      }
+      if (n.corner)
+        continue; // slips without friction traction (see ContactNode::corner)
+      // Slipping: the friction traction must oppose the slip of this step.
+      const double slip = u[0] - u_r_start[k];
+      if (mu > 0 && slip * n.slip_traction > 0 && std::abs(slip) > ring_.slip_reversal * travel &&
+          may_switch()) {
+        n.state = ContactNode::State::stick;
+        n.r_stick = X[0] + u[0];
+        ++changes.states;
+        continue;
+      }
+      if (mu > 0 && std::abs(p - n.pressure) > ring_.contact_tolerance * sy) {
+        const double direction =
+            n.slip_traction != 0 ? std::copysign(1.0, n.slip_traction) : std::copysign(1.0, t_r);
+        changes.max_pressure_change =
+            std::max(changes.max_pressure_change, std::abs(p - n.pressure));
+        // The pressure-to-traction iteration may oscillate where a neighbour chatters: from
+        // the fifth trial on, half steps (under-relaxation) make it contract.
+        n.pressure += (round < 4 ? 1.0 : 0.5) * (p - n.pressure);
+        n.slip_traction = mu * std::max(n.pressure, 0.0) * direction;
+        ++changes.tractions;
+      }
+    }
+    return changes;
+  }
+
+  // ∫ −σ_zz 2πr dr over the mid-plane z = 0 in the current configuration: the platen force of
+  // the whole ring (equilibrium of the half above the mid-plane) [N].
+  double midplane_load(const meshfree::LsmfmSolver<2>& solver, double Z = 0) const {
+    const dealii::QGauss<1> gauss(3);
+    double F = 0;
+    for (unsigned int i = 0; i < n_r_; ++i)
+      for (unsigned int q = 0; q < gauss.size(); ++q) {
+        const dealii::Point<2> X(r_i_ + (i + gauss.point(q)[0]) * dr_, Z);
+        const double r = X[0] + solver.displacement(X)[0];
+        const double drdR = solver.deformation_gradient(X)[0][0];
+        F += -solver.stress(X)[1] * 2.0 * dealii::numbers::PI * r * drdR * gauss.weight(q) * dr_;
+      }
+    return F;
+  }
+
+  // The nodes of the final state (current positions through the displacement) with stress.
+  void write_vtu(RunContext& ctx, const meshfree::LsmfmSolver<2>& solver,
+                 const std::string& label) const {
+    std::vector<double> volume(nodes_.size(), dr_ * dz_);
+    auto set = meshfree::ParticleSet<2>::from_points(nodes_, volume);
+    auto& vm = set.add_scalar_field("von_mises_Pa");
+    auto& srr = set.add_scalar_field("stress_rr_Pa");
+    auto& szz = set.add_scalar_field("stress_zz_Pa");
+    auto& stt = set.add_scalar_field("stress_hoop_Pa");
+    for (unsigned int j = 0; j < nodes_.size(); ++j) {
+      set.displacement(j) = solver.displacement(nodes_[j]);
+      const auto s = solver.stress(nodes_[j]);
+      vm[j] = meshfree::LsmfmSolver<2>::von_mises(s);
+      srr[j] = s[0];
+      szz[j] = s[1];
+      stt[j] = s[2];
+    }
+    meshfree::write_particles_vtu(
+        set, (ctx.output().path() / ("ring_nodes_" + label + ".vtu")).string());
+  }
+
+  // ring_compression.png: load against stroke and the calibration curves.
+  double plot(RunContext& ctx) const {
+    const auto dir = ctx.output().path();
+    const std::string data = (dir / "ring_compression.csv").string();
+    std::ostringstream gp;
+    gp << "set terminal pngcairo size 1400,600 noenhanced\n"
+       << "set output '" << (dir / "ring_compression.png").string() << "'\n"
+       << "set datafile separator ','\nset key top left\nset grid\n"
+       << "set multiplot layout 1,2 title 'Ring compression (LSMFM, axisymmetric), "
+       << ring_.outer_diameter * 1e3 << ':' << ring_.inner_diameter * 1e3 << ':'
+       << ring_.height * 1e3 << " mm'\n"
+       << "set xlabel 'stroke [mm]'\nset ylabel 'platen load [kN]'\n"
+       << "plot ";
+    for (unsigned int c = 0; c < ring_.labels.size(); ++c)
+      gp << (c ? ", " : "") << "'" << data << "' using 3:(strcol(1) eq '" << ring_.labels[c]
+         << "' ? $4 : NaN) with lines lw 2 title '" << ring_.labels[c] << "'";
+    gp << "\nset key bottom left\nset xlabel 'height reduction [%]'\n"
+       << "set ylabel 'inner diameter change [%]'\nplot ";
+    for (unsigned int c = 0; c < ring_.labels.size(); ++c)
+      gp << (c ? ", " : "") << "'" << data << "' using 2:(strcol(1) eq '" << ring_.labels[c]
+         << "' ? $5 : NaN) with linespoints lw 2 title '" << ring_.labels[c] << "'";
+    gp << "\nunset multiplot\n";
+    return draw_with_gnuplot(ctx, "ring_compression", gp.str(), "ring_compression.csv");
+  }
+};
+
+} // namespace lsmfm_ring
+
+SPINESIM_REGISTER_SCENARIO(lsmfm_ring_compression, "lsmfm_ring_compression",
+                           "ring compression between rigid platens with Coulomb friction by the "
+                           "axisymmetric least-squares meshfree method (Kwon & Youn 2005, "
+                           "section 6.3): load-stroke and friction calibration curves.",
+                           "mechanics|contact", create_scenario<lsmfm_ring::RingCompression>,
+                           sections::material(), {"LSMFM", meshfree::LsmfmParameters::declare},
+                           {"Ring compression", lsmfm_ring::RingParameters::declare})
+
+} // namespace spinesim::applications
