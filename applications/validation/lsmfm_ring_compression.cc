@@ -11,17 +11,19 @@
 //
 // Contact (Kwon & Youn eqs. 95–99 in the penalty collocation of the LSMFM's boundary
 // conditions). Every node of the top and side faces is a contact candidate. A node in contact
-// holds u_z(x_A) = z_p − Z_A; tangentially it
-//   * sticks: u_r(x_A) held where it touched (Friction = stick, or Coulomb below the limit);
-//   * slips: the friction traction e_r·(σ e_z) = −μ p sign(slip) with p = −e_z·σ e_z its
-//     contact pressure (the platen's normal is fixed in space, so the traction condition
-//     takes it as the spatial normal), μ = 0 leaving it free.
+// holds u_z(x_A) = z_p − Z_A and takes the friction traction e_r·(σ e_z) on the platen's
+// normal (fixed in space, so the traction condition takes it as the spatial normal). The
+// friction law is Coulomb's regularised (Wriggers, Computational Contact Mechanics, ch. 5):
+// with τ = μ p (p = −σ_zz the contact pressure) or, sticking, τ = σ_Y/√3 (the friction factor
+// m = 1 of metal forming: a sticking face shears the material below it), the traction is
+// −τ s/s₀ for the slip s of the node in the step below s₀ = (Slip regularisation) × the
+// platen's travel (a boundary spring, solved with the step), −τ sign(s) beyond.
 // The contact state is found per load step by repeated trial solves of the same step
 // (LsmfmSolver::solve_trial): a free node that crossed the platen comes into contact, a node
-// whose contact pressure is tensile leaves, a stuck node whose friction traction exceeds μ p
-// slips, a slipping node whose slip turned against its friction sticks, and the slip
-// tractions are updated from the pressures until they settle (Contact tolerance). A step whose
-// state does not settle in Contact rounds trials is a NumericalFailure.
+// whose contact pressure is tensile leaves, a node passes between the spring and the full
+// traction as its slip crosses s₀ (back below s₀/2), and the pressures the law uses follow the
+// trials until they settle (Contact tolerance). A step whose state does not settle in Contact
+// rounds trials is a NumericalFailure.
 //
 // Figures. Per friction case (label L: mu0, mu0_05, ..., stick): the inner and outer diameter
 // change at the mid-plane [%] (the calibration measure: the mid-plane is where the hole's wall
@@ -68,8 +70,8 @@ struct RingParameters {
   std::vector<double> friction; // Coulomb μ per case, `stick` = infinity
   std::vector<std::string> labels;
   unsigned int contact_rounds = 20;
-  double contact_tolerance = 5e-3; // [-] of the yield stress
-  double slip_reversal = 0.05;     // [-] of the platen's travel in a step
+  double contact_tolerance = 5e-3;   // [-] of the yield stress
+  double slip_regularisation = 0.05; // [-] of the platen's travel in a step
 
   static void declare(dealii::ParameterHandler& prm) {
     using namespace dealii::Patterns;
@@ -84,24 +86,25 @@ struct RingParameters {
                       "along r and z are rounded to fit the section [m].");
     prm.declare_entry("Friction", "0, 0.05, 0.2, stick", Anything(),
                       "The friction cases, one run each: Coulomb coefficients >= 0 or `stick` "
-                      "(no slip where the ring touches a platen), comma-separated [-].");
+                      "(sticking friction: the interface carries up to the shear yield stress "
+                      "σ_Y/√3, the friction factor m = 1), comma-separated [-].");
     prm.declare_entry("Contact rounds", "20", Integer(1),
                       "Trial solves of a load step allowed to settle the contact and friction "
                       "state [-].");
     prm.declare_entry("Contact tolerance", "5e-3", Double(0.0, 1.0),
-                      "The slip tractions are settled when no contact pressure changed by more "
-                      "than this fraction of the yield stress between trials. The default is "
-                      "LSMFM/Yield tolerance's: a trial's plastic set is consistent to that "
-                      "fraction, and the set's changes move the pressures by about as much "
-                      "(measured: 1e-3 left the 0.2 friction case cycling at 0.9-1.3 MPa in "
-                      "its 33rd step) [-].");
-    prm.declare_entry("Slip reversal tolerance", "0.05", Double(0.0, 1.0),
-                      "A slipping node whose slip in the step runs with its friction traction "
-                      "sticks only once that slip exceeds this fraction of the platen's travel in "
-                      "the step: near the neutral radius the slip is about zero and its sign is "
-                      "noise, which would make the node switch between stick and slip every "
-                      "trial (the regularisation of Coulomb's law by a small reversible slip) "
-                      "[-].");
+                      "The friction law's contact pressures are settled when none changed by "
+                      "more than this fraction of the yield stress between trials. The default "
+                      "is LSMFM/Yield tolerance's: a trial's plastic set is consistent to that "
+                      "fraction, and the set's changes move the contact pressures by about as "
+                      "much [-].");
+    prm.declare_entry("Slip regularisation", "0.05", Double(0.0, 1.0),
+                      "Coulomb's law regularised: a node's friction traction is −μ p s/s₀ for a "
+                      "slip s in the step below s₀ (a boundary spring solved with the step), "
+                      "−μ p sign(s) beyond, with s₀ this fraction of the platen's travel in the "
+                      "step. It stands for sticking near the neutral radius, where the slip's "
+                      "sign changes; a point stick condition there holds the node without a "
+                      "traction a stick/slip test could read (the least-squares stress has no "
+                      "peak at a pinned node) [-].");
   }
 
   void parse(const dealii::ParameterHandler& prm) {
@@ -113,7 +116,7 @@ struct RingParameters {
     node_spacing = prm.get_double("Node spacing");
     contact_rounds = prm.get_integer("Contact rounds");
     contact_tolerance = prm.get_double("Contact tolerance");
-    slip_reversal = prm.get_double("Slip reversal tolerance");
+    slip_regularisation = prm.get_double("Slip regularisation");
     const auto where = "Ring compression/Friction";
     friction.clear();
     labels.clear();
@@ -151,12 +154,12 @@ struct RingParameters {
                          "needs a hole: its hoop terms are singular on the axis)");
     if (!(height > 0))
       throw InvalidInput("Ring compression/Height", "must be positive", "a height > 0 [m]");
-    if (!(node_spacing > 0) || node_spacing > 0.25 * (outer_diameter - inner_diameter) ||
-        node_spacing > 0.25 * height)
+    if (!(node_spacing > 0) || node_spacing > 0.125 * (outer_diameter - inner_diameter) ||
+        node_spacing > 0.125 * height)
       throw InvalidInput("Ring compression/Node spacing",
                          "= " + std::to_string(node_spacing) + " m",
-                         "> 0 and at most a quarter of the wall thickness and of the height "
-                         "(at least 5 nodes across the section each way) [m]");
+                         "> 0 and at most a quarter of the wall thickness and of the half "
+                         "height (at least 5 nodes across the quarter section each way) [m]");
     if (!(height_reduction > 0))
       throw InvalidInput("Ring compression/Height reduction", "must be positive",
                          "0 < reduction <= 0.8 [-]");
@@ -168,18 +171,16 @@ struct ContactNode {
   unsigned int node;
   bool on_top = false;    // the face z = H/2 (else an inner or outer side)
   double side_normal = 0; // ±1: the reference normal ±e_r of a side node, else 0
-  // A top corner: its free side asks σ_rz = 0 there (Cauchy's lemma on the side face), so with
-  // Coulomb friction it takes no friction traction and slips; with sticking friction it sticks.
+  // A top corner: the free side's nodes below it hold σ_rz = 0 (Cauchy's lemma at the free
+  // edge) and the MLS stress field carries that to the corner, so it takes no friction
+  // traction.
   bool corner = false;
-  enum class State { free, stick, slip } state = State::free;
-  double r_stick = 0;       // current radius where it sticks [m]
-  double slip_traction = 0; // e_r·(σ e_z) when slipping [Pa]
-  double pressure = 0;      // last contact pressure p = −σ_zz [Pa]
-  // Stick/slip switches in the current load step. A node that switched twice keeps its state
-  // for the rest of the step (it chatters: each state's solution asks for the other one, a
-  // node whose slip changes sign within the step); such nodes are counted and reported.
-  unsigned int switches = 0;
-  bool held = false;
+  // Friction regularised (friction_limit τ): spring, the traction −τ s/s₀ of the slip s in the
+  // step (a Robin condition, solved with the step): sticking within the regularisation; slip,
+  // the full traction −τ sign(s) once |s| > s₀.
+  enum class State { free, spring, slip } state = State::free;
+  double pressure = 0;  // contact pressure p the friction law uses [Pa]
+  double slip_sign = 0; // ±1 when slipping
 };
 
 class RingCompression : public Scenario {
@@ -222,12 +223,13 @@ class RingCompression : public Scenario {
     ctx.set_cost({"lsmfm_quasi_static", unknowns * ring_.steps * ring_.friction.size(), unknowns});
     ctx.progress().start("ring compression", ring_.steps * ring_.friction.size(), 1.0);
     std::ostringstream csv;
+    csv << std::setprecision(10);
     csv << "friction,height_reduction_percent,stroke_mm,load_kN,inner_diameter_change_percent,"
-           "outer_diameter_change_percent,contact_nodes,slipping_nodes,chattering_nodes,"
-           "contact_rounds\n";
+           "outer_diameter_change_percent,contact_nodes,slipping_nodes,contact_rounds\n";
     Summary& s = ctx.summary();
     std::vector<double> id_change;
     unsigned int total_steps = 0;
+    double frictionless_load = std::numeric_limits<double>::quiet_NaN();
     for (unsigned int c = 0; c < ring_.friction.size(); ++c) {
       const CaseResult r = run_case(ctx, c, csv, total_steps);
       const std::string& L = ring_.labels[c];
@@ -239,11 +241,14 @@ class RingCompression : public Scenario {
       s.set_figure("load_sections_mismatch_relative_" + L,
                    std::abs(r.top_load - r.load) / std::abs(r.load), "-");
       s.set_figure("max_contact_rounds_" + L, r.max_rounds, "-");
-      // Nodes held in their stick or slip state after chattering, at most in a step.
-      s.set_figure("max_chattering_nodes_" + L, r.max_held, "-");
       s.set_figure("newton_iterations_" + L, r.newton, "iterations");
       s.set_figure("wall_time_s_" + L, r.seconds, "s");
       id_change.push_back(r.inner_change);
+      if (ring_.friction[c] == 0)
+        frictionless_load = r.load;
+      // Friction can only add to the forming load; NaN without a frictionless case first.
+      if (ring_.friction[c] > 0)
+        s.set_figure("load_over_frictionless_" + L, r.load / frictionless_load, "-");
       if (ring_.friction[c] == 0) {
         const auto h = homogeneous();
         s.set_figure("frictionless_inner_diameter_error_relative",
@@ -285,13 +290,20 @@ class RingCompression : public Scenario {
   struct CaseResult {
     double inner_change = 0, outer_change = 0, load = 0, seconds = 0; // [%, %, N, s]
     double top_load = 0; // the same integral over the top face [N]
-    unsigned int max_rounds = 0, newton = 0, max_held = 0;
+    unsigned int max_rounds = 0, newton = 0;
   };
   struct Homogeneous {
     double inner_change = 0, load = 0; // [%, N]
   };
 
   unsigned int index(unsigned int i, unsigned int j) const { return j * (n_r_ + 1) + i; }
+
+  // The largest friction traction [Pa]: Coulomb's μ p, or with sticking friction the shear
+  // yield stress σ_Y/√3 (the material shears below a sticking face: the friction factor m = 1
+  // of metal forming).
+  double friction_limit(double mu, double p) const {
+    return std::isfinite(mu) ? mu * std::max(p, 0.0) : law_.yield_stress / std::sqrt(3.0);
+  }
 
   void make_nodes() {
     r_i_ = 0.5 * ring_.inner_diameter;
@@ -377,9 +389,7 @@ class RingCompression : public Scenario {
         n.side_normal = i == 0 ? -1.0 : i == n_r_ ? 1.0 : 0.0;
         n.corner = n.on_top && n.side_normal != 0;
         if (n.on_top) { // touching the platen at the start
-          n.state = std::isfinite(mu) && (mu == 0 || n.corner) ? ContactNode::State::slip
-                                                               : ContactNode::State::stick;
-          n.r_stick = nodes_[n.node][0];
+          n.state = ContactNode::State::spring;
         }
         contact.push_back(n);
       }
@@ -391,28 +401,24 @@ class RingCompression : public Scenario {
       const double stroke = ring_.height_reduction * half_ * t; // of the quarter [m]
       const double z_platen = half_ - stroke;
       std::vector<double> u_r_start(contact.size());
-      for (unsigned int k = 0; k < contact.size(); ++k) {
+      for (unsigned int k = 0; k < contact.size(); ++k)
         u_r_start[k] = solver.displacement(nodes_[contact[k].node])[0];
-        contact[k].switches = 0;
-        contact[k].held = false;
-      }
       unsigned int round = 0;
       ContactChanges last;
       for (;; ++round) {
         if (round == ring_.contact_rounds) {
           std::ostringstream what;
           what << "the contact and friction state did not settle in " << round
-               << " trial solves (the last changed " << last.states
-               << " stick/slip/contact states and moved " << last.tractions
-               << " slip tractions by up to " << last.max_pressure_change / 1e6
-               << " MPa of contact pressure; tolerance " << ring_.contact_tolerance * sy / 1e6
-               << " MPa)";
+               << " trial solves (the last changed " << last.states << " contact states and moved "
+               << last.pressures << " friction pressures by up to "
+               << last.max_pressure_change / 1e6 << " MPa; tolerance "
+               << ring_.contact_tolerance * sy / 1e6 << " MPa)";
           NumericalFailure f(what.str(), "ring compression, friction " + label,
                              "take more load steps, or raise Ring compression/Contact rounds");
           f.set_step(step, t);
           throw f;
         }
-        set_conditions(solver, contact, z_platen);
+        set_conditions(solver, contact, z_platen, u_r_start, mu);
         try {
           result.newton += solver.solve_trial().iterations;
         } catch (NumericalFailure& f) {
@@ -420,8 +426,8 @@ class RingCompression : public Scenario {
           throw;
         }
         const double travel = ring_.height_reduction * half_ / ring_.steps;
-        last = update_contact(solver, contact, u_r_start, z_platen, mu, sy, travel, round);
-        if (last.states + last.tractions == 0)
+        last = update_contact(solver, contact, u_r_start, z_platen, mu, sy, travel);
+        if (last.states + last.pressures == 0)
           break;
       }
       solver.accept_step();
@@ -434,17 +440,14 @@ class RingCompression : public Scenario {
       result.outer_change = 100.0 * u_out / r_o_;
       result.load = midplane_load(solver);
       result.top_load = midplane_load(solver, half_);
-      unsigned int in_contact = 0, slipping = 0, held = 0;
+      unsigned int in_contact = 0, full_slip = 0;
       for (const auto& n : contact) {
         in_contact += n.state != ContactNode::State::free;
-        slipping += n.state == ContactNode::State::slip;
-        held += n.held;
+        full_slip += n.state == ContactNode::State::slip; // at the full Coulomb traction
       }
-      result.max_held = std::max(result.max_held, held);
       csv << label << "," << 100 * ring_.height_reduction * t << "," << 2e3 * stroke << ","
-          << std::setprecision(10) << result.load / 1e3 << "," << result.inner_change << ","
-          << result.outer_change << "," << in_contact << "," << slipping << "," << held << ","
-          << round + 1 << "\n";
+          << result.load / 1e3 << "," << result.inner_change << "," << result.outer_change << ","
+          << in_contact << "," << full_slip << "," << round + 1 << "\n";
       ctx.history().add({{"case", double(c)},
                          {"friction", std::isfinite(mu) ? mu : -1.0},
                          {"time", t},
@@ -454,8 +457,7 @@ class RingCompression : public Scenario {
                          {"inner_diameter_change_percent", result.inner_change},
                          {"outer_diameter_change_percent", result.outer_change},
                          {"contact_nodes", double(in_contact)},
-                         {"slipping_nodes", double(slipping)},
-                         {"chattering_nodes", double(held)},
+                         {"slipping_nodes", double(full_slip)},
                          {"contact_rounds", double(round + 1)}});
       ctx.flush_history();
       ++total_steps;
@@ -466,7 +468,17 @@ class RingCompression : public Scenario {
               << result.inner_change << " %, outer " << result.outer_change << std::noshowpos
               << " %, load " << result.load / 1e3 << " kN, " << result.newton
               << " Newton iterations, at most " << result.max_rounds << " contact rounds a step\n";
-    write_vtu(ctx, solver, label);
+    {
+      // Where the ring sticks at the end (within the regularisation; current radii, mm).
+      std::ostringstream where;
+      for (const auto& n : contact)
+        if (n.state == ContactNode::State::spring && mu > 0 && !n.corner)
+          where << " " << std::setprecision(4)
+                << 1e3 * (nodes_[n.node][0] + solver.displacement(nodes_[n.node])[0]);
+      ctx.log() << "    sticking at r [mm]:" << (where.str().empty() ? " none" : where.str())
+                << "\n";
+    }
+    write_vtu(ctx, solver, contact, label);
     result.seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return result;
@@ -475,13 +487,18 @@ class RingCompression : public Scenario {
   // The boundary conditions of a trial: symmetry on the mid-plane, free sides, the top's free
   // part, and the contact conditions.
   void set_conditions(meshfree::LsmfmSolver<2>& solver, const std::vector<ContactNode>& contact,
-                      double z_platen) const {
+                      double z_platen, const std::vector<double>& u_r_start, double mu) const {
     std::vector<typename meshfree::LsmfmSolver<2>::DisplacementCondition> uc;
     std::vector<typename meshfree::LsmfmSolver<2>::TractionCondition> tc;
     const dealii::Tensor<1, 2> er({1.0, 0.0}), ez({0.0, 1.0});
     std::vector<const ContactNode*> by_node(nodes_.size(), nullptr);
-    for (const auto& n : contact)
-      by_node[n.node] = &n;
+    std::vector<double> u_r0(nodes_.size(), 0.0);
+    for (unsigned int k = 0; k < contact.size(); ++k) {
+      by_node[contact[k].node] = &contact[k];
+      u_r0[contact[k].node] = u_r_start[k];
+    }
+    const double slip_scale =
+        ring_.slip_regularisation * ring_.height_reduction * half_ / ring_.steps; // s₀ [m]
     for (unsigned int j = 0; j <= n_z_; ++j)
       for (unsigned int i = 0; i <= n_r_; ++i) {
         const unsigned int A = index(i, j);
@@ -497,19 +514,24 @@ class RingCompression : public Scenario {
           if (!held_z)
             uc.push_back({A, ez, z_platen - X[1]});
           held_z = true;
-          if (cn->state == ContactNode::State::stick) {
-            uc.push_back({A, er, cn->r_stick - X[0]});
-            held_r = true;
-          } else {
-            typename meshfree::LsmfmSolver<2>::TractionCondition f{A, ez, er, cn->slip_traction};
-            f.spatial_normal = true;
-            tc.push_back(f);
-            held_r = true; // the friction condition takes the radial traction on the platen
+          // The friction traction on the platen's face.
+          const bool friction = mu > 0 && !cn->corner; // see ContactNode::corner
+          typename meshfree::LsmfmSolver<2>::TractionCondition f{A, ez, er, 0.0};
+          f.spatial_normal = true;
+          const double limit = friction_limit(mu, cn->pressure);
+          if (friction && cn->state == ContactNode::State::slip) {
+            f.value = -limit * cn->slip_sign;
+          } else if (friction) { // t_r + k u_r = k u_r0: t_r = −k (u_r − u_r0)
+            f.stiffness = limit / slip_scale;
+            f.value = f.stiffness * u_r0[A];
           }
+          tc.push_back(f);
         }
-        // Free faces: traction-free in the components nothing holds. A touching node drops
-        // the free condition of a face that now faces the platen (its top face, or a side
-        // folded onto the platen: the current normal within 60° of e_z).
+        // Free faces: traction-free in the components no displacement condition holds (the
+        // scenario lsmfm's convention). A touching node drops the free conditions of a face
+        // that now faces the platen (its top face, or a side folded onto the platen: the
+        // current normal within 60° of e_z); the contact conditions stand for them. At a
+        // touching corner the side keeps σ_rr = 0.
         const auto free_face = [&](const dealii::Tensor<1, 2>& N) {
           if (touching) {
             const auto F = solver.deformation_gradient(X);
@@ -539,30 +561,26 @@ class RingCompression : public Scenario {
   }
 
   struct ContactChanges {
-    unsigned int states = 0, tractions = 0;
-    double max_pressure_change = 0; // of the moved slip tractions [Pa]
+    unsigned int states = 0, pressures = 0;
+    double max_pressure_change = 0; // of the friction law's pressures [Pa]
   };
   // Updates the contact state from the trial solution (no changes: settled).
   ContactChanges update_contact(const meshfree::LsmfmSolver<2>& solver,
                                 std::vector<ContactNode>& contact,
                                 const std::vector<double>& u_r_start, double z_platen, double mu,
-                                double sy, double travel, unsigned int round) const {
+                                double sy, double travel) const {
     ContactChanges changes;
     const double release = 1e-2 * sy; // tensile contact pressure that separates [Pa]
     const double gap_tolerance = 1e-6 * half_;
+    const double slip_scale = ring_.slip_regularisation * travel; // s₀ [m]
     for (unsigned int k = 0; k < contact.size(); ++k) {
       ContactNode& n = contact[k];
       const auto& X = nodes_[n.node];
       const auto u = solver.displacement(X);
-      const auto s = solver.stress(X);
-      const double p = -s[1];  // contact pressure −σ_zz [Pa]
-      const double t_r = s[3]; // e_r·(σ e_z) = σ_rz [Pa]
+      const double p = -solver.stress(X)[1]; // contact pressure −σ_zz [Pa]
       if (n.state == ContactNode::State::free) {
         if (X[1] + u[1] - z_platen > gap_tolerance) { // crossed the platen
-          n.state = std::isfinite(mu) && (mu == 0 || n.corner) ? ContactNode::State::slip
-                                                               : ContactNode::State::stick;
-          n.r_stick = X[0] + u[0];
-          n.slip_traction = 0;
+          n.state = ContactNode::State::spring;
           n.pressure = std::max(p, 0.0);
           ++changes.states;
         }
@@ -573,48 +591,23 @@ class RingCompression : public Scenario {
         ++changes.states;
         continue;
       }
-      // Stick <-> slip, unless the node chatters (see ContactNode::switches).
-      const auto may_switch = [&n]() {
-        if (n.switches >= 2) {
-          n.held = true;
-          return false;
-        }
-        ++n.switches;
-        return true;
-      };
-      if (n.state == ContactNode::State::stick) {
-        if (!std::isfinite(mu))
-          continue; // sticks while pressed
-        const double limit = mu * std::max(p, 0.0);
-        if (std::abs(t_r) > limit + ring_.contact_tolerance * sy && may_switch()) {
-          n.state = ContactNode::State::slip;
-          n.slip_traction = std::copysign(limit, t_r);
-          n.pressure = p;
-          ++changes.states;
-        }
-        continue;
-      }
-      if (n.corner)
-        continue; // slips without friction traction (see ContactNode::corner)
-      // Slipping: the friction traction must oppose the slip of this step.
+      if (n.corner || mu == 0)
+        continue; // no friction traction (see ContactNode::corner)
       const double slip = u[0] - u_r_start[k];
-      if (mu > 0 && slip * n.slip_traction > 0 && std::abs(slip) > ring_.slip_reversal * travel &&
-          may_switch()) {
-        n.state = ContactNode::State::stick;
-        n.r_stick = X[0] + u[0];
+      if (n.state == ContactNode::State::spring && std::abs(slip) > slip_scale) {
+        n.state = ContactNode::State::slip; // past the regularisation: the full traction
+        n.slip_sign = std::copysign(1.0, slip);
         ++changes.states;
-        continue;
+      } else if (n.state == ContactNode::State::slip && slip * n.slip_sign < 0.5 * slip_scale) {
+        n.state = ContactNode::State::spring; // back within it (half of s₀: a hysteresis)
+        ++changes.states;
       }
-      if (mu > 0 && std::abs(p - n.pressure) > ring_.contact_tolerance * sy) {
-        const double direction =
-            n.slip_traction != 0 ? std::copysign(1.0, n.slip_traction) : std::copysign(1.0, t_r);
-        changes.max_pressure_change =
-            std::max(changes.max_pressure_change, std::abs(p - n.pressure));
-        // The pressure-to-traction iteration may oscillate where a neighbour chatters: from
-        // the fifth trial on, half steps (under-relaxation) make it contract.
-        n.pressure += (round < 4 ? 1.0 : 0.5) * (p - n.pressure);
-        n.slip_traction = mu * std::max(n.pressure, 0.0) * direction;
-        ++changes.tractions;
+      // The pressure the law uses follows the trials until it settles.
+      const double change = std::abs(std::max(p, 0.0) - n.pressure);
+      if (change > ring_.contact_tolerance * sy) {
+        changes.max_pressure_change = std::max(changes.max_pressure_change, change);
+        n.pressure = std::max(p, 0.0);
+        ++changes.pressures;
       }
     }
     return changes;
@@ -637,13 +630,19 @@ class RingCompression : public Scenario {
 
   // The nodes of the final state (current positions through the displacement) with stress.
   void write_vtu(RunContext& ctx, const meshfree::LsmfmSolver<2>& solver,
-                 const std::string& label) const {
+                 const std::vector<ContactNode>& contact, const std::string& label) const {
     std::vector<double> volume(nodes_.size(), dr_ * dz_);
     auto set = meshfree::ParticleSet<2>::from_points(nodes_, volume);
     auto& vm = set.add_scalar_field("von_mises_Pa");
     auto& srr = set.add_scalar_field("stress_rr_Pa");
     auto& szz = set.add_scalar_field("stress_zz_Pa");
     auto& stt = set.add_scalar_field("stress_hoop_Pa");
+    // 0 not a candidate or free, 1 within the friction regularisation (sticking), 2 slipping.
+    auto& state = set.add_scalar_field("contact_state");
+    for (const auto& n : contact)
+      state[n.node] = n.state == ContactNode::State::spring ? 1.0
+                      : n.state == ContactNode::State::slip ? 2.0
+                                                            : 0.0;
     for (unsigned int j = 0; j < nodes_.size(); ++j) {
       set.displacement(j) = solver.displacement(nodes_[j]);
       const auto s = solver.stress(nodes_[j]);

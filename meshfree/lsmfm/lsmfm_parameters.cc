@@ -89,6 +89,10 @@ void LsmfmParameters::validate() const {
                        "1 .. 1e9 (Kwon & Youn: 1e4 .. 1e6) [-]");
   if (!(tolerance > 0 && tolerance < 1))
     throw InvalidInput("LSMFM/Tolerance", "= " + number(tolerance), "0 < tol < 1 [-]");
+  if (plane_model != "plane_strain" && plane_model != "plane_stress" &&
+      plane_model != "axisymmetric")
+    throw InvalidInput("LSMFM plane model", "'" + plane_model + "'",
+                       "plane_strain, plane_stress or axisymmetric");
   if (kinematics == "finite_strain" && plane_model == "plane_stress")
     throw InvalidInput("Mechanics/Plane stress",
                        "plane_stress with Kinematics = finite_strain: the thickness change is not "

@@ -18,7 +18,7 @@ struct LsmfmParameters {
   double integration_ratio = 0.25;     // r of eq. (100) [-]
   unsigned int grid_points = 4;        // Gauss points per direction and cell [-]
   // Set by the caller from its Mechanics section, not declared here:
-  std::string plane_model = "plane_strain"; // plane_strain|plane_stress (2-D)
+  std::string plane_model = "plane_strain"; // plane_strain|plane_stress|axisymmetric (2-D)
   std::string kinematics = "small_strain";  // small_strain|finite_strain
   std::string flow_rule = "complementary";  // complementary|return_mapping
   std::string stress_rate = "truesdell";    // truesdell|jaumann_log (finite strain)

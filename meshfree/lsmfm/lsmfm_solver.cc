@@ -170,6 +170,18 @@ LsmfmSolver<dim>::LsmfmSolver(const LsmfmParameters& parameters, const Material&
   block_ = dim + active_.size();
   axisymmetric_ = dim == 2 && prm_.plane_model == "axisymmetric";
   if (axisymmetric_)
+    for (unsigned int j = 0; j < mls_.nodes().size(); ++j)
+      if (!(mls_.nodes()[j][0] > 0)) {
+        double c[dim];
+        for (unsigned int d = 0; d < dim; ++d)
+          c[d] = mls_.nodes()[j][d];
+        throw InvalidInput("LSMFM axisymmetric model",
+                           "node " + std::to_string(j) + " at " + point_text(c, dim) +
+                               " lies on or across the axis r = 0",
+                           "a body at r > 0 (x is the radius): the hoop terms 1/r are singular "
+                           "on the axis, so a solid cylinder is not supported");
+      }
+  if (axisymmetric_)
     for (unsigned int q = 0; q < points_.size(); ++q) {
       if (!(points_[q][0] > 0)) {
         double c[dim];
@@ -264,11 +276,13 @@ void LsmfmSolver<dim>::set_conditions(std::vector<DisplacementCondition> displac
                              " with value " + std::to_string(c.value),
                          "a node below " + std::to_string(n_nodes()) + " and a finite value [m]");
   for (const auto& c : traction)
-    if (c.node >= n_nodes() || !std::isfinite(c.value))
+    if (c.node >= n_nodes() || !std::isfinite(c.value) || !(c.stiffness >= 0) ||
+        !std::isfinite(c.stiffness))
       throw InvalidInput("LSMFM boundary conditions",
                          "traction condition at node " + std::to_string(c.node) + " with value " +
                              std::to_string(c.value),
-                         "a node below " + std::to_string(n_nodes()) + " and a finite value [Pa]");
+                         "a node below " + std::to_string(n_nodes()) +
+                             ", a finite value [Pa] and a finite stiffness >= 0 [Pa/m]");
   u_conditions_ = std::move(displacement);
   t_conditions_ = std::move(traction);
   if (rebuild)
@@ -771,11 +785,10 @@ double LsmfmSolver<dim>::evaluate(const std::vector<double>& U, bool assemble,
     // stress coefficients); the hoop terms h/r at r = r_n + ũ_r add −h ψ_m / r². Without these
     // −Jᵀr is not the gradient of I where the residuals do not vanish: the iteration then
     // stops at a point that is not I's minimiser, and its direction need not descend along I,
-    // which the line search measures. (On the ring compression the converged figures moved by
-    // 1e-3 relative; the iteration counts stayed within 20 %.)
+    // which the line search measures.
     if (finite) {
       double A[dim][dim][dim] = {};
-      double hoop[2] = {0, 0};
+      double hoop[dim] = {};
       for (unsigned int k = 0; k < n; ++k) {
         const unsigned int base = s.nodes[k] * block_ + dim;
         for (unsigned int b = 0; b < nr; ++b) {
@@ -896,6 +909,13 @@ double LsmfmSolver<dim>::evaluate(const std::vector<double>& U, bool assemble,
         t_d += coef * s.value[k] * U[s.nodes[k] * block_ + dim + b];
         Jb(0, k * block_ + dim + b) = coef * s.value[k];
       }
+    if (c.stiffness != 0) // the spring's part, scaled by E like the traction
+      for (unsigned int k = 0; k < n; ++k)
+        for (unsigned int i = 0; i < dim; ++i) {
+          const double coef = c.stiffness / E * c.direction[i] * s.value[k];
+          t_d += coef * U[s.nodes[k] * block_ + i];
+          Jb(0, k * block_ + i) = coef;
+        }
     rb[0] = t_d - c.value / E;
     I += alpha_t_ * rb[0] * rb[0];
     if (assemble)
@@ -921,6 +941,18 @@ void LsmfmSolver<dim>::accept_step() {
 
 template <int dim>
 typename LsmfmSolver<dim>::StepResult LsmfmSolver<dim>::solve_trial() {
+  // A failed trial closes the step and leaves the last committed state.
+  try {
+    return trial();
+  } catch (...) {
+    open_step_ = false;
+    U_ = U_n_;
+    throw;
+  }
+}
+
+template <int dim>
+typename LsmfmSolver<dim>::StepResult LsmfmSolver<dim>::trial() {
   // A second trial of the same load step starts from the first one's solution.
   const bool retry = open_step_;
   if (!retry)

@@ -41,14 +41,14 @@
 // A traction condition may instead hold its normal fixed in space (a flat rigid tool's
 // contact face: the friction traction on a platen).
 //
-// Axisymmetric (2-D, LSMFM/plane model = axisymmetric, as Kwon & Youn's ring compression,
-// section 6.3): x = (r, z), the hoop direction θ is the third one. σ_θθ is an unknown like
-// plane strain's σ_zz; the hoop strain is u_r/r (small strain) and the incremental hoop
-// stretch f_θθ = r_{n+1}/r_n (finite strain); the equilibrium residual gains the hoop terms
-// of div σ in cylindrical coordinates, (σ_rr − σ_θθ)/r and σ_rz/r, at the current radius;
-// the functional is integrated over the ring volume (weights × 2πr). Every integration point
-// must lie at r > 0: a body touching the axis (a solid cylinder) is refused, its 1/r terms
-// are singular there.
+// Axisymmetric (2-D, LsmfmParameters::plane_model = axisymmetric, set by the caller, as Kwon &
+// Youn's ring compression, section 6.3): x = (r, z), the hoop direction θ is the third one. σ_θθ is
+// an unknown like plane strain's σ_zz; the hoop strain is u_r/r (small strain) and the incremental
+// hoop stretch f_θθ = r_{n+1}/r_n (finite strain); the equilibrium residual gains the hoop terms of
+// div σ in cylindrical coordinates, (σ_rr − σ_θθ)/r and σ_rz/r, at the current radius; the
+// functional is integrated over the ring volume (weights × 2πr). Every node and integration point
+// must lie at r > 0: a body touching the axis (a solid cylinder) is refused, its 1/r terms are
+// singular there.
 
 #include "fem/materials/isotropic_hardening.h"
 #include "meshfree/lsmfm/lsmfm_parameters.h"
@@ -90,6 +90,10 @@ class LsmfmSolver {
     double value;
     // The normal is the current (spatial) one as given, not carried by the deformation.
     bool spatial_normal = false;
+    // A spring on the boundary (Robin condition): d·(σ n) + stiffness d·u = value, stiffness
+    // [Pa/m] >= 0 (0: a plain traction condition). Regularised friction holds a contact node
+    // this way: t = −k (u − u_0).
+    double stiffness = 0;
   };
 
   // Voigt order of the stress and the engineering strain: 11, 22, 33, 12, 23, 13.
@@ -114,8 +118,8 @@ class LsmfmSolver {
               std::vector<dealii::Point<dim>> points, std::vector<double> weights);
   ~LsmfmSolver();
 
-  // The boundary conditions (their values are those of the next step). The node lists must
-  // stay the same from step to step; only values may change.
+  // The boundary conditions (their values are those of the next step). Changing the node
+  // lists rebuilds the matrix pattern (contact that comes and goes); keeping them is cheaper.
   void set_conditions(std::vector<DisplacementCondition> displacement,
                       std::vector<TractionCondition> traction);
 
@@ -127,6 +131,8 @@ class LsmfmSolver {
   // set_conditions) it solves the same step from the last trial; accept_step() commits it.
   StepResult solve_trial();
   void accept_step();
+  // A trial that throws closes the step: the next solve_step/solve_trial starts a new one from
+  // the last accepted state.
 
   // Results.
   unsigned int n_nodes() const { return mls_.nodes().size(); }
@@ -142,12 +148,13 @@ class LsmfmSolver {
   // At integration point q: reference position, weight, Cauchy stress [Pa], effective plastic
   // strain q, current deformation gradient determinant.
   const dealii::Point<dim>& point(unsigned int q) const { return points_[q]; }
+  // Axisymmetric: the weight includes 2πr (a volume of the ring).
   double weight(unsigned int q) const { return weights_[q]; }
   Voigt point_stress(unsigned int q) const;
   double point_plastic_strain(unsigned int q) const { return state_[q].q; }
   double point_jacobian(unsigned int q) const;
   // Deformation gradient at integration point q: I + ∇u (small strain; 2-D embedded in 3×3
-  // with F_zz = 1) or the committed F_n (finite strain).
+  // with F_zz = 1, axisymmetric F_θθ = 1 + u_r/r) or the committed F_n (finite strain).
   dealii::Tensor<2, 3> point_deformation_gradient(unsigned int q) const;
   // Von Mises stress of a Voigt stress [Pa].
   static double von_mises(const Voigt& s);
@@ -220,6 +227,7 @@ class LsmfmSolver {
   ReturnMapped return_map(const Voigt& trial_strain, double q, int branch) const;
   // Newton on I with the plastic set fixed; result: iterations, I, gradient (over g0).
   void newton(StepResult& result, double g0);
+  StepResult trial(); // solve_trial() without its clean-up on failure
   // G = ∂ũ/∂x^n at a site; axisymmetric: G_θθ = ũ_r / r_n with r_n the radius at t_n.
   dealii::Tensor<2, 3> incremental_gradient(const Site& s, const std::vector<double>& U,
                                             const dealii::Tensor<2, 3>& F_n_inverse,

@@ -520,13 +520,108 @@ TEST(Lsmfm, AxisymmetricLameCylinderConverges) {
   EXPECT_GT(std::log2(e8 / e16), 1.8);
   EXPECT_LT(e16, 1e-3);
   // Finite strain (the incremental hoop stretch r_{n+1}/r_n, the hoop terms at the current
-  // radius) under a load 1000 times smaller, u_r/a = 1.7e-6: the geometric terms are then
+  // radius) under a load 1000 times smaller, u_r/a = 1.9e-6: the geometric terms are then
   // O(1e-6) of the solution and the finite-strain run must give the small-strain errors.
   const double f8 = lame_error(8, "finite_strain", 1e-3),
                f16 = lame_error(16, "finite_strain", 1e-3);
   std::cout << "finite strain: " << f8 << ", " << f16 << "\n";
   EXPECT_NEAR(f8, e8, 1e-2 * e8);
   EXPECT_NEAR(f16, e16, 1e-2 * e16);
+}
+
+// Axial shear of a tube, a <= r <= b = a + 1: u_r = 0, u_z = c ln(r/a) gives σ_rz = μc/r and
+// no other stress, and holds the z row of div σ in cylindrical coordinates only with its hoop
+// term: ∂σ_rz/∂r + σ_rz/r = 0. Held on both curved faces, the traction ±σ_rz e_r of the field
+// on z = 0 and z = 1. Returned: the largest error of u_z at the integration points over
+// u_z(b). The patch and Lamé tests have σ_rz = 0, so only this one sees that term.
+double axial_shear_error(unsigned int n) {
+  LsmfmParameters prm;
+  prm.plane_model = "axisymmetric";
+  LsmfmSolver<2>::Material mat;
+  mat.youngs_modulus = 1e3;
+  mat.poisson_ratio = 0.3;
+  mat.yield_stress = std::numeric_limits<double>::infinity();
+  const double a = 1.0, b = 2.0, c = 1e-3, mu = mat.youngs_modulus / (2 * (1 + mat.poisson_ratio));
+  auto solver = ring_solver(n, a, 0.0, prm, mat);
+  std::vector<LsmfmSolver<2>::DisplacementCondition> uc;
+  std::vector<LsmfmSolver<2>::TractionCondition> tc;
+  const auto& nodes = solver.approximation().nodes();
+  const dealii::Tensor<1, 2> er({1.0, 0.0}), ez({0.0, 1.0});
+  for (unsigned int J = 0; J < nodes.size(); ++J) {
+    const auto& X = nodes[J];
+    if (std::abs(X[0] - a) < 1e-12 || std::abs(X[0] - b) < 1e-12) {
+      uc.push_back({J, er, 0.0});
+      uc.push_back({J, ez, c * std::log(X[0] / a)});
+    } else if (std::abs(X[1]) < 1e-12 || std::abs(X[1] - 1) < 1e-12) {
+      const double sign = X[1] > 0.5 ? 1.0 : -1.0; // n = ±e_z: t = ±(σ_rz, σ_zz)
+      tc.push_back({J, sign * ez, er, sign * mu * c / X[0]});
+      tc.push_back({J, sign * ez, ez, 0.0});
+    }
+  }
+  solver.set_conditions(uc, tc);
+  solver.solve_step();
+  double err = 0;
+  for (unsigned int q = 0; q < solver.n_points(); ++q) {
+    const auto X = solver.point(q);
+    err = std::max(err, std::abs(solver.displacement(X)[1] - c * std::log(X[0] / a)));
+  }
+  return err / (c * std::log(b / a));
+}
+
+TEST(Lsmfm, AxisymmetricAxialShearConverges) {
+  const double e4 = axial_shear_error(4), e8 = axial_shear_error(8), e16 = axial_shear_error(16);
+  std::cout << "axial shear, max |u_z error| / u_z(b): " << e4 << ", " << e8 << ", " << e16
+            << " (orders " << std::log2(e4 / e8) << ", " << std::log2(e8 / e16) << ")\n";
+  // Second order with the linear basis, as the Lamé cylinder.
+  EXPECT_GT(std::log2(e8 / e16), 1.8);
+  EXPECT_LT(e16, 1e-3);
+}
+
+// A spring on the boundary (Robin condition, TractionCondition::stiffness): a plane-stress
+// square held at x = 0 (u_x), pulled on x = 1 by σ_xx + k u_x = F, the other faces free:
+// uniaxial stress with σ = E ε and u_x(1) = ε, so ε = F/(E + k) — a linear field, exact.
+TEST(Lsmfm, BoundarySpringGivesTheSeriesStiffness) {
+  LsmfmParameters prm;
+  prm.plane_model = "plane_stress";
+  prm.tolerance = 1e-14;
+  LsmfmSolver<2>::Material mat;
+  mat.youngs_modulus = 100;
+  mat.poisson_ratio = 0.3;
+  mat.yield_stress = std::numeric_limits<double>::infinity();
+  auto solver = box_solver<2>(4, 0.0, prm, mat);
+  const double E = mat.youngs_modulus, k = 300, F = 2.0; // k [Pa/m], F [Pa]
+  std::vector<LsmfmSolver<2>::DisplacementCondition> uc;
+  std::vector<LsmfmSolver<2>::TractionCondition> tc;
+  const auto& nodes = solver.approximation().nodes();
+  const dealii::Tensor<1, 2> ex({1.0, 0.0}), ey({0.0, 1.0});
+  for (unsigned int J = 0; J < nodes.size(); ++J) {
+    const auto& X = nodes[J];
+    if (std::abs(X[0]) < 1e-12) {
+      uc.push_back({J, ex, 0.0});
+      tc.push_back({J, -ex, ey, 0.0});
+    } else if (std::abs(X[0] - 1) < 1e-12) {
+      LsmfmSolver<2>::TractionCondition spring{J, ex, ex, F};
+      spring.stiffness = k;
+      tc.push_back(spring);
+      tc.push_back({J, ex, ey, 0.0});
+    }
+    if (std::abs(X[1]) < 1e-12 || std::abs(X[1] - 1) < 1e-12) {
+      const dealii::Tensor<1, 2> n({0.0, X[1] > 0.5 ? 1.0 : -1.0});
+      if (std::abs(X[0]) > 1e-12)
+        tc.push_back({J, n, ex, 0.0});
+      tc.push_back({J, n, ey, 0.0});
+    }
+  }
+  // One node also held in y, against the rigid motion.
+  uc.push_back({0, ey, 0.0});
+  solver.set_conditions(uc, tc);
+  solver.solve_step();
+  const double eps = F / (E + k);
+  for (unsigned int q = 0; q < solver.n_points(); ++q) {
+    // Round-off of the normal equations, as the patch tests (1e-10 of the field).
+    ASSERT_NEAR(solver.point_stress(q)[0], E * eps, 1e-10 * E * eps);
+    ASSERT_NEAR(solver.displacement(solver.point(q))[0], eps * solver.point(q)[0], 1e-10 * eps);
+  }
 }
 
 TEST(Lsmfm, AxisymmetricBodyOnTheAxisIsRefused) {

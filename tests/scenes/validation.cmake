@@ -90,13 +90,23 @@ spinesim_add_scene_test(validation.lsmfm_perforated_plate
 #    form (ε_z = ln 0.5, J2 with linear hardening); the field is in the linear MLS space, so
 #    only Newton's tolerance is left (measured 1.2e-5 and 7e-6; bound 1e-4), and the two
 #    sections carry the same load (bound 1e-4);
-#  * the paper's finding: the hole grows with low friction (0.05: measured +18.1 %) and shrinks
-#    with high friction (0.2: -53.5 %, sticking: -67.9 %), and every step up in friction
-#    lowers its change (the smallest fall, 14.4 percentage points; bound 1).
+#  * the paper's finding: the hole grows with low friction (0.05: measured +17.2 %, +16.0 % at
+#    half the node spacing) and shrinks with high friction (0.2: -31.2 %; sticking: -59.2 %),
+#    and every step up in friction lowers its change (the smallest fall, 24.2 percentage points;
+#    bound 1);
+#  * Coulomb friction raises the forming load above the frictionless one (measured 1.12 and
+#    1.20 times; bound 1).
 spinesim_add_scene_test(validation.lsmfm_ring_compression
   SCENE ${_val}/lsmfm_ring_compression.prm
-  EXPECT "status==ok;frictionless_inner_diameter_error_relative<=1e-4;frictionless_load_error_relative<=1e-4;load_sections_mismatch_relative_mu0<=1e-4;inner_diameter_change_percent_mu0_05>=1;inner_diameter_change_percent_mu0_2<=-1;inner_diameter_change_percent_stick<=-1;inner_diameter_smallest_fall_with_friction_percent>=1;ring_compression_png_valid>=1"
+  EXPECT "status==ok;frictionless_inner_diameter_error_relative<=1e-4;frictionless_load_error_relative<=1e-4;load_sections_mismatch_relative_mu0<=1e-4;inner_diameter_change_percent_mu0_05>=1;inner_diameter_change_percent_mu0_2<=-1;inner_diameter_change_percent_stick<=-1;inner_diameter_smallest_fall_with_friction_percent>=1;load_over_frictionless_mu0_05>=1;load_over_frictionless_mu0_2>=1;ring_compression_png_valid>=1"
   LABELS "scene;validation;meshfree" TIMEOUT 600)
+# Sticking friction should need the largest load of all; the LSMFM's falls after 24 % of
+# reduction to a third of the frictionless load at 50 % (docs/lsmfm.md, "what is not trusted
+# yet"). Label known_failure until an independent reference settles it.
+spinesim_add_scene_test(validation.lsmfm_ring_compression_sticking_load
+  SCENE ${_val}/lsmfm_ring_compression.prm SET "Ring compression/Friction=0, stick"
+  EXPECT "status==ok;load_over_frictionless_stick>=1"
+  LABELS "scene;validation;meshfree;known_failure" TIMEOUT 600)
 
 # The Taylor bar in explicit finite-strain FEM (applications/validation/taylor_bar_fem.prm):
 # Q1 cells with F-bar, total-Lagrangian J2 (j2_finite_strain), the impact face held on the
