@@ -22,6 +22,7 @@
 #include "applications/framework/scenario.h"
 #include "applications/studies/child_run.h"
 #include "applications/studies/study_plot.h"
+#include "applications/validation/lsmfm_material.h"
 #include "applications/validation/stretch_reference.h"
 #include "base/error_sums.h"
 #include "base/exceptions.h"
@@ -145,14 +146,8 @@ class LsmfmScenario : public Scenario {
     parse_section(prm, "Mechanics", mech_);
     parse_section(prm, "LSMFM", lsmfm_);
     parse_section(prm, "LSMFM run", run_);
-    if (law_.model != "linear_elastic" && law_.model != "j2_plasticity" &&
-        law_.model != "j2_finite_strain")
-      throw InvalidInput("Material/Model", "'" + law_.model + "' for the LSMFM",
-                         "linear_elastic, j2_plasticity or j2_finite_strain (the LSMFM has its "
-                         "own J2 flow rule, Kwon & Youn eqs. 12-14)");
-    if (law_.model != "linear_elastic" && law_.saturation_stress > 0)
-      throw InvalidInput("Material/Saturation stress", "> 0 with the LSMFM",
-                         "0: the LSMFM's hardening is linear (Kwon & Youn eq. 12c)");
+    material_ =
+        lsmfm_material<dim>(law_, "linear_elastic|j2_plasticity|j2_finite_strain", "the LSMFM");
     if (mech_.time_integration != "quasi_static")
       throw InvalidInput("Mechanics/Time integration", "'" + mech_.time_integration + "'",
                          "quasi_static: the LSMFM is a static method");
@@ -168,10 +163,7 @@ class LsmfmScenario : public Scenario {
   bool check_by_building() const override { return true; }
 
   void run(RunContext& ctx) override {
-    if (ctx.n_ranks() != 1)
-      throw InvalidInput("MPI ranks", std::to_string(ctx.n_ranks()),
-                         "1: the LSMFM solver runs on one rank (its matrix is a serial "
-                         "sparse Cholesky factorisation)");
+    require_one_lsmfm_rank(ctx.n_ranks());
     dealii::parallel::distributed::Triangulation<dim> tria(ctx.comm());
     dealii::MappingQ1<dim> mapping;
     {
@@ -193,16 +185,10 @@ class LsmfmScenario : public Scenario {
       }
     }
     const auto rule = integration_rule(tria, mapping);
-    typename meshfree::LsmfmSolver<dim>::Material mat;
-    mat.youngs_modulus = law_.youngs_modulus;
-    mat.poisson_ratio = law_.poisson_ratio;
-    mat.yield_stress = law_.model == "linear_elastic" ? std::numeric_limits<double>::infinity()
-                                                      : law_.yield_stress;
-    mat.hardening_modulus = law_.hardening_modulus;
     std::unique_ptr<meshfree::LsmfmSolver<dim>> solver;
     {
       dealii::TimerOutput::Scope t(ctx.timer(), "setup");
-      solver = std::make_unique<meshfree::LsmfmSolver<dim>>(lsmfm_, mat, nodes_, spacing_,
+      solver = std::make_unique<meshfree::LsmfmSolver<dim>>(lsmfm_, material_, nodes_, spacing_,
                                                             rule.points, rule.weights);
     }
     ctx.log() << "  LSMFM: " << nodes_.size() << " nodes (" << boundary_.size()
@@ -348,6 +334,7 @@ class LsmfmScenario : public Scenario {
  private:
   fem::MeshParameters mesh_;
   materials::LawParameters law_;
+  typename meshfree::LsmfmSolver<dim>::Material material_;
   typename fem::MechanicsSolver<dim>::Parameters mech_;
   meshfree::LsmfmParameters lsmfm_;
   LsmfmRunParameters run_;

@@ -461,6 +461,15 @@ TEST(Lsmfm, AxisymmetricPatchTestFiniteStrain) {
   check_axisymmetric_patch("finite_strain");
 }
 
+// E = 1 kPa, ν = 0.3, no yield: the elastic solid of the axisymmetric convergence tests.
+LsmfmSolver<2>::Material elastic_material() {
+  LsmfmSolver<2>::Material mat;
+  mat.youngs_modulus = 1e3;
+  mat.poisson_ratio = 0.3;
+  mat.yield_stress = std::numeric_limits<double>::infinity();
+  return mat;
+}
+
 // Lamé's thick-walled cylinder, a <= r <= b = a + 1, internal pressure p, plane strain along
 // the axis (u_z = 0 on z = 0 and z = 1, no shear there), outer face free:
 //   u_r = (1 + ν) p a² / (E (b² − a²)) [(1 − 2ν) r + b²/r]  (Timoshenko & Goodier, § 28).
@@ -472,10 +481,7 @@ double lame_error(unsigned int n, const std::string& kinematics = "small_strain"
   prm.kinematics = kinematics;
   prm.flow_rule = "return_mapping";
   prm.stress_rate = "jaumann_log";
-  LsmfmSolver<2>::Material mat;
-  mat.youngs_modulus = 1e3;
-  mat.poisson_ratio = 0.3;
-  mat.yield_stress = std::numeric_limits<double>::infinity();
+  const auto mat = elastic_material();
   const double a = 1.0, b = 2.0, E = mat.youngs_modulus, nu = mat.poisson_ratio;
   auto solver = ring_solver(n, a, 0.0, prm, mat);
   const auto u_exact = [&](double r) {
@@ -537,10 +543,7 @@ TEST(Lsmfm, AxisymmetricLameCylinderConverges) {
 double axial_shear_error(unsigned int n) {
   LsmfmParameters prm;
   prm.plane_model = "axisymmetric";
-  LsmfmSolver<2>::Material mat;
-  mat.youngs_modulus = 1e3;
-  mat.poisson_ratio = 0.3;
-  mat.yield_stress = std::numeric_limits<double>::infinity();
+  const auto mat = elastic_material();
   const double a = 1.0, b = 2.0, c = 1e-3, mu = mat.youngs_modulus / (2 * (1 + mat.poisson_ratio));
   auto solver = ring_solver(n, a, 0.0, prm, mat);
   std::vector<LsmfmSolver<2>::DisplacementCondition> uc;
@@ -627,10 +630,7 @@ TEST(Lsmfm, BoundarySpringGivesTheSeriesStiffness) {
 TEST(Lsmfm, AxisymmetricBodyOnTheAxisIsRefused) {
   LsmfmParameters prm;
   prm.plane_model = "axisymmetric";
-  LsmfmSolver<2>::Material mat;
-  mat.youngs_modulus = 1e3;
-  mat.poisson_ratio = 0.3;
-  mat.yield_stress = std::numeric_limits<double>::infinity();
+  const auto mat = elastic_material();
   EXPECT_THROW(ring_solver(4, -0.5, 0.0, prm, mat), InvalidInput);
 }
 
