@@ -13,11 +13,13 @@
 // conditions). Every node of the top and side faces is a contact candidate. A node in contact
 // holds u_z(x_A) = z_p − Z_A and takes the friction traction e_r·(σ e_z) on the platen's
 // normal (fixed in space, so the traction condition takes it as the spatial normal). The
-// friction law is Coulomb's regularised (Wriggers, Computational Contact Mechanics, ch. 5):
-// with τ = μ p (p = −σ_zz the contact pressure) or, sticking, τ = σ_Y/√3 (the friction factor
-// m = 1 of metal forming: a sticking face shears the material below it), the traction is
-// −τ s/s₀ for the slip s of the node in the step below s₀ = (Slip regularisation) × the
-// platen's travel (a boundary spring, solved with the step), −τ sign(s) beyond.
+// friction law is Coulomb's, regularised in the slip increment: with τ = μ p (p = −σ_zz the
+// contact pressure) or, sticking, τ = σ_Y/√3 (the friction factor m = 1 of metal forming: a
+// sticking face shears the material below it), the traction is −τ s/s₀ for the slip s of the
+// node in the step below s₀ = (Slip regularisation) × the platen's travel in the step (a
+// boundary spring anchored at the step's start, solved with the step), −τ sign(s) beyond.
+// Since s is the slip rate times the step, this is a viscous regularisation: a node that does
+// not move in a step carries no friction traction.
 // The contact state is found per load step by repeated trial solves of the same step
 // (LsmfmSolver::solve_trial): a free node that crossed the platen comes into contact, a node
 // whose contact pressure is tensile leaves, a node passes between the spring and the full
@@ -28,7 +30,8 @@
 // Figures. Per friction case (label L: mu0, mu0_05, ..., stick): the inner and outer diameter
 // change at the mid-plane [%] (the calibration measure: the mid-plane is where the hole's wall
 // bulges furthest in or out), the platen load [kN] (the mid-plane section's ∫ −σ_zz 2πr dr,
-// which equilibrium makes the platen force), and the contact rounds. Frictionless, the
+// which equilibrium makes the platen force) and its ratio to the frictionless case's, the
+// top face's load against it, and the contact rounds. Frictionless, the
 // compression is homogeneous and has a closed form (frictionless_*_error_relative).
 // ring_compression.csv and ring_compression.png hold the load–stroke curves and the
 // calibration curves (inner diameter change against height reduction).
@@ -37,6 +40,7 @@
 #include "applications/framework/run_context.h"
 #include "applications/framework/scenario.h"
 #include "applications/studies/study_plot.h"
+#include "applications/validation/lsmfm_material.h"
 #include "base/exceptions.h"
 #include "fem/materials/law_parameters.h"
 #include "meshfree/lsmfm/lsmfm_solver.h"
@@ -98,13 +102,11 @@ struct RingParameters {
                       "fraction, and the set's changes move the contact pressures by about as "
                       "much [-].");
     prm.declare_entry("Slip regularisation", "0.05", Double(0.0, 1.0),
-                      "Coulomb's law regularised: a node's friction traction is −μ p s/s₀ for a "
-                      "slip s in the step below s₀ (a boundary spring solved with the step), "
-                      "−μ p sign(s) beyond, with s₀ this fraction of the platen's travel in the "
-                      "step. It stands for sticking near the neutral radius, where the slip's "
-                      "sign changes; a point stick condition there holds the node without a "
-                      "traction a stick/slip test could read (the least-squares stress has no "
-                      "peak at a pinned node) [-].");
+                      "The friction law regularised in the slip increment: a node's friction "
+                      "traction is −τ s/s₀ for a slip s in the step below s₀ (a boundary spring "
+                      "anchored at the step's start, solved with the step), −τ sign(s) beyond, "
+                      "with τ = μ p (or σ_Y/√3 sticking) and s₀ this fraction of the platen's "
+                      "travel in the step; > 0 [-].");
   }
 
   void parse(const dealii::ParameterHandler& prm) {
@@ -117,6 +119,10 @@ struct RingParameters {
     contact_rounds = prm.get_integer("Contact rounds");
     contact_tolerance = prm.get_double("Contact tolerance");
     slip_regularisation = prm.get_double("Slip regularisation");
+    if (!(slip_regularisation > 0))
+      throw InvalidInput("Ring compression/Slip regularisation", "= 0",
+                         "a fraction of the platen's travel in a step > 0 (0 would be "
+                         "Coulomb's law unregularised, a stiffness τ/0) [-]");
     const auto where = "Ring compression/Friction";
     friction.clear();
     labels.clear();
@@ -192,13 +198,7 @@ class RingCompression : public Scenario {
     parse_section(args.prm, "Material", law_);
     parse_section(args.prm, "LSMFM", lsmfm_);
     parse_section(args.prm, "Ring compression", ring_);
-    if (law_.model != "j2_finite_strain" && law_.model != "j2_plasticity")
-      throw InvalidInput("Material/Model", "'" + law_.model + "' for the ring compression",
-                         "j2_finite_strain (or j2_plasticity: the LSMFM has its own J2 flow "
-                         "rule with linear hardening, Kwon & Youn eqs. 12-14)");
-    if (law_.saturation_stress > 0)
-      throw InvalidInput("Material/Saturation stress", "> 0 with the LSMFM",
-                         "0: the LSMFM's hardening is linear (Kwon & Youn eq. 12c)");
+    material_ = lsmfm_material<2>(law_, "j2_finite_strain|j2_plasticity", "the ring compression");
     lsmfm_.plane_model = "axisymmetric";
     lsmfm_.kinematics = "finite_strain"; // a 50 % reduction
     lsmfm_.validate();
@@ -207,10 +207,7 @@ class RingCompression : public Scenario {
   bool check_by_building() const override { return true; }
 
   void run(RunContext& ctx) override {
-    if (ctx.n_ranks() != 1)
-      throw InvalidInput("MPI ranks", std::to_string(ctx.n_ranks()),
-                         "1: the LSMFM solver runs on one rank (its matrix is a serial "
-                         "sparse Cholesky factorisation)");
+    require_one_lsmfm_rank(ctx.n_ranks());
     make_nodes();
     ctx.log() << "  ring " << ring_.outer_diameter * 1e3 << " x " << ring_.inner_diameter * 1e3
               << " x " << ring_.height * 1e3 << " mm, quarter section " << n_r_ << " x " << n_z_
@@ -280,6 +277,7 @@ class RingCompression : public Scenario {
 
  private:
   materials::LawParameters law_;
+  meshfree::LsmfmSolver<2>::Material material_;
   meshfree::LsmfmParameters lsmfm_;
   RingParameters ring_;
   std::vector<dealii::Point<2>> nodes_;
@@ -366,13 +364,8 @@ class RingCompression : public Scenario {
     const auto start = std::chrono::steady_clock::now();
     const double mu = ring_.friction[c];
     const std::string& label = ring_.labels[c];
-    typename meshfree::LsmfmSolver<2>::Material mat;
-    mat.youngs_modulus = law_.youngs_modulus;
-    mat.poisson_ratio = law_.poisson_ratio;
-    mat.yield_stress = law_.yield_stress;
-    mat.hardening_modulus = law_.hardening_modulus;
     const auto rule = integration_rule();
-    meshfree::LsmfmSolver<2> solver(lsmfm_, mat, nodes_, spacing_, rule.points, rule.weights);
+    meshfree::LsmfmSolver<2> solver(lsmfm_, material_, nodes_, spacing_, rule.points, rule.weights);
     if (c == 0)
       ctx.log() << "  LSMFM: " << nodes_.size() << " nodes, " << rule.points.size()
                 << " integration points (" << lsmfm_.integration << "), " << solver.n_unknowns()
@@ -390,6 +383,10 @@ class RingCompression : public Scenario {
         n.corner = n.on_top && n.side_normal != 0;
         if (n.on_top) { // touching the platen at the start
           n.state = ContactNode::State::spring;
+          // The first trial's friction law needs a pressure: the yield stress, about what
+          // a plastic ring presses with (a frictionless first trial would send every node far
+          // past s₀).
+          n.pressure = law_.yield_stress;
         }
         contact.push_back(n);
       }
@@ -443,7 +440,9 @@ class RingCompression : public Scenario {
       unsigned int in_contact = 0, full_slip = 0;
       for (const auto& n : contact) {
         in_contact += n.state != ContactNode::State::free;
-        full_slip += n.state == ContactNode::State::slip; // at the full Coulomb traction
+        // At the full friction traction, or sliding without friction.
+        full_slip += n.state == ContactNode::State::slip ||
+                     (n.state != ContactNode::State::free && (mu == 0 || n.corner));
       }
       csv << label << "," << 100 * ring_.height_reduction * t << "," << 2e3 * stroke << ","
           << result.load / 1e3 << "," << result.inner_change << "," << result.outer_change << ","
@@ -478,7 +477,7 @@ class RingCompression : public Scenario {
       ctx.log() << "    sticking at r [mm]:" << (where.str().empty() ? " none" : where.str())
                 << "\n";
     }
-    write_vtu(ctx, solver, contact, label);
+    write_vtu(ctx, solver, contact, mu, label);
     result.seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return result;
@@ -598,10 +597,14 @@ class RingCompression : public Scenario {
         n.state = ContactNode::State::slip; // past the regularisation: the full traction
         n.slip_sign = std::copysign(1.0, slip);
         ++changes.states;
-      } else if (n.state == ContactNode::State::slip && slip * n.slip_sign < 0.5 * slip_scale) {
-        n.state = ContactNode::State::spring; // back within it (half of s₀: a hysteresis)
+      } else if (n.state == ContactNode::State::slip && slip * n.slip_sign < 0.95 * slip_scale) {
+        // Back within it; the 5 % band keeps a node whose slip sits at s₀ from switching
+        // every trial, and accepts at most 5 % more traction than τ s/s₀ there.
+        n.state = ContactNode::State::spring;
         ++changes.states;
       }
+      if (!std::isfinite(mu))
+        continue; // τ = σ_Y/√3 does not depend on the pressure
       // The pressure the law uses follows the trials until it settles.
       const double change = std::abs(std::max(p, 0.0) - n.pressure);
       if (change > ring_.contact_tolerance * sy) {
@@ -630,19 +633,22 @@ class RingCompression : public Scenario {
 
   // The nodes of the final state (current positions through the displacement) with stress.
   void write_vtu(RunContext& ctx, const meshfree::LsmfmSolver<2>& solver,
-                 const std::vector<ContactNode>& contact, const std::string& label) const {
+                 const std::vector<ContactNode>& contact, double mu,
+                 const std::string& label) const {
     std::vector<double> volume(nodes_.size(), dr_ * dz_);
     auto set = meshfree::ParticleSet<2>::from_points(nodes_, volume);
     auto& vm = set.add_scalar_field("von_mises_Pa");
     auto& srr = set.add_scalar_field("stress_rr_Pa");
     auto& szz = set.add_scalar_field("stress_zz_Pa");
     auto& stt = set.add_scalar_field("stress_hoop_Pa");
-    // 0 not a candidate or free, 1 within the friction regularisation (sticking), 2 slipping.
+    // 0 not a candidate or free; in contact: 1 within the friction regularisation (sticking),
+    // 2 slipping at the full friction traction, 3 without friction traction (μ = 0, corners).
     auto& state = set.add_scalar_field("contact_state");
     for (const auto& n : contact)
-      state[n.node] = n.state == ContactNode::State::spring ? 1.0
-                      : n.state == ContactNode::State::slip ? 2.0
-                                                            : 0.0;
+      state[n.node] = n.state == ContactNode::State::free     ? 0.0
+                      : mu == 0 || n.corner                   ? 3.0
+                      : n.state == ContactNode::State::spring ? 1.0
+                                                              : 2.0;
     for (unsigned int j = 0; j < nodes_.size(); ++j) {
       set.displacement(j) = solver.displacement(nodes_[j]);
       const auto s = solver.stress(nodes_[j]);

@@ -942,11 +942,14 @@ void LsmfmSolver<dim>::accept_step() {
 template <int dim>
 typename LsmfmSolver<dim>::StepResult LsmfmSolver<dim>::solve_trial() {
   // A failed trial closes the step and leaves the last committed state.
+  const bool opens = !open_step_;
   try {
     return trial();
   } catch (...) {
     open_step_ = false;
     U_ = U_n_;
+    if (opens)
+      --step_; // the step it opened is not taken
     throw;
   }
 }

@@ -130,9 +130,9 @@ class LsmfmSolver {
   // solve_trial() solves the load step and leaves it open; called again (after new
   // set_conditions) it solves the same step from the last trial; accept_step() commits it.
   StepResult solve_trial();
-  void accept_step();
-  // A trial that throws closes the step: the next solve_step/solve_trial starts a new one from
+  // A trial that throws closes the step: the next solve_step/solve_trial starts it again from
   // the last accepted state.
+  void accept_step();
 
   // Results.
   unsigned int n_nodes() const { return mls_.nodes().size(); }

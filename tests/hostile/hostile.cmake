@@ -219,6 +219,10 @@ spinesim_add_hostile_test(ring_compression_friction_not_a_number
   ARGS check ${PROJECT_SOURCE_DIR}/applications/validation/lsmfm_ring_compression.prm
   --set "Ring compression/Friction=0, 0.1x"
   MATCH "Ring compression/Friction.*0.1x.*Coulomb coefficients >= 0 or `stick`")
+spinesim_add_hostile_test(ring_compression_no_slip_regularisation
+  ARGS check ${PROJECT_SOURCE_DIR}/applications/validation/lsmfm_ring_compression.prm
+  --set "Ring compression/Slip regularisation=0"
+  MATCH "Ring compression/Slip regularisation.*> 0")
 spinesim_add_hostile_test(ring_compression_in_3d
   ARGS check ${PROJECT_SOURCE_DIR}/applications/validation/lsmfm_ring_compression.prm
   --set "Dimension=3" MATCH "Dimension.*2: the ring compression is axisymmetric")

@@ -84,28 +84,27 @@ spinesim_add_scene_test(validation.lsmfm_perforated_plate
   SET "Geometry/Global refinements=5"
   EXPECT "status==ok;relative_difference_vs_fem<=0.005;plastic_zone_png_valid>=1;max_yield_violation_relative<=0.005"
   LABELS "scene;validation;meshfree;long" TIMEOUT 10800)
-# The ring compression of Kwon & Youn (section 6.3) by the axisymmetric LSMFM, the whole scene
-# (four friction cases, 40 steps each, 117 nodes; about 30 s):
+# The ring compression of Kwon & Youn (section 6.3) by the axisymmetric LSMFM, the Coulomb
+# cases (40 steps each, 117 nodes; about 12 s):
 #  * frictionless the compression is homogeneous: inner diameter and load against the closed
 #    form (ε_z = ln 0.5, J2 with linear hardening); the field is in the linear MLS space, so
 #    only Newton's tolerance is left (measured 1.2e-5 and 7e-6; bound 1e-4), and the two
 #    sections carry the same load (bound 1e-4);
-#  * the paper's finding: the hole grows with low friction (0.05: measured +17.2 %, +16.0 % at
-#    half the node spacing) and shrinks with high friction (0.2: -31.2 %; sticking: -59.2 %),
-#    and every step up in friction lowers its change (the smallest fall, 24.2 percentage points;
-#    bound 1);
-#  * Coulomb friction raises the forming load above the frictionless one (measured 1.12 and
-#    1.20 times; bound 1).
+#  * the paper's finding: the hole grows with low friction (0.05: measured +17.2 %, +16.0 % at half the node spacing) and shrinks with
+#    high friction (0.2: -31.3 %, -36.2 % at half the spacing), every step up in friction lowering its change (bound 1
+#    percentage point);
+#  * friction raises the forming load above the frictionless one (measured 1.12 and 1.20 times; bound 1).
 spinesim_add_scene_test(validation.lsmfm_ring_compression
-  SCENE ${_val}/lsmfm_ring_compression.prm
-  EXPECT "status==ok;frictionless_inner_diameter_error_relative<=1e-4;frictionless_load_error_relative<=1e-4;load_sections_mismatch_relative_mu0<=1e-4;inner_diameter_change_percent_mu0_05>=1;inner_diameter_change_percent_mu0_2<=-1;inner_diameter_change_percent_stick<=-1;inner_diameter_smallest_fall_with_friction_percent>=1;load_over_frictionless_mu0_05>=1;load_over_frictionless_mu0_2>=1;ring_compression_png_valid>=1"
+  SCENE ${_val}/lsmfm_ring_compression.prm SET "Ring compression/Friction=0, 0.05, 0.2"
+  EXPECT "status==ok;frictionless_inner_diameter_error_relative<=1e-4;frictionless_load_error_relative<=1e-4;load_sections_mismatch_relative_mu0<=1e-4;inner_diameter_change_percent_mu0_05>=1;inner_diameter_change_percent_mu0_2<=-1;inner_diameter_smallest_fall_with_friction_percent>=1;load_over_frictionless_mu0_05>=1;load_over_frictionless_mu0_2>=1;ring_compression_png_valid>=1"
   LABELS "scene;validation;meshfree" TIMEOUT 600)
-# Sticking friction should need the largest load of all; the LSMFM's falls after 24 % of
-# reduction to a third of the frictionless load at 50 % (docs/lsmfm.md, "what is not trusted
-# yet"). Label known_failure until an independent reference settles it.
-spinesim_add_scene_test(validation.lsmfm_ring_compression_sticking_load
+# Sticking friction (m = 1) should need the largest load of all; the LSMFM's falls after about
+# a quarter of the reduction to a third of the frictionless load at 50 % (docs/lsmfm.md, "what
+# is not trusted yet"), so its results are asserted here only, labelled known_failure until an
+# independent reference settles them.
+spinesim_add_scene_test(validation.lsmfm_ring_compression_sticking
   SCENE ${_val}/lsmfm_ring_compression.prm SET "Ring compression/Friction=0, stick"
-  EXPECT "status==ok;load_over_frictionless_stick>=1"
+  EXPECT "status==ok;load_over_frictionless_stick>=1;inner_diameter_change_percent_stick<=-1"
   LABELS "scene;validation;meshfree;known_failure" TIMEOUT 600)
 
 # The Taylor bar in explicit finite-strain FEM (applications/validation/taylor_bar_fem.prm):
