@@ -49,6 +49,7 @@
 #include "meshfree/particle_set.h"
 
 #include <deal.II/base/quadrature_lib.h>
+#include <deal.II/base/utilities.h>
 
 #include <algorithm>
 #include <chrono>
@@ -126,10 +127,8 @@ struct RingParameters {
     const auto where = "Ring compression/Friction";
     friction.clear();
     labels.clear();
-    std::stringstream list(prm.get("Friction"));
-    for (std::string item; std::getline(list, item, ',');) {
-      item.erase(0, item.find_first_not_of(" \t"));
-      item.erase(item.find_last_not_of(" \t") + 1);
+    // Comma-separated, whitespace trimmed (deal.II's list splitter, as the other list entries).
+    for (const std::string& item : dealii::Utilities::split_string_list(prm.get("Friction"), ',')) {
       if (item == "stick") {
         friction.push_back(stick);
         labels.push_back("stick");
