@@ -213,6 +213,8 @@ CellConverter<dim>::make_records(const std::set<std::string>& todo, double& max_
                                  ConversionReport<dim>& hole) const {
   const auto& fe = state_.fem.fe();
   const auto& bcs = state_.fem.boundary_conditions().dirichlet();
+  Vector<double> prescribed(dim);
+  const bool finite_strain = state_.fem.parameters().kinematics != "small_strain";
   FEValues<dim> at_points(state_.fem.mapping(), fe, state_.points,
                           update_values | update_quadrature_points | update_JxW_values);
   FEValues<dim> at_gauss(state_.fem.mapping(), fe, state_.fem.quadrature(),
@@ -328,6 +330,22 @@ CellConverter<dim>::make_records(const std::set<std::string>& todo, double& max_
       r.temperature = temperature[q];
       r.position = at_points.quadrature_point(q);
       r.displacement = u[q];
+      // A particle sits inside its cell, not on the boundary face. Under finite strain it
+      // keeps the offset from the prescribed value it has when it appears and moves with the
+      // prescribed motion after, instead of jumping onto the face's value: a particle of a
+      // crushed cell at a wall lies a fraction of a cell from where the face's value would
+      // put it. Under small strain the jump is of the order of the strain times the spacing
+      // and the particle takes the face's value, as do the cells that are particles from
+      // t = 0.
+      if (slots != 0 && finite_strain && state_.fem.time() > 0)
+        for (unsigned int k = 0; k < bcs.size(); ++k)
+          if ((slots >> k) & 1u) {
+            bcs[k].function->set_time(state_.fem.time());
+            bcs[k].function->vector_value(r.position, prescribed);
+            for (unsigned int c = 0; c < dim; ++c)
+              if (bcs[k].mask[c])
+                r.support_offset[c] = u[q][c] - prescribed[c];
+          }
       for (unsigned int d = 0; d < dim; ++d)
         r.velocity[d] = mean[d] + lambda * (v[q][d] + dv[d] - mean[d]);
       if (with_state) {
@@ -410,6 +428,7 @@ ConversionReport<dim> CellConverter<dim>::convert(const std::vector<CellId>& cel
       }
       state_.free[i] = 1;
       state_.fixed_slots[i] = r.fixed_slots;
+      state_.support_offset[i] = r.support_offset;
       state_.particles.volume(i) = r.volume;
       state_.particles.density(i) = r.density;
       state_.particles.temperature(i) = r.temperature;

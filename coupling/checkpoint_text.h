@@ -24,14 +24,14 @@ constexpr unsigned int checkpoint_state_doubles = 15;
 
 // One particle's line: host cell (deal.II CellId text) and quadrature point, free flag,
 // Dirichlet slots, volume, density, temperature, reference position, displacement, velocity
-// (the first `dim` entries of the arrays are used).
+// and (version 5) the support offset (the first `dim` entries of the arrays are used).
 struct CheckpointParticle {
   std::string cell;
   unsigned int point = 0;
   bool free = false;
   std::uint32_t fixed_slots = 0;
   double volume = 0, density = 0, temperature = 0;
-  std::array<double, 3> position{}, displacement{}, velocity{};
+  std::array<double, 3> position{}, displacement{}, velocity{}, support_offset{};
 };
 
 // The material history of the family of `particle` towards `neighbour`.

@@ -20,16 +20,51 @@ template <int dim>
 double CoupledIntegrator<dim>::stable_time_step() const {
   const auto& particles = state_.particles;
   const MPI_Comm comm = state_.fem.mpi_communicator(); // rows live with their owners
-  const double dt_fem = state_.fem.stable_time_step();
+  stiffness_bound_.clear();
+  if (state_.n_free_particles() > 0)
+    stiffness_bound_ = state_.method->stiffness_bound(particles, state_.bonds);
+  particle_step_ = Utilities::MPI::min(particle_step(), comm);
+  return combined_step(state_.fem.stable_time_step(), particle_step_);
+}
+
+template <int dim>
+double CoupledIntegrator<dim>::stable_time_step_fem_refreshed() const {
+  if (!(particle_step_ > 0))
+    return stable_time_step();
+  if (state_.fem.parameters().kinematics != "small_strain")
+    particle_step_ = Utilities::MPI::min(particle_step(), state_.fem.mpi_communicator());
+  return combined_step(state_.fem.stable_time_step(), particle_step_);
+}
+
+template <int dim>
+double CoupledIntegrator<dim>::particle_step() const {
+  const auto& particles = state_.particles;
+  const bool finite_strain = state_.fem.parameters().kinematics != "small_strain";
   double dt_pd = std::numeric_limits<double>::infinity();
-  if (state_.n_free_particles() > 0) {
-    const auto S = state_.method->stiffness_bound(particles, state_.bonds);
-    for (unsigned int i = 0; i < particles.size(); ++i)
-      if (state_.free[i] && S[i] > 0)
-        dt_pd = std::min(dt_pd, state_.prm.time_step_safety *
-                                    std::sqrt(2.0 * particles.density(i) / S[i]));
+  for (unsigned int i = 0; i < stiffness_bound_.size(); ++i) {
+    if (!state_.free[i] || !(stiffness_bound_[i] > 0))
+      continue;
+    // Under finite strain a compressed family is stiffer in its reference coordinates: a
+    // bond shortened to λ of its length stiffens like a cell edge shortened to λ (the FEM's
+    // step of the current cells), so the bound grows by 1/λ² with the family's shortest
+    // stretch (Belytschko, Liu & Moran 2000, §6.3: the step scales with the current element
+    // size).
+    double stretch = 1;
+    if (finite_strain)
+      for (std::size_t k = state_.bonds.begin(i); k < state_.bonds.end(i); ++k) {
+        const unsigned int j = state_.bonds.neighbor[k];
+        const auto xi = particles.reference_position(j) - particles.reference_position(i);
+        const auto eta = particles.displacement(j) - particles.displacement(i);
+        stretch = std::min(stretch, (xi + eta).norm() / xi.norm());
+      }
+    dt_pd = std::min(dt_pd, state_.prm.time_step_safety * stretch *
+                                std::sqrt(2.0 * particles.density(i) / stiffness_bound_[i]));
   }
-  dt_pd = Utilities::MPI::min(dt_pd, comm);
+  return dt_pd;
+}
+
+template <int dim>
+double CoupledIntegrator<dim>::combined_step(double dt_fem, double dt_pd) const {
   if (!(splice_.on() && state_.n_free_particles() > 0))
     return std::min(dt_fem, dt_pd);
   // The energy splice adds the two models' stiffnesses where they overlap (the ghost band

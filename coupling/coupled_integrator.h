@@ -40,6 +40,11 @@ class CoupledIntegrator {
         fracture_(fracture), converter_(converter), splice_(splice), energy_(state) {}
 
   double stable_time_step() const; // min(FEM CFL step, PD step) [s]
+  // The same with the FEM's step of its current cells and the particles' step of the last
+  // stable_time_step(): under finite strain the FEM's cells shrink from step to step (crushed
+  // cells set the step), while the particles' bound only changes where bonds break or
+  // particles are added.
+  double stable_time_step_fem_refreshed() const;
   // One central-difference step of both models (see advance()).
   void step(double dt);
   // Whether any bond broke on any rank in the last step (collective). Breaking can stiffen a
@@ -75,6 +80,11 @@ class CoupledIntegrator {
   void share_bond_breaks();
   // NumericalFailure naming the particle if a free particle outruns the P wave (divergence).
   void check_particle_speeds() const;
+  // This rank's particle step from stiffness_bound_ and, under finite strain, the current
+  // bond stretches [s].
+  double particle_step() const;
+  // min(dt_fem, dt_pd), or the energy splice's bound on the sum of the parts' frequencies.
+  double combined_step(double dt_fem, double dt_pd) const;
 
   CouplingState<dim>& state_;
   GhostLayer<dim>& ghosts_;
@@ -92,6 +102,10 @@ class CoupledIntegrator {
   bool any_broken_ = false;
   unsigned int steps_since_splice_check_ = 0;
   double particle_force_seconds_ = 0, particle_updates_ = 0;
+  // The particles' stable step at the last stable_time_step() [s]; -1 before the first.
+  mutable double particle_step_ = -1;
+  // The method's stiffness bound per particle at the last stable_time_step() [N/m per m^3].
+  mutable std::vector<double> stiffness_bound_;
   // Net accelerations of the free particle components at the last relaxation step [m/s²].
   std::vector<double> relax_acceleration_;
 };

@@ -74,8 +74,8 @@ void CouplingCheckpoint<dim>::save(const std::string& file) const {
   // Version 2 adds the fracture-heat totals (the per-particle accounts are handed to the FEM
   // at the end of every macro step, so they are empty when a checkpoint is written); version 3
   // the material history of the particle method; version 4 its fracture damage D_f (one more
-  // number per history record).
-  out << "spinesim_coupling 4\n"
+  // number per history record); version 5 the particles' support offsets (dim numbers more).
+  out << "spinesim_coupling 5\n"
       << p_.integrator.time() << " " << particles.size() << " " << p_.converter.converted().size()
       << " " << broken.size() << " " << dissipation << " " << p_.fracture.heat() << " " << n_history
       << "\n";
@@ -89,6 +89,8 @@ void CouplingCheckpoint<dim>::save(const std::string& file) const {
       out << " " << particles.reference_position(i)[d];
     for (unsigned int d = 0; d < dim; ++d)
       out << " " << particles.displacement(i)[d] << " " << particles.velocity(i)[d];
+    for (unsigned int d = 0; d < dim; ++d)
+      out << " " << state.support_offset[i][d];
     out << "\n";
   }
   for (const auto& [i, j] : broken)
@@ -138,6 +140,8 @@ void CouplingCheckpoint<dim>::load(const std::string& file) {
     particles.velocity(k) = v;
     state.free[k] = static_cast<std::uint8_t>(r.free);
     state.fixed_slots[k] = r.fixed_slots;
+    for (unsigned int d = 0; d < dim; ++d)
+      state.support_offset[k][d] = r.support_offset[d];
   }
   std::vector<meshfree::HistoryRecord> history(c.history.size());
   for (std::size_t k = 0; k < history.size(); ++k) {

@@ -34,9 +34,26 @@ CouplingState<dim>::CouplingState(const CouplingParameters<dim>& parameters,
     throw InvalidInput("Mechanics/Time integration",
                        "coupling runs explicit dynamics or quasi-static relaxation",
                        "explicit or quasi_static");
-  if (fem.parameters().kinematics != "small_strain" || fem.parameters().fe_degree != 1)
-    throw InvalidInput("Mechanics/Kinematics", "coupling needs small strain with Q1 elements",
-                       "Kinematics = small_strain, Finite element degree = 1");
+  if (fem.parameters().fe_degree != 1)
+    throw InvalidInput("Mechanics/Finite element degree", "coupling needs Q1 elements",
+                       "Finite element degree = 1");
+  // Finite strain couples in explicit dynamics: ghosts follow the FEM's material points and
+  // their forces return through the same shape functions (a total-Lagrangian virtual work),
+  // so nothing in the overlap splice assumes small strain. The energy splice's correction is
+  // built from the small-strain tangent, and quasi-static relaxation with finite strain is
+  // not verified.
+  if (fem.parameters().kinematics != "small_strain") {
+    if (fem.parameters().time_integration != "explicit")
+      throw InvalidInput("Mechanics/Kinematics",
+                         "coupling with finite strain runs explicit dynamics only",
+                         "Time integration = explicit with Kinematics = finite_strain, or "
+                         "Kinematics = small_strain");
+    if (prm.splice == "energy")
+      throw InvalidInput("Coupling/Splice",
+                         "the energy splice's consistency correction is built from the "
+                         "small-strain tangent",
+                         "Splice = overlap with Kinematics = finite_strain");
+  }
 }
 
 template <int dim>
@@ -203,6 +220,7 @@ unsigned int CouplingState<dim>::add_particle(const std::string& cell_id, unsign
   host_index.push_back(it == owned_cells.end() ? -1
                                                : static_cast<int>(it->second->active_cell_index()));
   fixed_slots.push_back(0);
+  support_offset.emplace_back();
   return i;
 }
 
@@ -215,6 +233,7 @@ void CouplingState<dim>::clear_particles() {
   host_index.clear();
   index_of.clear();
   fixed_slots.clear();
+  support_offset.clear();
 }
 
 template struct CouplingState<2>;

@@ -112,6 +112,9 @@ struct CouplingState {
   std::vector<int> host_index;
   std::map<std::pair<std::string, unsigned int>, unsigned int> index_of; // (cell, point) -> i
   std::vector<std::uint32_t> fixed_slots; // per particle: Dirichlet slots of its cell
+  // Per particle: its fixed components' offset from the prescribed values [m]
+  // (ParticleRecord::support_offset).
+  std::vector<dealii::Tensor<1, dim>> support_offset;
   // Rank owning each particle's host cell (empty on one rank: all owned); ParticleHalo::plan.
   std::vector<int> owner;
   // Owned host cells of free particles in ascending active index (temperatures, fracture

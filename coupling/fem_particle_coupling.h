@@ -92,6 +92,10 @@ class FemParticleCoupling {
   void refresh();
 
   double stable_time_step() const; // min(FEM CFL step, PD step) [s]
+  // CoupledIntegrator::stable_time_step_fem_refreshed (finite strain: every step).
+  double stable_time_step_fem_refreshed() const {
+    return integrator_.stable_time_step_fem_refreshed();
+  }
   // One central-difference step of both models (see CoupledIntegrator::advance).
   void step(double dt);
   // Whether bonds broke anywhere in the last step (collective; see CoupledIntegrator).

@@ -50,6 +50,7 @@ void MlsInterface<dim>::rebuild() {
                           fe.system_to_component_index(i).first};
   }
   PointBins<dim> bins(free_points, state_.prm.interface_radius * state_.spacing * 4);
+  const bool finite_strain = state_.fem.parameters().kinematics != "small_strain";
   std::vector<unsigned int> free_index;
   for (unsigned int i = 0; i < state_.particles.size(); ++i)
     if (state_.free[i])
@@ -81,13 +82,16 @@ void MlsInterface<dim>::rebuild() {
               ")",
           "convert larger blocks (Coupling/Buffer), use more particles per "
           "cell direction or a larger Coupling/Interface radius");
+    entry.offset = 0;
+    if (finite_strain)
+      entry.offset = state_.fem.displacement()(dof) - value(entry);
     dofs_.push_back(std::move(entry));
   }
 }
 
 template <int dim>
 double MlsInterface<dim>::value(const Dof& entry) const {
-  double value = 0;
+  double value = entry.offset;
   for (const auto& [p, w] : entry.weights)
     value += w * state_.particles.displacement(p)[entry.component];
   return value;

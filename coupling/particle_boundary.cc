@@ -39,9 +39,10 @@ void ParticleBoundary<dim>::apply(double time, double dt) {
     bc.function->vector_value(state_.particles.reference_position(f.particle), value);
     for (unsigned int c = 0; c < dim; ++c)
       if (bc.mask[c]) {
+        const double held = value[c] + state_.support_offset[f.particle][c];
         auto& u = state_.particles.displacement(f.particle)[c];
-        state_.particles.velocity(f.particle)[c] = dt > 0 ? (value[c] - u) / dt : 0.0;
-        u = value[c];
+        state_.particles.velocity(f.particle)[c] = dt > 0 ? (held - u) / dt : 0.0;
+        u = held;
       }
   }
 }

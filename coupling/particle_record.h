@@ -26,6 +26,9 @@ struct ParticleRecord {
   double temperature = 0;        // [K]
   dealii::Point<dim> position;   // reference position [m]
   dealii::Tensor<1, dim> displacement, velocity; // [m], [m/s]
+  // Of the fixed components: displacement at conversion less the prescribed value there [m]
+  // (ParticleBoundary holds u = g(X, t) + offset).
+  dealii::Tensor<1, dim> support_offset;
   // The cell's constitutive state at the particle (nearest quadrature point); only for
   // methods that carry material state.
   bool has_state = false;
@@ -34,7 +37,7 @@ struct ParticleRecord {
   template <class Archive>
   void serialize(Archive& ar, const unsigned int) {
     ar& cell& point& free& fixed_slots& volume& density& temperature& position& displacement&
-        velocity& has_state;
+        velocity& support_offset& has_state;
     if (has_state)
       ar& state.plastic_strain& state.elastic_left_cauchy_green& state
           .equivalent_plastic_strain& state.plastic_work& state.fracture_damage;
@@ -43,7 +46,8 @@ struct ParticleRecord {
   bool operator==(const ParticleRecord& o) const {
     return cell == o.cell && point == o.point && free == o.free && fixed_slots == o.fixed_slots &&
            volume == o.volume && density == o.density && temperature == o.temperature &&
-           position == o.position && displacement == o.displacement && velocity == o.velocity;
+           position == o.position && displacement == o.displacement && velocity == o.velocity &&
+           support_offset == o.support_offset;
   }
 };
 

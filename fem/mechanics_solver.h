@@ -151,7 +151,8 @@ class MechanicsSolver {
   // the velocities it finds as those of t_{−½}: h = dt, so the energy account books the
   // Dirichlet DoFs' jump to their prescribed velocity (an impact face stopped at t = 0) as
   // support work. set_state() keeps the last step (set_previous_step() sets it).
-  double stable_time_step() const;
+  // With `where`, also the centre of the cell that sets it (collective either way).
+  double stable_time_step(dealii::Point<dim>* where = nullptr) const;
   void explicit_step(double dt);
   // The velocity interval of an explicit step of dt taken next [s] (the coupling moves its
   // particles over the same interval).

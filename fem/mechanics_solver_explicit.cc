@@ -24,8 +24,9 @@ namespace spinesim::fem {
 using namespace dealii;
 
 template <int dim>
-double MechanicsSolver<dim>::stable_time_step() const {
+double MechanicsSolver<dim>::stable_time_step(Point<dim>* where) const {
   double dt = std::numeric_limits<double>::max();
+  Point<dim> centre; // of the cell that sets the step (deformed under finite strain)
   // Finite strain: the cells as they are now (an impact can shorten them several times).
   const bool current = prm_.kinematics == "finite_strain";
   std::vector<Point<dim>> x(GeometryInfo<dim>::vertices_per_cell);
@@ -54,8 +55,20 @@ double MechanicsSolver<dim>::stable_time_step() const {
               ? std::sqrt(law.youngs_modulus() /
                           ((1 - law.poisson_ratio() * law.poisson_ratio()) * law.density()))
               : law.p_wave_speed();
-      dt = std::min(dt, h / c);
+      if (h / c < dt) {
+        dt = h / c;
+        if (where) {
+          centre = Point<dim>();
+          for (const unsigned int v : cell->vertex_indices())
+            centre += (current ? x[v] : cell->vertex(v)) / double(cell->n_vertices());
+        }
+      }
     }
+  if (where) {
+    const auto m = Utilities::MPI::min_max_avg(dt, comm_);
+    *where = Utilities::MPI::broadcast(comm_, centre, m.min_index);
+    return prm_.cfl_safety_factor * m.min;
+  }
   return prm_.cfl_safety_factor * Utilities::MPI::min(dt, comm_);
 }
 
@@ -492,7 +505,7 @@ MechanicsSolver<dim>::solve_quasi_static_or_relax(double time, bool relax, doubl
 
 // Explicit instantiation of the members defined in this file.
 #define SPINESIM_INSTANTIATE(dim)                                                                  \
-  template double MechanicsSolver<dim>::stable_time_step() const;                                  \
+  template double MechanicsSolver<dim>::stable_time_step(Point<dim>*) const;                       \
   template void MechanicsSolver<dim>::explicit_step(double);                                       \
   template typename MechanicsSolver<dim>::RelaxationSums MechanicsSolver<dim>::relaxation_step(    \
       double, double, double, bool);                                                               \

@@ -6,6 +6,8 @@
 #include "base/exceptions.h"
 #include "base/expression_function.h"
 
+#include <deal.II/numerics/vector_tools_interpolate.h>
+
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -59,6 +61,21 @@ void SimulationParameters::declare(dealii::ParameterHandler& prm) {
       "||u_h - u|| / ||u|| at the end time, in the L2 norm over the FEM cells (Gauss rule of "
       "degree + 2) and the particles the method solves for (nodal integration, prescribed "
       "particles left out), with fem_ and particle_ parts when both exist; empty = none [m].");
+  prm.declare_entry(
+      "Initial velocity", "", dealii::Patterns::Anything(),
+      "Explicit FEM mechanics (alone or coupled): velocity of the body at t = 0, dim "
+      "';'-separated expressions in x, y, z (reference position), e.g. '0; 0; -227' for a bar "
+      "hitting a wall; Dirichlet components jump to their prescribed values in the first step "
+      "(an impact face stopped at t = 0), which the energy account books as support work. "
+      "Cells that are particles from t = 0 hand it to their particles. Its kinetic energy is "
+      "the account's initial energy; empty = at rest [m/s].");
+  prm.declare_entry(
+      "Minimum time step ratio", "1e-3", Double(0, 1),
+      "Explicit mechanics: the run stops as failed (exit 1, naming the cell that sets the "
+      "step) when the stable step falls below this fraction of the stable step at the start: "
+      "cells crushing towards inversion under finite strain shrink the step without bound, "
+      "and the run would crawl on for ever. Converting such cells to particles (Coupling/"
+      "Minimum Jacobian ratio, Minimum time step) keeps the step up; 0 = never stop [-].");
   CrackOutputParameters::declare(prm);
 }
 
@@ -74,6 +91,8 @@ void SimulationParameters::parse(const dealii::ParameterHandler& prm) {
   stop_after_step = prm.get_integer("Stop after step");
   energy_account = prm.get_bool("Energy account");
   exact_displacement = prm.get("Exact displacement");
+  initial_velocity = prm.get("Initial velocity");
+  minimum_time_step_ratio = prm.get_double("Minimum time step ratio");
   crack.parse(prm);
   if (end_time <= 0)
     throw InvalidInput("Simulation/End time", "must be positive", "a time > 0 [s]");
@@ -111,6 +130,17 @@ Simulation<dim>::Simulation(const ScenarioFactoryArgs& args)
   }
   if (effects_.heat)
     parse_section(prm_, "Heat", heat_prm_);
+  if (!sim_.initial_velocity.empty()) {
+    if (!effects_.mechanics || quasi_static_)
+      throw InvalidInput("Simulation/Initial velocity",
+                         "a velocity field for the FEM body, but " +
+                             std::string(effects_.mechanics ? "the mechanics is quasi-static"
+                                                            : "Effects/Mechanics is off"),
+                         "empty, or Effects/Mechanics = true with Mechanics/Time integration = "
+                         "explicit (a particle zone alone takes Particles/Initial velocity)");
+    parse_expressions<dim>(sim_.initial_velocity, "Simulation/Initial velocity", dim, false,
+                           "[m/s]");
+  }
   if (sim_.energy_account && (effects_.mechanics ? quasi_static_ : !effects_.particles()))
     throw InvalidInput("Simulation/Energy account",
                        "true, but the account follows explicit central-difference steps",
@@ -212,8 +242,10 @@ void Simulation<dim>::build(RunContext& ctx) {
           for (auto& v : values)
             v += q;
       });
-    if (!ctx.restarting())
+    if (!ctx.restarting()) {
       mechanics_->setup();
+      set_initial_velocity();
+    }
     mechanics_->set_energy_account(sim_.energy_account);
     if (sim_.energy_account && ctx.restarting())
       ctx.warn("Simulation/Energy account starts again at the restart: the works and "
@@ -240,6 +272,25 @@ void Simulation<dim>::build(RunContext& ctx) {
   if (heat_)
     ctx.log() << ", heat " << heat_->dof_handler().n_dofs() << " DoFs";
   ctx.log() << "\n";
+}
+
+template <int dim>
+void Simulation<dim>::set_initial_velocity() {
+  if (sim_.initial_velocity.empty())
+    return;
+  const auto velocity = parse_expressions<dim>(sim_.initial_velocity, "Simulation/Initial velocity",
+                                               dim, false, "[m/s]");
+  const dealii::IndexSet& owned = mechanics_->locally_owned_dofs();
+  typename fem::MechanicsSolver<dim>::VectorType u(owned, mechanics_->mpi_communicator()),
+      v(owned, mechanics_->mpi_communicator());
+  dealii::VectorTools::interpolate(mechanics_->mapping(), mechanics_->dof_handler(), *velocity, v);
+  for (const auto i : owned)
+    if (!std::isfinite(v[i]))
+      throw InvalidInput("Simulation/Initial velocity",
+                         "not finite at a node of the mesh (e.g. x/r at r = 0)",
+                         "expressions finite at every node of the body [m/s]");
+  mechanics_->set_state(u, v);
+  initial_kinetic_energy_ = mechanics_->kinetic_energy();
 }
 
 template <int dim>
@@ -419,7 +470,12 @@ void Simulation<dim>::coupled_explicit(unsigned int, double time, double, RunCon
   double t = mechanics_->time();
   if (coupled_dt_ == 0)
     coupled_dt_ = coupled_->stable_time_step();
+  // Finite strain: the crushed cells set the FEM's step, which shrinks as they deform.
+  const bool finite_strain = mech_prm_.kinematics != "small_strain";
   while (t < time - 1e-12 * time) {
+    if (finite_strain)
+      coupled_dt_ = coupled_->stable_time_step_fem_refreshed();
+    check_time_step(coupled_dt_);
     coupled_->step(std::min(coupled_dt_, time - t));
     t = mechanics_->time();
     ++explicit_steps_;
@@ -445,10 +501,35 @@ void Simulation<dim>::coupled_explicit(unsigned int, double time, double, RunCon
 }
 
 template <int dim>
+void Simulation<dim>::check_time_step(double stable) {
+  if (!(first_stable_step_ > 0))
+    first_stable_step_ = stable;
+  if (!(stable >= sim_.minimum_time_step_ratio * first_stable_step_)) {
+    dealii::Point<dim> where;
+    const double fem_step = mechanics_->stable_time_step(&where);
+    std::ostringstream what, location;
+    what << "the stable time step fell to " << stable << " s, below Simulation/Minimum time "
+         << "step ratio (" << sim_.minimum_time_step_ratio << ") times the first step ("
+         << first_stable_step_ << " s)";
+    if (fem_step <= stable * (1 + 1e-12))
+      location << "the cell centred at (" << where << ") (deformed), which sets the step";
+    else
+      location << "the particles (the FEM's step is " << fem_step << " s)";
+    throw NumericalFailure(what.str(), location.str(),
+                           "cells are crushing towards inversion: convert them to particles "
+                           "(Effects/Coupling and Conversion with Coupling/Minimum Jacobian "
+                           "ratio or Minimum time step), refine there, or lower the impact; "
+                           "0 switches this check off");
+  }
+}
+
+template <int dim>
 void Simulation<dim>::fem_explicit(unsigned int, double time, double, RunContext&) {
   double t = mechanics_->time();
   while (t < time - 1e-12 * time) {
-    const double h = std::min(mechanics_->stable_time_step(), time - t);
+    const double stable = mechanics_->stable_time_step();
+    check_time_step(stable);
+    const double h = std::min(stable, time - t);
     mechanics_->explicit_step(h);
     t = mechanics_->time();
     if (sim_.reaction_boundary_id >= 0)

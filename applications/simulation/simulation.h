@@ -29,6 +29,8 @@ struct SimulationParameters {
   bool energy_account = false;           // external work, energies, dissipations per step
   CrackOutputParameters crack;           // crack_path.csv and crack-line figures
   std::string exact_displacement;        // dim ';'-separated expressions; empty = none
+  std::string initial_velocity;          // FEM body at t = 0, dim expressions; empty = at rest
+  double minimum_time_step_ratio = 1e-3; // explicit: stop below this × the first stable step
 
   static void declare(dealii::ParameterHandler& prm);
   void parse(const dealii::ParameterHandler& prm);

@@ -92,11 +92,13 @@ void fill_crack_view(CrackView<dim>& v, const FemParticleCoupling<dim>* coupled,
 
 template <int dim>
 fem::EnergyBalance Simulation<dim>::energy_balance() const {
-  if (coupled_)
-    return coupled_->energy_balance();
   if (particles_ && !mechanics_) // summed over the ranks when the zone is distributed
     return particles_->energy_balance();
-  return fem::sum_energy({&mechanics_->energy_account()}, 0.0, mechanics_->mpi_communicator());
+  fem::EnergyBalance b = coupled_ ? coupled_->energy_balance()
+                                  : fem::sum_energy({&mechanics_->energy_account()}, 0.0,
+                                                    mechanics_->mpi_communicator());
+  b.initial_energy += initial_kinetic_energy_;
+  return b;
 }
 
 template <int dim>
@@ -147,7 +149,7 @@ void Simulation<dim>::record(unsigned int step, double time, RunContext& ctx) {
     const auto value = [](double x) { return x; };
     row.emplace_back("energy_time", value(b.time));
     row.emplace_back("external_work_J", value(b.external_work));
-    if (particles_)
+    if (particles_ || !sim_.initial_velocity.empty())
       row.emplace_back("initial_energy_J", value(b.initial_energy));
     row.emplace_back("strain_energy_J", value(b.strain_energy));
     row.emplace_back("kinetic_energy_J", value(b.kinetic_energy));

@@ -51,6 +51,12 @@ class Simulation : public framework::Scenario {
   void warn_outside_body(framework::RunContext& ctx) const;
   // Messages of the coupling and its particle method for the run log.
   void log_coupling_messages(framework::RunContext& ctx);
+  // Simulation/Initial velocity into the FEM's velocity (a new run, before the coupling
+  // converts its initial cells), and its kinetic energy.
+  void set_initial_velocity();
+  // NumericalFailure when an explicit stable step [s] falls below Simulation/Minimum time step
+  // ratio times the first one (a run's or a restart's first step).
+  void check_time_step(double stable);
   void advance_heat(unsigned int step, double time, double dt, framework::RunContext& ctx);
   // Mechanics: the integrator chosen in plan_step_modules, then the heat it hands over.
   void advance_mechanics(unsigned int step, double time, double dt, framework::RunContext& ctx);
@@ -100,6 +106,8 @@ class Simulation : public framework::Scenario {
       particles_pvd_{"particles.pvd"};
   unsigned int output_cycle_ = 0;
   double initial_heat_content_ = 0;
+  double initial_kinetic_energy_ = 0; // of Simulation/Initial velocity, at t = 0 [J, J/m in 2-D]
+  double first_stable_step_ = 0;      // explicit mechanics: the first stable step [s]
   unsigned int newton_iterations_ = 0, linear_iterations_ = 0;
   unsigned long relaxation_iterations_ = 0; // quasi-static coupled runs
   typename coupling::FemParticleCoupling<dim>::RelaxationReport last_relaxation_;

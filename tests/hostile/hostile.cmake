@@ -258,3 +258,19 @@ spinesim_add_hostile_test(fbar_in_a_newton_solve
 spinesim_add_hostile_test(restart_changes_the_model PREPARE run:${_quick}
   ARGS run --restart @KEEP@ --set "Mechanics/Boundary conditions/Dirichlet 2/Values=-1e-3*t"
   MATCH "--set Mechanics/Boundary conditions/Dirichlet 2/Values.*only a 'Stop after step'")
+# The FEM's initial velocity: only for explicit mechanics, finite at every node.
+spinesim_add_hostile_test(fem_initial_velocity_quasi_static
+  ARGS check ${_quick} --set "Simulation/Initial velocity=1"
+  MATCH "Simulation/Initial velocity.*the mechanics is quasi-static")
+set(_impact_scene ${PROJECT_SOURCE_DIR}/applications/validation/taylor_impact_plane_strain.prm)
+spinesim_add_hostile_test(fem_initial_velocity_one_expression
+  ARGS check ${_impact_scene} --set "Simulation/Initial velocity=1"
+  MATCH "Simulation/Initial velocity.*1 expressions")
+# Coupling with finite strain: explicit, the overlap splice, Q1.
+spinesim_add_hostile_test(coupling_finite_strain_energy_splice
+  ARGS check ${_impact_scene} --set "Coupling/Splice=energy"
+  MATCH "Coupling/Splice.*small-strain tangent")
+spinesim_add_hostile_test(coupling_finite_strain_quasi_static
+  ARGS check ${_impact_scene} --set "Mechanics/Time integration=quasi_static"
+       --set "Simulation/Energy account=false" --set "Simulation/Initial velocity="
+  MATCH "Mechanics/Kinematics.*explicit dynamics only")

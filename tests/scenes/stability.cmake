@@ -249,3 +249,45 @@ spinesim_add_comparison_test(stability.ring_fragmentation_restart_matches
   A ${_ring_runs}/bond_based_2d_1/summary.json B ${_ring_runs}/restart/summary.json
   CHECKS "energy_balance_error_relative:rel:1e-12;fracture_dissipation_J:rel:1e-12;kinetic_energy_J:rel:1e-12;max_particle_speed:rel:1e-12;broken_bonds:abs:0;fragments:abs:0"
   REQUIRES "ring_2d_1;ring_restarted" LABELS "scene;particles;stability")
+
+# Explicit finite-strain impacts: a copper bar hitting a rigid wall at 400 m/s
+# (taylor_impact_plane_strain.prm, taylor_impact_3d.prm). FEM alone, before its rim cells
+# collapse (hostile/failure_paths.cmake): the velocity field of Simulation/Initial velocity
+# carries ½ ρ V v0² exactly (the lumped masses sum to the body's mass: 73154.56 J/m in plane
+# strain, 234.094592 J for the 3-D quarter bar; 1e-12 is round-off), and the energy account
+# closes as for the FEM Taylor bar (measured 4.8e-4 at 20 us in 2-D, 1.17e-3 at 12 us in 3-D,
+# 4 us before the collapse, where the crushed rim cells carry the error; the Taylor bar in FEM
+# measured 4.7e-4 to 9.6e-4): bound 3e-3.
+set(_impact2 ${PROJECT_SOURCE_DIR}/applications/validation/taylor_impact_plane_strain.prm)
+set(_impact3 ${PROJECT_SOURCE_DIR}/applications/validation/taylor_impact_3d.prm)
+set(_fem_only "Effects/Coupling=false" "Effects/Conversion=false" "Effects/Particles method=none"
+    "Simulation/Write VTU=false")
+spinesim_add_scene_test(stability.impact_fem_initial_velocity_2d SCENE ${_impact2}
+  SET ${_fem_only} "Simulation/End time=2e-5" "Simulation/Steps=10"
+  EXPECT "status==ok;initial_energy_J~73154.56:1e-12;energy_balance_error_relative<=3e-3"
+  LABELS "scene;fem;validation;stability")
+spinesim_add_scene_test(stability.impact_fem_initial_velocity_3d SCENE ${_impact3}
+  SET ${_fem_only} "Simulation/End time=1.2e-5" "Simulation/Steps=6"
+  EXPECT "status==ok;initial_energy_J~234.094592:1e-12;energy_balance_error_relative<=3e-3"
+  LABELS "scene;fem;validation;stability")
+
+# The same plane-strain impact with the crushed cells converted to NOSB-PD particles (Jacobian
+# ratio below 0.3, docs/coupling.md, Finite strain): the run goes past the FEM's collapse at
+# 28 us to 40 us (measured: 38 cells converted from 24 us on, 152 particles, 26 s without the
+# energy account). Each conversion conserves mass and momentum to round-off (measured 3.6e-16
+# and 6.8e-16; 1e-12 as in the patch tests), and the particles carry the cells' equivalent
+# plastic strain (2.4e-16; 1e-10 as in coupling_plastic_conversion). The energy account is
+# not checked here: it does not close after the conversions (next test).
+set(_impact_coupled "status==ok;converted_cells>=1;conversion_mass_change_relative<=1e-12;conversion_momentum_change_relative<=1e-12;conversion_plastic_strain_error_relative<=1e-10")
+spinesim_add_scene_test(stability.impact_coupled_nosb_2d SCENE ${_impact2}
+  SET "Simulation/End time=4e-5" "Simulation/Steps=20" "Simulation/Write VTU=false"
+      "Simulation/Energy account=false"
+  EXPECT "${_impact_coupled}" LABELS "scene;coupling;stability" TIMEOUT 600)
+# The whole run to 60 us, with the energy account. Known to fail: the particles crush in turn
+# (a bond at 0.2 % of its length at 54 us collapses their step) and the account is off by
+# 18 % at 30 us (the cells ran F-bar, the particles evaluate the cells' state with their own F;
+# docs/coupling.md). The bound 5 % is what an overlap splice reaches on an elastic impact.
+spinesim_add_scene_test(stability.impact_coupled_nosb_2d_full SCENE ${_impact2}
+  SET "Simulation/Write VTU=false"
+  EXPECT "${_impact_coupled};energy_balance_error_relative<=0.05"
+  LABELS "scene;coupling;stability;known_failure" TIMEOUT 1800)
