@@ -52,6 +52,8 @@ double CoupledIntegrator<dim>::particle_step() const {
     double stretch = 1;
     if (finite_strain)
       for (std::size_t k = state_.bonds.begin(i); k < state_.bonds.end(i); ++k) {
+        if (state_.bonds.broken[k]) // no force: fragments may close up freely
+          continue;
         const unsigned int j = state_.bonds.neighbor[k];
         const auto xi = particles.reference_position(j) - particles.reference_position(i);
         const auto eta = particles.displacement(j) - particles.displacement(i);

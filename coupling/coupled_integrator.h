@@ -40,10 +40,10 @@ class CoupledIntegrator {
         fracture_(fracture), converter_(converter), splice_(splice), energy_(state) {}
 
   double stable_time_step() const; // min(FEM CFL step, PD step) [s]
-  // The same with the FEM's step of its current cells and the particles' step of the last
-  // stable_time_step(): under finite strain the FEM's cells shrink from step to step (crushed
-  // cells set the step), while the particles' bound only changes where bonds break or
-  // particles are added.
+  // The same with the FEM's step of its current cells and the particles' stiffness bound of the
+  // last stable_time_step(): under finite strain the FEM's cells shrink from step to step
+  // (crushed cells set the step) and the particles' step is recomputed from that bound and
+  // their current bond stretches; under small strain the particles' step is the last one.
   double stable_time_step_fem_refreshed() const;
   // One central-difference step of both models (see advance()).
   void step(double dt);
@@ -102,7 +102,8 @@ class CoupledIntegrator {
   bool any_broken_ = false;
   unsigned int steps_since_splice_check_ = 0;
   double particle_force_seconds_ = 0, particle_updates_ = 0;
-  // The particles' stable step at the last stable_time_step() [s]; -1 before the first.
+  // The particles' stable step at the last stable_time_step() (finite strain: at the last
+  // stable_time_step_fem_refreshed()) [s]; -1 before the first.
   mutable double particle_step_ = -1;
   // The method's stiffness bound per particle at the last stable_time_step() [N/m per m^3].
   mutable std::vector<double> stiffness_bound_;

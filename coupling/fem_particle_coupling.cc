@@ -74,6 +74,7 @@ void FemParticleCoupling<dim>::rebuild_layers() {
   interface_.rebuild();
   halo_.plan(interface_);
   ghosts_.update(); // owned ghosts from the FEM, then the halo (free particles included)
+  interface_.set_offsets();
   interface_.update();
   if (splice_.on()) {
     auto split = dof_split();
@@ -239,6 +240,8 @@ template <int dim>
 void FemParticleCoupling<dim>::impose_affine(const Tensor<2, dim>& H) {
   auto& solver = state_.fem;
   auto& particles = state_.particles;
+  // The state is made exactly affine: what the interface held from the last rebuild goes.
+  interface_.clear_offsets();
   class Affine : public Function<dim> {
    public:
     explicit Affine(const Tensor<2, dim>& H) : Function<dim>(dim), H_(H) {}

@@ -50,7 +50,6 @@ void MlsInterface<dim>::rebuild() {
                           fe.system_to_component_index(i).first};
   }
   PointBins<dim> bins(free_points, state_.prm.interface_radius * state_.spacing * 4);
-  const bool finite_strain = state_.fem.parameters().kinematics != "small_strain";
   std::vector<unsigned int> free_index;
   for (unsigned int i = 0; i < state_.particles.size(); ++i)
     if (state_.free[i])
@@ -82,11 +81,24 @@ void MlsInterface<dim>::rebuild() {
               ")",
           "convert larger blocks (Coupling/Buffer), use more particles per "
           "cell direction or a larger Coupling/Interface radius");
-    entry.offset = 0;
-    if (finite_strain)
-      entry.offset = state_.fem.displacement()(dof) - value(entry);
     dofs_.push_back(std::move(entry));
   }
+}
+
+template <int dim>
+void MlsInterface<dim>::set_offsets() {
+  const bool finite_strain = state_.fem.parameters().kinematics != "small_strain";
+  for (auto& entry : dofs_) {
+    entry.offset = 0;
+    if (finite_strain)
+      entry.offset = state_.fem.displacement()(entry.dof) - value(entry);
+  }
+}
+
+template <int dim>
+void MlsInterface<dim>::clear_offsets() {
+  for (auto& entry : dofs_)
+    entry.offset = 0;
 }
 
 template <int dim>

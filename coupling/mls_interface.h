@@ -35,8 +35,14 @@ class MlsInterface {
 
   explicit MlsInterface(CouplingState<dim>& state) : state_(state) {}
 
-  // The interface DoFs of the current split and their fits (locally relevant cells).
+  // The interface DoFs of the current split and their fits (locally relevant cells), with zero
+  // offsets.
   void rebuild();
+  // Each DoF's offset from its fit (finite strain; zero under small strain). Needs the
+  // current displacements of every particle in the fits: after the halo exchange.
+  void set_offsets();
+  // Zero offsets, for a state made affine by hand (a patch test).
+  void clear_offsets();
   // The driven values from the particle displacements, handed to the FEM.
   void update();
   // The driven displacement of one interface DoF: the fit plus the DoF's offset [m].

@@ -72,7 +72,8 @@ void SimulationParameters::declare(dealii::ParameterHandler& prm) {
   prm.declare_entry(
       "Minimum time step ratio", "1e-3", Double(0, 1),
       "Explicit mechanics: the run stops as failed (exit 1, naming the cell that sets the "
-      "step) when the stable step falls below this fraction of the stable step at the start: "
+      "step) when the stable step falls below this fraction of the run's first stable step "
+      "(kept across restarts), or reaches zero: "
       "cells crushing towards inversion under finite strain shrink the step without bound, "
       "and the run would crawl on for ever. Converting such cells to particles (Coupling/"
       "Minimum Jacobian ratio, Minimum time step) keeps the step up; 0 = never stop [-].");
@@ -284,11 +285,14 @@ void Simulation<dim>::set_initial_velocity() {
   typename fem::MechanicsSolver<dim>::VectorType u(owned, mechanics_->mpi_communicator()),
       v(owned, mechanics_->mpi_communicator());
   dealii::VectorTools::interpolate(mechanics_->mapping(), mechanics_->dof_handler(), *velocity, v);
+  bool finite = true;
   for (const auto i : owned)
-    if (!std::isfinite(v[i]))
-      throw InvalidInput("Simulation/Initial velocity",
-                         "not finite at a node of the mesh (e.g. x/r at r = 0)",
-                         "expressions finite at every node of the body [m/s]");
+    finite = finite && std::isfinite(v[i]);
+  // Every rank throws or none does: set_state's ghost update is collective.
+  if (dealii::Utilities::MPI::logical_or(!finite, mechanics_->mpi_communicator()))
+    throw InvalidInput("Simulation/Initial velocity",
+                       "not finite at a node of the mesh (e.g. x/r at r = 0)",
+                       "expressions finite at every node of the body [m/s]");
   mechanics_->set_state(u, v);
   initial_kinetic_energy_ = mechanics_->kinetic_energy();
 }
@@ -504,7 +508,8 @@ template <int dim>
 void Simulation<dim>::check_time_step(double stable) {
   if (!(first_stable_step_ > 0))
     first_stable_step_ = stable;
-  if (!(stable >= sim_.minimum_time_step_ratio * first_stable_step_)) {
+  // A zero step (a bond or cell of zero length) never ends the step loop, whatever the ratio.
+  if (!(stable > 0) || !(stable >= sim_.minimum_time_step_ratio * first_stable_step_)) {
     dealii::Point<dim> where;
     const double fem_step = mechanics_->stable_time_step(&where);
     std::ostringstream what, location;
@@ -512,7 +517,9 @@ void Simulation<dim>::check_time_step(double stable) {
          << "step ratio (" << sim_.minimum_time_step_ratio << ") times the first step ("
          << first_stable_step_ << " s)";
     if (fem_step <= stable * (1 + 1e-12))
-      location << "the cell centred at (" << where << ") (deformed), which sets the step";
+      location << "the cell centred at (" << where << ")"
+               << (mech_prm_.kinematics == "small_strain" ? "" : " (deformed)")
+               << ", which sets the step";
     else
       location << "the particles (the FEM's step is " << fem_step << " s)";
     throw NumericalFailure(what.str(), location.str(),

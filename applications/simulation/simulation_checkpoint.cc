@@ -47,6 +47,10 @@ void Simulation<dim>::write_checkpoint(unsigned int step, double time, RunContex
     state["final_step"] = sim_.steps;
     state["explicit_steps"] = explicit_steps_;
     state["peak_load"] = peak_load_;
+    // The reference of Simulation/Minimum time step ratio and the initial energy of an initial
+    // velocity field: a restarted run measures against the same values.
+    state["first_stable_step"] = first_stable_step_;
+    state["initial_kinetic_energy"] = initial_kinetic_energy_;
     state["relaxation_iterations"] = relaxation_iterations_;
     state["last_relaxation_iterations"] = last_relaxation_.iterations;
     state["last_relaxation_residual"] = last_relaxation_.relative_residual;
@@ -120,6 +124,8 @@ unsigned int Simulation<dim>::load_checkpoint(RunContext& ctx) {
       coupled_->load((dir / "coupling.txt").string());
     explicit_steps_ = state.value("explicit_steps", 0u);
     peak_load_ = state.value("peak_load", 0.0);
+    first_stable_step_ = state.value("first_stable_step", 0.0);
+    initial_kinetic_energy_ = state.value("initial_kinetic_energy", 0.0);
     relaxation_iterations_ = state.value("relaxation_iterations", 0ul);
     last_relaxation_.iterations = state.value("last_relaxation_iterations", 0u);
     last_relaxation_.relative_residual = state.value("last_relaxation_residual", 0.0);

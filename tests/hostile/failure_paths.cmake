@@ -50,8 +50,9 @@ spinesim_add_hostile_test(fails_energy_splice_nosb_body_cut EXIT 1 STATUS failed
        --set "Simulation/End time=2.2e-4" --set "Simulation/Steps=22"
   MATCH "stored energy is negative.*correction.*where: the FEM/particle interface.*${_report}.*cuts the body apart")
 # The plane-strain Taylor impact at 400 m/s in FEM alone: the rim cell at the wall crushes and
-# the stable step collapses (measured below 1e-3 of the first step at step 28, 28 us, in 2-D
-# and at step 8, 16 us, in 3-D); the run stops naming that cell instead of crawling on.
+# the stable step collapses (measured below 1e-3 of the first step in the step ending at 28 us,
+# step 14, in 2-D and at 16 us, step 8, in 3-D); the run stops naming that cell instead of
+# crawling on.
 foreach(_d 2 3)
   if(_d EQUAL 2)
     set(_scene ${PROJECT_SOURCE_DIR}/applications/validation/taylor_impact_plane_strain.prm)

@@ -255,8 +255,9 @@ spinesim_add_comparison_test(stability.ring_fragmentation_restart_matches
 # collapse (hostile/failure_paths.cmake): the velocity field of Simulation/Initial velocity
 # carries ½ ρ V v0² exactly (the lumped masses sum to the body's mass: 73154.56 J/m in plane
 # strain, 234.094592 J for the 3-D quarter bar; 1e-12 is round-off), and the energy account
-# closes as for the FEM Taylor bar (measured 4.8e-4 at 20 us in 2-D, 1.17e-3 at 12 us in 3-D,
-# 4 us before the collapse, where the crushed rim cells carry the error; the Taylor bar in FEM
+# closes as for the FEM Taylor bar (measured 4.8e-4 at 20 us in 2-D, 8 us before its collapse,
+# and 1.17e-3 at 12 us in 3-D, 4 us before, where the crushed rim cells carry the error; the
+# Taylor bar in FEM
 # measured 4.7e-4 to 9.6e-4): bound 3e-3.
 set(_impact2 ${PROJECT_SOURCE_DIR}/applications/validation/taylor_impact_plane_strain.prm)
 set(_impact3 ${PROJECT_SOURCE_DIR}/applications/validation/taylor_impact_3d.prm)
@@ -273,7 +274,7 @@ spinesim_add_scene_test(stability.impact_fem_initial_velocity_3d SCENE ${_impact
 
 # The same plane-strain impact with the crushed cells converted to NOSB-PD particles (Jacobian
 # ratio below 0.3, docs/coupling.md, Finite strain): the run goes past the FEM's collapse at
-# 28 us to 40 us (measured: 38 cells converted from 24 us on, 152 particles, 26 s without the
+# 28 us to 40 us (measured: 38 cells converted from 23.3 us on, 152 particles, 26 s without the
 # energy account). Each conversion conserves mass and momentum to round-off (measured 3.6e-16
 # and 6.8e-16; 1e-12 as in the patch tests), and the particles carry the cells' equivalent
 # plastic strain (2.4e-16; 1e-10 as in coupling_plastic_conversion). The energy account is
