@@ -389,6 +389,12 @@ spinesim_add_comparison_test(benchmark.cracked_plate_speedup_2_threads
 # 1.3e-9 to 1.7e-9 and 1e-14 to 5e-14). 3-D on a 12^3 mesh; NOSB-PD with the smaller horizon
 # 2.015 h (bond-associated families of a 3.015 h horizon cost about 40 s here, and the
 # interface property does not depend on the horizon).
+# The 3-D patch test on a 12^3 mesh with its particle block and conversion block scaled to it.
+set(_patch_3d_small "Geometry/Subdivisions=12,12,12"
+    "Coupling/Initial region lower corner=0.42,0.42,0.42"
+    "Coupling/Initial region upper corner=0.58,0.58,0.58"
+    "Patch test/Conversion block lower corner=0.34,0.34,0.34"
+    "Patch test/Conversion block upper corner=0.66,0.66,0.66")
 foreach(_m nosb spg)
   set(_method "Effects/Particles method=${_m}" "Mechanics/Plane stress=false"
       "Material/Poisson ratio=0.3")
@@ -405,11 +411,7 @@ foreach(_m nosb spg)
     set(_small_horizon "Coupling/NOSB/Horizon ratio=2.015")
   endif()
   spinesim_add_scene_test(coupling.patch_test_${_m}_3d SCENE ${_val}/coupling_patch_test.prm
-    SET ${_method} "Dimension=3" "Geometry/Subdivisions=12,12,12" ${_small_horizon}
-        "Coupling/Initial region lower corner=0.42,0.42,0.42"
-        "Coupling/Initial region upper corner=0.58,0.58,0.58"
-        "Patch test/Conversion block lower corner=0.34,0.34,0.34"
-        "Patch test/Conversion block upper corner=0.66,0.66,0.66"
+    SET ${_method} "Dimension=3" ${_patch_3d_small} ${_small_horizon}
     EXPECT "${_patch}" LABELS "scene;validation;coupling")
 endforeach()
 
@@ -816,10 +818,6 @@ foreach(_m nosb spg)
     SCENE ${_val}/coupling_patch_test.prm
     SET "Effects/Particles method=${_m}" ${_finite} "Dimension=3"
         "Patch test/Displacement gradient=0.02, 0.01, -0.01, -0.015, 0.01, 0, 0.005, 0, -0.01"
-        "Geometry/Subdivisions=12,12,12" "Coupling/NOSB/Horizon ratio=2.015"
-        "Coupling/Initial region lower corner=0.42,0.42,0.42"
-        "Coupling/Initial region upper corner=0.58,0.58,0.58"
-        "Patch test/Conversion block lower corner=0.34,0.34,0.34"
-        "Patch test/Conversion block upper corner=0.66,0.66,0.66"
+        ${_patch_3d_small} "Coupling/NOSB/Horizon ratio=2.015"
     EXPECT "${_patch}" LABELS "scene;validation;coupling")
 endforeach()
