@@ -156,9 +156,12 @@ void BondRows<dim>::rebuild() {
     driven[i] = state_.free[i] ? 0 : 1;
   state_.method->set_driven(std::move(driven));
   state_.method->initialise(state_.particles, state_.bonds);
-  // States carried in by conversions and new ghosts, now that their families exist.
+}
+
+template <int dim>
+void BondRows<dim>::hand_over_states() {
   if (!state_.pending_states.empty()) {
-    state_.method->set_particle_states(state_.pending_states);
+    state_.method->set_particle_states(state_.particles, state_.pending_states);
     state_.pending_states.clear();
   }
 }

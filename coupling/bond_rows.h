@@ -19,6 +19,9 @@ class BondRows {
 
   // Searches the new rows, keeps the owned free ones and initialises the particle method.
   void rebuild();
+  // Gives the method the states carried in since the last call (CouplingState::
+  // pending_states), once rebuild() made their families and the ghosts and halo are current.
+  void hand_over_states();
   // The next rebuild searches every row afresh (the particles were replaced).
   void forget_search();
   // Pairs broken in a checkpoint: the next rebuild breaks them before the method builds its

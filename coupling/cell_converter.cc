@@ -351,6 +351,10 @@ CellConverter<dim>::make_records(const std::set<std::string>& todo, double& max_
       if (with_state) {
         r.has_state = true;
         r.state = state_.cell_state(cell, q);
+        if (const auto F = state_.cell_state_deformation(cell, q)) {
+          r.has_state_deformation = true;
+          r.state_deformation = *F;
+        }
       }
       mine.push_back(std::move(r));
     }
@@ -386,7 +390,10 @@ ConversionReport<dim> CellConverter<dim>::convert(const std::vector<CellId>& cel
     if (account && splice_energy_) {
       particles_before = splice_energy_();
     } else if (account) {
-      particles_before = particle_strain_energy(state_) + particle_kinetic_energy(state_);
+      // The particles' side as their account counts it (ParticleEnergy: stored energy plus
+      // the plastic work carried in their history).
+      particles_before = particle_strain_energy(state_) + particle_plastic_work(state_) +
+                         particle_kinetic_energy(state_);
       fem_before = fem_energy();
     }
   }
@@ -434,8 +441,8 @@ ConversionReport<dim> CellConverter<dim>::convert(const std::vector<CellId>& cel
       state_.particles.temperature(i) = r.temperature;
       state_.particles.displacement(i) = r.displacement;
       state_.particles.velocity(i) = r.velocity;
-      if (r.has_state) // the method takes it once the rows are rebuilt (BondRows::rebuild)
-        state_.pending_states.emplace_back(i, r.state);
+      if (r.has_state) // the method takes it after the rebuild (BondRows::hand_over_states)
+        state_.pending_states.push_back(CouplingState<dim>::carried(i, r));
       batch_particles.push_back(i);
       ++added;
     }
@@ -477,8 +484,9 @@ ConversionReport<dim> CellConverter<dim>::convert(const std::vector<CellId>& cel
   if (account && splice_energy_) {
     report.energy_change_particles = splice_energy_() - particles_before;
   } else if (account) {
-    report.energy_change_particles =
-        particle_strain_energy(state_) + particle_kinetic_energy(state_) - particles_before;
+    report.energy_change_particles = particle_strain_energy(state_) +
+                                     particle_plastic_work(state_) +
+                                     particle_kinetic_energy(state_) - particles_before;
     report.energy_change_fem = fem_energy() - fem_before;
   }
   reports_.push_back(report);
@@ -487,7 +495,7 @@ ConversionReport<dim> CellConverter<dim>::convert(const std::vector<CellId>& cel
 
 template <int dim>
 double CellConverter<dim>::energy_change_particles() const {
-  double sum = 0;
+  double sum = restored_energy_particles_; // the same order of additions as without a restart
   for (const auto& r : reports_)
     sum += r.energy_change_particles;
   return sum;
@@ -495,7 +503,7 @@ double CellConverter<dim>::energy_change_particles() const {
 
 template <int dim>
 double CellConverter<dim>::energy_change_fem() const {
-  double sum = 0;
+  double sum = restored_energy_fem_;
   for (const auto& r : reports_)
     sum += r.energy_change_fem;
   return sum;

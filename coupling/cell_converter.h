@@ -92,6 +92,11 @@ class CellConverter {
   // Sums of energy_change_particles and energy_change_fem over the conversions so far [J].
   double energy_change_particles() const;
   double energy_change_fem() const;
+  // From a checkpoint: the sums of the conversions before it (the reports are not kept).
+  void restore_energy_changes(double particles, double fem) {
+    restored_energy_particles_ = particles;
+    restored_energy_fem_ = fem;
+  }
   // The latest report, for measures taken after the conversion (CoupledIntegrator::relax).
   ConversionReport<dim>& last_report() { return reports_.back(); }
 
@@ -113,6 +118,7 @@ class CellConverter {
   std::function<double()> splice_energy_;
   std::map<std::string, unsigned int> converted_;
   std::vector<ConversionReport<dim>> reports_;
+  double restored_energy_particles_ = 0, restored_energy_fem_ = 0; // [J]
 };
 
 } // namespace spinesim::coupling

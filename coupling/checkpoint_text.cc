@@ -60,12 +60,13 @@ CheckpointContents read_checkpoint_text(std::istream& in, std::uintmax_t bytes, 
   std::string tag;
   std::size_t n = 0, nc = 0, nb = 0, nh = 0;
   if (!(in >> tag) || tag != "spinesim_coupling" || !read_number(in, c.version) || c.version < 1 ||
-      c.version > 5 || !read_finite(in, c.time) || c.time < 0 || !read_number(in, n) ||
+      c.version > 6 || !read_finite(in, c.time) || c.time < 0 || !read_number(in, n) ||
       !read_number(in, nc) || !read_number(in, nb) ||
       (c.version >= 2 && !(read_finite(in, c.dissipation) && read_finite(in, c.heat))) ||
-      (c.version >= 3 && !read_number(in, nh)))
+      (c.version >= 3 && !read_number(in, nh)) ||
+      (c.version >= 6 && !(read_number(in, c.n_last_pass) && c.n_last_pass <= n)))
     throw InvalidInput(file, "missing or unreadable coupling checkpoint header",
-                       "a file written by FemParticleCoupling::save (versions 1 to 5)");
+                       "a file written by FemParticleCoupling::save (versions 1 to 6)");
   // Numbers of a history record's material state: version 4 added the fracture damage.
   const unsigned int n_state =
       c.version >= 4 ? checkpoint_state_doubles : checkpoint_state_doubles - 1;
@@ -74,8 +75,12 @@ CheckpointContents read_checkpoint_text(std::istream& in, std::uintmax_t bytes, 
   const auto fits = [&](std::size_t count, std::size_t numbers_per_record) {
     return count <= bytes / (2 * numbers_per_record);
   };
-  if (!fits(n, 7 + (c.version >= 5 ? 4 : 3) * dim) || !fits(nc, 2) || !fits(nb, 2) ||
-      !fits(nh, 2 + n_state))
+  if (!fits(n, 7 + (c.version >= 6 ? 1 : 0) +
+                   (c.version >= 6   ? 5
+                    : c.version >= 5 ? 4
+                                     : 3) *
+                       dim) ||
+      !fits(nc, 2) || !fits(nb, 2) || !fits(nh, 2 + n_state))
     throw InvalidInput(file,
                        "header counts (" + std::to_string(n) + " particles, " + std::to_string(nc) +
                            " converted cells, " + std::to_string(nb) + " broken bonds, " +
@@ -113,6 +118,10 @@ CheckpointContents read_checkpoint_text(std::istream& in, std::uintmax_t bytes, 
       ok = read_finite(in, p.displacement[d]) && read_finite(in, p.velocity[d]);
     for (unsigned int d = 0; ok && c.version >= 5 && d < dim; ++d)
       ok = read_finite(in, p.support_offset[d]);
+    for (unsigned int d = 0; ok && c.version >= 6 && d < dim; ++d)
+      ok = read_finite(in, p.last_pass_displacement[d]);
+    if (ok && c.version >= 6)
+      ok = read_finite(in, p.stiffness_bound) && p.stiffness_bound >= 0;
     require(ok, "particle", i);
     p.free = free == 1;
     // One particle per quadrature point of a converted cell.

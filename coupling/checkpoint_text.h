@@ -24,14 +24,19 @@ constexpr unsigned int checkpoint_state_doubles = 15;
 
 // One particle's line: host cell (deal.II CellId text) and quadrature point, free flag,
 // Dirichlet slots, volume, density, temperature, reference position, displacement, velocity
-// and (version 5) the support offset (the first `dim` entries of the arrays are used).
+// (version 5) the support offset (the first `dim` entries of the arrays are used) and
+// (version 6) the explicit integration's own state: the displacement at the last force pass
+// (the energy account's u_{n−1}) and the particle's stiffness bound of the stable step (0:
+// none), so a restart takes the steps and the account of the uninterrupted run.
 struct CheckpointParticle {
   std::string cell;
   unsigned int point = 0;
   bool free = false;
   std::uint32_t fixed_slots = 0;
   double volume = 0, density = 0, temperature = 0;
-  std::array<double, 3> position{}, displacement{}, velocity{}, support_offset{};
+  std::array<double, 3> position{}, displacement{}, velocity{}, support_offset{},
+      last_pass_displacement{};
+  double stiffness_bound = 0; // [N/m^4 or the method's unit]
 };
 
 // The material history of the family of `particle` towards `neighbour`.
@@ -47,6 +52,7 @@ struct CheckpointContents {
   std::vector<CheckpointParticle> particles;
   std::vector<std::pair<unsigned int, unsigned int>> broken; // particle index pairs
   std::vector<CheckpointHistory> history;                    // version 3
+  std::size_t n_last_pass = 0; // version 6: particles the last force pass saw (a prefix)
 };
 
 // Reads a checkpoint of a `dim`-dimensional run whose coupling has `n_points` candidate

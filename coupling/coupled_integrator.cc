@@ -37,12 +37,23 @@ double CoupledIntegrator<dim>::stable_time_step_fem_refreshed() const {
 }
 
 template <int dim>
+void CoupledIntegrator<dim>::restore_stiffness_bound(std::vector<double> bound) {
+  stiffness_bound_ = std::move(bound);
+  particle_step_ = stiffness_bound_.empty()
+                       ? -1
+                       : Utilities::MPI::min(particle_step(), state_.fem.mpi_communicator());
+}
+
+template <int dim>
 double CoupledIntegrator<dim>::particle_step() const {
   const auto& particles = state_.particles;
   const bool finite_strain = state_.fem.parameters().kinematics != "small_strain";
   double dt_pd = std::numeric_limits<double>::infinity();
   for (unsigned int i = 0; i < stiffness_bound_.size(); ++i) {
-    if (!state_.free[i] || !(stiffness_bound_[i] > 0))
+    // Owned rows only: another rank's particle holds a partial row sum here (the neighbour
+    // families this rank keeps), never more than its owner's, so the minimum over the ranks
+    // is the owners' either way, and a checkpoint need keep the owners' entries alone.
+    if (!state_.free[i] || !state_.is_owned(i) || !(stiffness_bound_[i] > 0))
       continue;
     // Under finite strain a compressed family is stiffer in its reference coordinates: a
     // bond shortened to λ of its length stiffens like a cell edge shortened to λ (the FEM's

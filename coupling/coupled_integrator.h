@@ -68,6 +68,11 @@ class CoupledIntegrator {
   double particle_updates() const { return particle_updates_; }
   // The particle side of the energy account of explicit steps (off unless switched on).
   ParticleEnergy<dim>& energy() { return energy_; }
+  // The particles' stiffness bound of the last stable_time_step() (empty before the first;
+  // particle_step() reads the entries of the particles this rank owns) and its restoration
+  // from a checkpoint, so that a restart steps as the uninterrupted run (collective).
+  const std::vector<double>& stiffness_bound() const { return stiffness_bound_; }
+  void restore_stiffness_bound(std::vector<double> bound);
   const ParticleEnergy<dim>& energy() const { return energy_; }
 
  private:

@@ -62,6 +62,16 @@ double particle_strain_energy(const CouplingState<dim>& s) {
 }
 
 template <int dim>
+double particle_plastic_work(const CouplingState<dim>& s) {
+  const auto d = s.method ? s.method->plastic_work_density(s.particles) : std::vector<double>();
+  double e = 0;
+  for (unsigned int i = 0; i < d.size(); ++i)
+    if (s.free[i] && s.is_owned(i))
+      e += d[i] * s.particles.volume(i);
+  return Utilities::MPI::sum(e, s.fem.mpi_communicator());
+}
+
+template <int dim>
 double strain_energy(const CouplingState<dim>& s) {
   return particle_strain_energy(s) + s.fem.strain_energy();
 }
@@ -103,6 +113,8 @@ template double particle_kinetic_energy(const CouplingState<2>&);
 template double particle_kinetic_energy(const CouplingState<3>&);
 template double particle_strain_energy(const CouplingState<2>&);
 template double particle_strain_energy(const CouplingState<3>&);
+template double particle_plastic_work(const CouplingState<2>&);
+template double particle_plastic_work(const CouplingState<3>&);
 template std::size_t n_broken_bonds(const CouplingState<2>&);
 template std::size_t n_broken_bonds(const CouplingState<3>&);
 template double max_damage(const CouplingState<2>&);

@@ -25,6 +25,10 @@ template <int dim>
 double particle_kinetic_energy(const CouplingState<dim>& state);
 template <int dim>
 double particle_strain_energy(const CouplingState<dim>& state);
+// The plastic work the owned free particles' history holds (ParticleMethod::
+// plastic_work_density) [J] (2-D: J/m); collective.
+template <int dim>
+double particle_plastic_work(const CouplingState<dim>& state);
 template <int dim>
 std::size_t n_broken_bonds(const CouplingState<dim>& state);
 // Updates the damage of the owned rows on the way (the particle set is a cache of it).

@@ -63,6 +63,24 @@ void CouplingCheckpoint<dim>::save(const std::string& file) const {
       const auto flat = pack_state(r.state);
       history.insert(history.end(), flat.begin(), flat.end());
     }
+  // The explicit integration's own state per particle, from the ranks that own it (each
+  // particle's entry is non-zero on its owner only, so the sum over the ranks is its value):
+  // the displacement at the last force pass and the stiffness bound of the stable step.
+  const auto& u_pass = p_.integrator.energy().last_pass_displacements();
+  const auto& bound = p_.integrator.stiffness_bound();
+  std::vector<double> integration((dim + 1) * particles.size(), 0.0);
+  for (unsigned int i = 0; i < particles.size(); ++i) {
+    if (!state.is_owned(i))
+      continue;
+    for (unsigned int d = 0; d < dim && i < u_pass.size(); ++d)
+      integration[(dim + 1) * i + d] = u_pass[i][d];
+    integration[(dim + 1) * i + dim] = i < bound.size() ? bound[i] : 0.0;
+  }
+  {
+    std::vector<double> total(integration.size());
+    Utilities::MPI::sum(integration, state.fem.mpi_communicator(), total);
+    integration = std::move(total);
+  }
   const auto histories = Utilities::MPI::gather(state.fem.mpi_communicator(), history, 0);
   if (Utilities::MPI::this_mpi_process(state.fem.mpi_communicator()) != 0)
     return;
@@ -74,11 +92,13 @@ void CouplingCheckpoint<dim>::save(const std::string& file) const {
   // Version 2 adds the fracture-heat totals (the per-particle accounts are handed to the FEM
   // at the end of every macro step, so they are empty when a checkpoint is written); version 3
   // the material history of the particle method; version 4 its fracture damage D_f (one more
-  // number per history record); version 5 the particles' support offsets (dim numbers more).
-  out << "spinesim_coupling 5\n"
+  // number per history record); version 5 the particles' support offsets (dim numbers more);
+  // version 6 the displacement at the last force pass and the stiffness bound (dim + 1 more a
+  // particle; the header's last number: how many particles the last force pass saw).
+  out << "spinesim_coupling 6\n"
       << p_.integrator.time() << " " << particles.size() << " " << p_.converter.converted().size()
       << " " << broken.size() << " " << dissipation << " " << p_.fracture.heat() << " " << n_history
-      << "\n";
+      << " " << u_pass.size() << "\n";
   for (const auto& [id, batch] : p_.converter.converted())
     out << id << " " << batch << "\n";
   for (unsigned int i = 0; i < particles.size(); ++i) {
@@ -91,6 +111,8 @@ void CouplingCheckpoint<dim>::save(const std::string& file) const {
       out << " " << particles.displacement(i)[d] << " " << particles.velocity(i)[d];
     for (unsigned int d = 0; d < dim; ++d)
       out << " " << state.support_offset[i][d];
+    for (unsigned int d = 0; d <= dim; ++d)
+      out << " " << integration[(dim + 1) * i + d];
     out << "\n";
   }
   for (const auto& [i, j] : broken)
@@ -158,6 +180,21 @@ void CouplingCheckpoint<dim>::load(const std::string& file) {
   p_.rebuild_layers();
   if (state.method)
     state.method->set_history(history);
+  if (c.version >= 6) { // older checkpoints: both start afresh, as they did
+    // The last force pass saw the first n_last_pass particles (later ones were converted
+    // since): the account leaves a break's lost work out until the next pass as before.
+    std::vector<Tensor<1, dim>> u_pass(c.n_last_pass);
+    std::vector<double> bound(c.particles.size());
+    bool any_bound = false;
+    for (std::size_t k = 0; k < c.particles.size(); ++k) {
+      for (unsigned int d = 0; d < dim && k < u_pass.size(); ++d)
+        u_pass[k][d] = c.particles[k].last_pass_displacement[d];
+      bound[k] = state.is_owned(k) ? c.particles[k].stiffness_bound : 0.0;
+      any_bound = any_bound || c.particles[k].stiffness_bound > 0;
+    }
+    p_.integrator.energy().restore_last_pass_displacements(std::move(u_pass));
+    p_.integrator.restore_stiffness_bound(any_bound ? std::move(bound) : std::vector<double>());
+  }
 }
 
 template class CouplingCheckpoint<2>;

@@ -209,6 +209,19 @@ materials::MaterialState CouplingState<dim>::cell_state(const DoFCell& cell,
 }
 
 template <int dim>
+std::optional<materials::Tensor2>
+CouplingState<dim>::cell_state_deformation(const DoFCell& cell, unsigned int point) const {
+  if (fem.parameters().kinematics == "small_strain")
+    return std::nullopt; // a small-strain state is not tied to an F
+  // At the current displacement, where the particles' families measure theirs (the point
+  // states hold the F of the last force pass, one step behind); an inverted cell: none.
+  const auto F = fem.current_deformation_gradients(cell);
+  if (!F)
+    return std::nullopt;
+  return (*F)[nearest_quadrature_point[point]];
+}
+
+template <int dim>
 unsigned int CouplingState<dim>::add_particle(const std::string& cell_id, unsigned int point,
                                               const Point<dim>& position, double volume) {
   const unsigned int i = particles.add_particle(position, volume);

@@ -21,6 +21,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -68,6 +69,21 @@ struct CouplingState {
   // inside the yield surface; interpolated states need not). MechanicsSolver::refresh_states()
   // first.
   materials::MaterialState cell_state(const DoFCell& cell, unsigned int point) const;
+  // Finite strain: the point's deformation gradient at the current displacement as the law
+  // sees it (F̄ with F-bar, 3 × 3), which the FEM's next update would take; none for small
+  // strain or an inverted cell (meshfree::CarriedState).
+  std::optional<materials::Tensor2> cell_state_deformation(const DoFCell& cell,
+                                                           unsigned int point) const;
+  // A carried state for particle i from the record's state (pending_states).
+  template <class Record>
+  static meshfree::CarriedState carried(unsigned int i, const Record& r) {
+    meshfree::CarriedState c;
+    c.particle = i;
+    c.state = r.state;
+    if (r.has_state_deformation)
+      c.deformation = r.state_deformation;
+    return c;
+  }
 
   bool is_owned(unsigned int i) const {
     return owner.empty() || owner[i] == static_cast<int>(rank);
@@ -95,9 +111,10 @@ struct CouplingState {
   meshfree::ParticleMaterial particle_material;
   // Per particle point of a cell: the nearest quadrature point of the FEM (cell_state()).
   std::vector<unsigned int> nearest_quadrature_point;
-  // States carried into particles since the last bond-row rebuild (conversions, new ghosts):
-  // BondRows::rebuild hands them to the method once its families exist.
-  std::vector<std::pair<unsigned int, materials::MaterialState>> pending_states;
+  // States carried into particles since the last rebuild of the layers (conversions, new
+  // ghosts): BondRows::hand_over_states gives them to the method once its families exist and
+  // the particles' displacements are current.
+  std::vector<meshfree::CarriedState> pending_states;
   // For the run log (FemParticleCoupling::take_messages).
   std::vector<std::string> messages;
 

@@ -74,6 +74,8 @@ void FemParticleCoupling<dim>::rebuild_layers() {
   interface_.rebuild();
   halo_.plan(interface_);
   ghosts_.update(); // owned ghosts from the FEM, then the halo (free particles included)
+  // Carried states last: each family continues its state at its F of these displacements.
+  bond_rows_.hand_over_states();
   interface_.set_offsets();
   interface_.update();
   if (splice_.on()) {
@@ -184,6 +186,33 @@ fem::EnergyBalance FemParticleCoupling<dim>::energy_balance() const {
   if (splice_.on())
     b.interface_work_particles = 0; // the energy splice's exchange is inside its energy
   return b;
+}
+
+template <int dim>
+std::vector<double> FemParticleCoupling<dim>::energy_account_sums() const {
+  const MPI_Comm comm = state_.fem.mpi_communicator();
+  std::vector<double> sums = state_.fem.energy_account().works();
+  const auto particles = integrator_.energy().saved_sums();
+  sums.insert(sums.end(), particles.begin(), particles.end());
+  std::vector<double> total(sums.size());
+  Utilities::MPI::sum(sums, comm, total);
+  sums = std::move(total);
+  sums.push_back(converter_.energy_change_particles());
+  sums.push_back(converter_.energy_change_fem());
+  return sums;
+}
+
+template <int dim>
+void FemParticleCoupling<dim>::restore_energy_account_sums(const std::vector<double>& sums) {
+  constexpr unsigned int n = fem::ExplicitEnergy::n_works;
+  AssertThrow(sums.size() == 2 * n + 3, ExcMessage("energy account sums: wrong count"));
+  const bool root = Utilities::MPI::this_mpi_process(state_.fem.mpi_communicator()) == 0;
+  std::vector<double> mine(sums.begin(), sums.begin() + 2 * n + 1);
+  if (!root)
+    std::fill(mine.begin(), mine.end(), 0.0);
+  state_.fem.restore_energy_works({mine.begin(), mine.begin() + n});
+  integrator_.energy().restore_sums({mine.begin() + n, mine.end()});
+  converter_.restore_energy_changes(sums[2 * n + 1], sums[2 * n + 2]);
 }
 
 template <int dim>

@@ -153,6 +153,12 @@ class FemParticleCoupling {
   void set_energy_account(bool on);
   fem::EnergyBalance energy_balance() const;
   double energy_account_seconds() const; // particle stored-energy passes, slowest rank [s]
+  // The account's running sums for a checkpoint: the FEM's and the particles' works and the
+  // fracture dissipation summed over the ranks, then the conversions' sums (collective).
+  std::vector<double> energy_account_sums() const;
+  // A restart continues them: rank 0 takes the sums, the other ranks start from zero (the
+  // account is only ever read summed over the ranks).
+  void restore_energy_account_sums(const std::vector<double>& sums);
   // Reaction on a boundary id: FEM reaction + fixed particles of converted boundary cells [N].
   dealii::Tensor<1, dim> reaction_force(dealii::types::boundary_id id) const;
 

@@ -70,6 +70,10 @@ void GhostLayer<dim>::extend() {
       if (with_state) { // a ghost family starts from the cell's history and follows the FEM
         r.has_state = true;
         r.state = state_.cell_state(cell, q);
+        if (const auto F = state_.cell_state_deformation(cell, q)) {
+          r.has_state_deformation = true;
+          r.state_deformation = *F;
+        }
       }
       mine.push_back(std::move(r));
     }
@@ -79,7 +83,7 @@ void GhostLayer<dim>::extend() {
       const unsigned int i = state_.add_particle(r.cell, r.point, r.position, r.volume);
       state_.particles.density(i) = r.density;
       if (r.has_state)
-        state_.pending_states.emplace_back(i, r.state);
+        state_.pending_states.push_back(CouplingState<dim>::carried(i, r));
     }
 
   free_searched_.assign(state_.free.begin(), state_.free.end());

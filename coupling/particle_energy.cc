@@ -22,13 +22,33 @@ double ParticleEnergy<dim>::stored_energy() const {
   if (splice_stored_) {
     e = splice_stored_();
   } else {
+    // Stored energy plus the plastic work the particles' history holds: the FEM's internal
+    // work holds both, and so the account's U is the internal work on both sides.
     const auto w = state_.method->strain_energy_density(state_.particles, state_.bonds);
     for (unsigned int i = 0; i < w.size(); ++i)
       if (state_.free[i] && state_.is_owned(i))
         e += w[i] * state_.particles.volume(i);
+    const auto d = state_.method->plastic_work_density(state_.particles);
+    for (unsigned int i = 0; i < d.size(); ++i)
+      if (state_.free[i] && state_.is_owned(i))
+        e += d[i] * state_.particles.volume(i);
   }
   seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return e;
+}
+
+template <int dim>
+std::vector<double> ParticleEnergy<dim>::saved_sums() const {
+  auto sums = account_.works();
+  sums.push_back(fracture_);
+  return sums;
+}
+
+template <int dim>
+void ParticleEnergy<dim>::restore_sums(const std::vector<double>& sums) {
+  account_.set_works(sums);
+  if (sums.size() > fem::ExplicitEnergy::n_works)
+    fracture_ = sums[fem::ExplicitEnergy::n_works];
 }
 
 template <int dim>

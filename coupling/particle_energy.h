@@ -55,6 +55,16 @@ class ParticleEnergy {
   // This rank's share at the last force pass [J] (2-D: J/m).
   const fem::ExplicitEnergy& account() const { return account_; }
   double fracture_dissipation() const { return fracture_; } // this rank, so far [J]
+  // The account's works and the fracture dissipation (this rank's share) for a checkpoint,
+  // and their restoration at a restart (ExplicitEnergy::works, then the dissipation).
+  std::vector<double> saved_sums() const;
+  void restore_sums(const std::vector<double>& sums);
+  // The displacements at the last force pass (u_{n−1} of the next breaking pass's lost work;
+  // empty before the first) and their restoration from a checkpoint.
+  const std::vector<dealii::Tensor<1, dim>>& last_pass_displacements() const { return u_now_; }
+  void restore_last_pass_displacements(std::vector<dealii::Tensor<1, dim>> u) {
+    u_now_ = std::move(u);
+  }
   unsigned int breaking_passes() const { return breaking_passes_; }
   double seconds() const { return seconds_; } // wall time of the stored-energy passes [s]
 

@@ -33,6 +33,10 @@ struct ParticleRecord {
   // methods that carry material state.
   bool has_state = false;
   materials::MaterialState state;
+  // The point's deformation gradient now (finite strain: F̄ of an F-bar cell at the current
+  // displacement; the particles continue the state at their own F, meshfree::CarriedState).
+  bool has_state_deformation = false;
+  materials::Tensor2 state_deformation;
 
   template <class Archive>
   void serialize(Archive& ar, const unsigned int) {
@@ -40,7 +44,10 @@ struct ParticleRecord {
         velocity& support_offset& has_state;
     if (has_state)
       ar& state.plastic_strain& state.elastic_left_cauchy_green& state
-          .equivalent_plastic_strain& state.plastic_work& state.fracture_damage;
+          .equivalent_plastic_strain& state.plastic_work& state
+          .fracture_damage& has_state_deformation;
+    if (has_state && has_state_deformation)
+      ar& state_deformation;
   }
 
   bool operator==(const ParticleRecord& o) const {

@@ -52,6 +52,21 @@ struct ExplicitEnergy {
   double strain = std::numeric_limits<double>::quiet_NaN();
   bool valid = false; // a force pass has been accounted
 
+  // The running sums a restart must continue (the energies are recomputed at the next force
+  // pass): external, interface, damping and internal work, each (running, at_force_pass).
+  static constexpr unsigned int n_works = 8;
+  std::vector<double> works() const {
+    return {external.running, external.at_force_pass, interface.running, interface.at_force_pass,
+            damping.running,  damping.at_force_pass,  internal.running,  internal.at_force_pass};
+  }
+  void set_works(const std::vector<double>& w) {
+    TrapezoidWork* parts[] = {&external, &interface, &damping, &internal};
+    for (unsigned int k = 0; k < 4 && 2 * k + 1 < w.size(); ++k) {
+      parts[k]->running = w[2 * k];
+      parts[k]->at_force_pass = w[2 * k + 1];
+    }
+  }
+
   // U(t_n) where known, else the internal work (stored energy plus plastic dissipation).
   double stored_or_internal() const { return std::isnan(strain) ? internal.at_force_pass : strain; }
 

@@ -45,6 +45,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <string>
 #include <utility>
@@ -169,6 +170,9 @@ class MechanicsSolver {
   // books no interface work through them.
   void set_massless_driven(bool on) { massless_driven_ = on; }
   const ExplicitEnergy& energy_account() const { return energy_; }
+  // A restart continues the account's works from a checkpoint (ExplicitEnergy::works; this
+  // rank's share, which sums over the ranks as the account does).
+  void restore_energy_works(const std::vector<double>& works) { energy_.set_works(works); }
   // ½ uᵀ K u of the active cells at the current displacement on the linear explicit path (the
   // stored energy the account reports there) [J]; NaN on other paths, whose account holds the
   // internal work instead. Collective.
@@ -322,6 +326,11 @@ class MechanicsSolver {
   // Point states of a cell at the current displacement (refresh_states() first).
   dealii::ArrayView<const QuadraturePointData>
   quadrature_point_data(const CellIterator& cell) const;
+  // Finite strain: F at the quadrature points of a locally owned or ghost cell at the current
+  // displacement, as the law sees it (F̄ with F-bar; 3 × 3, plane strain embedded), or
+  // nothing where the cell is inverted. The point states hold the F of the last force pass.
+  std::optional<std::vector<materials::Tensor2>>
+  current_deformation_gradients(const CellIterator& cell) const;
   // The linear explicit path defers the point-wise update: this brings the states to the
   // current displacement (threaded over cells). Call it before reading states from threads.
   void refresh_states() const;

@@ -3,6 +3,9 @@
 
 #include "fem/mechanics_solver.h"
 
+#include "fem/f_bar.h"
+#include "fem/point_update.h"
+
 #include "fem/materials/j2_plasticity.h"
 
 #include "base/scoped_time.h"
@@ -157,6 +160,35 @@ double MechanicsSolver<dim>::plastic_work() const {
 }
 
 template <int dim>
+std::optional<std::vector<materials::Tensor2>>
+MechanicsSolver<dim>::current_deformation_gradients(const CellIterator& cell) const {
+  FEValues<dim> fe_values(*mapping_, fe_, quadrature_, update_gradients | update_JxW_values);
+  fe_values.reinit(cell);
+  const unsigned int n = fe_.n_dofs_per_cell(), nq = quadrature_.size();
+  std::vector<double> local(n);
+  get_cell_values(u_ghost_, cell, local);
+  std::vector<Tensor<2, dim>> grads(nq);
+  fe_values[FEValuesExtractors::Vector(0)].get_function_gradients_from_local_dof_values(local,
+                                                                                        grads);
+  std::vector<materials::Tensor2> F(nq);
+  if (prm_.volumetric_locking == "fbar") {
+    std::vector<unsigned int> comp(n);
+    for (unsigned int i = 0; i < n; ++i)
+      comp[i] = fe_.system_to_component_index(i).first;
+    FBar<dim> f_bar;
+    unsigned int worst = 0;
+    if (!f_bar.reinit(fe_values, comp, grads, worst))
+      return std::nullopt;
+    for (unsigned int q = 0; q < nq; ++q)
+      F[q] = materials::Tensor2(unit_symmetric_tensor<3>()) + f_bar.modified_gradient(q);
+  } else {
+    for (unsigned int q = 0; q < nq; ++q)
+      F[q] = materials::Tensor2(unit_symmetric_tensor<3>()) + padded_gradient<dim>(grads[q]);
+  }
+  return F;
+}
+
+template <int dim>
 double MechanicsSolver<dim>::strain_energy() const {
   if (states_stale_ && explicit_matrix_ready_ && linear_explicit()) {
     // Linear path: ½ uᵀ K u (K over the active cells) without refreshing the point states.
@@ -286,6 +318,8 @@ std::string MechanicsSolver<dim>::write_output(
   template Vector<double> MechanicsSolver<dim>::cell_plastic_dissipation_rate() const;             \
   template double MechanicsSolver<dim>::plastic_work() const;                                      \
   template double MechanicsSolver<dim>::strain_energy() const;                                     \
+  template std::optional<std::vector<materials::Tensor2>>                                          \
+  MechanicsSolver<dim>::current_deformation_gradients(const CellIterator&) const;                  \
   template double MechanicsSolver<dim>::max_von_mises() const;                                     \
   template double MechanicsSolver<dim>::kinetic_energy() const;                                    \
   template Tensor<1, dim> MechanicsSolver<dim>::momentum() const;                                  \

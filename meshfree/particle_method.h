@@ -58,6 +58,18 @@ struct HistoryRecord {
   materials::MaterialState state;
 };
 
+// A constitutive state carried into particle `particle` from elsewhere (the nearest quadrature
+// point of a converted FEM cell), with that point's deformation gradient at the current
+// displacement (3 × 3; none where the source is small-strain: its state is not tied to an F).
+// A method that evaluates the law at its own F continues it through ConstitutiveLaw::
+// transferred_state, so its next update starts from the elastic trial the source's would
+// (an F-bar cell's F̄ against a family's F).
+struct CarriedState {
+  unsigned int particle = 0;
+  materials::MaterialState state;
+  std::optional<materials::Tensor2> deformation;
+};
+
 template <int dim>
 class ParticleMethod {
  public:
@@ -157,15 +169,24 @@ class ParticleMethod {
   // does not hold are skipped.
   virtual void set_history(const std::vector<HistoryRecord>& records) { (void)records; }
   // Sets the committed history of every family centred on each given particle (state carried
-  // in from a converted FEM cell).
-  virtual void set_particle_states(
-      const std::vector<std::pair<unsigned int, materials::MaterialState>>& states) {
+  // in from a converted FEM cell), at the particles' current displacements (they give each
+  // family's F; after initialise()).
+  virtual void set_particle_states(const ParticleSet<dim>& particles,
+                                   const std::vector<CarriedState>& states) {
+    (void)particles;
     (void)states;
   }
   // Particle i's committed state for output: its own family's, or the weighted mean over its
   // bond-associated families. The default state for a method without history.
   virtual materials::MaterialState particle_state(unsigned int i) const {
     (void)i;
+    return {};
+  }
+  // Per particle, the plastic work its committed history holds [J/m^3 of particle volume]: what
+  // plastic flow dissipated, which an energy account adds to the stored energy (the FEM's
+  // internal work holds both). Empty for methods without plastic history.
+  virtual std::vector<double> plastic_work_density(const ParticleSet<dim>& particles) const {
+    (void)particles;
     return {};
   }
   // The method's own history for checkpoints (the particle set and bonds are saved by the

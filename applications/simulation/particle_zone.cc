@@ -293,6 +293,17 @@ struct ParticleZone<dim>::Impl {
     });
   }
 
+  // The account's U of this rank: the owned particles' stored energy plus the plastic work
+  // their history holds (ParticleMethod::plastic_work_density), the internal work as the FEM
+  // counts it.
+  double internal_energy(const meshfree::ParticleSet<dim>& p) const {
+    double e = method->strain_energy(p, bonds);
+    const auto d = method->plastic_work_density(p);
+    for (unsigned int i = 0; i < d.size() && i < n_owned(); ++i)
+      e += d[i] * p.volume(i);
+    return e;
+  }
+
   // Forces at the current displacements; returns the bond ends broken. With an account,
   // `before` is the stored energy before the pass's breaks.
   std::size_t force_pass(meshfree::ParticleSet<dim>& p, double& before) {
@@ -302,7 +313,7 @@ struct ParticleZone<dim>::Impl {
     // The breaks of this pass release the stored energy they take away at these displacements
     // and the forces they remove (zone_energy.h): a pass without breaking gives the forces
     // before them (the price: two force passes a step with Damage on).
-    before = method->strain_energy(p, bonds);
+    before = internal_energy(p);
     if (breaking) {
       method->compute_forces_before_breaks(p, bonds);
       forces_before = p.forces();
@@ -315,7 +326,7 @@ struct ParticleZone<dim>::Impl {
     if (!account)
       return;
     if (broke > 0)
-      energy.force_pass(p, before, method->strain_energy(p, bonds), &forces_before);
+      energy.force_pass(p, before, internal_energy(p), &forces_before);
     else
       energy.force_pass(p, before, before, nullptr);
   }
@@ -664,7 +675,7 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
     if (z.partition)
       z.energy.set_counted(z.partition->n_owned());
     if (z.account)
-      z.energy.start(z.particles, z.method->strain_energy(z.particles, z.bonds));
+      z.energy.start(z.particles, z.internal_energy(z.particles));
     z.verlet->initialise(z.particles); // forces and accelerations at t = 0
   }
   ctx.log() << "  particles: " << n_global_particles() << " on a lattice of spacing "
@@ -725,7 +736,7 @@ std::vector<std::string> ParticleZone<dim>::take_messages() {
 }
 
 template <int dim>
-void ParticleZone<dim>::advance_to(double time) {
+bool ParticleZone<dim>::advance_to(double time, const std::function<bool(double)>& stop) {
   Impl& z = *impl_;
   struct Clock { // adds the wall time of this call to advance_seconds, however it returns
     double& total;
@@ -755,9 +766,13 @@ void ParticleZone<dim>::advance_to(double time) {
                              "or take more, smaller steps");
     z.method->commit_state();
     z.time = time;
-    return;
+    return true;
   }
+  bool first = true;
   while (z.time < time * (1 - 1e-12)) {
+    if (!first && stop && stop(z.time))
+      return false;
+    first = false;
     const double dt = std::min(z.dt_stable, time - z.time);
     if (z.account)
       z.energy.before_step(z.particles);
@@ -792,6 +807,7 @@ void ParticleZone<dim>::advance_to(double time) {
     if (z.account)
       z.energy.after_step(z.particles, z.time, dt, damped);
   }
+  return true;
 }
 
 template <int dim>

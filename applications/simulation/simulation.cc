@@ -247,11 +247,7 @@ void Simulation<dim>::build(RunContext& ctx) {
       mechanics_->setup();
       set_initial_velocity();
     }
-    mechanics_->set_energy_account(sim_.energy_account);
-    if (sim_.energy_account && ctx.restarting())
-      ctx.warn("Simulation/Energy account starts again at the restart: the works and "
-               "dissipations before it are not in the checkpoint, so the balance figures do "
-               "not hold for a restarted run");
+    mechanics_->set_energy_account(sim_.energy_account); // a restart's sums: load_checkpoint
   }
   if (effects_.coupling) {
     coupled_ = std::make_unique<FemParticleCoupling<dim>>(coupling_prm_, *mechanics_, heat_.get());
@@ -440,6 +436,11 @@ void Simulation<dim>::advance_mechanics(unsigned int step, double time, double d
   if (heat_ && mech_prm_.taylor_quinney > 0)
     mechanics_->mark_plastic_work(); // dissipation over this step, for plastic heating
   (this->*mechanics_integrator_)(step, time, dt, ctx);
+  if (mid_step_signal_ != 0) { // stopped inside the step (no heat module: nothing to hand over)
+    if (coupled_)
+      log_coupling_messages(ctx);
+    return;
+  }
   if (heat_ && mech_prm_.taylor_quinney > 0) // heats the next heat step (staggered)
     plastic_heating_ = mechanics_->cell_plastic_dissipation_rate();
   if (coupled_)
@@ -476,7 +477,11 @@ void Simulation<dim>::coupled_explicit(unsigned int, double time, double, RunCon
     coupled_dt_ = coupled_->stable_time_step();
   // Finite strain: the crushed cells set the FEM's step, which shrinks as they deform.
   const bool finite_strain = mech_prm_.kinematics != "small_strain";
+  bool first = true;
   while (t < time - 1e-12 * time) {
+    if (!first && stop_requested_mid_step(ctx, t))
+      break; // the splice check below holds for the checkpoint of this state too
+    first = false;
     if (finite_strain)
       coupled_dt_ = coupled_->stable_time_step_fem_refreshed();
     check_time_step(coupled_dt_);
@@ -531,9 +536,42 @@ void Simulation<dim>::check_time_step(double stable) {
 }
 
 template <int dim>
-void Simulation<dim>::fem_explicit(unsigned int, double time, double, RunContext&) {
+bool Simulation<dim>::stop_requested_mid_step(RunContext& ctx, double time) {
+  // The heat module has advanced the whole step before the mechanics: a restart in the middle
+  // of the step would advance it twice, so such runs stop after complete steps only.
+  if (heat_)
+    return false;
+  if (++sub_steps_since_signal_check_ < interrupt_check_interval)
+    return false;
+  sub_steps_since_signal_check_ = 0;
+  mid_step_signal_ = ctx.interrupt_signal();
+  mid_step_time_ = time;
+  return mid_step_signal_ != 0;
+}
+
+template <int dim>
+void Simulation<dim>::stop_mid_step(unsigned int step, RunContext& ctx) {
+  // The modules before the one that stopped reached the step's end, the rest did not start:
+  // a checkpoint "after step − 1" at this state resumes the step where it stopped (each module
+  // advances from its own time to the step's end; the explicit state is whole at a sub-step).
+  write_checkpoint(step - 1, mid_step_time_, ctx);
+  ctx.progress().finish();
+  report_figures(ctx);
+  ctx.summary().set_figure("last_step", step - 1, "-");
+  std::ostringstream where;
+  where << "inside step " << step << ", at t = " << mid_step_time_
+        << " s; its checkpoint resumes the step there";
+  throw Interrupted(mid_step_signal_, where.str());
+}
+
+template <int dim>
+void Simulation<dim>::fem_explicit(unsigned int, double time, double, RunContext& ctx) {
   double t = mechanics_->time();
+  bool first = true;
   while (t < time - 1e-12 * time) {
+    if (!first && stop_requested_mid_step(ctx, t))
+      return;
+    first = false;
     const double stable = mechanics_->stable_time_step();
     check_time_step(stable);
     const double h = std::min(stable, time - t);
@@ -556,7 +594,7 @@ void Simulation<dim>::fem_quasi_static(unsigned int, double time, double, RunCon
 
 template <int dim>
 void Simulation<dim>::advance_particles(unsigned int, double time, double, RunContext& ctx) {
-  particles_->advance_to(time);
+  particles_->advance_to(time, [&](double t) { return stop_requested_mid_step(ctx, t); });
   // A fragmenting zone can lose hundreds of families in a step: the first few name the place.
   const std::vector<std::string> messages = particles_->take_messages();
   constexpr std::size_t shown = 10;
@@ -593,11 +631,15 @@ void Simulation<dim>::run(RunContext& ctx) {
       for (const auto& module : modules_) {
         dealii::TimerOutput::Scope scope(ctx.timer(), module.name);
         (this->*module.advance)(step, time, dt, ctx);
+        if (mid_step_signal_ != 0)
+          break;
       }
     } catch (NumericalFailure& failure) {
       failure.set_step(step, time);
       throw;
     }
+    if (mid_step_signal_ != 0)
+      stop_mid_step(step, ctx);
     record(step, time, ctx);
     const bool last = step == last_step;
     if (last || (sim_.output_interval > 0 && step % sim_.output_interval == 0))

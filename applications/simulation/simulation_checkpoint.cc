@@ -33,6 +33,16 @@ void Simulation<dim>::write_checkpoint(unsigned int step, double time, RunContex
     if (coupled_)
       coupled_->save((staged / "coupling.txt").string());
   };
+  // The energy account's running sums (works, dissipations, conversions), summed over the
+  // ranks: a restart continues them instead of starting the balance again (collective).
+  std::vector<double> account_sums;
+  if (sim_.energy_account && coupled_)
+    account_sums = coupled_->energy_account_sums();
+  else if (sim_.energy_account && mechanics_ && !quasi_static_) {
+    const auto works = mechanics_->energy_account().works();
+    account_sums.resize(works.size());
+    dealii::Utilities::MPI::sum(works, ctx.comm(), account_sums);
+  }
   const auto state = [&] {
     const nlohmann::json crack_json = crack_ ? crack_->to_json(ctx.comm()) : nlohmann::json();
     nlohmann::json state;
@@ -46,11 +56,16 @@ void Simulation<dim>::write_checkpoint(unsigned int step, double time, RunContex
     state["particles_pvd"] = particles_pvd_.to_json();
     state["final_step"] = sim_.steps;
     state["explicit_steps"] = explicit_steps_;
+    // The coupled step only falls between conversions (bond breaks): recomputed at a restart
+    // it could differ from the uninterrupted run's.
+    state["coupled_time_step"] = coupled_dt_;
     state["peak_load"] = peak_load_;
     // The reference of Simulation/Minimum time step ratio and the initial energy of an initial
     // velocity field: a restarted run measures against the same values.
     state["first_stable_step"] = first_stable_step_;
     state["initial_kinetic_energy"] = initial_kinetic_energy_;
+    if (!account_sums.empty())
+      state["energy_account_sums"] = account_sums;
     state["relaxation_iterations"] = relaxation_iterations_;
     state["last_relaxation_iterations"] = last_relaxation_.iterations;
     state["last_relaxation_residual"] = last_relaxation_.relative_residual;
@@ -122,7 +137,28 @@ unsigned int Simulation<dim>::load_checkpoint(RunContext& ctx) {
       mechanics_->deserialize(mesh_file);
     if (coupled_)
       coupled_->load((dir / "coupling.txt").string());
+    if (sim_.energy_account && (coupled_ || (mechanics_ && !quasi_static_))) {
+      if (state.contains("energy_account_sums")) {
+        const auto sums = state["energy_account_sums"].get<std::vector<double>>();
+        if (coupled_) {
+          coupled_->restore_energy_account_sums(sums);
+        } else {
+          if (sums.size() != fem::ExplicitEnergy::n_works)
+            throw InvalidInput(
+                (dir / "state.json").string(),
+                "energy_account_sums holds " + std::to_string(sums.size()) + " values",
+                std::to_string(fem::ExplicitEnergy::n_works) + " for a run of the FEM alone");
+          mechanics_->restore_energy_works(ctx.is_root() ? sums
+                                                         : std::vector<double>(sums.size(), 0.0));
+        }
+      } else {
+        ctx.warn("Simulation/Energy account starts again at the restart: the checkpoint was "
+                 "written without the account's sums (an older run), so the balance figures "
+                 "do not hold for a restarted run");
+      }
+    }
     explicit_steps_ = state.value("explicit_steps", 0u);
+    coupled_dt_ = state.value("coupled_time_step", 0.0); // 0: recomputed (older checkpoints)
     peak_load_ = state.value("peak_load", 0.0);
     first_stable_step_ = state.value("first_stable_step", 0.0);
     initial_kinetic_energy_ = state.value("initial_kinetic_energy", 0.0);
@@ -151,7 +187,12 @@ unsigned int Simulation<dim>::load_checkpoint(RunContext& ctx) {
     ctx.history().load(dir / "history.csv");
     ctx.history().truncate_after("time", time * (1 + 1e-12));
   });
-  ctx.log() << "  restarting after step " << step << ", t = " << time << " s\n";
+  // A checkpoint written inside step + 1 (an interrupt between its explicit sub-steps) holds
+  // a time past step's.
+  if (time > step * (sim_.end_time / sim_.steps) * (1 + 1e-9))
+    ctx.log() << "  restarting inside step " << step + 1 << ", at t = " << time << " s\n";
+  else
+    ctx.log() << "  restarting after step " << step << ", t = " << time << " s\n";
   return step;
 }
 

@@ -57,6 +57,15 @@ class Simulation : public framework::Scenario {
   // NumericalFailure when an explicit stable step [s] falls below Simulation/Minimum time step
   // ratio times the first one (a run's or a restart's first step).
   void check_time_step(double stable);
+  // Inside a step's explicit sub-steps, at the module's time `time` [s]: whether SIGINT/SIGTERM
+  // asks the run to stop at this sub-step (the signal and time are then in mid_step_signal_,
+  // mid_step_time_). All ranks ask at the same sub-steps,
+  // every interrupt_check_interval of them (one reduction), so they stop together. Never
+  // true where the step cannot be resumed from its middle (a heat module ran before).
+  bool stop_requested_mid_step(framework::RunContext& ctx, double time);
+  // After a module stopped mid-step: a checkpoint of that state (the step is resumed on
+  // --restart), the figures so far, and Interrupted.
+  [[noreturn]] void stop_mid_step(unsigned int step, framework::RunContext& ctx);
   void advance_heat(unsigned int step, double time, double dt, framework::RunContext& ctx);
   // Mechanics: the integrator chosen in plan_step_modules, then the heat it hands over.
   void advance_mechanics(unsigned int step, double time, double dt, framework::RunContext& ctx);
@@ -100,6 +109,12 @@ class Simulation : public framework::Scenario {
   typename coupling::FemParticleCoupling<dim>::Parameters coupling_prm_;
   std::unique_ptr<coupling::FemParticleCoupling<dim>> coupled_;
   double coupled_dt_ = 0; // stable step of the coupled model, refreshed after conversions
+  // Explicit sub-steps between two looks for a signal inside a step, and the count since the
+  // last look; the signal that stopped a step in its middle (0: none).
+  static constexpr unsigned int interrupt_check_interval = 50;
+  unsigned int sub_steps_since_signal_check_ = 0;
+  int mid_step_signal_ = 0;
+  double mid_step_time_ = 0; // [s]
   unsigned int explicit_steps_ = 0;
   double peak_load_ = 0;
   PvdRecord solution_pvd_{"solution.pvd"}, temperature_pvd_{"temperature.pvd"},

@@ -11,6 +11,16 @@ FiniteStrainStress ConstitutiveLaw::finite_strain_stress(const Tensor2& F, doubl
   return {r.first_piola, std::move(r.state)};
 }
 
+std::optional<double> ConstitutiveLaw::stored_energy_density(const Tensor2&, double,
+                                                             const MaterialState&) const {
+  return std::nullopt;
+}
+
+MaterialState ConstitutiveLaw::transferred_state(const MaterialState& state, const Tensor2&,
+                                                 const Tensor2&) const {
+  return state;
+}
+
 double ConstitutiveLaw::p_wave_speed() const {
   const double E = youngs_modulus(), nu = poisson_ratio();
   const double lambda_plus_2mu = E * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu));

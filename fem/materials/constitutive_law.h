@@ -9,6 +9,7 @@
 #include <deal.II/base/tensor.h>
 
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace spinesim::materials {
@@ -68,6 +69,24 @@ class ConstitutiveLaw {
   // particle family or quadrature point and step, and never uses the tangent).
   virtual FiniteStrainStress finite_strain_stress(const Tensor2& F, double temperature_change,
                                                   const MaterialState& old_state) const;
+
+  // The stored (recoverable) energy per reference volume [J/m^3] at F after the update from
+  // `old_state`, for laws with history whose stored energy is a function of their state (not
+  // the path integral ∫P:dF, which counts what plastic flow dissipated, or with a stressed
+  // intermediate configuration misses it). nullopt for the others: hyperelastic laws, where
+  // the path integral from F = I is the stored energy, and laws with their own formula.
+  virtual std::optional<double> stored_energy_density(const Tensor2& F, double temperature_change,
+                                                      const MaterialState& old_state) const;
+
+  // `state` of a point now at deformation gradient F_from, rewritten for a point that carries
+  // it on at F_to with the same elastic trial state. A law whose history lives in the
+  // intermediate configuration (J2FiniteStrain's C_p⁻¹) must rewrite it, or b^e = F C_p⁻¹ Fᵀ
+  // and with it the stress jump by F_to F_from⁻¹; that happens where a state moves between
+  // discretisations that see different F at one material point (an F-bar cell's F̄ and a
+  // particle family's F).
+  // The default, for laws whose state is spatial or small-strain, returns it unchanged.
+  virtual MaterialState transferred_state(const MaterialState& state, const Tensor2& F_from,
+                                          const Tensor2& F_to) const;
 
   // Elastic constants for stable-step estimates, stabilisation and AMG scaling.
   virtual double youngs_modulus() const = 0; // [Pa]

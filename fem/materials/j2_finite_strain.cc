@@ -42,6 +42,33 @@ SymTensor2 J2FiniteStrain::elastic_left_cauchy_green(const Tensor2& F, const Mat
   return dealii::symmetrize(F * Tensor2(state.elastic_left_cauchy_green) * dealii::transpose(F));
 }
 
+std::optional<double> J2FiniteStrain::stored_energy_density(const Tensor2& F, double dT,
+                                                            const MaterialState& old_state) const {
+  const FiniteStrainStress r = respond(F, dT, old_state, nullptr);
+  const SymTensor2 b = elastic_left_cauchy_green(F, r.state);
+  const auto eig = dealii::eigenvectors(b, dealii::SymmetricTensorEigenvectorMethod::jacobi);
+  SymTensor2 eps; // elastic log strain, thermal part removed
+  for (unsigned int a = 0; a < 3; ++a)
+    eps += 0.5 * std::log(eig[a].first) *
+           dealii::symmetrize(dealii::outer_product(eig[a].second, eig[a].second));
+  eps -= alpha_ * dT * dealii::unit_symmetric_tensor<3>();
+  const double tr = dealii::trace(eps);
+  const SymTensor2 dev = dealii::deviator(eps);
+  return 0.5 * K_ * tr * tr + mu_ * (dev * dev);
+}
+
+MaterialState J2FiniteStrain::transferred_state(const MaterialState& state, const Tensor2& F_from,
+                                                const Tensor2& F_to) const {
+  checked_determinant(F_from, *this);
+  checked_determinant(F_to, *this);
+  const Tensor2 F_to_inverse = dealii::invert(F_to);
+  MaterialState out = state;
+  out.elastic_left_cauchy_green =
+      dealii::symmetrize(F_to_inverse * Tensor2(elastic_left_cauchy_green(F_from, state)) *
+                         dealii::transpose(F_to_inverse));
+  return out;
+}
+
 FiniteStrainResponse J2FiniteStrain::finite_strain(const Tensor2& F, double dT,
                                                    const MaterialState& old_state) const {
   FiniteStrainResponse r;

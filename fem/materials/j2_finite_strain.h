@@ -45,6 +45,14 @@ class J2FiniteStrain : public ConstitutiveLaw {
                                      const MaterialState& old_state) const override;
   FiniteStrainStress finite_strain_stress(const Tensor2& F, double temperature_change,
                                           const MaterialState& old_state) const override;
+  // Hencky: W = ½ K (tr ε_e)² + μ |dev ε_e|², ε_e = ½ ln b^e − αΔT I with b^e after the
+  // return from `old_state` (W = ½ τ : ε_e); the plastic work is in the state.
+  std::optional<double> stored_energy_density(const Tensor2& F, double temperature_change,
+                                              const MaterialState& old_state) const override;
+  // C_p⁻¹ ← F_to⁻¹ F_from C_p⁻¹ F_fromᵀ F_to⁻ᵀ: b^e (hence τ, the stored energy and the
+  // distance to the yield surface) at F_to is the one the state had at F_from.
+  MaterialState transferred_state(const MaterialState& state, const Tensor2& F_from,
+                                  const Tensor2& F_to) const override;
   double youngs_modulus() const override { return E_; }
   double poisson_ratio() const override { return nu_; }
   double density() const override { return rho_; }

@@ -83,10 +83,14 @@ void NosbMethod<dim>::set_history(const std::vector<HistoryRecord>& records) {
 }
 
 template <int dim>
-void NosbMethod<dim>::set_particle_states(
-    const std::vector<std::pair<unsigned int, materials::MaterialState>>& states) {
-  for (const auto& [i, s] : states)
-    pd_.set_particle_state(i, s);
+void NosbMethod<dim>::set_particle_states(const ParticleSet<dim>& particles,
+                                          const std::vector<CarriedState>& states) {
+  const std::vector<int> family = pd_.family_of_history();
+  for (const auto& c : states)
+    if (c.deformation)
+      pd_.set_particle_state(c.particle, c.state, *c.deformation, family, particles);
+    else
+      pd_.set_particle_state(c.particle, c.state);
 }
 
 template <int dim>

@@ -67,8 +67,11 @@ class NosbMethod : public ParticleMethod<dim> {
                        const BondList<dim>& bonds) const override;
   std::vector<HistoryRecord> history(const std::vector<std::uint8_t>& which) const override;
   void set_history(const std::vector<HistoryRecord>& records) override;
-  void set_particle_states(
-      const std::vector<std::pair<unsigned int, materials::MaterialState>>& states) override;
+  void set_particle_states(const ParticleSet<dim>& particles,
+                           const std::vector<CarriedState>& states) override;
+  std::vector<double> plastic_work_density(const ParticleSet<dim>& particles) const override {
+    return pd_.plastic_work_density(particles);
+  }
   materials::MaterialState particle_state(unsigned int i) const override {
     return pd_.particle_state(i);
   }

@@ -654,6 +654,14 @@ double NosbPD<dim>::stress_energy(unsigned int e, const dealii::Tensor<2, dim>& 
   const auto& fam = families();
   if (!(committed_[fam.history_index(e)].fracture_damage < 1.0))
     return 0.0; // no stress, no energy (evaluate)
+  {
+    // A law whose stored energy is a function of its state (finite-strain J2: W(b^e)): the
+    // path integral below would start from a stressed intermediate configuration.
+    const auto& old = committed_[fam.history_index(e)];
+    const double dT = particles.temperature(fam.centre(e)) - reference_temperature_;
+    if (const auto W = law_->stored_energy_density(materials::embed_plane_strain(F), dT, old))
+      return (1.0 - old.fracture_damage) * fam.weight(e) * *W; // W = (1 − D_f) W_law
+  }
   if (const auto* j2 = dynamic_cast<const materials::J2Plasticity*>(law_.get())) {
     // Small-strain J2 on isotropic linear elasticity: the path integral from F = I would
     // count the plastic strain as stored (J2Plasticity::stored_energy_density).
@@ -751,6 +759,51 @@ void NosbPD<dim>::set_particle_state(unsigned int i, const materials::MaterialSt
     committed_[h] = trial_[h] = state;
     committed_[h].fracture_damage = trial_[h].fracture_damage = D;
   }
+}
+
+template <int dim>
+void NosbPD<dim>::set_particle_state(unsigned int i, const materials::MaterialState& state,
+                                     const materials::Tensor2& F_from,
+                                     const std::vector<int>& family,
+                                     const ParticleSet<dim>& particles) {
+  if (i + 1 >= particle_history_begin_.size())
+    return;
+  const auto& fam = families();
+  for (std::size_t h = particle_history_begin_[i]; h < particle_history_begin_[i + 1]; ++h) {
+    materials::MaterialState s = state;
+    // An inverted family keeps the state as carried: its first force pass reports it.
+    if (h < family.size() && family[h] >= 0) {
+      const materials::Tensor2 F_to = materials::embed_plane_strain(
+          fam.deformation_gradient(family[h], particles.displacements()));
+      if (dealii::determinant(F_to) > 0.0 && dealii::determinant(F_from) > 0.0)
+        s = law_->transferred_state(state, F_from, F_to);
+    }
+    const double D = std::max(committed_[h].fracture_damage, s.fracture_damage);
+    committed_[h] = trial_[h] = s;
+    committed_[h].fracture_damage = trial_[h].fracture_damage = D;
+  }
+}
+
+template <int dim>
+std::vector<double> NosbPD<dim>::plastic_work_density(const ParticleSet<dim>& particles) const {
+  std::vector<double> D(particles.size(), 0.0);
+  const auto& fam = families();
+  for (unsigned int e = 0; e < fam.n_families(); ++e) {
+    const unsigned int i = fam.centre(e);
+    if (i < D.size() && fam.history_index(e) < committed_.size())
+      D[i] += fam.weight(e) * committed_[fam.history_index(e)].plastic_work / particles.volume(i);
+  }
+  return D;
+}
+
+template <int dim>
+std::vector<int> NosbPD<dim>::family_of_history() const {
+  std::vector<int> family(committed_.size(), -1);
+  const auto& fam = families();
+  for (unsigned int e = 0; e < fam.n_families(); ++e)
+    if (fam.history_index(e) < family.size())
+      family[fam.history_index(e)] = static_cast<int>(e);
+  return family;
 }
 
 template <int dim>

@@ -201,6 +201,17 @@ class NosbPD {
                            const materials::MaterialState& state);
   // Every history index centred on particle i gets `state`.
   void set_particle_state(unsigned int i, const materials::MaterialState& state);
+  // The same for a state last evaluated at deformation gradient F_from (3 × 3): each family
+  // continues it at its own F at the current displacements (ConstitutiveLaw::
+  // transferred_state); a history index without a family (a failed particle) takes it as it
+  // is. `family` maps history indices to families (family_of_history()).
+  void set_particle_state(unsigned int i, const materials::MaterialState& state,
+                          const materials::Tensor2& F_from, const std::vector<int>& family,
+                          const ParticleSet<dim>& particles);
+  // Per particle: Σ_e w_e D_p,e / V_i over its families' committed plastic work D_p [J/m^3].
+  std::vector<double> plastic_work_density(const ParticleSet<dim>& particles) const;
+  // The family of each history index (−1: none), for set_particle_state.
+  std::vector<int> family_of_history() const;
   // Particle i's committed state: its particle family's, or the mean over its bond-associated
   // families (tensors and scalars averaged alike).
   materials::MaterialState particle_state(unsigned int i) const;

@@ -192,6 +192,16 @@ double SpgMethod<dim>::stable_time_step(const ParticleSet<dim>&, const BondList<
 }
 
 template <int dim>
+dealii::Tensor<2, dim> SpgMethod<dim>::particle_gradient(unsigned int i,
+                                                         const ParticleSet<dim>& particles) const {
+  // From the coefficients now (a restored checkpoint has not evaluated forces yet).
+  return solver_->parameters().update_mode() == SpgKernelUpdate::total_lagrangian
+             ? (solver_->has_row(i) ? solver_->deformation_gradient(i, particles.displacements())
+                                    : dealii::Tensor<2, dim>(dealii::unit_symmetric_tensor<dim>()))
+             : solver_->deformation_gradients()[i];
+}
+
+template <int dim>
 double SpgMethod<dim>::energy_density(unsigned int i, const ParticleSet<dim>& particles) const {
   if (!solver_)
     throw std::logic_error("SpgMethod: initialise() before use");
@@ -205,13 +215,13 @@ double SpgMethod<dim>::energy_density(unsigned int i, const ParticleSet<dim>& pa
   const double wa = (18.0 + std::sqrt(30.0)) / 36.0, wb = (18.0 - std::sqrt(30.0)) / 36.0;
   const double t[4] = {0.5 * (1 - b), 0.5 * (1 - a), 0.5 * (1 + a), 0.5 * (1 + b)};
   const double w[4] = {0.5 * wb, 0.5 * wa, 0.5 * wa, 0.5 * wb};
-  // F from the coefficients now (a restored checkpoint has not evaluated forces yet).
-  const auto F =
-      solver_->parameters().update_mode() == SpgKernelUpdate::total_lagrangian
-          ? (solver_->has_row(i) ? solver_->deformation_gradient(i, particles.displacements())
-                                 : dealii::Tensor<2, dim>(dealii::unit_symmetric_tensor<dim>()))
-          : solver_->deformation_gradients()[i];
+  const auto F = particle_gradient(i, particles);
   const double dT = particles.temperature(i) - reference_temperature_;
+  // A law whose stored energy is a function of its state (finite-strain J2: W(b^e)), as in
+  // NOSB-PD: the path integral below would start from a stressed intermediate configuration.
+  if (const auto W = law_->stored_energy_density(materials::embed_plane_strain(F), dT,
+                                                 solver_->committed_states()[i]))
+    return kept * *W;
   if (const auto* j2 = dynamic_cast<const materials::J2Plasticity*>(law_.get())) {
     // The stored energy of small-strain J2, not the path integral (which would count the
     // plastic strain as stored): the FEM and NOSB-PD take the same.
@@ -414,11 +424,50 @@ void SpgMethod<dim>::set_history(const std::vector<HistoryRecord>& records) {
 }
 
 template <int dim>
-void SpgMethod<dim>::set_particle_states(
-    const std::vector<std::pair<unsigned int, materials::MaterialState>>& states) {
-  for (const auto& [i, s] : states)
-    if (solver_ && i < solver_->committed_states().size())
+void SpgMethod<dim>::set_particle_states(const ParticleSet<dim>& particles,
+                                         const std::vector<CarriedState>& states) {
+  if (!solver_)
+    return;
+  // Each particle continues the state at its own F (total Lagrangian kernels, F from the
+  // coefficients now: no force pass has run on the new rows yet); as it is elsewhere.
+  const bool own_F = solver_->parameters().update_mode() == SpgKernelUpdate::total_lagrangian;
+  // An inverted F keeps the state as carried: the first force pass reports it.
+  for (const auto& c : states)
+    if (c.particle < solver_->committed_states().size()) {
+      const unsigned int i = c.particle;
+      materials::MaterialState s = c.state;
+      if (c.deformation && own_F && solver_->has_row(i)) {
+        const materials::Tensor2 F_to = materials::embed_plane_strain(
+            solver_->deformation_gradient(i, particles.displacements()));
+        if (dealii::determinant(F_to) > 0.0 && dealii::determinant(*c.deformation) > 0.0)
+          s = law_->transferred_state(c.state, *c.deformation, F_to);
+      }
       solver_->set_state(i, s);
+    }
+}
+
+template <int dim>
+std::vector<double> SpgMethod<dim>::plastic_work_density(const ParticleSet<dim>& particles) const {
+  // Only where energy_density takes the stored energy from the state (finite-strain J2,
+  // small-strain J2), and after this update at the current F, as that W (NosbPD alike).
+  const bool from_state =
+      dynamic_cast<const materials::J2Plasticity*>(law_.get()) != nullptr ||
+      law_->stored_energy_density(materials::Tensor2(dealii::unit_symmetric_tensor<3>()), 0.0,
+                                  materials::MaterialState())
+          .has_value();
+  if (!solver_ || !from_state)
+    return {};
+  std::vector<double> D(particles.size(), 0.0);
+  for (unsigned int i = 0; i < D.size() && i < solver_->committed_states().size(); ++i) {
+    const materials::MaterialState& old = solver_->committed_states()[i];
+    D[i] = old.plastic_work;
+    if (old.fracture_damage < 1.0)
+      D[i] =
+          law_->finite_strain_stress(materials::embed_plane_strain(particle_gradient(i, particles)),
+                                     particles.temperature(i) - reference_temperature_, old)
+              .state.plastic_work;
+  }
+  return D;
 }
 
 template <int dim>

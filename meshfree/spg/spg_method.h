@@ -108,9 +108,10 @@ class SpgMethod : public ParticleMethod<dim> {
   void rollback_state() override;
   std::vector<HistoryRecord> history(const std::vector<std::uint8_t>& which) const override;
   void set_history(const std::vector<HistoryRecord>& records) override;
-  void set_particle_states(
-      const std::vector<std::pair<unsigned int, materials::MaterialState>>& states) override;
+  void set_particle_states(const ParticleSet<dim>& particles,
+                           const std::vector<CarriedState>& states) override;
   materials::MaterialState particle_state(unsigned int i) const override;
+  std::vector<double> plastic_work_density(const ParticleSet<dim>& particles) const override;
 
   // u_I of the last force evaluation.
   const std::vector<dealii::Tensor<1, dim>>& physical_displacements() const;
@@ -127,6 +128,8 @@ class SpgMethod : public ParticleMethod<dim> {
   std::vector<materials::MaterialState> kept_;
   std::unique_ptr<SPGSolver<dim>> solver_;
   double energy_density(unsigned int i, const ParticleSet<dim>& particles) const; // W_i [J/m^3]
+  // F at particle i for the coefficients now (total Lagrangian) or of the last force pass.
+  dealii::Tensor<2, dim> particle_gradient(unsigned int i, const ParticleSet<dim>& particles) const;
   // The particles of the force pass under way (for the break observer) and the stored energies
   // V_i W_i of the rows a break changes, taken before their rows are rebuilt [J].
   const ParticleSet<dim>* pass_particles_ = nullptr;

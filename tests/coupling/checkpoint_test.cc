@@ -180,8 +180,8 @@ void damaged_checkpoint_is_invalid_input() {
   std::vector<std::string> counts;
   for (std::string token; header >> token;)
     counts.push_back(token);
-  ASSERT_EQ(counts.size(),
-            7u); // time, particles, converted cells, broken, dissipation, heat, history
+  // time, particles, converted cells, broken, dissipation, heat, history, last force pass
+  ASSERT_EQ(counts.size(), 8u);
   const std::size_t first_particle = 2 + std::stoul(counts[2]);
   ASSERT_LT(first_particle, lines.size());
 

@@ -109,6 +109,34 @@ add_test(NAME hostile.interrupt_and_restart
     -P ${PROJECT_SOURCE_DIR}/tests/support/interrupt_case.cmake)
 set_tests_properties(hostile.interrupt_and_restart PROPERTIES LABELS "hostile;cli" TIMEOUT 300)
 
+# SIGTERM inside a long explicit step: the run stops at a sub-step of step 2 (it looks every 50
+# sub-steps) instead of finishing the step, checkpoints that state, and the restart resumes
+# the step there and ends with the uninterrupted run's figures and history to the last digit.
+# FEM alone (the impact on 12 x 120 cells in plane strain, 6 x 6 x 60 in 3-D: about 3.5 s a
+# step), a NOSB-PD particle zone (the ring, about 2 s a step) and the coupled integrator: with
+# conversions and bond breaks (the coupled cracked plate, about 1.5 s a step) and in finite
+# strain (the 3-D impact with every cell a NOSB particle, about 4 s a step). LAST_STEP = 1: a
+# run that finished step 2 before stopping fails. Every run keeps an energy account: the
+# checkpoints carry its sums, the displacement of the last force pass (the lost work of a
+# break) and the particles' stiffness bound (the step under finite strain), so the restarted
+# balance and steps are the uninterrupted run's too.
+set(_impact_fem "Effects/Coupling=false|Effects/Conversion=false|Effects/Particles method=none|Simulation/Write VTU=false|Simulation/Steps=3")
+foreach(_case
+    "fem_2d|${PROJECT_SOURCE_DIR}/applications/validation/taylor_impact_plane_strain.prm|${_impact_fem}|Simulation/End time=1.5e-5|Geometry/Subdivisions=12, 120"
+    "fem_3d|${PROJECT_SOURCE_DIR}/applications/validation/taylor_impact_3d.prm|${_impact_fem}|Simulation/End time=6e-6|Geometry/Subdivisions=6, 6, 60"
+    "particles_2d|${PROJECT_SOURCE_DIR}/applications/validation/ring_fragmentation.prm|Effects/Particles method=nosb|Simulation/Steps=3"
+    "coupled_2d|${PROJECT_SOURCE_DIR}/applications/scenes/cracked_plate_coupled.prm|Simulation/Write VTU=false|Simulation/Steps=2|Simulation/Energy account=true"
+    "coupled_finite_strain_3d|${PROJECT_SOURCE_DIR}/applications/validation/taylor_impact_3d.prm|Coupling/All particles=true|Simulation/Write VTU=false|Simulation/End time=6e-6|Simulation/Steps=3")
+  string(REPLACE "|" ";" _parts "${_case}")
+  list(POP_FRONT _parts _tag _scene)
+  list(JOIN _parts "|" _set)
+  add_test(NAME hostile.interrupt_mid_step_${_tag}
+    COMMAND ${CMAKE_COMMAND} -DSPINESIM=$<TARGET_FILE:spinesim> -DSCENE=${_scene}
+      -DDIR=${_runs}/interrupt_mid_step_${_tag} -DAFTER_ROWS=1 -DLAST_STEP=1 -DTOL=1e-12
+      "-DSET=${_set}" -P ${PROJECT_SOURCE_DIR}/tests/support/interrupt_case.cmake)
+  set_tests_properties(hostile.interrupt_mid_step_${_tag} PROPERTIES LABELS "hostile;cli" TIMEOUT 300)
+endforeach()
+
 # `check` rejects what `run` rejects before its first step, with the same message.
 foreach(_case "Material/Young's modulus=0:Young's modulus"
               "Simulation/End time=0:Simulation/End time"

@@ -621,9 +621,11 @@ TEST(Lsmfm, BoundarySpringGivesTheSeriesStiffness) {
   solver.solve_step();
   const double eps = F / (E + k);
   for (unsigned int q = 0; q < solver.n_points(); ++q) {
-    // Round-off of the normal equations, as the patch tests (1e-10 of the field).
-    ASSERT_NEAR(solver.point_stress(q)[0], E * eps, 1e-10 * E * eps);
-    ASSERT_NEAR(solver.displacement(solver.point(q))[0], eps * solver.point(q)[0], 1e-10 * eps);
+    // Round-off of the normal equations: the supernodal Cholesky's BLAS kernels are chosen by
+    // the CPU (OpenBLAS), and the stress error measured 1.0e-10 of the field on one machine
+    // and below it on another; 1e-9 of the field is round-off still.
+    ASSERT_NEAR(solver.point_stress(q)[0], E * eps, 1e-9 * E * eps);
+    ASSERT_NEAR(solver.displacement(solver.point(q))[0], eps * solver.point(q)[0], 1e-9 * eps);
   }
 }
 

@@ -5,6 +5,7 @@
 // stable step, a non-negative stored energy that vanishes at rest, and damage in [0, 1].
 #include "fem/materials/law_parameters.h"
 #include "fem/materials/material_state_io.h"
+#include "fem/materials/plane_strain_embedding.h"
 #include "meshfree/bond_based_method.h"
 #include "meshfree/neighbor_search.h"
 #include "meshfree/particle_method.h"
@@ -31,7 +32,8 @@ struct Body {
 };
 
 template <int dim>
-Body<dim> make_body(const std::string& name, unsigned int n) {
+Body<dim> make_body(const std::string& name, unsigned int n,
+                    const std::string& model = "linear_elastic") {
   dealii::ParameterHandler prm;
   declare_particle_method_sections(prm);
   if (name == "nosb") {
@@ -42,6 +44,7 @@ Body<dim> make_body(const std::string& name, unsigned int n) {
   }
   const auto make = particle_method_maker<dim>(name, prm, "test");
   materials::LawParameters law; // linear elastic, E = 17 GPa, ν = 0.3
+  law.model = model;            // j2_finite_strain: yield 115 MPa, no hardening
   // Bond-based PD refuses any other ratio than its own (1/3 plane stress, 1/4 in 3-D).
   law.poisson_ratio = name == "bond_based" ? (dim == 2 ? 1.0 / 3.0 : 0.25) : 0.3;
   const ParticleMaterial material{law.youngs_modulus, law.poisson_ratio, law.density,
@@ -194,7 +197,10 @@ void check_nosb_history_checkpoint() {
   materials::MaterialState s;
   s.equivalent_plastic_strain = 0.01;
   s.fracture_damage = 0.375;
-  b.method->set_particle_states({{0u, s}});
+  CarriedState carried;
+  carried.particle = 0;
+  carried.state = s;
+  b.method->set_particle_states(b.particles, {carried});
   std::stringstream file;
   b.method->save(file);
   auto c = make_body<dim>("nosb", dim == 2 ? 6 : 4);
@@ -232,6 +238,81 @@ TEST(ParticleMethod, NosbHistoryCheckpointCarriesFractureDamage2D) {
 }
 TEST(ParticleMethod, NosbHistoryCheckpointCarriesFractureDamage3D) {
   check_nosb_history_checkpoint<3>();
+}
+
+// A finite-strain J2 state carried into particles from a point whose F differs from theirs
+// (an F-bar cell's F̄): each NOSB-PD family (its own F of the affine field u = (F_p − I) X) and
+// each SPG particle continues the elastic trial b^e = F_from C_p⁻¹ F_fromᵀ the source would
+// take, so the particles' state gives the same b^e at their F (ConstitutiveLaw::
+// transferred_state). Interior particles, where the families reproduce F_p exactly; 1e-12
+// relative: inverses and products of tensors of order 1. Carried without the source's F, the
+// state gives another b^e (the check can fail), and its equivalent plastic strain is kept.
+template <int dim>
+void check_carried_state_continues_the_elastic_state(const std::string& name) {
+  const double depth = interior_depth(make_body<dim>(name, 3, "j2_finite_strain"));
+  auto b = make_body<dim>(name, static_cast<unsigned int>(std::ceil(2 * depth / h)) + 2,
+                          "j2_finite_strain");
+  dealii::Tensor<2, dim> Fp; // the particles' F
+  for (unsigned int r = 0; r < dim; ++r)
+    for (unsigned int c = 0; c < dim; ++c)
+      Fp[r][c] = (r == c ? 0.97 : 0.0) + (c == r + 1 ? 0.04 : 0.0);
+  for (unsigned int i = 0; i < b.particles.size(); ++i)
+    b.particles.displacement(i) =
+        (Fp - dealii::Tensor<2, dim>(dealii::unit_symmetric_tensor<dim>())) *
+        b.particles.reference_position(i);
+  materials::Tensor2 F_from; // the source's F̄: 5 % more volume and a shear
+  for (unsigned int r = 0; r < 3; ++r)
+    for (unsigned int c = 0; c < 3; ++c)
+      F_from[r][c] = r < dim && c < dim ? Fp[r][c] * 1.02 : (r == c ? 1.0 : 0.0);
+  F_from[0][1] += 0.01;
+  materials::MaterialState s; // a plastic state: C_p⁻¹ isochoric, not the identity
+  s.elastic_left_cauchy_green = dealii::unit_symmetric_tensor<3>();
+  s.elastic_left_cauchy_green[0][0] = 1.1;
+  s.elastic_left_cauchy_green[1][1] = 1.0 / 1.1;
+  s.elastic_left_cauchy_green[0][1] = 0.02;
+  s.equivalent_plastic_strain = 0.07;
+  const materials::SymTensor2 be_source = dealii::symmetrize(
+      F_from * materials::Tensor2(s.elastic_left_cauchy_green) * dealii::transpose(F_from));
+  const materials::Tensor2 F3 = materials::embed_plane_strain(Fp);
+
+  std::vector<CarriedState> with_F, without_F;
+  std::vector<unsigned int> interior;
+  for (unsigned int i = 0; i < b.particles.size(); ++i) {
+    bool inside = true;
+    for (unsigned int d = 0; d < dim; ++d)
+      inside = inside && b.particles.reference_position(i)[d] >= depth &&
+               b.particles.reference_position(i)[d] <= b.extent - depth;
+    if (!inside)
+      continue;
+    interior.push_back(i);
+    with_F.push_back({i, s, F_from});
+    without_F.push_back({i, s, std::nullopt});
+  }
+  ASSERT_FALSE(interior.empty());
+  b.method->set_particle_states(b.particles, with_F);
+  for (const unsigned int i : interior) {
+    const auto state = b.method->particle_state(i);
+    const materials::SymTensor2 be = dealii::symmetrize(
+        F3 * materials::Tensor2(state.elastic_left_cauchy_green) * dealii::transpose(F3));
+    EXPECT_LE((be - be_source).norm(), 1e-12 * be_source.norm()) << name << " particle " << i;
+    // NOSB-PD's bond-associated families: the mean of equal values, to a few ulps.
+    EXPECT_NEAR(state.equivalent_plastic_strain, s.equivalent_plastic_strain,
+                1e-14 * s.equivalent_plastic_strain);
+  }
+  b.method->set_particle_states(b.particles, without_F);
+  const auto plain = b.method->particle_state(interior.front());
+  const materials::SymTensor2 be_plain = dealii::symmetrize(
+      F3 * materials::Tensor2(plain.elastic_left_cauchy_green) * dealii::transpose(F3));
+  EXPECT_GT((be_plain - be_source).norm(), 1e-2 * be_source.norm());
+}
+
+TEST(ParticleMethod, CarriedFiniteStrainStateContinuesTheElasticState2D) {
+  for (const std::string name : {"nosb", "spg"})
+    check_carried_state_continues_the_elastic_state<2>(name);
+}
+TEST(ParticleMethod, CarriedFiniteStrainStateContinuesTheElasticState3D) {
+  for (const std::string name : {"nosb", "spg"})
+    check_carried_state_continues_the_elastic_state<3>(name);
 }
 
 TEST(ParticleMethod, BadParameterIsInvalidInputAtReading) {

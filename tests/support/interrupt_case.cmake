@@ -3,7 +3,9 @@
 # summary.json figures and the history.csv of a run that was never interrupted.
 # Variables: SPINESIM, SCENE (empty: the embedded default scene), DIR (work folder), SET
 # ("Section/Param=value|..." for all three runs), AFTER_ROWS (history rows to wait for),
-# TOL (relative tolerance of the summary figures; history values must agree to the digit).
+# TOL (relative tolerance of the summary figures; history values must agree to the digit),
+# LAST_STEP (optional: the last complete step the interrupted run must report; AFTER_ROWS for a
+# run whose explicit sub-steps stop inside the next step, where the signal fell).
 cmake_minimum_required(VERSION 3.19)
 string(REPLACE "|" ";" _sets "${SET}")
 set(_common ${SCENE} --progress off)
@@ -47,6 +49,10 @@ if(NOT EXISTS ${DIR}/run/checkpoint/manifest.json)
   message(FATAL_ERROR "no checkpoint after the interrupt")
 endif()
 message(STATUS "interrupted after step ${_last}")
+if(DEFINED LAST_STEP AND NOT _last EQUAL LAST_STEP)
+  message(FATAL_ERROR "the interrupted run reports last_step ${_last}, expected ${LAST_STEP}: "
+                      "it did not stop inside the step the signal fell in")
+endif()
 
 execute_process(COMMAND ${SPINESIM} run --restart ${DIR}/run --progress off RESULT_VARIABLE _rc
                 OUTPUT_VARIABLE _o ERROR_VARIABLE _e)
@@ -56,6 +62,10 @@ endif()
 file(READ ${DIR}/run/log.txt _log)
 if(NOT _log MATCHES "running.*interrupted by SIGTERM.*restarting")
   message(FATAL_ERROR "log.txt does not hold both segments:\n${_log}")
+endif()
+math(EXPR _resumed "${AFTER_ROWS} + 1")
+if(DEFINED LAST_STEP AND NOT _log MATCHES "interrupted by SIGTERM inside step ${_resumed}.*restarting inside step ${_resumed}")
+  message(FATAL_ERROR "log.txt does not show the stop and the restart inside step ${_resumed}:\n${_log}")
 endif()
 
 # Figures: compare_summaries (timings and iteration counts aside) to TOL.
