@@ -768,11 +768,9 @@ bool ParticleZone<dim>::advance_to(double time, const std::function<bool(double)
     z.time = time;
     return true;
   }
-  bool first = true;
   while (z.time < time * (1 - 1e-12)) {
-    if (!first && stop && stop(z.time))
+    if (stop && stop(z.time))
       return false;
-    first = false;
     const double dt = std::min(z.dt_stable, time - z.time);
     if (z.account)
       z.energy.before_step(z.particles);

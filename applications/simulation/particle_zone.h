@@ -78,9 +78,9 @@ class ParticleZone {
   // Explicit integration only (InvalidInput otherwise); before setup().
   void set_energy_account(bool on);
   void setup(RunContext& ctx);
-  // Advances from the zone's time to `time` [s]. Explicit: before each sub-step after the
-  // first, `stop` (given the zone's time [s]) may end the call early at a complete sub-step;
-  // returns whether `time` was reached. `stop` is called on every rank at the same sub-steps.
+  // Advances from the zone's time to `time` [s]. Explicit: before each sub-step, `stop` (given
+  // the zone's time [s]) may end the call early at a complete sub-step; returns whether `time`
+  // was reached. `stop` is called on every rank at the same sub-steps.
   bool advance_to(double time, const std::function<bool(double)>& stop = {});
   // The method's messages for the run log since the last call (e.g. particles that lost their
   // family), from every rank, on rank 0 (collective when distributed; empty elsewhere).

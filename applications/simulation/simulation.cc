@@ -477,11 +477,10 @@ void Simulation<dim>::coupled_explicit(unsigned int, double time, double, RunCon
     coupled_dt_ = coupled_->stable_time_step();
   // Finite strain: the crushed cells set the FEM's step, which shrinks as they deform.
   const bool finite_strain = mech_prm_.kinematics != "small_strain";
-  bool first = true;
+  auto stop_here = mid_step_stop(ctx);
   while (t < time - 1e-12 * time) {
-    if (!first && stop_requested_mid_step(ctx, t))
+    if (stop_here(t))
       break; // the splice check below holds for the checkpoint of this state too
-    first = false;
     if (finite_strain)
       coupled_dt_ = coupled_->stable_time_step_fem_refreshed();
     check_time_step(coupled_dt_);
@@ -550,6 +549,18 @@ bool Simulation<dim>::stop_requested_mid_step(RunContext& ctx, double time) {
 }
 
 template <int dim>
+std::function<bool(double)> Simulation<dim>::mid_step_stop(RunContext& ctx) {
+  // Never before the first sub-step: a run resumed inside a step always advances.
+  return [this, &ctx, first = true](double time) mutable {
+    if (first) {
+      first = false;
+      return false;
+    }
+    return stop_requested_mid_step(ctx, time);
+  };
+}
+
+template <int dim>
 void Simulation<dim>::stop_mid_step(unsigned int step, RunContext& ctx) {
   // The modules before the one that stopped reached the step's end, the rest did not start:
   // a checkpoint "after step − 1" at this state resumes the step where it stopped (each module
@@ -567,11 +578,10 @@ void Simulation<dim>::stop_mid_step(unsigned int step, RunContext& ctx) {
 template <int dim>
 void Simulation<dim>::fem_explicit(unsigned int, double time, double, RunContext& ctx) {
   double t = mechanics_->time();
-  bool first = true;
+  auto stop_here = mid_step_stop(ctx);
   while (t < time - 1e-12 * time) {
-    if (!first && stop_requested_mid_step(ctx, t))
+    if (stop_here(t))
       return;
-    first = false;
     const double stable = mechanics_->stable_time_step();
     check_time_step(stable);
     const double h = std::min(stable, time - t);
@@ -594,7 +604,7 @@ void Simulation<dim>::fem_quasi_static(unsigned int, double time, double, RunCon
 
 template <int dim>
 void Simulation<dim>::advance_particles(unsigned int, double time, double, RunContext& ctx) {
-  particles_->advance_to(time, [&](double t) { return stop_requested_mid_step(ctx, t); });
+  particles_->advance_to(time, mid_step_stop(ctx));
   // A fragmenting zone can lose hundreds of families in a step: the first few name the place.
   const std::vector<std::string> messages = particles_->take_messages();
   constexpr std::size_t shown = 10;

@@ -22,6 +22,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -63,6 +64,9 @@ class Simulation : public framework::Scenario {
   // every interrupt_check_interval of them (one reduction), so they stop together. Never
   // true where the step cannot be resumed from its middle (a heat module ran before).
   bool stop_requested_mid_step(framework::RunContext& ctx, double time);
+  // For one sub-step loop: called before each sub-step with the module's time [s], it asks
+  // stop_requested_mid_step before every sub-step but the loop's first.
+  std::function<bool(double)> mid_step_stop(framework::RunContext& ctx);
   // After a module stopped mid-step: a checkpoint of that state (the step is resumed on
   // --restart), the figures so far, and Interrupted.
   [[noreturn]] void stop_mid_step(unsigned int step, framework::RunContext& ctx);

@@ -16,6 +16,12 @@ std::optional<double> ConstitutiveLaw::stored_energy_density(const Tensor2&, dou
   return std::nullopt;
 }
 
+bool ConstitutiveLaw::stored_energy_from_state() const {
+  // At F = I from the initial state: one cheap update, no virtual flag to keep in step.
+  return stored_energy_density(Tensor2(dealii::unit_symmetric_tensor<3>()), 0.0, MaterialState())
+      .has_value();
+}
+
 MaterialState ConstitutiveLaw::transferred_state(const MaterialState& state, const Tensor2&,
                                                  const Tensor2&) const {
   return state;

@@ -75,8 +75,12 @@ class ConstitutiveLaw {
   // the path integral ∫P:dF, which counts what plastic flow dissipated, or with a stressed
   // intermediate configuration misses it). nullopt for the others: hyperelastic laws, where
   // the path integral from F = I is the stored energy, and laws with their own formula.
+  // Where it has a value, the state's plastic_work is the rest of the work done: an energy
+  // account adds it (stored_energy_from_state()).
   virtual std::optional<double> stored_energy_density(const Tensor2& F, double temperature_change,
                                                       const MaterialState& old_state) const;
+  // Whether stored_energy_density has a value (it does for every F and state, or for none).
+  bool stored_energy_from_state() const;
 
   // `state` of a point now at deformation gradient F_from, rewritten for a point that carries
   // it on at F_to with the same elastic trial state. A law whose history lives in the

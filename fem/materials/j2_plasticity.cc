@@ -71,4 +71,10 @@ double J2Plasticity::stored_energy_density(const SymTensor2& stress) const {
   return s * s / (4.0 * mu_) + p * p / (2.0 * K_);
 }
 
+std::optional<double> J2Plasticity::stored_energy_density(const Tensor2& F, double dT,
+                                                          const MaterialState& old_state) const {
+  return stored_energy_density(
+      dealii::symmetrize(finite_strain_stress(F, dT, old_state).first_piola));
+}
+
 } // namespace spinesim::materials

@@ -36,6 +36,9 @@ class J2Plasticity : public ConstitutiveLaw {
   // s the deviator and p the mean stress. Integrating the stress along the path from the
   // undeformed state would count the plastic strain as stored.
   double stored_energy_density(const SymTensor2& stress) const;
+  // The same at the stress the update from `old_state` gives at F (linearised kinematics).
+  std::optional<double> stored_energy_density(const Tensor2& F, double temperature_change,
+                                              const MaterialState& old_state) const override;
 
  private:
   SmallStrainResponse respond(const SymTensor2& strain, double temperature_change,

@@ -1,7 +1,6 @@
 #include "meshfree/nosb/nosb_pd.h"
 
 #include "base/exceptions.h"
-#include "fem/materials/j2_plasticity.h"
 #include "fem/materials/plane_strain_embedding.h"
 #include "meshfree/bond_based_pd.h"
 #include "meshfree/bond_loop.h"
@@ -655,23 +654,13 @@ double NosbPD<dim>::stress_energy(unsigned int e, const dealii::Tensor<2, dim>& 
   if (!(committed_[fam.history_index(e)].fracture_damage < 1.0))
     return 0.0; // no stress, no energy (evaluate)
   {
-    // A law whose stored energy is a function of its state (finite-strain J2: W(b^e)): the
-    // path integral below would start from a stressed intermediate configuration.
+    // A law whose stored energy is a function of its state (J2 plasticity: W of the elastic
+    // strain): the path integral below would count the plastic strain as stored, or start from
+    // a stressed intermediate configuration (finite strain).
     const auto& old = committed_[fam.history_index(e)];
     const double dT = particles.temperature(fam.centre(e)) - reference_temperature_;
     if (const auto W = law_->stored_energy_density(materials::embed_plane_strain(F), dT, old))
       return (1.0 - old.fracture_damage) * fam.weight(e) * *W; // W = (1 − D_f) W_law
-  }
-  if (const auto* j2 = dynamic_cast<const materials::J2Plasticity*>(law_.get())) {
-    // Small-strain J2 on isotropic linear elasticity: the path integral from F = I would
-    // count the plastic strain as stored (J2Plasticity::stored_energy_density).
-    const double dT = particles.temperature(fam.centre(e)) - reference_temperature_;
-    const auto sigma =
-        dealii::symmetrize(law_->finite_strain_stress(materials::embed_plane_strain(F), dT,
-                                                      committed_[fam.history_index(e)])
-                               .first_piola);
-    const double kept = 1.0 - committed_[fam.history_index(e)].fracture_damage;
-    return kept * fam.weight(e) * j2->stored_energy_density(sigma); // W = (1 − D_f) W_law
   }
   const dealii::Tensor<2, dim> H = F - dealii::Tensor<2, dim>(dealii::unit_symmetric_tensor<dim>());
   double W = 0;
@@ -786,6 +775,10 @@ void NosbPD<dim>::set_particle_state(unsigned int i, const materials::MaterialSt
 
 template <int dim>
 std::vector<double> NosbPD<dim>::plastic_work_density(const ParticleSet<dim>& particles) const {
+  // Only where stress_energy takes the stored energy from the state: a path integral of a
+  // plastic law is not split into stored and dissipated work.
+  if (!law_->stored_energy_from_state())
+    return {};
   std::vector<double> D(particles.size(), 0.0);
   const auto& fam = families();
   for (unsigned int e = 0; e < fam.n_families(); ++e) {

@@ -1,7 +1,6 @@
 #include "meshfree/spg/spg_method.h"
 
 #include "base/exceptions.h"
-#include "fem/materials/j2_plasticity.h"
 #include "fem/materials/material_state_io.h"
 #include "fem/materials/plane_strain_embedding.h"
 #include "meshfree/bond_loop.h"
@@ -217,19 +216,12 @@ double SpgMethod<dim>::energy_density(unsigned int i, const ParticleSet<dim>& pa
   const double w[4] = {0.5 * wb, 0.5 * wa, 0.5 * wa, 0.5 * wb};
   const auto F = particle_gradient(i, particles);
   const double dT = particles.temperature(i) - reference_temperature_;
-  // A law whose stored energy is a function of its state (finite-strain J2: W(b^e)), as in
-  // NOSB-PD: the path integral below would start from a stressed intermediate configuration.
+  // A law whose stored energy is a function of its state (J2 plasticity), as in NOSB-PD: the
+  // path integral below would count the plastic strain as stored, or start from a stressed
+  // intermediate configuration (finite strain).
   if (const auto W = law_->stored_energy_density(materials::embed_plane_strain(F), dT,
                                                  solver_->committed_states()[i]))
     return kept * *W;
-  if (const auto* j2 = dynamic_cast<const materials::J2Plasticity*>(law_.get())) {
-    // The stored energy of small-strain J2, not the path integral (which would count the
-    // plastic strain as stored): the FEM and NOSB-PD take the same.
-    return kept * j2->stored_energy_density(dealii::symmetrize(
-                      law_->finite_strain_stress(materials::embed_plane_strain(F), dT,
-                                                 solver_->committed_states()[i])
-                          .first_piola));
-  }
   materials::Tensor2 H;
   for (unsigned int r = 0; r < dim; ++r)
     for (unsigned int c = 0; c < dim; ++c)
@@ -448,13 +440,9 @@ void SpgMethod<dim>::set_particle_states(const ParticleSet<dim>& particles,
 
 template <int dim>
 std::vector<double> SpgMethod<dim>::plastic_work_density(const ParticleSet<dim>& particles) const {
-  // Only where energy_density takes the stored energy from the state (finite-strain J2,
-  // small-strain J2), and after this update at the current F, as that W (NosbPD alike).
-  const bool from_state =
-      dynamic_cast<const materials::J2Plasticity*>(law_.get()) != nullptr ||
-      law_->stored_energy_density(materials::Tensor2(dealii::unit_symmetric_tensor<3>()), 0.0,
-                                  materials::MaterialState())
-          .has_value();
+  // Only where energy_density takes the stored energy from the state (J2 plasticity), and
+  // after this update at the current F, as that W (NosbPD alike).
+  const bool from_state = law_->stored_energy_from_state();
   if (!solver_ || !from_state)
     return {};
   std::vector<double> D(particles.size(), 0.0);
