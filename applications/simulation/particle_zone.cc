@@ -297,7 +297,12 @@ struct ParticleZone<dim>::Impl {
   // their history holds (ParticleMethod::plastic_work_density), the internal work as the FEM
   // counts it.
   double internal_energy(const meshfree::ParticleSet<dim>& p) const {
-    double e = method->strain_energy(p, bonds);
+    return method->strain_energy(p, bonds) + plastic_work(p);
+  }
+  // The plastic work the owned particles' history holds [J] (2-D: J/m); 0 for a method or law
+  // whose stored energy is not taken from the state.
+  double plastic_work(const meshfree::ParticleSet<dim>& p) const {
+    double e = 0;
     const auto d = method->plastic_work_density(p);
     for (unsigned int i = 0; i < d.size() && i < n_owned(); ++i)
       e += d[i] * p.volume(i);
@@ -882,8 +887,11 @@ void ParticleZone<dim>::add_figures(RunContext& ctx) const {
   s.set_figure("free_particles", z.sum(free), "-");
   s.set_figure("bonds", double(z.n_bonds_global), "-");
   s.set_figure("broken_bonds", (z.sum(z.owned_broken_ends()) - z.broken_initially) / 2, "-");
-  s.set_figure("particle_strain_energy", z.sum(z.method->strain_energy(z.particles, z.bonds)), "J");
-  s.set_figure("particle_kinetic_energy", z.sum(z.particles.kinetic_energy()), "J");
+  s.set_figure("particle_strain_energy", z.sum(z.method->strain_energy(z.particles, z.bonds)),
+               "J" + per);
+  s.set_figure("particle_kinetic_energy", z.sum(z.particles.kinetic_energy()), "J" + per);
+  if (!z.method->plastic_work_density(z.particles).empty()) // laws with stored energy W(state)
+    s.set_figure("particle_plastic_work", z.sum(z.plastic_work(z.particles)), "J" + per);
   s.set_figure("particle_stable_time_step", z.dt_stable, "s");
   // The particle data of the rank holding the most (particle_zone.h: memory_bytes).
   s.set_figure("particle_memory_per_rank_max_bytes",
@@ -941,6 +949,8 @@ bool ParticleZone<dim>::energy_account_restored() const {
 template <int dim>
 fem::EnergyBalance ParticleZone<dim>::energy_balance() const {
   fem::EnergyBalance b = impl_->energy.balance();
+  // A restart that could not continue the account (energy_account_restored) has none: NaN.
+  b.valid = b.valid && impl_->account_restored;
   if (!impl_->partition)
     return b;
   // Each rank's account covers its owned particles and bond rows: the terms add up.
@@ -997,6 +1007,8 @@ std::string ParticleZone<dim>::write_output(const std::string& directory,
 namespace {
 // Last entry of a particle checkpoint ("SPZ-END"): a file that ends before it was cut.
 constexpr std::uint64_t checkpoint_end_tag = 0x444e452d5a5053ull;
+// After the stable step ("SPZ-WP"): the energy account counts plastic work (see save()).
+constexpr std::uint64_t account_with_plastic_work_tag = 0x50572d5a5053ull;
 } // namespace
 
 template <int dim>
@@ -1037,6 +1049,9 @@ void ParticleZone<dim>::save(const std::string& file) const {
     // The stable step as breaks have shrunk it (it only falls during a run): a restart takes
     // the same steps as the uninterrupted run. After the end tag: older files end without it.
     write(&z.dt_stable, sizeof z.dt_stable);
+    // Last: the account's stored energy holds the plastic work of laws whose stored energy is a
+    // function of their state. Files without the tag counted the path integral ∫P:dF for them.
+    write(&account_with_plastic_work_tag, sizeof account_with_plastic_work_tag);
     if (!out)
       throw std::runtime_error("cannot write particle checkpoint " + file);
   });
@@ -1120,6 +1135,13 @@ void ParticleZone<dim>::load(const std::string& file) {
           std::isfinite(dt_stable))
         z.dt_stable = dt_stable;
     }
+    std::uint64_t account_tag = 0;
+    const bool tagged = in.read(reinterpret_cast<char*>(&account_tag), sizeof account_tag) &&
+                        account_tag == account_with_plastic_work_tag;
+    // An account of another measure of U cannot be continued: the balance would jump by the
+    // plastic work at the restart (the caller warns, as for a checkpoint without an account).
+    if (!tagged && !z.method->plastic_work_density(z.particles).empty())
+      z.account_restored = false;
     accelerations = z.particles.accelerations();
   });
   // The pass refreshes the method's own per-pass data (deformation gradients for output, the

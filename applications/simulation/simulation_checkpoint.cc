@@ -123,7 +123,8 @@ unsigned int Simulation<dim>::load_checkpoint(RunContext& ctx) {
       particles_->load((dir / "particles.bin").string());
       if (sim_.energy_account && !particles_->energy_account_restored())
         ctx.warn("Simulation/Energy account: the checkpoint was written without the particle "
-                 "zone's account, so the balance figures after this restart do not hold");
+                 "zone's account (or by an earlier version, whose account of plastic particles "
+                 "left out their plastic work), so this run reports no balance figures (NaN)");
     }
     if (heat_) {
       heat_->deserialize();

@@ -287,8 +287,17 @@ std::vector<double> SpgMethod<dim>::strain_energy_density(const ParticleSet<dim>
   // A distributed zone's ghosts [first_ghost_, size) are counted by their owners.
   std::vector<double> W(particles.size(), 0.0);
   const unsigned int n = std::min<unsigned int>(particles.size(), first_ghost_);
-  for (unsigned int i = 0; solver_ && i < n; ++i)
-    W[i] = energy_density(i, particles);
+  const bool total_lagrangian =
+      solver_ && solver_->parameters().update_mode() == SpgKernelUpdate::total_lagrangian;
+  for (unsigned int i = 0; solver_ && i < n; ++i) {
+    // The stabilisation energy ½ κ_i |r_i|² of row i is stored energy too (spg_solver.h): left
+    // out, a ring that flows plastically (where d − ū grows) lost 0.6 % of its energy.
+    // Updated kernels: the last pass's, as their F (particle_gradient).
+    const double stab = total_lagrangian
+                            ? solver_->stabilisation_energy(i, particles.displacements())
+                            : solver_->stabilisation_energy(i);
+    W[i] = energy_density(i, particles) + stab / particles.volume(i);
+  }
   return W;
 }
 
@@ -490,9 +499,10 @@ SpgMethod<dim>::splice_energy_by_row(const ParticleSet<dim>& particles,
   // gradient of the stabilisation energy.
   if (prm_.stabilisation > 0.0 && prm_.smoothing_interval != 1)
     return std::nullopt;
-  auto E = strain_energy_density(particles, bonds);
+  auto E = strain_energy_density(particles, bonds); // owned rows: with their stabilisation
   for (unsigned int i = 0; i < particles.size(); ++i)
-    E[i] = E[i] * particles.volume(i) + solver_->stabilisation_energy(i);
+    E[i] =
+        E[i] * particles.volume(i) + (i >= first_ghost_ ? solver_->stabilisation_energy(i) : 0.0);
   return E;
 }
 

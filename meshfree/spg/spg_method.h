@@ -94,7 +94,7 @@ class SpgMethod : public ParticleMethod<dim> {
   }
   std::optional<std::vector<dealii::Tensor<1, dim>>>
   driven_reactions(const ParticleSet<dim>& particles, const BondList<dim>& bonds) const override;
-  // W_N V_N plus the stabilisation energy ½ κ_N |r_N|² of each row N.
+  // W_N V_N plus the stabilisation energy ½ κ_N |r_N|² of each row N (ghost rows: W_N = 0).
   std::optional<std::vector<double>>
   splice_energy_by_row(const ParticleSet<dim>& particles,
                        const BondList<dim>& bonds) const override;

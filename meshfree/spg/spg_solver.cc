@@ -452,6 +452,21 @@ SPGSolver<dim>::deformation_gradient(unsigned int i,
 }
 
 template <int dim>
+double SPGSolver<dim>::stabilisation_energy(unsigned int N,
+                                            const std::vector<dealii::Tensor<1, dim>>& d) const {
+  if (mode_ != KernelUpdate::total_lagrangian)
+    throw std::logic_error("SPGSolver::stabilisation_energy: total Lagrangian kernels only");
+  if (!(prm_.stabilisation > 0.0) || N >= kappa_.size() || !has_row_[N])
+    return 0.0;
+  const auto& rk = *rk_;
+  // r_N = e_N − ū_N with e = d − d^r, as compute_forces forms it.
+  Vector r = (1.0 - rk.self_value[N]) * (d[N] - dref_[N]);
+  for_each_bond_of(bonds_, N,
+                   [&](std::size_t k, unsigned int j) { r -= rk.value[k] * (d[j] - dref_[j]); });
+  return 0.5 * kappa_[N] * r.norm_square();
+}
+
+template <int dim>
 std::vector<dealii::Tensor<1, dim>>
 SPGSolver<dim>::smoothed(const std::vector<dealii::Tensor<1, dim>>& d) const {
   if (mode_ != KernelUpdate::total_lagrangian)

@@ -197,6 +197,9 @@ class SPGSolver {
                ? 0.5 * kappa_[N] * residual_[N].norm_square()
                : 0.0;
   }
+  // Row N's ½ κ_N |r_N|² at the coefficients d [J] (total Lagrangian kernels; 0 without a row):
+  // the stabilisation energy whose gradient the force pass applies at d.
+  double stabilisation_energy(unsigned int N, const std::vector<dealii::Tensor<1, dim>>& d) const;
   double contact_energy() const { return contact_energy_; } // ½ Σ k g² [J]
   dealii::Tensor<1, dim> contact_force(unsigned int obstacle) const { return reaction_[obstacle]; }
   // max |d_I − ū_I| over particles [m]: the amplitude of the non-smooth (checkerboard) part.

@@ -111,8 +111,9 @@ spinesim_add_scene_test(stability.ring_breathing_nosb_2d SCENE ${_ring}
   EXPECT "${_ring_ok};energy_balance_error_relative<=5e-4;strain_energy_J>=300;fragments<=1"
   LABELS "scene;particles;validation;stability")
 # SPG particle zones (RK coefficients as unknowns, explicit, lumped mass): the breathing ring
-# and tube conserve K + U to 1.35e-5 and 3.0e-5 of K0 over 100 us (velocity Verlet's O(dt^2)
-# defect); bound 1e-3, far below what a missing or one-sided force term leaves.
+# and tube conserve K + U to 2.0e-6 and 2.0e-6 of K0 over 100 us with the stabilisation energy
+# in U (1.35e-5 and 3.0e-5 without it); bound 1e-3, far below what a missing or one-sided force
+# term leaves.
 set(_ring_spg_ok "status==ok;energy_balance_error_relative<=1e-3;max_particle_speed<=100;fragments<=1")
 # The 2-D ring keeps the fragmenting run's critical stretch: with Damage = false the log must
 # say it is not applied, and the ring stays whole.
@@ -170,12 +171,14 @@ spinesim_add_scene_test(stability.ring_breathing_spg_3d SCENE ${_ring3}
 # fastest particle 89 and 81 m/s, 124 and 40 fragments, max D_f 1.0 and 0.98 on 46 % and 6 % of
 # the volume. The ring's checks (balance 1 %, speed 100 m/s) and D_f: max above 1/2, and the
 # damaged share above 20 % (2-D) and 3 % (3-D), half the measured, so that a D_f that stopped
-# being raised fails. The balance is looser than NOSB-PD's (1.6e-4): the account's stored energy
-# leaves out SPG's stabilisation energy, which breaks change too.
+# being raised fails. Since the stabilisation energy ½ κ |d − ū|² is part of the stored energy
+# (SpgMethod::strain_energy_density) the balance is 0.25 % (2-D) and 0.20 % (3-D), the
+# dissipation 265 J/m (breaks release the stabilisation energy too); the 2-D check 4e-3 fails
+# the 0.51 % of the account without it. Still looser than NOSB-PD's (1.6e-4), not yet explained.
 spinesim_add_scene_test(stability.ring_fragmentation_spg_2d SCENE ${_ring}
   SET "Effects/Particles method=spg" "Particles/SPG/Critical stretch=0.01"
   OUT ${_ring_runs}/spg_2d FIXTURE ring_spg_2d
-  EXPECT "${_ring_2d};max_fracture_damage>=0.5;max_fracture_damage<=1;fracture_damaged_volume_fraction>=0.2"
+  EXPECT "${_ring_2d};energy_balance_error_relative<=4e-3;max_fracture_damage>=0.5;max_fracture_damage<=1;fracture_damaged_volume_fraction>=0.2"
   LABELS "scene;particles;validation;stability")
 # Its checkpoint and restart: stopped after step 20 of 50 (bonds broken, D_f raised) and
 # restarted, the run ends with the uninterrupted run's figures (the SPG zone's checkpoint holds
@@ -197,6 +200,62 @@ spinesim_add_scene_test(stability.ring_fragmentation_spg_3d SCENE ${_ring3}
   OUT ${_ring_runs}/spg_3d FIXTURE ring_spg_3d
   EXPECT "${_ring_ok};initial_energy_J~14.098:1e-10;fracture_dissipation_J>=0.04;fragments>=2;max_fracture_damage>=0.5;max_fracture_damage<=1;fracture_damaged_volume_fraction>=0.03"
   LABELS "scene;particles;validation;stability")
+# Plastic flow in particles (finite-strain J2, sigma_y 30 MPa, H 1 GPa, no breaks): the ring
+# flung at 50 m/s turns 92 % of K0 = 3524.5 J/m into plastic work. The account's U is the
+# stored energy W(b^e) (J2FiniteStrain::stored_energy_density) plus the plastic work the history
+# holds, the internal work as the FEM counts it. Measured balance: NOSB-PD 2.0e-3 (1.0e-3 and
+# 5.0e-4 at a half and a quarter of the step: first order, the plastic work is backward
+# Euler's), SPG 6.6e-4 (5.5e-3 at every step size before the stabilisation energy was stored
+# energy), the SPG tube 5.2e-4. Bounds 3e-3 (NOSB-PD, as the FEM impact's) and 2e-3 (SPG, under
+# half its error without the stabilisation energy). The plastic work must exceed half K0 (a
+# quarter in 3-D; measured 3253 and 3239 J/m, 7.7 J of 14.1 J), so the ring does flow.
+set(_ring_plastic "Effects/Damage=false" "Material/Model=j2_finite_strain"
+    "Material/Yield stress=30e6" "Material/Hardening modulus=1e9")
+set(_ring_plastic_ok "status==ok;initial_energy_J~3524.5:1e-10;particle_plastic_work>=1762;fragments<=1")
+spinesim_add_scene_test(stability.ring_plastic_nosb_2d SCENE ${_ring}
+  SET ${_ring_plastic} "Effects/Particles method=nosb"
+  OUT ${_ring_runs}/plastic_nosb_2d FIXTURE ring_plastic_nosb
+  EXPECT "${_ring_plastic_ok};energy_balance_error_relative<=3e-3"
+  LABELS "scene;particles;validation;stability")
+spinesim_add_scene_test(stability.ring_plastic_spg_2d SCENE ${_ring}
+  SET ${_ring_plastic} "Effects/Particles method=spg"
+  EXPECT "${_ring_plastic_ok};energy_balance_error_relative<=2e-3"
+  LABELS "scene;particles;validation;stability")
+spinesim_add_scene_test(stability.ring_plastic_spg_3d SCENE ${_ring3}
+  SET ${_ring_plastic} "Effects/Particles method=spg" "Simulation/End time=4e-5" "Simulation/Steps=20"
+  EXPECT "status==ok;initial_energy_J~14.098:1e-10;particle_plastic_work>=3.5;fragments<=1;energy_balance_error_relative<=2e-3"
+  LABELS "scene;particles;validation;stability")
+# Its restart: stopped after step 21 of 50 and restarted, the NOSB-PD ring ends with the
+# uninterrupted run's figures, its plastic work and balance included (the zone's checkpoint
+# holds the families' states and the account). A copy of the stopped run whose particle
+# checkpoint lacks its last entry (the tag that the account counts plastic work) reads as one an
+# earlier version wrote, whose account left out the plastic work: that restart must say so and
+# report no balance (NaN), not a balance that jumps by the plastic work.
+spinesim_add_scene_test(stability.ring_plastic_nosb_2d_restart_first_half SCENE ${_ring}
+  SET ${_ring_plastic} "Effects/Particles method=nosb" "Simulation/Checkpoint interval=7"
+      "Simulation/Stop after step=21"
+  OUT ${_ring_runs}/plastic_nosb_2d_restart EXPECT "status==ok;last_step~21:0"
+  FIXTURE ring_plastic_half LABELS "scene;particles;stability")
+# The copy: the tag cut off, and without a manifest (as checkpoints before manifests, which a
+# restart reads unverified), so the cut file reads as an earlier version's, not a damaged one.
+set(_older ${_ring_runs}/plastic_nosb_2d_older)
+add_test(NAME stability.ring_plastic_nosb_2d_older_checkpoint_copy
+  COMMAND sh -c "rm -rf '${_older}' && cp -r '${_ring_runs}/plastic_nosb_2d_restart' '${_older}' && truncate -s -8 '${_older}/checkpoint/particles.bin' && rm '${_older}/checkpoint/manifest.json'")
+set_tests_properties(stability.ring_plastic_nosb_2d_older_checkpoint_copy PROPERTIES
+  FIXTURES_REQUIRED ring_plastic_half FIXTURES_SETUP ring_plastic_older
+  LABELS "scene;particles;stability")
+spinesim_add_restart_test(stability.ring_plastic_nosb_2d_restart_second_half
+  OUT ${_ring_runs}/plastic_nosb_2d_restart EXPECT "status==ok;last_step~50:0"
+  REQUIRES "ring_plastic_half;ring_plastic_older" FIXTURE ring_plastic_done
+  LABELS "scene;particles;stability")
+spinesim_add_summaries_match_test(stability.ring_plastic_nosb_2d_restart_matches_uninterrupted
+  A ${_ring_runs}/plastic_nosb_2d_restart/summary.json B ${_ring_runs}/plastic_nosb_2d/summary.json
+  TOL 1e-12 FLOOR 1e-9 REQUIRES "ring_plastic_done;ring_plastic_nosb" LABELS "scene;particles;stability")
+spinesim_add_scene_test(stability.ring_plastic_nosb_2d_restart_older_checkpoint
+  ARGS run --restart ${_older} --set "Simulation/Stop after step=0"
+  OUT ${_older} EXPECT "status==ok;last_step~50:0;particle_plastic_work>=1762"
+  MATCH "earlier version, whose account of plastic particles left out their plastic work.*no balance figures"
+  REQUIRES ring_plastic_older LABELS "scene;particles;stability")
 spinesim_add_scene_test(stability.ring_fragmentation_bond_based_3d SCENE ${_ring3}
   EXPECT "${_ring_ok};initial_energy_J~14.098:1e-10;fracture_dissipation_J>=0.04;fragments>=2"
   LABELS "scene;particles;validation;stability")
