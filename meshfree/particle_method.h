@@ -189,6 +189,8 @@ class ParticleMethod {
     (void)particles;
     return {};
   }
+  // Whether plastic_work_density has values (the same on every rank, whatever it holds).
+  virtual bool has_plastic_work() const { return false; }
   // The method's own history for checkpoints (the particle set and bonds are saved by the
   // caller). A method without history writes nothing.
   virtual void save(std::ostream&) const {}

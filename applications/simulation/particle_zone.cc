@@ -890,7 +890,7 @@ void ParticleZone<dim>::add_figures(RunContext& ctx) const {
   s.set_figure("particle_strain_energy", z.sum(z.method->strain_energy(z.particles, z.bonds)),
                "J" + per);
   s.set_figure("particle_kinetic_energy", z.sum(z.particles.kinetic_energy()), "J" + per);
-  if (!z.method->plastic_work_density(z.particles).empty()) // laws with stored energy W(state)
+  if (z.method->has_plastic_work()) // laws with stored energy W(state)
     s.set_figure("particle_plastic_work", z.sum(z.plastic_work(z.particles)), "J" + per);
   s.set_figure("particle_stable_time_step", z.dt_stable, "s");
   // The particle data of the rank holding the most (particle_zone.h: memory_bytes).
@@ -1007,8 +1007,9 @@ std::string ParticleZone<dim>::write_output(const std::string& directory,
 namespace {
 // Last entry of a particle checkpoint ("SPZ-END"): a file that ends before it was cut.
 constexpr std::uint64_t checkpoint_end_tag = 0x444e452d5a5053ull;
-// After the stable step ("SPZ-WP"): the energy account counts plastic work (see save()).
-constexpr std::uint64_t account_with_plastic_work_tag = 0x50572d5a5053ull;
+// After the stable step ("SPZ-WP"): the account's stored energy is measured as this version
+// measures it (see save() and load()).
+constexpr std::uint64_t account_measure_tag = 0x50572d5a5053ull;
 } // namespace
 
 template <int dim>
@@ -1049,9 +1050,9 @@ void ParticleZone<dim>::save(const std::string& file) const {
     // The stable step as breaks have shrunk it (it only falls during a run): a restart takes
     // the same steps as the uninterrupted run. After the end tag: older files end without it.
     write(&z.dt_stable, sizeof z.dt_stable);
-    // Last: the account's stored energy holds the plastic work of laws whose stored energy is a
-    // function of their state. Files without the tag counted the path integral ∫P:dF for them.
-    write(&account_with_plastic_work_tag, sizeof account_with_plastic_work_tag);
+    // Last: the account's stored energy is this version's measure (the stored energy of J2
+    // laws from their state plus their plastic work, SPG's stabilisation energy included).
+    write(&account_measure_tag, sizeof account_measure_tag);
     if (!out)
       throw std::runtime_error("cannot write particle checkpoint " + file);
   });
@@ -1137,10 +1138,12 @@ void ParticleZone<dim>::load(const std::string& file) {
     }
     std::uint64_t account_tag = 0;
     const bool tagged = in.read(reinterpret_cast<char*>(&account_tag), sizeof account_tag) &&
-                        account_tag == account_with_plastic_work_tag;
-    // An account of another measure of U cannot be continued: the balance would jump by the
-    // plastic work at the restart (the caller warns, as for a checkpoint without an account).
-    if (!tagged && !z.method->plastic_work_density(z.particles).empty())
+                        account_tag == account_measure_tag;
+    // Earlier versions measured the stored energy of NOSB-PD and SPG particles otherwise (the
+    // path integral for J2 laws, SPG without its stabilisation energy): continued, the balance
+    // would jump by the difference at the restart (the caller warns, as for a checkpoint
+    // without an account). Bond-based PD's measure has not changed.
+    if (!tagged && z.method->carries_material_state())
       z.account_restored = false;
     accelerations = z.particles.accelerations();
   });

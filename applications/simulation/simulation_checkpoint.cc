@@ -123,8 +123,9 @@ unsigned int Simulation<dim>::load_checkpoint(RunContext& ctx) {
       particles_->load((dir / "particles.bin").string());
       if (sim_.energy_account && !particles_->energy_account_restored())
         ctx.warn("Simulation/Energy account: the checkpoint was written without the particle "
-                 "zone's account (or by an earlier version, whose account of plastic particles "
-                 "left out their plastic work), so this run reports no balance figures (NaN)");
+                 "zone's account (or by an earlier version, which measured the stored energy of "
+                 "NOSB-PD or SPG particles otherwise), so this run reports no balance figures "
+                 "(NaN)");
     }
     if (heat_) {
       heat_->deserialize();

@@ -114,6 +114,13 @@ FiniteStrainStress J2Damage::finite_strain_stress(const Tensor2& F, double dT,
   return r;
 }
 
+std::optional<double> J2Damage::stored_energy_density(const Tensor2& F, double dT,
+                                                      const MaterialState& old_state) const {
+  const FiniteStrainStress e = effective_.finite_strain_stress(F, dT, old_state);
+  const double D = damage_.damage(e.state.equivalent_plastic_strain);
+  return (1.0 - D) * effective_.stored_energy_density(dealii::symmetrize(e.first_piola));
+}
+
 SPINESIM_REGISTER_MATERIAL_MODEL(
     j2_damage, "j2_damage",
     "small-strain von Mises with ductile damage D(eps_bar_p) on the effective stress "

@@ -57,6 +57,11 @@ class J2Damage : public ConstitutiveLaw {
   // Linearised kinematics as J2Plasticity::finite_strain (small displacement gradients only).
   FiniteStrainResponse finite_strain(const Tensor2& F, double temperature_change,
                                      const MaterialState& old_state) const override;
+  // The damaged solid's elastic energy (1 − D) ½ σ̃ : C⁻¹ : σ̃ at the update from `old_state`;
+  // the plastic work in the state is (1 − D) Δγ σ_y. The energy the damage growth releases
+  // (½ σ̃ : C⁻¹ : σ̃ dD) is in neither.
+  std::optional<double> stored_energy_density(const Tensor2& F, double temperature_change,
+                                              const MaterialState& old_state) const override;
   FiniteStrainStress finite_strain_stress(const Tensor2& F, double temperature_change,
                                           const MaterialState& old_state) const override;
   double youngs_modulus() const override { return effective_.youngs_modulus(); }

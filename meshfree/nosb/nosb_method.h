@@ -72,6 +72,7 @@ class NosbMethod : public ParticleMethod<dim> {
   std::vector<double> plastic_work_density(const ParticleSet<dim>& particles) const override {
     return pd_.plastic_work_density(particles);
   }
+  bool has_plastic_work() const override { return pd_.law().stored_energy_from_state(); }
   materials::MaterialState particle_state(unsigned int i) const override {
     return pd_.particle_state(i);
   }

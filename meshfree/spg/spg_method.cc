@@ -282,22 +282,25 @@ void SpgMethod<dim>::observe_breaks(const std::vector<unsigned int>& rows, bool 
 }
 
 template <int dim>
+double SpgMethod<dim>::row_stabilisation_energy(unsigned int i,
+                                                const ParticleSet<dim>& particles) const {
+  // The stabilisation energy ½ κ_i |r_i|² of row i is stored energy too (spg_solver.h): left
+  // out, a ring that flows plastically (where d − ū grows) lost 0.6 % of its energy. Updated
+  // kernels: the last pass's, as their F (particle_gradient).
+  return solver_->parameters().update_mode() == SpgKernelUpdate::total_lagrangian
+             ? solver_->stabilisation_energy(i, particles.displacements())
+             : solver_->stabilisation_energy(i);
+}
+
+template <int dim>
 std::vector<double> SpgMethod<dim>::strain_energy_density(const ParticleSet<dim>& particles,
                                                           const BondList<dim>&) const {
   // A distributed zone's ghosts [first_ghost_, size) are counted by their owners.
   std::vector<double> W(particles.size(), 0.0);
   const unsigned int n = std::min<unsigned int>(particles.size(), first_ghost_);
-  const bool total_lagrangian =
-      solver_ && solver_->parameters().update_mode() == SpgKernelUpdate::total_lagrangian;
-  for (unsigned int i = 0; solver_ && i < n; ++i) {
-    // The stabilisation energy ½ κ_i |r_i|² of row i is stored energy too (spg_solver.h): left
-    // out, a ring that flows plastically (where d − ū grows) lost 0.6 % of its energy.
-    // Updated kernels: the last pass's, as their F (particle_gradient).
-    const double stab = total_lagrangian
-                            ? solver_->stabilisation_energy(i, particles.displacements())
-                            : solver_->stabilisation_energy(i);
-    W[i] = energy_density(i, particles) + stab / particles.volume(i);
-  }
+  for (unsigned int i = 0; solver_ && i < n; ++i)
+    W[i] =
+        energy_density(i, particles) + row_stabilisation_energy(i, particles) / particles.volume(i);
   return W;
 }
 
@@ -324,7 +327,9 @@ double SpgMethod<dim>::bond_energy(const ParticleSet<dim>& particles, const Bond
   });
   if (!(all > 0.0))
     return 0.0;
-  return bonds.volume_factor(k) * V[bonds.neighbor[k]] / all * energy_density(i, particles) * V[i];
+  // The row's stored energy as the account counts it (the stabilisation energy included).
+  return bonds.volume_factor(k) * V[bonds.neighbor[k]] / all *
+         (energy_density(i, particles) * V[i] + row_stabilisation_energy(i, particles));
 }
 
 template <int dim>

@@ -82,7 +82,9 @@ class SpgMethod : public ParticleMethod<dim> {
   double stable_time_step(const ParticleSet<dim>& particles, const BondList<dim>& bonds,
                           double safety) override;
   // W_N = ∫_0^1 P(I + t(F_N − I)) : (F_N − I) dt at every particle (4-point Gauss), the
-  // stored energy for hyperelastic laws and the elastic path estimate otherwise.
+  // stored energy for hyperelastic laws and the elastic path estimate otherwise (J2 laws: W of
+  // their state, ConstitutiveLaw::stored_energy_density), plus the row's stabilisation energy
+  // per volume (owned rows).
   std::vector<double> strain_energy_density(const ParticleSet<dim>& particles,
                                             const BondList<dim>& bonds) const override;
   double strain_energy(const ParticleSet<dim>& particles,
@@ -112,6 +114,7 @@ class SpgMethod : public ParticleMethod<dim> {
                            const std::vector<CarriedState>& states) override;
   materials::MaterialState particle_state(unsigned int i) const override;
   std::vector<double> plastic_work_density(const ParticleSet<dim>& particles) const override;
+  bool has_plastic_work() const override { return law_->stored_energy_from_state(); }
 
   // u_I of the last force evaluation.
   const std::vector<dealii::Tensor<1, dim>>& physical_displacements() const;
@@ -128,6 +131,8 @@ class SpgMethod : public ParticleMethod<dim> {
   std::vector<materials::MaterialState> kept_;
   std::unique_ptr<SPGSolver<dim>> solver_;
   double energy_density(unsigned int i, const ParticleSet<dim>& particles) const; // W_i [J/m^3]
+  // Row i's stabilisation energy ½ κ_i |r_i|² [J] (0 without a row or stabilisation).
+  double row_stabilisation_energy(unsigned int i, const ParticleSet<dim>& particles) const;
   // F at particle i for the coefficients now (total Lagrangian) or of the last force pass.
   dealii::Tensor<2, dim> particle_gradient(unsigned int i, const ParticleSet<dim>& particles) const;
   // The particles of the force pass under way (for the break observer) and the stored energies

@@ -248,6 +248,25 @@ TEST(SpgSolver, CheckerboardIsZeroEnergyForDniOnly) {
       EXPECT_EQ(spg.stabilisation_energy(), 0.0);
     else // κ|d − ū|² with |d − ū| ≈ 1e-4: clearly non-zero.
       EXPECT_GT(spg.stabilisation_energy(), 1e-3 * 0.5 * 0.1 * 1e9 * 1e-8 / 2.25);
+    // Each row's share from the coefficients alone is the force pass's, and they add up to it
+    // (the energy accounts take it between passes, at displacements no pass has seen yet).
+    double sum = 0;
+    for (unsigned int i = 0; i < p.size(); ++i) {
+      const double from_d = spg.stabilisation_energy(i, p.displacements());
+      EXPECT_NEAR(from_d, spg.stabilisation_energy(i), 1e-14 * spg.stabilisation_energy() + 1e-300);
+      sum += from_d;
+    }
+    EXPECT_NEAR(sum, spg.stabilisation_energy(), 1e-12 * spg.stabilisation_energy() + 1e-300);
+    if (eta > 0) // and it moves with the coefficients: twice the mode, four times the energy
+    {
+      auto d2 = p.displacements();
+      for (auto& d : d2)
+        d *= 2.0;
+      double sum2 = 0;
+      for (unsigned int i = 0; i < p.size(); ++i)
+        sum2 += spg.stabilisation_energy(i, d2);
+      EXPECT_NEAR(sum2, 4.0 * sum, 1e-12 * sum);
+    }
   }
 }
 

@@ -228,9 +228,10 @@ spinesim_add_scene_test(stability.ring_plastic_spg_3d SCENE ${_ring3}
 # Its restart: stopped after step 21 of 50 and restarted, the NOSB-PD ring ends with the
 # uninterrupted run's figures, its plastic work and balance included (the zone's checkpoint
 # holds the families' states and the account). A copy of the stopped run whose particle
-# checkpoint lacks its last entry (the tag that the account counts plastic work) reads as one an
-# earlier version wrote, whose account left out the plastic work: that restart must say so and
-# report no balance (NaN), not a balance that jumps by the plastic work.
+# checkpoint lacks its last entry (the tag of this version's measure of the stored energy) reads
+# as one an earlier version wrote, which measured the particles' stored energy otherwise (the
+# path integral of J2 laws): that restart must say so and report no balance (NaN, written as
+# null), not a balance that jumps by the difference.
 spinesim_add_scene_test(stability.ring_plastic_nosb_2d_restart_first_half SCENE ${_ring}
   SET ${_ring_plastic} "Effects/Particles method=nosb" "Simulation/Checkpoint interval=7"
       "Simulation/Stop after step=21"
@@ -253,8 +254,9 @@ spinesim_add_summaries_match_test(stability.ring_plastic_nosb_2d_restart_matches
   TOL 1e-12 FLOOR 1e-9 REQUIRES "ring_plastic_done;ring_plastic_nosb" LABELS "scene;particles;stability")
 spinesim_add_scene_test(stability.ring_plastic_nosb_2d_restart_older_checkpoint
   ARGS run --restart ${_older} --set "Simulation/Stop after step=0"
-  OUT ${_older} EXPECT "status==ok;last_step~50:0;particle_plastic_work>=1762"
-  MATCH "earlier version, whose account of plastic particles left out their plastic work.*no balance figures"
+  OUT ${_older}
+  EXPECT "status==ok;last_step~50:0;particle_plastic_work>=1762;energy_balance_error_relative==null;strain_energy_J==null"
+  MATCH "earlier version, which measured the stored energy of NOSB-PD or SPG particles otherwise.*no balance figures"
   REQUIRES ring_plastic_older LABELS "scene;particles;stability")
 spinesim_add_scene_test(stability.ring_fragmentation_bond_based_3d SCENE ${_ring3}
   EXPECT "${_ring_ok};initial_energy_J~14.098:1e-10;fracture_dissipation_J>=0.04;fragments>=2"
