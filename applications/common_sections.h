@@ -19,7 +19,8 @@ inline framework::ScenarioSection geometry() {
 }
 inline framework::ScenarioSection material() {
   return {"Material",
-          [](dealii::ParameterHandler& prm) { materials::LawParameters::declare(prm); }};
+          // A plain function (+): SectionDeclarer recognises its repeats without printing.
+          +[](dealii::ParameterHandler& prm) { materials::LawParameters::declare(prm); }};
 }
 inline framework::ScenarioSection mechanics() {
   return {"Mechanics", fem::MechanicsSolver<2>::Parameters::declare};

@@ -141,7 +141,10 @@ void CoupledIntegrator<dim>::check_particle_speeds() const {
            << std::sqrt(c2) << " m/s (diverged)";
       where << "particle " << i << " at (" << p.reference_position(i) << ")";
       throw NumericalFailure(what.str(), where.str(),
-                             "energy grew without bound. Where a crack or fragments reach the "
+                             "either the body was set moving at or above the P-wave speed "
+                             "(Simulation/Initial velocity; the solids here carry no shock "
+                             "waves), or energy grew without bound. Where a crack or fragments "
+                             "reach the "
                              "FEM/particle interface: widen the conversion region and Coupling/"
                              "Buffer so the crack stays inside the particles. In a long run "
                              "without that, with Coupling/Splice = overlap: that splice is not "

@@ -10,25 +10,37 @@
 
 namespace spinesim::framework {
 
-void SectionDeclarer::declare(const std::string& section,
-                              const std::function<void(dealii::ParameterHandler&)>& fn) {
-  // What this declaration declares, as text: two scenarios sharing a section must declare the
-  // same entries (names, defaults, patterns, help), or one of them would read entries that do
-  // not exist, or silently get another's defaults.
+std::string SectionDeclarer::signature(const std::string& section, const DeclareFunction& fn) {
   dealii::ParameterHandler scratch;
   scratch.enter_subsection(section);
   fn(scratch);
   scratch.leave_subsection();
-  std::ostringstream signature;
-  scratch.print_parameters(signature, dealii::ParameterHandler::OutputStyle::PRM);
-  const auto [it, inserted] = declared_.emplace(section, signature.str());
-  if (!inserted) {
-    if (it->second != signature.str())
+  std::ostringstream text;
+  scratch.print_parameters(text, dealii::ParameterHandler::OutputStyle::PRM);
+  return text.str();
+}
+
+void SectionDeclarer::declare(const std::string& section, const DeclareFunction& fn) {
+  // Two scenarios sharing a section must declare the same entries (names, defaults, patterns,
+  // help), or one of them would read entries that do not exist, or silently get another's
+  // defaults. The same plain function declares the same entries; anything else is compared
+  // as printed text.
+  using Plain = void (*)(dealii::ParameterHandler&);
+  const auto seen = declared_.find(section);
+  if (seen != declared_.end()) {
+    const Plain* a = seen->second.fn.target<Plain>();
+    const Plain* b = fn.target<Plain>();
+    if (a && b && *a == *b)
+      return;
+    if (seen->second.signature.empty())
+      seen->second.signature = signature(section, seen->second.fn);
+    if (seen->second.signature != signature(section, fn))
       throw std::logic_error("section '" + section +
                              "' is declared twice with different entries; scenarios that share "
                              "a section must declare it with the same function");
     return;
   }
+  declared_.emplace(section, First{fn, ""});
   prm_.enter_subsection(section);
   fn(prm_);
   prm_.leave_subsection();

@@ -34,13 +34,22 @@ class Scenario {
 // again with different entries is a programming error (std::logic_error at start-up).
 class SectionDeclarer {
  public:
+  using DeclareFunction = std::function<void(dealii::ParameterHandler&)>;
   explicit SectionDeclarer(dealii::ParameterHandler& prm) : prm_(prm) {}
-  void declare(const std::string& section,
-               const std::function<void(dealii::ParameterHandler&)>& fn);
+  void declare(const std::string& section, const DeclareFunction& fn);
 
  private:
+  // The first declaration of a section. Its entries are printed as text only when a later
+  // declaration comes through another function and the two must be compared: printing every
+  // section took a quarter of each start-up's instructions.
+  struct First {
+    DeclareFunction fn;
+    std::string signature; // empty until a comparison needs it
+  };
+  static std::string signature(const std::string& section, const DeclareFunction& fn);
+
   dealii::ParameterHandler& prm_;
-  std::map<std::string, std::string> declared_; // section -> its declaration as text
+  std::map<std::string, First> declared_;
 };
 
 // The scene's handler is not const: reading a section moves its subsection cursor.

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -54,6 +55,55 @@ bool ends_with(const std::string& s, const std::string& suffix) {
          s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
+// Byte offset of the first byte in `s` that does not belong to well-formed UTF-8 (RFC 3629:
+// no overlong forms, no surrogates, nothing above U+10FFFF), or npos. deal.II keeps a value's
+// bytes as they are, and the JSON the scene's parameters are walked through must be UTF-8.
+std::size_t first_invalid_utf8(const std::string& s) {
+  const auto byte = [&](std::size_t i) { return static_cast<unsigned char>(s[i]); };
+  for (std::size_t i = 0; i < s.size();) {
+    const unsigned char c = byte(i);
+    std::size_t n;
+    unsigned char lo = 0x80, hi = 0xBF; // the allowed range of the second byte
+    if (c < 0x80) {
+      ++i;
+      continue;
+    } else if (c >= 0xC2 && c <= 0xDF) {
+      n = 1;
+    } else if (c >= 0xE0 && c <= 0xEF) {
+      n = 2;
+      lo = c == 0xE0 ? 0xA0 : 0x80;
+      hi = c == 0xED ? 0x9F : 0xBF;
+    } else if (c >= 0xF0 && c <= 0xF4) {
+      n = 3;
+      lo = c == 0xF0 ? 0x90 : 0x80;
+      hi = c == 0xF4 ? 0x8F : 0xBF;
+    } else {
+      return i;
+    }
+    if (i + n >= s.size()) // the sequence runs past the end
+      return i;
+    for (std::size_t k = 1; k <= n; ++k) {
+      const unsigned char b = byte(i + k);
+      if (k == 1 ? (b < lo || b > hi) : (b < 0x80 || b > 0xBF))
+        return i;
+    }
+    i += n + 1;
+  }
+  return std::string::npos;
+}
+
+void require_utf8(const std::string& text, const std::string& where) {
+  const std::size_t bad = first_invalid_utf8(text);
+  if (bad == std::string::npos)
+    return;
+  char hex[8];
+  std::snprintf(hex, sizeof hex, "0x%02X", static_cast<unsigned char>(text[bad]));
+  throw InvalidInput(where,
+                     "byte " + std::string(hex) + " at column " + std::to_string(bad + 1) +
+                         " is not UTF-8 text",
+                     "UTF-8 text (plain ASCII suffices for every parameter)");
+}
+
 // Subsection path in effect at 1-based `line` of a .prm text (before that line's own words).
 std::vector<std::string> subsection_path_at(const std::string& text, unsigned int line) {
   std::vector<std::string> path;
@@ -83,6 +133,7 @@ void expand_includes(const std::string& text, const std::filesystem::path& file,
   std::string raw;
   for (unsigned int n = 1; std::getline(in, raw); ++n) {
     const std::string where = file.string() + ":" + std::to_string(n);
+    require_utf8(raw, where);
     const std::string l = trim(raw.substr(0, raw.find('#')));
     if (l.rfind("include", 0) != 0 ||
         (l.size() > 7 && !std::isspace(static_cast<unsigned char>(l[7])))) {
@@ -287,6 +338,7 @@ std::string Scene::allowed_names(const std::vector<std::string>& path) const {
 
 void Scene::apply_override(const std::string& assignment) {
   const std::string where = "--set \"" + assignment + "\"";
+  require_utf8(assignment, "--set");
   const auto eq = assignment.find('=');
   if (eq == std::string::npos)
     throw InvalidInput(where, "no '=' in the override", "\"Section/Sub/Parameter=value\"");

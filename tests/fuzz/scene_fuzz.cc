@@ -1,7 +1,7 @@
 // Fuzz target: the scene reader (applications/framework/scene.h) on .prm and .json text: the
 // first byte picks the format. Bad scenes must end in InvalidInput naming where; anything else
-// is a finding. Built with the project's compiler for the corpus replay only (it links
-// deal.II's ParameterHandler and the scenario registry).
+// is a finding. Built with the project's compiler for the corpus replay, and with clang and
+// libFuzzer under SPINESIM_FUZZ (it links deal.II's ParameterHandler and the scenario registry).
 #include "applications/framework/scene.h"
 #include "base/exceptions.h"
 

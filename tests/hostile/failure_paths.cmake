@@ -66,3 +66,11 @@ foreach(_d 2 3)
          --set "Simulation/Write VTU=false"
     MATCH "stable time step fell to [0-9.e-]+ s, below Simulation/Minimum time step ratio.*where: the cell centred at .*\\(deformed\\).*${_report}")
 endforeach()
+# The coupled integrator's divergence check: a free particle faster than the P wave
+# (c_p = sqrt(M / rho) = 4586 m/s for this copper) means the motion diverged; the same check
+# stops a body thrown faster than that, which the model (no shock waves) does not cover. The
+# plane-strain Taylor bar, all cells NOSB-PD particles, at 5000 m/s: stopped in step 1, naming
+# the particle (taylor_faster_than_p_wave.prm).
+spinesim_add_hostile_test(fails_particle_outruns_p_wave EXIT 1 STATUS failed LABELS stability cli
+  ARGS run ${CMAKE_CURRENT_SOURCE_DIR}/taylor_faster_than_p_wave.prm --output @KEEP@ --progress off
+  MATCH "particle speed 5000 m/s exceeds the P-wave speed 4585.6 m/s \\(diverged\\).*where: particle [0-9]+ at .*${_report}.*Simulation/Initial velocity")

@@ -57,6 +57,13 @@ spinesim_add_hostile_test(malformed_list ARGS check ${_quick} --set "Geometry/Le
   MATCH "Geometry/Lengths")
 spinesim_add_hostile_test(include_relative_to_scene EXIT 0 WORKDIR ${CMAKE_CURRENT_BINARY_DIR}
   ARGS check ${_h}/include_parent.prm MATCH "ok")
+# A relative `Mesh file` resolves the same way: the scene's ../data/bar_2d.vtk (2 cells, where
+# the included quick scene alone has 16), run from a working directory where that path
+# does not exist.
+spinesim_add_hostile_test(mesh_file_relative_to_scene EXIT 0 WORKDIR ${CMAKE_CURRENT_BINARY_DIR}
+  ARGS run ${_h}/mesh_relative_to_scene.prm --force --progress off
+       --output ${_runs}/mesh_file_relative_to_scene/run
+  MATCH "mesh: 2 cells")
 # Mesh files that deal.II's GridIn would misread (a letter in a coordinate read as 0) or that
 # would make it allocate without bound (a garbled node number or count), and a truncated
 # file: exit 2 naming the file and line, and the earlier run in the target survives --force.
@@ -86,6 +93,20 @@ spinesim_add_hostile_test(ct_truncated_nii PREPARE gunzip:${_im}
   TRUNCATE sub-verse004_0000_vertebra_21_im.nii
   ARGS check ${_vertebra} --set "CT/Image file=@KEEP@/sub-verse004_0000_vertebra_21_im.nii"
   MATCH "vertebra_21_im.nii.*bytes of voxel data, the header announces")
+# `convert` reads the image through the same front end: the cut image is refused before any
+# particle file is written (the output folder is never made, the image's folder is unchanged).
+spinesim_add_hostile_test(convert_ct_truncated_nii_gz PREPARE copy:${_im}
+  TRUNCATE sub-verse004_0000_vertebra_21_im.nii.gz
+  ARGS convert ${_vertebra} --output ${_runs}/convert_ct_truncated_nii_gz/particles --progress off
+       --set "CT/Image file=@KEEP@/sub-verse004_0000_vertebra_21_im.nii.gz"
+  MATCH "vertebra_21_im.nii.gz.*compressed voxel data ends early"
+  ABSENT ${_runs}/convert_ct_truncated_nii_gz/particles)
+spinesim_add_hostile_test(convert_ct_truncated_nii PREPARE gunzip:${_im}
+  TRUNCATE sub-verse004_0000_vertebra_21_im.nii
+  ARGS convert ${_vertebra} --output ${_runs}/convert_ct_truncated_nii/particles --progress off
+       --set "CT/Image file=@KEEP@/sub-verse004_0000_vertebra_21_im.nii"
+  MATCH "vertebra_21_im.nii.*bytes of voxel data, the header announces"
+  ABSENT ${_runs}/convert_ct_truncated_nii/particles)
 # The uncut image passes the same check (the check above fails for the cut, not for the file).
 spinesim_add_hostile_test(ct_complete_nii EXIT 0 PREPARE gunzip:${_im}
   ARGS check ${_vertebra} --set "CT/Image file=@KEEP@/sub-verse004_0000_vertebra_21_im.nii"
@@ -136,6 +157,15 @@ foreach(_case
       "-DSET=${_set}" -P ${PROJECT_SOURCE_DIR}/tests/support/interrupt_case.cmake)
   set_tests_properties(hostile.interrupt_mid_step_${_tag} PROPERTIES LABELS "hostile;cli" TIMEOUT 300)
 endforeach()
+# SIGINT (Ctrl-C at a terminal) takes the same path as SIGTERM and exits 130 (128 + 2): the
+# NOSB-PD ring stopped inside step 2 and resumed to the uninterrupted run's figures.
+add_test(NAME hostile.interrupt_mid_step_particles_2d_sigint
+  COMMAND ${CMAKE_COMMAND} -DSPINESIM=$<TARGET_FILE:spinesim>
+    -DSCENE=${PROJECT_SOURCE_DIR}/applications/validation/ring_fragmentation.prm
+    -DDIR=${_runs}/interrupt_mid_step_particles_2d_sigint -DAFTER_ROWS=1 -DLAST_STEP=1 -DTOL=1e-12
+    -DSIGNAL=INT "-DSET=Effects/Particles method=nosb|Simulation/Steps=3"
+    -P ${PROJECT_SOURCE_DIR}/tests/support/interrupt_case.cmake)
+set_tests_properties(hostile.interrupt_mid_step_particles_2d_sigint PROPERTIES LABELS "hostile;cli" TIMEOUT 300)
 # The coupled case on 2 MPI ranks, the signal sent to both (as a batch system's time limit
 # does; mpirun itself does not pass SIGTERM on): both ranks stop at the same sub-step (one
 # reduction decides), and the checkpoint they write together (each particle's owner saves its
@@ -320,3 +350,9 @@ spinesim_add_hostile_test(coupling_finite_strain_quasi_static
   ARGS check ${_impact_scene} --set "Mechanics/Time integration=quasi_static"
        --set "Simulation/Energy account=false" --set "Simulation/Initial velocity="
   MATCH "Mechanics/Kinematics.*explicit dynamics only")
+
+# Scene text that is not UTF-8 (a Latin-1 file): bad input naming the file and line (a
+# stray byte in --set is refused alike), where before the scene walk's JSON parser aborted the run
+# (found by fuzzing the scene reader: a mutated byte in a value).
+spinesim_add_hostile_test(scene_not_utf8 ARGS check ${_h}/data/latin1_description.prm
+  MATCH "latin1_description.prm:1.*byte 0xE9 at column 35 is not UTF-8 text")

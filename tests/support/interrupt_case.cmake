@@ -9,7 +9,19 @@
 # RANKS, MPIEXEC (optional): all three runs on RANKS MPI ranks; the signal goes to every rank's
 # process, as a batch system's time limit sends it to every task.
 # HISTORY_TOL (optional): history values may differ by this relative amount (default: not at all).
+# SIGNAL (optional): TERM (default) or INT, as Ctrl-C sends it; the run exits 128 + the
+# signal's number (143, 130).
 cmake_minimum_required(VERSION 3.19)
+if(NOT DEFINED SIGNAL)
+  set(SIGNAL TERM)
+endif()
+if(SIGNAL STREQUAL "TERM")
+  set(_expected_rc 143)
+elseif(SIGNAL STREQUAL "INT")
+  set(_expected_rc 130)
+else()
+  message(FATAL_ERROR "SIGNAL must be TERM or INT, not '${SIGNAL}'")
+endif()
 string(REPLACE "|" ";" _sets "${SET}")
 set(_common ${SCENE} --progress off)
 foreach(_s ${_sets})
@@ -28,7 +40,7 @@ if(NOT _rc EQUAL 0)
   message(FATAL_ERROR "the uninterrupted reference run failed (exit ${_rc})")
 endif()
 
-# The run in the background; SIGTERM once AFTER_ROWS steps are in history.csv (the header and
+# The run in the background; the signal once AFTER_ROWS steps are in history.csv (the header and
 # the row of step 0 come first).
 list(JOIN _common "' '" _quoted)
 list(JOIN _launch "' '" _launch_quoted)
@@ -43,13 +55,13 @@ while [ \"$(cat '${DIR}/run/history.csv' 2>/dev/null | wc -l)\" -lt $rows ]; do
   sleep 0.02; waited=$((waited + 1))
   if ! kill -0 $pid 2>/dev/null || [ $waited -gt 6000 ]; then echo 'ended before the signal'; exit 90; fi
 done
-kill -TERM ${_targets}
+kill -${SIGNAL} ${_targets}
 wait $pid")
 execute_process(COMMAND sh -c "${_script}" RESULT_VARIABLE _rc OUTPUT_VARIABLE _o ERROR_VARIABLE _e)
 file(READ ${DIR}/run.out _log)
 message("${_o}${_e}\n${_log}")
-if(NOT _rc EQUAL 143)
-  message(FATAL_ERROR "interrupted run: exit code ${_rc}, expected 143 (SIGTERM)")
+if(NOT _rc EQUAL _expected_rc)
+  message(FATAL_ERROR "interrupted run: exit code ${_rc}, expected ${_expected_rc} (SIG${SIGNAL})")
 endif()
 file(READ ${DIR}/run/summary.json _json)
 string(JSON _status GET "${_json}" status)
@@ -72,11 +84,11 @@ if(NOT _rc EQUAL 0)
   message(FATAL_ERROR "restart: exit code ${_rc}\n${_o}${_e}")
 endif()
 file(READ ${DIR}/run/log.txt _log)
-if(NOT _log MATCHES "running.*interrupted by SIGTERM.*restarting")
+if(NOT _log MATCHES "running.*interrupted by SIG${SIGNAL}.*restarting")
   message(FATAL_ERROR "log.txt does not hold both segments:\n${_log}")
 endif()
 math(EXPR _resumed "${AFTER_ROWS} + 1")
-if(DEFINED LAST_STEP AND NOT _log MATCHES "interrupted by SIGTERM inside step ${_resumed}.*restarting inside step ${_resumed}")
+if(DEFINED LAST_STEP AND NOT _log MATCHES "interrupted by SIG${SIGNAL} inside step ${_resumed}.*restarting inside step ${_resumed}")
   message(FATAL_ERROR "log.txt does not show the stop and the restart inside step ${_resumed}:\n${_log}")
 endif()
 
