@@ -186,6 +186,18 @@ struct ContactNode {
   enum class State { free, spring, slip } state = State::free;
   double pressure = 0;  // contact pressure p the friction law uses [Pa]
   double slip_sign = 0; // ±1 when slipping
+  // Released from the platen in this step's trials: a node that touches again is released
+  // again only under ten times the separating tension. A node arriving at the platen (a side
+  // folding onto it) holds almost no pressure, and the least-squares stress at a node carries
+  // noise of that size: without the hysteresis such a node crossed and separated on alternate
+  // trials until the step gave up.
+  bool released_in_step = false;
+  // Returned from slip to the spring in this step's trials: it slips again only beyond
+  // 1.1 s₀. The penalty rows of the Robin (spring) and traction (slip) conditions are met
+  // to different accuracy, so a node at s ≈ s₀ can slip 1.02 s₀ under the spring and 0.8 s₀
+  // under the (smaller) full traction, and switch on every trial; the band accepts up to
+  // 10 % more than τ at such a node.
+  bool unslipped_in_step = false;
 };
 
 class RingCompression : public Scenario {
@@ -397,8 +409,11 @@ class RingCompression : public Scenario {
       const double stroke = ring_.height_reduction * half_ * t; // of the quarter [m]
       const double z_platen = half_ - stroke;
       std::vector<double> u_r_start(contact.size());
-      for (unsigned int k = 0; k < contact.size(); ++k)
+      for (unsigned int k = 0; k < contact.size(); ++k) {
         u_r_start[k] = solver.displacement(nodes_[contact[k].node])[0];
+        contact[k].released_in_step = false;
+        contact[k].unslipped_in_step = false;
+      }
       unsigned int round = 0;
       ContactChanges last;
       for (;; ++round) {
@@ -584,15 +599,17 @@ class RingCompression : public Scenario {
         }
         continue;
       }
-      if (p < -release) { // pulled off the platen
+      if (p < -(n.released_in_step ? 10.0 : 1.0) * release) { // pulled off the platen
         n.state = ContactNode::State::free;
+        n.released_in_step = true;
         ++changes.states;
         continue;
       }
       if (n.corner || mu == 0)
         continue; // no friction traction (see ContactNode::corner)
       const double slip = u[0] - u_r_start[k];
-      if (n.state == ContactNode::State::spring && std::abs(slip) > slip_scale) {
+      if (n.state == ContactNode::State::spring &&
+          std::abs(slip) > (n.unslipped_in_step ? 1.1 : 1.0) * slip_scale) {
         n.state = ContactNode::State::slip; // past the regularisation: the full traction
         n.slip_sign = std::copysign(1.0, slip);
         ++changes.states;
@@ -600,6 +617,7 @@ class RingCompression : public Scenario {
         // Back within it; the 5 % band keeps a node whose slip sits at s₀ from switching
         // every trial, and accepts at most 5 % more traction than τ s/s₀ there.
         n.state = ContactNode::State::spring;
+        n.unslipped_in_step = true;
         ++changes.states;
       }
       if (!std::isfinite(mu))

@@ -65,6 +65,30 @@ double compliance_entry(unsigned int a, unsigned int b, double E, double nu) {
     return 2.0 * (1.0 + nu) / E;
   return 0.0;
 }
+// σ^h + D R_u: the stress that satisfies the strain residual R_u = 0 with the strain and the
+// plastic increment of the step held (σ^h scaled by E, R_u engineering strain; D = C⁻¹ of
+// eq. 16i on the active components: plane stress keeps σ_zz = 0).
+Voigt stress_from_strain_residual(const Voigt& sig_scaled, const Voigt& R, double E, double nu,
+                                  bool plane_stress) {
+  const double mu = E / (2.0 * (1.0 + nu));
+  Voigt s;
+  for (unsigned int a = 0; a < 6; ++a)
+    s[a] = E * sig_scaled[a];
+  if (plane_stress) {
+    const double c = E / (1.0 - nu * nu);
+    s[0] += c * (R[0] + nu * R[1]);
+    s[1] += c * (R[1] + nu * R[0]);
+    s[3] += mu * R[3];
+    return s;
+  }
+  const double lambda = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+  const double tr = R[0] + R[1] + R[2];
+  for (unsigned int a = 0; a < 3; ++a)
+    s[a] += lambda * tr + 2.0 * mu * R[a];
+  for (unsigned int a = 3; a < 6; ++a)
+    s[a] += mu * R[a];
+  return s;
+}
 // P of eq. (16f).
 double projector_entry(unsigned int a, unsigned int b) {
   if (a < 3 && b < 3)
@@ -703,6 +727,11 @@ double LsmfmSolver<dim>::evaluate(const std::vector<double>& U, bool assemble,
       if (plastic)
         ++*plastic;
     }
+    if (record_ && finite)
+      constitutive_stress_[q] =
+          return_mapping_
+              ? returned_[q].stress
+              : stress_from_strain_residual(sig, R, E, nu, prm_.plane_model == "plane_stress");
     // Residual vector: active rows of R_u, then ℓ div σ / E in the current configuration.
     for (unsigned int a = 0; a < nr; ++a)
       r[a] = R[active_[a]];
@@ -1216,6 +1245,7 @@ template <int dim>
 void LsmfmSolver<dim>::commit() {
   const bool finite = prm_.finite_strain();
   returned_.assign(points_.size(), ReturnMapped());
+  constitutive_stress_.assign(finite ? points_.size() : 0, Voigt{});
   record_ = true;
   evaluate(U_, false, nullptr); // the final plastic set (and the return mappings)
   record_ = false;
@@ -1252,7 +1282,7 @@ void LsmfmSolver<dim>::commit() {
       const Tensor3 G =
           incremental_gradient(point_sites_[q], U_, Fn_inv, axisymmetric_ ? radius_n(q) : 1.0);
       st.F_n = (dealii::unit_symmetric_tensor<3>() + G) * st.F_n;
-      st.sigma_n = sigma;
+      st.sigma_n = constitutive_stress_[q];
     }
   }
   last_increment_.resize(n_unknowns_);

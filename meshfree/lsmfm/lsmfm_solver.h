@@ -204,11 +204,17 @@ class LsmfmSolver {
   bool axisymmetric_ = false; // 2-D (r, z) with the hoop direction third
   bool second_order_ = true;  // assemble the Newton Hessian (else Gauss–Newton)
   bool return_mapping_ = false;
-  bool jaumann_log_ = false; // finite strain: Jaumann-type update with log strain increments    //
-                             // flow-rule residual in the return-mapping form
-  bool record_ = false;      // evaluate() stores the return mappings and the plastic set
+  bool jaumann_log_ = false;       // finite strain: Jaumann-type update with log strain increments
+  bool record_ = false;            // evaluate() stores the return mappings and the plastic set
   bool iterate_switching_ = false; // plastic set from the current stress at every iterate
   std::vector<ReturnMapped> returned_;
+  // Finite strain, per point, recorded by evaluate() in commit(): the stress of the
+  // constitutive update (σ_rm, or the complementary form's σ^h + D R_u), which the next step
+  // starts from as σ_n. Starting from the least-squares fit σ^h instead would leave each
+  // step's constitutive residual out of every later step: the result then drifts with the
+  // number of load steps (a stuck block at 0.125 % compression lost 10 % of its load from 1 to
+  // 160 steps).
+  std::vector<Voigt> constitutive_stress_;
   std::unique_ptr<materials::IsotropicHardening> hardening_;
   std::vector<char> plastic_set_;    // per point: flows in the current Newton solve
   std::vector<double> trial_excess_; // q_tr − σ_y,n at the last evaluation [Pa]

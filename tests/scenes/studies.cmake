@@ -10,7 +10,9 @@ set(_studies ${PROJECT_SOURCE_DIR}/applications/studies)
 # horizon is half the depth, and 1 m) is bounded below by 1, the order of the free-surface
 # error of peridynamics (Le & Bobaru 2018). Every run must finish with finite
 # figures, and the plot must be a valid PNG. LSMFM: linear MLS basis, expected L2 order 2
-# (measured 1.97 between 297 and 1105 nodes), bound 1.8 as for Q1. Kirsch's plate
+# (measured 1.97 between 297 and 1105 nodes), bounds 1.8 and 2.2 (the expected order within
+# 0.2, both ways: an order above it would say the error measure or the reference is off;
+# Q1 and Q2 get the same upper bounds). Kirsch's plate
 # (problems/kirsch_plate_fem.prm, the exact field on the edges, isoparametric hole): Q1 at
 # refinements 2, 3 and Q2 at 1, 2, measured orders 2.05 and 3.06 against h (the same bounds).
 # SPG particle zones (linear RK basis, expected L2 order 2): the cantilever at h = 2, 1 m,
@@ -18,7 +20,7 @@ set(_studies ${PROJECT_SOURCE_DIR}/applications/studies)
 # h = 0.25, 0.2 m, measured 1.55 (3.07 % -> 2.17 %; 0.99 on to 0.125 m: the stepped hole's order
 # 1), bound 0.8 as for NOSB-PD in the full study.
 spinesim_add_scene_test(study.accuracy_cost_quick SCENE ${_studies}/accuracy_cost_quick.prm
-  EXPECT "status==ok;runs>=16;failed_runs<=0;all_rows_finite>=1;png_valid>=1;order_cantilever_fem_q1>=1.8;order_cantilever_fem_q2>=2.8;order_cantilever_nosb>=1;order_cantilever_lsmfm>=1.8;order_cantilever_spg>=1.7;errors_fall_cantilever_fem_q1>=1;errors_fall_cantilever_fem_q2>=1;errors_fall_cantilever_nosb>=1;errors_fall_cantilever_lsmfm>=1;errors_fall_cantilever_spg>=1;order_kirsch_plate_fem_q1>=1.8;order_kirsch_plate_fem_q2>=2.8;order_kirsch_plate_spg>=0.8;errors_fall_kirsch_plate_fem_q1>=1;errors_fall_kirsch_plate_fem_q2>=1;errors_fall_kirsch_plate_spg>=1"
+  EXPECT "status==ok;runs>=16;failed_runs<=0;all_rows_finite>=1;png_valid>=1;order_cantilever_fem_q1>=1.8;order_cantilever_fem_q2>=2.8;order_cantilever_nosb>=1;order_cantilever_lsmfm>=1.8;order_cantilever_lsmfm<=2.2;order_cantilever_fem_q1<=2.2;order_cantilever_fem_q2<=3.2;order_cantilever_spg>=1.7;errors_fall_cantilever_fem_q1>=1;errors_fall_cantilever_fem_q2>=1;errors_fall_cantilever_nosb>=1;errors_fall_cantilever_lsmfm>=1;errors_fall_cantilever_spg>=1;order_kirsch_plate_fem_q1>=1.8;order_kirsch_plate_fem_q2>=2.8;order_kirsch_plate_spg>=0.8;errors_fall_kirsch_plate_fem_q1>=1;errors_fall_kirsch_plate_fem_q2>=1;errors_fall_kirsch_plate_spg>=1"
   LABELS "scene;study" TIMEOUT 600)
 
 # Simulation/Exact displacement against a field every method reproduces exactly: an affine

@@ -84,24 +84,46 @@ spinesim_add_scene_test(validation.lsmfm_perforated_plate
   SET "Geometry/Global refinements=5"
   EXPECT "status==ok;relative_difference_vs_fem<=0.005;plastic_zone_png_valid>=1;max_yield_violation_relative<=0.005"
   LABELS "scene;validation;meshfree;long" TIMEOUT 10800)
+# Finite-strain LSMFM under inhomogeneous deformation: the plane-strain block pressed by a
+# sticking platen, elastic, 0.125 % compression, in 10 and in 160 load steps. Each step must
+# start from the stress of the constitutive update: started from the least-squares fit, the
+# load fell with the number of steps (8.17e6 N/m at 10 steps, 7.55e6 at 160, below the
+# frictionless closed form E/(1-nu^2) eps W = 7.83e6 N/m, which a constraint can only raise).
+# Measured now 8.35659e6 and 8.35669e6 N/m (1.2e-5 apart; the one-step value 8.35563e6
+# differs by the strain increment's size, ~1e-4). Bounds: at least the frictionless closed
+# form (1 % above it, the stuck face's stiffening is 6.7 %), and the two step counts within
+# 1e-4 of each other.
+set(_block_runs ${CMAKE_CURRENT_BINARY_DIR}/runs/lsmfm_stuck_block)
+foreach(_steps 10 160)
+  spinesim_add_scene_test(validation.lsmfm_stuck_block_${_steps}_steps
+    SCENE ${_val}/lsmfm_stuck_block.prm OUT ${_block_runs}/steps_${_steps}
+    SET "LSMFM run/Steps=${_steps}"
+    EXPECT "status==ok;plastic_points<=0;reaction_force_norm>=7.91e6"
+    LABELS "scene;validation;meshfree" FIXTURE lsmfm_stuck_block_${_steps})
+endforeach()
+spinesim_add_comparison_test(validation.lsmfm_stuck_block_steps_agree
+  A ${_block_runs}/steps_10/summary.json B ${_block_runs}/steps_160/summary.json
+  CHECKS "reaction_force_norm:rel:1e-4"
+  REQUIRES "lsmfm_stuck_block_10;lsmfm_stuck_block_160" LABELS "scene;validation;meshfree")
 # The ring compression of Kwon & Youn (section 6.3) by the axisymmetric LSMFM, the Coulomb
 # cases (40 steps each, 117 nodes; about 12 s):
 #  * frictionless the compression is homogeneous: inner diameter and load against the closed
 #    form (ε_z = ln 0.5, J2 with linear hardening); the field is in the linear MLS space, so
 #    only Newton's tolerance is left (measured 1.2e-5 and 7e-6; bound 1e-4), and the two
 #    sections carry the same load (bound 1e-4);
-#  * the paper's finding: the hole grows with low friction (0.05: measured +17.2 %, +16.0 % at half the node spacing) and shrinks with
-#    high friction (0.2: -31.3 %, -36.2 % at half the spacing), every step up in friction lowering its change (bound 1
-#    percentage point);
-#  * friction raises the forming load above the frictionless one (measured 1.12 and 1.20 times; bound 1).
+#  * the paper's finding: the hole grows with low friction (0.05: measured +22.9 %, +17.5 % at
+#    half the node spacing) and shrinks with high friction (0.2: -16.3 %; at half the spacing
+#    the contact pressures do not settle in step 30), every step up in friction lowering its
+#    change (bound 1 percentage point; the values are not converged, docs/lsmfm.md);
+#  * friction raises the forming load above the frictionless one (measured 1.08 and 1.24 times; bound 1).
 spinesim_add_scene_test(validation.lsmfm_ring_compression
   SCENE ${_val}/lsmfm_ring_compression.prm SET "Ring compression/Friction=0, 0.05, 0.2"
   EXPECT "status==ok;frictionless_inner_diameter_error_relative<=1e-4;frictionless_load_error_relative<=1e-4;load_sections_mismatch_relative_mu0<=1e-4;inner_diameter_change_percent_mu0_05>=1;inner_diameter_change_percent_mu0_2<=-1;inner_diameter_smallest_fall_with_friction_percent>=1;load_over_frictionless_mu0_05>=1;load_over_frictionless_mu0_2>=1;ring_compression_png_valid>=1"
   LABELS "scene;validation;meshfree" TIMEOUT 600)
-# Sticking friction (m = 1) should need the largest load of all; the LSMFM's falls after about
-# a quarter of the reduction to a third of the frictionless load at 50 % (docs/lsmfm.md, "what
-# is not trusted yet"), so its results are asserted here only, labelled known_failure until an
-# independent reference settles them.
+# Sticking friction (m = 1) should need the largest load of all; the LSMFM's stays below the
+# Coulomb cases' and the run stops at 42.5 %, a top node switching between the spring and the
+# full traction (docs/lsmfm.md, "what is not trusted"), so its results are asserted here only,
+# labelled known_failure.
 spinesim_add_scene_test(validation.lsmfm_ring_compression_sticking
   SCENE ${_val}/lsmfm_ring_compression.prm SET "Ring compression/Friction=0, stick"
   EXPECT "status==ok;load_over_frictionless_stick>=1;inner_diameter_change_percent_stick<=-1"
