@@ -2,7 +2,8 @@
 // 2-D and 3-D: the registry lists bond_based, nosb and spg with their parameter sections; a
 // method made through the registry reproduces an affine field with no interior force (patch
 // test), conserves linear momentum for any displacement (Σ f = 0), has a finite positive
-// stable step, a non-negative stored energy that vanishes at rest, and damage in [0, 1].
+// stable step, a non-negative stored energy that vanishes at rest, and damage in [0, 1]; NOSB-PD
+// and SPG expand freely with temperature.
 #include "fem/materials/law_parameters.h"
 #include "fem/materials/material_state_io.h"
 #include "fem/materials/plane_strain_embedding.h"
@@ -33,7 +34,8 @@ struct Body {
 
 template <int dim>
 Body<dim> make_body(const std::string& name, unsigned int n,
-                    const std::string& model = "linear_elastic") {
+                    const std::string& model = "linear_elastic", double thermal_expansion = 0,
+                    double reference_temperature = 0) {
   dealii::ParameterHandler prm;
   declare_particle_method_sections(prm);
   if (name == "nosb") {
@@ -47,8 +49,9 @@ Body<dim> make_body(const std::string& name, unsigned int n,
   law.model = model;            // j2_finite_strain: yield 115 MPa, no hardening
   // Bond-based PD refuses any other ratio than its own (1/3 plane stress, 1/4 in 3-D).
   law.poisson_ratio = name == "bond_based" ? (dim == 2 ? 1.0 / 3.0 : 0.25) : 0.3;
+  law.thermal_expansion = thermal_expansion;
   const ParticleMaterial material{law.youngs_modulus, law.poisson_ratio, law.density,
-                                  materials::create_law(law)};
+                                  materials::create_law(law), reference_temperature};
   Body<dim> b;
   b.method = make(material);
   unsigned int cells[dim];
@@ -127,6 +130,68 @@ TEST(ParticleMethod, AffineFieldHasNoInteriorForce2D) {
 TEST(ParticleMethod, AffineFieldHasNoInteriorForce3D) {
   for (const auto& name : methods)
     affine_field_has_no_interior_force<3>(name);
+}
+
+// Thermal expansion as a coupled run drives it: the particles at an absolute temperature, the
+// material's reference temperature (ParticleMaterial) and the law's α. At the free thermal
+// stretch no particle carries a force, surface ones included: 3-D λ = θ = exp(α ΔT), the
+// finite-strain law's thermal stretch; 2-D plane strain (F_zz = 1) λ² = 1 + (1 + ν)(θ² − 1),
+// where the in-plane stress vanishes. Held at u = 0, the heated body pushes its surface
+// particles outward and leaves its interior without force.
+template <int dim>
+void thermal_expansion(const std::string& name) {
+  const double alpha = 1e-5, T_ref = 310, dT = 100, nu = 0.3;
+  const double depth = interior_depth(make_body<dim>(name, 3)); // as for the affine field
+  auto b = make_body<dim>(name, static_cast<unsigned int>(std::ceil(2 * depth / h)) + 2,
+                          "linear_elastic", alpha, T_ref);
+  for (unsigned int i = 0; i < b.particles.size(); ++i)
+    b.particles.temperature(i) = T_ref + dT;
+  const double theta = std::exp(alpha * dT);
+  const double lambda = dim == 3 ? theta : std::sqrt(1.0 + (1.0 + nu) * (theta * theta - 1.0));
+  for (unsigned int i = 0; i < b.particles.size(); ++i)
+    b.particles.displacement(i) = (lambda - 1.0) * b.particles.reference_position(i);
+  b.method->compute_forces(b.particles, b.bonds, false);
+  // A particle's force scale at the thermal stress: E α ΔT h^(dim−1).
+  const double scale = 17e9 * alpha * dT * std::pow(h, dim - 1);
+  double free_largest = 0;
+  for (unsigned int i = 0; i < b.particles.size(); ++i)
+    free_largest = std::max(free_largest, b.particles.force(i).norm());
+  // Round-off of sums over ~100 neighbours of terms of the size of the stress (E λ ≈ E),
+  // against the thermal stress E α ΔT = 1e-3 E: 1e-9 of the scale is ~1e-12 of the terms.
+  EXPECT_LT(free_largest, 1e-9 * scale) << name;
+
+  for (unsigned int i = 0; i < b.particles.size(); ++i)
+    b.particles.displacement(i) = dealii::Tensor<1, dim>();
+  b.method->compute_forces(b.particles, b.bonds, false);
+  dealii::Point<dim> L;
+  for (unsigned int d = 0; d < dim; ++d)
+    L[d] = b.extent;
+  double outward = 0, interior_largest = 0;
+  unsigned int n_interior = 0;
+  for (unsigned int i = 0; i < b.particles.size(); ++i) {
+    const auto X = b.particles.reference_position(i);
+    if (test::distance_to_boundary(b.particles, i, L) > interior_depth(b)) {
+      ++n_interior;
+      interior_largest = std::max(interior_largest, b.particles.force(i).norm());
+      continue;
+    }
+    for (unsigned int d = 0; d < dim; ++d)
+      outward += b.particles.force(i)[d] * (X[d] > 0.5 * b.extent ? 1.0 : -1.0);
+  }
+  EXPECT_GT(n_interior, 0u) << name;
+  EXPECT_LT(interior_largest, 1e-9 * scale) << name;
+  // The surface layer carries the thermal stress times the surface: far more than one
+  // particle's scale (a body that ignored the temperature would carry nothing).
+  EXPECT_GT(outward, 1.0 * scale) << name;
+}
+
+TEST(ParticleMethod, ThermalExpansionFreeAndHeld2D) {
+  for (const auto& name : {"nosb", "spg"})
+    thermal_expansion<2>(name);
+}
+TEST(ParticleMethod, ThermalExpansionFreeAndHeld3D) {
+  for (const auto& name : {"nosb", "spg"})
+    thermal_expansion<3>(name);
 }
 
 // Random displacements: pairwise-antisymmetric bond forces (PD) and partition of unity (SPG)
