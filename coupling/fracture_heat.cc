@@ -37,7 +37,7 @@ void FractureHeat<dim>::after_forces(std::size_t newly_broken) {
       continue;
     meshfree::for_each_bond_of(bonds, i, [&](std::size_t k, unsigned int) {
       if (bonds.broken[k] && !broken_before_[k]) {
-        const double e = state_.method->bond_energy(particles, bonds, i, k);
+        const double e = state_.method->bond_energy(particles, bonds, i, k, &broken_before_);
         energy_[i] += e;
         dissipation_ += e;
       }

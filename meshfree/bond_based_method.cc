@@ -121,9 +121,9 @@ double BondBasedMethod<dim>::strain_energy(const ParticleSet<dim>& particles,
 
 template <int dim>
 double BondBasedMethod<dim>::bond_energy(const ParticleSet<dim>& particles,
-                                         const BondList<dim>& bonds, unsigned int i,
-                                         std::size_t k) const {
-  return pd_.bond_energy(particles, bonds, i, k);
+                                         const BondList<dim>& bonds, unsigned int i, std::size_t k,
+                                         const std::vector<std::uint8_t>*) const {
+  return pd_.bond_energy(particles, bonds, i, k); // a bond's own spring energy, broken or not
 }
 
 template <int dim>

@@ -65,7 +65,8 @@ class BondBasedMethod : public ParticleMethod<dim> {
   double strain_energy(const ParticleSet<dim>& particles,
                        const BondList<dim>& bonds) const override;
   double bond_energy(const ParticleSet<dim>& particles, const BondList<dim>& bonds, unsigned int i,
-                     std::size_t k) const override;
+                     std::size_t k,
+                     const std::vector<std::uint8_t>* broken_before = nullptr) const override;
   void update_damage(ParticleSet<dim>& particles, const BondList<dim>& bonds) const override;
   void set_driven(std::vector<std::uint8_t> driven) override { driven_ = std::move(driven); }
   std::optional<std::vector<dealii::Tensor<1, dim>>>

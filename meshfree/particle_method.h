@@ -142,9 +142,14 @@ class ParticleMethod {
                                                     const BondList<dim>& bonds) const = 0;
   virtual double strain_energy(const ParticleSet<dim>& particles,
                                const BondList<dim>& bonds) const = 0;
-  // The energy bond k of particle i holds now [J]: what breaking it dissipates.
+  // The energy bond k of particle i holds now [J]: what breaking it dissipates. Asked right
+  // after the force pass that broke it, with `broken_before` the bonds' broken flags before
+  // that pass (nullptr: bonds.broken): a bond broken in that pass still holds its energy, and
+  // methods that share a particle's energy among its bonds share it among the bonds intact
+  // before the pass.
   virtual double bond_energy(const ParticleSet<dim>& particles, const BondList<dim>& bonds,
-                             unsigned int i, std::size_t k) const = 0;
+                             unsigned int i, std::size_t k,
+                             const std::vector<std::uint8_t>* broken_before = nullptr) const = 0;
   // Damage φ_i ∈ [0, 1] into particles.damage().
   virtual void update_damage(ParticleSet<dim>& particles, const BondList<dim>& bonds) const = 0;
 

@@ -144,13 +144,15 @@ double NosbMethod<dim>::strain_energy(const ParticleSet<dim>& particles,
 
 template <int dim>
 double NosbMethod<dim>::bond_energy(const ParticleSet<dim>& particles, const BondList<dim>& bonds,
-                                    unsigned int i, std::size_t k) const {
-  if (bonds.broken[k] || pd_.failed(i))
+                                    unsigned int i, std::size_t k,
+                                    const std::vector<std::uint8_t>* broken_before) const {
+  const auto& before = broken_before ? *broken_before : bonds.broken;
+  if (before[k] || pd_.failed(i))
     return 0.0;
   const auto& V = particles.volumes();
   double all = 0;
   for_each_bond_of(bonds, i, [&](std::size_t b, unsigned int j) {
-    if (!bonds.broken[b])
+    if (!before[b])
       all += bonds.influence[b] * bonds.volume_factor(b) * V[j];
   });
   if (!(all > 0.0))

@@ -39,10 +39,11 @@ class NosbMethod : public ParticleMethod<dim> {
                                             const BondList<dim>& bonds) const override;
   double strain_energy(const ParticleSet<dim>& particles,
                        const BondList<dim>& bonds) const override;
-  // The particle's stored energy W_i V_i shared among its intact bonds by their weight
-  // ω β V_j: a correspondence bond has no energy of its own.
+  // The particle's stored energy W_i V_i shared among its intact bonds (before the pass) by
+  // their weight ω β V_j: a correspondence bond has no energy of its own.
   double bond_energy(const ParticleSet<dim>& particles, const BondList<dim>& bonds, unsigned int i,
-                     std::size_t k) const override;
+                     std::size_t k,
+                     const std::vector<std::uint8_t>* broken_before = nullptr) const override;
   void update_damage(ParticleSet<dim>& particles, const BondList<dim>& bonds) const override;
   void commit_state() override { pd_.commit_state(); }
   // compute_forces always starts from the committed history: nothing to undo.

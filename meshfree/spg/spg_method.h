@@ -100,9 +100,10 @@ class SpgMethod : public ParticleMethod<dim> {
   std::optional<std::vector<double>>
   splice_energy_by_row(const ParticleSet<dim>& particles,
                        const BondList<dim>& bonds) const override;
-  // W_i V_i shared among the intact bonds of i by their weight β V_j.
+  // W_i V_i shared among the bonds of i intact before the pass by their weight β V_j.
   double bond_energy(const ParticleSet<dim>& particles, const BondList<dim>& bonds, unsigned int i,
-                     std::size_t k) const override;
+                     std::size_t k,
+                     const std::vector<std::uint8_t>* broken_before = nullptr) const override;
   // Damage is written by the solver when bonds break (the broken fraction of each particle's
   // support bonds); nothing else to update.
   void update_damage(ParticleSet<dim>& particles, const BondList<dim>& bonds) const override;

@@ -96,7 +96,7 @@ class LinearSprings : public ParticleMethod<dim> {
     return E;
   }
   double bond_energy(const ParticleSet<dim>& p, const BondList<dim>& bonds, unsigned int i,
-                     std::size_t k) const override {
+                     std::size_t k, const std::vector<std::uint8_t>* = nullptr) const override {
     const unsigned int j = bonds.neighbor[k];
     const double e = (bonds.xi[k] + p.displacement(j) - p.displacement(i)).norm() - bonds.length[k];
     return 0.25 * prm_.spring_constant * e * e / bonds.length[k] * p.volume(i) * p.volume(j);

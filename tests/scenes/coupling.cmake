@@ -308,6 +308,28 @@ spinesim_add_comparison_test(coupling.fracture_heat_ranks_agree
   CHECKS "fracture_dissipation:rel:1e-9;fracture_heat_applied:rel:1e-9;heat_content:rel:1e-12"
   REQUIRES "heat_1;heat_2" LABELS "scene;coupling;mpi")
 
+# The same plate with the design's particle methods (plane strain, as they are in 2-D). Their
+# bonds hold no energy of their own: a breaking bond hands over its share of the particle's
+# stored energy among the bonds intact before the force pass that broke it (asked after
+# that pass; asked with the bond already flagged broken, the share was 0 and no heat came).
+# NOSB-PD, its critical stretch from Gc = 100 J/m^2 (about 40 s): the crack runs to the edges
+# and the breaks dissipate 101.5 J/m (measured; the bond-based plate 100 J/m, Gc x the crack
+# growth of 0.68 m = 68 J/m); bound 30 J/m, under half of Gc x growth, which a method booking
+# no heat (0 J/m before) or a fraction of it fails. SPG, whose critical stretch is given
+# (3.5e-4, the bond-based value of that Gc; SPG has no Gc calibration): 6.1 J/m measured,
+# bound 1 J/m. Both keep the heat books of the bond-based run.
+set(_heat_books "status==ok;fracture_heat_supplied_relative<=1e-12;heat_energy_balance_relative<=1e-3;crack_extent_max_x_m>=0.45;crack_extent_min_x_m<=-0.45")
+spinesim_add_scene_test(coupling.fracture_heat_nosb SCENE ${_val}/coupling_fracture_heat.prm
+  OUT ${_heat_runs}/fracture_heat_nosb
+  SET "Effects/Particles method=nosb" "Mechanics/Plane stress=false"
+      "Coupling/NOSB/Fracture energy=100"
+  EXPECT "${_heat_books};fracture_dissipation>=30" LABELS "scene;validation;coupling" TIMEOUT 600)
+spinesim_add_scene_test(coupling.fracture_heat_spg SCENE ${_val}/coupling_fracture_heat.prm
+  OUT ${_heat_runs}/fracture_heat_spg
+  SET "Effects/Particles method=spg" "Mechanics/Plane stress=false"
+      "Coupling/SPG/Critical stretch=3.5e-4"
+  EXPECT "${_heat_books};fracture_dissipation>=1" LABELS "scene;validation;coupling")
+
 # The same in 3-D, a 0.1 m thick slab (about 20 s): the same balances; the dissipation bound is
 # Gc x the new crack area, 100 J/m^2 x 2 x 0.30 m x 0.1 m = 6 J (9.2 J measured; the damage
 # band is wider than one bond layer, as in 2-D). Heat gained vs supplied: 1.8e-4 measured.
