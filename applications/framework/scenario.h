@@ -43,7 +43,7 @@ class SectionDeclarer {
   // declaration comes through another function and the two must be compared: printing every
   // section took a quarter of each start-up's instructions.
   struct First {
-    DeclareFunction fn;
+    DeclareFunction fn;    // called again for a comparison: it must not capture by reference
     std::string signature; // empty until a comparison needs it
   };
   static std::string signature(const std::string& section, const DeclareFunction& fn);

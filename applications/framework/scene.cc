@@ -203,6 +203,14 @@ void Scene::load_file(const std::string& path) {
   buffer << in.rdbuf();
   source_name_ = path;
   if (ends_with(path, ".json")) {
+    // deal.II's JSON reader (Boost property_tree) lets overlong forms and surrogates through,
+    // which the parameter walks (nlohmann) refuse later: checked here, line by line.
+    {
+      std::istringstream lines(buffer.str());
+      std::string line;
+      for (unsigned int n = 1; std::getline(lines, line); ++n)
+        require_utf8(line, path + ":" + std::to_string(n));
+    }
     try {
       std::istringstream json(buffer.str());
       prm_.parse_input_from_json(json, /*skip_undefined=*/false);
@@ -338,8 +346,12 @@ std::string Scene::allowed_names(const std::vector<std::string>& path) const {
 
 void Scene::apply_override(const std::string& assignment) {
   const std::string where = "--set \"" + assignment + "\"";
-  require_utf8(assignment, "--set");
   const auto eq = assignment.find('=');
+  // Named by its parameter when the bad byte is in the value (the name is then plain text).
+  const std::size_t bad = first_invalid_utf8(assignment);
+  require_utf8(assignment, eq != std::string::npos && bad != std::string::npos && bad > eq
+                               ? "--set " + assignment.substr(0, eq)
+                               : std::string("--set"));
   if (eq == std::string::npos)
     throw InvalidInput(where, "no '=' in the override", "\"Section/Sub/Parameter=value\"");
   std::vector<std::string> path;

@@ -656,6 +656,7 @@ double LsmfmSolver<dim>::evaluate(const std::vector<double>& U, bool assemble,
     // strain (small strain: ε − e^p_n; finite strain: ε̃ + C(f σ_n fᵀ)/J̃, eq. 51 with
     // Δγ = 0) and σ_rm its J2 radial return (fem/materials/j2_return_mapping.h); the
     // derivative in H is C D ∂e_tr/∂H with D the consistent tangent.
+    Voigt recorded{}; // return mapping: the stress this point commits (see below)
     if (return_mapping_) {
       const Voigt c = compliance(sig, 1.0, nu);
       Voigt etr;
@@ -671,6 +672,9 @@ double LsmfmSolver<dim>::evaluate(const std::vector<double>& U, bool assemble,
         const auto trial = return_map(etr, st.q, 1);
         trial_excess_[q] =
             von_mises(trial.stress) - (mat_.yield_stress + mat_.hardening_modulus * st.q);
+        // commit() books flow only where Δq > 0; elsewhere the point stays elastic, and so
+        // does the stress it commits.
+        recorded = rm.plastic && !(rm.delta_q > 0) ? trial.stress : rm.stress;
       }
       if (record_)
         returned_[q] = rm;
@@ -727,11 +731,20 @@ double LsmfmSolver<dim>::evaluate(const std::vector<double>& U, bool assemble,
       if (plastic)
         ++*plastic;
     }
-    if (record_ && finite)
-      constitutive_stress_[q] =
-          return_mapping_
-              ? returned_[q].stress
-              : stress_from_strain_residual(sig, R, E, nu, prm_.plane_model == "plane_stress");
+    if (record_ && finite) {
+      if (return_mapping_) {
+        constitutive_stress_[q] = recorded;
+      } else {
+        // commit() books flow only where φ > 0: a point of the set below the yield surface
+        // (γ ≤ 0) commits the stress without that flow.
+        Voigt committed = R;
+        if (flows && !(phi_now > 0))
+          for (unsigned int a = 0; a < 6; ++a)
+            committed[a] += gamma * nvec[a];
+        constitutive_stress_[q] =
+            stress_from_strain_residual(sig, committed, E, nu, prm_.plane_model == "plane_stress");
+      }
+    }
     // Residual vector: active rows of R_u, then ℓ div σ / E in the current configuration.
     for (unsigned int a = 0; a < nr; ++a)
       r[a] = R[active_[a]];

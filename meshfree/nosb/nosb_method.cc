@@ -147,7 +147,11 @@ double NosbMethod<dim>::bond_energy(const ParticleSet<dim>& particles, const Bon
                                     unsigned int i, std::size_t k,
                                     const std::vector<std::uint8_t>* broken_before) const {
   const auto& before = broken_before ? *broken_before : bonds.broken;
-  if (before[k] || pd_.failed(i))
+  // Asked after the pass that broke k: the particle's energy from before that pass's breaks
+  // rebuilt its family (which may have failed it), as the account releases it.
+  const double cached =
+      broken_before ? pd_.energy_before_last_breaks(i) : std::numeric_limits<double>::quiet_NaN();
+  if (before[k] || (std::isnan(cached) && pd_.failed(i)))
     return 0.0;
   const auto& V = particles.volumes();
   double all = 0;
@@ -158,7 +162,7 @@ double NosbMethod<dim>::bond_energy(const ParticleSet<dim>& particles, const Bon
   if (!(all > 0.0))
     return 0.0;
   const double share = bonds.influence[k] * bonds.volume_factor(k) * V[bonds.neighbor[k]] / all;
-  return share * pd_.particle_strain_energy(i, particles, bonds);
+  return share * (std::isnan(cached) ? pd_.particle_strain_energy(i, particles, bonds) : cached);
 }
 
 template <int dim>

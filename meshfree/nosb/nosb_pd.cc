@@ -345,6 +345,9 @@ std::size_t NosbPD<dim>::break_bonds(ParticleSet<dim>& particles, BondList<dim>&
     parallel_for_rethrow(
         static_cast<long>(changed.size()), parallel_particle_threshold,
         [&](long c) { before[c] = particle_strain_energy(changed[c], particles, bonds); });
+    energy_before_breaks_.assign(particles.size(), std::numeric_limits<double>::quiet_NaN());
+    for (std::size_t c = 0; c < changed.size(); ++c)
+      energy_before_breaks_[changed[c]] = before[c];
     for (std::size_t k = 0; k < breaking.size(); ++k)
       bonds.broken[k] |= breaking[k];
     update_families(particles, bonds);

@@ -57,6 +57,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <string>
 #include <utility>
@@ -105,6 +106,13 @@ class NosbPD {
   // Breaks over-stretched bonds, rebuilds the families and updates damage if any broke;
   // returns the number of bond ends broken (each pair counts twice).
   std::size_t break_bonds(ParticleSet<dim>& particles, BondList<dim>& bonds);
+  // W_i V_i of particle i taken in the last break_bonds() that broke bonds, before its family
+  // was rebuilt (its failure flag may have been set by the rebuild); NaN for a particle whose
+  // bonds that call did not break [J].
+  double energy_before_last_breaks(unsigned int i) const {
+    return i < energy_before_breaks_.size() ? energy_before_breaks_[i]
+                                            : std::numeric_limits<double>::quiet_NaN();
+  }
   // For explicit dynamics: break_bonds, compute_forces, commit_state.
   std::function<void(ParticleSet<dim>&)> force_function(BondList<dim>& bonds);
   void commit_state();
@@ -269,6 +277,7 @@ class NosbPD {
   void log_failed(const ParticleSet<dim>& particles, const std::vector<unsigned int>& newly);
   // After the families of the `changed` particles were rebuilt for broken bonds: raises D_f
   // of a particle's families where its stored energy exceeds `before` (its energy then).
+  std::vector<double> energy_before_breaks_; // see energy_before_last_breaks()
   void release_energy_at_breaks(const ParticleSet<dim>& particles, const BondList<dim>& bonds,
                                 const std::vector<unsigned int>& changed,
                                 const std::vector<double>& before);

@@ -106,6 +106,7 @@ std::size_t SpgMethod<dim>::compute_forces(ParticleSet<dim>& particles, BondList
   // before the breaks, for the forces they remove) evaluates the forces on the bonds as they are.
   const std::size_t before = solver().n_broken_bonds();
   solver_->set_breaking(breaking_ && allow_breaking);
+  pass_energy_before_.assign(particles.size(), std::numeric_limits<double>::quiet_NaN());
   pass_particles_ = &particles;
   solver_->compute_forces(particles);
   pass_particles_ = nullptr;
@@ -156,6 +157,7 @@ std::vector<std::pair<unsigned int, unsigned int>> SpgMethod<dim>::take_broken_p
 template <int dim>
 void SpgMethod<dim>::break_pairs(ParticleSet<dim>& particles, BondList<dim>& bonds,
                                  const std::vector<std::pair<unsigned int, unsigned int>>& pairs) {
+  pass_energy_before_.assign(particles.size(), std::numeric_limits<double>::quiet_NaN());
   pass_particles_ = &particles;
   solver().break_pairs(particles, pairs);
   pass_particles_ = nullptr;
@@ -256,6 +258,9 @@ void SpgMethod<dim>::observe_breaks(const std::vector<unsigned int>& rows, bool 
         } catch (const NumericalFailure&) {
         }
       }
+    for (std::size_t k = 0; k < rows.size(); ++k)
+      if (rows[k] < pass_energy_before_.size() && std::isnan(pass_energy_before_[rows[k]]))
+        pass_energy_before_[rows[k]] = std::max(energy_before_break_[k], 0.0);
     return;
   }
   const double floor = 1e-16 * law_->youngs_modulus();
@@ -329,9 +334,14 @@ double SpgMethod<dim>::bond_energy(const ParticleSet<dim>& particles, const Bond
   });
   if (!(all > 0.0))
     return 0.0;
-  // The row's stored energy as the account counts it (the stabilisation energy included).
+  // The row's stored energy as the account counts it (the stabilisation energy included);
+  // asked after the pass that broke k, the row's energy before that pass rebuilt it.
+  const double cached = broken_before && i < pass_energy_before_.size()
+                            ? pass_energy_before_[i]
+                            : std::numeric_limits<double>::quiet_NaN();
   return bonds.volume_factor(k) * V[bonds.neighbor[k]] / all *
-         (energy_density(i, particles) * V[i] + row_stabilisation_energy(i, particles));
+         ((std::isnan(cached) ? energy_density(i, particles) * V[i] : cached) +
+          row_stabilisation_energy(i, particles));
 }
 
 template <int dim>

@@ -140,6 +140,10 @@ class SpgMethod : public ParticleMethod<dim> {
   // V_i W_i of the rows a break changes, taken before their rows are rebuilt [J].
   const ParticleSet<dim>* pass_particles_ = nullptr;
   std::vector<double> energy_before_break_;
+  // Per particle, V_i W_i before the first rebuild of its row in the last pass that broke
+  // bonds (NaN: not rebuilt in that pass): what bond_energy() shares when asked after the
+  // pass [J].
+  std::vector<double> pass_energy_before_;
   // After breaks rebuilt rows: a row whose stored energy rose gets the fracture damage D_f that
   // brings it back, so that a break never releases negative energy (as NosbPD does).
   void observe_breaks(const std::vector<unsigned int>& rows, bool after);

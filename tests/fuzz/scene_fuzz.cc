@@ -27,6 +27,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     spinesim::framework::Scene scene;
     scene.load_file(file);
     (void)scene.effects();
+    (void)scene.input_files(); // walks the parameters as JSON, as `run` does before starting
   } catch (const spinesim::InvalidInput&) {
   }
   std::filesystem::remove(file);

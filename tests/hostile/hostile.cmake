@@ -351,8 +351,11 @@ spinesim_add_hostile_test(coupling_finite_strain_quasi_static
        --set "Simulation/Energy account=false" --set "Simulation/Initial velocity="
   MATCH "Mechanics/Kinematics.*explicit dynamics only")
 
-# Scene text that is not UTF-8 (a Latin-1 file): bad input naming the file and line (a
-# stray byte in --set is refused alike), where before the scene walk's JSON parser aborted the run
-# (found by fuzzing the scene reader: a mutated byte in a value).
+# Scene text that is not UTF-8 (a value saved in Latin-1; an overlong form in a .json scene,
+# which deal.II's JSON reader lets through): bad input naming the file, line and column (a
+# stray byte in --set is refused alike), where before the scene walk's JSON parser aborted
+# the run (found by fuzzing the scene reader: a mutated byte in a value).
 spinesim_add_hostile_test(scene_not_utf8 ARGS check ${_h}/data/latin1_description.prm
-  MATCH "latin1_description.prm:1.*byte 0xE9 at column 35 is not UTF-8 text")
+  MATCH "latin1_description.prm:3.*byte 0xE8 at column 23 is not UTF-8 text")
+spinesim_add_hostile_test(json_scene_not_utf8 ARGS check ${_h}/data/overlong_description.json
+  MATCH "overlong_description.json:3.*byte 0xC0 at column 34 is not UTF-8 text")

@@ -14,7 +14,7 @@ set(_studies ${PROJECT_SOURCE_DIR}/applications/studies)
 # 0.2, both ways: an order above it would say the error measure or the reference is off;
 # Q1 and Q2 get the same upper bounds). Kirsch's plate
 # (problems/kirsch_plate_fem.prm, the exact field on the edges, isoparametric hole): Q1 at
-# refinements 2, 3 and Q2 at 1, 2, measured orders 2.05 and 3.06 against h (the same bounds).
+# refinements 2, 3 and Q2 at 1, 2, measured orders 2.05 and 3.06 against h (the same lower bounds).
 # SPG particle zones (linear RK basis, expected L2 order 2): the cantilever at h = 2, 1 m,
 # measured order 1.89 (8.0e-4 -> 2.2e-4; 1.92 on to h = 0.5 m), bound 1.7; Kirsch's plate at
 # h = 0.25, 0.2 m, measured 1.55 (3.07 % -> 2.17 %; 0.99 on to 0.125 m: the stepped hole's order
