@@ -92,16 +92,21 @@ std::size_t first_invalid_utf8(const std::string& s) {
   return std::string::npos;
 }
 
-void require_utf8(const std::string& text, const std::string& where) {
-  const std::size_t bad = first_invalid_utf8(text);
-  if (bad == std::string::npos)
-    return;
+// Bad input naming the byte at offset `bad` of `text` (from first_invalid_utf8).
+[[noreturn]] void throw_not_utf8(const std::string& text, std::size_t bad,
+                                 const std::string& where) {
   char hex[8];
   std::snprintf(hex, sizeof hex, "0x%02X", static_cast<unsigned char>(text[bad]));
   throw InvalidInput(where,
                      "byte " + std::string(hex) + " at column " + std::to_string(bad + 1) +
                          " is not UTF-8 text",
                      "UTF-8 text (plain ASCII suffices for every parameter)");
+}
+
+void require_utf8(const std::string& text, const std::string& where) {
+  const std::size_t bad = first_invalid_utf8(text);
+  if (bad != std::string::npos)
+    throw_not_utf8(text, bad, where);
 }
 
 // Subsection path in effect at 1-based `line` of a .prm text (before that line's own words).
@@ -349,9 +354,10 @@ void Scene::apply_override(const std::string& assignment) {
   const auto eq = assignment.find('=');
   // Named by its parameter when the bad byte is in the value (the name is then plain text).
   const std::size_t bad = first_invalid_utf8(assignment);
-  require_utf8(assignment, eq != std::string::npos && bad != std::string::npos && bad > eq
-                               ? "--set " + assignment.substr(0, eq)
-                               : std::string("--set"));
+  if (bad != std::string::npos)
+    throw_not_utf8(assignment, bad,
+                   eq != std::string::npos && bad > eq ? "--set " + assignment.substr(0, eq)
+                                                       : std::string("--set"));
   if (eq == std::string::npos)
     throw InvalidInput(where, "no '=' in the override", "\"Section/Sub/Parameter=value\"");
   std::vector<std::string> path;
