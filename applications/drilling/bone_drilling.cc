@@ -1070,9 +1070,12 @@ void BoneDrilling::run(RunContext& ctx) {
   ctx.log() << "  mesh: " << tria.n_global_active_cells() << " cells, drill cells " << h_drill * 1e3
             << " mm (" << mesh_.cells_across_diameter << " across the diameter); "
             << heat.dof_handler().n_dofs() << " DoFs at the start\n";
-  if (!restarting)
-    ctx.set_cost({"fem_heat", double(heat.dof_handler().n_dofs()) * nominal_end / feed_dt,
-                  double(heat.dof_handler().n_dofs())});
+  if (!restarting) {
+    const double dofs = heat.dof_handler().n_dofs();
+    framework::RunCost cost{"fem_heat", dofs * nominal_end / feed_dt, dofs};
+    cost.heat_dofs = dofs;
+    ctx.set_cost(cost);
+  }
   ctx.progress().start("bone drilling", static_cast<unsigned int>(std::ceil(nominal_end / feed_dt)),
                        nominal_end);
   const auto start = std::chrono::steady_clock::now();

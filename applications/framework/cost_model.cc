@@ -5,12 +5,42 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <sstream>
+#include <vector>
 
 namespace spinesim {
 extern const char* const built_in_cost_table; // cost_table.cc, generated at configure time
 }
 
 namespace spinesim::framework {
+
+std::string RunCost::describe_state() const {
+  std::ostringstream out;
+  out.precision(6);
+  out << state << " unknowns and bonds";
+  std::vector<std::string> parts;
+  const auto part = [&](double n, const std::string& what) {
+    if (n > 0) {
+      std::ostringstream p;
+      p.precision(12);
+      p << n << " " << what;
+      parts.push_back(p.str());
+    }
+  };
+  part(fem_dofs, "FEM DoFs");
+  if (particles > 0) {
+    std::ostringstream p;
+    p.precision(12);
+    p << particles << " particles (" << particle_unknowns << " unknowns)";
+    parts.push_back(p.str());
+  }
+  part(bonds, "bonds");
+  part(meshfree_unknowns, "meshfree unknowns");
+  part(heat_dofs, "heat DoFs");
+  for (std::size_t i = 0; i < parts.size(); ++i)
+    out << (i == 0 ? ": " : ", ") << parts[i];
+  return out.str();
+}
 
 const CostModel& CostModel::built_in() {
   static const CostModel model = from_json(built_in_cost_table);

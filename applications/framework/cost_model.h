@@ -20,6 +20,17 @@ struct RunCost {
   std::string kind; // empty: the scenario states none
   double work = 0;  // work units of the kind
   double state = 0; // unknowns + bonds held
+  // What the state is made of (0: none in this run), over all ranks.
+  double fem_dofs = 0;          // displacement DoFs of the FEM mechanics
+  double heat_dofs = 0;         // temperature DoFs
+  double particles = 0;         // particles that carry their own unknowns ...
+  double particle_unknowns = 0; // ... and those unknowns (dim per particle)
+  double bonds = 0;             // particle bonds (each counted once)
+  double meshfree_unknowns = 0; // unknowns of a meshfree Galerkin (LSMFM) discretisation
+
+  // "N unknowns and bonds: a FEM DoFs, b particles (c unknowns), d bonds, ..."; the parts are
+  // named only when the scenario stated them.
+  std::string describe_state() const;
 };
 
 struct CostLaw {

@@ -141,8 +141,8 @@ int check_command(const SceneSource& source, bool estimate) {
           std::cout << "  estimate:  the " << scene.scenario()
                     << " scenario states no work to predict from\n";
         else {
-          std::cout << "  estimate:  " << cost.kind << ", " << cost.work << " work units, "
-                    << cost.state << " unknowns and bonds\n";
+          std::cout << "  estimate:  " << cost.kind << ", " << cost.work << " work units\n"
+                    << "             " << cost.describe_state() << "\n";
           if (prediction)
             std::cout << "             predicted wall time " << prediction->wall_time
                       << " s (plus about 1 s of start-up), peak memory " << prediction->peak_memory

@@ -70,9 +70,22 @@ std::string Summary::json() const {
     j["timings"][phase] = s;
   if (ranks_ > 0) {
     j["run"] = {{"dimension", dimension_}, {"mpi_ranks", ranks_}, {"threads_per_rank", threads_}};
-    if (!cost_.kind.empty())
+    if (!cost_.kind.empty()) {
       j["run"].update(
           {{"cost_kind", cost_.kind}, {"work_units", cost_.work}, {"state_size", cost_.state}});
+      // The parts of the state the scenario stated (counts over all ranks).
+      nlohmann::ordered_json parts = nlohmann::ordered_json::object();
+      for (const auto& [key, n] :
+           {std::pair{"fem_dofs", cost_.fem_dofs}, std::pair{"particles", cost_.particles},
+            std::pair{"particle_unknowns", cost_.particle_unknowns},
+            std::pair{"bonds", cost_.bonds},
+            std::pair{"meshfree_unknowns", cost_.meshfree_unknowns},
+            std::pair{"heat_dofs", cost_.heat_dofs}})
+        if (n > 0)
+          parts[key] = n;
+      if (!parts.empty())
+        j["run"]["state"] = parts;
+    }
     if (peak_memory_ > 0)
       j["run"]["peak_memory_MiB"] = peak_memory_;
   }

@@ -721,8 +721,11 @@ class ScrewPullout : public Scenario {
                          {"newton_iterations", 0.0},
                          {"linear_iterations", 0.0},
                          {"relaxation_steps", 0.0}});
-      ctx.set_cost({"fem_quasi_static",
-                    dofs * (pull_.steps + pull_.toggle_cycles * pull_.toggle_steps), dofs});
+      framework::RunCost cost{"fem_quasi_static",
+                              dofs * (pull_.steps + pull_.toggle_cycles * pull_.toggle_steps),
+                              dofs};
+      cost.fem_dofs = dofs;
+      ctx.set_cost(cost);
     }
     const unsigned int toggle_total = pull_.toggle_cycles * pull_.toggle_steps;
     ctx.progress().start("screw pull-out", toggle_total + pull_.steps, n_toggle + 1.0);

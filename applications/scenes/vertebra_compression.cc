@@ -176,7 +176,9 @@ class VertebraCompression : public Scenario {
         {{"displacement_mm", 0.0}, {"reaction_force_N", 0.0}, {"plastic_volume_fraction", 0.0}});
     // Cost table kind: a CT model solved quasi-statically, W = DoFs × load steps.
     const double dofs = solver.dof_handler().n_dofs();
-    ctx.set_cost({"ct_fem_quasi_static", dofs * n, dofs});
+    RunCost cost{"ct_fem_quasi_static", dofs * n, dofs};
+    cost.fem_dofs = dofs;
+    ctx.set_cost(cost);
     ctx.progress().start("vertebra compression", n, 1.0);
     for (unsigned int step = 1; step <= n; ++step) {
       const double t = double(step) / n;

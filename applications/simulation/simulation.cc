@@ -388,6 +388,10 @@ RunCost Simulation<dim>::planned_cost() const {
                          2;
     const double particles = coupled_->n_free_particles();
     cost.state = dofs + dim * particles + bonds;
+    cost.fem_dofs = dofs;
+    cost.particles = particles;
+    cost.particle_unknowns = dim * particles;
+    cost.bonds = bonds;
     if (quasi_static_) {
       cost.kind = "coupled_quasi_static:" + method;
       cost.work = (dofs + bonds) * sim_.steps;
@@ -397,6 +401,7 @@ RunCost Simulation<dim>::planned_cost() const {
     }
   } else if (mechanics_) {
     cost.state = dofs;
+    cost.fem_dofs = dofs;
     if (quasi_static_) {
       cost.kind = "fem_quasi_static";
       cost.work = dofs * sim_.steps * mech_prm_.load_steps;
@@ -407,6 +412,9 @@ RunCost Simulation<dim>::planned_cost() const {
   } else if (particles_) {
     const double bonds = particles_->n_bonds();
     cost.state = dim * double(particles_->n_global_particles()) + bonds;
+    cost.particles = particles_->n_global_particles();
+    cost.particle_unknowns = dim * cost.particles;
+    cost.bonds = bonds;
     const bool explicit_steps =
         particles_->stable_time_step() > 0 &&
         prm_.get(std::vector<std::string>{"Particles"}, "Integration") == "explicit";
@@ -417,6 +425,7 @@ RunCost Simulation<dim>::planned_cost() const {
   if (heat_ && !cost.kind.empty()) {
     cost.kind += "+heat";
     cost.state += heat_->dof_handler().n_dofs();
+    cost.heat_dofs = heat_->dof_handler().n_dofs();
   }
   return cost;
 }

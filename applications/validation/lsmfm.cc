@@ -198,8 +198,10 @@ class LsmfmScenario : public Scenario {
               << "\n  material: " << law_.describe() << "\n";
 
     // The cost table's work: unknowns × load steps (each step a few sparse factorisations).
-    ctx.set_cost({"lsmfm_quasi_static", double(solver->n_unknowns()) * run_.steps,
-                  double(solver->n_unknowns())});
+    framework::RunCost cost{"lsmfm_quasi_static", double(solver->n_unknowns()) * run_.steps,
+                            double(solver->n_unknowns())};
+    cost.meshfree_unknowns = solver->n_unknowns();
+    ctx.set_cost(cost);
 
     std::unique_ptr<fem::MechanicsSolver<dim>> fem;
     if (run_.compare_fem) {

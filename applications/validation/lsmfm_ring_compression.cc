@@ -228,7 +228,10 @@ class RingCompression : public Scenario {
     // The cost table's work: unknowns × load steps over the cases (LSMFM unknowns: u_r, u_z
     // and four stress components per node).
     const double unknowns = 6.0 * nodes_.size();
-    ctx.set_cost({"lsmfm_quasi_static", unknowns * ring_.steps * ring_.friction.size(), unknowns});
+    framework::RunCost cost{"lsmfm_quasi_static", unknowns * ring_.steps * ring_.friction.size(),
+                            unknowns};
+    cost.meshfree_unknowns = unknowns;
+    ctx.set_cost(cost);
     ctx.progress().start("ring compression", ring_.steps * ring_.friction.size(), 1.0);
     std::ostringstream csv;
     csv << std::setprecision(10);

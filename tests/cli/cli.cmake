@@ -84,9 +84,9 @@ set_tests_properties(cli.bad_input_keeps_previous_run PROPERTIES FIXTURES_REQUIR
 set_tests_properties(cli.ranks_agree PROPERTIES DEPENDS cli.bad_input_keeps_previous_run)
 
 # check --estimate: the default scene states its work (coupled explicit steps over DoFs and
-# bonds) and the compiled cost table predicts its time and memory
+# bonds), what its state is made of (FEM DoFs, particles, bonds) and the compiled cost table predicts its time and memory
 # (applications/studies/cost_model.json, fitted by the accuracy_cost study).
 spinesim_add_scene_test(cli.check_estimate_default_scene
   ARGS "check;${PROJECT_SOURCE_DIR}/applications/scenes/default.prm;--estimate"
-  MATCH "estimate: +coupled_explicit:bond_based, [0-9.e+]+ work units.*predicted wall time [0-9.e+-]+ s.*peak memory [0-9.e+-]+ MiB"
+  MATCH "estimate: +coupled_explicit:bond_based, [0-9.e+]+ work units.* [0-9]+ unknowns and bonds: [0-9]+ FEM DoFs, [0-9]+ particles [(][0-9]+ unknowns[)], [0-9]+ bonds.*predicted wall time [0-9.e+-]+ s.*peak memory [0-9.e+-]+ MiB"
   LABELS "cli")
