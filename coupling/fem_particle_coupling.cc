@@ -27,7 +27,7 @@ FemParticleCoupling<dim>::FemParticleCoupling(const Parameters& parameters,
                                               const fem::HeatSolver<dim>* heat)
     : state_(parameters, mechanics, heat), halo_(state_), ghosts_(state_, halo_),
       bond_rows_(state_), boundary_(state_), interface_(state_), splice_(state_, interface_, halo_),
-      fracture_(state_), converter_(state_, [this] { rebuild_layers(); }),
+      fracture_(state_), plastic_heat_(state_), converter_(state_, [this] { rebuild_layers(); }),
       integrator_(state_, ghosts_, interface_, halo_, boundary_, fracture_, converter_, splice_),
       checkpoint_({state_, converter_, integrator_, fracture_, halo_, bond_rows_, ghosts_,
                    [this] { rebuild_layers(); }}) {
@@ -76,6 +76,7 @@ void FemParticleCoupling<dim>::rebuild_layers() {
   ghosts_.update(); // owned ghosts from the FEM, then the halo (free particles included)
   // Carried states last: each family continues its state at its F of these displacements.
   bond_rows_.hand_over_states();
+  plastic_heat_.track_new_particles(); // what the new particles inherited was heat of the FEM
   interface_.set_offsets();
   interface_.update();
   if (splice_.on()) {
@@ -256,6 +257,11 @@ double FemParticleCoupling<dim>::max_damage() const {
 template <int dim>
 Vector<double> FemParticleCoupling<dim>::take_fracture_heat(double elapsed) {
   return fracture_.take(elapsed);
+}
+
+template <int dim>
+double FemParticleCoupling<dim>::particle_plastic_work() const {
+  return coupling::particle_plastic_work(state_);
 }
 
 template <int dim>

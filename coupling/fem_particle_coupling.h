@@ -11,6 +11,7 @@
 //   MlsInterface       interface FEM DoFs driven by the MLS fit of the free particles
 //   ParticleHalo       owners, halo exchange and synchronisation across ranks
 //   FractureHeat       broken-bond energy handed to the heat equation
+//   ParticlePlasticHeat the particles' plastic work (× Taylor-Quinney) handed to it
 //   CoupledIntegrator  central-difference steps and dynamic relaxation of both models
 //   CouplingCheckpoint save and load of the particle side
 //
@@ -44,6 +45,7 @@
 #include "coupling/mls_interface.h"
 #include "coupling/particle_boundary.h"
 #include "coupling/particle_halo.h"
+#include "coupling/particle_plastic_heat.h"
 
 #include <deal.II/grid/cell_id.h>
 #include <deal.II/lac/vector.h>
@@ -169,6 +171,16 @@ class FemParticleCoupling {
   dealii::Vector<double> take_fracture_heat(double elapsed);
   double fracture_dissipation() const; // energy of all broken bonds so far [J], collective
   double fracture_heat() const { return fracture_.heat(); } // handed to the FEM so far [J]
+  // The same for the plastic work the free particles did since the last call, × beta (the
+  // Taylor-Quinney coefficient); particles without plastic history give zeros. Collective.
+  dealii::Vector<double> take_plastic_heat(double beta, double elapsed) {
+    return plastic_heat_.take(beta, elapsed);
+  }
+  double particle_plastic_heat() const { return plastic_heat_.heat(); } // handed so far [J]
+  double particle_plastic_work() const; // the free particles' plastic work now [J], collective
+  double particle_plastic_heat_work() const { return plastic_heat_.work(); } // counted [J]
+  // After load(): the totals a restarted run continues from.
+  void restore_plastic_heat(double heat, double work) { plastic_heat_.restore(heat, work); }
 
   unsigned int n_free_particles() const { return state_.n_free_particles(); }
   unsigned int n_ghost_particles() const { return state_.n_ghost_particles(); }
@@ -237,6 +249,7 @@ class FemParticleCoupling {
   MlsInterface<dim> interface_;
   EnergySplice<dim> splice_;
   FractureHeat<dim> fracture_;
+  ParticlePlasticHeat<dim> plastic_heat_;
   CellConverter<dim> converter_;
   CoupledIntegrator<dim> integrator_;
   CouplingCheckpoint<dim> checkpoint_;

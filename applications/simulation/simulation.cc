@@ -239,6 +239,8 @@ void Simulation<dim>::build(RunContext& ctx) {
           q += mech_prm_.taylor_quinney * plastic_heating_(i);
         if (i < fracture_heating_.size())
           q += fracture_heating_(i);
+        if (i < particle_plastic_heating_.size())
+          q += particle_plastic_heating_(i);
         if (q != 0)
           for (auto& v : values)
             v += q;
@@ -450,13 +452,26 @@ void Simulation<dim>::advance_mechanics(unsigned int step, double time, double d
       log_coupling_messages(ctx);
     return;
   }
-  if (heat_ && mech_prm_.taylor_quinney > 0) // heats the next heat step (staggered)
+  if (heat_ && mech_prm_.taylor_quinney > 0) { // heats the next heat step (staggered)
     plastic_heating_ = mechanics_->cell_plastic_dissipation_rate();
+    // What the next heat step takes from it, for the books: β Σ rate |K| dt.
+    fem_plastic_heat_applied_ += fem_plastic_heat_pending_;
+    double pending = 0;
+    for (const auto& cell : mechanics_->dof_handler().active_cell_iterators())
+      if (cell->is_locally_owned() && cell->active_cell_index() < plastic_heating_.size())
+        pending += plastic_heating_(cell->active_cell_index()) * cell->measure();
+    fem_plastic_heat_pending_ =
+        mech_prm_.taylor_quinney * dt *
+        dealii::Utilities::MPI::sum(pending, mechanics_->mpi_communicator());
+  }
   if (coupled_)
     log_coupling_messages(ctx);
   if (heat_ && coupled_) { // the same for the energy of the bonds broken in this step
     fracture_heat_applied_ = coupled_->fracture_heat(); // what this step's heat solve used
     fracture_heating_ = coupled_->take_fracture_heat(dt);
+    // ... and of the particles' plastic work, × β as the FEM's own.
+    particle_plastic_heat_applied_ = coupled_->particle_plastic_heat();
+    particle_plastic_heating_ = coupled_->take_plastic_heat(mech_prm_.taylor_quinney, dt);
   }
 }
 

@@ -75,6 +75,13 @@ void Simulation<dim>::write_checkpoint(unsigned int step, double time, RunContex
     if (heat_) {
       state["heat_supplied_energy"] = heat_->supplied_energy();
       state["initial_heat_content"] = initial_heat_content_;
+      // The plastic heat books; what the last step handed on for the next heat step is not
+      // kept (a restart starts its first heat step without it).
+      state["fem_plastic_heat_applied"] = fem_plastic_heat_applied_;
+      if (coupled_) {
+        state["particle_plastic_heat"] = coupled_->particle_plastic_heat();
+        state["particle_plastic_heat_work"] = coupled_->particle_plastic_heat_work();
+      }
     }
     return state;
   };
@@ -137,8 +144,14 @@ unsigned int Simulation<dim>::load_checkpoint(RunContext& ctx) {
                                         sim_.reference_temperature);
     if (mechanics_)
       mechanics_->deserialize(mesh_file);
-    if (coupled_)
+    if (coupled_) {
       coupled_->load((dir / "coupling.txt").string());
+      if (heat_)
+        coupled_->restore_plastic_heat(state.value("particle_plastic_heat", 0.0),
+                                       state.value("particle_plastic_heat_work", 0.0));
+    }
+    if (heat_)
+      fem_plastic_heat_applied_ = state.value("fem_plastic_heat_applied", 0.0);
     if (sim_.energy_account && (coupled_ || (mechanics_ && !quasi_static_))) {
       if (state.contains("energy_account_sums")) {
         const auto sums = state["energy_account_sums"].get<std::vector<double>>();

@@ -324,7 +324,28 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
                      std::abs(heat_->supplied_energy() - fracture_heat_applied_) /
                          fracture_heat_applied_,
                      "-");
+      // The particles' plastic work × β: handed over so far (the last step's share heats the
+      // next step) against the work the free particles did since they became free.
+      if (coupled_->particle_plastic_heat_work() > 0) {
+        s.set_figure("particle_plastic_heat_J", coupled_->particle_plastic_heat(),
+                     dim == 2 ? "J/m" : "J");
+        s.set_figure("particle_plastic_heat_applied_J", particle_plastic_heat_applied_,
+                     dim == 2 ? "J/m" : "J");
+        s.set_figure("particle_plastic_work_heated_J", coupled_->particle_plastic_heat_work(),
+                     dim == 2 ? "J/m" : "J");
+        s.set_figure("particle_plastic_work_J", coupled_->particle_plastic_work(),
+                     dim == 2 ? "J/m" : "J");
+      }
     }
+    if (mech_prm_.taylor_quinney > 0 && mechanics_)
+      s.set_figure("fem_plastic_heat_applied_J", fem_plastic_heat_applied_, dim == 2 ? "J/m" : "J");
+    // The internal sources together (fracture, plastic work of the FEM and of the particles)
+    // against what the heat solver supplied: equal when the scene has no heat input of its own.
+    const double internal =
+        fracture_heat_applied_ + particle_plastic_heat_applied_ + fem_plastic_heat_applied_;
+    if (internal > 0)
+      s.set_figure("internal_heat_supplied_relative",
+                   std::abs(heat_->supplied_energy() - internal) / internal, "-");
     // Energy conservation: what the sources supplied is what the body gained (heat through
     // fixed-temperature boundaries is not counted by the solver, so scenes with such
     // boundaries do not balance).

@@ -102,9 +102,13 @@ class Simulation : public framework::Scenario {
   std::shared_ptr<const materials::ConstitutiveLaw> law_;
   std::unique_ptr<fem::MechanicsSolver<dim>> mechanics_;
   std::unique_ptr<fem::HeatSolver<dim>> heat_;
-  dealii::Vector<double> plastic_heating_;  // plastic dissipation rate per cell [W/m^3]
-  dealii::Vector<double> fracture_heating_; // heat of broken bonds per cell [W/m^3]
-  double fracture_heat_applied_ = 0;        // of it, what heat steps have used [J]
+  dealii::Vector<double> plastic_heating_;          // plastic dissipation rate per cell [W/m^3]
+  dealii::Vector<double> fracture_heating_;         // heat of broken bonds per cell [W/m^3]
+  double fracture_heat_applied_ = 0;                // of it, what heat steps have used [J]
+  dealii::Vector<double> particle_plastic_heating_; // β × particles' plastic work rate [W/m^3]
+  double particle_plastic_heat_applied_ = 0;        // of it, what heat steps have used [J]
+  double fem_plastic_heat_applied_ = 0;             // β × FEM plastic work heat steps used [J]
+  double fem_plastic_heat_pending_ = 0;             // β × the last step's, for the next [J]
   std::unique_ptr<ParticleZone<dim>> particles_;
   std::unique_ptr<CrackPath<dim>> crack_; // runs with particles
   std::vector<StepModule> modules_;

@@ -1,0 +1,74 @@
+#include "coupling/particle_plastic_heat.h"
+
+#include <deal.II/base/mpi.h>
+
+namespace spinesim::coupling {
+
+using namespace dealii;
+
+template <int dim>
+std::vector<double> ParticlePlasticHeat<dim>::current_work() const {
+  const auto& particles = state_.particles;
+  std::vector<double> w(particles.size(), 0.0);
+  if (!state_.method || !state_.method->has_plastic_work())
+    return w;
+  const auto d = state_.method->plastic_work_density(particles);
+  for (unsigned int i = 0; i < w.size() && i < d.size(); ++i)
+    w[i] = d[i] * particles.volume(i);
+  return w;
+}
+
+template <int dim>
+void ParticlePlasticHeat<dim>::track_new_particles() {
+  const auto w = current_work();
+  // Particles are only ever appended (CouplingState::add_particle), so an index keeps its
+  // particle; new indices start from what they inherited.
+  for (unsigned int i = 0; i < w.size(); ++i)
+    if (i >= booked_.size())
+      booked_.push_back(w[i]);
+    else if (!state_.free[i])
+      booked_[i] = w[i];
+}
+
+template <int dim>
+Vector<double> ParticlePlasticHeat<dim>::take(double beta, double elapsed) {
+  Vector<double> power(state_.fem.dof_handler().get_triangulation().n_active_cells());
+  if (!state_.method || !state_.method->has_plastic_work() || !(elapsed > 0))
+    return power;
+  track_new_particles();
+  const auto w = current_work();
+  // Each particle's increment since its baseline; the baselines move on for every particle
+  // on every rank (all ranks hold all particles), whichever rank hands the heat over.
+  std::vector<double> increment(w.size(), 0.0);
+  for (unsigned int i = 0; i < w.size(); ++i) {
+    if (state_.free[i])
+      increment[i] = w[i] - booked_[i];
+    booked_[i] = w[i];
+  }
+  double local = 0; // work done in this rank's host cells [J]
+  for (const auto& [cell, row] : state_.free_cells) {
+    double work = 0;
+    for (const int i : row)
+      if (i >= 0 && static_cast<unsigned int>(i) < increment.size())
+        work += increment[i];
+    power(cell->active_cell_index()) = beta * work / (cell->measure() * elapsed);
+    local += work;
+  }
+  const double work = Utilities::MPI::sum(local, state_.fem.mpi_communicator());
+  work_ += work;
+  heat_ += beta * work;
+  return power;
+}
+
+template <int dim>
+void ParticlePlasticHeat<dim>::restore(double heat, double work) {
+  heat_ = heat;
+  work_ = work;
+  booked_.clear();
+  track_new_particles();
+}
+
+template class ParticlePlasticHeat<2>;
+template class ParticlePlasticHeat<3>;
+
+} // namespace spinesim::coupling
