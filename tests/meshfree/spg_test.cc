@@ -304,6 +304,69 @@ TEST(SpgSolver, BondFailureConservesMomentum) {
   }
 }
 
+// Critical plastic strain: a bond breaks exactly when the mean equivalent plastic strain of
+// its two particles exceeds ε_crit (SpgParameters::critical_plastic_strain). A bar pulled with
+// a strain growing along x, ε = a x / L (a = 2 %, the copper law yields at 0.34 %): the
+// plastic strain grows from nothing at x = 0, so bonds break at the far end and stay whole
+// at the near one. The states the criterion reads are those of the same pass without
+// breaking (the breaks rebuild rows after it).
+template <int dim>
+void check_plastic_strain_breaking() {
+  const double h = 0.1;
+  const unsigned int n = dim == 2 ? 8 : 5;
+  const double L = n * h, a = 0.02, ec = 0.003;
+  auto law = copper_law();
+  const auto pulled = [&] {
+    auto p = jittered_box<dim>(n, h, 0.1);
+    for (unsigned int i = 0; i < p.size(); ++i) {
+      const double x = p.reference_position(i)[0];
+      dealii::Tensor<1, dim> u;
+      u[0] = 0.5 * a * x * x / L; // du/dx = a x / L
+      p.displacement(i) = u;
+    }
+    return p;
+  };
+  auto p0 = pulled();
+  SpgParameters intact;
+  SPGSolver<dim> reference(intact, *law, p0, h);
+  reference.compute_forces(p0);
+  ASSERT_EQ(reference.n_broken_bonds(), 0u);
+  const auto& states = reference.states();
+
+  auto p = pulled();
+  SpgParameters prm;
+  prm.critical_plastic_strain = ec;
+  SPGSolver<dim> spg(prm, *law, p, h);
+  spg.compute_forces(p);
+  const auto& bonds = spg.bonds();
+  unsigned int broken = 0, whole = 0, wrong = 0;
+  double max_ep = 0;
+  for (unsigned int i = 0; i < p.size(); ++i) {
+    max_ep = std::max(max_ep, states[i].equivalent_plastic_strain);
+    for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
+      const unsigned int j = bonds.neighbor[k];
+      const double mean =
+          0.5 * (states[i].equivalent_plastic_strain + states[j].equivalent_plastic_strain);
+      ASSERT_TRUE(std::isfinite(mean));
+      const bool b = bonds.broken[k] != 0;
+      (b ? broken : whole) += 1;
+      wrong += b != (mean > ec);
+    }
+  }
+  EXPECT_GT(max_ep, 2 * ec);               // the far end flows well past the criterion ...
+  EXPECT_GT(broken, 0u);                   // ... so bonds broke there,
+  EXPECT_GT(whole, 0u);                    // and the near end, below yield, keeps its bonds
+  EXPECT_EQ(wrong, 0u);                    // each exactly by the criterion
+  EXPECT_EQ(spg.n_broken_bonds(), broken); // both directions of a bond flagged
+}
+
+TEST(SpgSolver, PlasticStrainBreaks2D) {
+  check_plastic_strain_breaking<2>();
+}
+TEST(SpgSolver, PlasticStrainBreaks3D) {
+  check_plastic_strain_breaking<3>();
+}
+
 // Transformation method: the PHYSICAL displacement of constrained particles equals the value.
 TEST(SpgSolver, EssentialBoundaryByTransformation) {
   const double h = 0.1;
