@@ -30,6 +30,10 @@ void NosbParameters::declare(dealii::ParameterHandler& prm) {
   prm.declare_entry("Fracture energy", "0", Double(0.0),
                     "Critical energy release rate Gc used when the critical stretch is 0 "
                     "[J/m^2]; both 0 = bonds never break.");
+  prm.declare_entry("Critical plastic strain", "0", Double(0.0),
+                    "A bond breaks once the mean equivalent plastic strain of its two ends "
+                    "exceeds this [-] (bond-associated families: the two families of the bond; "
+                    "otherwise the two particles'), as well as by stretch; 0 = off.");
   prm.declare_entry("Maximum shape tensor condition number", "1e4", Double(1.0),
                     "A particle whose shape tensor K has a larger condition number (or fewer "
                     "than dim intact bonds) is flagged failed: no stress, damage 1 [-].");
@@ -67,6 +71,7 @@ void NosbParameters::parse(const dealii::ParameterHandler& prm) {
   stabilization_coefficient = prm.get_double("Stabilization coefficient");
   critical_stretch = prm.get_double("Critical stretch");
   fracture_energy = prm.get_double("Fracture energy");
+  critical_plastic_strain = prm.get_double("Critical plastic strain");
   max_condition_number = prm.get_double("Maximum shape tensor condition number");
   partial_volume_correction = prm.get_bool("Partial volume correction");
   thickness = prm.get_double("Thickness");

@@ -22,6 +22,7 @@ struct NosbParameters {
   double stabilization_coefficient = 0.1; // G_s [-], penalty only
   double critical_stretch = 0.0;          // [-], 0 = from the fracture energy
   double fracture_energy = 0.0;           // G_c [J/m^2]; both 0 = bonds never break
+  double critical_plastic_strain = 0.0;   // ε_crit [-] of a bond's families, 0 = off
   double max_condition_number = 1e4;      // of K_i [-]
   bool partial_volume_correction = true;
   double thickness = 1.0; // 2-D out-of-plane thickness [m]

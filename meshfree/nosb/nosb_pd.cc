@@ -33,12 +33,12 @@ NosbPD<dim>::NosbPD(const Parameters& parameters,
           InfluenceFunction<dim>::from_name(parameters.influence_function, parameters.alpha)) {
   if (!law_)
     throw InvalidInput("NOSB-PD", "no constitutive law", "a law from materials::create_law");
-  if (!(prm_.horizon_ratio > 1.0) || !(prm_.thickness > 0.0) || prm_.critical_stretch < 0.0 ||
-      prm_.fracture_energy < 0.0 || prm_.stabilization_coefficient < 0.0 ||
-      !(prm_.max_condition_number >= 1.0))
+  if (!(prm_.horizon_ratio > 1.0) || !(prm_.thickness > 0.0) || !(prm_.critical_stretch >= 0.0) ||
+      !(prm_.fracture_energy >= 0.0) || !(prm_.critical_plastic_strain >= 0.0) ||
+      prm_.stabilization_coefficient < 0.0 || !(prm_.max_condition_number >= 1.0))
     throw InvalidInput("NOSB-PD parameters", "a value out of range",
-                       "horizon ratio > 1, thickness > 0, critical stretch, Gc, stabilization "
-                       "coefficient >= 0, condition number limit >= 1");
+                       "horizon ratio > 1, thickness > 0, critical stretch, Gc, critical plastic "
+                       "strain, stabilization coefficient >= 0, condition number limit >= 1");
   const double E = law_->youngs_modulus(), nu = law_->poisson_ratio();
   modulus_ = dim == 3 ? E / (3.0 * (1.0 - 2.0 * nu)) : E / (2.0 * (1.0 - nu - 2.0 * nu * nu));
 }
@@ -76,6 +76,7 @@ void NosbPD<dim>::initialise(const ParticleSet<dim>& particles, const BondList<d
       prm_.stabilization == Stabilization::bond_associated ? bonds.n_bonds() : particles.size();
   committed_.assign(n_history, materials::MaterialState());
   trial_ = committed_;
+  reverse_bond_.clear(); // a new bond list
   // History index -> (centre, partner); bond-associated indices are the bond indices, so the
   // indices of particle i are its bond row.
   history_keys_.resize(n_history);
@@ -315,9 +316,52 @@ void NosbPD<dim>::commit_state() {
 }
 
 template <int dim>
+std::vector<double> NosbPD<dim>::bond_plastic_strain(const BondList<dim>& bonds) {
+  const std::size_t n_bonds = bonds.n_bonds();
+  std::vector<double> ep(n_bonds, 0.0);
+  if (prm_.stabilization != Stabilization::bond_associated) {
+    for_each_bond(bonds, [&](unsigned int i, std::size_t k, unsigned int j) {
+      if (j < committed_.size() && i < committed_.size())
+        ep[k] = 0.5 *
+                (committed_[i].equivalent_plastic_strain + committed_[j].equivalent_plastic_strain);
+    });
+    return ep;
+  }
+  if (reverse_bond_.size() != n_bonds) {
+    // The rows do not change between rebuilds of the list (bonds only break): sorted keys
+    // (i, j) -> k once, then each bond looks up (j, i).
+    std::vector<std::pair<std::uint64_t, std::size_t>> keyed;
+    keyed.reserve(n_bonds);
+    for (unsigned int i = 0; i < bonds.n_particles(); ++i)
+      for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k)
+        keyed.emplace_back((std::uint64_t(i) << 32) | bonds.neighbor[k], k);
+    std::sort(keyed.begin(), keyed.end());
+    reverse_bond_.assign(n_bonds, n_bonds);
+    for (unsigned int i = 0; i < bonds.n_particles(); ++i)
+      for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
+        const std::uint64_t key = (std::uint64_t(bonds.neighbor[k]) << 32) | i;
+        const auto it =
+            std::lower_bound(keyed.begin(), keyed.end(), std::make_pair(key, std::size_t(0)));
+        if (it != keyed.end() && it->first == key)
+          reverse_bond_[k] = it->second;
+      }
+  }
+  // A bond whose partner row is not held here (a coupled rank's one-sided bond) reads its own
+  // family twice.
+  for (std::size_t k = 0; k < n_bonds && k < committed_.size(); ++k) {
+    const std::size_t r = reverse_bond_[k] < committed_.size() ? reverse_bond_[k] : k;
+    ep[k] =
+        0.5 * (committed_[k].equivalent_plastic_strain + committed_[r].equivalent_plastic_strain);
+  }
+  return ep;
+}
+
+template <int dim>
 std::size_t NosbPD<dim>::break_bonds(ParticleSet<dim>& particles, BondList<dim>& bonds) {
-  if (!std::isfinite(s0_))
+  const double ec = prm_.critical_plastic_strain;
+  if (!std::isfinite(s0_) && !(ec > 0.0))
     return 0;
+  const std::vector<double> plastic = ec > 0.0 ? bond_plastic_strain(bonds) : std::vector<double>();
   const auto& u = particles.displacements();
   const bool any_driven = !driven_.empty();
   // Each bond decides alone (the reversed bond sees the same stretch bit for bit): a map. The
@@ -329,8 +373,9 @@ std::size_t NosbPD<dim>::break_bonds(ParticleSet<dim>& particles, BondList<dim>&
     if (bonds.broken[k] || (any_driven && driven_[i] && driven_[j]))
       return;
     const auto y = bonds.xi[k] + (u[j] - u[i]);
-    const double limit = (1.0 + s0_) * bonds.length[k];
-    if (y.norm_square() > limit * limit) { // |y| > (1 + s0) L, without a square root
+    const double limit = (1.0 + s0_) * bonds.length[k]; // inf: no stretch criterion
+    if (y.norm_square() > limit * limit ||              // |y| > (1 + s0) L, without a square root
+        (ec > 0.0 && plastic[k] > ec)) {
       breaking[k] = 1;
       touched[i] = 1; // the reversed bond marks j: each thread writes its own rows only
       n_broken.fetch_add(1, std::memory_order_relaxed);

@@ -103,8 +103,10 @@ class NosbPD {
   // committed material history (the trial history is kept for commit_state()).
   // NumericalFailure naming the particle on det F <= 0 or a non-finite force.
   void compute_forces(ParticleSet<dim>& particles, const BondList<dim>& bonds);
-  // Breaks over-stretched bonds, rebuilds the families and updates damage if any broke;
-  // returns the number of bond ends broken (each pair counts twice).
+  // Breaks over-stretched bonds (and, with a Critical plastic strain, bonds whose two ends'
+  // committed equivalent plastic strain exceeds it on average), rebuilds the families and
+  // updates damage if any broke; returns the number of bond ends broken (each pair counts
+  // twice).
   std::size_t break_bonds(ParticleSet<dim>& particles, BondList<dim>& bonds);
   // W_i V_i of particle i taken in the last break_bonds() that broke bonds, before its family
   // was rebuilt (its failure flag may have been set by the rebuild); NaN for a particle whose
@@ -298,6 +300,12 @@ class NosbPD {
   // (row, bond) of the bonds whose partner has no bond row of its own, in bond order
   // (update_families): the pair forces of compute_forces that no row of the partner adds.
   std::vector<std::pair<unsigned int, std::size_t>> one_sided_bonds_;
+  // Per bond k (i -> j), the index of j -> i (n_bonds: j holds no row here); built on demand
+  // for the plastic-strain criterion with bond-associated families.
+  std::vector<std::size_t> reverse_bond_;
+  // Per bond, the mean equivalent plastic strain of its two ends' committed histories: the
+  // bond's two families (bond-associated), else its two particles'. Symmetric bit for bit.
+  std::vector<double> bond_plastic_strain(const BondList<dim>& bonds);
   std::vector<std::string> messages_;
   unsigned long families_version_ = 0, pattern_version_ = ~0ul;
   // Transpose of the families' node lists for the force gather: per particle, the entries q

@@ -813,5 +813,61 @@ TEST(Nosb, BreaksNeverRaiseTheStoredEnergy3D) {
   check_breaks_release_energy<3>(Stab::bond_associated);
 }
 
+// Critical plastic strain: a bond breaks once the mean equivalent plastic strain of its two
+// ends exceeds ε_crit, by stretch or not (here none: the body is at rest). Committed states
+// grading ε̄p = 2 % x / L along the bar (as a converted cell's points would bring them): bonds
+// break at the far end, stay at the near one, and each exactly by the criterion, with
+// bond-associated families (the bond's two families) and with the penalty control (the two
+// particles'). Without the parameter the same states break nothing.
+template <int dim>
+void check_plastic_strain_breaking(Stab stab) {
+  const double ec = 0.01;
+  for (const double critical : {0.0, ec}) {
+    NosbParameters prm;
+    prm.horizon_ratio = dim == 2 ? 3.015 : 2.015;
+    prm.stabilization = cast<dim>(stab);
+    prm.critical_plastic_strain = critical;
+    NosbPD<dim> model(prm, std::make_shared<materials::LinearElastic>(E, nu, rho));
+    unsigned int cells[dim];
+    for (unsigned int d = 0; d < dim; ++d)
+      cells[d] = dim == 2 ? 10 : 6;
+    auto p = test::box<dim>(cells, h);
+    p.set_density(rho);
+    auto bonds = NeighborSearch<dim>(model.neighbor_options(h)).build(p);
+    model.initialise(p, bonds);
+    const double L = cells[0] * h;
+    std::vector<double> ep(p.size());
+    for (unsigned int i = 0; i < p.size(); ++i) {
+      materials::MaterialState s;
+      s.equivalent_plastic_strain = ep[i] = 0.02 * p.reference_position(i)[0] / L;
+      model.set_particle_state(i, s);
+    }
+    const std::size_t broken = model.break_bonds(p, bonds);
+    if (critical == 0) {
+      EXPECT_EQ(broken, 0u);
+      continue;
+    }
+    unsigned int n_broken = 0, n_whole = 0, wrong = 0;
+    for (unsigned int i = 0; i < p.size(); ++i)
+      for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
+        const bool b = bonds.broken[k] != 0;
+        (b ? n_broken : n_whole) += 1;
+        wrong += b != (0.5 * (ep[i] + ep[bonds.neighbor[k]]) > ec);
+      }
+    EXPECT_GT(n_broken, 0u);
+    EXPECT_GT(n_whole, 0u);
+    EXPECT_EQ(wrong, 0u);
+    EXPECT_EQ(broken, n_broken); // bond ends
+  }
+}
+TEST(Nosb, PlasticStrainBreaks2D) {
+  check_plastic_strain_breaking<2>(Stab::penalty);
+  check_plastic_strain_breaking<2>(Stab::bond_associated);
+}
+TEST(Nosb, PlasticStrainBreaks3D) {
+  check_plastic_strain_breaking<3>(Stab::penalty);
+  check_plastic_strain_breaking<3>(Stab::bond_associated);
+}
+
 } // namespace
 } // namespace spinesim::meshfree
