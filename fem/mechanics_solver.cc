@@ -117,50 +117,19 @@ void MechanicsSolver<dim>::set_active_cells(const std::vector<bool>& active) {
   if (!active.empty() && active.size() != tria_.n_active_cells())
     throw InvalidInput("active cells", "got " + std::to_string(active.size()) + " flags",
                        "one flag per active cell (" + std::to_string(tria_.n_active_cells()) + ")");
-  // Cells leaving the FEM (conversion) are subtracted from the explicit matrix instead of
-  // reassembling it over every active cell: a conversion then costs O(converted cells).
-  std::vector<bool> removed;
-  bool only_removed = is_setup_ && explicit_matrix_ready_;
-  if (only_removed) {
-    removed.assign(tria_.n_active_cells(), false);
-    for (const auto& cell : tria_.active_cell_iterators()) {
-      const unsigned int i = cell->active_cell_index();
-      const bool was = active_.empty() || active_[i], now = active.empty() || active[i];
-      if (now && !was) {
-        only_removed = false;
-        break;
-      }
-      removed[i] = was && !now;
-    }
-  }
+  // The explicit matrix is assembled afresh over the active cells when next needed. (Removing
+  // the converted cells' contributions from the assembled matrix instead would make its rows at
+  // the interface differ from a fresh assembly by round-off, so a restarted run, which
+  // assembles afresh, would not continue bit for bit.)
   active_ = active;
   step_tables_ready_ = false;
-  if (!only_removed)
-    explicit_matrix_ready_ = false;
+  explicit_matrix_ready_ = false;
   n_active_cells_ = 0;
   for (const auto& cell : dof_handler_.active_cell_iterators())
     if (cell->is_locally_owned() && is_active(cell))
       ++n_active_cells_;
   n_active_cells_ = Utilities::MPI::sum(n_active_cells_, comm_);
   if (is_setup_) {
-    if (only_removed) {
-      const VectorType rhs = rhs_, raw = raw_residual_; // the last step's forces stay readable
-      assembly_cells_ = &removed;
-      assembly_sign_ = -1.0;
-      assemble_into_explicit_matrix_ = true;
-      assemble(true, 1.0, hanging_);
-      assemble_into_explicit_matrix_ = false;
-      assembly_cells_ = nullptr;
-      assembly_sign_ = 1.0;
-      // The assembly wrote the trial states of the removed cells only: reset those.
-      const unsigned int nq = quadrature_.size();
-      for (std::size_t c = 0; c < removed.size(); ++c)
-        if (removed[c])
-          std::copy(committed_.begin() + c * nq, committed_.begin() + (c + 1) * nq,
-                    trial_.begin() + c * nq);
-      rhs_ = rhs;
-      raw_residual_ = raw;
-    }
     compute_lumped_mass();
     mark_orphan_dofs();
     homogeneous_stale_ = true; // rebuilt where a Newton solve needs it (explicit runs never)

@@ -476,10 +476,6 @@ class MechanicsSolver {
   HangingNodeLines hanging_lines_; // hanging_ on the owned arrays of an explicit step
   bool step_tables_ready_ = false;
   unsigned int n_active_cells_ = 0; // global count of active cells
-  // Incremental assembly: when set, assemble() visits exactly these cells (by active cell
-  // index) and adds sign × their matrices without zeroing the matrix first.
-  const std::vector<bool>* assembly_cells_ = nullptr;
-  double assembly_sign_ = 1.0;
 
   // Quasi-static load path: boundary values at the start of the solve and targets at the end.
   std::map<dealii::types::global_dof_index, double> dirichlet_start_, dirichlet_target_;

@@ -70,7 +70,7 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
                                const AffineConstraints<double>& constraints) {
   ScopedTime timer(timings_.assembly);
   MatrixType& matrix = assemble_into_explicit_matrix_ ? explicit_matrix_ : matrix_;
-  if (with_matrix && !assembly_cells_)
+  if (with_matrix)
     matrix = 0;
   rhs_ = 0;
   VectorType f_int(owned_, comm_);
@@ -139,8 +139,7 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
   // The cells to assemble, in the active-cell order the serial loop took.
   std::vector<typename DoFHandler<dim>::active_cell_iterator> cells;
   for (const auto& cell : dof_handler_.active_cell_iterators())
-    if (cell->is_locally_owned() &&
-        (assembly_cells_ ? (*assembly_cells_)[cell->active_cell_index()] : is_active(cell)))
+    if (cell->is_locally_owned() && is_active(cell))
       cells.push_back(cell);
   // The load functions at the target time: the threads only read them (load_blend).
   for (auto* f : {body_force_.get(), temperature_change_.get()})
@@ -367,8 +366,6 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
       cell->get_dof_indices(dofs);
       for (unsigned int i = 0; i < n; ++i)
         cell_rhs(i) = cell_fext(i) - cell_fint(i);
-      if (assembly_sign_ != 1.0)
-        cell_matrix *= assembly_sign_;
       copy.filled = true;
     } catch (...) {
       record_failure(at);
@@ -411,7 +408,7 @@ MechanicsSolver<dim>::assemble(bool with_matrix, double load_factor,
   f_int.compress(VectorOperation::add);
   f_ext.compress(VectorOperation::add);
   raise_on_every_rank(failure, comm_);
-  if (with_matrix && !assembly_cells_ && !assemble_into_explicit_matrix_)
+  if (with_matrix && !assemble_into_explicit_matrix_)
     regularise_untouched_rows(matrix, constraints);
   raw_residual_ = f_int;
   raw_residual_ -= f_ext;

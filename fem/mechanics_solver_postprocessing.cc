@@ -191,10 +191,16 @@ MechanicsSolver<dim>::current_deformation_gradients(const CellIterator& cell) co
 template <int dim>
 double MechanicsSolver<dim>::strain_energy() const {
   if (states_stale_ && explicit_matrix_ready_ && linear_explicit()) {
-    // Linear path: ½ uᵀ K u (K over the active cells) without refreshing the point states.
+    // Linear path: ½ uᵀ K u (K over the active cells) without refreshing the point states,
+    // over the unconstrained DoFs: a hanging node's row holds no stiffness of its own (its
+    // cells' stiffness went to its masters), only a diagonal entry that keeps K regular.
     VectorType Ku(owned_, comm_);
     explicit_matrix_.vmult(Ku, u_);
-    return 0.5 * (Ku * u_);
+    double stored2 = 0;
+    for (const auto dof : owned_)
+      if (!hanging_.is_constrained(dof))
+        stored2 += u_(dof) * Ku(dof);
+    return 0.5 * Utilities::MPI::sum(stored2, comm_);
   }
   refresh_states();
   FEValues<dim> fe_values(*mapping_, fe_, quadrature_, update_JxW_values);
