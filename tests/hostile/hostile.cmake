@@ -136,7 +136,10 @@ set_tests_properties(hostile.interrupt_and_restart PROPERTIES LABELS "hostile;cl
 # FEM alone (the impact on 12 x 120 cells in plane strain, 6 x 6 x 60 in 3-D: about 3.5 s a
 # step), a NOSB-PD particle zone (the ring, about 2 s a step) and the coupled integrator: with
 # conversions and bond breaks (the coupled cracked plate, about 1.5 s a step) and in finite
-# strain (the 3-D impact with every cell a NOSB particle, about 4 s a step). LAST_STEP = 1: a
+# strain (the 3-D impact with every cell a NOSB particle, about 4 s a step), and with SPG
+# particles (the cracked plate's band of SPG particles under the energy splice, pre-cracked,
+# stopped early in the step in which the crack starts to grow: 4 bonds break after the
+# restart). LAST_STEP = 1: a
 # run that finished step 2 before stopping fails. Every run keeps an energy account: the
 # checkpoints carry its sums, the displacement of the last force pass (the lost work of a
 # break) and the particles' stiffness bound (the step under finite strain), so the restarted
@@ -147,7 +150,8 @@ foreach(_case
     "fem_3d|${PROJECT_SOURCE_DIR}/applications/validation/taylor_impact_3d.prm|${_impact_fem}|Simulation/End time=6e-6|Geometry/Subdivisions=6, 6, 60"
     "particles_2d|${PROJECT_SOURCE_DIR}/applications/validation/ring_fragmentation.prm|Effects/Particles method=nosb|Simulation/Steps=3"
     "coupled_2d|${PROJECT_SOURCE_DIR}/applications/scenes/cracked_plate_coupled.prm|Simulation/Write VTU=false|Simulation/Steps=2|Simulation/Energy account=true"
-    "coupled_finite_strain_3d|${PROJECT_SOURCE_DIR}/applications/validation/taylor_impact_3d.prm|Coupling/All particles=true|Simulation/Write VTU=false|Simulation/End time=6e-6|Simulation/Steps=3")
+    "coupled_finite_strain_3d|${PROJECT_SOURCE_DIR}/applications/validation/taylor_impact_3d.prm|Coupling/All particles=true|Simulation/Write VTU=false|Simulation/End time=6e-6|Simulation/Steps=3"
+    "coupled_spg_2d|${PROJECT_SOURCE_DIR}/applications/scenes/cracked_plate_nosb.prm|Effects/Particles method=spg|Coupling/SPG/Critical stretch=7e-4|Coupling/Splice=energy|Coupling/Initial region lower corner=-0.5,-0.055|Coupling/Initial region upper corner=0.5,0.055|Simulation/Write VTU=false|Simulation/End time=1.2e-3|Simulation/Steps=2|Simulation/Energy account=true")
   string(REPLACE "|" ";" _parts "${_case}")
   list(POP_FRONT _parts _tag _scene)
   list(JOIN _parts "|" _set)
