@@ -2,6 +2,8 @@
 
 #include <deal.II/base/mpi.h>
 
+#include <algorithm>
+
 namespace spinesim::coupling {
 
 using namespace dealii;
@@ -22,12 +24,18 @@ template <int dim>
 void ParticlePlasticHeat<dim>::track_new_particles() {
   const auto w = current_work();
   // Particles are only ever appended (CouplingState::add_particle), so an index keeps its
-  // particle; new indices start from what they inherited.
-  for (unsigned int i = 0; i < w.size(); ++i)
-    if (i >= booked_.size())
+  // particle; new indices, and ghosts a conversion made free, start from what they inherited
+  // (the cell's work, which heated the FEM); a ghost's follows the FEM.
+  for (unsigned int i = 0; i < w.size(); ++i) {
+    const bool is_free = state_.free[i];
+    if (i >= booked_.size()) {
       booked_.push_back(w[i]);
-    else if (!state_.free[i])
+      free_.push_back(is_free);
+    } else if (!is_free || !free_[i]) {
       booked_[i] = w[i];
+      free_[i] = is_free;
+    }
+  }
 }
 
 template <int dim>
@@ -39,10 +47,13 @@ Vector<double> ParticlePlasticHeat<dim>::take(double beta, double elapsed) {
   const auto w = current_work();
   // Each particle's increment since its baseline; the baselines move on for every particle
   // on every rank (all ranks hold all particles), whichever rank hands the heat over.
+  // Plastic dissipation is never negative: a particle's work can fall only where its history
+  // lost weight (NOSB-PD families rebuilt after breaks, a failed family), which gives no heat
+  // back; the baseline follows it down.
   std::vector<double> increment(w.size(), 0.0);
   for (unsigned int i = 0; i < w.size(); ++i) {
     if (state_.free[i])
-      increment[i] = w[i] - booked_[i];
+      increment[i] = std::max(0.0, w[i] - booked_[i]);
     booked_[i] = w[i];
   }
   double local = 0; // work done in this rank's host cells [J]
@@ -65,6 +76,7 @@ void ParticlePlasticHeat<dim>::restore(double heat, double work) {
   heat_ = heat;
   work_ = work;
   booked_.clear();
+  free_.clear();
   track_new_particles();
 }
 

@@ -12,6 +12,7 @@
 
 #include <deal.II/lac/vector.h>
 
+#include <cstdint>
 #include <vector>
 
 namespace spinesim::coupling {
@@ -21,8 +22,9 @@ class ParticlePlasticHeat {
  public:
   explicit ParticlePlasticHeat(CouplingState<dim>& state) : state_(state) {}
 
-  // Takes the baseline of particles new since the last call (their inherited work), and
-  // re-takes it for ghosts. Called once conversions have handed their states over.
+  // Takes the baseline of particles new since the last call and of ghosts that became free
+  // (their inherited work), and re-takes it for ghosts. Called once conversions have handed
+  // their states over.
   void track_new_particles();
   // β × the plastic work done since the last call as a power density [W/m^3] over `elapsed`
   // [s], one entry per active cell (locally owned host cells; others 0). Collective.
@@ -37,7 +39,8 @@ class ParticlePlasticHeat {
   // Per particle: its plastic work now [J] (0 for a method without plastic history).
   std::vector<double> current_work() const;
   CouplingState<dim>& state_;
-  std::vector<double> booked_; // per particle: plastic work already counted [J]
+  std::vector<double> booked_;     // per particle: plastic work already counted [J]
+  std::vector<std::uint8_t> free_; // per particle: free when its baseline was taken
   double heat_ = 0, work_ = 0;
 };
 

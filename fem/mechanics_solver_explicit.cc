@@ -412,9 +412,14 @@ void MechanicsSolver<dim>::assemble_explicit_matrix() {
   DoFTools::make_sparsity_pattern(dof_handler_, dsp, hanging_, true);
   SparsityTools::distribute_sparsity_pattern(dsp, owned_, comm_, relevant_);
   explicit_matrix_.reinit(owned_, owned_, dsp, comm_);
+  // The assembly writes the force vectors: the last step's (reactions) stay readable when the
+  // matrix is built between steps (an energy account right after a conversion).
+  const VectorType rhs = rhs_, raw = raw_residual_;
   assemble_into_explicit_matrix_ = true;
   assemble(true, 1.0, hanging_);
   assemble_into_explicit_matrix_ = false;
+  rhs_ = rhs;
+  raw_residual_ = raw;
   trial_ = committed_;
   explicit_matrix_ready_ = true;
 }

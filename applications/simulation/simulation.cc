@@ -439,6 +439,11 @@ void Simulation<dim>::advance_heat(unsigned int, double, double dt, RunContext&)
       std::max(1u, static_cast<unsigned int>(std::ceil(dt / heat_prm_.time_step - 1e-9)));
   for (unsigned int i = 0; i < n; ++i)
     heat_->advance(dt / n);
+  // The books of the staggered plastic heat: this step used what the last mechanics step
+  // handed on.
+  fem_plastic_heat_applied_ += fem_plastic_heat_pending_;
+  particle_plastic_heat_applied_ += particle_plastic_heat_pending_;
+  fem_plastic_heat_pending_ = particle_plastic_heat_pending_ = 0;
 }
 
 template <int dim>
@@ -455,7 +460,6 @@ void Simulation<dim>::advance_mechanics(unsigned int step, double time, double d
   if (heat_ && mech_prm_.taylor_quinney > 0) { // heats the next heat step (staggered)
     plastic_heating_ = mechanics_->cell_plastic_dissipation_rate();
     // What the next heat step takes from it, for the books: β Σ rate |K| dt.
-    fem_plastic_heat_applied_ += fem_plastic_heat_pending_;
     double pending = 0;
     for (const auto& cell : mechanics_->dof_handler().active_cell_iterators())
       if (cell->is_locally_owned() && cell->active_cell_index() < plastic_heating_.size())
@@ -470,8 +474,9 @@ void Simulation<dim>::advance_mechanics(unsigned int step, double time, double d
     fracture_heat_applied_ = coupled_->fracture_heat(); // what this step's heat solve used
     fracture_heating_ = coupled_->take_fracture_heat(dt);
     // ... and of the particles' plastic work, × β as the FEM's own.
-    particle_plastic_heat_applied_ = coupled_->particle_plastic_heat();
+    const double handed = coupled_->particle_plastic_heat();
     particle_plastic_heating_ = coupled_->take_plastic_heat(mech_prm_.taylor_quinney, dt);
+    particle_plastic_heat_pending_ = coupled_->particle_plastic_heat() - handed;
   }
 }
 

@@ -79,7 +79,8 @@ void Simulation<dim>::write_checkpoint(unsigned int step, double time, RunContex
       // kept (a restart starts its first heat step without it).
       state["fem_plastic_heat_applied"] = fem_plastic_heat_applied_;
       if (coupled_) {
-        state["particle_plastic_heat"] = coupled_->particle_plastic_heat();
+        // What heat steps used: the share handed on for the next step is dropped at a restart.
+        state["particle_plastic_heat_applied"] = particle_plastic_heat_applied_;
         state["particle_plastic_heat_work"] = coupled_->particle_plastic_heat_work();
       }
     }
@@ -146,9 +147,11 @@ unsigned int Simulation<dim>::load_checkpoint(RunContext& ctx) {
       mechanics_->deserialize(mesh_file);
     if (coupled_) {
       coupled_->load((dir / "coupling.txt").string());
-      if (heat_)
-        coupled_->restore_plastic_heat(state.value("particle_plastic_heat", 0.0),
+      if (heat_) {
+        particle_plastic_heat_applied_ = state.value("particle_plastic_heat_applied", 0.0);
+        coupled_->restore_plastic_heat(particle_plastic_heat_applied_,
                                        state.value("particle_plastic_heat_work", 0.0));
+      }
     }
     if (heat_)
       fem_plastic_heat_applied_ = state.value("fem_plastic_heat_applied", 0.0);

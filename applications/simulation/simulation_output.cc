@@ -319,7 +319,9 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
       s.set_figure("fracture_dissipation", coupled_->fracture_dissipation(),
                    dim == 2 ? "J/m" : "J");
       s.set_figure("fracture_heat_applied", fracture_heat_applied_, dim == 2 ? "J/m" : "J");
-      if (fracture_heat_applied_ > 0) // the only source when the scene has no other heat input
+      // Fracture heat alone against what was supplied: when it is the only internal source.
+      if (fracture_heat_applied_ > 0 && particle_plastic_heat_applied_ == 0 &&
+          fem_plastic_heat_applied_ == 0)
         s.set_figure("fracture_heat_supplied_relative",
                      std::abs(heat_->supplied_energy() - fracture_heat_applied_) /
                          fracture_heat_applied_,

@@ -106,9 +106,10 @@ class Simulation : public framework::Scenario {
   dealii::Vector<double> fracture_heating_;         // heat of broken bonds per cell [W/m^3]
   double fracture_heat_applied_ = 0;                // of it, what heat steps have used [J]
   dealii::Vector<double> particle_plastic_heating_; // β × particles' plastic work rate [W/m^3]
-  double particle_plastic_heat_applied_ = 0;        // of it, what heat steps have used [J]
-  double fem_plastic_heat_applied_ = 0;             // β × FEM plastic work heat steps used [J]
-  double fem_plastic_heat_pending_ = 0;             // β × the last step's, for the next [J]
+  // The plastic heat books [J]: what heat steps have used, and what the last mechanics step
+  // handed on for the next heat step (a restart drops it, as it drops the source vectors).
+  double particle_plastic_heat_applied_ = 0, particle_plastic_heat_pending_ = 0;
+  double fem_plastic_heat_applied_ = 0, fem_plastic_heat_pending_ = 0;
   std::unique_ptr<ParticleZone<dim>> particles_;
   std::unique_ptr<CrackPath<dim>> crack_; // runs with particles
   std::vector<StepModule> modules_;

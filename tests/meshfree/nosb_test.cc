@@ -815,10 +815,11 @@ TEST(Nosb, BreaksNeverRaiseTheStoredEnergy3D) {
 
 // Critical plastic strain: a bond breaks once the mean equivalent plastic strain of its two
 // ends exceeds ε_crit, by stretch or not (here none: the body is at rest). Committed states
-// grading ε̄p = 2 % x / L along the bar (as a converted cell's points would bring them): bonds
-// break at the far end, stay at the near one, and each exactly by the criterion, with
-// bond-associated families (the bond's two families) and with the penalty control (the two
-// particles'). Without the parameter the same states break nothing.
+// grade ε̄p along the bar: each history entry (i, j) holds 2 % (0.7 x_i + 0.3 x_j) / L, so
+// the family i -> j and its reverse j -> i differ, and a bond read with any family of j but
+// its reverse would be judged on another mean (the penalty control has one entry (i, i) per
+// particle: 2 % x_i / L). Bonds break at the far end, stay at the near one, and each exactly
+// by the criterion. Without the parameter the same states break nothing.
 template <int dim>
 void check_plastic_strain_breaking(Stab stab) {
   const double ec = 0.01;
@@ -836,12 +837,15 @@ void check_plastic_strain_breaking(Stab stab) {
     auto bonds = NeighborSearch<dim>(model.neighbor_options(h)).build(p);
     model.initialise(p, bonds);
     const double L = cells[0] * h;
-    std::vector<double> ep(p.size());
-    for (unsigned int i = 0; i < p.size(); ++i) {
+    const auto entry = [&](unsigned int i, unsigned int j) {
+      return 0.02 * (0.7 * p.reference_position(i)[0] + 0.3 * p.reference_position(j)[0]) / L;
+    };
+    for (const auto& key : model.history_keys()) {
       materials::MaterialState s;
-      s.equivalent_plastic_strain = ep[i] = 0.02 * p.reference_position(i)[0] / L;
-      model.set_particle_state(i, s);
+      s.equivalent_plastic_strain = entry(key.first, key.second);
+      ASSERT_TRUE(model.set_committed_state(key, s));
     }
+    const bool per_bond = stab == Stab::bond_associated;
     const std::size_t broken = model.break_bonds(p, bonds);
     if (critical == 0) {
       EXPECT_EQ(broken, 0u);
@@ -852,7 +856,10 @@ void check_plastic_strain_breaking(Stab stab) {
       for (std::size_t k = bonds.begin(i); k < bonds.end(i); ++k) {
         const bool b = bonds.broken[k] != 0;
         (b ? n_broken : n_whole) += 1;
-        wrong += b != (0.5 * (ep[i] + ep[bonds.neighbor[k]]) > ec);
+        const unsigned int j = bonds.neighbor[k];
+        const double mean =
+            per_bond ? 0.5 * (entry(i, j) + entry(j, i)) : 0.5 * (entry(i, i) + entry(j, j));
+        wrong += b != (mean > ec);
       }
     EXPECT_GT(n_broken, 0u);
     EXPECT_GT(n_whole, 0u);

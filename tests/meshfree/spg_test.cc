@@ -306,7 +306,8 @@ TEST(SpgSolver, BondFailureConservesMomentum) {
 
 // Critical plastic strain: a bond breaks exactly when the mean equivalent plastic strain of
 // its two particles exceeds ε_crit (SpgParameters::critical_plastic_strain). A bar pulled with
-// a strain growing along x, ε = a x / L (a = 2 %, the copper law yields at 0.34 %): the
+// a strain growing along x, ε = a x / L (a = 2 %; the copper law yields at about 0.46 % in
+// this uniaxial strain, σ_eq = 2 μ ε): the
 // plastic strain grows from nothing at x = 0, so bonds break at the far end and stay whole
 // at the near one. The states the criterion reads are those of the same pass without
 // breaking (the breaks rebuild rows after it).
