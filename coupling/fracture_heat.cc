@@ -1,5 +1,6 @@
 #include "coupling/fracture_heat.h"
 
+#include "coupling/host_cell_source.h"
 #include "meshfree/bond_loop.h"
 
 #include <deal.II/base/mpi.h>
@@ -57,16 +58,7 @@ Vector<double> FractureHeat<dim>::take(double elapsed) {
   if (energy_.empty() || !(elapsed > 0))
     return power;
   const double fraction = state_.prm.fracture_heat_fraction;
-  double local = 0; // energy handed over by this rank's host cells [J]
-  for (const auto& [cell, row] : state_.free_cells) {
-    double energy = 0;
-    for (const int i : row)
-      if (i >= 0 && static_cast<unsigned int>(i) < energy_.size())
-        energy += energy_[i];
-    power(cell->active_cell_index()) = fraction * energy / (cell->measure() * elapsed);
-    local += energy;
-  }
-  heat_ += fraction * Utilities::MPI::sum(local, state_.fem.mpi_communicator());
+  heat_ += fraction * host_cell_power(state_, energy_, fraction, elapsed, power);
   std::fill(energy_.begin(), energy_.end(), 0.0);
   return power;
 }

@@ -1,6 +1,6 @@
 #include "coupling/particle_plastic_heat.h"
 
-#include <deal.II/base/mpi.h>
+#include "coupling/host_cell_source.h"
 
 #include <algorithm>
 
@@ -22,7 +22,12 @@ std::vector<double> ParticlePlasticHeat<dim>::current_work() const {
 
 template <int dim>
 void ParticlePlasticHeat<dim>::track_new_particles() {
-  const auto w = current_work();
+  if (state_.heat && state_.method && state_.method->has_plastic_work())
+    take_baselines(current_work());
+}
+
+template <int dim>
+void ParticlePlasticHeat<dim>::take_baselines(const std::vector<double>& w) {
   // Particles are only ever appended (CouplingState::add_particle), so an index keeps its
   // particle; new indices, and ghosts a conversion made free, start from what they inherited
   // (the cell's work, which heated the FEM); a ghost's follows the FEM.
@@ -43,8 +48,8 @@ Vector<double> ParticlePlasticHeat<dim>::take(double beta, double elapsed) {
   Vector<double> power(state_.fem.dof_handler().get_triangulation().n_active_cells());
   if (!state_.method || !state_.method->has_plastic_work() || !(elapsed > 0))
     return power;
-  track_new_particles();
   const auto w = current_work();
+  take_baselines(w);
   // Each particle's increment since its baseline; the baselines move on for every particle
   // on every rank (all ranks hold all particles), whichever rank hands the heat over.
   // Plastic dissipation is never negative: a particle's work can fall only where its history
@@ -56,16 +61,7 @@ Vector<double> ParticlePlasticHeat<dim>::take(double beta, double elapsed) {
       increment[i] = std::max(0.0, w[i] - booked_[i]);
     booked_[i] = w[i];
   }
-  double local = 0; // work done in this rank's host cells [J]
-  for (const auto& [cell, row] : state_.free_cells) {
-    double work = 0;
-    for (const int i : row)
-      if (i >= 0 && static_cast<unsigned int>(i) < increment.size())
-        work += increment[i];
-    power(cell->active_cell_index()) = beta * work / (cell->measure() * elapsed);
-    local += work;
-  }
-  const double work = Utilities::MPI::sum(local, state_.fem.mpi_communicator());
+  const double work = host_cell_power(state_, increment, beta, elapsed, power);
   work_ += work;
   heat_ += beta * work;
   return power;

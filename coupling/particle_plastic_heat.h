@@ -24,7 +24,7 @@ class ParticlePlasticHeat {
 
   // Takes the baseline of particles new since the last call and of ghosts that became free
   // (their inherited work), and re-takes it for ghosts. Called once conversions have handed
-  // their states over.
+  // their states over; nothing to do without a heat solver or plastic history.
   void track_new_particles();
   // β × the plastic work done since the last call as a power density [W/m^3] over `elapsed`
   // [s], one entry per active cell (locally owned host cells; others 0). Collective.
@@ -38,6 +38,8 @@ class ParticlePlasticHeat {
  private:
   // Per particle: its plastic work now [J] (0 for a method without plastic history).
   std::vector<double> current_work() const;
+  // The baselines of new particles, of ghosts turned free and of ghosts, from the work `w`.
+  void take_baselines(const std::vector<double>& w);
   CouplingState<dim>& state_;
   std::vector<double> booked_;     // per particle: plastic work already counted [J]
   std::vector<std::uint8_t> free_; // per particle: free when its baseline was taken
