@@ -8,14 +8,63 @@
 
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <filesystem>
 #include <fstream>
+#include <map>
 
 namespace spinesim::applications {
 
 using namespace framework;
 
 namespace fs = std::filesystem;
+
+template <int dim>
+nlohmann::json Simulation<dim>::pending_heat_sources(MPI_Comm comm) const {
+  std::vector<std::string> ids;
+  std::vector<double> values; // three per cell
+  const auto at = [](const dealii::Vector<double>& v, unsigned int i) {
+    return i < v.size() ? v(i) : 0.0;
+  };
+  for (const auto& cell : triangulation_->active_cell_iterators())
+    if (cell->is_locally_owned()) {
+      const unsigned int i = cell->active_cell_index();
+      const double q[3] = {at(plastic_heating_, i), at(fracture_heating_, i),
+                           at(particle_plastic_heating_, i)};
+      if (q[0] != 0 || q[1] != 0 || q[2] != 0) {
+        ids.push_back(cell->id().to_string());
+        values.insert(values.end(), q, q + 3);
+      }
+    }
+  const auto all_ids = dealii::Utilities::MPI::gather(comm, ids, 0);
+  const auto all_values = dealii::Utilities::MPI::gather(comm, values, 0);
+  nlohmann::json sources = nlohmann::json::array();
+  for (std::size_t r = 0; r < all_ids.size(); ++r)
+    for (std::size_t k = 0; k < all_ids[r].size(); ++k)
+      sources.push_back({all_ids[r][k], all_values[r][3 * k], all_values[r][3 * k + 1],
+                         all_values[r][3 * k + 2]});
+  return sources;
+}
+
+template <int dim>
+void Simulation<dim>::restore_pending_heat_sources(const nlohmann::json& sources) {
+  std::map<std::string, std::array<double, 3>> by_cell;
+  for (const auto& s : sources)
+    by_cell[s.at(0).get<std::string>()] = {s.at(1).get<double>(), s.at(2).get<double>(),
+                                           s.at(3).get<double>()};
+  const unsigned int n = triangulation_->n_active_cells();
+  plastic_heating_.reinit(n);
+  fracture_heating_.reinit(n);
+  particle_plastic_heating_.reinit(n);
+  for (const auto& cell : triangulation_->active_cell_iterators())
+    if (cell->is_locally_owned())
+      if (const auto it = by_cell.find(cell->id().to_string()); it != by_cell.end()) {
+        const unsigned int i = cell->active_cell_index();
+        plastic_heating_(i) = it->second[0];
+        fracture_heating_(i) = it->second[1];
+        particle_plastic_heating_(i) = it->second[2];
+      }
+}
 
 template <int dim>
 void Simulation<dim>::write_checkpoint(unsigned int step, double time, RunContext& ctx) {
@@ -43,6 +92,9 @@ void Simulation<dim>::write_checkpoint(unsigned int step, double time, RunContex
     account_sums.resize(works.size());
     dealii::Utilities::MPI::sum(works, ctx.comm(), account_sums);
   }
+  // What the next heat step would have used: a restart continues as if never stopped.
+  const nlohmann::json heat_sources =
+      heat_ && triangulation_ ? pending_heat_sources(ctx.comm()) : nlohmann::json();
   const auto state = [&] {
     const nlohmann::json crack_json = crack_ ? crack_->to_json(ctx.comm()) : nlohmann::json();
     nlohmann::json state;
@@ -75,13 +127,16 @@ void Simulation<dim>::write_checkpoint(unsigned int step, double time, RunContex
     if (heat_) {
       state["heat_supplied_energy"] = heat_->supplied_energy();
       state["initial_heat_content"] = initial_heat_content_;
-      // The plastic heat books; what the last step handed on for the next heat step is not
-      // kept (a restart starts its first heat step without it).
+      // The heat sources handed on to the next heat step and the plastic heat books.
+      state["pending_heat_sources"] = heat_sources;
       state["fem_plastic_heat_applied"] = fem_plastic_heat_applied_;
+      state["fem_plastic_heat_pending"] = fem_plastic_heat_pending_;
       if (coupled_) {
-        // What heat steps used: the share handed on for the next step is dropped at a restart.
+        state["particle_plastic_heat"] = coupled_->particle_plastic_heat();
         state["particle_plastic_heat_applied"] = particle_plastic_heat_applied_;
+        state["particle_plastic_heat_pending"] = particle_plastic_heat_pending_;
         state["particle_plastic_heat_work"] = coupled_->particle_plastic_heat_work();
+        state["fracture_heat_applied"] = fracture_heat_applied_;
       }
     }
     return state;
@@ -149,12 +204,18 @@ unsigned int Simulation<dim>::load_checkpoint(RunContext& ctx) {
       coupled_->load((dir / "coupling.txt").string());
       if (heat_) {
         particle_plastic_heat_applied_ = state.value("particle_plastic_heat_applied", 0.0);
-        coupled_->restore_plastic_heat(particle_plastic_heat_applied_,
+        particle_plastic_heat_pending_ = state.value("particle_plastic_heat_pending", 0.0);
+        fracture_heat_applied_ = state.value("fracture_heat_applied", 0.0);
+        coupled_->restore_plastic_heat(state.value("particle_plastic_heat", 0.0),
                                        state.value("particle_plastic_heat_work", 0.0));
       }
     }
-    if (heat_)
+    if (heat_) {
       fem_plastic_heat_applied_ = state.value("fem_plastic_heat_applied", 0.0);
+      fem_plastic_heat_pending_ = state.value("fem_plastic_heat_pending", 0.0);
+      if (triangulation_ && state.contains("pending_heat_sources"))
+        restore_pending_heat_sources(state["pending_heat_sources"]);
+    }
     if (sim_.energy_account && (coupled_ || (mechanics_ && !quasi_static_))) {
       if (state.contains("energy_account_sums")) {
         const auto sums = state["energy_account_sums"].get<std::vector<double>>();

@@ -85,6 +85,11 @@ class Simulation : public framework::Scenario {
   void write_checkpoint(unsigned int step, double time, framework::RunContext& ctx);
   // Returns the step to continue after.
   unsigned int load_checkpoint(framework::RunContext& ctx);
+  // The heat sources the last mechanics step handed on to the next heat step, by cell:
+  // [[CellId, FEM plastic dissipation rate, fracture power, particle plastic power], ...]
+  // of the cells with any (on rank 0; collective), and back into this mesh's cells.
+  nlohmann::json pending_heat_sources(MPI_Comm comm) const;
+  void restore_pending_heat_sources(const nlohmann::json& sources);
   void report_figures(framework::RunContext& ctx);
   // displacement_l2_error_relative (and its fem_/particle_ parts) against the scene's exact
   // displacement at the end time (collective).
