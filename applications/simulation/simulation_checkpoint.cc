@@ -50,8 +50,8 @@ template <int dim>
 void Simulation<dim>::restore_pending_heat_sources(const nlohmann::json& sources) {
   std::map<std::string, std::array<double, 3>> by_cell;
   for (const auto& s : sources)
-    by_cell[s.at(0).get<std::string>()] = {s.at(1).get<double>(), s.at(2).get<double>(),
-                                           s.at(3).get<double>()};
+    by_cell[s.at(0).get<std::string>()] = {
+        {s.at(1).get<double>(), s.at(2).get<double>(), s.at(3).get<double>()}};
   const unsigned int n = triangulation_->n_active_cells();
   plastic_heating_.reinit(n);
   fracture_heating_.reinit(n);

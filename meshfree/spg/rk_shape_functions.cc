@@ -248,6 +248,16 @@ int RKShapeFunctions<dim>::compute_row(unsigned int i,
   return 0;
 }
 
+template <int dim>
+std::size_t RKShapeFunctions<dim>::memory_bytes() const {
+  return (self_value.capacity() + value.capacity() + value_at_partner.capacity() +
+          condition_number.capacity()) *
+             sizeof(double) +
+         (self_gradient.capacity() + gradient.capacity() + gradient_at_partner.capacity()) *
+             sizeof(dealii::Tensor<1, dim>) +
+         reverse.capacity() * sizeof(std::size_t) + shepard.capacity();
+}
+
 template class RKShapeFunctions<2>;
 template class RKShapeFunctions<3>;
 

@@ -51,6 +51,8 @@ class RKShapeFunctions {
                      const std::vector<double>& volumes, const BondList<dim>& bonds);
 
   double support_size() const { return a_; }
+  // Bytes held by the rows (capacities) [B].
+  std::size_t memory_bytes() const;
   const RKKernel<dim>& kernel() const { return kernel_; }
 
   // Row i holds Ψ_J(X_i) for J = i (self_*) and J = neighbor[k], k in the bonds of i.

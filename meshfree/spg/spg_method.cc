@@ -523,6 +523,13 @@ SpgMethod<dim>::splice_energy_by_row(const ParticleSet<dim>& particles,
   return E;
 }
 
+template <int dim>
+std::size_t SpgMethod<dim>::memory_bytes() const {
+  return (solver_ ? solver_->memory_bytes() : 0) + driven_.capacity() +
+         kept_.capacity() * sizeof(materials::MaterialState) +
+         (energy_before_break_.capacity() + pass_energy_before_.capacity()) * sizeof(double);
+}
+
 template class SpgMethod<2>;
 template class SpgMethod<3>;
 

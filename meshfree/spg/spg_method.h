@@ -116,6 +116,7 @@ class SpgMethod : public ParticleMethod<dim> {
   materials::MaterialState particle_state(unsigned int i) const override;
   std::vector<double> plastic_work_density(const ParticleSet<dim>& particles) const override;
   bool has_plastic_work() const override { return law_->stored_energy_from_state(); }
+  std::size_t memory_bytes() const override;
 
   // u_I of the last force evaluation.
   const std::vector<dealii::Tensor<1, dim>>& physical_displacements() const;

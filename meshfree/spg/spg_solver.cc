@@ -565,6 +565,24 @@ SPGSolver<dim>::driven_forces(const std::vector<std::uint8_t>& driven) const {
   return f;
 }
 
+template <int dim>
+std::size_t SPGSolver<dim>::memory_bytes() const {
+  std::size_t vectors = 0, matrices = 0;
+  for (const auto* v :
+       {&dref_, &shift_, &uh_, &stab_force_, &residual_, &contact_, &d_last_, &reaction_})
+    vectors += v->capacity();
+  for (const auto* m : {&F_, &P_, &Fr_, &stress_})
+    matrices += m->capacity();
+  return (rk_ ? rk_->memory_bytes() : 0) + bonds_.memory_bytes() +
+         (X0_.capacity() + Xr_.capacity()) * sizeof(dealii::Point<dim>) +
+         (volume_.capacity() + rk_volume_.capacity() + kappa_.capacity()) * sizeof(double) +
+         vectors * sizeof(Vector) + matrices * sizeof(Matrix) +
+         (state_.capacity() + committed_.capacity()) * sizeof(materials::MaterialState) +
+         has_row_.capacity() + complete_.capacity() + driven_.capacity() +
+         newly_broken_.capacity() * sizeof(std::pair<unsigned int, unsigned int>) +
+         broken_pairs_.capacity() * sizeof(unsigned long long);
+}
+
 template class SPGSolver<2>;
 template class SPGSolver<3>;
 

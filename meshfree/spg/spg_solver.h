@@ -213,6 +213,9 @@ class SPGSolver {
   double p_wave_speed() const { return cp_; }
   double contact_stiffness() const { return kc_; }
   const Parameters& parameters() const { return prm_; }
+  // Bytes held per particle and per bond: the RK rows, the solver's copy of the bonds, the
+  // kinematic and material-state arrays (capacities) [B].
+  std::size_t memory_bytes() const;
 
  private:
   using Vector = dealii::Tensor<1, dim>;

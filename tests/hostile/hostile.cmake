@@ -166,14 +166,17 @@ endforeach()
 # of 4. The step's FEM and particle plastic heat is handed on to the next heat step; the
 # checkpoint keeps those sources by cell, so the restarted run supplies the uninterrupted
 # run's heat and ends with its figures (1e-12) and history. Before, the restart dropped them
-# and its heat books started again from what had been applied.
+# and its heat books started again from what had been applied. The uninterrupted run is
+# coupling.plastic_heat_nosb_2d's (the same scene and settings).
 add_test(NAME hostile.interrupt_and_restart_plastic_heat
   COMMAND ${CMAKE_COMMAND} -DSPINESIM=$<TARGET_FILE:spinesim>
     -DSCENE=${PROJECT_SOURCE_DIR}/applications/validation/coupling_plastic_conversion.prm
     -DDIR=${_runs}/interrupt_and_restart_plastic_heat -DAFTER_ROWS=1 -DTOL=1e-12
+    -DREFERENCE=${PROJECT_BINARY_DIR}/tests/scenes/runs/plastic_conversion/heat_nosb_2d
     "-DSET=Effects/Heat=true|Mechanics/Taylor-Quinney coefficient=0.9|Heat/Time step=0.25|Effects/Particles method=nosb"
     -P ${PROJECT_SOURCE_DIR}/tests/support/interrupt_case.cmake)
-set_tests_properties(hostile.interrupt_and_restart_plastic_heat PROPERTIES LABELS "hostile;cli;heat" TIMEOUT 300)
+set_tests_properties(hostile.interrupt_and_restart_plastic_heat PROPERTIES LABELS "hostile;cli;heat"
+  TIMEOUT 300 FIXTURES_REQUIRED ph_nosb_2d)
 # SIGINT (Ctrl-C at a terminal) takes the same path as SIGTERM and exits 130 (128 + 2): the
 # NOSB-PD ring stopped inside step 2 and resumed to the uninterrupted run's figures.
 add_test(NAME hostile.interrupt_mid_step_particles_2d_sigint

@@ -681,10 +681,11 @@ spinesim_add_scene_test(coupling.energy_elastic_3d SCENE ${_bar3} OUT ${_bar_run
 # the springs' unbooked work partly cancelled.) Bound 18 %: a guard against a growing defect,
 # not a closed balance; the energy splice below closes it. The crack runs from the notch tip
 # (y = -10 mm) through the far face (last particle row at 18.75 mm) in the particle layers next
-# to x = 0.
+# to x = 0. Labelled long (53 s): the energy-splice runs below check the same bar's crack and
+# close its balance on 1 and 2 ranks.
 spinesim_add_scene_test(coupling.notched_bar_nosb_3d SCENE ${_bar3} OUT ${_bar_runs}/fracture_3d
   EXPECT "status==ok;energy_balance_error_relative<=0.18;fracture_dissipation_J>=0.01;crack_extent_max_y_m>=0.015;crack_extent_min_y_m<=-0.009;crack_path_rms_x_m<=0.0025"
-  LABELS "scene;validation;coupling" TIMEOUT 300)
+  LABELS "scene;validation;coupling;long" TIMEOUT 300)
 # The same bar with the energy splice, 1 and 2 ranks, while the crack runs (to 0.18 ms, 18
 # steps; about 65 s on one core): every force derives from one energy, and the account closes
 # to 0.049 % (measured), with 0.030 J released by 20 250 broken bond ends and the crack 21 mm

@@ -55,7 +55,13 @@ spinesim_add_comparison_test(distributed.ring_3d_1_vs_2_ranks
 # 40 fragments. Tolerances as above: 1e-9, counts exact.
 set(_spg_ring_runs ${CMAKE_CURRENT_BINARY_DIR}/runs/ring_fragmentation)
 set(_spg_checks "${_dist_checks};energy_balance_error_relative:abs:1e-9;fracture_dissipation_J:rel:1e-9;max_fracture_damage:rel:1e-9;fracture_damaged_volume_fraction:rel:1e-9")
+# Particle data per rank (RK rows, the solver's arrays, particles, bonds, the partition): on 2
+# ranks measured 0.542 of one rank in 2-D and 0.538 in 3-D (0.288 on 4 ranks in 2-D); bound 0.6.
 foreach(_ranks 2 4)
+  set(_memory_check "")
+  if(_ranks EQUAL 2)
+    set(_memory_check ";particle_memory_per_rank_max_bytes:ratio_max:0.6")
+  endif()
   spinesim_add_scene_test(distributed.ring_spg_2d_${_ranks}ranks SCENE ${_dist_ring}
     RANKS ${_ranks} SET "Effects/Particles method=spg" "Particles/SPG/Critical stretch=0.01"
     OUT ${_dist_runs}/ring_spg_2d_${_ranks} FIXTURE dist_ring_spg_2d_${_ranks}
@@ -63,7 +69,7 @@ foreach(_ranks 2 4)
     LABELS "scene;particles;stability")
   spinesim_add_comparison_test(distributed.ring_spg_2d_1_vs_${_ranks}_ranks
     A ${_spg_ring_runs}/spg_2d/summary.json B ${_dist_runs}/ring_spg_2d_${_ranks}/summary.json
-    CHECKS "${_spg_checks}" REQUIRES "ring_spg_2d;dist_ring_spg_2d_${_ranks}"
+    CHECKS "${_spg_checks}${_memory_check}" REQUIRES "ring_spg_2d;dist_ring_spg_2d_${_ranks}"
     LABELS "scene;particles;stability;mpi")
 endforeach()
 # Checkpoint and restart with SPG breaks on 2 ranks: stopped after step 20 of 50 (bonds broken,
@@ -89,7 +95,8 @@ spinesim_add_scene_test(distributed.ring_spg_3d_2ranks SCENE ${_dist_ring3} RANK
   LABELS "scene;particles;stability")
 spinesim_add_comparison_test(distributed.ring_spg_3d_1_vs_2_ranks
   A ${_spg_ring_runs}/spg_3d/summary.json B ${_dist_runs}/ring_spg_3d_2/summary.json
-  CHECKS "${_spg_checks}" REQUIRES "ring_spg_3d;dist_ring_spg_3d_2"
+  CHECKS "${_spg_checks};particle_memory_per_rank_max_bytes:ratio_max:0.6"
+  REQUIRES "ring_spg_3d;dist_ring_spg_3d_2"
   LABELS "scene;particles;stability;mpi")
 
 # Checkpoint and restart of a distributed zone: each rank writes its part; stopped after step 20

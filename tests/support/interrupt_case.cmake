@@ -11,6 +11,9 @@
 # HISTORY_TOL (optional): history values may differ by this relative amount (default: not at all).
 # SIGNAL (optional): TERM (default) or INT, as Ctrl-C sends it; the run exits 128 + the
 # signal's number (143, 130).
+# REFERENCE (optional): the directory of a finished uninterrupted run of the same scene and
+# settings (another test's output, required as its fixture) to compare with instead of running
+# the reference here.
 cmake_minimum_required(VERSION 3.19)
 if(NOT DEFINED SIGNAL)
   set(SIGNAL TERM)
@@ -34,10 +37,18 @@ endif()
 file(REMOVE_RECURSE ${DIR})
 file(MAKE_DIRECTORY ${DIR})
 
-execute_process(COMMAND ${_launch} run ${_common} --output ${DIR}/reference RESULT_VARIABLE _rc
-                OUTPUT_QUIET)
-if(NOT _rc EQUAL 0)
-  message(FATAL_ERROR "the uninterrupted reference run failed (exit ${_rc})")
+if(REFERENCE)
+  if(NOT EXISTS ${REFERENCE}/summary.json OR NOT EXISTS ${REFERENCE}/history.csv)
+    message(FATAL_ERROR "the uninterrupted reference run ${REFERENCE} has no summary.json and "
+                        "history.csv (its test must run first)")
+  endif()
+  file(COPY ${REFERENCE}/summary.json ${REFERENCE}/history.csv DESTINATION ${DIR}/reference)
+else()
+  execute_process(COMMAND ${_launch} run ${_common} --output ${DIR}/reference RESULT_VARIABLE _rc
+                  OUTPUT_QUIET)
+  if(NOT _rc EQUAL 0)
+    message(FATAL_ERROR "the uninterrupted reference run failed (exit ${_rc})")
+  endif()
 endif()
 
 # The run in the background; the signal once AFTER_ROWS steps are in history.csv (the header and
