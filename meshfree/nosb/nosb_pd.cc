@@ -23,6 +23,15 @@ std::string where(const ParticleSet<dim>& p, unsigned int i) {
   s << "particle " << i << " at (" << p.reference_position(i) << ")";
   return s.str();
 }
+// The state after an update whose stress the family carries as kept · P: its flow dissipates
+// kept · ΔW_p (J2Damage books the FEM's damaged points alike). With the whole ΔW_p a family that
+// kept little stress went on dissipating at full stress, and the energy account's plastic work
+// outgrew the energy supplied.
+materials::MaterialState kept_share_of_work(materials::MaterialState updated,
+                                            const materials::MaterialState& old, double kept) {
+  updated.plastic_work = old.plastic_work + kept * (updated.plastic_work - old.plastic_work);
+  return updated;
+}
 } // namespace
 
 template <int dim>
@@ -203,7 +212,7 @@ NosbPD<dim>::evaluate(unsigned int e, const dealii::Tensor<2, dim>& F,
               out.A[a][J][b][L] = kept * r.dP_dF[a][J][b][L];
         }
       if (trial)
-        *trial = r.state;
+        *trial = kept_share_of_work(r.state, old, kept);
     } else {
       // An explicit step needs P only; the law's tangent would cost several times more.
       const materials::FiniteStrainStress r = law_->finite_strain_stress(F3, dT, old);
@@ -211,7 +220,7 @@ NosbPD<dim>::evaluate(unsigned int e, const dealii::Tensor<2, dim>& F,
         for (unsigned int J = 0; J < dim; ++J)
           out.P[a][J] = kept * r.first_piola[a][J];
       if (trial)
-        *trial = r.state;
+        *trial = kept_share_of_work(r.state, old, kept);
     }
   } catch (const NumericalFailure& f) {
     throw NumericalFailure(f.what_failed(), where(particles, i) + " (NOSB-PD family)",

@@ -475,11 +475,13 @@ std::vector<double> SpgMethod<dim>::plastic_work_density(const ParticleSet<dim>&
   for (unsigned int i = 0; i < D.size() && i < solver_->committed_states().size(); ++i) {
     const materials::MaterialState& old = solver_->committed_states()[i];
     D[i] = old.plastic_work;
-    if (old.fracture_damage < 1.0)
-      D[i] =
-          law_->finite_strain_stress(materials::embed_plane_strain(particle_gradient(i, particles)),
-                                     particles.temperature(i) - reference_temperature_, old)
-              .state.plastic_work;
+    if (old.fracture_damage < 1.0) // the share kept of the update's work (SPGSolver alike)
+      D[i] += (1.0 - old.fracture_damage) *
+              (law_->finite_strain_stress(
+                       materials::embed_plane_strain(particle_gradient(i, particles)),
+                       particles.temperature(i) - reference_temperature_, old)
+                   .state.plastic_work -
+               old.plastic_work);
   }
   return D;
 }

@@ -225,7 +225,51 @@ spinesim_add_scene_test(stability.ring_plastic_spg_3d SCENE ${_ring3}
   SET ${_ring_plastic} "Effects/Particles method=spg" "Simulation/End time=4e-5" "Simulation/Steps=20"
   EXPECT "status==ok;initial_energy_J~14.098:1e-10;particle_plastic_work>=3.5;fragments<=1;energy_balance_error_relative<=2e-3"
   LABELS "scene;particles;validation;stability")
-# Its restart: stopped after step 21 of 50 and restarted, the NOSB-PD ring ends with the
+# Plastic flow and fracture together: the same ring with its bonds breaking (the scene's
+# Gc = 1000 J/m^2; SPG's critical stretch 0.01) and, in two of the runs, by plastic strain
+# (mean of the ends above 0.05). A family (row) whose stress breaks have scaled by the share
+# kept, 1 - D_f, dissipates that share of its plastic work (J2Damage books the FEM alike).
+# Before, it booked the law's whole increment: rows in opening cracks that carried almost no
+# stress went on flowing and "dissipating" at full stress, the plastic work outgrew the 3524.5
+# J/m ever supplied (SPG 12 918 J/m) and the balance read 0.58 (NOSB-PD), 0.21 (NOSB-PD with the
+# plastic-strain criterion) and 0.52 (SPG). Measured now: NOSB-PD 1.35e-2 and 2.65e-2, SPG
+# 2.6e-3. What remains in NOSB-PD does not fall with the step (3.1e-2 and 2.9e-2 at a half and a
+# quarter of it, other fragmentations): families that die or are re-weighted at breaks move
+# their plastic work into the fracture books, and the passes that break measure it without that
+# pass's flow; not closed yet (docs/nosb.md). Bounds: twice the measured, far below the defect.
+# The plastic work must stay below K0 (a ring whose rows flow at full stress passes it).
+set(_ring_plastic_fracture "Material/Model=j2_finite_strain" "Material/Yield stress=30e6"
+    "Material/Hardening modulus=1e9")
+set(_plastic_fracture_ok "status==ok;initial_energy_J~3524.5:1e-10;particle_plastic_work<=3524.5;broken_bonds>=1000")
+spinesim_add_scene_test(stability.ring_plastic_fracture_nosb_2d SCENE ${_ring}
+  SET ${_ring_plastic_fracture} "Effects/Particles method=nosb" "Particles/NOSB/Stabilization=penalty"
+  EXPECT "${_plastic_fracture_ok};energy_balance_error_relative<=0.03"
+  LABELS "scene;particles;stability")
+spinesim_add_scene_test(stability.ring_plastic_fracture_nosb_2d_plastic_strain SCENE ${_ring}
+  SET ${_ring_plastic_fracture} "Effects/Particles method=nosb" "Particles/NOSB/Stabilization=penalty"
+      "Particles/NOSB/Critical plastic strain=0.05"
+  EXPECT "${_plastic_fracture_ok};energy_balance_error_relative<=0.05"
+  LABELS "scene;particles;stability")
+spinesim_add_scene_test(stability.ring_plastic_fracture_spg_2d SCENE ${_ring}
+  SET ${_ring_plastic_fracture} "Effects/Particles method=spg" "Particles/SPG/Critical stretch=0.01"
+      "Particles/SPG/Critical plastic strain=0.05"
+  EXPECT "${_plastic_fracture_ok};energy_balance_error_relative<=5e-3"
+  LABELS "scene;particles;stability")
+# The tube in 3-D (K0 = 14.098 J), both criteria: NOSB-PD to 20 us (88 336 bond ends broken,
+# 14 s) 2.3e-3, SPG to 40 us (3744, 21 s) 4.6e-4 (not measured before the fix); bounds as in
+# 2-D, 5e-3 and 1e-3.
+set(_plastic_fracture_3d_ok "status==ok;initial_energy_J~14.098:1e-10;particle_plastic_work<=14.098;broken_bonds>=1000")
+spinesim_add_scene_test(stability.ring_plastic_fracture_nosb_3d SCENE ${_ring3}
+  SET ${_ring_plastic_fracture} "Effects/Particles method=nosb" "Particles/NOSB/Stabilization=penalty"
+      "Particles/NOSB/Critical plastic strain=0.05" "Simulation/End time=2e-5" "Simulation/Steps=10"
+  EXPECT "${_plastic_fracture_3d_ok};energy_balance_error_relative<=5e-3"
+  LABELS "scene;particles;stability")
+spinesim_add_scene_test(stability.ring_plastic_fracture_spg_3d SCENE ${_ring3}
+  SET ${_ring_plastic_fracture} "Effects/Particles method=spg" "Particles/SPG/Critical stretch=0.01"
+      "Particles/SPG/Critical plastic strain=0.05" "Simulation/End time=4e-5" "Simulation/Steps=20"
+  EXPECT "${_plastic_fracture_3d_ok};energy_balance_error_relative<=1e-3"
+  LABELS "scene;particles;stability")
+# The plastic NOSB-PD ring's restart: stopped after step 21 of 50 and restarted, it ends with the
 # uninterrupted run's figures, its plastic work and balance included (the zone's checkpoint
 # holds the families' states and the account). A copy of the stopped run whose particle
 # checkpoint lacks its last entry (the tag of this version's measure of the stored energy) reads
