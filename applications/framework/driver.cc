@@ -14,10 +14,12 @@
 
 #include <chrono>
 #include <csignal>
+#include <cstdlib>
 #include <exception>
 #include <filesystem>
 #include <iostream>
 #include <omp.h>
+#include <string>
 #include <thread>
 #include <unistd.h>
 
@@ -177,6 +179,9 @@ int run_command(const RunOptions& options) {
   }
   if (options.threads > 0) {
     omp_set_num_threads(options.threads);
+    // deal.II takes the smaller of this and DEAL_II_NUM_THREADS: --threads wins over the
+    // environment (and the runs a study starts inherit it).
+    setenv("DEAL_II_NUM_THREADS", std::to_string(options.threads).c_str(), 1);
     dealii::MultithreadInfo::set_thread_limit(options.threads);
   }
 

@@ -475,7 +475,10 @@ std::vector<double> SpgMethod<dim>::plastic_work_density(const ParticleSet<dim>&
   for (unsigned int i = 0; i < D.size() && i < solver_->committed_states().size(); ++i) {
     const materials::MaterialState& old = solver_->committed_states()[i];
     D[i] = old.plastic_work;
-    if (old.fracture_damage < 1.0) // the share kept of the update's work (SPGSolver alike)
+    // The share kept of the update's work, as SPGSolver books it. After a pass that broke
+    // bonds this reads the new share and the rebuilt row's F, while the state committed holds
+    // the pass's: the difference goes to the breaks' energy release.
+    if (old.fracture_damage < 1.0)
       D[i] += (1.0 - old.fracture_damage) *
               (law_->finite_strain_stress(
                        materials::embed_plane_strain(particle_gradient(i, particles)),

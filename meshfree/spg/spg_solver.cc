@@ -194,9 +194,9 @@ void SPGSolver<dim>::compute_forces(ParticleSet<dim>& p) {
         const auto r = law_.finite_strain_stress(F3, dT, committed_[N]);
         state_[N] = r.state;
         // The row carries kept · P, so its flow dissipates kept · ΔW_p (as J2Damage books the
-        // FEM's damaged points): the whole ΔW_p made a row that kept little stress keep
-        // hardening and dissipating at full stress, and the energy account's plastic work
-        // outgrew all energy ever supplied.
+        // FEM's damaged points); the law's plastic strain and hardening advance as returned.
+        // Booking the whole ΔW_p counted a row that kept little stress as dissipating at full
+        // stress, and the energy account's plastic work outgrew all energy ever supplied.
         state_[N].plastic_work =
             committed_[N].plastic_work + kept * (r.state.plastic_work - committed_[N].plastic_work);
         for (unsigned int i = 0; i < dim; ++i)
