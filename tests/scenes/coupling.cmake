@@ -578,15 +578,18 @@ spinesim_add_scene_test(scene.cracked_plate_spg_energy_splice SCENE ${_plate_nos
       "Coupling/Initial region upper corner=0.5,0.055"
   EXPECT "status==ok;crack_path_rms_y_m<=0.0125;crack_extent_max_x_m>=0.45;crack_extent_min_x_m<=-0.45"
   LABELS "scene;coupling" FIXTURE plate_spg_energy)
+# The all-particle SPG plate and its comparison are labelled long (57 s): the coupled SPG runs
+# above and below check the crack on 1 and 2 ranks, and the NOSB-PD pair the agreement with
+# the all-particle run that the coupling must reach.
 spinesim_add_scene_test(scene.cracked_plate_spg_all_particles SCENE ${_plate_nosb}
   OUT ${_runs}/cracked_plate_spg_all_particles SET ${_spg_plate} "Coupling/All particles=true"
-  EXPECT "status==ok;free_particles>=25600" LABELS "scene;coupling" TIMEOUT 900
+  EXPECT "status==ok;free_particles>=25600" LABELS "scene;coupling;long" TIMEOUT 900
   FIXTURE plate_spg_particles)
 spinesim_add_comparison_test(scene.cracked_plate_spg_energy_splice_agree
   A ${_runs}/cracked_plate_spg_all_particles/summary.json
   B ${_runs}/cracked_plate_spg_energy_splice/summary.json
   CHECKS "peak_load_N:rel:0.05;crack_path_rms_y_m:abs:0.0125;crack_extent_max_x_m:abs:0.0125;crack_extent_min_x_m:abs:0.0125"
-  REQUIRES "plate_spg_energy;plate_spg_particles" LABELS "scene;coupling")
+  REQUIRES "plate_spg_energy;plate_spg_particles" LABELS "scene;coupling;long")
 # The same coupled SPG fracture on 2 ranks (the band and its crack cross the partition): the
 # same crack, bond for bond, and the peak load to round-off (measured 3e-14 relative; the
 # correction's sums are added in another order). Bound 1e-9: a break that moved by a step would
@@ -666,7 +669,8 @@ spinesim_add_scene_test(scene.slanted_crack_coupled_2ranks SCENE ${_slanted} RAN
 # horizon, 0.0188 m) one branch crosses the centre line and ends at y = -0.19 m. At 3.5e-4 it
 # crosses and turns, in a wider band (1928 cracked particles, ends at y = -0.178 and +0.166 m,
 # angle 1.6 deg, 36 s): the ends are held from 5 cm inside to 10 cm outside the pre-crack tips'
-# height, still far from the 45 degree line's exit through the top and bottom edges.
+# height, still far from the 45 degree line's exit through the top and bottom edges. Labelled
+# long: its stretch is not calibrated, and the NOSB-PD run checks the dynamic crack.
 set(_slanted_particles "Material/Poisson ratio=0.3" "Mechanics/Plane stress=false")
 spinesim_add_scene_test(scene.slanted_crack_coupled_nosb SCENE ${_slanted}
   OUT ${_runs}/slanted_crack_nosb
@@ -677,7 +681,7 @@ spinesim_add_scene_test(scene.slanted_crack_coupled_spg SCENE ${_slanted}
   OUT ${_runs}/slanted_crack_spg
   SET ${_slanted_particles} "Effects/Particles method=spg" "Coupling/SPG/Critical stretch=3.5e-4"
   EXPECT "status==ok;crack_particles>=300;crack_tip_1_x_m<=-0.45;crack_tip_2_x_m>=0.45;crack_tip_1_y_m>=-0.206;crack_tip_1_y_m<=-0.056;crack_tip_2_y_m>=0.056;crack_tip_2_y_m<=0.206;max_displacement<=1e-3"
-  LABELS "scene;coupling")
+  LABELS "scene;coupling;long")
 spinesim_add_comparison_test(scene.slanted_crack_ranks_agree
   A ${_runs}/slanted_crack/summary.json B ${_runs}/slanted_crack_2ranks/summary.json
   CHECKS "peak_load_N:rel:1e-9;crack_particles:abs:0;crack_angle_deg:abs:1e-9"
