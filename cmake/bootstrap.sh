@@ -18,7 +18,7 @@ jobs=${SPINESIM_JOBS:-$(nproc)}
 
 # Debian packages the build, the tests and the plots need (by name, nothing downloaded).
 packages=(
-  cmake make g++ ccache pkg-config
+  cmake make ninja-build g++ ccache pkg-config
   libdeal.ii-dev          # deal.II 9.4 with Trilinos, p4est, PETSc, HDF5, MPI, TBB
   libopenblas0-serial     # optimised BLAS/LAPACK behind Debian's alternatives (single-threaded:
                           # no contention with OpenMP or MPI ranks); the dense eigenvalue
@@ -49,8 +49,14 @@ export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_
 export CCACHE_DIR=${CCACHE_DIR:-$root/.ccache}
 
 mkdir -p "$build"
+# Ninja for a new build directory: it compiles a target's files while the libraries it links
+# are still building, where CMake's Makefiles wait for each dependency. A cold build of
+# everything on 2 cores took 615 s with Ninja against 803-814 s with Makefiles. A directory
+# configured before keeps its generator (CMake refuses to switch).
+generator=()
+[[ -f "$build/CMakeCache.txt" ]] || generator=(-G Ninja)
 echo "== configuring ($build)"
-cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release >"$build/configure.log" 2>&1 ||
+cmake -S "$root" -B "$build" "${generator[@]}" -DCMAKE_BUILD_TYPE=Release >"$build/configure.log" 2>&1 ||
   { cat "$build/configure.log"; exit 1; }
 # `run` builds only the executable and the libraries it loads (the first result comes sooner
 # on a fresh machine); `test` builds everything.
