@@ -303,17 +303,10 @@ void CoupledIntegrator<dim>::advance(double dt, double a, double load_time, bool
     move_particles(false); // every cell converted: the FEM step had no forces to hand over
   if (state_.n_ghost_particles() > 0)
     ghosts_.update();
-  if (state_.heat && state_.n_free_particles() > 0) {
-    // The FEM temperature drives the temperatures of the free particles owned here (their
-    // host cells are this rank's; synchronise() spreads them).
-    std::vector<double> values;
-    for (const auto& [cell, row] : state_.free_cells) {
-      state_.heat->temperature_at_unit_points(cell, state_.points.get_points(), values);
-      for (unsigned int q = 0; q < row.size(); ++q)
-        if (row[q] >= 0)
-          particles.temperature(row[q]) = values[q];
-    }
-  }
+  // The FEM temperature drives the particles' temperatures (synchronise() spreads them); it
+  // holds still while a relaxation runs, so its first pseudo-step reads it.
+  if (state_.heat && particles.size() > 0 && (!sums || first))
+    ghosts_.update_temperatures();
 }
 
 template <int dim>

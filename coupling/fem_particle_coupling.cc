@@ -74,6 +74,7 @@ void FemParticleCoupling<dim>::rebuild_layers() {
   interface_.rebuild();
   halo_.plan(interface_);
   ghosts_.update(); // owned ghosts from the FEM, then the halo (free particles included)
+  ghosts_.update_temperatures();
   // Carried states last: each family continues its state at its F of these displacements.
   bond_rows_.hand_over_states();
   plastic_heat_.track_new_particles(); // what the new particles inherited was heat of the FEM

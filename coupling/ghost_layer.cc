@@ -1,5 +1,7 @@
 #include "coupling/ghost_layer.h"
 
+#include "fem/heat/heat_solver.h"
+
 #include "coupling/particle_record.h"
 #include "coupling/point_bins.h"
 
@@ -165,6 +167,21 @@ void GhostLayer<dim>::update() {
     }
   }
   halo_.exchange();
+}
+
+template <int dim>
+void GhostLayer<dim>::update_temperatures() {
+  if (!state_.heat)
+    return;
+  std::vector<double> values;
+  for (const auto* table : {&state_.free_cells, &ghost_cells_})
+    for (const auto& [cell, row] : *table) {
+      state_.heat->temperature_at_unit_points(cell, state_.points.get_points(), values);
+      for (unsigned int q = 0; q < row.size(); ++q)
+        if (row[q] >= 0)
+          state_.particles.temperature(row[q]) = values[q];
+    }
+  halo_.exchange_temperatures();
 }
 
 template class GhostLayer<2>;

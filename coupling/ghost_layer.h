@@ -25,6 +25,12 @@ class GhostLayer {
   void rebuild_tables();
   // u and v of the ghosts this rank owns from the FEM, then the halo.
   void update();
+  // With heat: the temperatures of the particles (free and ghost) whose host cells this rank
+  // owns, from the FEM field. The families of both run the thermal strain of their law, so a
+  // ghost at its initial temperature would carry a spurious thermal stress into the free
+  // particles' forces. A rank also evaluates the families of its rows' partners owned
+  // elsewhere (BondRows), so the halo brings their temperatures (collective).
+  void update_temperatures();
   // The next extend() searches around every free particle (the particles were replaced).
   void forget_search() { free_searched_.clear(); }
 

@@ -98,6 +98,40 @@ void ParticleHalo<dim>::exchange() {
 }
 
 template <int dim>
+void ParticleHalo<dim>::exchange_temperatures() {
+  const MPI_Comm comm = state_.fem.mpi_communicator();
+  if (Utilities::MPI::n_mpi_processes(comm) == 1)
+    return;
+  constexpr int tag = 7303;
+  std::vector<std::vector<double>> out, in;
+  std::vector<MPI_Request> requests;
+  requests.reserve(send_.size() + recv_.size());
+  out.reserve(send_.size());
+  in.reserve(recv_.size());
+  for (const auto& [rank, list] : recv_) {
+    in.emplace_back(list.size());
+    requests.emplace_back();
+    MPI_Irecv(in.back().data(), static_cast<int>(list.size()), MPI_DOUBLE, static_cast<int>(rank),
+              tag, comm, &requests.back());
+  }
+  for (const auto& [rank, list] : send_) {
+    out.emplace_back();
+    for (const unsigned int i : list)
+      out.back().push_back(state_.particles.temperature(i));
+    requests.emplace_back();
+    MPI_Isend(out.back().data(), static_cast<int>(list.size()), MPI_DOUBLE, static_cast<int>(rank),
+              tag, comm, &requests.back());
+  }
+  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
+  std::size_t k = 0;
+  for (const auto& [rank, list] : recv_) {
+    const auto& b = in[k++];
+    for (std::size_t m = 0; m < list.size(); ++m)
+      state_.particles.temperature(list[m]) = b[m];
+  }
+}
+
+template <int dim>
 void ParticleHalo<dim>::add_to_owners(std::vector<Tensor<1, dim>>& values) const {
   const MPI_Comm comm = state_.fem.mpi_communicator();
   if (Utilities::MPI::n_mpi_processes(comm) == 1)

@@ -22,7 +22,8 @@ class ParticleHalo {
   // Owners (CouplingState::owner) and the plan: which particles this rank reads but others
   // own, and which of its own the others read.
   void plan(const MlsInterface<dim>& interface);
-  void exchange(); // u, v of halo particles from their owners
+  void exchange();              // u, v of halo particles from their owners
+  void exchange_temperatures(); // temperatures of halo particles from their owners
   // The reverse of exchange(): what this rank computed for halo particles (forces on the
   // partners and stencil particles it reads) is added to their owners' entries and zeroed here
   // (collective). `values` has one entry per particle.

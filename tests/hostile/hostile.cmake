@@ -173,7 +173,7 @@ add_test(NAME hostile.interrupt_and_restart_plastic_heat
     -DSCENE=${PROJECT_SOURCE_DIR}/applications/validation/coupling_plastic_conversion.prm
     -DDIR=${_runs}/interrupt_and_restart_plastic_heat -DAFTER_ROWS=1 -DTOL=1e-12
     -DREFERENCE=${PROJECT_BINARY_DIR}/tests/scenes/runs/plastic_conversion/heat_nosb_2d
-    "-DSET=Effects/Heat=true|Mechanics/Taylor-Quinney coefficient=0.9|Heat/Time step=0.25|Effects/Particles method=nosb"
+    "-DSET=Effects/Heat=true|Mechanics/Taylor-Quinney coefficient=0.9|Heat/Time step=0.25|Effects/Thermal expansion=true|Material/Thermal expansion=1e-5|Heat/Initial temperature=330.15|Effects/Particles method=nosb"
     -P ${PROJECT_SOURCE_DIR}/tests/support/interrupt_case.cmake)
 set_tests_properties(hostile.interrupt_and_restart_plastic_heat PROPERTIES LABELS "hostile;cli;heat"
   TIMEOUT 300 FIXTURES_REQUIRED ph_nosb_2d)
