@@ -46,6 +46,27 @@ function(spinesim_early_symbol_scope target)
                       "LINKER:--pop-state")
 endfunction()
 
+# Precompiled headers: the deal.II headers most files include, parsed once into one GCC
+# precompiled header (target spinesim_pch) that every target of the project reuses. Parsing
+# them is about a third of a unity batch's compile (the 22 system headers of one coupling batch
+# alone: 10.6 s of its 37.9 s). A cold build of everything with Ninja on 2 cores: 615 s without
+# it, 465 s with it. GCC and a build without sanitizers only (the flags must match
+# the header's); SPINESIM_PRECOMPILED_HEADERS=OFF compiles every file from its own includes, as
+# checks of a file's include list want.
+option(SPINESIM_PRECOMPILED_HEADERS "Compile the common deal.II headers once (GCC)" ON)
+set(SPINESIM_PCH_HEADERS
+    <deal.II/base/mpi.h> <deal.II/base/parameter_handler.h> <deal.II/base/point.h>
+    <deal.II/base/tensor.h> <deal.II/base/symmetric_tensor.h> <deal.II/base/function.h>
+    <deal.II/base/quadrature_lib.h> <deal.II/base/utilities.h> <deal.II/base/index_set.h>
+    <deal.II/lac/vector.h> <deal.II/lac/full_matrix.h> <deal.II/lac/trilinos_vector.h>
+    <deal.II/lac/trilinos_sparse_matrix.h> <deal.II/grid/tria.h> <deal.II/distributed/tria.h>
+    <deal.II/dofs/dof_handler.h> <deal.II/fe/fe_values.h> <deal.II/fe/fe_q.h>
+    <deal.II/fe/fe_system.h> <vector> <string> <map> <memory> <functional> <algorithm>)
+set(SPINESIM_USE_PCH OFF)
+if(SPINESIM_PRECOMPILED_HEADERS AND CMAKE_CXX_COMPILER_ID STREQUAL "GNU" AND NOT SPINESIM_SANITIZE)
+  set(SPINESIM_USE_PCH ON)
+endif()
+
 # spinesim_setup_target(<target>): deal.II flags and libraries and warnings for the project's
 # own code. No include directory of the project: each module exposes its own (below).
 function(spinesim_setup_target target)
@@ -63,6 +84,15 @@ function(spinesim_setup_target target)
   target_link_libraries(${target} OpenMP::OpenMP_CXX)
   if(_type STREQUAL "EXECUTABLE")
     spinesim_early_symbol_scope(${target})
+  endif()
+  if(SPINESIM_USE_PCH)
+    # GCC takes a precompiled header only where the macros it tests are defined as they were
+    # for it: CGAL's targets define BOOST_ALL_NO_LIB (Boost's auto-linking, which only MSVC
+    # has), so every target defines it and the implant code and scenarios use the header too.
+    target_compile_definitions(${target} PRIVATE BOOST_ALL_NO_LIB)
+    if(NOT target STREQUAL "spinesim_pch")
+      target_precompile_headers(${target} REUSE_FROM spinesim_pch)
+    endif()
   endif()
   if(SPINESIM_SANITIZE)
     # After the build type's -O3: the last -O wins.
@@ -104,3 +134,13 @@ function(spinesim_add_library name)
     target_link_libraries(${name} ${ARG_LINKS})
   endif()
 endfunction()
+
+# The target holding the precompiled header (SPINESIM_PCH_HEADERS): an object library set up
+# like every other target, so its flags are theirs.
+if(SPINESIM_USE_PCH)
+  file(WRITE ${PROJECT_BINARY_DIR}/spinesim_pch.cc "// the precompiled header's own unit\n")
+  add_library(spinesim_pch OBJECT ${PROJECT_BINARY_DIR}/spinesim_pch.cc)
+  set_target_properties(spinesim_pch PROPERTIES POSITION_INDEPENDENT_CODE ON UNITY_BUILD OFF)
+  spinesim_setup_target(spinesim_pch)
+  target_precompile_headers(spinesim_pch PRIVATE ${SPINESIM_PCH_HEADERS})
+endif()

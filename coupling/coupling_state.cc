@@ -2,11 +2,13 @@
 
 #include "base/exceptions.h"
 
+#include <deal.II/base/array_view.h>
 #include <deal.II/base/mpi.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <set>
 #include <sstream>
 #include <string>
 
@@ -96,6 +98,47 @@ void CouplingState<dim>::prepare() {
     }
   const MPI_Comm comm = fem.mpi_communicator();
   h_min = Utilities::MPI::min(h_min, comm);
+  // The particle methods take one law (the first cell's): cells of other materials would turn
+  // into, or drive ghosts of, particles with the wrong stiffness, density and strength.
+  // Refused until the particles carry their host cell's law.
+  {
+    std::vector<double> lo{std::numeric_limits<double>::max(), 2.0,
+                           std::numeric_limits<double>::max()};
+    std::vector<double> hi{0.0, -2.0, 0.0};
+    std::set<std::string> models;
+    for (const auto& [id, cell] : owned_cells) {
+      const auto cell_law = fem.cell_law(cell);
+      const double values[3] = {cell_law->youngs_modulus(), cell_law->poisson_ratio(),
+                                cell_law->density()};
+      for (unsigned int k = 0; k < 3; ++k) {
+        lo[k] = std::min(lo[k], values[k]);
+        hi[k] = std::max(hi[k], values[k]);
+      }
+      models.insert(cell_law->name());
+    }
+    Utilities::MPI::min(ArrayView<const double>(lo), comm, ArrayView<double>(lo));
+    Utilities::MPI::max(ArrayView<const double>(hi), comm, ArrayView<double>(hi));
+    for (const auto& part :
+         Utilities::MPI::all_gather(comm, std::vector<std::string>(models.begin(), models.end())))
+      models.insert(part.begin(), part.end());
+    const std::size_t n_models = models.size();
+    const char* names[3] = {"Young's modulus [Pa]", "Poisson ratio [-]", "density [kg/m^3]"};
+    std::ostringstream spread;
+    for (unsigned int k = 0; k < 3; ++k)
+      if (hi[k] - lo[k] > 1e-12 * std::abs(hi[k]))
+        spread << (spread.tellp() > 0 ? ", " : "") << names[k] << " from " << lo[k] << " to "
+               << hi[k];
+    if (n_models > 1) {
+      spread << (spread.tellp() > 0 ? ", " : "") << "laws";
+      for (const auto& m : models)
+        spread << " " << m;
+    }
+    if (spread.tellp() > 0)
+      throw InvalidInput("Material",
+                         "the coupled run's cells hold more than one material (" + spread.str() +
+                             ") but the particles take one law",
+                         "one material in a coupled run (Effects/Coupling with a particle method)");
+  }
   // E, ν, ρ from the lowest rank that owns cells.
   const unsigned int source = Utilities::MPI::min(have_law ? rank : 1u << 30, comm);
   std::vector<double> props{youngs, poisson, density};

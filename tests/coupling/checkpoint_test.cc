@@ -33,12 +33,18 @@ namespace {
 // J2 yielding at a strain of 6e-5 with `plastic` (the imposed fields below are plastic).
 template <int dim>
 struct CoupledSetup {
-  CoupledSetup(const std::string& method, bool plastic) : tria(MPI_COMM_WORLD) {
+  // second_youngs > 0: the cells right of x = 0.5 are material 1, that law with this E.
+  CoupledSetup(const std::string& method, bool plastic, double second_youngs = 0)
+      : tria(MPI_COMM_WORLD) {
     fem::MeshParameters mesh;
     mesh.origin = {0, 0, 0};
     mesh.lengths = {1, 1, 1};
     mesh.subdivisions = {dim == 2 ? 8u : 4u, dim == 2 ? 8u : 4u, 4u};
     fem::build_mesh(mesh, tria);
+    if (second_youngs > 0)
+      for (const auto& cell : tria.active_cell_iterators())
+        if (cell->center()[0] > 0.5)
+          cell->set_material_id(1);
     typename fem::MechanicsSolver<dim>::Parameters mech;
     mech.time_integration = "explicit";
     solver = std::make_unique<fem::MechanicsSolver<dim>>(tria, mech);
@@ -50,6 +56,10 @@ struct CoupledSetup {
       law.hardening_modulus = 1e8;
     }
     solver->set_material(0, materials::create_law(law));
+    if (second_youngs > 0) {
+      law.youngs_modulus = second_youngs;
+      solver->set_material(1, materials::create_law(law));
+    }
     solver->setup();
     dealii::ParameterHandler prm;
     meshfree::declare_particle_method_sections(prm);
@@ -232,6 +242,29 @@ TEST(CouplingCheckpoint, DamagedFileIsInvalidInput2D) {
 TEST(CouplingCheckpoint, DamagedFileIsInvalidInput3D) {
   damaged_checkpoint_is_invalid_input<3>();
 }
+// Particles take one law: a coupled run whose cells hold two materials (bone and a stiffer
+// one) is refused with the range of the materials' moduli, never run with the first cell's
+// law for every particle.
+template <int dim>
+void two_materials_are_refused(const std::string& method) {
+  CoupledSetup<dim> setup(method, false, 110e9);
+  FemParticleCoupling<dim> c(setup.parameters, *setup.solver);
+  try {
+    c.initialise();
+    FAIL() << "a coupled run of two materials started";
+  } catch (const InvalidInput& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("Young's modulus [Pa] from 1.7e+10 to 1.1e+11"), std::string::npos) << what;
+  }
+}
+
+TEST(CouplingMaterials, TwoMaterialsAreRefused2D) {
+  two_materials_are_refused<2>("nosb");
+}
+TEST(CouplingMaterials, TwoMaterialsAreRefused3D) {
+  two_materials_are_refused<3>("spg");
+}
+
 TEST(CoupledStep, DivergenceIsCaught2D) {
   divergence_is_caught<2>();
 }
