@@ -100,7 +100,8 @@ void CouplingState<dim>::prepare() {
   h_min = Utilities::MPI::min(h_min, comm);
   // The particle methods take one law (the first cell's): cells of other materials would turn
   // into, or drive ghosts of, particles with the wrong stiffness, density and strength.
-  // Refused until the particles carry their host cell's law.
+  // Refused until the particles carry their host cell's law. Compared by E, ν, ρ and the
+  // law's name (laws do not report their other parameters, e.g. a yield stress).
   {
     std::vector<double> lo{std::numeric_limits<double>::max(), 2.0,
                            std::numeric_limits<double>::max()};
@@ -211,7 +212,12 @@ void CouplingState<dim>::prepare() {
   if (!law)
     law = fem.cell_law(*dh.active_cell_iterators().begin());
   meshfree::ParticleMaterial material{youngs, poisson, density, law};
-  material.reference_temperature = fem.reference_temperature();
+  // Particles strain thermally exactly where the FEM does: without a temperature field the
+  // FEM ignores the law's expansion coefficient, and so must the particles (their temperatures
+  // still follow the heat equation when it runs).
+  material.reference_temperature = fem.has_temperature_field()
+                                       ? fem.reference_temperature()
+                                       : std::numeric_limits<double>::quiet_NaN();
   method = prm.make_method(material);
   particle_material = material;
   for (auto& m : method->take_messages())

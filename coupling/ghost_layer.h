@@ -27,7 +27,7 @@ class GhostLayer {
   void update();
   // With heat: the temperatures of the particles (free and ghost) whose host cells this rank
   // owns, from the FEM field. The families of both run the thermal strain of their law, so a
-  // ghost at its initial temperature would carry a spurious thermal stress into the free
+  // ghost left at 0 K (never set) would carry a spurious thermal stress into the free
   // particles' forces. A rank also evaluates the families of its rows' partners owned
   // elsewhere (BondRows), so the halo brings their temperatures (collective).
   void update_temperatures();

@@ -315,6 +315,8 @@ class MechanicsSolver {
   std::shared_ptr<const materials::ConstitutiveLaw> cell_law(const CellIterator& cell) const;
   // T_ref of set_temperature_field() [K] (0 without a temperature field).
   double reference_temperature() const { return reference_temperature_; }
+  // Whether a temperature field drives thermal strain (set_temperature_field).
+  bool has_temperature_field() const { return temperature_field_ != nullptr; }
   const VectorType& lumped_mass() const { return lumped_mass_; } // owned [kg]
   // Hanging-node constraints (locally relevant DoFs).
   const dealii::AffineConstraints<double>& hanging_constraints() const { return hanging_; }

@@ -45,7 +45,9 @@ struct ParticleMaterial {
   std::shared_ptr<const materials::ConstitutiveLaw> law;
   // Temperature at which the particles are free of thermal strain [K]: the law sees
   // particles.temperature() minus this (a coupled run's particles carry absolute FEM
-  // temperatures; stand-alone zones carry temperature changes and leave it 0).
+  // temperatures; stand-alone zones carry temperature changes and leave it 0). NaN: the
+  // particles take no thermal strain (a coupled run whose FEM has none, though the heat
+  // equation runs and the law has an expansion coefficient).
   double reference_temperature = 0;
 };
 

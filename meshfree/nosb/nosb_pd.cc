@@ -199,7 +199,7 @@ NosbPD<dim>::evaluate(unsigned int e, const dealii::Tensor<2, dim>& F,
     return Response();
   }
   const materials::Tensor2 F3 = materials::embed_plane_strain(F);
-  const double dT = particles.temperature(i) - reference_temperature_;
+  const double dT = thermal_change(particles.temperature(i));
   Response out;
   try {
     if (with_tangent) {
@@ -715,7 +715,7 @@ double NosbPD<dim>::stress_energy(unsigned int e, const dealii::Tensor<2, dim>& 
     // strain): the path integral below would count the plastic strain as stored, or start from
     // a stressed intermediate configuration (finite strain).
     const auto& old = committed_[fam.history_index(e)];
-    const double dT = particles.temperature(fam.centre(e)) - reference_temperature_;
+    const double dT = thermal_change(particles.temperature(fam.centre(e)));
     if (const auto W = law_->stored_energy_density(materials::embed_plane_strain(F), dT, old))
       return (1.0 - old.fracture_damage) * fam.weight(e) * *W; // W = (1 − D_f) W_law
   }

@@ -55,6 +55,7 @@
 #include <deal.II/lac/sparse_matrix.h>
 #include <deal.II/lac/sparsity_pattern.h>
 
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <limits>
@@ -228,6 +229,7 @@ class NosbPD {
 
   // Temperature at which the particles carry no thermal strain [K]: the law is called with
   // particles.temperature() minus this. 0 by default (temperatures are changes).
+  // NaN: no thermal strain (ParticleMaterial::reference_temperature).
   void set_reference_temperature(double T) { reference_temperature_ = T; }
   // Driven particles (coupling ghosts): a bond between two of them never breaks.
   void set_driven(std::vector<std::uint8_t> driven) { driven_ = std::move(driven); }
@@ -295,6 +297,10 @@ class NosbPD {
   std::vector<std::pair<unsigned int, unsigned int>> history_keys_;
   std::vector<std::size_t> particle_history_begin_; // history indices of particle i: [b_i, b_i+1)
   double reference_temperature_ = 0;
+  // T − T_ref the law sees; 0 without thermal strain (reference NaN).
+  double thermal_change(double T) const {
+    return std::isnan(reference_temperature_) ? 0.0 : T - reference_temperature_;
+  }
   std::vector<std::uint8_t> driven_;
   unsigned int first_ghost_ = ~0u;
   // (row, bond) of the bonds whose partner has no bond row of its own, in bond order

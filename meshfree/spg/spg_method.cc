@@ -217,7 +217,7 @@ double SpgMethod<dim>::energy_density(unsigned int i, const ParticleSet<dim>& pa
   const double t[4] = {0.5 * (1 - b), 0.5 * (1 - a), 0.5 * (1 + a), 0.5 * (1 + b)};
   const double w[4] = {0.5 * wb, 0.5 * wa, 0.5 * wa, 0.5 * wb};
   const auto F = particle_gradient(i, particles);
-  const double dT = particles.temperature(i) - reference_temperature_;
+  const double dT = thermal_change(particles.temperature(i));
   // A law whose stored energy is a function of its state (J2 plasticity), as in NOSB-PD: the
   // path integral below would count the plastic strain as stored, or start from a stressed
   // intermediate configuration (finite strain).
@@ -482,7 +482,7 @@ std::vector<double> SpgMethod<dim>::plastic_work_density(const ParticleSet<dim>&
       D[i] += (1.0 - old.fracture_damage) *
               (law_->finite_strain_stress(
                        materials::embed_plane_strain(particle_gradient(i, particles)),
-                       particles.temperature(i) - reference_temperature_, old)
+                       thermal_change(particles.temperature(i)), old)
                    .state.plastic_work -
                old.plastic_work);
   }

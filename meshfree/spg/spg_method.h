@@ -20,6 +20,7 @@
 #include "meshfree/particle_method.h"
 #include "meshfree/spg/spg_solver.h"
 
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <utility>
@@ -125,6 +126,10 @@ class SpgMethod : public ParticleMethod<dim> {
   SpgParameters prm_;
   std::shared_ptr<const materials::ConstitutiveLaw> law_;
   double thickness_ = 1.0, reference_temperature_ = 0;
+  // T − T_ref the law sees; 0 without thermal strain (reference NaN).
+  double thermal_change(double T) const {
+    return std::isnan(reference_temperature_) ? 0.0 : T - reference_temperature_;
+  }
   std::vector<std::uint8_t> driven_;
   unsigned int first_ghost_ = ~0u;                                // set_first_ghost()
   std::function<bool(unsigned int, unsigned int)> break_decider_; // set_break_decider()

@@ -190,7 +190,9 @@ void SPGSolver<dim>::compute_forces(ParticleSet<dim>& p) {
     const double kept = 1.0 - committed_[N].fracture_damage;
     try {
       if (kept > 0.0) {
-        const double dT = has_temperature ? temperature[N] - reference_temperature_ : 0.0;
+        const double dT = has_temperature && !std::isnan(reference_temperature_)
+                              ? temperature[N] - reference_temperature_
+                              : 0.0;
         const auto r = law_.finite_strain_stress(F3, dT, committed_[N]);
         state_[N] = r.state;
         // The row carries kept · P, so its flow dissipates kept · ΔW_p (as J2Damage books the
