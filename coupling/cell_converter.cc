@@ -253,6 +253,7 @@ CellConverter<dim>::make_records(const std::set<std::string>& todo, double& max_
     if (state_.heat)
       state_.heat->temperature_at_unit_points(cell, state_.points.get_points(), temperature);
     const double rho = state_.fem.cell_material(cell).density();
+    const materials::LawParameters law = state_.cell_law_parameters(cell);
     // The mass and momentum this cell takes out of the lumped FEM mass (same quadrature).
     double cell_mass = 0;
     Tensor<1, dim> cell_momentum;
@@ -327,6 +328,7 @@ CellConverter<dim>::make_records(const std::set<std::string>& todo, double& max_
       r.fixed_slots = slots;
       r.volume = at_points.JxW(q) * scale;
       r.density = rho;
+      r.law = law;
       r.temperature = temperature[q];
       r.position = at_points.quadrature_point(q);
       r.displacement = u[q];
@@ -438,6 +440,7 @@ ConversionReport<dim> CellConverter<dim>::convert(const std::vector<CellId>& cel
       state_.support_offset[i] = r.support_offset;
       state_.particles.volume(i) = r.volume;
       state_.particles.density(i) = r.density;
+      state_.particles.material_id(i) = state_.law_index(r.law, state_.owned_law(r.cell));
       state_.particles.temperature(i) = r.temperature;
       state_.particles.displacement(i) = r.displacement;
       state_.particles.velocity(i) = r.velocity;

@@ -2,6 +2,7 @@
 
 #include "base/exceptions.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <set>
@@ -58,15 +59,16 @@ CheckpointContents read_checkpoint_text(std::istream& in, std::uintmax_t bytes, 
     throw InvalidInput(file, "a checkpoint read for dimension " + std::to_string(dim), "2 or 3");
   CheckpointContents c;
   std::string tag;
-  std::size_t n = 0, nc = 0, nb = 0, nh = 0;
+  std::size_t n = 0, nc = 0, nb = 0, nh = 0, nl = 0;
   if (!(in >> tag) || tag != "spinesim_coupling" || !read_number(in, c.version) || c.version < 1 ||
-      c.version > 6 || !read_finite(in, c.time) || c.time < 0 || !read_number(in, n) ||
+      c.version > 7 || !read_finite(in, c.time) || c.time < 0 || !read_number(in, n) ||
       !read_number(in, nc) || !read_number(in, nb) ||
       (c.version >= 2 && !(read_finite(in, c.dissipation) && read_finite(in, c.heat))) ||
       (c.version >= 3 && !read_number(in, nh)) ||
-      (c.version >= 6 && !(read_number(in, c.n_last_pass) && c.n_last_pass <= n)))
+      (c.version >= 6 && !(read_number(in, c.n_last_pass) && c.n_last_pass <= n)) ||
+      (c.version >= 7 && !read_number(in, nl)))
     throw InvalidInput(file, "missing or unreadable coupling checkpoint header",
-                       "a file written by FemParticleCoupling::save (versions 1 to 6)");
+                       "a file written by FemParticleCoupling::save (versions 1 to 7)");
   // Numbers of a history record's material state: version 4 added the fracture damage.
   const unsigned int n_state =
       c.version >= 4 ? checkpoint_state_doubles : checkpoint_state_doubles - 1;
@@ -75,17 +77,18 @@ CheckpointContents read_checkpoint_text(std::istream& in, std::uintmax_t bytes, 
   const auto fits = [&](std::size_t count, std::size_t numbers_per_record) {
     return count <= bytes / (2 * numbers_per_record);
   };
-  if (!fits(n, 7 + (c.version >= 6 ? 1 : 0) +
+  if (!fits(n, 7 + (c.version >= 6 ? 1 : 0) + (c.version >= 7 ? 1 : 0) +
                    (c.version >= 6   ? 5
                     : c.version >= 5 ? 4
                                      : 3) *
                        dim) ||
-      !fits(nc, 2) || !fits(nb, 2) || !fits(nh, 2 + n_state))
+      !fits(nc, 2) || !fits(nb, 2) || !fits(nh, 2 + n_state) ||
+      !fits(nl, 2 + checkpoint_law_values))
     throw InvalidInput(file,
                        "header counts (" + std::to_string(n) + " particles, " + std::to_string(nc) +
                            " converted cells, " + std::to_string(nb) + " broken bonds, " +
-                           std::to_string(nh) + " history records) exceed what its " +
-                           std::to_string(bytes) + " bytes can hold",
+                           std::to_string(nh) + " history records, " + std::to_string(nl) +
+                           " laws) exceed what its " + std::to_string(bytes) + " bytes can hold",
                        written_by);
   const auto require = [&](bool ok, const std::string& what, std::size_t k) {
     if (!ok)
@@ -100,6 +103,22 @@ CheckpointContents read_checkpoint_text(std::istream& in, std::uintmax_t bytes, 
     unsigned int batch = 0;
     require(in >> id && is_cell_id(id, dim) && read_number(in, batch), "converted cell", k);
     c.converted[id] = batch;
+  }
+
+  for (std::size_t k = 0; k < nl; ++k) {
+    auto& law = c.laws.emplace_back();
+    int secant = 0;
+    // A model name: a registry key, lower-case letters, digits and '_' (the loader checks
+    // that the model exists).
+    bool ok = in >> law.model && !law.model.empty() && law.model.size() <= 64 &&
+              std::all_of(law.model.begin(), law.model.end(), [](char ch) {
+                return (ch >= 'a' && ch <= 'z') || (ch >= '0' && ch <= '9') || ch == '_';
+              });
+    for (unsigned int m = 0; ok && m < checkpoint_law_values; ++m)
+      ok = read_finite(in, law.values[m]);
+    ok = ok && read_number(in, secant) && (secant == 0 || secant == 1);
+    require(ok, "law", k);
+    law.secant_tangent = secant == 1;
   }
 
   // Records are appended as they are read: memory follows what the file holds, not what its
@@ -122,6 +141,8 @@ CheckpointContents read_checkpoint_text(std::istream& in, std::uintmax_t bytes, 
       ok = read_finite(in, p.last_pass_displacement[d]);
     if (ok && c.version >= 6)
       ok = read_finite(in, p.stiffness_bound) && p.stiffness_bound >= 0;
+    if (ok && c.version >= 7)
+      ok = read_number(in, p.material) && p.material < nl;
     require(ok, "particle", i);
     p.free = free == 1;
     // One particle per quadrature point of a converted cell.

@@ -1,7 +1,7 @@
 #ifndef SPINESIM_COUPLING_CHECKPOINT_TEXT_H
 #define SPINESIM_COUPLING_CHECKPOINT_TEXT_H
 
-// The bytes of a coupling checkpoint ("spinesim_coupling 1" to "3", written by
+// The bytes of a coupling checkpoint ("spinesim_coupling 1" to "7", written by
 // CouplingCheckpoint::save) read into plain records, with every check a file from outside
 // needs: counts bounded by the file's size before anything is sized by them, every record
 // complete, in range and finite, nothing after the last record. No deal.II: the loader turns
@@ -37,6 +37,16 @@ struct CheckpointParticle {
   std::array<double, 3> position{}, displacement{}, velocity{}, support_offset{},
       last_pass_displacement{};
   double stiffness_bound = 0; // [N/m^4 or the method's unit]
+  unsigned int material = 0;  // version 7: index into CheckpointContents::laws
+};
+
+// A particle law's parameters (materials::LawParameters, version 7): the model's name, the
+// values in the order of checkpoint_law_values and the secant-tangent flag.
+constexpr unsigned int checkpoint_law_values = 11;
+struct CheckpointLaw {
+  std::string model;
+  std::array<double, checkpoint_law_values> values{};
+  bool secant_tangent = false;
 };
 
 // The material history of the family of `particle` towards `neighbour`.
@@ -52,7 +62,8 @@ struct CheckpointContents {
   std::vector<CheckpointParticle> particles;
   std::vector<std::pair<unsigned int, unsigned int>> broken; // particle index pairs
   std::vector<CheckpointHistory> history;                    // version 3
-  std::size_t n_last_pass = 0; // version 6: particles the last force pass saw (a prefix)
+  std::size_t n_last_pass = 0;     // version 6: particles the last force pass saw (a prefix)
+  std::vector<CheckpointLaw> laws; // version 7: the particles' laws (CouplingState::laws)
 };
 
 // Reads a checkpoint of a `dim`-dimensional run whose coupling has `n_points` candidate

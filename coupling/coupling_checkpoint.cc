@@ -3,6 +3,8 @@
 #include "coupling/checkpoint_text.h"
 
 #include "base/exceptions.h"
+#include "fem/materials/law_parameters.h"
+#include "fem/materials/material_models.h"
 #include "fem/materials/material_state_io.h"
 #include "meshfree/bond_loop.h"
 
@@ -31,6 +33,43 @@ constexpr unsigned int state_doubles = materials::material_state_doubles;
 using materials::pack_state;
 using materials::unpack_state;
 } // namespace
+
+namespace checkpoint_laws {
+// LawParameters as the numbers of a checkpoint's law line (CheckpointLaw), and back.
+std::array<double, checkpoint_law_values> to_text(const materials::LawParameters& p) {
+  return {p.youngs_modulus,
+          p.poisson_ratio,
+          p.density,
+          p.yield_stress,
+          p.hardening_modulus,
+          p.saturation_stress,
+          p.saturation_exponent,
+          p.thermal_expansion,
+          p.damage_onset_plastic_strain,
+          p.damage_softening_strain,
+          p.maximum_damage};
+}
+
+materials::LawParameters from_text(const CheckpointLaw& law) {
+  materials::LawParameters p;
+  p.model = law.model;
+  double* fields[checkpoint_law_values] = {&p.youngs_modulus,
+                                           &p.poisson_ratio,
+                                           &p.density,
+                                           &p.yield_stress,
+                                           &p.hardening_modulus,
+                                           &p.saturation_stress,
+                                           &p.saturation_exponent,
+                                           &p.thermal_expansion,
+                                           &p.damage_onset_plastic_strain,
+                                           &p.damage_softening_strain,
+                                           &p.maximum_damage};
+  for (unsigned int m = 0; m < checkpoint_law_values; ++m)
+    *fields[m] = law.values[m];
+  p.secant_tangent = law.secant_tangent;
+  return p;
+}
+} // namespace checkpoint_laws
 
 template <int dim>
 void CouplingCheckpoint<dim>::save(const std::string& file) const {
@@ -94,13 +133,22 @@ void CouplingCheckpoint<dim>::save(const std::string& file) const {
   // the material history of the particle method; version 4 its fracture damage D_f (one more
   // number per history record); version 5 the particles' support offsets (dim numbers more);
   // version 6 the displacement at the last force pass and the stiffness bound (dim + 1 more a
-  // particle; the header's last number: how many particles the last force pass saw).
-  out << "spinesim_coupling 6\n"
+  // particle; the header's eighth number: how many particles the last force pass saw);
+  // version 7 the particles' laws (their number last in the header, one line each after the
+  // converted cells) and each particle's index among them.
+  out << "spinesim_coupling 7\n"
       << p_.integrator.time() << " " << particles.size() << " " << p_.converter.converted().size()
       << " " << broken.size() << " " << dissipation << " " << p_.fracture.heat() << " " << n_history
-      << " " << u_pass.size() << "\n";
+      << " " << u_pass.size() << " " << state.law_parameters.size() << "\n";
   for (const auto& [id, batch] : p_.converter.converted())
     out << id << " " << batch << "\n";
+  for (const auto& law : state.law_parameters) {
+    const auto values = checkpoint_laws::to_text(law);
+    out << law.model;
+    for (const double v : values)
+      out << " " << v;
+    out << " " << int(law.secant_tangent) << "\n";
+  }
   for (unsigned int i = 0; i < particles.size(); ++i) {
     out << state.host_cell[i] << " " << state.host_point[i] << " " << int(state.free[i]) << " "
         << state.fixed_slots[i] << " " << particles.volume(i) << " " << particles.density(i) << " "
@@ -113,7 +161,7 @@ void CouplingCheckpoint<dim>::save(const std::string& file) const {
       out << " " << state.support_offset[i][d];
     for (unsigned int d = 0; d <= dim; ++d)
       out << " " << integration[(dim + 1) * i + d];
-    out << "\n";
+    out << " " << particles.material_id(i) << "\n";
   }
   for (const auto& [i, j] : broken)
     out << i << " " << j << "\n";
@@ -147,6 +195,29 @@ void CouplingCheckpoint<dim>::load(const std::string& file) {
   p_.integrator.set_time(c.time);
   p_.fracture.restore(c.dissipation, c.heat); // version 1: none
   state.clear_particles();
+  // The laws in the file's order, so the particles' indices keep their meaning. Older files
+  // come from runs whose particles all took the method's one law.
+  std::vector<unsigned int> law_of_record;
+  if (c.version >= 7) {
+    // Laws this rank already holds keep their objects (shared with the FEM cells).
+    std::vector<
+        std::pair<materials::LawParameters, std::shared_ptr<const materials::ConstitutiveLaw>>>
+        held;
+    for (unsigned int m = 0; m < state.laws->size(); ++m)
+      held.emplace_back(state.law_parameters[m], state.laws->law_pointer(m));
+    state.clear_laws();
+    for (std::size_t m = 0; m < c.laws.size(); ++m) {
+      const auto p = checkpoint_laws::from_text(c.laws[m]);
+      if (!materials::MaterialModels::instance().entries().count(p.model))
+        throw InvalidInput(file, "law " + std::to_string(m) + " has an unknown model " + p.model,
+                           "a checkpoint of this program (Material/Model names)");
+      std::shared_ptr<const materials::ConstitutiveLaw> object;
+      for (const auto& [q, pointer] : held)
+        if (q.same_law(p))
+          object = pointer;
+      law_of_record.push_back(state.law_index(p, object));
+    }
+  }
   for (const auto& r : c.particles) {
     Point<dim> x;
     Tensor<1, dim> u, v;
@@ -157,6 +228,7 @@ void CouplingCheckpoint<dim>::load(const std::string& file) {
     }
     const unsigned int k = state.add_particle(r.cell, r.point, x, r.volume);
     particles.density(k) = r.density;
+    particles.material_id(k) = c.version >= 7 ? law_of_record[r.material] : 0;
     particles.temperature(k) = r.temperature;
     particles.displacement(k) = u;
     particles.velocity(k) = v;

@@ -98,50 +98,18 @@ void CouplingState<dim>::prepare() {
     }
   const MPI_Comm comm = fem.mpi_communicator();
   h_min = Utilities::MPI::min(h_min, comm);
-  // The particle methods take one law (the first cell's): cells of other materials would turn
-  // into, or drive ghosts of, particles with the wrong stiffness, density and strength.
-  // Refused until the particles carry their host cell's law. Compared by E, ν, ρ and the
-  // law's name (laws do not report their other parameters, e.g. a yield stress).
-  {
-    std::vector<double> lo{std::numeric_limits<double>::max(), 2.0,
-                           std::numeric_limits<double>::max()};
-    std::vector<double> hi{0.0, -2.0, 0.0};
-    std::set<std::string> models;
-    for (const auto& [id, cell] : owned_cells) {
-      const auto cell_law = fem.cell_law(cell);
-      const double values[3] = {cell_law->youngs_modulus(), cell_law->poisson_ratio(),
-                                cell_law->density()};
-      for (unsigned int k = 0; k < 3; ++k) {
-        lo[k] = std::min(lo[k], values[k]);
-        hi[k] = std::max(hi[k], values[k]);
-      }
-      models.insert(cell_law->name());
-    }
-    Utilities::MPI::min(ArrayView<const double>(lo), comm, ArrayView<double>(lo));
-    Utilities::MPI::max(ArrayView<const double>(hi), comm, ArrayView<double>(hi));
-    for (const auto& part :
-         Utilities::MPI::all_gather(comm, std::vector<std::string>(models.begin(), models.end())))
-      models.insert(part.begin(), part.end());
-    const std::size_t n_models = models.size();
-    const char* names[3] = {"Young's modulus [Pa]", "Poisson ratio [-]", "density [kg/m^3]"};
-    std::ostringstream spread;
-    for (unsigned int k = 0; k < 3; ++k)
-      if (hi[k] - lo[k] > 1e-12 * std::abs(hi[k]))
-        spread << (spread.tellp() > 0 ? ", " : "") << names[k] << " from " << lo[k] << " to "
-               << hi[k];
-    if (n_models > 1) {
-      spread << (spread.tellp() > 0 ? ", " : "") << "laws";
-      for (const auto& m : models)
-        spread << " " << m;
-    }
-    if (spread.tellp() > 0)
-      throw InvalidInput("Material",
-                         "the coupled run's cells hold more than one material (" + spread.str() +
-                             ") but the particles take one law",
-                         "one material in a coupled run (Effects/Coupling with a particle method)");
-  }
-  // E, ν, ρ from the lowest rank that owns cells.
+  // E, ν, ρ from the lowest rank that owns cells, and its first cell's law as the method's
+  // default law (table entry 0 on every rank, when the law can be described).
   const unsigned int source = Utilities::MPI::min(have_law ? rank : 1u << 30, comm);
+  clear_laws();
+  {
+    std::vector<materials::LawParameters> first(1);
+    if (!(have_law && law->describe(first[0])))
+      first.clear();
+    first = Utilities::MPI::broadcast(comm, first, source);
+    if (!first.empty())
+      law = laws->law_pointer(law_index(first[0], rank == source ? law : nullptr));
+  }
   std::vector<double> props{youngs, poisson, density};
   props = Utilities::MPI::broadcast(comm, props, source);
   youngs = props[0];
@@ -204,14 +172,13 @@ void CouplingState<dim>::prepare() {
   if (!prm.make_method)
     throw InvalidInput("Coupling", "no particle method was read for the coupling",
                        "Coupling parameters parsed with Effects/Particles method");
-  // Calibrated to the law of the FEM cells the particles replace (the same law on every
-  // rank; the law object itself is not needed by methods without point-wise laws).
-  // A rank without cells still needs a law object: the same model from the owning rank's E,
-  // ν and ρ is not available generically, so such a rank takes the first cell's law of the
-  // mesh (every rank holds the laws of all material ids).
+  // The method's default law (above); each particle runs its host cell's law from `laws`.
+  // Only a law that cannot describe itself leaves a rank without cells to take the first
+  // cell's law of the mesh (every rank holds the laws of all material ids).
   if (!law)
     law = fem.cell_law(*dh.active_cell_iterators().begin());
   meshfree::ParticleMaterial material{youngs, poisson, density, law};
+  material.table = laws;
   // Particles strain thermally exactly where the FEM does: without a temperature field the
   // FEM ignores the law's expansion coefficient, and so must the particles (their temperatures
   // still follow the heat equation when it runs).
@@ -268,6 +235,67 @@ CouplingState<dim>::cell_state_deformation(const DoFCell& cell, unsigned int poi
   if (!F)
     return std::nullopt;
   return (*F)[nearest_quadrature_point[point]];
+}
+
+namespace {
+// Exact identity of a law's parameters as a map key: the model and the values' bits.
+std::string law_key(const materials::LawParameters& p) {
+  const double values[] = {p.youngs_modulus,
+                           p.poisson_ratio,
+                           p.density,
+                           p.yield_stress,
+                           p.hardening_modulus,
+                           p.saturation_stress,
+                           p.saturation_exponent,
+                           p.thermal_expansion,
+                           p.damage_onset_plastic_strain,
+                           p.damage_softening_strain,
+                           p.maximum_damage,
+                           p.secant_tangent ? 1.0 : 0.0};
+  std::string key = p.model;
+  key.push_back('\0');
+  key.append(reinterpret_cast<const char*>(values), sizeof(values));
+  return key;
+}
+} // namespace
+
+template <int dim>
+unsigned int
+CouplingState<dim>::law_index(const materials::LawParameters& p,
+                              std::shared_ptr<const materials::ConstitutiveLaw> local) {
+  const auto [it, added] = law_lookup.emplace(law_key(p), laws->size());
+  if (added) {
+    laws->add(local ? std::move(local)
+                    : std::shared_ptr<const materials::ConstitutiveLaw>(materials::rebuild_law(p)));
+    law_parameters.push_back(p);
+  }
+  return it->second;
+}
+
+template <int dim>
+materials::LawParameters CouplingState<dim>::cell_law_parameters(const DoFCell& cell) const {
+  materials::LawParameters p;
+  const auto law = fem.cell_law(cell);
+  if (!law->describe(p))
+    throw InvalidInput("Material",
+                       "law " + law->name() +
+                           " cannot be handed to particles (it does not report its parameters)",
+                       "a law made from Material parameters (Model)");
+  return p;
+}
+
+template <int dim>
+std::shared_ptr<const materials::ConstitutiveLaw>
+CouplingState<dim>::owned_law(const std::string& cell_id) const {
+  const auto it = owned_cells.find(cell_id);
+  return it == owned_cells.end() ? nullptr : fem.cell_law(it->second);
+}
+
+template <int dim>
+void CouplingState<dim>::clear_laws() {
+  laws->clear();
+  law_parameters.clear();
+  law_lookup.clear();
 }
 
 template <int dim>

@@ -9,6 +9,7 @@
 
 #include "coupling/coupling_parameters.h"
 
+#include "fem/materials/law_parameters.h"
 #include "fem/mechanics_solver.h"
 #include "meshfree/bond_list.h"
 #include "meshfree/particle_method.h"
@@ -105,7 +106,25 @@ struct CouplingState {
   // The owned cells of the particle lattice's size, by active index: only these can convert
   // (the refinement box makes them).
   std::vector<DoFCell> lattice_cells;
+  // E, ν and ρ of the law the method is constructed with (a lattice cell's, the same on
+  // every rank); the particles run their own laws from `laws`.
   double spacing = 0, youngs = 0, poisson = 0, density = 0;
+  // The particles' laws (ParticleSet::material_id indexes them), shared with the method, and
+  // their parameters in the same order: records name their host cell's law by its
+  // parameters, so every rank, adding records in the all-gathered order, gives a law the
+  // same index; a checkpoint writes them.
+  std::shared_ptr<meshfree::MaterialTable> laws = std::make_shared<meshfree::MaterialTable>();
+  std::vector<materials::LawParameters> law_parameters;
+  // The index of the law `p` describes, added to `laws` if new. `local`: this rank's object
+  // for that law (a cell's), shared with the FEM; null builds it from `p`.
+  unsigned int law_index(const materials::LawParameters& p,
+                         std::shared_ptr<const materials::ConstitutiveLaw> local = nullptr);
+  // The parameters of `cell`'s law; InvalidInput naming the law if it cannot give them.
+  materials::LawParameters cell_law_parameters(const DoFCell& cell) const;
+  // This rank's law object of cell `cell_id` if it owns the cell, else null.
+  std::shared_ptr<const materials::ConstitutiveLaw> owned_law(const std::string& cell_id) const;
+  // Empties `laws` (a checkpoint brings its own).
+  void clear_laws();
   std::unique_ptr<meshfree::ParticleMethod<dim>> method;
   // What `method` was made for (EnergySplice makes a second one for its probes).
   meshfree::ParticleMaterial particle_material;
@@ -128,7 +147,8 @@ struct CouplingState {
   // CellId strings need a map lookup).
   std::vector<int> host_index;
   std::map<std::pair<std::string, unsigned int>, unsigned int> index_of; // (cell, point) -> i
-  std::vector<std::uint32_t> fixed_slots; // per particle: Dirichlet slots of its cell
+  std::map<std::string, unsigned int> law_lookup; // law_key(parameters) -> index in `laws`
+  std::vector<std::uint32_t> fixed_slots;         // per particle: Dirichlet slots of its cell
   // Per particle: its fixed components' offset from the prescribed values [m]
   // (ParticleRecord::support_offset).
   std::vector<dealii::Tensor<1, dim>> support_offset;

@@ -426,6 +426,7 @@ std::string FemParticleCoupling<dim>::write_output(const std::string& directory,
         out.displacement(k)[d] = u[dim * i + d];
       out.velocity(k) = particles.velocity(i);
       out.density(k) = particles.density(i);
+      out.material_id(k) = particles.material_id(i);
       out.damage(k) = particles.damage(i);
       out.temperature(k) = particles.temperature(i);
       if (eps)

@@ -70,8 +70,9 @@ class FemParticleCoupling {
   static void prepare_mesh(const Parameters& parameters,
                            dealii::parallel::distributed::Triangulation<dim>& triangulation);
 
-  // The solver must be set up, explicit, small strain, one law (E, ν, ρ from the first active
-  // cell's law: the PD micromodulus is calibrated to it). `heat` is optional.
+  // The solver must be set up. Each particle runs the law of the cell it came from
+  // (CouplingState::laws; bonds between materials: meshfree/material_table.h). `heat` is
+  // optional.
   FemParticleCoupling(const Parameters& parameters, fem::MechanicsSolver<dim>& mechanics,
                       const fem::HeatSolver<dim>* heat = nullptr);
   ~FemParticleCoupling();
@@ -183,6 +184,9 @@ class FemParticleCoupling {
   void restore_plastic_heat(double heat, double work) { plastic_heat_.restore(heat, work); }
 
   unsigned int n_free_particles() const { return state_.n_free_particles(); }
+  // Constitutive laws the particles run (distinct host-cell laws; the method's default
+  // included).
+  unsigned int n_particle_laws() const { return state_.laws->size(); }
   unsigned int n_ghost_particles() const { return state_.n_ghost_particles(); }
   unsigned int n_converted_cells() const {
     return static_cast<unsigned int>(converter_.converted().size());

@@ -60,6 +60,7 @@ void GhostLayer<dim>::extend() {
       continue;
     at_points.reinit(cell);
     const double rho = state_.fem.cell_material(cell).density();
+    const materials::LawParameters law = state_.cell_law_parameters(cell);
     for (unsigned int q = 0; q < np; ++q) {
       if (state_.prm.in_hole(xs[q])) // cells the hole reaches are particles from t = 0
         continue;
@@ -68,6 +69,7 @@ void GhostLayer<dim>::extend() {
       r.point = q;
       r.volume = at_points.JxW(q);
       r.density = rho;
+      r.law = law;
       r.position = xs[q];
       if (with_state) { // a ghost family starts from the cell's history and follows the FEM
         r.has_state = true;
@@ -84,6 +86,7 @@ void GhostLayer<dim>::extend() {
     for (const auto& r : part) {
       const unsigned int i = state_.add_particle(r.cell, r.point, r.position, r.volume);
       state_.particles.density(i) = r.density;
+      state_.particles.material_id(i) = state_.law_index(r.law, state_.owned_law(r.cell));
       if (r.has_state)
         state_.pending_states.push_back(CouplingState<dim>::carried(i, r));
     }

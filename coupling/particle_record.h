@@ -6,6 +6,7 @@
 // Utilities::MPI::all_gather): everything the other ranks need to add it.
 
 #include "fem/materials/constitutive_law.h"
+#include "fem/materials/law_parameters.h"
 
 #include <deal.II/base/point.h>
 #include <deal.II/base/tensor.h>
@@ -29,6 +30,8 @@ struct ParticleRecord {
   // Of the fixed components: displacement at conversion less the prescribed value there [m]
   // (ParticleBoundary holds u = g(X, t) + offset).
   dealii::Tensor<1, dim> support_offset;
+  // The host cell's constitutive law, which the particle runs on (CouplingState::laws).
+  materials::LawParameters law;
   // The cell's constitutive state at the particle (nearest quadrature point); only for
   // methods that carry material state.
   bool has_state = false;
@@ -41,7 +44,7 @@ struct ParticleRecord {
   template <class Archive>
   void serialize(Archive& ar, const unsigned int) {
     ar& cell& point& free& fixed_slots& volume& density& temperature& position& displacement&
-        velocity& support_offset& has_state;
+        velocity& support_offset& law& has_state;
     if (has_state)
       ar& state.plastic_strain& state.elastic_left_cauchy_green& state
           .equivalent_plastic_strain& state.plastic_work& state
@@ -54,7 +57,7 @@ struct ParticleRecord {
     return cell == o.cell && point == o.point && free == o.free && fixed_slots == o.fixed_slots &&
            volume == o.volume && density == o.density && temperature == o.temperature &&
            position == o.position && displacement == o.displacement && velocity == o.velocity &&
-           support_offset == o.support_offset;
+           support_offset == o.support_offset && law.same_law(o.law);
   }
 };
 

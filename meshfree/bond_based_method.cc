@@ -11,27 +11,36 @@ namespace spinesim::meshfree {
 template <int dim>
 BondBasedMethod<dim>::BondBasedMethod(const Parameters& parameters,
                                       const ParticleMaterial& material)
-    : pd_(parameters, material.youngs_modulus, material.poisson_ratio) {
-  const auto model = parameters.plane_model;
+    : pd_(parameters, material.youngs_modulus, material.poisson_ratio), prm_(parameters),
+      table_(material.table) {
+  pd_.set_material_table(material.table);
+  check_poisson_ratio(material.poisson_ratio, "");
+  checked_nu_.insert(material.poisson_ratio);
+}
+
+template <int dim>
+void BondBasedMethod<dim>::check_poisson_ratio(double nu, const std::string& law) {
+  const auto model = prm_.plane_model;
   const std::string model_name =
       model == PlaneModel::plane_stress ? "plane stress" : "plane strain";
-  const double implied = implied_poisson_ratio(model), nu = material.poisson_ratio;
+  const double implied = implied_poisson_ratio(model);
   // 1e-6: scenes write 1/3 to ten digits or more; any real mismatch is far larger.
   if (std::abs(nu - implied) <= 1e-6 * implied)
     return;
   const std::string where = dim == 3 ? "3-D" : model_name;
+  const std::string whose = law.empty() ? "" : " (particles of law " + law + ")";
   std::ostringstream error;
   error << std::setprecision(3) << 100.0 * shear_modulus_error(model, nu);
-  if (!parameters.accept_poisson_mismatch)
+  if (!prm_.accept_poisson_mismatch)
     throw InvalidInput(
         "Material/Poisson ratio",
-        "= " + std::to_string(nu) +
+        "= " + std::to_string(nu) + whose +
             ", but bond-based PD represents nu = " + std::to_string(implied) + " in " + where +
             " (pairwise central forces); the shear modulus would be off by " + error.str() + " %",
         "Effects/Particles method = nosb (any Poisson ratio), nu = " + std::to_string(implied) +
             ", or Bond based/Accept Poisson ratio mismatch = true");
   messages_.push_back("bond-based PD represents nu = " + std::to_string(implied) + " in " + where +
-                      ", the material has nu = " + std::to_string(nu) +
+                      ", the material" + whose + " has nu = " + std::to_string(nu) +
                       " (accepted): the particles' shear modulus is off by " + error.str() +
                       " % (bulk modulus matched)");
 }
@@ -86,6 +95,14 @@ typename NeighborSearch<dim>::Options BondBasedMethod<dim>::neighbor_options(dou
 template <int dim>
 void BondBasedMethod<dim>::initialise(const ParticleSet<dim>& particles,
                                       const BondList<dim>& bonds) {
+  // Laws the table gained since the last call: each Poisson ratio is checked once.
+  if (table_) {
+    for (; checked_laws_ < table_->size(); ++checked_laws_) {
+      const double nu = (*table_)[checked_laws_].poisson_ratio;
+      if (checked_nu_.insert(nu).second)
+        check_poisson_ratio(nu, table_->law(checked_laws_).name());
+    }
+  }
   pd_.initialise(particles, bonds);
 }
 

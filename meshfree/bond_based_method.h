@@ -9,6 +9,10 @@
 #include "meshfree/bond_based_pd.h"
 #include "meshfree/particle_method.h"
 
+#include <memory>
+#include <set>
+#include <string>
+
 namespace spinesim::meshfree {
 
 struct BondBasedMethodParameters : BondBasedParameters {
@@ -76,7 +80,15 @@ class BondBasedMethod : public ParticleMethod<dim> {
                        const BondList<dim>& bonds) const override;
 
  private:
+  // InvalidInput unless ν is the implied ratio or the mismatch is accepted (then a message);
+  // `law` names the particles' law when the run has several.
+  void check_poisson_ratio(double nu, const std::string& law);
+
   BondBasedPD<dim> pd_;
+  Parameters prm_;
+  std::shared_ptr<const MaterialTable> table_;
+  unsigned int checked_laws_ = 0; // table entries whose ν was checked
+  std::set<double> checked_nu_;
   std::vector<std::uint8_t> driven_; // set_driven()
   std::vector<std::string> messages_;
 };

@@ -28,12 +28,16 @@ BondBasedPD<dim>::BondBasedPD(const Parameters& parameters, double youngs_modulu
                        "horizon ratio, thickness, critical stretch or "
                        "fracture energy out of range",
                        "horizon ratio > 1, thickness > 0, critical stretch >= 0, Gc >= 0");
+  modulus_ = calibration_modulus(E_, nu_);
+}
+
+template <int dim>
+double BondBasedPD<dim>::calibration_modulus(double E, double nu) const {
   if (dim == 3)
-    modulus_ = E_ / (3.0 * (1.0 - 2.0 * nu_));
-  else if (prm_.plane_model == PlaneModel::plane_stress)
-    modulus_ = E_ / (2.0 * (1.0 - nu_));
-  else
-    modulus_ = E_ / (2.0 * (1.0 - nu_ - 2.0 * nu_ * nu_));
+    return E / (3.0 * (1.0 - 2.0 * nu));
+  if (prm_.plane_model == PlaneModel::plane_stress)
+    return E / (2.0 * (1.0 - nu));
+  return E / (2.0 * (1.0 - nu - 2.0 * nu * nu));
 }
 
 template <int dim>
@@ -116,8 +120,41 @@ void BondBasedPD<dim>::initialise(const ParticleSet<dim>& particles, const BondL
   s0_ = critical_stretch(bonds.horizon);
   k_.resize(bonds.n_bonds());
   const auto& V = particles.volumes();
-  for_each_bond(bonds, [&](unsigned int, std::size_t k, unsigned int j) {
-    k_[k] = c_ * bonds.influence[k] * bonds.volume_factor(k) * bonds.surface(k) * V[j] /
+  if (!table_ || table_->empty()) {
+    for_each_bond(bonds, [&](unsigned int, std::size_t k, unsigned int j) {
+      k_[k] = c_ * bonds.influence[k] * bonds.volume_factor(k) * bonds.surface(k) * V[j] /
+              bonds.length[k];
+    });
+    return;
+  }
+  // Several materials: c per law; a bond within one material keeps that law's c exactly.
+  std::vector<double> c(table_->size()), s0(table_->size());
+  for (unsigned int m = 0; m < table_->size(); ++m) {
+    const double modulus =
+        calibration_modulus((*table_)[m].youngs_modulus, (*table_)[m].poisson_ratio);
+    c[m] = micromodulus(influence_, bonds.horizon, modulus, prm_.thickness);
+    s0[m] = prm_.critical_stretch > 0.0 ? prm_.critical_stretch
+            : prm_.fracture_energy > 0.0
+                ? critical_stretch_from_fracture_energy(influence_, bonds.horizon, modulus,
+                                                        prm_.fracture_energy)
+                : std::numeric_limits<double>::infinity();
+  }
+  // One G_c gives each material its own s0 ∝ sqrt(G_c/K); the force kernel takes one s0.
+  for (unsigned int m = 1; m < s0.size(); ++m)
+    if (s0[m] != s0[0])
+      throw InvalidInput("Bond based/Fracture energy",
+                         "particles of " + std::to_string(table_->size()) +
+                             " materials get critical stretches from " +
+                             std::to_string(*std::min_element(s0.begin(), s0.end())) + " to " +
+                             std::to_string(*std::max_element(s0.begin(), s0.end())) +
+                             " from one fracture energy, but bond-based PD takes one",
+                         "Bond based/Critical stretch > 0 (one critical stretch for all bonds), "
+                         "or Effects/Particles method = nosb or spg");
+  s0_ = s0[0];
+  const auto& id = particles.material_ids();
+  for_each_bond(bonds, [&](unsigned int i, std::size_t k, unsigned int j) {
+    const double cij = id[i] == id[j] ? c[id[i]] : series_mean(c[id[i]], c[id[j]]);
+    k_[k] = cij * bonds.influence[k] * bonds.volume_factor(k) * bonds.surface(k) * V[j] /
             bonds.length[k];
   });
 }

@@ -19,6 +19,7 @@
 #include "meshfree/bond_based_parameters.h"
 #include "meshfree/bond_list.h"
 #include "meshfree/influence_function.h"
+#include "meshfree/material_table.h"
 #include "meshfree/neighbor_search.h"
 #include "meshfree/particle_set.h"
 
@@ -56,6 +57,13 @@ class BondBasedPD {
   double micromodulus(double delta) const;
   // s_0 [-]: the parameter if > 0, else from G_c, else +infinity (no damage).
   double critical_stretch(double delta) const;
+
+  // Particles of several materials: particle i is calibrated to (*table)[material_id(i)]'s
+  // E and ν, a bond between two materials takes the series mean of their micromoduli
+  // (meshfree/material_table.h). Null: every particle has the constructor's E and ν.
+  void set_material_table(std::shared_ptr<const MaterialTable> table) { table_ = std::move(table); }
+  // The calibration modulus above for E [Pa] and ν [-].
+  double calibration_modulus(double youngs_modulus, double poisson_ratio) const;
 
   // Precomputes k_ij for these particles and bonds. Call again when volumes or bonds change.
   // InvalidInput if the particle thickness differs from the parameter (2-D).
@@ -101,6 +109,7 @@ class BondBasedPD {
   double E_, nu_, modulus_;
   double c_ = 0, s0_ = 0;
   std::vector<double> k_;
+  std::shared_ptr<const MaterialTable> table_;
 };
 
 } // namespace spinesim::meshfree

@@ -20,6 +20,7 @@
 #include "base/registry.h"
 #include "fem/materials/constitutive_law.h"
 #include "meshfree/bond_list.h"
+#include "meshfree/material_table.h"
 #include "meshfree/neighbor_search.h"
 #include "meshfree/particle_set.h"
 
@@ -49,6 +50,10 @@ struct ParticleMaterial {
   // particles take no thermal strain (a coupled run whose FEM has none, though the heat
   // equation runs and the law has an expansion coefficient).
   double reference_temperature = 0;
+  // Several materials (coupled runs): particle i runs law (*table)[material_id(i)] and `law`
+  // is only a default for the method's construction. Null: every particle runs `law`. The
+  // table may grow between initialise() calls (the method rereads it there).
+  std::shared_ptr<const MaterialTable> table;
 };
 
 // One entry of a method's committed material history, keyed so that it survives a

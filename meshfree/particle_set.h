@@ -64,8 +64,10 @@ class ParticleSet {
   double& density(unsigned int i) { return density_[i]; }
   double density(unsigned int i) const { return density_[i]; }
   double mass(unsigned int i) const { return density_[i] * volume_[i]; }
+  // Index into the particle method's MaterialTable (0 without one).
   unsigned int& material_id(unsigned int i) { return material_id_[i]; }
   unsigned int material_id(unsigned int i) const { return material_id_[i]; }
+  const std::vector<unsigned int>& material_ids() const { return material_id_; }
   double& temperature(unsigned int i) { return temperature_[i]; }
   double temperature(unsigned int i) const { return temperature_[i]; }
   double& damage(unsigned int i) { return damage_[i]; }

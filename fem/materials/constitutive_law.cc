@@ -11,6 +11,10 @@ FiniteStrainStress ConstitutiveLaw::finite_strain_stress(const Tensor2& F, doubl
   return {r.first_piola, std::move(r.state)};
 }
 
+bool ConstitutiveLaw::describe(LawParameters&) const {
+  return false;
+}
+
 std::optional<double> ConstitutiveLaw::stored_energy_density(const Tensor2&, double,
                                                              const MaterialState&) const {
   return std::nullopt;

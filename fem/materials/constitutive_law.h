@@ -52,10 +52,16 @@ struct FiniteStrainStress {
   MaterialState state;
 };
 
+struct LawParameters; // law_parameters.h
+
 class ConstitutiveLaw {
  public:
   virtual ~ConstitutiveLaw() = default;
   virtual std::string name() const = 0;
+  // The parameters rebuild_law() makes this law from again, giving the same stresses to the
+  // last bit (a law travels between ranks and into checkpoints as its parameters). False for
+  // a law that cannot be described by LawParameters.
+  virtual bool describe(LawParameters& out) const;
 
   // Linearised kinematics: total strain ε and temperature change ΔT [K] from the reference.
   virtual SmallStrainResponse small_strain(const SymTensor2& strain, double temperature_change,

@@ -121,6 +121,16 @@ std::optional<double> J2Damage::stored_energy_density(const Tensor2& F, double d
   return (1.0 - D) * effective_.stored_energy_density(dealii::symmetrize(e.first_piola));
 }
 
+bool J2Damage::describe(LawParameters& out) const {
+  effective_.describe(out);
+  out.model = name();
+  out.damage_onset_plastic_strain = damage_.onset_plastic_strain;
+  out.damage_softening_strain = damage_.softening_strain;
+  out.maximum_damage = damage_.maximum_damage;
+  out.secant_tangent = secant_;
+  return true;
+}
+
 SPINESIM_REGISTER_MATERIAL_MODEL(
     j2_damage, "j2_damage",
     "small-strain von Mises with ductile damage D(eps_bar_p) on the effective stress "
@@ -130,7 +140,8 @@ SPINESIM_REGISTER_MATERIAL_MODEL(
           p.youngs_modulus, p.poisson_ratio, p.density, p.thermal_expansion,
           IsotropicHardening(p.yield_stress, p.hardening_modulus, p.saturation_stress,
                              p.saturation_exponent),
-          DamageCurve{p.damage_onset_plastic_strain, p.damage_softening_strain, p.maximum_damage});
+          DamageCurve{p.damage_onset_plastic_strain, p.damage_softening_strain, p.maximum_damage},
+          p.secant_tangent);
     })
 
 } // namespace spinesim::materials

@@ -52,6 +52,7 @@ class J2Damage : public ConstitutiveLaw {
            bool secant_tangent = false);
 
   std::string name() const override { return "j2_damage"; }
+  bool describe(LawParameters& out) const override;
   SmallStrainResponse small_strain(const SymTensor2& strain, double temperature_change,
                                    const MaterialState& old_state) const override;
   // Linearised kinematics as J2Plasticity::finite_strain (small displacement gradients only).

@@ -54,6 +54,20 @@ FiniteStrainStress J2Plasticity::finite_strain_stress(const Tensor2& F, double d
   return {Tensor2(r.stress), std::move(r.state)};
 }
 
+bool J2Plasticity::describe(LawParameters& out) const {
+  out = LawParameters();
+  out.model = name();
+  out.youngs_modulus = E_;
+  out.poisson_ratio = nu_;
+  out.density = rho_;
+  out.thermal_expansion = alpha_;
+  out.yield_stress = hardening_.yield_stress();
+  out.hardening_modulus = hardening_.hardening_modulus();
+  out.saturation_stress = hardening_.saturation_stress();
+  out.saturation_exponent = hardening_.saturation_exponent();
+  return true;
+}
+
 SPINESIM_REGISTER_MATERIAL_MODEL(j2_plasticity, "j2_plasticity",
                                  "small-strain von Mises, radial return.", true,
                                  [](const LawParameters& p) -> std::unique_ptr<ConstitutiveLaw> {

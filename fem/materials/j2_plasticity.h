@@ -21,6 +21,7 @@ class J2Plasticity : public ConstitutiveLaw {
 
   static constexpr const char* law_name = "j2_plasticity";
   std::string name() const override { return law_name; }
+  bool describe(LawParameters& out) const override;
   SmallStrainResponse small_strain(const SymTensor2& strain, double temperature_change,
                                    const MaterialState& old_state) const override;
   FiniteStrainResponse finite_strain(const Tensor2& F, double temperature_change,

@@ -136,4 +136,19 @@ std::unique_ptr<ConstitutiveLaw> create_law(const LawParameters& p) {
   return MaterialModels::instance().get(p.model, "Model").create(p);
 }
 
+std::unique_ptr<ConstitutiveLaw> rebuild_law(const LawParameters& p) {
+  return MaterialModels::instance().get(p.model, "Model").create(p);
+}
+
+bool LawParameters::same_law(const LawParameters& o) const {
+  return model == o.model && youngs_modulus == o.youngs_modulus &&
+         poisson_ratio == o.poisson_ratio && density == o.density &&
+         yield_stress == o.yield_stress && hardening_modulus == o.hardening_modulus &&
+         saturation_stress == o.saturation_stress && saturation_exponent == o.saturation_exponent &&
+         thermal_expansion == o.thermal_expansion &&
+         damage_onset_plastic_strain == o.damage_onset_plastic_strain &&
+         damage_softening_strain == o.damage_softening_strain &&
+         maximum_damage == o.maximum_damage && secant_tangent == o.secant_tangent;
+}
+
 } // namespace spinesim::materials

@@ -41,10 +41,27 @@ struct LawParameters {
   double damage_onset_plastic_strain = 0; // [-]
   double damage_softening_strain = 0.05;  // [-]
   double maximum_damage = 0.9;            // [-]
+  // j2_damage only: the secant tangent (1 - D) D_ep (J2Damage); set by scenes, not read.
+  bool secant_tangent = false;
+
+  // The same law: model and every value (not the preset's name), compared exactly.
+  bool same_law(const LawParameters& o) const;
+
+  // Boost serialization (particle records between ranks); the preset's name stays behind.
+  template <class Archive>
+  void serialize(Archive& ar, const unsigned int) {
+    ar& model& youngs_modulus& poisson_ratio& density& yield_stress& hardening_modulus&
+        saturation_stress& saturation_exponent& thermal_expansion& damage_onset_plastic_strain&
+            damage_softening_strain& maximum_damage& secant_tangent;
+  }
 };
 
 // The law described by p (validated first).
 std::unique_ptr<ConstitutiveLaw> create_law(const LawParameters& p);
+// The law a ConstitutiveLaw::describe() gave p for, without the input-range checks (a law
+// built in code, e.g. a CT cell's from its density, may lie outside them); InvalidInput for
+// an unknown model.
+std::unique_ptr<ConstitutiveLaw> rebuild_law(const LawParameters& p);
 
 } // namespace spinesim::materials
 

@@ -93,6 +93,16 @@ LinearElastic::plane_stress(const dealii::SymmetricTensor<2, 2>& strain, double 
   return r;
 }
 
+bool LinearElastic::describe(LawParameters& out) const {
+  out = LawParameters();
+  out.model = name();
+  out.youngs_modulus = E_;
+  out.poisson_ratio = nu_;
+  out.density = rho_;
+  out.thermal_expansion = alpha_;
+  return true;
+}
+
 SPINESIM_REGISTER_MATERIAL_MODEL(linear_elastic, "linear_elastic",
                                  "small strain; St. Venant-Kirchhoff for finite strain.", false,
                                  [](const LawParameters& p) -> std::unique_ptr<ConstitutiveLaw> {

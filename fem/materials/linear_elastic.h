@@ -22,6 +22,7 @@ class LinearElastic : public ConstitutiveLaw {
                 double thermal_expansion = 0.0);
 
   std::string name() const override { return "linear_elastic"; }
+  bool describe(LawParameters& out) const override;
   SmallStrainResponse small_strain(const SymTensor2& strain, double temperature_change,
                                    const MaterialState& old_state) const override;
   FiniteStrainResponse finite_strain(const Tensor2& F, double temperature_change,

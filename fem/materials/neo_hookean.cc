@@ -62,6 +62,16 @@ FiniteStrainStress NeoHookean::finite_strain_stress(const Tensor2& F, double dT,
   return r;
 }
 
+bool NeoHookean::describe(LawParameters& out) const {
+  out = LawParameters();
+  out.model = name();
+  out.youngs_modulus = E_;
+  out.poisson_ratio = nu_;
+  out.density = rho_;
+  out.thermal_expansion = alpha_;
+  return true;
+}
+
 SPINESIM_REGISTER_MATERIAL_MODEL(neo_hookean, "neo_hookean", "compressible hyperelastic.", false,
                                  [](const LawParameters& p) -> std::unique_ptr<ConstitutiveLaw> {
                                    return std::make_unique<NeoHookean>(p.youngs_modulus,

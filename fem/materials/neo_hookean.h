@@ -21,6 +21,7 @@ class NeoHookean : public ConstitutiveLaw {
              double thermal_expansion = 0.0);
 
   std::string name() const override { return "neo_hookean"; }
+  bool describe(LawParameters& out) const override;
   SmallStrainResponse small_strain(const SymTensor2& strain, double temperature_change,
                                    const MaterialState& old_state) const override;
   FiniteStrainResponse finite_strain(const Tensor2& F, double temperature_change,

@@ -28,12 +28,21 @@ materials::MaterialState read_state(std::istream& in, bool with_fracture_damage)
   in.read(reinterpret_cast<char*>(v.data()), sizeof(double) * n);
   return materials::unpack_state(v);
 }
+
+// The model's default law: the material's, else the first of its table (null: none, which
+// NosbPD reports).
+std::shared_ptr<const materials::ConstitutiveLaw> default_law(const ParticleMaterial& material) {
+  if (material.law || !material.table || material.table->empty())
+    return material.law;
+  return material.table->law_pointer(0);
+}
 } // namespace
 
 template <int dim>
 NosbMethod<dim>::NosbMethod(const Parameters& parameters, const ParticleMaterial& material)
-    : pd_(parameters, material.law) {
+    : pd_(parameters, default_law(material)), table_(material.table) {
   pd_.set_reference_temperature(material.reference_temperature);
+  pd_.set_material_table(table_);
 }
 
 template <int dim>

@@ -14,7 +14,9 @@ template <int dim>
 class NosbMethod : public ParticleMethod<dim> {
  public:
   using Parameters = NosbParameters;
-  // The particles run material.law; InvalidInput without one.
+  // The particles run material.law, or with material.table the law of their material id
+  // (material.law, else the table's first entry, is the model's default); InvalidInput
+  // without any law.
   NosbMethod(const Parameters& parameters, const ParticleMaterial& material);
   static void declare(dealii::ParameterHandler& prm);
   static Parameters parse_parameters(const dealii::ParameterHandler& section);
@@ -73,14 +75,18 @@ class NosbMethod : public ParticleMethod<dim> {
   std::vector<double> plastic_work_density(const ParticleSet<dim>& particles) const override {
     return pd_.plastic_work_density(particles);
   }
-  bool has_plastic_work() const override { return pd_.law().stored_energy_from_state(); }
+  bool has_plastic_work() const override {
+    return table_ && !table_->empty() ? table_->any_stored_energy_from_state()
+                                      : pd_.law().stored_energy_from_state();
+  }
   materials::MaterialState particle_state(unsigned int i) const override {
     return pd_.particle_state(i);
   }
 
  private:
   NosbPD<dim> pd_;
-  std::vector<std::uint8_t> driven_; // set_driven()
+  std::shared_ptr<const MaterialTable> table_; // ParticleMaterial::table, shared with pd_
+  std::vector<std::uint8_t> driven_;           // set_driven()
 };
 
 } // namespace spinesim::meshfree

@@ -32,6 +32,12 @@ materials::MaterialState kept_share_of_work(materials::MaterialState updated,
   updated.plastic_work = old.plastic_work + kept * (updated.plastic_work - old.plastic_work);
   return updated;
 }
+// The modulus c and s0 are matched to: bulk K (3-D), plane-strain k' (2-D) [Pa].
+template <int dim>
+double calibration_modulus_of(const materials::ConstitutiveLaw& law) {
+  const double E = law.youngs_modulus(), nu = law.poisson_ratio();
+  return dim == 3 ? E / (3.0 * (1.0 - 2.0 * nu)) : E / (2.0 * (1.0 - nu - 2.0 * nu * nu));
+}
 } // namespace
 
 template <int dim>
@@ -48,8 +54,7 @@ NosbPD<dim>::NosbPD(const Parameters& parameters,
     throw InvalidInput("NOSB-PD parameters", "a value out of range",
                        "horizon ratio > 1, thickness > 0, critical stretch, Gc, critical plastic "
                        "strain, stabilization coefficient >= 0, condition number limit >= 1");
-  const double E = law_->youngs_modulus(), nu = law_->poisson_ratio();
-  modulus_ = dim == 3 ? E / (3.0 * (1.0 - 2.0 * nu)) : E / (2.0 * (1.0 - nu - 2.0 * nu * nu));
+  modulus_ = calibration_modulus_of<dim>(*law_);
 }
 
 template <int dim>
@@ -73,14 +78,56 @@ void NosbPD<dim>::initialise(const ParticleSet<dim>& particles, const BondList<d
   if (bonds.n_particles() != particles.size() || !(bonds.horizon > 0.0))
     throw InvalidInput("NOSB-PD", "bond list built for another particle set",
                        "bonds from NeighborSearch::build on these particles");
+  auto critical_stretch_for = [&](double modulus) {
+    if (prm_.critical_stretch > 0.0)
+      return prm_.critical_stretch;
+    if (prm_.fracture_energy > 0.0)
+      return BondBasedPD<dim>::critical_stretch_from_fracture_energy(influence_, bonds.horizon,
+                                                                     modulus, prm_.fracture_energy);
+    return std::numeric_limits<double>::infinity();
+  };
   c_ = BondBasedPD<dim>::micromodulus(influence_, bonds.horizon, modulus_, prm_.thickness);
-  if (prm_.critical_stretch > 0.0)
-    s0_ = prm_.critical_stretch;
-  else if (prm_.fracture_energy > 0.0)
-    s0_ = BondBasedPD<dim>::critical_stretch_from_fracture_energy(influence_, bonds.horizon,
-                                                                  modulus_, prm_.fracture_energy);
-  else
-    s0_ = std::numeric_limits<double>::infinity();
+  s0_ = critical_stretch_for(modulus_);
+  // The constants of each law, reread here: the table may have grown since the last call.
+  modulus_m_.clear();
+  c_m_.clear();
+  s0_m_.clear();
+  if (uses_table()) {
+    for (unsigned int i = 0; i < particles.size(); ++i)
+      if (particles.material_id(i) >= table_->size())
+        throw InvalidInput("NOSB-PD: material of " + where(particles, i),
+                           "material " + std::to_string(particles.material_id(i)) +
+                               ", the table has " + std::to_string(table_->size()),
+                           "a material id of the particle method's material table");
+    for (unsigned int m = 0; m < table_->size(); ++m) {
+      const double K = calibration_modulus_of<dim>(table_->law(m));
+      modulus_m_.push_back(K);
+      c_m_.push_back(BondBasedPD<dim>::micromodulus(influence_, bonds.horizon, K, prm_.thickness));
+      s0_m_.push_back(critical_stretch_for(K));
+    }
+  } else {
+    modulus_m_.push_back(modulus_);
+    c_m_.push_back(c_);
+    s0_m_.push_back(s0_);
+  }
+  // One micromodulus for all springs unless the particles hold two materials or more.
+  c_shared_ = c_;
+  c_bond_.clear();
+  if (uses_table() && particles.size() > 0) {
+    const unsigned int m0 = particles.material_id(0);
+    bool one_material = true;
+    for (unsigned int i = 1; i < particles.size() && one_material; ++i)
+      one_material = particles.material_id(i) == m0;
+    if (one_material)
+      c_shared_ = c_m_[m0];
+    else {
+      c_bond_.assign(bonds.n_bonds(), 0.0);
+      for_each_bond(bonds, [&](unsigned int i, std::size_t k, unsigned int j) {
+        const unsigned int mi = particles.material_id(i), mj = particles.material_id(j);
+        c_bond_[k] = mi == mj ? c_m_[mi] : series_mean(c_m_[mi], c_m_[mj]);
+      });
+    }
+  }
   const std::size_t n_history =
       prm_.stabilization == Stabilization::bond_associated ? bonds.n_bonds() : particles.size();
   committed_.assign(n_history, materials::MaterialState());
@@ -200,10 +247,11 @@ NosbPD<dim>::evaluate(unsigned int e, const dealii::Tensor<2, dim>& F,
   }
   const materials::Tensor2 F3 = materials::embed_plane_strain(F);
   const double dT = thermal_change(particles.temperature(i));
+  const materials::ConstitutiveLaw& law = law_of(particles, i); // the family's centre's
   Response out;
   try {
     if (with_tangent) {
-      const materials::FiniteStrainResponse r = law_->finite_strain(F3, dT, old);
+      const materials::FiniteStrainResponse r = law.finite_strain(F3, dT, old);
       for (unsigned int a = 0; a < dim; ++a)
         for (unsigned int J = 0; J < dim; ++J) {
           out.P[a][J] = kept * r.first_piola[a][J];
@@ -215,7 +263,7 @@ NosbPD<dim>::evaluate(unsigned int e, const dealii::Tensor<2, dim>& F,
         *trial = kept_share_of_work(r.state, old, kept);
     } else {
       // An explicit step needs P only; the law's tangent would cost several times more.
-      const materials::FiniteStrainStress r = law_->finite_strain_stress(F3, dT, old);
+      const materials::FiniteStrainStress r = law.finite_strain_stress(F3, dT, old);
       for (unsigned int a = 0; a < dim; ++a)
         for (unsigned int J = 0; J < dim; ++J)
           out.P[a][J] = kept * r.first_piola[a][J];
@@ -282,7 +330,7 @@ void NosbPD<dim>::compute_forces(ParticleSet<dim>& particles, const BondList<dim
   if (penalty) {
     // The pair part of −∂E_hg/∂u (the part through F_i is in P above).
     const auto& V = particles.volumes();
-    const double Gc = prm_.stabilization_coefficient * c_;
+    const double Gc = penalty_coefficient();
     const long n = particles.size();
     // Each particle adds to its own force only (same order as serially).
 #pragma omp parallel for schedule(static) if (n > parallel_particle_threshold)
@@ -307,7 +355,7 @@ void NosbPD<dim>::compute_forces(ParticleSet<dim>& particles, const BondList<dim
       if (bonds.broken[k] || !(si > 0.0))
         continue;
       const unsigned int j = bonds.neighbor[k];
-      const double kappa = penalty_stiffness(bonds, k, Gc);
+      const double kappa = penalty_stiffness(bonds, k, bond_coefficient(k, Gc));
       const Vec z = (u[j] - u[i]) - (F_particle_[i] * bonds.xi[k] - bonds.xi[k]);
       f[j] -= (si * kappa * V[i] * V[j]) * z;
     }
@@ -368,8 +416,12 @@ std::vector<double> NosbPD<dim>::bond_plastic_strain(const BondList<dim>& bonds)
 template <int dim>
 std::size_t NosbPD<dim>::break_bonds(ParticleSet<dim>& particles, BondList<dim>& bonds) {
   const double ec = prm_.critical_plastic_strain;
-  if (!std::isfinite(s0_) && !(ec > 0.0))
+  const bool any_stretch =
+      std::any_of(s0_m_.begin(), s0_m_.end(), [](double s) { return std::isfinite(s); });
+  if (s0_m_.empty() || (!any_stretch && !(ec > 0.0))) // empty: before initialise
     return 0;
+  // A bond between two materials breaks at the smaller critical stretch (the weaker side).
+  const bool one_law = s0_m_.size() == 1;
   const std::vector<double> plastic = ec > 0.0 ? bond_plastic_strain(bonds) : std::vector<double>();
   const auto& u = particles.displacements();
   const bool any_driven = !driven_.empty();
@@ -382,8 +434,11 @@ std::size_t NosbPD<dim>::break_bonds(ParticleSet<dim>& particles, BondList<dim>&
     if (bonds.broken[k] || (any_driven && driven_[i] && driven_[j]))
       return;
     const auto y = bonds.xi[k] + (u[j] - u[i]);
-    const double limit = (1.0 + s0_) * bonds.length[k]; // inf: no stretch criterion
-    if (y.norm_square() > limit * limit ||              // |y| > (1 + s0) L, without a square root
+    const double s0 =
+        one_law ? s0_m_[0]
+                : std::min(s0_m_[particles.material_id(i)], s0_m_[particles.material_id(j)]);
+    const double limit = (1.0 + s0) * bonds.length[k]; // inf: no stretch criterion
+    if (y.norm_square() > limit * limit ||             // |y| > (1 + s0) L, without a square root
         (ec > 0.0 && plastic[k] > ec)) {
       breaking[k] = 1;
       touched[i] = 1; // the reversed bond marks j: each thread writes its own rows only
@@ -430,7 +485,7 @@ void NosbPD<dim>::release_energy_at_breaks(const ParticleSet<dim>& particles,
   parallel_for_rethrow(static_cast<long>(changed.size()), parallel_particle_threshold, [&](long c) {
     const unsigned int i = changed[c];
     const double after = particle_strain_energy(i, particles, bonds);
-    if (!(after > before[c] + 1e-16 * modulus_ * V[i]))
+    if (!(after > before[c] + 1e-16 * modulus_m_[material_index(particles, i)] * V[i]))
       return;
     const double ratio = before[c] > 0.0 ? before[c] / after : 0.0;
     for (std::size_t h = particle_history_begin_[i]; h < particle_history_begin_[i + 1]; ++h) {
@@ -490,7 +545,7 @@ void NosbPD<dim>::assemble_tangent(const ParticleSet<dim>& particles, const Bond
 
   const auto& u = particles.displacements();
   const auto& V = particles.volumes();
-  const double Gc = prm_.stabilization_coefficient * c_;
+  const double Gc = penalty_coefficient();
   std::vector<dealii::types::global_dof_index> cols(dim);
   double vals[dim];
   // Penalty springs of a particle family i (E_hg in the header): z_ij = Σ_m c_m u_m with
@@ -614,7 +669,7 @@ std::vector<double> NosbPD<dim>::stiffness_row_bound(const ParticleSet<dim>& par
     // B_i = Σ_j κ V_j |ξ_ij| S_j. O(family size) a family.
     const auto& pfam = particle_families_;
     const auto& V = particles.volumes();
-    const double Gc = prm_.stabilization_coefficient * c_;
+    const double Gc = penalty_coefficient();
     for (unsigned int e = 0; e < pfam.n_families(); ++e) {
       const unsigned int i = pfam.centre(e);
       double gsum = 0;
@@ -685,7 +740,7 @@ NosbPD<dim>::penalty_part(unsigned int i, const dealii::Tensor<2, dim>& F_i,
   const dealii::Tensor<2, dim> H =
       F_i - dealii::Tensor<2, dim>(dealii::unit_symmetric_tensor<dim>());
   double energy = 0;
-  for_each_penalty_bond(bonds, i, prm_.stabilization_coefficient * c_,
+  for_each_penalty_bond(bonds, i, penalty_coefficient(),
                         [&](std::size_t k, unsigned int j, double kappa) {
                           const Vec& xi = bonds.xi[k];
                           const Vec z = (u[j] - u[i]) - H * xi;
@@ -716,7 +771,8 @@ double NosbPD<dim>::stress_energy(unsigned int e, const dealii::Tensor<2, dim>& 
     // a stressed intermediate configuration (finite strain).
     const auto& old = committed_[fam.history_index(e)];
     const double dT = thermal_change(particles.temperature(fam.centre(e)));
-    if (const auto W = law_->stored_energy_density(materials::embed_plane_strain(F), dT, old))
+    const auto& law = law_of(particles, fam.centre(e));
+    if (const auto W = law.stored_energy_density(materials::embed_plane_strain(F), dT, old))
       return (1.0 - old.fracture_damage) * fam.weight(e) * *W; // W = (1 − D_f) W_law
   }
   const dealii::Tensor<2, dim> H = F - dealii::Tensor<2, dim>(dealii::unit_symmetric_tensor<dim>());
@@ -822,7 +878,7 @@ void NosbPD<dim>::set_particle_state(unsigned int i, const materials::MaterialSt
       const materials::Tensor2 F_to = materials::embed_plane_strain(
           fam.deformation_gradient(family[h], particles.displacements()));
       if (dealii::determinant(F_to) > 0.0 && dealii::determinant(F_from) > 0.0)
-        s = law_->transferred_state(state, F_from, F_to);
+        s = law_of(particles, i).transferred_state(state, F_from, F_to);
     }
     const double D = std::max(committed_[h].fracture_damage, s.fracture_damage);
     committed_[h] = trial_[h] = s;
@@ -834,12 +890,16 @@ template <int dim>
 std::vector<double> NosbPD<dim>::plastic_work_density(const ParticleSet<dim>& particles) const {
   // Only where stress_energy takes the stored energy from the state: a path integral of a
   // plastic law is not split into stored and dissipated work.
-  if (!law_->stored_energy_from_state())
+  // With several laws, only the families whose centre runs such a law.
+  const bool mixed = uses_table();
+  if (!(mixed ? table_->any_stored_energy_from_state() : law_->stored_energy_from_state()))
     return {};
   std::vector<double> D(particles.size(), 0.0);
   const auto& fam = families();
   for (unsigned int e = 0; e < fam.n_families(); ++e) {
     const unsigned int i = fam.centre(e);
+    if (mixed && i < D.size() && !law_of(particles, i).stored_energy_from_state())
+      continue;
     if (i < D.size() && fam.history_index(e) < committed_.size())
       D[i] += fam.weight(e) * committed_[fam.history_index(e)].plastic_work / particles.volume(i);
   }
@@ -910,7 +970,7 @@ typename NosbPD<dim>::HourglassMeasure NosbPD<dim>::hourglass(const ParticleSet<
       const Vec z = eta - (F[i] * xi - xi);
       const double wb = bonds.influence[k] * bonds.volume_factor(k) * V[i] * V[j];
       const double L = bonds.length[k];
-      h.energy += 0.25 * c_ * wb * z.norm_square() / L;
+      h.energy += 0.25 * bond_micromodulus(k) * wb * z.norm_square() / L;
       z2 += wb * z.norm_square() / (L * L);
       eta2 += wb * eta.norm_square() / (L * L);
       h.max_nonuniform = std::max(h.max_nonuniform, z.norm());

@@ -41,11 +41,19 @@
 // their stress is scaled down by the fracture damage D_f (MaterialState::fracture_damage) to
 // the energy before. Failed particles (singular or badly conditioned K) carry no stress and
 // have damage 1; each is logged once.
+//
+// Several materials (set_material_table; a coupled run whose particles come from cells of
+// different laws): each family runs the law of its centre particle, a bond between two
+// materials has the harmonic (series) mean of their micromoduli in its hourglass spring and
+// the smaller of their critical stretches, both symmetric in i and j. A family that straddles
+// an interface still fits one F over the bonds of both materials (least squares): a
+// modelling limit of correspondence models, which smear the strain jump over a horizon.
 
 #include "fem/materials/constitutive_law.h"
 #include "meshfree/bond_list.h"
 #include "meshfree/bond_loop.h"
 #include "meshfree/influence_function.h"
+#include "meshfree/material_table.h"
 #include "meshfree/neighbor_search.h"
 #include "meshfree/nosb/correspondence_families.h"
 #include "meshfree/nosb/nosb_parameters.h"
@@ -77,19 +85,31 @@ class NosbPD {
   // the penalty springs' E_hg at G_s = 1 without fracture damage (s = 1), whatever the
   // stabilisation.
   struct HourglassMeasure {
-    double energy = 0;        // Σ_i Σ_j ¼ c ω β |z_ij|²/|ξ| V_i V_j [J]: a G_s = 1 penalty
+    double energy = 0; // Σ_i Σ_j ¼ c_ij ω β |z_ij|²/|ξ| V_i V_j [J]: a G_s = 1 penalty
     double relative_norm = 0; // sqrt(Σ ωβ V V |z|²/|ξ|²) / sqrt(Σ ωβ V V |η|²/|ξ|²) [-]
     double max_nonuniform = 0; // max |z_ij| [m]
   };
 
+  // `law` runs every particle unless a material table is set.
   NosbPD(const Parameters& parameters, std::shared_ptr<const materials::ConstitutiveLaw> law);
+  // Particle i runs (*table)[material_id(i)] from the next initialise() on (null or empty:
+  // every particle runs the constructor's law). The table may grow between initialise() calls;
+  // its constants are recomputed there.
+  void set_material_table(std::shared_ptr<const MaterialTable> table) { table_ = std::move(table); }
 
   const Parameters& parameters() const { return prm_; }
+  // The constructor's law (the default of a material table).
   const materials::ConstitutiveLaw& law() const { return *law_; }
+  // The law particle i runs: its table entry, else the constructor's.
+  const materials::ConstitutiveLaw& law_of(const ParticleSet<dim>& particles,
+                                           unsigned int i) const {
+    return uses_table() ? table_->law(particles.material_id(i)) : *law_;
+  }
   const InfluenceFunction<dim>& influence() const { return influence_; }
   // Search options for a particle spacing h: δ = (horizon ratio)·h, partial volumes.
   typename NeighborSearch<dim>::Options neighbor_options(double spacing) const;
-  // Bulk modulus K (3-D) or plane-strain k' (2-D) [Pa]: calibrates c and s0.
+  // Bulk modulus K (3-D) or plane-strain k' (2-D) [Pa]: calibrates c and s0. These three are
+  // the constructor's law's; with a material table each entry has its own (initialise).
   double calibration_modulus() const { return modulus_; }
   double micromodulus() const { return c_; }      // c (after initialise)
   double critical_stretch() const { return s0_; } // s0 (after initialise), inf = no breaking
@@ -171,15 +191,25 @@ class NosbPD {
   // body(k, j, κ) for every intact bond k = (i → j), with the penalty stiffness
   // κ = ½ G_s c ω β / |ξ| of the hourglass springs (Silling 2017), Gc = G_s c: the springs of
   // particle i's family (they need F_i only, whether or not j has a family of its own).
+  // Gc = penalty_coefficient(): a bond between materials takes its own (bond_coefficient).
   template <class Body>
   void for_each_penalty_bond(const BondList<dim>& bonds, unsigned int i, double Gc,
                              Body&& body) const {
     for_each_bond_of(bonds, i, [&](std::size_t k, unsigned int j) {
       if (bonds.broken[k])
         return;
-      body(k, j, penalty_stiffness(bonds, k, Gc));
+      body(k, j, penalty_stiffness(bonds, k, bond_coefficient(k, Gc)));
     });
   }
+  // G_s c of the bonds when they share one micromodulus c (one material) [N/m^6 in 3-D].
+  double penalty_coefficient() const { return prm_.stabilization_coefficient * c_shared_; }
+  // G_s c_ij of bond k: Gc when the bonds share one c, else from the harmonic mean of its ends'
+  // micromoduli (c_bond_).
+  double bond_coefficient(std::size_t k, double Gc) const {
+    return c_bond_.empty() ? Gc : prm_.stabilization_coefficient * c_bond_[k];
+  }
+  // c_ij of bond k for G_s = 1 (the hourglass measure).
+  double bond_micromodulus(std::size_t k) const { return c_bond_.empty() ? c_shared_ : c_bond_[k]; }
   // κ = ½ G_s c ω β / |ξ| of bond k, Gc = G_s c [N/m^7 in 3-D].
   static double penalty_stiffness(const BondList<dim>& bonds, std::size_t k, double Gc) {
     return 0.5 * Gc * bonds.influence[k] * bonds.volume_factor(k) / bonds.length[k];
@@ -247,7 +277,9 @@ class NosbPD {
                sizeof(std::size_t) +
            (entry_family_.capacity() + gather_family_.capacity()) * sizeof(unsigned int) +
            gather_gradient_.capacity() * sizeof(dealii::Tensor<1, dim>) + driven_.capacity() +
-           one_sided_bonds_.capacity() * sizeof(std::pair<unsigned int, std::size_t>);
+           one_sided_bonds_.capacity() * sizeof(std::pair<unsigned int, std::size_t>) +
+           (modulus_m_.capacity() + c_m_.capacity() + s0_m_.capacity() + c_bond_.capacity()) *
+               sizeof(double);
   }
 
  private:
@@ -288,8 +320,22 @@ class NosbPD {
 
   Parameters prm_;
   std::shared_ptr<const materials::ConstitutiveLaw> law_;
+  std::shared_ptr<const MaterialTable> table_; // null: every particle runs law_
+  bool uses_table() const { return table_ && !table_->empty(); }
+  // Index of particle i's law in the per-law constants below (0 without a table).
+  unsigned int material_index(const ParticleSet<dim>& particles, unsigned int i) const {
+    return uses_table() ? particles.material_id(i) : 0u;
+  }
   InfluenceFunction<dim> influence_;
-  double modulus_ = 0, c_ = 0, s0_ = 0;
+  double modulus_ = 0, c_ = 0, s0_ = 0; // of law_
+  // Per law (table entry, or law_ alone), by the formulas of modulus_, c_, s0_ (initialise).
+  std::vector<double> modulus_m_, c_m_, s0_m_;
+  // The micromodulus of every bond when the particles share one law (c_ without a table);
+  // otherwise c_bond_ holds each bond's: c of its material, or the harmonic mean
+  // 2 c_i c_j/(c_i + c_j) across two (springs in series), symmetric so κ_ij = κ_ji and the
+  // pair force stays the gradient of E_hg. Empty with a single law.
+  double c_shared_ = 0;
+  std::vector<double> c_bond_;
   CorrespondenceFamilies<dim> particle_families_, bond_families_;
   std::vector<dealii::Tensor<2, dim>> F_particle_;
   std::vector<dealii::Tensor<2, dim>> family_stress_; // P per family, scratch of compute_forces

@@ -18,8 +18,8 @@ namespace spinesim::meshfree {
 
 template <int dim>
 SpgMethod<dim>::SpgMethod(const Parameters& parameters, const ParticleMaterial& material)
-    : prm_(parameters.solver), law_(material.law), thickness_(parameters.thickness),
-      reference_temperature_(material.reference_temperature) {
+    : prm_(parameters.solver), law_(material.law), table_(material.table),
+      thickness_(parameters.thickness), reference_temperature_(material.reference_temperature) {
   if (!law_)
     throw InvalidInput("SPG", "no constitutive law", "a law from the Material section");
 }
@@ -84,8 +84,31 @@ void SpgMethod<dim>::initialise(const ParticleSet<dim>& particles, const BondLis
   // Lagrangian).
   const bool driven = std::find(driven_.begin(), driven_.end(), std::uint8_t(1)) != driven_.end();
   const bool use_rows = driven || prm_.kernel_update == "total_lagrangian";
-  solver_ = std::make_unique<SPGSolver<dim>>(
-      prm_, *law_, particles, bonds.horizon / search_radius(1.0), use_rows ? &bonds : nullptr);
+  // Each particle's law: its material's from the table (reread here: it may have grown), or
+  // the one law without a table.
+  std::vector<const materials::ConstitutiveLaw*> law_of_particle(particles.size(), law_.get());
+  std::vector<std::shared_ptr<const materials::ConstitutiveLaw>> laws{law_};
+  if (table_ && !table_->empty()) {
+    laws.clear();
+    std::vector<std::uint8_t> used(table_->size(), 0);
+    for (unsigned int i = 0; i < particles.size(); ++i) {
+      const unsigned int m = particles.material_id(i);
+      if (m >= table_->size())
+        throw InvalidInput("SPG",
+                           "particle " + std::to_string(i) + " of material " + std::to_string(m) +
+                               " in a table of " + std::to_string(table_->size()) + " laws",
+                           "material ids of the particles' material table");
+      law_of_particle[i] = &table_->law(m);
+      if (!used[m]) {
+        used[m] = 1;
+        laws.push_back(table_->law_pointer(m));
+      }
+    }
+  }
+  solver_ = std::make_unique<SPGSolver<dim>>(prm_, std::move(law_of_particle), particles,
+                                             bonds.horizon / search_radius(1.0),
+                                             use_rows ? &bonds : nullptr);
+  solver_laws_ = std::move(laws); // after the old solver, which ran the old ones, is gone
   solver_->set_deferred_commit(true);
   solver_->set_breaking(breaking_);
   solver_->set_break_observer(
@@ -221,8 +244,9 @@ double SpgMethod<dim>::energy_density(unsigned int i, const ParticleSet<dim>& pa
   // A law whose stored energy is a function of its state (J2 plasticity), as in NOSB-PD: the
   // path integral below would count the plastic strain as stored, or start from a stressed
   // intermediate configuration (finite strain).
-  if (const auto W = law_->stored_energy_density(materials::embed_plane_strain(F), dT,
-                                                 solver_->committed_states()[i]))
+  const materials::ConstitutiveLaw& law = law_of(i);
+  if (const auto W = law.stored_energy_density(materials::embed_plane_strain(F), dT,
+                                               solver_->committed_states()[i]))
     return kept * *W;
   materials::Tensor2 H;
   for (unsigned int r = 0; r < dim; ++r)
@@ -231,7 +255,7 @@ double SpgMethod<dim>::energy_density(unsigned int i, const ParticleSet<dim>& pa
   double W = 0;
   for (unsigned int q = 0; q < 4; ++q) {
     const materials::Tensor2 Ft = materials::Tensor2(dealii::unit_symmetric_tensor<3>()) + t[q] * H;
-    const auto r = law_->finite_strain_stress(Ft, dT, solver_->committed_states()[i]);
+    const auto r = law.finite_strain_stress(Ft, dT, solver_->committed_states()[i]);
     W += w[q] * dealii::scalar_product(r.first_piola, H);
   }
   return kept * W;
@@ -263,11 +287,11 @@ void SpgMethod<dim>::observe_breaks(const std::vector<unsigned int>& rows, bool 
         pass_energy_before_[rows[k]] = std::max(energy_before_break_[k], 0.0);
     return;
   }
-  const double floor = 1e-16 * law_->youngs_modulus();
   for (std::size_t k = 0; k < rows.size() && k < energy_before_break_.size(); ++k) {
     const unsigned int i = rows[k];
     if (!solver_->has_row(i))
       continue;
+    const double floor = 1e-16 * law_of(i).youngs_modulus(); // the row's own material
     const double before = energy_before_break_[k];
     if (before < 0.0)
       continue;
@@ -458,7 +482,7 @@ void SpgMethod<dim>::set_particle_states(const ParticleSet<dim>& particles,
         const materials::Tensor2 F_to = materials::embed_plane_strain(
             solver_->deformation_gradient(i, particles.displacements()));
         if (dealii::determinant(F_to) > 0.0 && dealii::determinant(*c.deformation) > 0.0)
-          s = law_->transferred_state(c.state, *c.deformation, F_to);
+          s = law_of(i).transferred_state(c.state, *c.deformation, F_to);
       }
       solver_->set_state(i, s);
     }
@@ -467,24 +491,27 @@ void SpgMethod<dim>::set_particle_states(const ParticleSet<dim>& particles,
 template <int dim>
 std::vector<double> SpgMethod<dim>::plastic_work_density(const ParticleSet<dim>& particles) const {
   // Only where energy_density takes the stored energy from the state (J2 plasticity), and
-  // after this update at the current F, as that W (NosbPD alike).
-  const bool from_state = law_->stored_energy_from_state();
-  if (!solver_ || !from_state)
+  // after this update at the current F, as that W (NosbPD alike). Several materials: a particle
+  // whose own law does not (elastic) holds none, as a single such law holds none.
+  if (!solver_ || !has_plastic_work())
     return {};
   std::vector<double> D(particles.size(), 0.0);
   for (unsigned int i = 0; i < D.size() && i < solver_->committed_states().size(); ++i) {
+    const materials::ConstitutiveLaw& law = law_of(i);
+    if (!law.stored_energy_from_state())
+      continue;
     const materials::MaterialState& old = solver_->committed_states()[i];
     D[i] = old.plastic_work;
     // The share kept of the update's work, as SPGSolver books it. After a pass that broke
     // bonds this reads the new share and the rebuilt row's F, while the state committed holds
     // the pass's: the difference goes to the breaks' energy release.
     if (old.fracture_damage < 1.0)
-      D[i] += (1.0 - old.fracture_damage) *
-              (law_->finite_strain_stress(
-                       materials::embed_plane_strain(particle_gradient(i, particles)),
-                       thermal_change(particles.temperature(i)), old)
-                   .state.plastic_work -
-               old.plastic_work);
+      D[i] +=
+          (1.0 - old.fracture_damage) *
+          (law.finite_strain_stress(materials::embed_plane_strain(particle_gradient(i, particles)),
+                                    thermal_change(particles.temperature(i)), old)
+               .state.plastic_work -
+           old.plastic_work);
   }
   return D;
 }
@@ -532,6 +559,7 @@ template <int dim>
 std::size_t SpgMethod<dim>::memory_bytes() const {
   return (solver_ ? solver_->memory_bytes() : 0) + driven_.capacity() +
          kept_.capacity() * sizeof(materials::MaterialState) +
+         solver_laws_.capacity() * sizeof(std::shared_ptr<const materials::ConstitutiveLaw>) +
          (energy_before_break_.capacity() + pass_energy_before_.capacity()) * sizeof(double);
 }
 

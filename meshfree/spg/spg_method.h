@@ -16,6 +16,9 @@
 //    affine fields by linear reproduction, O(a² ∇²u) otherwise (docs/coupling.md).
 //  * The material history follows the interface: a trial state per force evaluation,
 //    commit_state() accepts it, rollback_state() discards it; history is kept per particle.
+//  * Several materials (material.table): each particle runs its own law, P_N = law_N(F_N),
+//    with its own stiffness in the stabilisation, step and contact (spg_solver.h). The smoothed
+//    gradient of a particle near a material interface mixes both materials' displacements.
 
 #include "meshfree/particle_method.h"
 #include "meshfree/spg/spg_solver.h"
@@ -37,7 +40,8 @@ template <int dim>
 class SpgMethod : public ParticleMethod<dim> {
  public:
   using Parameters = SpgMethodParameters;
-  // The particles run material.law; InvalidInput without one.
+  // The particles run material.law, or with material.table particle i runs the table's law
+  // of its material id; InvalidInput without material.law.
   SpgMethod(const Parameters& parameters, const ParticleMaterial& material);
   static void declare(dealii::ParameterHandler& prm);
   static Parameters parse_parameters(const dealii::ParameterHandler& section);
@@ -72,6 +76,7 @@ class SpgMethod : public ParticleMethod<dim> {
   // kernel's search radius per spacing (the list was searched with neighbor_options()).
   // A total Lagrangian kernel works on these rows (with their pre-cracks and breaks); the
   // others search their own neighbours. Committed states of particles seen before are kept.
+  // Each particle's law is read here (from material.table by material id, when there is one).
   void initialise(const ParticleSet<dim>& particles, const BondList<dim>& bonds) override;
   // Bonds break (by the SPG criteria) only when `allow_breaking`.
   std::size_t compute_forces(ParticleSet<dim>& particles, BondList<dim>& bonds,
@@ -116,7 +121,10 @@ class SpgMethod : public ParticleMethod<dim> {
                            const std::vector<CarriedState>& states) override;
   materials::MaterialState particle_state(unsigned int i) const override;
   std::vector<double> plastic_work_density(const ParticleSet<dim>& particles) const override;
-  bool has_plastic_work() const override { return law_->stored_energy_from_state(); }
+  bool has_plastic_work() const override {
+    return table_ && !table_->empty() ? table_->any_stored_energy_from_state()
+                                      : law_->stored_energy_from_state();
+  }
   std::size_t memory_bytes() const override;
 
   // u_I of the last force evaluation.
@@ -124,7 +132,15 @@ class SpgMethod : public ParticleMethod<dim> {
 
  private:
   SpgParameters prm_;
-  std::shared_ptr<const materials::ConstitutiveLaw> law_;
+  std::shared_ptr<const materials::ConstitutiveLaw> law_; // every particle's, without a table
+  // Several materials: particle i runs (*table_)[material_id(i)] (reread in initialise(), as the
+  // table may have grown). The laws the solver runs are held here, so they outlive it.
+  std::shared_ptr<const MaterialTable> table_;
+  std::vector<std::shared_ptr<const materials::ConstitutiveLaw>> solver_laws_;
+  // The law particle i runs (the solver's; law_ before there is one).
+  const materials::ConstitutiveLaw& law_of(unsigned int i) const {
+    return solver_ && i < solver_->committed_states().size() ? solver_->law(i) : *law_;
+  }
   double thickness_ = 1.0, reference_temperature_ = 0;
   // T − T_ref the law sees; 0 without thermal strain (reference NaN).
   double thermal_change(double T) const {

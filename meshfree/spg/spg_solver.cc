@@ -8,6 +8,7 @@
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <unordered_map>
 #include <utility>
 
 namespace spinesim::meshfree {
@@ -16,20 +17,53 @@ template <int dim>
 SPGSolver<dim>::SPGSolver(const Parameters& parameters, const materials::ConstitutiveLaw& law,
                           const ParticleSet<dim>& particles, double spacing,
                           const BondList<dim>* rows)
-    : prm_(parameters), mode_(parameters.update_mode()), law_(law),
+    : SPGSolver(parameters, std::vector<const materials::ConstitutiveLaw*>(particles.size(), &law),
+                particles, spacing, rows) {}
+
+template <int dim>
+SPGSolver<dim>::SPGSolver(const Parameters& parameters,
+                          std::vector<const materials::ConstitutiveLaw*> law_of_particle,
+                          const ParticleSet<dim>& particles, double spacing,
+                          const BondList<dim>* rows)
+    : prm_(parameters), mode_(parameters.update_mode()),
       kernel_(RKKernel<dim>::from_names(parameters.kernel, parameters.support_shape)) {
   prm_.validate();
   if (!(spacing > 0.0))
     throw InvalidInput("SPG spacing", "= " + spg_number(spacing), "> 0 [m]");
   if (particles.size() == 0)
     throw InvalidInput("SPG particles", "no particles", "at least one particle");
+  const unsigned int n = particles.size();
+  if (law_of_particle.size() != n)
+    throw InvalidInput("SPG laws",
+                       "laws for " + std::to_string(law_of_particle.size()) + " particles, " +
+                           std::to_string(n) + " particles",
+                       "one law per particle");
   h_ = spacing;
   a_ = prm_.dilation * h_;
-  const double E = law.youngs_modulus(), nu = law.poisson_ratio();
-  modulus_ = E * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu));
-  cp_ = law.p_wave_speed();
-  kc_ = prm_.contact_penalty_factor * modulus_ * (dim == 2 ? particles.thickness() : h_);
-  const unsigned int n = particles.size();
+  // The distinct laws, each with its λ + 2μ, c_p and k_c computed once (one law: exactly the
+  // values a single-law solver takes, so its results do not change to the bit).
+  law_index_.resize(n);
+  std::unordered_map<const materials::ConstitutiveLaw*, unsigned int> index_of;
+  for (unsigned int i = 0; i < n; ++i) {
+    const materials::ConstitutiveLaw* law = law_of_particle[i];
+    if (!law)
+      throw InvalidInput("SPG laws", "no law for particle " + std::to_string(i),
+                         "a law for every particle");
+    const auto [it, inserted] = index_of.emplace(law, static_cast<unsigned int>(laws_.size()));
+    if (inserted)
+      laws_.push_back(law);
+    law_index_[i] = it->second;
+  }
+  for (const materials::ConstitutiveLaw* law : laws_) {
+    const double E = law->youngs_modulus(), nu = law->poisson_ratio();
+    const double modulus = E * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu));
+    modulus_.push_back(modulus);
+    cp_.push_back(law->p_wave_speed());
+    kc_.push_back(prm_.contact_penalty_factor * modulus * (dim == 2 ? particles.thickness() : h_));
+    uniform_wave_speed_ = uniform_wave_speed_ && (cp_.size() == 1 || cp_.back() == cp_.front());
+  }
+  // σ = 1 before the first force pass: the step of the fastest wave.
+  min_stretch_per_speed_ = 1.0 / *std::max_element(cp_.begin(), cp_.end());
   X0_ = particles.reference_positions();
   Xr_ = X0_;
   volume_ = particles.volumes();
@@ -51,7 +85,7 @@ SPGSolver<dim>::SPGSolver(const Parameters& parameters, const materials::Constit
   committed_ = state_;
   kappa_.resize(n);
   for (unsigned int i = 0; i < n; ++i)
-    kappa_[i] = prm_.stabilisation * modulus_ * volume_[i] / (a_ * a_);
+    kappa_[i] = prm_.stabilisation * modulus_[law_index_[i]] * volume_[i] / (a_ * a_);
   has_row_.assign(n, 1);
   complete_.assign(n, 1);
   if (rows) {
@@ -193,7 +227,8 @@ void SPGSolver<dim>::compute_forces(ParticleSet<dim>& p) {
         const double dT = has_temperature && !std::isnan(reference_temperature_)
                               ? temperature[N] - reference_temperature_
                               : 0.0;
-        const auto r = law_.finite_strain_stress(F3, dT, committed_[N]);
+        // P_N = law_N(F_N): the particle's own law.
+        const auto r = laws_[law_index_[N]]->finite_strain_stress(F3, dT, committed_[N]);
         state_[N] = r.state;
         // The row carries kept · P, so its flow dissipates kept · ΔW_p (as J2Damage books the
         // FEM's damaged points); the law's plastic strain and hardening advance as returned.
@@ -241,13 +276,17 @@ void SPGSolver<dim>::compute_forces(ParticleSet<dim>& p) {
       dF[i][i] -= 1.0;
     rel[N] = dF.norm();
   });
-  double min_sigma = 1e300, max_rel = 0;
+  double min_sigma = 1e300, min_per_speed = 1e300, max_rel = 0;
   for (unsigned int N = 0; N < n; ++N) {
     internal_work_ += work[N];
     min_sigma = std::min(min_sigma, sigma[N]);
+    // Several wave speeds: each particle's stretch limits the step with its own c_p.
+    if (!uniform_wave_speed_)
+      min_per_speed = std::min(min_per_speed, sigma[N] / cp_[law_index_[N]]);
     max_rel = std::max(max_rel, rel[N]);
   }
   min_stretch_ = min_sigma;
+  min_stretch_per_speed_ = uniform_wave_speed_ ? min_sigma / cp_.front() : min_per_speed;
   max_rel_ = max_rel;
 
   // Contact (serial over obstacles; cheap next to the law).
@@ -260,10 +299,11 @@ void SPGSolver<dim>::compute_forces(ParticleSet<dim>& p) {
       Vector normal;
       const double g = obstacles_[o].gap(current_position(i), time_, normal) - offset;
       if (g < 0.0) {
-        const Vector f = (-kc_ * g) * normal;
+        const double kc = kc_[law_index_[i]]; // the particle's own stiffness
+        const Vector f = (-kc * g) * normal;
         contact_[i] += f;
         reaction_[o] -= f;
-        contact_energy_ += 0.5 * kc_ * g * g;
+        contact_energy_ += 0.5 * kc * g * g;
       }
     }
   const bool has_contact = !obstacles_.empty();
@@ -496,7 +536,19 @@ SPGSolver<dim>::smoothed(const std::vector<dealii::Tensor<1, dim>>& d) const {
 
 template <int dim>
 double SPGSolver<dim>::stable_time_step() const {
-  return prm_.cfl * h_ * min_stretch_ / cp_;
+  // One wave speed: the single-law expression, to the bit.
+  return uniform_wave_speed_ ? prm_.cfl * h_ * min_stretch_ / cp_.front()
+                             : prm_.cfl * h_ * min_stretch_per_speed_;
+}
+
+template <int dim>
+double SPGSolver<dim>::p_wave_speed() const {
+  return *std::max_element(cp_.begin(), cp_.end());
+}
+
+template <int dim>
+double SPGSolver<dim>::contact_stiffness() const {
+  return *std::max_element(kc_.begin(), kc_.end());
 }
 
 template <int dim>
@@ -529,10 +581,11 @@ std::vector<double> SPGSolver<dim>::stiffness_bound(const ParticleSet<dim>& p) c
     const unsigned int I = static_cast<unsigned int>(II);
     if (!complete_[I])
       return;
-    double s = volume_[I] * rk.self_gradient[I].norm() * G[I] * modulus_;
+    // Each row N with the λ + 2μ of its own law.
+    double s = volume_[I] * rk.self_gradient[I].norm() * G[I] * modulus_[law_index_[I]];
     double t = kappa_[I] * std::abs(1.0 - rk.self_value[I]) * R[I];
     for_each_bond_of(bonds_, I, [&](std::size_t k, unsigned int N) {
-      s += volume_[N] * rk.gradient_at_partner[k].norm() * G[N] * modulus_;
+      s += volume_[N] * rk.gradient_at_partner[k].norm() * G[N] * modulus_[law_index_[N]];
       t += kappa_[N] * std::abs(rk.value_at_partner[k]) * R[N];
     });
     // ×2: the block rows of an isotropic C are bounded by (λ+2μ)|∇Ψ_I||∇Ψ_J| per component
@@ -583,8 +636,12 @@ std::size_t SPGSolver<dim>::memory_bytes() const {
     matrices += m->capacity();
   return (rk_ ? rk_->memory_bytes() : 0) + bonds_.memory_bytes() +
          (X0_.capacity() + Xr_.capacity()) * sizeof(dealii::Point<dim>) +
-         (volume_.capacity() + rk_volume_.capacity() + kappa_.capacity()) * sizeof(double) +
-         vectors * sizeof(Vector) + matrices * sizeof(Matrix) +
+         (volume_.capacity() + rk_volume_.capacity() + kappa_.capacity() + modulus_.capacity() +
+          cp_.capacity() + kc_.capacity()) *
+             sizeof(double) +
+         laws_.capacity() * sizeof(const materials::ConstitutiveLaw*) +
+         law_index_.capacity() * sizeof(unsigned int) + vectors * sizeof(Vector) +
+         matrices * sizeof(Matrix) +
          (state_.capacity() + committed_.capacity()) * sizeof(materials::MaterialState) +
          has_row_.capacity() + complete_.capacity() + driven_.capacity() +
          newly_broken_.capacity() * sizeof(std::pair<unsigned int, unsigned int>) +

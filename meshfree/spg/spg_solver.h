@@ -10,13 +10,20 @@
 // & Chen 2015).
 //
 // Internal force by direct nodal integration (total Lagrangian form):
-//   F_N = I + Σ_J d_J ⊗ ∇Ψ_J(X_N),   P_N = law(F_N),   f_int,I = Σ_N V_N P_N ∇Ψ_I(X_N).
+//   F_N = I + Σ_J d_J ⊗ ∇Ψ_J(X_N),   P_N = law_N(F_N),   f_int,I = Σ_N V_N P_N ∇Ψ_I(X_N).
 // Σ_I ∇Ψ_I(X_N) = 0 (partition of unity), so Σ_I f_int,I = 0: linear momentum is conserved to
 // round-off, also after bond failure. 2-D is plane strain (F_33 = 1).
 //
+// Several materials: each particle N runs its own law_N (its stress, its λ+2μ in κ_N and in the
+// stiffness bound, its c_p in the stable step, its contact stiffness). F_N is the gradient of the
+// kernel-smoothed field, so near a material interface it mixes the displacements of both
+// materials' particles over the support: the interface is smeared over about one support size
+// a, and a particle there sees a strain between the two sides' (a modelling limit of the
+// smooth kernel, which only a smaller support narrows).
+//
 // Stabilisation (displacement smoothing, Wu, Park & Chen 2015). With the smoothed value
 // ū_I = Σ_J Ψ_J(X_I) d_J (the kernel-smoothed field at particle I, Ψ̃ = Ψ) we add the energy
-//   W_stab = ½ Σ_I κ_I |d_I − ū_I|²,   κ_I = η (λ + 2μ) V_I / a²,
+//   W_stab = ½ Σ_I κ_I |d_I − ū_I|²,   κ_I = η (λ + 2μ)_I V_I / a²,
 // and its exact gradient as the stabilisation force f_K = −Σ_I κ_I (δ_IK − Ψ_K(X_I))(d_I − ū_I).
 // d_I − ū_I ≈ −½ Σ_J Ψ_J (X_J − X_I)⊗(X_J − X_I) : ∇∇u = O(a² ∇ε), so W_stab ≈ ½ η Σ_I V_I
 // (λ+2μ) |O(a ∇ε)|² is the strain-gradient penalty of Wu, Park & Chen (2015), η (∇ε_smooth − ∇ε)ᵀ C
@@ -51,11 +58,12 @@
 //
 // Contact with RigidObstacle (frictionless penalty): a particle I at x_I with gap
 // g = gap(x_I) − offset < 0 gets f = −k_c g n, k_c = factor · ρ c_p² h^(dim−2) (the particle's
-// own stiffness; h^(dim−2) = thickness in 2-D), distributed to the coefficients as
-// Σ_I Ψ_K(X_I) f_I. offset = `Contact offset` × h (0: contact at the particle centre).
+// own stiffness, of its own law; h^(dim−2) = thickness in 2-D), distributed to the coefficients
+// as Σ_I Ψ_K(X_I) f_I. offset = `Contact offset` × h (0: contact at the particle centre).
 //
 // Essential boundaries: mixed transformation method (essential_boundary.h). Stable step:
-// Δt = CFL · h σ_min / c_p, σ_min a lower bound 1/|F⁻¹|_Frobenius of the smallest stretch.
+// Δt = CFL · h · min_N σ_N / c_p,N, σ_N = 1/|F_N⁻¹|_Frobenius a lower bound of the smallest
+// stretch of particle N (one law: CFL · h σ_min / c_p).
 //
 // Loops are over particles (OpenMP, static schedule), each gathering over its own CSR row with
 // the reverse-bond index, so the results do not depend on the thread count.
@@ -97,12 +105,17 @@ class SPGSolver {
   using KernelUpdate = SpgKernelUpdate;
   using Parameters = SpgParameters;
 
-  // `spacing` h [m] is the nominal particle spacing: support a = dilation·h. The law must
-  // outlive the solver. Builds bonds and shape functions at the reference positions.
-  // With `rows` (a symmetric CSR list searched within the kernel's search radius, rows only
-  // where needed), the solver uses those rows instead of searching all particles; only the
-  // total Lagrangian kernel is allowed then.
+  // `spacing` h [m] is the nominal particle spacing: support a = dilation·h. Every particle
+  // runs `law`, which must outlive the solver. Builds bonds and shape functions at the
+  // reference positions. With `rows` (a symmetric CSR list searched within the kernel's search
+  // radius, rows only where needed), the solver uses those rows instead of searching all
+  // particles; only the total Lagrangian kernel is allowed then.
   SPGSolver(const Parameters& parameters, const materials::ConstitutiveLaw& law,
+            const ParticleSet<dim>& particles, double spacing, const BondList<dim>* rows = nullptr);
+  // Several materials: particle i runs *law_of_particle[i] (one non-null law per particle; the
+  // laws must outlive the solver).
+  SPGSolver(const Parameters& parameters,
+            std::vector<const materials::ConstitutiveLaw*> law_of_particle,
             const ParticleSet<dim>& particles, double spacing, const BondList<dim>* rows = nullptr);
 
   // --- setup
@@ -210,8 +223,14 @@ class SPGSolver {
   const RKShapeFunctions<dim>& shape_functions() const { return *rk_; }
   double support_size() const { return a_; }
   double spacing() const { return h_; }
-  double p_wave_speed() const { return cp_; }
-  double contact_stiffness() const { return kc_; }
+  // The law particle i runs.
+  const materials::ConstitutiveLaw& law(unsigned int i) const { return *laws_[law_index_[i]]; }
+  // c_p [m/s] and the contact stiffness k_c [N/m] of particle i; without an index the largest
+  // over the particles (one law: its own).
+  double p_wave_speed(unsigned int i) const { return cp_[law_index_[i]]; }
+  double contact_stiffness(unsigned int i) const { return kc_[law_index_[i]]; }
+  double p_wave_speed() const;
+  double contact_stiffness() const;
   const Parameters& parameters() const { return prm_; }
   // Bytes held per particle and per bond: the RK rows, the solver's copy of the bonds, the
   // kinematic and material-state arrays (capacities) [B].
@@ -222,8 +241,14 @@ class SPGSolver {
   using Matrix = dealii::Tensor<2, dim>;
   Parameters prm_;
   KernelUpdate mode_;
-  const materials::ConstitutiveLaw& law_;
-  double h_, a_, cp_, modulus_, kc_;
+  // The distinct laws (in order of first use) and each particle's index among them; per law its
+  // λ + 2μ [Pa], c_p [m/s] and contact stiffness k_c [N/m].
+  std::vector<const materials::ConstitutiveLaw*> laws_;
+  std::vector<unsigned int> law_index_;
+  std::vector<double> modulus_, cp_, kc_;
+  // Every law has the same c_p: the stable step is CFL h σ_min / c_p, as for one law.
+  bool uniform_wave_speed_ = true;
+  double h_, a_;
   RKKernel<dim> kernel_;
   std::unique_ptr<RKShapeFunctions<dim>> rk_;
   BondList<dim> bonds_;
@@ -246,7 +271,8 @@ class SPGSolver {
   std::vector<RigidObstacle<dim>> obstacles_;
   std::vector<Vector> reaction_;
   double time_ = 0, internal_work_ = 0, stab_energy_ = 0, contact_energy_ = 0, max_residual_ = 0;
-  double min_stretch_ = 1, max_rel_ = 0;
+  // min_N σ_N and min_N σ_N / c_p,N [s/m] of the last force pass (σ = 1 before any).
+  double min_stretch_ = 1, min_stretch_per_speed_ = 0, max_rel_ = 0;
   unsigned long calls_ = 0;
   unsigned int n_resets_ = 0;
   std::vector<unsigned long long> broken_pairs_; // (i << 32 | j), i < j, sorted

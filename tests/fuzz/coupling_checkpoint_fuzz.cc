@@ -26,11 +26,20 @@ void require(bool ok) {
 void check_accepted(const spinesim::coupling::CheckpointContents& c, unsigned int dim,
                     std::size_t size) {
   const std::size_t n = c.particles.size();
-  require(c.version >= 1 && c.version <= 3 && std::isfinite(c.time) && c.time >= 0);
+  require(c.version >= 1 && c.version <= 7 && std::isfinite(c.time) && c.time >= 0);
   require(std::isfinite(c.dissipation) && std::isfinite(c.heat));
   // The size bound: each number of a record takes at least two bytes.
   require(n * 2 * (7 + 3 * dim) <= size && c.broken.size() * 4 <= size);
+  for (const auto& law : c.laws) {
+    require(!law.model.empty() && law.model.size() <= 64);
+    for (const double v : law.values)
+      require(std::isfinite(v));
+  }
+  require(c.laws.size() * 2 * 13 <= size);
   for (const auto& p : c.particles) {
+    // A particle's law is one the file holds (version 7; 0 before, with no laws).
+    require(c.version >= 7 ? p.material < c.laws.size() : p.material == 0);
+    require(std::isfinite(p.stiffness_bound) && p.stiffness_bound >= 0);
     require(p.point < n_points && p.volume > 0 && p.density > 0 && std::isfinite(p.volume) &&
             std::isfinite(p.density) && std::isfinite(p.temperature));
     for (unsigned int d = 0; d < 3; ++d)
