@@ -6,6 +6,7 @@
 #include "base/exceptions.h"
 #include "base/expression_function.h"
 
+#include <deal.II/grid/grid_tools.h>
 #include <deal.II/numerics/vector_tools_interpolate.h>
 
 #include <chrono>
@@ -126,6 +127,10 @@ Simulation<dim>::Simulation(const ScenarioFactoryArgs& args)
     parse_section(prm_, "Geometry", mesh_prm_);
   if (effects_.mechanics) {
     parse_section(prm_, "Material", law_prm_);
+    parse_section(prm_, "CT block", ct_block_prm_);
+    if (ct_block_prm_.enabled() && dim != 3)
+      throw InvalidInput("CT block/Image file", "a CT block in a " + std::to_string(dim) + "-D run",
+                         "an empty Image file, or Dimension = 3 (CT images are 3-D)");
     parse_section(prm_, "Mechanics", mech_prm_);
     quasi_static_ = mech_prm_.time_integration == "quasi_static";
   }
@@ -224,6 +229,23 @@ void Simulation<dim>::build(RunContext& ctx) {
         std::vector<dealii::types::material_id>(ids.begin(), ids.end()), ctx.comm());
     for (const auto id : all_ids)
       mechanics_->set_material(id, law_);
+    if constexpr (dim == 3)
+      if (ct_block_prm_.enabled()) {
+        // Each cell the Material law at its voxel's density (the same cells, so the same laws,
+        // after a restart).
+        // The body's bounding box over all ranks (each sees its own and the coarse cells).
+        const auto local = dealii::GridTools::compute_bounding_box(*triangulation_);
+        dealii::Point<3> lower = local.get_boundary_points().first,
+                         upper = local.get_boundary_points().second;
+        for (unsigned int d = 0; d < 3; ++d) {
+          lower[d] = dealii::Utilities::MPI::min(lower[d], ctx.comm());
+          upper[d] = dealii::Utilities::MPI::max(upper[d], ctx.comm());
+        }
+        ct_block_ = std::make_unique<CtBlock>(ct_block_prm_, law_prm_,
+                                              dealii::BoundingBox<3>({lower, upper}));
+        mechanics_->set_cell_laws(
+            [this](const auto& cell) { return ct_block_->law_at(cell->center()); });
+      }
     if (effects_.thermal_expansion && heat_ && !ctx.restarting())
       // T − T_ref read from the heat field at the mechanics' quadrature points (same mesh);
       // a restart connects them once the heat DoFs exist again (load_checkpoint).
@@ -249,6 +271,8 @@ void Simulation<dim>::build(RunContext& ctx) {
       mechanics_->setup();
       set_initial_velocity();
     }
+    if (ct_block_)
+      ctx.log() << "  " << ct_block_->summary() << "\n";
     mechanics_->set_energy_account(sim_.energy_account); // a restart's sums: load_checkpoint
   }
   if (effects_.coupling) {
@@ -720,6 +744,7 @@ SPINESIM_REGISTER_SCENARIO(
     create_for_dimension<Simulation>, {"Simulation", SimulationParameters::declare},
     sections::geometry(), sections::material(), sections::mechanics(),
     {"Heat", fem::HeatSolver<2>::Parameters::declare},
-    {"Particles", ParticleZoneParameters::declare}, sections::coupling())
+    {"Particles", ParticleZoneParameters::declare}, sections::coupling(),
+    {"CT block", CtBlockParameters::declare})
 
 } // namespace spinesim::applications

@@ -219,6 +219,13 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
     if (ctx.is_root())
       ctx.output().write_atomic("crack_path.csv", csv);
   }
+  if (ct_block_) {
+    const MPI_Comm comm = mechanics_->mpi_communicator();
+    s.set_figure("ct_block_min_modulus_MPa",
+                 dealii::Utilities::MPI::min(ct_block_->minimum_modulus(), comm) / 1e6, "MPa");
+    s.set_figure("ct_block_max_modulus_MPa",
+                 dealii::Utilities::MPI::max(ct_block_->maximum_modulus(), comm) / 1e6, "MPa");
+  }
   if (coupled_) {
     const char* force_unit = dim == 2 ? "N/m" : "N";
     s.set_figure("peak_load_N", peak_load_, force_unit);
@@ -226,6 +233,7 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
       s.set_figure("griffith_ratio", peak_load_ / sim_.critical_load_estimate, "-");
     s.set_figure("free_particles", coupled_->n_free_particles(), "-");
     s.set_figure("ghost_particles", coupled_->n_ghost_particles(), "-");
+    s.set_figure("particle_laws", coupled_->n_particle_laws(), "-");
     s.set_figure("converted_cells", coupled_->n_converted_cells(), "-");
     s.set_figure("broken_bonds", double(coupled_->n_broken_bonds()), "-");
     s.set_figure("max_damage", coupled_->max_damage(), "-");

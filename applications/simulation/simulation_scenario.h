@@ -8,6 +8,7 @@
 #include "applications/framework/run_context.h"
 #include "applications/framework/scenario.h"
 #include "applications/simulation/crack_path.h"
+#include "applications/simulation/ct_block.h"
 #include "applications/simulation/particle_zone.h"
 #include "applications/simulation/pvd_record.h"
 #include "applications/simulation/simulation.h"
@@ -100,6 +101,8 @@ class Simulation : public framework::Scenario {
   SimulationParameters sim_;
   fem::MeshParameters mesh_prm_;
   materials::LawParameters law_prm_;
+  CtBlockParameters ct_block_prm_;
+  std::unique_ptr<CtBlock> ct_block_; // CT block: per-cell laws (3-D)
   typename fem::MechanicsSolver<dim>::Parameters mech_prm_;
   typename fem::HeatSolver<dim>::Parameters heat_prm_;
 
