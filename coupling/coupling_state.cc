@@ -265,6 +265,11 @@ CouplingState<dim>::law_index(const materials::LawParameters& p,
                               std::shared_ptr<const materials::ConstitutiveLaw> local) {
   const auto [it, added] = law_lookup.emplace(law_key(p), laws->size());
   if (added) {
+    if (method && laws->size() >= 1 && !method->supports_material_table())
+      throw InvalidInput("Effects/Particles method",
+                         method->name() + " particles take one law, but cells of a second (" +
+                             p.describe() + ") turn into particles or ghosts",
+                         "nosb, spg or bond_based (a law per particle), or one material");
     laws->add(local ? std::move(local)
                     : std::shared_ptr<const materials::ConstitutiveLaw>(materials::rebuild_law(p)));
     law_parameters.push_back(p);

@@ -97,6 +97,8 @@ void BondBasedMethod<dim>::initialise(const ParticleSet<dim>& particles,
                                       const BondList<dim>& bonds) {
   // Laws the table gained since the last call: each Poisson ratio is checked once.
   if (table_) {
+    if (checked_laws_ > table_->size()) // a checkpoint replaced the table
+      checked_laws_ = 0;
     for (; checked_laws_ < table_->size(); ++checked_laws_) {
       const double nu = (*table_)[checked_laws_].poisson_ratio;
       if (checked_nu_.insert(nu).second)

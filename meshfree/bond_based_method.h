@@ -39,6 +39,7 @@ class BondBasedMethod : public ParticleMethod<dim> {
   const BondBasedPD<dim>& model() const { return pd_; }
 
   std::string name() const override { return "bond_based"; }
+  bool supports_material_table() const override { return true; }
   bool carries_material_state() const override { return false; }
   bool forces_derive_from_energy() const override { return true; }
   double thickness() const override { return pd_.parameters().thickness; }

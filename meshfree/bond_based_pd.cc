@@ -139,19 +139,27 @@ void BondBasedPD<dim>::initialise(const ParticleSet<dim>& particles, const BondL
                                                         prm_.fracture_energy)
                 : std::numeric_limits<double>::infinity();
   }
-  // One G_c gives each material its own s0 ∝ sqrt(G_c/K); the force kernel takes one s0.
-  for (unsigned int m = 1; m < s0.size(); ++m)
-    if (s0[m] != s0[0])
-      throw InvalidInput("Bond based/Fracture energy",
-                         "particles of " + std::to_string(table_->size()) +
-                             " materials get critical stretches from " +
-                             std::to_string(*std::min_element(s0.begin(), s0.end())) + " to " +
-                             std::to_string(*std::max_element(s0.begin(), s0.end())) +
-                             " from one fracture energy, but bond-based PD takes one",
-                         "Bond based/Critical stretch > 0 (one critical stretch for all bonds), "
-                         "or Effects/Particles method = nosb or spg");
-  s0_ = s0[0];
   const auto& id = particles.material_ids();
+  // One G_c gives each material its own s0 ∝ sqrt(G_c/K); the force kernel takes one s0.
+  // Only the laws the particles run count.
+  double s0_min = std::numeric_limits<double>::infinity(), s0_max = 0;
+  for (unsigned int i = 0; i < particles.size(); ++i) {
+    if (id[i] >= table_->size())
+      throw InvalidInput("bond-based PD: material of particle " + std::to_string(i),
+                         "material " + std::to_string(id[i]) + ", the table has " +
+                             std::to_string(table_->size()),
+                         "a material id of the particle method's material table");
+    s0_min = std::min(s0_min, s0[id[i]]);
+    s0_max = std::max(s0_max, s0[id[i]]);
+  }
+  if (particles.size() > 0 && s0_min != s0_max)
+    throw InvalidInput("Bond based/Fracture energy",
+                       "particles of several materials get critical stretches from " +
+                           std::to_string(s0_min) + " to " + std::to_string(s0_max) +
+                           " from one fracture energy, but bond-based PD takes one",
+                       "Bond based/Critical stretch > 0 (one critical stretch for all bonds), "
+                       "or Effects/Particles method = nosb or spg");
+  s0_ = particles.size() > 0 ? s0[id[0]] : s0_;
   for_each_bond(bonds, [&](unsigned int i, std::size_t k, unsigned int j) {
     const double cij = id[i] == id[j] ? c[id[i]] : series_mean(c[id[i]], c[id[j]]);
     k_[k] = cij * bonds.influence[k] * bonds.volume_factor(k) * bonds.surface(k) * V[j] /

@@ -87,6 +87,9 @@ class ParticleMethod {
   // Whether particles carry the constitutive state (stress, plastic strain, hardening) of
   // the law; bond-based PD does not.
   virtual bool carries_material_state() const = 0;
+  // Whether the method runs ParticleMaterial::table (a law per particle); one that does not
+  // is refused in runs whose particles hold more than one law.
+  virtual bool supports_material_table() const { return false; }
   // Out-of-plane thickness of a 2-D body the method was set up for [m] (1 in 3-D): particle
   // sets for it are made with this thickness.
   virtual double thickness() const = 0;

@@ -52,7 +52,9 @@ void Progress::start(const std::string& label, unsigned int total_steps, double 
 }
 
 void Progress::update(unsigned int step, double time) {
-  if (on_update_)
+  // A phase's last step is done work: a signal arriving in it lets the run end with its
+  // figures (the next phase, if any, checks again).
+  if (on_update_ && step != total_)
     on_update_();
   if (!active_)
     return;

@@ -28,8 +28,8 @@ class Progress {
 
   static Style parse_style(const std::string& name);
 
-  // Called by start() (the run context publishes its output then) and by every update()
-  // (it checks for an interrupt); on every rank.
+  // Called by start() (the run context publishes its output then) and by every update() but
+  // the phase's last (it checks for an interrupt); on every rank.
   void on_start(std::function<void()> f) { on_start_ = std::move(f); }
   void on_update(std::function<void()> f) { on_update_ = std::move(f); }
 

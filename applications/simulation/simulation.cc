@@ -131,6 +131,13 @@ Simulation<dim>::Simulation(const ScenarioFactoryArgs& args)
     if (ct_block_prm_.enabled() && dim != 3)
       throw InvalidInput("CT block/Image file", "a CT block in a " + std::to_string(dim) + "-D run",
                          "an empty Image file, or Dimension = 3 (CT images are 3-D)");
+    // The block's origin is the body's bounding-box top centre, which refinement moves on
+    // curved shells (a restart, rebuilt from the coarse mesh, would map other voxels).
+    if (ct_block_prm_.enabled() &&
+        (mesh_prm_.shape == "hyper_shell" || mesh_prm_.shape == "quarter_hyper_shell"))
+      throw InvalidInput("Geometry/Shape", mesh_prm_.shape + " with a CT block",
+                         "a shape whose bounding box refinement keeps (hyper_rectangle, "
+                         "plate_with_a_hole, or a mesh file with flat faces)");
     parse_section(prm_, "Mechanics", mech_prm_);
     quasi_static_ = mech_prm_.time_integration == "quasi_static";
   }

@@ -25,6 +25,7 @@ class NosbMethod : public ParticleMethod<dim> {
   const NosbPD<dim>& model() const { return pd_; }
 
   std::string name() const override { return "nosb"; }
+  bool supports_material_table() const override { return true; }
   bool carries_material_state() const override { return true; }
   double thickness() const override { return pd_.parameters().thickness; }
   typename NeighborSearch<dim>::Options neighbor_options(double spacing) const override;

@@ -50,6 +50,7 @@ class SpgMethod : public ParticleMethod<dim> {
   SPGSolver<dim>& solver();
 
   std::string name() const override { return "spg"; }
+  bool supports_material_table() const override { return true; }
   bool carries_material_state() const override { return true; }
   double thickness() const override { return thickness_; }
   // The force on a coefficient gathers the stresses of every particle in its support.

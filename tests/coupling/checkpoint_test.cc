@@ -113,6 +113,12 @@ void checkpoint_round_trip(const std::string& method, double second_youngs = 0) 
   const auto& pa = a.particles();
   const auto& pb = b.particles();
   ASSERT_EQ(pb.size(), pa.size());
+  if (second_youngs > 0) { // the file holds two laws, and particles of each
+    std::set<unsigned int> ids;
+    for (unsigned int i = 0; i < pa.size(); ++i)
+      ids.insert(pa.material_id(i));
+    EXPECT_EQ(ids.size(), 2u);
+  }
   for (unsigned int i = 0; i < pa.size(); ++i) {
     ASSERT_EQ(pb.reference_position(i), pa.reference_position(i)) << i;
     ASSERT_EQ(pb.volume(i), pa.volume(i)) << i;

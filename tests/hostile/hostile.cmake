@@ -379,3 +379,14 @@ spinesim_add_hostile_test(scene_not_utf8 ARGS check ${_h}/data/latin1_descriptio
   MATCH "latin1_description.prm:3.*byte 0xE8 at column 23 is not UTF-8 text")
 spinesim_add_hostile_test(json_scene_not_utf8 ARGS check ${_h}/data/overlong_description.json
   MATCH "overlong_description.json:3.*byte 0xC0 at column 34 is not UTF-8 text")
+# A coupled run on CT bone stopped after its first load step and resumed: the particles' laws
+# (one per voxel density) come back from the checkpoint in their table order, and the run
+# ends with the figures of the uninterrupted one.
+add_test(NAME hostile.interrupt_and_restart_ct_block
+  COMMAND ${CMAKE_COMMAND} -DSPINESIM=$<TARGET_FILE:spinesim>
+    -DSCENE=${PROJECT_SOURCE_DIR}/applications/validation/coupling_ct_block.prm
+    -DDIR=${_runs}/interrupt_and_restart_ct_block -DAFTER_ROWS=1 -DTOL=1e-12
+    "-DSET=Material/Model=linear_elastic|Effects/Conversion=false|Simulation/Steps=3|Coupling/Initial region lower corner=-0.001,-0.001,-0.004|Coupling/Initial region upper corner=0.001,0.001,-0.002"
+    -P ${PROJECT_SOURCE_DIR}/tests/support/interrupt_case.cmake)
+set_tests_properties(hostile.interrupt_and_restart_ct_block PROPERTIES LABELS "hostile;cli;ct"
+  TIMEOUT 300)
