@@ -35,37 +35,13 @@ using materials::unpack_state;
 } // namespace
 
 namespace checkpoint_laws {
-// LawParameters as the numbers of a checkpoint's law line (CheckpointLaw), and back.
-std::array<double, checkpoint_law_values> to_text(const materials::LawParameters& p) {
-  return {p.youngs_modulus,
-          p.poisson_ratio,
-          p.density,
-          p.yield_stress,
-          p.hardening_modulus,
-          p.saturation_stress,
-          p.saturation_exponent,
-          p.thermal_expansion,
-          p.damage_onset_plastic_strain,
-          p.damage_softening_strain,
-          p.maximum_damage};
-}
-
+static_assert(checkpoint_law_values == materials::LawParameters::n_values,
+              "a checkpoint's law line holds LawParameters::values()");
+// A checkpoint's law line (CheckpointLaw) as LawParameters.
 materials::LawParameters from_text(const CheckpointLaw& law) {
   materials::LawParameters p;
   p.model = law.model;
-  double* fields[checkpoint_law_values] = {&p.youngs_modulus,
-                                           &p.poisson_ratio,
-                                           &p.density,
-                                           &p.yield_stress,
-                                           &p.hardening_modulus,
-                                           &p.saturation_stress,
-                                           &p.saturation_exponent,
-                                           &p.thermal_expansion,
-                                           &p.damage_onset_plastic_strain,
-                                           &p.damage_softening_strain,
-                                           &p.maximum_damage};
-  for (unsigned int m = 0; m < checkpoint_law_values; ++m)
-    *fields[m] = law.values[m];
+  p.set_values(law.values);
   p.secant_tangent = law.secant_tangent;
   return p;
 }
@@ -143,7 +119,7 @@ void CouplingCheckpoint<dim>::save(const std::string& file) const {
   for (const auto& [id, batch] : p_.converter.converted())
     out << id << " " << batch << "\n";
   for (const auto& law : state.law_parameters) {
-    const auto values = checkpoint_laws::to_text(law);
+    const auto values = law.values();
     out << law.model;
     for (const double v : values)
       out << " " << v;

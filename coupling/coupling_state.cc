@@ -240,21 +240,10 @@ CouplingState<dim>::cell_state_deformation(const DoFCell& cell, unsigned int poi
 namespace {
 // Exact identity of a law's parameters as a map key: the model and the values' bits.
 std::string law_key(const materials::LawParameters& p) {
-  const double values[] = {p.youngs_modulus,
-                           p.poisson_ratio,
-                           p.density,
-                           p.yield_stress,
-                           p.hardening_modulus,
-                           p.saturation_stress,
-                           p.saturation_exponent,
-                           p.thermal_expansion,
-                           p.damage_onset_plastic_strain,
-                           p.damage_softening_strain,
-                           p.maximum_damage,
-                           p.secant_tangent ? 1.0 : 0.0};
+  const auto values = p.values();
   std::string key = p.model;
-  key.push_back('\0');
-  key.append(reinterpret_cast<const char*>(values), sizeof(values));
+  key.push_back(p.secant_tangent ? '\1' : '\0');
+  key.append(reinterpret_cast<const char*>(values.data()), sizeof(double) * values.size());
   return key;
 }
 } // namespace

@@ -174,16 +174,7 @@ FiniteStrainStress J2FiniteStrain::respond(const Tensor2& F, double dT,
 }
 
 bool J2FiniteStrain::describe(LawParameters& out) const {
-  out = LawParameters();
-  out.model = name();
-  out.youngs_modulus = E_;
-  out.poisson_ratio = nu_;
-  out.density = rho_;
-  out.thermal_expansion = alpha_;
-  out.yield_stress = hardening_.yield_stress();
-  out.hardening_modulus = hardening_.hardening_modulus();
-  out.saturation_stress = hardening_.saturation_stress();
-  out.saturation_exponent = hardening_.saturation_exponent();
+  out = LawParameters::elastic(name(), E_, nu_, rho_, alpha_).with_hardening(hardening_);
   return true;
 }
 

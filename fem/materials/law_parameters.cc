@@ -141,14 +141,56 @@ std::unique_ptr<ConstitutiveLaw> rebuild_law(const LawParameters& p) {
 }
 
 bool LawParameters::same_law(const LawParameters& o) const {
-  return model == o.model && youngs_modulus == o.youngs_modulus &&
-         poisson_ratio == o.poisson_ratio && density == o.density &&
-         yield_stress == o.yield_stress && hardening_modulus == o.hardening_modulus &&
-         saturation_stress == o.saturation_stress && saturation_exponent == o.saturation_exponent &&
-         thermal_expansion == o.thermal_expansion &&
-         damage_onset_plastic_strain == o.damage_onset_plastic_strain &&
-         damage_softening_strain == o.damage_softening_strain &&
-         maximum_damage == o.maximum_damage && secant_tangent == o.secant_tangent;
+  return model == o.model && values() == o.values() && secant_tangent == o.secant_tangent;
+}
+
+std::array<double, LawParameters::n_values> LawParameters::values() const {
+  return {youngs_modulus,
+          poisson_ratio,
+          density,
+          yield_stress,
+          hardening_modulus,
+          saturation_stress,
+          saturation_exponent,
+          thermal_expansion,
+          damage_onset_plastic_strain,
+          damage_softening_strain,
+          maximum_damage};
+}
+
+void LawParameters::set_values(const std::array<double, n_values>& v) {
+  double* fields[n_values] = {&youngs_modulus,
+                              &poisson_ratio,
+                              &density,
+                              &yield_stress,
+                              &hardening_modulus,
+                              &saturation_stress,
+                              &saturation_exponent,
+                              &thermal_expansion,
+                              &damage_onset_plastic_strain,
+                              &damage_softening_strain,
+                              &maximum_damage};
+  for (unsigned int m = 0; m < n_values; ++m)
+    *fields[m] = v[m];
+}
+
+LawParameters LawParameters::elastic(const std::string& model, double E, double nu, double rho,
+                                     double alpha) {
+  LawParameters p;
+  p.model = model;
+  p.youngs_modulus = E;
+  p.poisson_ratio = nu;
+  p.density = rho;
+  p.thermal_expansion = alpha;
+  return p;
+}
+
+LawParameters& LawParameters::with_hardening(const IsotropicHardening& h) {
+  yield_stress = h.yield_stress();
+  hardening_modulus = h.hardening_modulus();
+  saturation_stress = h.saturation_stress();
+  saturation_exponent = h.saturation_exponent();
+  return *this;
 }
 
 } // namespace spinesim::materials

@@ -5,9 +5,11 @@
 // factory create_law(). Entries are declared in the CURRENT subsection of the handler.
 
 #include "fem/materials/constitutive_law.h"
+#include "fem/materials/isotropic_hardening.h"
 
 #include <deal.II/base/parameter_handler.h>
 
+#include <array>
 #include <memory>
 #include <string>
 
@@ -44,8 +46,18 @@ struct LawParameters {
   // j2_damage only: the secant tangent (1 - D) D_ep (J2Damage); set by scenes, not read.
   bool secant_tangent = false;
 
-  // The same law: model and every value (not the preset's name), compared exactly.
+  // The same law: model, every value and the flag (not the preset's name), compared exactly.
   bool same_law(const LawParameters& o) const;
+  // The numeric values in one fixed order (checkpoints' law lines, exact keys): E, ν, ρ,
+  // σ_y0, H, σ_∞, δ, α, damage onset, softening strain, D_max.
+  static constexpr unsigned int n_values = 11;
+  std::array<double, n_values> values() const;
+  void set_values(const std::array<double, n_values>& v);
+  // The parameters of an elastic law (model, E, ν, ρ, α; the rest at their defaults), and
+  // the hardening curve's entries set from `h`: for ConstitutiveLaw::describe.
+  static LawParameters elastic(const std::string& model, double youngs_modulus,
+                               double poisson_ratio, double density, double thermal_expansion);
+  LawParameters& with_hardening(const IsotropicHardening& h);
 
   // Boost serialization (particle records between ranks); the preset's name stays behind.
   template <class Archive>

@@ -94,12 +94,7 @@ LinearElastic::plane_stress(const dealii::SymmetricTensor<2, 2>& strain, double 
 }
 
 bool LinearElastic::describe(LawParameters& out) const {
-  out = LawParameters();
-  out.model = name();
-  out.youngs_modulus = E_;
-  out.poisson_ratio = nu_;
-  out.density = rho_;
-  out.thermal_expansion = alpha_;
+  out = LawParameters::elastic(name(), E_, nu_, rho_, alpha_);
   return true;
 }
 

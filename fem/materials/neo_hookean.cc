@@ -63,12 +63,7 @@ FiniteStrainStress NeoHookean::finite_strain_stress(const Tensor2& F, double dT,
 }
 
 bool NeoHookean::describe(LawParameters& out) const {
-  out = LawParameters();
-  out.model = name();
-  out.youngs_modulus = E_;
-  out.poisson_ratio = nu_;
-  out.density = rho_;
-  out.thermal_expansion = alpha_;
+  out = LawParameters::elastic(name(), E_, nu_, rho_, alpha_);
   return true;
 }
 

@@ -386,7 +386,7 @@ add_test(NAME hostile.interrupt_and_restart_ct_block
   COMMAND ${CMAKE_COMMAND} -DSPINESIM=$<TARGET_FILE:spinesim>
     -DSCENE=${PROJECT_SOURCE_DIR}/applications/validation/coupling_ct_block.prm
     -DDIR=${_runs}/interrupt_and_restart_ct_block -DAFTER_ROWS=1 -DTOL=1e-12
-    "-DSET=Material/Model=linear_elastic|Effects/Conversion=false|Simulation/Steps=3|Coupling/Initial region lower corner=-0.001,-0.001,-0.004|Coupling/Initial region upper corner=0.001,0.001,-0.002"
+    "-DSET=Material/Model=linear_elastic|Effects/Conversion=false|Simulation/Steps=3|Geometry/Origin=-0.002,-0.002,-0.004|Geometry/Lengths=0.004,0.004,0.004|Geometry/Subdivisions=8,8,8|Coupling/Initial region lower corner=-0.0005,-0.0005,-0.0025|Coupling/Initial region upper corner=0.0005,0.0005,-0.0015"
     -P ${PROJECT_SOURCE_DIR}/tests/support/interrupt_case.cmake)
 set_tests_properties(hostile.interrupt_and_restart_ct_block PROPERTIES LABELS "hostile;cli;ct"
   TIMEOUT 300)
