@@ -45,35 +45,68 @@ void CoupledIntegrator<dim>::restore_stiffness_bound(std::vector<double> bound) 
 }
 
 template <int dim>
-double CoupledIntegrator<dim>::particle_step() const {
+double CoupledIntegrator<dim>::own_particle_step(unsigned int i) const {
   const auto& particles = state_.particles;
-  const bool finite_strain = state_.fem.parameters().kinematics != "small_strain";
+  const double inf = std::numeric_limits<double>::infinity();
+  // Owned rows only: another rank's particle holds a partial row sum here (the neighbour
+  // families this rank keeps), never more than its owner's, so the minimum over the ranks
+  // is the owners' either way, and a checkpoint need keep the owners' entries alone.
+  if (i >= stiffness_bound_.size() || !state_.free[i] || !state_.is_owned(i) ||
+      !(stiffness_bound_[i] > 0))
+    return inf;
+  // Under finite strain a compressed family is stiffer in its reference coordinates: a
+  // bond shortened to λ of its length stiffens like a cell edge shortened to λ (the FEM's
+  // step of the current cells), so the bound grows by 1/λ² with the family's shortest
+  // stretch (Belytschko, Liu & Moran 2000, §6.3: the step scales with the current element
+  // size).
+  double stretch = 1;
+  if (state_.fem.parameters().kinematics != "small_strain")
+    for (std::size_t k = state_.bonds.begin(i); k < state_.bonds.end(i); ++k) {
+      if (state_.bonds.broken[k]) // no force: fragments may close up freely
+        continue;
+      const unsigned int j = state_.bonds.neighbor[k];
+      const auto xi = particles.reference_position(j) - particles.reference_position(i);
+      const auto eta = particles.displacement(j) - particles.displacement(i);
+      stretch = std::min(stretch, (xi + eta).norm() / xi.norm());
+    }
+  return state_.prm.time_step_safety * stretch *
+         std::sqrt(2.0 * particles.density(i) / stiffness_bound_[i]);
+}
+
+template <int dim>
+double CoupledIntegrator<dim>::particle_step() const {
   double dt_pd = std::numeric_limits<double>::infinity();
-  for (unsigned int i = 0; i < stiffness_bound_.size(); ++i) {
-    // Owned rows only: another rank's particle holds a partial row sum here (the neighbour
-    // families this rank keeps), never more than its owner's, so the minimum over the ranks
-    // is the owners' either way, and a checkpoint need keep the owners' entries alone.
-    if (!state_.free[i] || !state_.is_owned(i) || !(stiffness_bound_[i] > 0))
-      continue;
-    // Under finite strain a compressed family is stiffer in its reference coordinates: a
-    // bond shortened to λ of its length stiffens like a cell edge shortened to λ (the FEM's
-    // step of the current cells), so the bound grows by 1/λ² with the family's shortest
-    // stretch (Belytschko, Liu & Moran 2000, §6.3: the step scales with the current element
-    // size).
-    double stretch = 1;
-    if (finite_strain)
-      for (std::size_t k = state_.bonds.begin(i); k < state_.bonds.end(i); ++k) {
-        if (state_.bonds.broken[k]) // no force: fragments may close up freely
-          continue;
-        const unsigned int j = state_.bonds.neighbor[k];
-        const auto xi = particles.reference_position(j) - particles.reference_position(i);
-        const auto eta = particles.displacement(j) - particles.displacement(i);
-        stretch = std::min(stretch, (xi + eta).norm() / xi.norm());
-      }
-    dt_pd = std::min(dt_pd, state_.prm.time_step_safety * stretch *
-                                std::sqrt(2.0 * particles.density(i) / stiffness_bound_[i]));
-  }
+  for (unsigned int i = 0; i < stiffness_bound_.size(); ++i)
+    dt_pd = std::min(dt_pd, own_particle_step(i));
   return dt_pd;
+}
+
+template <int dim>
+double CoupledIntegrator<dim>::relaxation_time_step() {
+  const double dt = stable_time_step(); // also renews the particles' stiffness bound
+  relax_mass_scale_.clear();
+  state_.fem.clear_relaxation_masses();
+  // The energy splice's step bound and its mass-weighted correction are those of the real
+  // masses: it relaxes with them.
+  if (state_.fem.parameters().relaxation_masses != "scaled" || splice_.on())
+    return dt;
+  // Fictitious masses (Underwood 1983; Kilic & Madenci 2010 for PD): each part stable by itself
+  // at the reference step; a cell or particle with a longer own step moves with a lighter mass,
+  // one with a shorter step (particles finer than the cells) with a heavier one. The
+  // equilibrium is the same; the pseudo-dynamics reach it in fewer steps.
+  const bool cells = state_.fem.n_active_cells() > 0;
+  const double reference = cells ? state_.fem.stable_time_step() : particle_step_;
+  if (!(reference > 0) || !std::isfinite(reference))
+    return dt;
+  if (cells)
+    state_.fem.set_relaxation_masses(reference);
+  relax_mass_scale_.assign(state_.particles.size(), 1.0);
+  for (unsigned int i = 0; i < state_.particles.size(); ++i) {
+    const double own = own_particle_step(i);
+    if (std::isfinite(own) && own > 0)
+      relax_mass_scale_[i] = (reference / own) * (reference / own);
+  }
+  return reference;
 }
 
 template <int dim>
@@ -266,7 +299,8 @@ void CoupledIntegrator<dim>::advance(double dt, double a, double load_time, bool
     for (unsigned int i = 0; sums && i < particles.size(); ++i) {
       if (!state_.free[i] || !state_.is_owned(i))
         continue;
-      const double m = particles.mass(i);
+      const double m =
+          particles.mass(i) * (i < relax_mass_scale_.size() ? relax_mass_scale_[i] : 1.0);
       for (unsigned int d = 0; d < dim; ++d) {
         const double f = force_on(i, d);
         if (particles.is_fixed(i, d)) {
@@ -329,7 +363,15 @@ RelaxationReport<dim> CoupledIntegrator<dim>::relax(double time, bool with_conve
   // conversion. Velocities are pseudo-velocities and end at zero.
   const MPI_Comm comm = state_.fem.mpi_communicator();
   RelaxationReport<dim> report;
-  double dt = stable_time_step();
+  // The real masses come back however the relaxation ends.
+  struct MassGuard {
+    CoupledIntegrator& integrator;
+    ~MassGuard() {
+      integrator.relax_mass_scale_.clear();
+      integrator.state_.fem.clear_relaxation_masses();
+    }
+  } guard{*this};
+  double dt = relaxation_time_step();
   double c = 0, peak_residual = 0;
   bool first = true;
   time_ = time; // held: advance() with sums does not move the clock
@@ -378,7 +420,7 @@ RelaxationReport<dim> CoupledIntegrator<dim>::relax(double time, bool with_conve
       }
       r.reaction_before = converter_.last_report().reaction_before = reaction;
       report.conversions.push_back(r);
-      dt = stable_time_step();
+      dt = relaxation_time_step();
       first = true; // new unknowns: restart the stiffness estimate
       c = 0;
       continue;

@@ -88,6 +88,14 @@ class CoupledIntegrator {
   // This rank's particle step from stiffness_bound_ and, under finite strain, the current
   // bond stretches [s].
   double particle_step() const;
+  // Particle i's own stable step [s] (the same bound); infinity for a particle without one
+  // (not free, not owned, no stiffness).
+  double own_particle_step(unsigned int i) const;
+  // The pseudo-step of a relaxation. With Mechanics/Relaxation masses = scaled (and the overlap
+  // splice), fictitious masses put every FEM cell and every particle at one step: the FEM's
+  // (its stiffest cell keeps its mass), or the particles' once no cell is left; sets the FEM's
+  // relaxation masses and relax_mass_scale_. Else the stable step with the real masses.
+  double relaxation_time_step();
   // min(dt_fem, dt_pd), or the energy splice's bound on the sum of the parts' frequencies.
   double combined_step(double dt_fem, double dt_pd) const;
 
@@ -114,6 +122,8 @@ class CoupledIntegrator {
   mutable std::vector<double> stiffness_bound_;
   // Net accelerations of the free particle components at the last relaxation step [m/s²].
   std::vector<double> relax_acceleration_;
+  // Per particle, its relaxation mass over its mass (empty: the real masses).
+  std::vector<double> relax_mass_scale_;
 };
 
 } // namespace spinesim::coupling

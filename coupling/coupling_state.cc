@@ -177,8 +177,8 @@ void CouplingState<dim>::prepare() {
   // cell's law of the mesh (every rank holds the laws of all material ids).
   if (!law)
     law = fem.cell_law(*dh.active_cell_iterators().begin());
-  meshfree::ParticleMaterial material{youngs, poisson, density, law};
-  material.table = laws;
+  // The reference temperature is set below.
+  meshfree::ParticleMaterial material{youngs, poisson, density, law, 0.0, laws};
   // Particles strain thermally exactly where the FEM does: without a temperature field the
   // FEM ignores the law's expansion coefficient, and so must the particles (their temperatures
   // still follow the heat equation when it runs).

@@ -45,6 +45,14 @@ void MechanicsParameters<dim>::declare(ParameterHandler& prm) {
                     "Fraction of the CFL stable step used by the explicit integrator [-].");
   prm.declare_entry("Mass damping", "0", Patterns::Double(0),
                     "Mass-proportional damping coefficient alpha [1/s].");
+  prm.declare_entry(
+      "Relaxation masses", "scaled", Patterns::Selection("scaled|lumped"),
+      "Masses of dynamic relaxation, where a quasi-static step is relaxed pseudo-dynamically "
+      "(coupled FEM/particle runs; a softening solid past its peak) [-]. scaled: each cell's "
+      "share of the lumped mass times (dt / dt_cell)^2, so that every cell (and every particle) "
+      "runs at the one stable step dt, as fictitious densities do (Underwood 1983; Kilic & "
+      "Madenci 2010); the equilibrium is the same, reached in fewer pseudo-steps where cell "
+      "sizes, moduli or densities vary. lumped: the real lumped masses at the stable step.");
   prm.declare_entry("Taylor-Quinney coefficient", "0.9", Patterns::Double(0, 1),
                     "Fraction beta of the plastic work turned into heat when Heat and Mechanics "
                     "are both on (plastic-work heating; 0 switches it off) [-]. 0.9 is the "
@@ -71,6 +79,7 @@ void MechanicsParameters<dim>::parse(const ParameterHandler& prm) {
   max_linear_iterations = prm.get_integer("Max linear iterations");
   cfl_safety_factor = prm.get_double("CFL safety factor");
   mass_damping = prm.get_double("Mass damping");
+  relaxation_masses = prm.get("Relaxation masses");
   taylor_quinney = prm.get_double("Taylor-Quinney coefficient");
   if (!(taylor_quinney >= 0 && taylor_quinney <= 1))
     throw InvalidInput("Taylor-Quinney coefficient", "must lie in [0, 1]", "0 <= beta <= 1");

@@ -28,7 +28,10 @@ struct MechanicsParameters {
   double linear_tolerance = 1e-10;
   unsigned int max_linear_iterations = 1000;
   double cfl_safety_factor = 0.5;
-  double mass_damping = 0.0;   // [1/s]
+  double mass_damping = 0.0; // [1/s]
+  // Dynamic relaxation (quasi-static steps relaxed pseudo-dynamically): "scaled" fictitious
+  // masses that put every cell at the common stable step, or the "lumped" real masses.
+  std::string relaxation_masses = "scaled";
   double taylor_quinney = 0.9; // fraction of plastic work turned into heat [-]
   typename BoundaryConditions<dim>::Parameters boundary_conditions;
 

@@ -130,7 +130,7 @@ void MechanicsSolver<dim>::set_active_cells(const std::vector<bool>& active) {
       ++n_active_cells_;
   n_active_cells_ = Utilities::MPI::sum(n_active_cells_, comm_);
   if (is_setup_) {
-    compute_lumped_mass();
+    compute_lumped_mass(lumped_mass_);
     mark_orphan_dofs();
     homogeneous_stale_ = true; // rebuilt where a Newton solve needs it (explicit runs never)
   }
@@ -260,7 +260,7 @@ void MechanicsSolver<dim>::setup() {
   committed_.assign(tria_.n_active_cells() * nq, initial);
   trial_ = committed_;
 
-  compute_lumped_mass();
+  compute_lumped_mass(lumped_mass_);
   build_rigid_body_modes();
   update_ghosts();
   dT_start_.clear();
@@ -277,10 +277,12 @@ void MechanicsSolver<dim>::setup() {
 }
 
 template <int dim>
-void MechanicsSolver<dim>::compute_lumped_mass() {
+void MechanicsSolver<dim>::compute_lumped_mass(VectorType& mass, double reference_step) {
   // Row-sum lumped mass: Σ_j ∫ρ N_i N_j = ∫ρ N_i (partition of unity), condensed onto masters.
-  lumped_mass_ = 0;
+  mass = 0;
   const unsigned int nq = quadrature_.size();
+  const bool current = prm_.kinematics == "finite_strain";
+  std::vector<Point<dim>> x(GeometryInfo<dim>::vertices_per_cell);
   FEValues<dim> fe_values(*mapping_, fe_, quadrature_, update_values | update_JxW_values);
   Vector<double> cell_mass(fe_.n_dofs_per_cell());
   std::vector<types::global_dof_index> dofs(fe_.n_dofs_per_cell());
@@ -290,17 +292,31 @@ void MechanicsSolver<dim>::compute_lumped_mass() {
     fe_values.reinit(cell);
     const auto lit = laws_.find(cell->material_id());
     const unsigned int index = cell->active_cell_index();
-    const double rho = index < cell_laws_.size() && cell_laws_[index] ? cell_laws_[index]->density()
-                       : (lit != laws_.end() && lit->second)          ? lit->second->density()
-                                                                      : 0.0;
+    double rho = index < cell_laws_.size() && cell_laws_[index] ? cell_laws_[index]->density()
+                 : (lit != laws_.end() && lit->second)          ? lit->second->density()
+                                                                : 0.0;
+    if (reference_step > 0 && rho > 0) {
+      const double own = prm_.cfl_safety_factor * cell_step(cell, current, x);
+      rho *= (reference_step / own) * (reference_step / own);
+    }
     cell_mass = 0;
     for (unsigned int q = 0; q < nq; ++q)
       for (unsigned int i = 0; i < fe_.n_dofs_per_cell(); ++i)
         cell_mass(i) += rho * fe_values.shape_value(i, q) * fe_values.JxW(q);
     cell->get_dof_indices(dofs);
-    hanging_.distribute_local_to_global(cell_mass, dofs, lumped_mass_);
+    hanging_.distribute_local_to_global(cell_mass, dofs, mass);
   }
-  lumped_mass_.compress(VectorOperation::add);
+  mass.compress(VectorOperation::add);
+}
+
+template <int dim>
+void MechanicsSolver<dim>::set_relaxation_masses(double reference_step) {
+  if (!is_setup_)
+    setup();
+  if (relaxation_mass_.size() != lumped_mass_.size())
+    relaxation_mass_.reinit(owned_, comm_);
+  compute_lumped_mass(relaxation_mass_, reference_step);
+  relaxation_masses_on_ = true;
 }
 
 template <int dim>

@@ -231,6 +231,14 @@ class MechanicsSolver {
   // relaxation); then the point history is committed and the velocity cleared. Returns the
   // pseudo-steps taken; NumericalFailure (NaN, or no convergence in max_steps). Collective.
   unsigned int relax_quasi_static(double time, double tolerance, unsigned int max_steps);
+  // Fictitious relaxation masses (Underwood 1983): each active cell's share of the lumped mass
+  // times (reference_step / the cell's own stable step)², so that every cell is stable at
+  // reference_step [s] by itself; the assembled system then is too, since its highest
+  // frequency is at most the largest of its elements' (Irons' element eigenvalue bound;
+  // Belytschko, Liu & Moran 2000, §6.3.2). Relaxation steps use them until
+  // clear_relaxation_masses() (collective).
+  void set_relaxation_masses(double reference_step);
+  void clear_relaxation_masses() { relaxation_masses_on_ = false; }
   // solve_quasi_static(time); where that fails with a NumericalFailure and `relax` holds (the
   // caller knows the solid may soften: past yield of a damage law), relax_quasi_static() from
   // the last converged state instead. Other failures, and every failure without `relax`, are
@@ -347,7 +355,13 @@ class MechanicsSolver {
   const dealii::AffineConstraints<double>& homogeneous_constraints();
   void update_ghosts();
   void build_rigid_body_modes();
-  void compute_lumped_mass();
+  // The row-sum lumped mass into `mass`; with reference_step > 0, each cell's share scaled by
+  // (reference_step / its stable step)² (set_relaxation_masses()).
+  void compute_lumped_mass(VectorType& mass, double reference_step = 0);
+  // A cell's CFL step without the safety factor, h / c [s]: h its shortest vertex distance
+  // over the degree (of the current cell under finite strain; x is scratch), c its P wave.
+  double cell_step(const typename dealii::DoFHandler<dim>::active_cell_iterator& cell, bool current,
+                   std::vector<dealii::Point<dim>>& x) const;
   void mark_orphan_dofs();
   void drop_inactive_hanging_constraints(); // setup() with inactive cells
 
@@ -407,6 +421,8 @@ class MechanicsSolver {
   dealii::AffineConstraints<double> hanging_, homogeneous_, newton_constraints_;
   MatrixType matrix_;
   VectorType u_, u_ghost_, v_, v_ghost_, rhs_, raw_residual_, lumped_mass_;
+  VectorType relaxation_mass_; // set_relaxation_masses() [kg]
+  bool relaxation_masses_on_ = false;
   std::vector<dealii::IndexSet> component_dofs_; // owned dofs of each component
   std::vector<unsigned char> owned_component_;   // component of each owned dof (local order)
   std::vector<std::vector<double>> rigid_modes_; // per mode, per owned dof (local order)

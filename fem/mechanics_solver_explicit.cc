@@ -24,6 +24,34 @@ namespace spinesim::fem {
 using namespace dealii;
 
 template <int dim>
+double MechanicsSolver<dim>::cell_step(const typename DoFHandler<dim>::active_cell_iterator& cell,
+                                       bool current, std::vector<Point<dim>>& x) const {
+  // The shortest distance between two vertices (not the diameter) bounds the highest mode of
+  // distorted cells; degree p splits the edge into p node spacings.
+  double shortest = cell->minimum_vertex_distance();
+  if (current) {
+    for (const unsigned int v : cell->vertex_indices()) {
+      x[v] = cell->vertex(v);
+      for (unsigned int c = 0; c < dim; ++c)
+        x[v][c] += u_ghost_(cell->vertex_dof_index(v, c));
+    }
+    shortest = std::numeric_limits<double>::max();
+    for (unsigned int a = 0; a < x.size(); ++a)
+      for (unsigned int b = a + 1; b < x.size(); ++b)
+        shortest = std::min(shortest, x[a].distance(x[b]));
+  }
+  const double h = shortest / prm_.fe_degree;
+  const auto& law = cell_material(cell);
+  // Plane stress carries the in-plane P wave sqrt(E / ((1 − ν²) ρ)), slower than the 3-D one.
+  const double c =
+      prm_.plane_stress
+          ? std::sqrt(law.youngs_modulus() /
+                      ((1 - law.poisson_ratio() * law.poisson_ratio()) * law.density()))
+          : law.p_wave_speed();
+  return h / c;
+}
+
+template <int dim>
 double MechanicsSolver<dim>::stable_time_step(Point<dim>* where) const {
   double dt = std::numeric_limits<double>::max();
   Point<dim> centre; // of the cell that sets the step (deformed under finite strain)
@@ -32,31 +60,9 @@ double MechanicsSolver<dim>::stable_time_step(Point<dim>* where) const {
   std::vector<Point<dim>> x(GeometryInfo<dim>::vertices_per_cell);
   for (const auto& cell : dof_handler_.active_cell_iterators())
     if (cell->is_locally_owned() && is_active(cell)) {
-      // The shortest distance between two vertices (not the diameter) bounds the highest mode
-      // of distorted cells; degree p splits the edge into p node spacings.
-      double shortest = cell->minimum_vertex_distance();
-      if (current) {
-        for (const unsigned int v : cell->vertex_indices()) {
-          x[v] = cell->vertex(v);
-          for (unsigned int c = 0; c < dim; ++c)
-            x[v][c] += u_ghost_(cell->vertex_dof_index(v, c));
-        }
-        shortest = std::numeric_limits<double>::max();
-        for (unsigned int a = 0; a < x.size(); ++a)
-          for (unsigned int b = a + 1; b < x.size(); ++b)
-            shortest = std::min(shortest, x[a].distance(x[b]));
-      }
-      const double h = shortest / prm_.fe_degree;
-      const auto& law = cell_material(cell);
-      // Plane stress carries the in-plane P wave sqrt(E / ((1 − ν²) ρ)), slower than the
-      // 3-D one.
-      const double c =
-          prm_.plane_stress
-              ? std::sqrt(law.youngs_modulus() /
-                          ((1 - law.poisson_ratio() * law.poisson_ratio()) * law.density()))
-              : law.p_wave_speed();
-      if (h / c < dt) {
-        dt = h / c;
+      const double step = cell_step(cell, current, x); // x: the current vertices
+      if (step < dt) {
+        dt = step;
         if (where) {
           centre = Point<dim>();
           for (const unsigned int v : cell->vertex_indices())
@@ -144,6 +150,13 @@ unsigned int MechanicsSolver<dim>::relax_quasi_static(double time, double tolera
   v_ = 0;
   update_ghosts();
   trial_ = committed_;
+  // The real masses come back however the relaxation ends.
+  struct MassGuard {
+    MechanicsSolver& solver;
+    ~MassGuard() { solver.clear_relaxation_masses(); }
+  } guard{*this};
+  if (prm_.relaxation_masses == "scaled")
+    set_relaxation_masses(dt);
   for (unsigned int it = 1; it <= max_steps; ++it) {
     const RelaxationSums local = relaxation_step(dt, c, time, it == 1);
     double v[4] = {local.stiffness_numerator, local.stiffness_denominator, local.residual_square,
@@ -215,7 +228,9 @@ void MechanicsSolver<dim>::central_difference(double dt, double a, double bc_tim
     double* v = v_.begin();
     const double* r = linear ? raw_residual_.begin() : rhs_.begin();
     const double sign = linear ? -1.0 : 1.0;
-    const double* mass = lumped_mass_.begin();
+    // Relaxation steps move with the fictitious masses where they are set.
+    const double* mass =
+        sums && relaxation_masses_on_ ? relaxation_mass_.begin() : lumped_mass_.begin();
     const std::size_t n = owned_.n_elements();
     std::copy(u, u + n, u_previous_.begin());
     if (!sums && energy_account_on_) {

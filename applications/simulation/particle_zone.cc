@@ -540,8 +540,8 @@ ParticleZone<dim>::ParticleZone(dealii::ParameterHandler& prm, const std::string
   parse_section(prm, std::vector<std::string>{"Particles", "Quasi-static"}, impl_->adr_prm);
   impl_->damage = damage;
   const std::shared_ptr<const materials::ConstitutiveLaw> law = materials::create_law(impl_->law);
-  const meshfree::ParticleMaterial material{impl_->law.youngs_modulus, impl_->law.poisson_ratio,
-                                            impl_->law.density, law};
+  const meshfree::ParticleMaterial material{
+      impl_->law.youngs_modulus, impl_->law.poisson_ratio, impl_->law.density, law, 0.0, nullptr};
   prm.enter_subsection("Particles");
   meshfree::ParticleMethodMaker<dim> make;
   try {
