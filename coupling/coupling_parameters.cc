@@ -97,10 +97,11 @@ void CouplingParameters<dim>::declare(ParameterHandler& prm) {
                     "particles per direction); false keeps the interpolated velocities (mass and "
                     "momentum still exact) and logs the energy defect [-].");
   prm.declare_entry("Relaxation tolerance", "1e-6", Double(0),
-                    "Quasi-static coupled runs (Mechanics/Time integration = quasi_static): "
-                    "dynamic relaxation of each step ends when the free residual (FEM DoFs and "
-                    "particles) is this fraction of the larger of the reactions and the largest "
-                    "residual of the step [-].");
+                    "Quasi-static coupled runs (Mechanics/Time integration = quasi_static), and "
+                    "a softening CT model past its peak without particles: dynamic relaxation "
+                    "of each step ends when the free residual (FEM DoFs and particles) is this "
+                    "fraction of the larger of the reactions and the largest residual of the "
+                    "step [-].");
   prm.declare_entry("Relaxation max iterations", "200000", Integer(1),
                     "Quasi-static coupled runs: pseudo-time steps allowed per step before the "
                     "run stops as not converged [-].");

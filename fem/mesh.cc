@@ -92,10 +92,12 @@ void MeshParameters::declare(dealii::ParameterHandler& prm) {
   using dealii::Patterns::Selection;
   prm.declare_entry(
       "Shape", "hyper_rectangle",
-      Selection("hyper_rectangle|plate_with_a_hole|hyper_shell|quarter_hyper_shell|file"),
+      Selection("hyper_rectangle|plate_with_a_hole|hyper_shell|quarter_hyper_shell|file|ct_model"),
       "Generated shape or 'file' to import Mesh file [-]. Boundary ids: rectangle "
       "x- 0, x+ 1, y- 2, y+ 3, z- 4, z+ 5; plate with hole x- 0, x+ 1, y- 2, y+ 3, "
-      "hole 4, z- 5, z+ 6; shells inner 0, outer 1 (quarter: x=0 2, y=0 3, z=0 4).");
+      "hole 4, z- 5, z+ 6; shells inner 0, outer 1 (quarter: x=0 2, y=0 3, z=0 4). ct_model "
+      "(simulation scenario, 3-D): the CT model of the CT, Bone and Caps sections, caps' end "
+      "faces 4 (lower) and 5 (upper).");
   prm.declare_entry("Origin", "0,0,0", Anything(), "Lower corner of the rectangle [m].");
   prm.declare_entry("Lengths", "1,1,1", Anything(), "Edge lengths of the rectangle [m].");
   prm.declare_entry("Subdivisions", "1,1,1", Anything(),
@@ -189,6 +191,10 @@ void build_coarse_mesh(const MeshParameters& p,
                                        p.outer_radius, p.shell_cells, /*colorize=*/true);
   } else if (p.shape == "file") {
     import_mesh(p, tria);
+  } else if (p.shape == "ct_model") {
+    throw InvalidInput("Shape", "ct_model here",
+                       "ct_model in the simulation scenario only (it builds the CT model from "
+                       "its CT, Bone and Caps sections); another shape here");
   } else {
     throw InvalidInput("Shape", "unknown shape '" + p.shape + "'",
                        "hyper_rectangle|plate_with_a_hole|hyper_shell|quarter_hyper_shell|file");

@@ -125,6 +125,9 @@ Simulation<dim>::Simulation(const ScenarioFactoryArgs& args)
   parse_section(prm_, "Simulation", sim_);
   if (effects_.mechanics || effects_.heat)
     parse_section(prm_, "Geometry", mesh_prm_);
+  if (mesh_prm_.shape == "ct_model" && dim != 3)
+    throw InvalidInput("Geometry/Shape", "ct_model in a " + std::to_string(dim) + "-D run",
+                       "Dimension = 3 (CT images are 3-D), or another shape");
   if (effects_.mechanics) {
     parse_section(prm_, "Material", law_prm_);
     parse_section(prm_, "CT block", ct_block_prm_);
@@ -140,6 +143,16 @@ Simulation<dim>::Simulation(const ScenarioFactoryArgs& args)
                          "plate_with_a_hole, or a mesh file with flat faces)");
     parse_section(prm_, "Mechanics", mech_prm_);
     quasi_static_ = mech_prm_.time_integration == "quasi_static";
+  }
+  if (mesh_prm_.shape == "ct_model") {
+    if (!effects_.mechanics)
+      throw InvalidInput("Geometry/Shape", "ct_model without Effects/Mechanics",
+                         "Effects/Mechanics = true (the CT model maps the bone's mechanics)");
+    if (ct_block_prm_.enabled())
+      throw InvalidInput("CT block/Image file", "a CT block on a CT model",
+                         "an empty Image file: the CT model maps its own densities");
+    // With damage, the bone cells soften past the Bone section's damage curve.
+    ct_model_ = std::make_unique<CtModelBody>(prm_, law_prm_.model, effects_.damage);
   }
   if (effects_.heat)
     parse_section(prm_, "Heat", heat_prm_);
@@ -161,7 +174,7 @@ Simulation<dim>::Simulation(const ScenarioFactoryArgs& args)
                        "explicit, or a particle zone alone (Effects/Particles method, "
                        "Particles/Integration = explicit)");
   // Contact is not among the effects this scenario registers (the driver rejects it).
-  if (effects_.damage && !effects_.particles())
+  if (effects_.damage && !effects_.particles() && !ct_model_)
     throw InvalidInput("Effects/Damage",
                        "FEM cells of the simulation scenario do not fail; damage acts on particles",
                        "false, or a Particles method (with Coupling and Conversion for cells "
@@ -173,6 +186,12 @@ Simulation<dim>::Simulation(const ScenarioFactoryArgs& args)
   if (effects_.coupling) {
     parse_section(prm_, "Coupling", coupling_prm_, effects_.particles_method);
     coupling_prm_.damage = effects_.damage;
+  } else if (ct_model_ && effects_.damage) {
+    // The FEM alone past a softening peak relaxes with the coupling's relaxation controls.
+    prm_.enter_subsection("Coupling");
+    coupling_prm_.relaxation_tolerance = prm_.get_double("Relaxation tolerance");
+    coupling_prm_.relaxation_max_iterations = prm_.get_integer("Relaxation max iterations");
+    prm_.leave_subsection();
   }
   if (effects_.particles() && !effects_.coupling) // reads its sections and makes the method
     particles_ =
@@ -208,7 +227,18 @@ void Simulation<dim>::build(RunContext& ctx) {
       ctx.comm(), typename dealii::Triangulation<dim>::MeshSmoothing(
                       dealii::Triangulation<dim>::smoothing_on_refinement |
                       dealii::Triangulation<dim>::smoothing_on_coarsening));
-  if (ctx.restarting())
+  if constexpr (dim == 3)
+    if (ct_model_) {
+      dealii::TimerOutput::Scope t(ctx.timer(), "ct model");
+      ct_model_->build(*triangulation_); // the same coarse mesh at a restart
+      ctx.log() << "  " << ct_model_->summary() << "\n";
+      for (const auto& warning : ct_model_->warnings())
+        ctx.warn(warning);
+    }
+  if (ct_model_) {
+    if (!ctx.restarting() && effects_.coupling)
+      FemParticleCoupling<dim>::prepare_mesh(coupling_prm_, *triangulation_);
+  } else if (ctx.restarting())
     fem::build_coarse_mesh(mesh_prm_, *triangulation_);
   else {
     fem::build_mesh(mesh_prm_, *triangulation_);
@@ -225,7 +255,11 @@ void Simulation<dim>::build(RunContext& ctx) {
   }
   if (effects_.mechanics) {
     law_ = materials::create_law(law_prm_);
-    ctx.log() << "  material: " << law_prm_.describe() << "\n";
+    if (ct_model_)
+      ctx.log() << "  material: each cell its own from the CT model (the Material section's "
+                   "values do not apply)\n";
+    else
+      ctx.log() << "  material: " << law_prm_.describe() << "\n";
     mechanics_ = std::make_unique<fem::MechanicsSolver<dim>>(*triangulation_, mech_prm_);
     // One law for every material id present (CT models set per-cell laws instead).
     std::set<dealii::types::material_id> ids;
@@ -236,6 +270,9 @@ void Simulation<dim>::build(RunContext& ctx) {
         std::vector<dealii::types::material_id>(ids.begin(), ids.end()), ctx.comm());
     for (const auto id : all_ids)
       mechanics_->set_material(id, law_);
+    if constexpr (dim == 3)
+      if (ct_model_)
+        mechanics_->set_cell_laws(ct_model_->cell_laws());
     if constexpr (dim == 3)
       if (ct_block_prm_.enabled()) {
         // Each cell the Material law at its voxel's density (the same cells, so the same laws,
@@ -527,7 +564,7 @@ void Simulation<dim>::coupled_relaxation(unsigned int step, double time, double,
                            "raise Coupling/Relaxation max iterations, take more Simulation/"
                            "Steps, or run explicit dynamics if the crack runs unstably");
   if (sim_.reaction_boundary_id >= 0)
-    peak_load_ = std::max(peak_load_, coupled_->reaction_force(sim_.reaction_boundary_id).norm());
+    track_load(coupled_->reaction_force(sim_.reaction_boundary_id).norm(), time);
 }
 
 template <int dim>
@@ -553,7 +590,7 @@ void Simulation<dim>::coupled_explicit(unsigned int, double time, double, RunCon
       coupled_dt_ = std::min(coupled_dt_, coupled_->stable_time_step());
     // The peak load is tracked every step, not only at history rows.
     if (sim_.reaction_boundary_id >= 0)
-      peak_load_ = std::max(peak_load_, coupled_->reaction_force(sim_.reaction_boundary_id).norm());
+      track_load(coupled_->reaction_force(sim_.reaction_boundary_id).norm(), t);
     if (effects_.conversion && explicit_steps_ % coupling_prm_.check_interval == 0) {
       dealii::TimerOutput::Scope conversion_scope(ctx.timer(), "conversion");
       const auto r = coupled_->convert_flagged();
@@ -648,17 +685,28 @@ void Simulation<dim>::fem_explicit(unsigned int, double time, double, RunContext
     mechanics_->explicit_step(h);
     t = mechanics_->time();
     if (sim_.reaction_boundary_id >= 0)
-      peak_load_ =
-          std::max(peak_load_, mechanics_->reaction_force(sim_.reaction_boundary_id).norm());
+      track_load(mechanics_->reaction_force(sim_.reaction_boundary_id).norm(), t);
   }
 }
 
 template <int dim>
-void Simulation<dim>::fem_quasi_static(unsigned int, double time, double, RunContext&) {
-  for (const auto& report : mechanics_->solve_quasi_static(time)) {
+void Simulation<dim>::fem_quasi_static(unsigned int, double time, double, RunContext& ctx) {
+  // Softening bone (a CT model with Effects/Damage): where Newton finds no equilibrium past
+  // the peak (an unstable drop under displacement control), dynamic relaxation crosses to it,
+  // as in the vertebra_compression scenario; to the coupled runs' relaxation tolerance.
+  const bool softening = ct_model_ && effects_.damage;
+  const auto result = mechanics_->solve_quasi_static_or_relax(
+      time, softening, coupling_prm_.relaxation_tolerance, coupling_prm_.relaxation_max_iterations);
+  for (const auto& report : result.reports) {
     newton_iterations_ += report.newton_iterations;
     for (const auto n : report.linear_iterations)
       linear_iterations_ += n;
+  }
+  if (result.relaxation_steps > 0) {
+    relaxation_iterations_ += result.relaxation_steps;
+    ctx.log() << "  t = " << time << " s: Newton found no equilibrium (" << result.newton_failure
+              << "); dynamic relaxation converged in " << result.relaxation_steps
+              << " pseudo-steps\n";
   }
 }
 
@@ -752,6 +800,6 @@ SPINESIM_REGISTER_SCENARIO(
     sections::geometry(), sections::material(), sections::mechanics(),
     {"Heat", fem::HeatSolver<2>::Parameters::declare},
     {"Particles", ParticleZoneParameters::declare}, sections::coupling(),
-    {"CT block", CtBlockParameters::declare})
+    {"CT block", CtBlockParameters::declare}, sections::ct(), sections::bone(), sections::caps())
 
 } // namespace spinesim::applications

@@ -112,6 +112,8 @@ void Simulation<dim>::write_checkpoint(unsigned int step, double time, RunContex
     // it could differ from the uninterrupted run's.
     state["coupled_time_step"] = coupled_dt_;
     state["peak_load"] = peak_load_;
+    state["peak_load_time"] = peak_time_;
+    state["last_load"] = last_load_;
     // The reference of Simulation/Minimum time step ratio and the initial energy of an initial
     // velocity field: a restarted run measures against the same values.
     state["first_stable_step"] = first_stable_step_;
@@ -239,6 +241,8 @@ unsigned int Simulation<dim>::load_checkpoint(RunContext& ctx) {
     explicit_steps_ = state.value("explicit_steps", 0u);
     coupled_dt_ = state.value("coupled_time_step", 0.0); // 0: recomputed (older checkpoints)
     peak_load_ = state.value("peak_load", 0.0);
+    peak_time_ = state.value("peak_load_time", 0.0);
+    last_load_ = state.value("last_load", 0.0);
     first_stable_step_ = state.value("first_stable_step", 0.0);
     initial_kinetic_energy_ = state.value("initial_kinetic_energy", 0.0);
     relaxation_iterations_ = state.value("relaxation_iterations", 0ul);

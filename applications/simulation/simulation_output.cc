@@ -113,7 +113,7 @@ void Simulation<dim>::record(unsigned int step, double time, RunContext& ctx) {
       const char* names[] = {"reaction_x", "reaction_y", "reaction_z"};
       for (unsigned int d = 0; d < dim; ++d)
         row.emplace_back(names[d], r[d]);
-      peak_load_ = std::max(peak_load_, r.norm());
+      track_load(r.norm(), time);
     }
     // Coupled: the FEM's active cells plus the bonds of the free particles.
     row.emplace_back("strain_energy",
@@ -226,6 +226,17 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
     s.set_figure("ct_block_max_modulus_MPa",
                  dealii::Utilities::MPI::max(ct_block_->maximum_modulus(), comm) / 1e6, "MPa");
   }
+  if (ct_model_) { // every rank built the whole model
+    s.set_figure("ct_bone_min_modulus_MPa", ct_model_->minimum_bone_modulus() / 1e6, "MPa");
+    s.set_figure("ct_bone_max_modulus_MPa", ct_model_->maximum_bone_modulus() / 1e6, "MPa");
+  }
+  if (mechanics_ && sim_.reaction_boundary_id >= 0) {
+    // The force-displacement curve's peak: when, and how far the load fell after it.
+    s.set_figure("peak_load_time_s", peak_time_, "s");
+    s.set_figure("post_peak_drop", peak_load_ > 0 ? 1.0 - last_load_ / peak_load_ : 0.0, "-");
+    if (!coupled_)
+      s.set_figure("peak_load_N", peak_load_, dim == 2 ? "N/m" : "N");
+  }
   if (coupled_) {
     const char* force_unit = dim == 2 ? "N/m" : "N";
     s.set_figure("peak_load_N", peak_load_, force_unit);
@@ -281,6 +292,9 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
       const auto r = coupled_ ? coupled_->reaction_force(sim_.reaction_boundary_id)
                               : mechanics_->reaction_force(sim_.reaction_boundary_id);
       s.set_figure("reaction_force_norm", r.norm(), dim == 2 ? "N/m" : "N");
+      const char* names[] = {"reaction_force_x", "reaction_force_y", "reaction_force_z"};
+      for (unsigned int d = 0; d < dim; ++d)
+        s.set_figure(names[d], r[d], dim == 2 ? "N/m" : "N");
     }
     s.set_figure("newton_iterations", newton_iterations_, "iterations");
     s.set_figure("linear_iterations", linear_iterations_, "iterations");

@@ -9,6 +9,7 @@
 #include "applications/framework/scenario.h"
 #include "applications/simulation/crack_path.h"
 #include "applications/simulation/ct_block.h"
+#include "applications/simulation/ct_model_body.h"
 #include "applications/simulation/particle_zone.h"
 #include "applications/simulation/pvd_record.h"
 #include "applications/simulation/simulation.h"
@@ -102,7 +103,8 @@ class Simulation : public framework::Scenario {
   fem::MeshParameters mesh_prm_;
   materials::LawParameters law_prm_;
   CtBlockParameters ct_block_prm_;
-  std::unique_ptr<CtBlock> ct_block_; // CT block: per-cell laws (3-D)
+  std::unique_ptr<CtBlock> ct_block_;     // CT block: per-cell laws (3-D)
+  std::unique_ptr<CtModelBody> ct_model_; // Geometry/Shape = ct_model: the body and its laws
   typename fem::MechanicsSolver<dim>::Parameters mech_prm_;
   typename fem::HeatSolver<dim>::Parameters heat_prm_;
 
@@ -134,6 +136,16 @@ class Simulation : public framework::Scenario {
   double mid_step_time_ = 0; // [s]
   unsigned int explicit_steps_ = 0;
   double peak_load_ = 0;
+  // The reaction's norm at `time` [N, N/m in 2-D]: the peak, its time and the last value.
+  void track_load(double load, double time) {
+    if (load > peak_load_) {
+      peak_load_ = load;
+      peak_time_ = time;
+    }
+    last_load_ = load;
+  }
+  double peak_time_ = 0; // time of peak_load_ [s]
+  double last_load_ = 0; // the reaction's norm at the last recorded step
   PvdRecord solution_pvd_{"solution.pvd"}, temperature_pvd_{"temperature.pvd"},
       particles_pvd_{"particles.pvd"};
   unsigned int output_cycle_ = 0;

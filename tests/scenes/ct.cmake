@@ -66,7 +66,36 @@ spinesim_add_scene_test(scene.vertebra_compression_to_failure SCENE ${_vertebra}
   SET "CT/Coarsening factor=3" "Loading/Nonlinear=true" "Effects/Damage=true"
       "Loading/Axial displacement=0.8" "Loading/Steps=16"
   EXPECT "status==ok;failure_load_kN>=1.0;failure_load_kN<=6.0;displacement_at_peak_mm<=0.7;post_peak_drop>=0.1"
-  LABELS "scene;fem" TIMEOUT 300)
+  LABELS "scene;fem" TIMEOUT 300 FIXTURE vertebra_failure)
+
+# The same CT model as the body of the effects-driven simulation scenario (Geometry/Shape =
+# ct_model, applications/scenes/vertebra_crush_particles.prm without its particles): the same
+# mesh, laws and supports, so the same reactions as vertebra_compression up to the solvers'
+# round-off. Linear at 0.1 mm (the scene's 0.8 mm ramp stopped at t = 0.125): the axial
+# reactions agree to 1e-12 (measured); to failure with
+# softening bone, 16 Newton steps: the final reaction to 1e-12 (measured). Bounds 1e-8 and
+# 1e-6 (CG to 1e-10 and Newton to 1e-8 relative, here through two code paths).
+set(_crush ${PROJECT_SOURCE_DIR}/applications/scenes/vertebra_crush_particles.prm)
+set(_crush_fem "Effects/Particles method=none" "Effects/Coupling=false" "Effects/Conversion=false")
+spinesim_add_scene_test(scene.ct_model_elastic SCENE ${_crush} OUT ${_runs}/ct_model_elastic
+  SET ${_crush_fem} "Material/Model=linear_elastic" "Effects/Damage=false" "Simulation/Steps=1"
+      "Simulation/End time=0.125"
+      "Simulation/Checkpoint interval=0" "Simulation/Output interval=0"
+  EXPECT "status==ok;ct_bone_min_modulus_MPa>=1;ct_bone_max_modulus_MPa<=20000"
+  LABELS "scene;fem;ct" FIXTURE ct_model_elastic)
+spinesim_add_comparison_test(scene.ct_model_elastic_matches_vertebra_compression
+  A ${_runs}/scene.vertebra_compression/summary.json B ${_runs}/ct_model_elastic/summary.json
+  CHECKS "reaction_force_N=-reaction_force_z:rel:1e-8"
+  REQUIRES "vertebra_1;ct_model_elastic" LABELS "scene;fem;ct")
+spinesim_add_scene_test(scene.ct_model_to_failure SCENE ${_crush} OUT ${_runs}/ct_model_to_failure
+  SET ${_crush_fem} "Simulation/Checkpoint interval=0" "Simulation/Output interval=0"
+  EXPECT "status==ok;post_peak_drop>=0.1;peak_load_time_s<=0.875"
+  LABELS "scene;fem;ct" TIMEOUT 300 FIXTURE ct_model_failure)
+spinesim_add_comparison_test(scene.ct_model_to_failure_matches_vertebra_compression
+  A ${_runs}/scene.vertebra_compression_to_failure/summary.json
+  B ${_runs}/ct_model_to_failure/summary.json
+  CHECKS "reaction_force_N=-reaction_force_z:rel:1e-6"
+  REQUIRES "vertebra_failure;ct_model_failure" LABELS "scene;fem;ct")
 
 # CT -> particles from the CLI: count = 8 per cell (quadrature) or 1 per cell, total volume
 # = mesh volume (JxW of parallelepipeds: round-off of ~1e5 terms, measured 1e-12) and total

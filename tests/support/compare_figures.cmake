@@ -1,7 +1,9 @@
 # Compares chosen figures of two summary.json files.
 # Variables: A, B (files); CHECKS: list of "figure:rel:tol" (|a-b| <= tol*max(|a|,|b|)),
 # "figure:abs:tol" (|a-b| <= tol), "figure:ratio:min" (b/a >= min, e.g. a speed-up) or
-# "figure:ratio_max:max" (b/a <= max, e.g. memory per rank).
+# "figure:ratio_max:max" (b/a <= max, e.g. memory per rank). "figure" may be "a_name=b_name"
+# where the two runs name it differently, and "a_name=-b_name" compares a with −b (a force
+# one scenario reports as carried, the other as a reaction).
 # A figure missing or not finite in either file fails (figures.cmake).
 cmake_minimum_required(VERSION 3.19)
 include(${CMAKE_CURRENT_LIST_DIR}/figures.cmake)
@@ -15,8 +17,19 @@ foreach(_check IN LISTS CHECKS)
   list(GET _parts 0 _name)
   list(GET _parts 1 _kind)
   list(GET _parts 2 _tol)
-  spinesim_numeric_figure("${_a}" ${_name} _va ${A})
-  spinesim_numeric_figure("${_b}" ${_name} _vb ${B})
+  set(_name_a ${_name})
+  set(_name_b ${_name})
+  set(_sign_b "")
+  if(_name MATCHES "^([^=]+)=(-?)(.+)$")
+    set(_name_a ${CMAKE_MATCH_1})
+    set(_sign_b ${CMAKE_MATCH_2})
+    set(_name_b ${CMAKE_MATCH_3})
+  endif()
+  spinesim_numeric_figure("${_a}" ${_name_a} _va ${A})
+  spinesim_numeric_figure("${_b}" ${_name_b} _vb ${B})
+  if(_sign_b STREQUAL "-")
+    set(_vb "(-(${_vb}))")
+  endif()
   if(_kind STREQUAL "rel")
     set(_expr "(${_va} - ${_vb})^2 <= (${_tol})^2 * ((${_va})^2 > (${_vb})^2 ? (${_va})^2 : (${_vb})^2)")
   elseif(_kind STREQUAL "abs")
