@@ -74,7 +74,8 @@ spinesim_add_scene_test(scene.vertebra_compression_to_failure SCENE ${_vertebra}
 # round-off. Linear at 0.1 mm (the scene's 0.8 mm ramp stopped at t = 0.125): the axial
 # reactions agree to 1e-12 (measured); to failure with
 # softening bone, 16 Newton steps: the final reaction to 1e-12 (measured). Bounds 1e-8 and
-# 1e-6 (CG to 1e-10 and Newton to 1e-8 relative, here through two code paths).
+# 1e-6 (CG to 1e-10 and Newton to 1e-8 relative, here through two code paths). The run to
+# failure takes 30-40 s: labelled long (the linear pair checks the model in the default run).
 set(_crush ${PROJECT_SOURCE_DIR}/applications/scenes/vertebra_crush_particles.prm)
 set(_crush_fem "Effects/Particles method=none" "Effects/Coupling=false" "Effects/Conversion=false")
 spinesim_add_scene_test(scene.ct_model_elastic SCENE ${_crush} OUT ${_runs}/ct_model_elastic
@@ -90,12 +91,12 @@ spinesim_add_comparison_test(scene.ct_model_elastic_matches_vertebra_compression
 spinesim_add_scene_test(scene.ct_model_to_failure SCENE ${_crush} OUT ${_runs}/ct_model_to_failure
   SET ${_crush_fem} "Simulation/Checkpoint interval=0" "Simulation/Output interval=0"
   EXPECT "status==ok;post_peak_drop>=0.1;peak_load_time_s<=0.875"
-  LABELS "scene;fem;ct" TIMEOUT 300 FIXTURE ct_model_failure)
+  LABELS "scene;fem;ct;long" TIMEOUT 300 FIXTURE ct_model_failure)
 spinesim_add_comparison_test(scene.ct_model_to_failure_matches_vertebra_compression
   A ${_runs}/scene.vertebra_compression_to_failure/summary.json
   B ${_runs}/ct_model_to_failure/summary.json
   CHECKS "reaction_force_N=-reaction_force_z:rel:1e-6"
-  REQUIRES "vertebra_failure;ct_model_failure" LABELS "scene;fem;ct")
+  REQUIRES "vertebra_failure;ct_model_failure" LABELS "scene;fem;ct;long")
 
 # CT -> particles from the CLI: count = 8 per cell (quadrature) or 1 per cell, total volume
 # = mesh volume (JxW of parallelepipeds: round-off of ~1e5 terms, measured 1e-12) and total
@@ -110,3 +111,13 @@ spinesim_add_scene_test(scene.ct_convert_cell_2ranks RANKS 2
   OUT ${_runs}/scene.ct_convert_cell_2ranks
   EXPECT "status==ok;particle_count_mismatch<=0;particles>=1000;volume_relative_error<=1e-10;mass_relative_error<=1e-10"
   LABELS "scene;fem")
+
+# Particles in the crushed zone (the scene as shipped): the peak inside the loading, the load
+# falling after it, crushed cells in particles. Not met: after the first conversion (10 cells
+# at 0.25 mm) the coupled relaxation does not converge in a usable time (more than 14 minutes
+# on one core in step 6, in NOSB force passes). Known failure, docs/implants.md ("The vertebra
+# in the simulation scenario").
+spinesim_add_scene_test(scene.vertebra_crush_particles SCENE ${_crush}
+  SET "Simulation/Checkpoint interval=0" "Simulation/Output interval=0"
+  EXPECT "status==ok;converted_cells>=10;post_peak_drop>=0.1;peak_load_time_s<=0.875"
+  LABELS "scene;coupling;ct;long;known_failure" TIMEOUT 3600)
