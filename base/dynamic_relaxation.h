@@ -6,9 +6,10 @@
 //   v^{n+½} = ((1 − c dt/2) v^{n−½} + dt a^n) / (1 + c dt/2),  u^{n+1} = u^n + dt v^{n+½},
 // with the damping c = 2 sqrt(uᵀK¹u / uᵀu) from the local stiffness estimates
 // K¹_ii = −(a_i^n − a_i^{n−1}) / (dt v_i^{n−½}) of the free components. Every driver uses these
-// pieces; it chooses only the masses behind a = r/m and the step (the real lumped masses at the
-// stable step: FEM and coupling; the fictitious density λ_i of a Gershgorin bound with dt = 1,
-// a = b/λ: particles alone) and the scale that judges convergence.
+// pieces; it chooses only the masses behind a = r/m and the step (FEM and coupling: each cell's
+// and particle's mass scaled to the FEM's stable step, Mechanics/Relaxation masses, or the real
+// lumped masses; particles alone: the fictitious density λ_i of a Gershgorin bound with dt = 1,
+// a = b/λ) and the scale that judges convergence.
 
 #include <algorithm>
 #include <cmath>

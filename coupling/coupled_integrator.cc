@@ -355,7 +355,8 @@ template <int dim>
 RelaxationReport<dim> CoupledIntegrator<dim>::relax(double time, bool with_conversion) {
   // Adaptive dynamic relaxation of the coupled system at the load of `time` (Underwood 1983;
   // Kilic & Madenci 2010 for PD; base/dynamic_relaxation.h): central differences in
-  // pseudo-time with the real lumped and particle masses at the common stable step, and the
+  // pseudo-time with the relaxation masses (relaxation_time_step(): scaled, or the real lumped
+  // and particle masses with Mechanics/Relaxation masses = lumped or the energy splice), and the
   // damping c = 2 sqrt(uᵀ k u / uᵀ u) from the local stiffness estimates of both models
   // (critical for the lowest mode, updated every step, one step late). Converged when ‖free
   // residual‖ ≤ tolerance × max(‖reactions‖, largest ‖free residual‖ of this relaxation). Bonds

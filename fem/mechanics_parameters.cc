@@ -42,7 +42,9 @@ void MechanicsParameters<dim>::declare(ParameterHandler& prm) {
   prm.declare_entry("Max linear iterations", "1000", Patterns::Integer(1),
                     "Iterative solver limit [-].");
   prm.declare_entry("CFL safety factor", "0.5", Patterns::Double(0, 1),
-                    "Fraction of the CFL stable step used by the explicit integrator [-].");
+                    "Fraction of the CFL stable step used by the explicit integrator, and by "
+                    "dynamic relaxation, whose scaled masses (Relaxation masses) put every cell "
+                    "at this fraction of its own step [-].");
   prm.declare_entry("Mass damping", "0", Patterns::Double(0),
                     "Mass-proportional damping coefficient alpha [1/s].");
   prm.declare_entry(

@@ -313,7 +313,8 @@ template <int dim>
 void MechanicsSolver<dim>::set_relaxation_masses(double reference_step) {
   if (!is_setup_)
     setup();
-  if (relaxation_mass_.size() != lumped_mass_.size())
+  if (relaxation_mass_.size() != lumped_mass_.size() ||
+      relaxation_mass_.locally_owned_elements() != owned_)
     relaxation_mass_.reinit(owned_, comm_);
   compute_lumped_mass(relaxation_mass_, reference_step);
   relaxation_masses_on_ = true;

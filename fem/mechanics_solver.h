@@ -224,7 +224,8 @@ class MechanicsSolver {
   // Sets every velocity to zero (the end of a relaxation).
   void clear_velocity();
   // Quasi-static equilibrium at `time` by adaptive dynamic relaxation from the current state,
-  // with the lumped masses at the stable step: where Newton finds no equilibrium (an unstable
+  // with the masses of Mechanics/Relaxation masses (set_relaxation_masses(), or the lumped
+  // ones) at the stable step: where Newton finds no equilibrium (an unstable
   // drop past a peak of a softening solid, which displacement control cannot follow
   // statically), the damped pseudo-dynamics cross to the equilibrium of the step. Converged
   // when ‖free residual‖ <= tolerance × max(‖reactions‖, largest ‖free residual‖ of this

@@ -526,6 +526,9 @@ MechanicsSolver<dim>::solve_quasi_static_or_relax(double time, bool relax, doubl
 // Explicit instantiation of the members defined in this file.
 #define SPINESIM_INSTANTIATE(dim)                                                                  \
   template double MechanicsSolver<dim>::stable_time_step(Point<dim>*) const;                       \
+  template double MechanicsSolver<dim>::cell_step(                                                 \
+      const typename DoFHandler<dim>::active_cell_iterator&, bool, std::vector<Point<dim>>&)       \
+      const;                                                                                       \
   template void MechanicsSolver<dim>::explicit_step(double);                                       \
   template typename MechanicsSolver<dim>::RelaxationSums MechanicsSolver<dim>::relaxation_step(    \
       double, double, double, bool);                                                               \

@@ -148,6 +148,11 @@ Simulation<dim>::Simulation(const ScenarioFactoryArgs& args)
     if (!effects_.mechanics)
       throw InvalidInput("Geometry/Shape", "ct_model without Effects/Mechanics",
                          "Effects/Mechanics = true (the CT model maps the bone's mechanics)");
+    if (mesh_prm_.global_refinements > 0)
+      throw InvalidInput("Geometry/Global refinements",
+                         std::to_string(mesh_prm_.global_refinements) + " with Shape = ct_model",
+                         "0: the CT model's cells are CT/Coarsening factor voxels (Coupling/Region "
+                         "refinements refines a box of them)");
     if (ct_block_prm_.enabled())
       throw InvalidInput("CT block/Image file", "a CT block on a CT model",
                          "an empty Image file: the CT model maps its own densities");
