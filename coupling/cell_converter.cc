@@ -143,13 +143,21 @@ std::vector<CellId> CellConverter<dim>::flagged_cells() const {
                    state_.prm.plastic_strain_threshold > 0 || state_.prm.min_jacobian_ratio > 0 ||
                    state_.prm.min_time_step > 0;
   std::vector<Point<dim>> centres;
+  // Cells near a support stay FEM (Coupling/Support clearance).
+  const double clearance = state_.prm.support_clearance;
+  const std::vector<Point<dim>> supports =
+      any && clearance > 0 ? support_face_centres() : std::vector<Point<dim>>();
+  const PointBins<dim> support_bins(supports, std::max(clearance, state_.spacing));
+  const auto may_convert = [&](const DoFCell& cell) {
+    return state_.fem.is_active(cell) && in_conversion_region(cell) &&
+           !(clearance > 0 && support_bins.any_within(cell->center(), clearance));
+  };
   if (any) {
     // Only active cells of the particle lattice's size can convert (the refinement box).
     std::vector<bool> candidate(state_.fem.dof_handler().get_triangulation().n_active_cells(),
                                 false);
     for (const auto& cell : state_.lattice_cells)
-      candidate[cell->active_cell_index()] =
-          state_.fem.is_active(cell) && in_conversion_region(cell);
+      candidate[cell->active_cell_index()] = may_convert(cell);
     fem::CellIndicators<dim> indicators;
     indicators.compute(state_.fem, state_.prm.plastic_strain_threshold > 0, candidate,
                        state_.prm.min_jacobian_ratio > 0 || state_.prm.min_time_step > 0);
@@ -179,11 +187,27 @@ std::vector<CellId> CellConverter<dim>::flagged_cells() const {
     const double reach = std::max(state_.prm.buffer, 1e-9 * state_.spacing);
     PointBins<dim> bins(all_centres, std::max(state_.prm.buffer, state_.spacing));
     for (const auto& cell : state_.lattice_cells)
-      if (state_.fem.is_active(cell) && in_conversion_region(cell) &&
-          !bins.within(cell->center(), reach).empty())
+      if (may_convert(cell) && !bins.within(cell->center(), reach).empty())
         mine.push_back(cell->id().to_string());
   }
   return gather_cell_ids(comm, mine);
+}
+
+template <int dim>
+std::vector<Point<dim>> CellConverter<dim>::support_face_centres() const {
+  std::set<types::boundary_id> ids;
+  for (const auto& bc : state_.fem.boundary_conditions().dirichlet())
+    ids.insert(bc.boundary_id);
+  std::vector<Point<dim>> mine;
+  for (const auto& cell : state_.fem.dof_handler().active_cell_iterators())
+    if (cell->is_locally_owned())
+      for (const unsigned int f : cell->face_indices())
+        if (cell->face(f)->at_boundary() && ids.count(cell->face(f)->boundary_id()))
+          mine.push_back(cell->face(f)->center());
+  std::vector<Point<dim>> all;
+  for (const auto& part : Utilities::MPI::all_gather(state_.fem.mpi_communicator(), mine))
+    all.insert(all.end(), part.begin(), part.end());
+  return all;
 }
 
 template <int dim>

@@ -107,6 +107,9 @@ class CellConverter {
   using DoFCell = typename CouplingState<dim>::DoFCell;
   // Whether the criteria may convert this cell (Conversion region; everywhere when unset).
   bool in_conversion_region(const DoFCell& cell) const;
+  // The centres of the faces on the mechanics' Dirichlet boundaries, over all ranks
+  // (collective), for Coupling/Support clearance.
+  std::vector<dealii::Point<dim>> support_face_centres() const;
   // The mass, momentum and kinetic energy of points inside the hole go into `hole` (as its
   // *_before members, this rank's share).
   std::vector<ParticleRecord<dim>> make_records(const std::set<std::string>& todo,

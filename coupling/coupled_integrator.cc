@@ -352,7 +352,9 @@ void CoupledIntegrator<dim>::advance(double dt, double a, double load_time, bool
 }
 
 template <int dim>
-RelaxationReport<dim> CoupledIntegrator<dim>::relax(double time, bool with_conversion) {
+RelaxationReport<dim>
+CoupledIntegrator<dim>::relax(double time, bool with_conversion,
+                              const std::function<void(const RelaxationProgress&)>& progress) {
   // Adaptive dynamic relaxation of the coupled system at the load of `time` (Underwood 1983;
   // Kilic & Madenci 2010 for PD; base/dynamic_relaxation.h): central differences in
   // pseudo-time with the relaxation masses (relaxation_time_step(): scaled, or the real lumped
@@ -372,6 +374,7 @@ RelaxationReport<dim> CoupledIntegrator<dim>::relax(double time, bool with_conve
       integrator.state_.fem.clear_relaxation_masses();
     }
   } guard{*this};
+  const auto started = std::chrono::steady_clock::now();
   double dt = relaxation_time_step();
   double c = 0, peak_residual = 0;
   bool first = true;
@@ -428,6 +431,23 @@ RelaxationReport<dim> CoupledIntegrator<dim>::relax(double time, bool with_conve
     }
     c = sums.damping(dt);
     report.damping = c;
+    if (progress && state_.prm.relaxation_report_interval > 0 &&
+        it % state_.prm.relaxation_report_interval == 0) {
+      RelaxationProgress p;
+      p.iteration = it;
+      p.relative_residual = report.relative_residual;
+      p.residual = residual;
+      p.reaction = reaction;
+      p.damping = c;
+      p.stiffness_estimate = sums.stiffness_denominator > 0
+                                 ? sums.stiffness_numerator / sums.stiffness_denominator
+                                 : 0.0;
+      p.free_particles = Utilities::MPI::sum(state_.n_free_particles(), comm);
+      for (const auto& r : report.conversions)
+        p.converted_cells += r.cells;
+      p.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+      progress(p);
+    }
   }
   // Quasi-static: the pseudo-velocities go.
   for (unsigned int i = 0; i < state_.particles.size(); ++i)

@@ -16,6 +16,7 @@
 #include "coupling/particle_energy.h"
 #include "coupling/particle_halo.h"
 
+#include <functional>
 #include <vector>
 
 namespace spinesim::coupling {
@@ -27,6 +28,20 @@ struct RelaxationReport {
   double relative_residual = 0; // at the end [-]
   double damping = 0;           // last adaptive damping [1/s]
   std::vector<ConversionReport<dim>> conversions;
+};
+
+// Where a relaxation stands, for a progress line every Coupling/Relaxation report interval
+// pseudo-steps (the same on every rank).
+struct RelaxationProgress {
+  unsigned int iteration = 0;    // pseudo-steps of this relaxation so far [-]
+  double relative_residual = 0;  // ‖free residual‖ / max(‖reactions‖, peak residual) [-]
+  double residual = 0;           // ‖free residual‖ [N]
+  double reaction = 0;           // ‖reactions‖ [N]
+  double damping = 0;            // damping for the next pseudo-step [1/s]
+  double stiffness_estimate = 0; // uᵀK¹u / uᵀu of the last step; < 0: the state softens [1/s²]
+  unsigned int free_particles = 0;  // over all ranks [-]
+  unsigned int converted_cells = 0; // cells converted in this relaxation so far [-]
+  double seconds = 0;               // wall time of this relaxation so far [s]
 };
 
 template <int dim>
@@ -56,8 +71,10 @@ class CoupledIntegrator {
   void check_splice_energy();
   // Adaptive dynamic relaxation to equilibrium under the loads of `time`; with
   // `with_conversion`, the cells flagged at equilibrium convert and the state relaxes again.
-  // Ends with zero velocities.
-  RelaxationReport<dim> relax(double time, bool with_conversion);
+  // Ends with zero velocities. `progress`, when given, is called on every rank every
+  // Coupling/Relaxation report interval pseudo-steps.
+  RelaxationReport<dim> relax(double time, bool with_conversion,
+                              const std::function<void(const RelaxationProgress&)>& progress = {});
 
   double time() const { return time_; }
   void set_time(double time) { time_ = time; } // a checkpoint's

@@ -69,6 +69,14 @@ void CouplingParameters<dim>::declare(ParameterHandler& prm) {
   prm.declare_entry("Buffer", "0", Double(0),
                     "Cells whose centre lies within this distance of a flagged cell convert "
                     "with it, so the particle zone runs ahead of a crack [m].");
+  prm.declare_entry(
+      "Support clearance", "0", Double(0),
+      "Cells whose centre lies within this distance of the centre of a face on a Dirichlet "
+      "boundary of Mechanics never convert, nor does the buffer reach them. The overlap splice "
+      "drives the FEM's interface DoFs by the particles and the ghosts by the FEM (Dirichlet on "
+      "both sides): between the particles and a support it needs FEM DoFs that are neither "
+      "(e.g. the bone cells next to a platen's cap); without them the reaction at that "
+      "support measures the interface fit, not the load. 0 = off [m].");
   prm.declare_entry("Conversion region lower corner", "", Anything(),
                     "Lower corner of the box whose cells the criteria may convert (by cell "
                     "centre; the buffer reaches no farther); empty = anywhere on the particle "
@@ -105,6 +113,11 @@ void CouplingParameters<dim>::declare(ParameterHandler& prm) {
   prm.declare_entry("Relaxation max iterations", "200000", Integer(1),
                     "Quasi-static coupled runs: pseudo-time steps allowed per step before the "
                     "run stops as not converged [-].");
+  prm.declare_entry("Relaxation report interval", "5000", Integer(0),
+                    "Quasi-static coupled runs: every this many pseudo-steps of a step's "
+                    "relaxation, a line in the log with the relative residual, the damping and "
+                    "the stiffness estimate behind it, the free particles and the cells "
+                    "converted so far; 0 = none [-].");
   prm.declare_entry("Hole centre", "", Anything(),
                     "Centre of a hole the FEM mesh does not model (a plate's hole, a pilot "
                     "hole): no particle is made inside it, and the cells it reaches (within half "
@@ -143,6 +156,7 @@ void CouplingParameters<dim>::parse(ParameterHandler& prm, const std::string& me
   min_jacobian_ratio = prm.get_double("Minimum Jacobian ratio");
   min_time_step = prm.get_double("Minimum time step");
   buffer = prm.get_double("Buffer");
+  support_clearance = prm.get_double("Support clearance");
   check_interval = prm.get_integer("Check interval");
   convert_lower = parse_doubles(prm.get("Conversion region lower corner"),
                                 "Coupling/Conversion region lower corner");
@@ -158,6 +172,7 @@ void CouplingParameters<dim>::parse(ParameterHandler& prm, const std::string& me
   conserve_kinetic_energy = prm.get_bool("Conserve kinetic energy");
   relaxation_tolerance = prm.get_double("Relaxation tolerance");
   relaxation_max_iterations = prm.get_integer("Relaxation max iterations");
+  relaxation_report_interval = prm.get_integer("Relaxation report interval");
   check_box_corners<dim>(refine_lower, refine_upper, "Coupling/Refinement region lower corner");
   const auto centre = parse_doubles(prm.get("Hole centre"), "Coupling/Hole centre");
   hole_radius = prm.get_double("Hole radius");

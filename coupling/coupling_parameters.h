@@ -25,12 +25,13 @@ struct CouplingParameters {
   std::string splice = "overlap";
   double time_step_safety = 0.8; // PD stable step factor [-]
   bool all_particles = false;
-  std::vector<double> region_lower, region_upper;   // particles from t = 0 (empty = none)
-  double principal_strain_threshold = 0;            // [-], 0 = off
-  double plastic_strain_threshold = 0;              // [-], 0 = off
-  double min_jacobian_ratio = 0;                    // [-], 0 = off
-  double min_time_step = 0;                         // [s], 0 = off
-  double buffer = 0;                                // converted around flagged cells [m]
+  std::vector<double> region_lower, region_upper; // particles from t = 0 (empty = none)
+  double principal_strain_threshold = 0;          // [-], 0 = off
+  double plastic_strain_threshold = 0;            // [-], 0 = off
+  double min_jacobian_ratio = 0;                  // [-], 0 = off
+  double min_time_step = 0;                       // [s], 0 = off
+  double buffer = 0;                              // converted around flagged cells [m]
+  double support_clearance = 0; // no conversion within this of a Dirichlet face centre [m]
   std::vector<double> convert_lower, convert_upper; // cells the criteria may convert (empty = all)
   unsigned int check_interval = 10;                 // steps between conversion checks
   bool damage = true;                               // bonds may break (Effects/Damage)
@@ -40,6 +41,7 @@ struct CouplingParameters {
   bool conserve_kinetic_energy = true; // scale the velocity fluctuation at conversion
   double relaxation_tolerance = 1e-6;  // quasi-static: free residual / reaction scale [-]
   unsigned int relaxation_max_iterations = 200000; // quasi-static: per step [-]
+  unsigned int relaxation_report_interval = 5000;  // pseudo-steps between progress lines [-]
   // The particle method (Effects/Particles method), its parameters read from its subsection
   // of "Coupling"; made in CouplingState::prepare() with the material of the FEM cells.
   std::string particles_method = "bond_based";

@@ -145,8 +145,9 @@ void FemParticleCoupling<dim>::step(double dt) {
 
 template <int dim>
 typename FemParticleCoupling<dim>::RelaxationReport
-FemParticleCoupling<dim>::relax(double time, bool with_conversion) {
-  return integrator_.relax(time, with_conversion);
+FemParticleCoupling<dim>::relax(double time, bool with_conversion,
+                                const std::function<void(const RelaxationProgress&)>& progress) {
+  return integrator_.relax(time, with_conversion, progress);
 }
 
 // ---------------------------------------------------------------- totals

@@ -115,7 +115,9 @@ class FemParticleCoupling {
   // the cells flagged at equilibrium convert and the state relaxes again, until none is
   // flagged. Ends with zero velocities. Not converged within Relaxation max iterations (all
   // relaxations of the step together): converged = false (the caller decides).
-  RelaxationReport relax(double time, bool with_conversion);
+  // `progress` as in CoupledIntegrator::relax.
+  RelaxationReport relax(double time, bool with_conversion,
+                         const std::function<void(const RelaxationProgress&)>& progress = {});
 
   // The eigenvalues μ of the one-step map of the explicit coupled scheme, (u^n, v^{n−½}) →
   // (u^{n+1}, v^{n+½}) at step dt, linearised about the current state: one probed step per

@@ -9,6 +9,10 @@ int RunLog::TeeBuffer::overflow(int c) {
     a->sputc(static_cast<char>(c));
   if (b)
     b->sputc(static_cast<char>(c));
+  // Whole lines reach the terminal and log.txt as they are written: a long step's progress
+  // can be followed (tail -f), and a run that is killed keeps its log.
+  if (c == '\n')
+    sync();
   return c;
 }
 

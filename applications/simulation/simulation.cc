@@ -196,6 +196,7 @@ Simulation<dim>::Simulation(const ScenarioFactoryArgs& args)
     prm_.enter_subsection("Coupling");
     coupling_prm_.relaxation_tolerance = prm_.get_double("Relaxation tolerance");
     coupling_prm_.relaxation_max_iterations = prm_.get_integer("Relaxation max iterations");
+    coupling_prm_.relaxation_report_interval = prm_.get_integer("Relaxation report interval");
     prm_.leave_subsection();
   }
   if (effects_.particles() && !effects_.coupling) // reads its sections and makes the method
@@ -556,7 +557,19 @@ void Simulation<dim>::advance_mechanics(unsigned int step, double time, double d
 template <int dim>
 void Simulation<dim>::coupled_relaxation(unsigned int step, double time, double, RunContext& ctx) {
   // Equilibrium of both models at this step's load, by dynamic relaxation.
-  const auto report = coupled_->relax(time, effects_.conversion);
+  // A long relaxation says where it stands (Coupling/Relaxation report interval): whether the
+  // residual falls, whether the state softens (a negative stiffness estimate) and whether
+  // conversions cascade.
+  const char* force = dim == 2 ? " N/m" : " N"; // 2-D: per unit thickness
+  const auto progress = [&](const coupling::RelaxationProgress& p) {
+    ctx.log() << "  t = " << time << " s: relaxation pseudo-step " << p.iteration
+              << ", relative residual " << p.relative_residual << " (" << p.residual << force
+              << " of " << p.reaction << force << " reactions), damping " << p.damping
+              << " 1/s, stiffness estimate " << p.stiffness_estimate << " 1/s^2, "
+              << p.free_particles << " free particles, " << p.converted_cells
+              << " cells converted so far, " << p.seconds << " s" << std::endl;
+  };
+  const auto report = coupled_->relax(time, effects_.conversion, progress);
   relaxation_iterations_ += report.iterations;
   last_relaxation_ = report;
   for (const auto& r : report.conversions)

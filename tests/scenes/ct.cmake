@@ -112,12 +112,40 @@ spinesim_add_scene_test(scene.ct_convert_cell_2ranks RANKS 2
   EXPECT "status==ok;particle_count_mismatch<=0;particles>=1000;volume_relative_error<=1e-10;mass_relative_error<=1e-10"
   LABELS "scene;fem")
 
-# Particles in the crushed zone (the scene as shipped): the peak inside the loading, the load
-# falling after it, crushed cells in particles. Not met: after the first conversion (10 cells
-# at 0.25 mm) the coupled relaxation does not converge in a usable time (more than 14 minutes
-# on one core in step 6, in NOSB force passes). Known failure, docs/implants.md ("The vertebra
-# in the simulation scenario").
+# Particles in the crushed zone (the scene as shipped, about 6 minutes on two threads: long):
+# the run goes through the loading with the crushed cells in particles, the peak inside the
+# loading and the load falling after it. The peak comes before the conversions matter, so it
+# is the all-FEM run's (scene.ct_model_to_failure): 1.708 kN against 1.705 kN measured, the
+# coupled steps relaxed to 1e-4 of the reactions; bound 1 %.
 spinesim_add_scene_test(scene.vertebra_crush_particles SCENE ${_crush}
+  OUT ${_runs}/vertebra_crush_particles
   SET "Simulation/Checkpoint interval=0" "Simulation/Output interval=0"
-  EXPECT "status==ok;converted_cells>=10;post_peak_drop>=0.1;peak_load_time_s<=0.875"
-  LABELS "scene;coupling;ct;long;known_failure" TIMEOUT 3600)
+  EXPECT "status==ok;converted_cells>=100;free_particles>=800;post_peak_drop>=0.1;peak_load_time_s<=0.875"
+  LABELS "scene;coupling;ct;long" TIMEOUT 3600 FIXTURE crush_particles)
+spinesim_add_comparison_test(scene.vertebra_crush_particles_peak_is_the_fem_peak
+  A ${_runs}/ct_model_to_failure/summary.json B ${_runs}/vertebra_crush_particles/summary.json
+  CHECKS "peak_load_N:rel:0.01"
+  REQUIRES "ct_model_failure;crush_particles" LABELS "scene;coupling;ct;long")
+# Past the first conversions the particle zone must carry what the FEM carries. Without damage
+# (J2, perfectly plastic) and with B-bar cells (plain Q1 locks under plastic flow: +17 % at the
+# end) the all-FEM body levels off at its limit load, 1.87 kN axial; a body under displacement
+# control cannot fall below it, so the coupled run's final axial reaction must be within 10 %
+# of it (the coupled steps relax to 1e-4; 10 % leaves room for the particles' different
+# discretisation, 10 % softer than the FEM in an elastic interior block). Not met: the particle
+# zone collapses once about 2000 particles carry the plastic flow (0.99 kN at t = 0.4375, NOSB
+# penalty; SPG the same): known failure, docs/implants.md.
+set(_crush_plastic "Effects/Damage=false" "Mechanics/Volumetric locking=bbar"
+    "Simulation/Checkpoint interval=0" "Simulation/Output interval=0")
+spinesim_add_scene_test(scene.vertebra_plastic_limit_fem SCENE ${_crush}
+  OUT ${_runs}/vertebra_plastic_limit_fem SET ${_crush_fem} ${_crush_plastic}
+  EXPECT "status==ok" LABELS "scene;fem;ct;long" TIMEOUT 600 FIXTURE plastic_limit_fem)
+spinesim_add_scene_test(scene.vertebra_plastic_limit_particles SCENE ${_crush}
+  OUT ${_runs}/vertebra_plastic_limit_particles SET ${_crush_plastic}
+  EXPECT "status==ok;converted_cells>=100"
+  LABELS "scene;coupling;ct;long;known_failure" TIMEOUT 3600 FIXTURE plastic_limit_particles)
+spinesim_add_comparison_test(scene.vertebra_plastic_limit_particles_hold_the_limit_load
+  A ${_runs}/vertebra_plastic_limit_fem/summary.json
+  B ${_runs}/vertebra_plastic_limit_particles/summary.json
+  CHECKS "reaction_force_z:rel:0.1"
+  REQUIRES "plastic_limit_fem;plastic_limit_particles"
+  LABELS "scene;coupling;ct;long;known_failure")
