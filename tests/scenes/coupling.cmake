@@ -75,15 +75,17 @@ spinesim_add_comparison_test(coupling.quasi_static_ranks_agree
   REQUIRES "qs_coupled_2d;qs_coupled_2d_2ranks" LABELS "scene;coupling;mpi")
 # Relaxation masses (Mechanics/Relaxation masses): the default scaled masses put every cell and
 # particle at the FEM's stable step; the real lumped masses give the same equilibrium (measured
-# 5e-8 apart here, the relaxation tolerance being 1e-9; bound 1e-6) in more pseudo-steps: 2016
-# against 1867 (ratio 0.926; bound 0.97). One material and particles about as stiff per mass
-# as the cells leave little to gain here; the CT block below gains more.
+# 5e-8 apart here, the relaxation tolerance being 1e-9; bound 1e-6). With one material there is
+# no pseudo-step gain to assert: the count scatters with the rounding of the bond force kernel
+# (scaled 1867, 2097 or 2088 with its x86-64-v3, v4 or baseline build; lumped 2016, 2033,
+# 2009), so only the equilibrium is compared here; the gain is asserted where the cells' steps
+# spread (the bimaterial bar, Mechanics.ScaledRelaxationMasses*, and the CT block below).
 spinesim_add_scene_test(coupling.quasi_static_2d_lumped_masses SCENE ${_qs}
   OUT ${_qs_runs}/coupled_2d_lumped SET "Mechanics/Relaxation masses=lumped"
   EXPECT "${_qs_checks}" LABELS "scene;validation;coupling" FIXTURE qs_coupled_2d_lumped)
-spinesim_add_comparison_test(coupling.quasi_static_2d_scaled_masses_agree_sooner
+spinesim_add_comparison_test(coupling.quasi_static_2d_scaled_masses_agree
   A ${_qs_runs}/coupled_2d_lumped/summary.json B ${_qs_runs}/coupled_2d/summary.json
-  CHECKS "reaction_force_norm:rel:1e-6;strain_energy:rel:1e-6;relaxation_iterations:ratio_max:0.97"
+  CHECKS "reaction_force_norm:rel:1e-6;strain_energy:rel:1e-6"
   REQUIRES "qs_coupled_2d;qs_coupled_2d_lumped" LABELS "scene;coupling")
 
 # Reflected energy below 1 % (required bound; 0.12 % measured at one particle per cell). The
@@ -506,7 +508,9 @@ endforeach()
 # x = 0, x = L, y = 0, z = 0) one layer each, leaving 4 x 5 x 5 = 100. Exact counts; the
 # uniform field is then carried as exactly as without the clearance (relaxation to 1e-9
 # against Newton: 2.3e-8 and 2.6e-8 measured for reactions and stored energy in 2-D; bound
-# 1e-6 as above).
+# 1e-6 as above). The clearance must leave the particles' horizons clear of the supports: on
+# 8 x 8 cells (spacing 0.625 mm, horizon 1.88 mm) the same 2 mm left two cell layers and the
+# plate came out 4.5 % soft.
 set(_sc "Coupling/Conversion region lower corner=" "Coupling/Conversion region upper corner="
     "Coupling/Support clearance=0.002" "Simulation/End time=0.5" "Simulation/Steps=2")
 set(_sc_3d "Dimension=3" "Geometry/Origin=0,0,0" "Geometry/Lengths=0.01,0.01,0.01"
@@ -610,17 +614,19 @@ spinesim_add_scene_test(scene.cracked_plate_nosb SCENE ${_plate_nosb} OUT ${_run
   SET "Simulation/Write VTU=false"
   EXPECT "status==ok;griffith_ratio>=0.9;griffith_ratio<=1.1;crack_path_rms_y_m<=0.0125;crack_extent_max_x_m>=0.45;crack_extent_min_x_m<=-0.45;crack_angle_deg>=-2;crack_angle_deg<=2;conversion_mass_change_relative<=1e-12;conversion_momentum_change_relative<=1e-11"
   LABELS "scene;coupling" TIMEOUT 900 FIXTURE plate_nosb)
-# The same plate fully in NOSB particles (25 600 particles, 56 s alone) and the required
-# agreement: peak loads within 5 % (1.3 % measured), crack paths within two spacings (0.05 mm).
+# The same plate fully in NOSB particles (25 600 particles, 56 s alone; labelled long, as the
+# all-SPG plate: the coupled run above makes the Griffith-Irwin and path checks by itself) and
+# the required agreement: peak loads within 5 % (1.3 % measured), crack paths within two
+# spacings (0.05 mm).
 spinesim_add_scene_test(scene.cracked_plate_nosb_all_particles SCENE ${_plate_nosb}
   OUT ${_runs}/cracked_plate_nosb_all_particles
   SET "Simulation/Write VTU=false" "Coupling/All particles=true"
-  EXPECT "status==ok;free_particles>=25600" LABELS "scene;coupling" TIMEOUT 900
+  EXPECT "status==ok;free_particles>=25600" LABELS "scene;coupling;long" TIMEOUT 900
   FIXTURE plate_nosb_particles)
 spinesim_add_comparison_test(scene.cracked_plate_nosb_agree
   A ${_runs}/cracked_plate_nosb_all_particles/summary.json B ${_runs}/cracked_plate_nosb/summary.json
   CHECKS "peak_load_N:rel:0.05;crack_path_rms_y_m:abs:0.0125;crack_extent_max_x_m:abs:0.0125;crack_extent_min_x_m:abs:0.0125"
-  REQUIRES "plate_nosb;plate_nosb_particles" LABELS "scene;coupling")
+  REQUIRES "plate_nosb;plate_nosb_particles" LABELS "scene;coupling;long")
 # Speed: the coupled run at least 3x faster (5.0 s against 30.1 s measured, ratio 6.0, on a
 # loaded machine); wall time is a benchmark figure.
 spinesim_add_comparison_test(benchmark.cracked_plate_nosb_speedup
@@ -799,9 +805,11 @@ spinesim_add_scene_test(coupling.notched_bar_nosb_3d SCENE ${_bar3} OUT ${_bar_r
 # asserts that the state measured is not there yet.
 set(_bar_es_set "Coupling/Splice=energy" "Simulation/End time=1.8e-4" "Simulation/Steps=18")
 set(_bar_checks "status==ok;energy_balance_error_relative<=0.005;strain_energy_J>=0.01;fracture_dissipation_J>=0.02;crack_extent_max_y_m>=0.01;crack_extent_min_y_m<=-0.009;crack_path_rms_x_m<=0.0025")
+# The 2-rank run makes every check in the default run (24 s); the 1-rank run and the agreement
+# between them are labelled long (65 s).
 spinesim_add_scene_test(coupling.notched_bar_nosb_3d_energy_splice SCENE ${_bar3}
   OUT ${_bar_runs}/fracture_3d_es SET ${_bar_es_set}
-  EXPECT "${_bar_checks}" LABELS "scene;validation;coupling" TIMEOUT 300 FIXTURE bar_1)
+  EXPECT "${_bar_checks}" LABELS "scene;validation;coupling;long" TIMEOUT 300 FIXTURE bar_1)
 spinesim_add_scene_test(coupling.notched_bar_nosb_3d_energy_splice_2ranks SCENE ${_bar3}
   OUT ${_bar_runs}/fracture_3d_es_2ranks SET ${_bar_es_set} RANKS 2 EXPECT "${_bar_checks}"
   LABELS "scene;validation;coupling;mpi" TIMEOUT 300 FIXTURE bar_2)
@@ -811,7 +819,7 @@ spinesim_add_scene_test(coupling.notched_bar_nosb_3d_energy_splice_2ranks SCENE 
 spinesim_add_comparison_test(coupling.notched_bar_nosb_3d_ranks_agree
   A ${_bar_runs}/fracture_3d_es/summary.json B ${_bar_runs}/fracture_3d_es_2ranks/summary.json
   CHECKS "peak_load_N:rel:1e-9;external_work_J:rel:1e-9;strain_energy_J:rel:1e-9;kinetic_energy_J:rel:1e-9;fracture_dissipation_J:rel:1e-9;broken_bonds:rel:1e-12"
-  REQUIRES "bar_1;bar_2" LABELS "scene;coupling;mpi")
+  REQUIRES "bar_1;bar_2" LABELS "scene;coupling;mpi;long")
 # Conversions in the account: the bar with bond-based particles (nu = 1/4), elastic, a narrow
 # initial zone (|x| <= 5 mm) and cells converting at a principal strain of 4e-4 from 0.17 ms
 # (132 cells; about 20 s). A conversion adds U + K that no work supplied: the particles' stored

@@ -112,15 +112,17 @@ spinesim_add_scene_test(scene.ct_convert_cell_2ranks RANKS 2
   EXPECT "status==ok;particle_count_mismatch<=0;particles>=1000;volume_relative_error<=1e-10;mass_relative_error<=1e-10"
   LABELS "scene;fem")
 
-# Particles in the crushed zone (the scene as shipped, about 6 minutes on two threads: long):
-# the run goes through the loading with the crushed cells in particles, the peak inside the
-# loading and the load falling after it. The peak comes before the conversions matter, so it
-# is the all-FEM run's (scene.ct_model_to_failure): 1.708 kN against 1.705 kN measured, the
-# coupled steps relaxed to 1e-4 of the reactions; bound 1 %.
+# Particles in the crushed zone (the scene as shipped, 15-20 minutes: long): the run goes
+# through the loading, stable, with the crushed cells in particles and the peak inside the
+# loading. The peak comes before the conversions matter, so it is the all-FEM run's
+# (scene.ct_model_to_failure): 1.7076 kN against 1.7049 kN measured, the coupled steps relaxed
+# to 1e-4 of the reactions; bound 1 %. What follows the peak is not asserted: the particle
+# zone is too soft (the known failure below), and the final axial reaction came out +701 N,
+# tensile, with 1.35 kN lateral, so post_peak_drop (0.108) measures nothing true here.
 spinesim_add_scene_test(scene.vertebra_crush_particles SCENE ${_crush}
   OUT ${_runs}/vertebra_crush_particles
   SET "Simulation/Checkpoint interval=0" "Simulation/Output interval=0"
-  EXPECT "status==ok;converted_cells>=100;free_particles>=800;post_peak_drop>=0.1;peak_load_time_s<=0.875"
+  EXPECT "status==ok;converted_cells>=100;free_particles>=800;peak_load_time_s<=0.875"
   LABELS "scene;coupling;ct;long" TIMEOUT 3600 FIXTURE crush_particles)
 spinesim_add_comparison_test(scene.vertebra_crush_particles_peak_is_the_fem_peak
   A ${_runs}/ct_model_to_failure/summary.json B ${_runs}/vertebra_crush_particles/summary.json
