@@ -145,9 +145,9 @@ std::vector<CellId> CellConverter<dim>::flagged_cells() const {
   std::vector<Point<dim>> centres;
   // Cells near a support stay FEM (Coupling/Support clearance).
   const double clearance = state_.prm.support_clearance;
-  const std::vector<Point<dim>> supports =
-      any && clearance > 0 ? support_face_centres() : std::vector<Point<dim>>();
-  const PointBins<dim> support_bins(supports, std::max(clearance, state_.spacing));
+  const std::vector<Point<dim>> none;
+  const PointBins<dim> support_bins(any && clearance > 0 ? support_points() : none,
+                                    std::max(clearance, state_.spacing));
   const auto may_convert = [&](const DoFCell& cell) {
     return state_.fem.is_active(cell) && in_conversion_region(cell) &&
            !(clearance > 0 && support_bins.any_within(cell->center(), clearance));
@@ -194,20 +194,34 @@ std::vector<CellId> CellConverter<dim>::flagged_cells() const {
 }
 
 template <int dim>
-std::vector<Point<dim>> CellConverter<dim>::support_face_centres() const {
-  std::set<types::boundary_id> ids;
-  for (const auto& bc : state_.fem.boundary_conditions().dirichlet())
-    ids.insert(bc.boundary_id);
+const std::vector<Point<dim>>& CellConverter<dim>::support_points() const {
+  // The mesh and the conditions are fixed once the coupling is set up: gathered once.
+  if (support_points_)
+    return *support_points_;
   std::vector<Point<dim>> mine;
-  for (const auto& cell : state_.fem.dof_handler().active_cell_iterators())
-    if (cell->is_locally_owned())
+  for (const auto& bc : state_.fem.boundary_conditions().dirichlet())
+    for (const auto& cell : state_.fem.dof_handler().active_cell_iterators()) {
+      if (!cell->is_locally_owned())
+        continue;
+      if (bc.region) {
+        // A region holds the DoFs whose support points (Q1: the vertices) lie in its box,
+        // inside the body as well as on its boundary.
+        for (const unsigned int v : cell->vertex_indices())
+          if (bc.region->contains(cell->vertex(v)))
+            mine.push_back(cell->vertex(v));
+        continue;
+      }
       for (const unsigned int f : cell->face_indices())
-        if (cell->face(f)->at_boundary() && ids.count(cell->face(f)->boundary_id()))
+        if (cell->face(f)->at_boundary() && cell->face(f)->boundary_id() == bc.boundary_id) {
           mine.push_back(cell->face(f)->center());
-  std::vector<Point<dim>> all;
+          for (const unsigned int v : cell->face(f)->vertex_indices())
+            mine.push_back(cell->face(f)->vertex(v));
+        }
+    }
+  support_points_.emplace();
   for (const auto& part : Utilities::MPI::all_gather(state_.fem.mpi_communicator(), mine))
-    all.insert(all.end(), part.begin(), part.end());
-  return all;
+    support_points_->insert(support_points_->end(), part.begin(), part.end());
+  return *support_points_;
 }
 
 template <int dim>

@@ -20,6 +20,7 @@
 
 #include <functional>
 #include <map>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -107,9 +108,11 @@ class CellConverter {
   using DoFCell = typename CouplingState<dim>::DoFCell;
   // Whether the criteria may convert this cell (Conversion region; everywhere when unset).
   bool in_conversion_region(const DoFCell& cell) const;
-  // The centres of the faces on the mechanics' Dirichlet boundaries, over all ranks
-  // (collective), for Coupling/Support clearance.
-  std::vector<dealii::Point<dim>> support_face_centres() const;
+  // The points the mechanics' Dirichlet conditions hold, over all ranks, for Coupling/Support
+  // clearance: centres and vertices of the faces on a support's boundary id, and the vertices
+  // inside a support's region. Collective on the first call (every rank checks the criteria
+  // at the same time), cached after it.
+  const std::vector<dealii::Point<dim>>& support_points() const;
   // The mass, momentum and kinetic energy of points inside the hole go into `hole` (as its
   // *_before members, this rank's share).
   std::vector<ParticleRecord<dim>> make_records(const std::set<std::string>& todo,
@@ -120,6 +123,7 @@ class CellConverter {
   std::function<void()> rebuild_layers_;
   std::function<double()> splice_energy_;
   std::map<std::string, unsigned int> converted_;
+  mutable std::optional<std::vector<dealii::Point<dim>>> support_points_;
   std::vector<ConversionReport<dim>> reports_;
   double restored_energy_particles_ = 0, restored_energy_fem_ = 0; // [J]
 };

@@ -31,12 +31,12 @@ struct RelaxationReport {
 };
 
 // Where a relaxation stands, for a progress line every Coupling/Relaxation report interval
-// pseudo-steps (the same on every rank).
+// pseudo-steps (the same on every rank but the wall time, each rank's own).
 struct RelaxationProgress {
   unsigned int iteration = 0;    // pseudo-steps of this relaxation so far [-]
   double relative_residual = 0;  // ‖free residual‖ / max(‖reactions‖, peak residual) [-]
-  double residual = 0;           // ‖free residual‖ [N]
-  double reaction = 0;           // ‖reactions‖ [N]
+  double residual = 0;           // ‖free residual‖ [N] (2-D: N/m)
+  double reaction = 0;           // ‖reactions‖ over the supported DoFs [N] (2-D: N/m)
   double damping = 0;            // damping for the next pseudo-step [1/s]
   double stiffness_estimate = 0; // uᵀK¹u / uᵀu of the last step; < 0: the state softens [1/s²]
   unsigned int free_particles = 0;  // over all ranks [-]
@@ -71,8 +71,9 @@ class CoupledIntegrator {
   void check_splice_energy();
   // Adaptive dynamic relaxation to equilibrium under the loads of `time`; with
   // `with_conversion`, the cells flagged at equilibrium convert and the state relaxes again.
-  // Ends with zero velocities. `progress`, when given, is called on every rank every
-  // Coupling/Relaxation report interval pseudo-steps.
+  // Ends with zero velocities. `progress`, when given, is called every Coupling/Relaxation
+  // report interval pseudo-steps; it must be given on every rank or on none (the free
+  // particles it reports are summed over the ranks).
   RelaxationReport<dim> relax(double time, bool with_conversion,
                               const std::function<void(const RelaxationProgress&)>& progress = {});
 

@@ -71,8 +71,9 @@ void CouplingParameters<dim>::declare(ParameterHandler& prm) {
                     "with it, so the particle zone runs ahead of a crack [m].");
   prm.declare_entry(
       "Support clearance", "0", Double(0),
-      "Cells whose centre lies within this distance of the centre of a face on a Dirichlet "
-      "boundary of Mechanics never convert, nor does the buffer reach them. The overlap splice "
+      "Cells whose centre lies within this distance of a point a Dirichlet condition of "
+      "Mechanics holds (a vertex or the centre of a face on its boundary id, a vertex inside "
+      "its region) never convert, nor does the buffer reach them. The overlap splice "
       "drives the FEM's interface DoFs by the particles and the ghosts by the FEM (Dirichlet on "
       "both sides): between the particles and a support it needs FEM DoFs that are neither "
       "(e.g. the bone cells next to a platen's cap); without them the reaction at that "

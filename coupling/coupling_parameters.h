@@ -31,7 +31,7 @@ struct CouplingParameters {
   double min_jacobian_ratio = 0;                  // [-], 0 = off
   double min_time_step = 0;                       // [s], 0 = off
   double buffer = 0;                              // converted around flagged cells [m]
-  double support_clearance = 0; // no conversion within this of a Dirichlet face centre [m]
+  double support_clearance = 0; // no conversion within this of a supported point [m]
   std::vector<double> convert_lower, convert_upper; // cells the criteria may convert (empty = all)
   unsigned int check_interval = 10;                 // steps between conversion checks
   bool damage = true;                               // bonds may break (Effects/Damage)

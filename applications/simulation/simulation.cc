@@ -196,7 +196,6 @@ Simulation<dim>::Simulation(const ScenarioFactoryArgs& args)
     prm_.enter_subsection("Coupling");
     coupling_prm_.relaxation_tolerance = prm_.get_double("Relaxation tolerance");
     coupling_prm_.relaxation_max_iterations = prm_.get_integer("Relaxation max iterations");
-    coupling_prm_.relaxation_report_interval = prm_.get_integer("Relaxation report interval");
     prm_.leave_subsection();
   }
   if (effects_.particles() && !effects_.coupling) // reads its sections and makes the method
