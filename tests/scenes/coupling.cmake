@@ -520,6 +520,15 @@ set(_sc_3d "Dimension=3" "Geometry/Origin=0,0,0" "Geometry/Lengths=0.01,0.01,0.0
 spinesim_add_scene_test(coupling.support_clearance_2d SCENE ${_pc} OUT ${_pc_runs}/clearance_2d
   SET ${_sc} EXPECT "status==ok;converted_cells>=130;converted_cells<=130"
   LABELS "scene;validation;coupling" FIXTURE sc_2d)
+# On 2 ranks the supports are gathered from both (130 cells; reactions 3e-8 from the FEM's).
+spinesim_add_scene_test(coupling.support_clearance_2d_2ranks SCENE ${_pc} RANKS 2
+  OUT ${_pc_runs}/clearance_2d_2ranks SET ${_sc}
+  EXPECT "status==ok;converted_cells>=130;converted_cells<=130"
+  LABELS "scene;validation;coupling;mpi" FIXTURE sc_2d_2ranks)
+spinesim_add_comparison_test(coupling.support_clearance_2d_2ranks_agrees_with_fem
+  A ${_pc_runs}/clearance_fem_2d/summary.json B ${_pc_runs}/clearance_2d_2ranks/summary.json
+  CHECKS "reaction_force_norm:rel:1e-6;strain_energy:rel:1e-6"
+  REQUIRES "sc_2d_2ranks;sc_fem_2d" LABELS "scene;coupling;mpi")
 spinesim_add_scene_test(coupling.support_clearance_3d SCENE ${_pc} OUT ${_pc_runs}/clearance_3d
   SET ${_sc} ${_sc_3d} "Effects/Particles method=spg"
   EXPECT "status==ok;converted_cells>=100;converted_cells<=100"
