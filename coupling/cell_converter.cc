@@ -351,10 +351,14 @@ CellConverter<dim>::make_records(const std::set<std::string>& todo, double& max_
         excess > 0)
       lambda = std::sqrt(excess / fluctuation);
     max_velocity_scale = std::max(max_velocity_scale, lambda);
+    // The particles of a cell a condition holds by a whole face (its boundary id, or a face
+    // inside its region) are held with it. A region that holds only an edge or a vertex of the
+    // cell (a pin) holds none of its particles; its FEM nodes stay held while a cell that
+    // shares them is FEM.
     std::uint32_t slots = 0;
     for (unsigned int k = 0; k < bcs.size(); ++k)
       for (const unsigned int f : cell->face_indices())
-        if (cell->face(f)->at_boundary() && cell->face(f)->boundary_id() == bcs[k].boundary_id)
+        if (bcs[k].holds_face(cell->face(f)))
           slots |= 1u << k;
     for (unsigned int q = 0; q < np; ++q) {
       if (state_.prm.in_hole(at_points.quadrature_point(q)))

@@ -8,7 +8,6 @@
 #include <deal.II/base/function.h>
 #include <deal.II/base/mpi.h>
 #include <deal.II/base/utilities.h>
-#include <deal.II/dofs/dof_tools.h>
 #include <deal.II/numerics/vector_tools.h>
 
 #include <algorithm>
@@ -94,10 +93,10 @@ typename FemParticleCoupling<dim>::DofSplit FemParticleCoupling<dim>::dof_split(
   const auto& owned = solver.locally_owned_dofs();
   std::set<types::global_dof_index> dirichlet, driven;
   for (const auto& d : solver.boundary_conditions().dirichlet()) {
-    const IndexSet s =
-        DoFTools::extract_boundary_dofs(solver.dof_handler(), d.mask, {d.boundary_id});
-    for (const auto i : s)
-      dirichlet.insert(i);
+    // The DoFs the FEM constrains (by boundary id or by region), in the condition's components.
+    const auto held =
+        fem::BoundaryConditions<dim>::held_dofs(d, solver.mapping(), solver.dof_handler());
+    dirichlet.insert(held.begin(), held.end());
   }
   for (const auto& e : interface_.dofs())
     driven.insert(e.dof);

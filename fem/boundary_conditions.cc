@@ -308,29 +308,43 @@ void BoundaryConditions<dim>::add_pressure(dealii::types::boundary_id id,
 template <int dim>
 void BoundaryConditions<dim>::add_dirichlet(const Region& region, const std::string& components,
                                             const std::string& values, const std::string& where) {
-  add_dirichlet(0, components, values, where); // parses and checks like a boundary-id slot
+  // Parses and checks like a boundary-id slot; a region condition holds no boundary id, so no
+  // query by id (reactions, boundary DoFs, particles of boundary cells) picks it up.
+  add_dirichlet(dealii::numbers::invalid_boundary_id, components, values, where);
   dirichlet_.back().region = region;
 }
 
 template <int dim>
 void BoundaryConditions<dim>::add_dirichlet(const Region& region, const dealii::ComponentMask& mask,
                                             std::shared_ptr<dealii::Function<dim>> function) {
-  add_dirichlet(0, mask, std::move(function));
+  add_dirichlet(dealii::numbers::invalid_boundary_id, mask, std::move(function));
   dirichlet_.back().region = region;
 }
 
 template <int dim>
 void BoundaryConditions<dim>::add_traction(const Region& region, const std::string& values,
                                            const std::string& where) {
-  add_traction(0, values, where);
+  add_traction(dealii::numbers::invalid_boundary_id, values, where);
   traction_.back().region = region;
 }
 
 template <int dim>
 void BoundaryConditions<dim>::add_pressure(const Region& region, const std::string& value,
                                            const std::string& where) {
-  add_pressure(0, value, where);
+  add_pressure(dealii::numbers::invalid_boundary_id, value, where);
   pressure_.back().region = region;
+}
+
+template <int dim>
+std::set<dealii::types::global_dof_index>
+BoundaryConditions<dim>::held_dofs(const Dirichlet& condition, const dealii::Mapping<dim>& mapping,
+                                   const dealii::DoFHandler<dim>& dof_handler) {
+  std::map<dealii::types::global_dof_index, double> values;
+  interpolate(condition, mapping, dof_handler, dealii::Functions::ZeroFunction<dim>(dim), values);
+  std::set<dealii::types::global_dof_index> dofs;
+  for (const auto& [dof, value] : values)
+    dofs.insert(dofs.end(), dof);
+  return dofs;
 }
 
 template <int dim>

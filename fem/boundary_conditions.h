@@ -32,6 +32,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -79,12 +80,24 @@ class BoundaryConditions {
                const std::vector<std::string>& subsection_path = {});
   };
 
-  // Each condition acts on boundary_id unless `region` is set.
+  // Each condition acts on boundary_id unless `region` is set; a region condition's
+  // boundary_id is numbers::invalid_boundary_id (so no query by id matches it).
   struct Dirichlet {
     dealii::types::boundary_id boundary_id;
     dealii::ComponentMask mask;                      // constrained components
     std::shared_ptr<dealii::Function<dim>> function; // dim components [m]
     std::optional<Region> region;
+    // Does the condition hold this face of a cell: a boundary face with its id, or (region) a
+    // face, boundary or interior, whose vertices all lie in the box (unmapped)?
+    template <class FaceIterator>
+    bool holds_face(const FaceIterator& face) const {
+      if (!region)
+        return face->at_boundary() && face->boundary_id() == boundary_id;
+      for (const unsigned int v : face->vertex_indices())
+        if (!region->contains(face->vertex(v)))
+          return false;
+      return true;
+    }
   };
   struct Traction {
     dealii::types::boundary_id boundary_id;
@@ -136,6 +149,11 @@ class BoundaryConditions {
                           const dealii::DoFHandler<dim>& dof_handler,
                           const dealii::Function<dim>& function,
                           std::map<dealii::types::global_dof_index, double>& values);
+
+  // The DoFs (locally relevant) that `condition` constrains, in any component of its mask.
+  static std::set<dealii::types::global_dof_index>
+  held_dofs(const Dirichlet& condition, const dealii::Mapping<dim>& mapping,
+            const dealii::DoFHandler<dim>& dof_handler);
 
   const std::vector<Dirichlet>& dirichlet() const { return dirichlet_; }
   const std::vector<Traction>& traction() const { return traction_; }

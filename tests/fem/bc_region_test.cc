@@ -11,9 +11,11 @@
 
 #include <deal.II/base/function.h>
 #include <deal.II/base/mpi.h>
+#include <deal.II/dofs/dof_tools.h>
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <functional>
 #include <map>
 #include <string>
@@ -211,6 +213,58 @@ TEST(BoundaryRegion, InteriorBoxSelectsItsSupportPoints) {
     owned += mech.dof_handler().locally_owned_dofs().is_element(dof);
   }
   EXPECT_EQ(Utilities::MPI::sum(owned, comm()), 25u);
+}
+
+template <int dim>
+void check_region_holds_no_boundary_id() {
+  // Bar [0,2] x [0,0.5] (x [0,0.5]) of 4 cells, Q1. A region on the plane x = 1 (the faces
+  // between cells 2 and 3) holds those faces and their nodes, nothing on boundary id 0 (x = 0).
+  parallel::distributed::Triangulation<dim> tria(comm());
+  bar<dim>(tria, 0);
+  typename MechanicsSolver<dim>::Parameters prm;
+  MechanicsSolver<dim> mech(tria, prm);
+  mech.set_material(0, std::make_shared<materials::LinearElastic>(1e9, 0.3, 1000.0));
+  auto& bcs = mech.boundary_conditions();
+  bcs.add_dirichlet(BoundaryConditions<dim>::Region::parse(box<dim>("1,0", "1,0.5"), "test"), "x",
+                    "0", "test");
+  bcs.add_dirichlet(0, "x", "0", "test");
+  mech.setup();
+  const auto& region = mech.boundary_conditions().dirichlet()[0];
+  const auto& by_id = mech.boundary_conditions().dirichlet()[1];
+  EXPECT_EQ(region.boundary_id, numbers::invalid_boundary_id);
+  unsigned int region_faces = 0, id_faces = 0;
+  for (const auto& cell : mech.dof_handler().active_cell_iterators()) {
+    if (!cell->is_locally_owned())
+      continue;
+    for (const unsigned int f : cell->face_indices()) {
+      const bool on_plane = std::abs(cell->face(f)->center()[0] - 1.0) < 1e-12;
+      const bool on_id_0 = cell->face(f)->at_boundary() && cell->face(f)->boundary_id() == 0;
+      EXPECT_EQ(region.holds_face(cell->face(f)), on_plane);
+      EXPECT_EQ(by_id.holds_face(cell->face(f)), on_id_0);
+      region_faces += region.holds_face(cell->face(f));
+      id_faces += by_id.holds_face(cell->face(f));
+    }
+  }
+  // The plane's face is seen from both of its cells; the x = 0 face from one.
+  EXPECT_EQ(Utilities::MPI::sum(region_faces, comm()), 2u);
+  EXPECT_EQ(Utilities::MPI::sum(id_faces, comm()), 1u);
+  // The held DoFs: the x component of the plane's 2^(dim-1) nodes; none of them at x = 0.
+  std::map<types::global_dof_index, Point<dim>> support;
+  DoFTools::map_dofs_to_support_points(mech.mapping(), mech.dof_handler(), support);
+  const auto held = BoundaryConditions<dim>::held_dofs(region, mech.mapping(), mech.dof_handler());
+  unsigned int owned = 0;
+  for (const auto dof : held) {
+    EXPECT_NEAR(support.at(dof)[0], 1.0, 1e-12);
+    owned += mech.dof_handler().locally_owned_dofs().is_element(dof);
+  }
+  EXPECT_EQ(Utilities::MPI::sum(owned, comm()), 1u << (dim - 1));
+}
+
+TEST(BoundaryRegion, RegionHoldsItsFacesNotBoundaryIdZero2D) {
+  check_region_holds_no_boundary_id<2>();
+}
+TEST(BoundaryRegion, RegionHoldsItsFacesNotBoundaryIdZero3D) {
+  check_region_holds_no_boundary_id<3>();
 }
 
 TEST(BoundaryRegion, ParameterGrammar) {
