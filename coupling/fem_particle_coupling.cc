@@ -2,7 +2,9 @@
 
 #include "coupling/coupled_totals.h"
 
+#include "base/exceptions.h"
 #include "base/scoped_time.h"
+#include "fem/materials/plane_strain_embedding.h"
 #include "meshfree/particle_output.h"
 
 #include <deal.II/base/function.h>
@@ -13,6 +15,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <optional>
 #include <set>
 
@@ -382,6 +385,49 @@ FemParticleCoupling<dim>::gather_state(double materials::MaterialState::*field) 
 }
 
 template <int dim>
+std::vector<double> FemParticleCoupling<dim>::cauchy_stresses() const {
+  constexpr unsigned int n_components = 6;
+  std::vector<double> out(n_components * state_.particles.size(), 0.0);
+  const auto& table = state_.particle_material.table;
+  if (state_.carries_state() && state_.method) {
+    const double T_ref = state_.particle_material.reference_temperature;
+    for (unsigned int i = 0; i < state_.particles.size(); ++i) {
+      if (!state_.free[i] || !state_.is_owned(i))
+        continue;
+      const auto F = state_.method->particle_deformation_gradient(i);
+      if (!F)
+        continue;
+      const materials::ConstitutiveLaw& law = table && !table->empty()
+                                                  ? table->law(state_.particles.material_id(i))
+                                                  : *state_.particle_material.law;
+      const materials::MaterialState old = state_.method->particle_state(i);
+      const double dT = std::isnan(T_ref) ? 0.0 : state_.particles.temperature(i) - T_ref;
+      const materials::Tensor2 F3 = materials::embed_plane_strain(*F);
+      double* sigma = &out[n_components * i];
+      try {
+        // σ = P Fᵀ / J (P itself under linearised kinematics), scaled like the stress the
+        // particle exerts (1 − D_f).
+        const auto r = law.finite_strain_stress(F3, dT, old);
+        const materials::Tensor2 s =
+            (1.0 - old.fracture_damage) *
+            (law.linearised_kinematics() ? r.first_piola
+                                         : (1.0 / determinant(F3)) * r.first_piola * transpose(F3));
+        const unsigned int a[n_components] = {0, 1, 2, 0, 1, 0};
+        const unsigned int b[n_components] = {0, 1, 2, 1, 2, 2};
+        for (unsigned int c = 0; c < n_components; ++c)
+          sigma[c] = 0.5 * (s[a[c]][b[c]] + s[b[c]][a[c]]);
+      } catch (const NumericalFailure&) {
+        for (unsigned int c = 0; c < n_components; ++c)
+          sigma[c] = std::numeric_limits<double>::quiet_NaN();
+      }
+    }
+  }
+  if (Utilities::MPI::n_mpi_processes(state_.fem.mpi_communicator()) > 1)
+    Utilities::MPI::sum(out, state_.fem.mpi_communicator(), out);
+  return out;
+}
+
+template <int dim>
 std::vector<std::string> FemParticleCoupling<dim>::take_messages() {
   std::vector<std::string> m;
   m.swap(state_.messages);
@@ -399,6 +445,7 @@ std::string FemParticleCoupling<dim>::write_output(const std::string& directory,
   halo_.synchronise(); // collective: damage and states of every particle on every rank
   const auto plastic = equivalent_plastic_strains(); // collective
   const auto fracture = fracture_damages();          // collective
+  const auto stresses = cauchy_stresses();           // collective
   // Physical displacements from their owners (SPG's unknowns are RK coefficients; the others'
   // are the displacements themselves).
   std::vector<double> u(dim * particles.size(), 0.0);
@@ -419,6 +466,16 @@ std::string FemParticleCoupling<dim>::write_output(const std::string& directory,
       state_.carries_state() ? &out.add_scalar_field("equivalent_plastic_strain") : nullptr;
   std::vector<double>* df =
       state_.carries_state() ? &out.add_scalar_field("fracture_damage") : nullptr;
+  // The stress as six components and the von Mises stress [Pa] (methods with a law).
+  const char* const stress_names[6] = {"stress_xx", "stress_yy", "stress_zz",
+                                       "stress_xy", "stress_yz", "stress_xz"};
+  std::vector<std::vector<double>*> sigma;
+  std::vector<double>* von_mises_field = nullptr;
+  if (state_.carries_state()) {
+    for (const char* name : stress_names)
+      sigma.push_back(&out.add_scalar_field(name));
+    von_mises_field = &out.add_scalar_field("von_mises_stress");
+  }
   for (unsigned int i = 0; i < particles.size(); ++i)
     if (state_.free[i]) {
       const unsigned int k = out.add_particle(particles.reference_position(i), particles.volume(i));
@@ -433,6 +490,12 @@ std::string FemParticleCoupling<dim>::write_output(const std::string& directory,
         (*eps)[k] = plastic[i];
       if (df)
         (*df)[k] = fracture[i];
+      if (von_mises_field) {
+        const double* c = &stresses[6 * i];
+        for (unsigned int m = 0; m < 6; ++m)
+          (*sigma[m])[k] = c[m];
+        (*von_mises_field)[k] = von_mises(c);
+      }
     }
   const std::string dir =
       directory.empty() || directory.back() == '/' ? directory : directory + "/";

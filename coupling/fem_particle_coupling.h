@@ -50,7 +50,9 @@
 #include <deal.II/grid/cell_id.h>
 #include <deal.II/lac/vector.h>
 
+#include <cmath>
 #include <complex>
+#include <cstdint>
 #include <string>
 #include <utility>
 #include <vector>
@@ -186,6 +188,17 @@ class FemParticleCoupling {
   void restore_plastic_heat(double heat, double work) { plastic_heat_.restore(heat, work); }
 
   unsigned int n_free_particles() const { return state_.n_free_particles(); }
+  // Per particle: 1 free, 0 ghost (replicated on every rank).
+  const std::vector<std::uint8_t>& free_flags() const { return state_.free; }
+  // Whether the particles carry a material state and a stress (NOSB-PD, SPG).
+  bool carries_material_state() const { return state_.carries_state(); }
+  // Von Mises stress of six components (xx, yy, zz, xy, yz, xz) as cauchy_stresses() gives
+  // them [Pa]: √(½[(σxx−σyy)² + (σyy−σzz)² + (σzz−σxx)²] + 3(σxy² + σyz² + σxz²)).
+  static double von_mises(const double* c) {
+    return std::sqrt(0.5 * ((c[0] - c[1]) * (c[0] - c[1]) + (c[1] - c[2]) * (c[1] - c[2]) +
+                            (c[2] - c[0]) * (c[2] - c[0])) +
+                     3.0 * (c[3] * c[3] + c[4] * c[4] + c[5] * c[5]));
+  }
   // Constitutive laws the particles run (distinct host-cell laws; the method's default
   // included).
   unsigned int n_particle_laws() const { return state_.laws->size(); }
@@ -224,6 +237,12 @@ class FemParticleCoupling {
   // Fracture damage D_f of every free particle (the share of stress its families lost at
   // bond breaks, NOSB-PD; 0 for ghosts and other methods) [-]. Collective.
   std::vector<double> fracture_damages() const;
+  // Cauchy stress of every free particle from its owner: its law at the deformation gradient
+  // of the last force evaluation and its committed state, times 1 − D_f; six components per
+  // particle (xx, yy, zz, xy, yz, xz; plane strain gives zz) [Pa]. Zero for ghosts, for
+  // particles without a stress (failed families) and for methods without a law; NaN where the
+  // law fails (det F <= 0). Collective.
+  std::vector<double> cauchy_stresses() const;
   // Messages for the run log since the last call (the method's, and the coupling's own).
   std::vector<std::string> take_messages();
 

@@ -193,6 +193,14 @@ class ParticleMethod {
   }
   // Particle i's committed state for output: its own family's, or the weighted mean over its
   // bond-associated families. The default state for a method without history.
+  // The deformation gradient particle i's law sees at the last force evaluation (NOSB: its
+  // particle family's F; SPG: its smoothed gradient), for stress output; nullopt for a method
+  // without one, or a particle that carries no stress (a failed family).
+  virtual std::optional<dealii::Tensor<2, dim>>
+  particle_deformation_gradient(unsigned int i) const {
+    (void)i;
+    return std::nullopt;
+  }
   virtual materials::MaterialState particle_state(unsigned int i) const {
     (void)i;
     return {};

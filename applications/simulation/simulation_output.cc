@@ -6,6 +6,7 @@
 #include <deal.II/base/mpi.h>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 namespace spinesim::applications {
@@ -277,6 +278,24 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
       s.set_figure("relaxation_relative_residual", last_relaxation_.relative_residual, "-");
     }
     s.set_figure("particle_spacing_m", coupled_->particle_spacing(), "m");
+    if (coupled_->n_free_particles() > 0 && coupled_->carries_material_state()) {
+      // Von Mises stress of the free particles (the particle VTU's von_mises_stress); a failed
+      // family carries none (0), a law that failed gives NaN.
+      const std::vector<double> sigma = coupled_->cauchy_stresses(); // collective
+      const auto& free = coupled_->free_flags();
+      double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+      for (std::size_t i = 0; i < free.size(); ++i) {
+        if (!free[i])
+          continue;
+        const double vm = coupling::FemParticleCoupling<dim>::von_mises(&sigma[6 * i]);
+        lo = std::isnan(vm) ? vm : std::min(lo, vm);
+        hi = std::isnan(vm) ? vm : std::max(hi, vm);
+        if (std::isnan(vm))
+          break;
+      }
+      s.set_figure("particle_max_von_mises", hi, "Pa");
+      s.set_figure("particle_min_von_mises", lo, "Pa");
+    }
   }
   if (mechanics_) {
     s.set_figure("mechanics_dofs", mechanics_->dof_handler().n_dofs(), "-");

@@ -98,6 +98,10 @@ class ConstitutiveLaw {
   virtual MaterialState transferred_state(const MaterialState& state, const Tensor2& F_from,
                                           const Tensor2& F_to) const;
 
+  // Whether finite_strain() uses linearised kinematics (ε = sym F − I, P = σ): then P is the
+  // (small-strain) Cauchy stress itself, not P = J σ F⁻ᵀ (stress output).
+  virtual bool linearised_kinematics() const { return false; }
+
   // Elastic constants for stable-step estimates, stabilisation and AMG scaling.
   virtual double youngs_modulus() const = 0; // [Pa]
   virtual double poisson_ratio() const = 0;  // [-]

@@ -65,6 +65,7 @@ class J2Damage : public ConstitutiveLaw {
                                               const MaterialState& old_state) const override;
   FiniteStrainStress finite_strain_stress(const Tensor2& F, double temperature_change,
                                           const MaterialState& old_state) const override;
+  bool linearised_kinematics() const override { return true; }
   double youngs_modulus() const override { return effective_.youngs_modulus(); }
   double poisson_ratio() const override { return effective_.poisson_ratio(); }
   double density() const override { return effective_.density(); }

@@ -28,6 +28,7 @@ class J2Plasticity : public ConstitutiveLaw {
                                      const MaterialState& old_state) const override;
   FiniteStrainStress finite_strain_stress(const Tensor2& F, double temperature_change,
                                           const MaterialState& old_state) const override;
+  bool linearised_kinematics() const override { return true; }
   double youngs_modulus() const override { return E_; }
   double poisson_ratio() const override { return nu_; }
   double density() const override { return rho_; }

@@ -80,6 +80,13 @@ class NosbMethod : public ParticleMethod<dim> {
     return table_ && !table_->empty() ? table_->any_stored_energy_from_state()
                                       : pd_.law().stored_energy_from_state();
   }
+  std::optional<dealii::Tensor<2, dim>>
+  particle_deformation_gradient(unsigned int i) const override {
+    const auto& F = pd_.deformation_gradients();
+    if (i >= F.size() || pd_.failed(i))
+      return std::nullopt;
+    return F[i];
+  }
   materials::MaterialState particle_state(unsigned int i) const override {
     return pd_.particle_state(i);
   }

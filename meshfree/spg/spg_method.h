@@ -121,6 +121,12 @@ class SpgMethod : public ParticleMethod<dim> {
   void set_particle_states(const ParticleSet<dim>& particles,
                            const std::vector<CarriedState>& states) override;
   materials::MaterialState particle_state(unsigned int i) const override;
+  std::optional<dealii::Tensor<2, dim>>
+  particle_deformation_gradient(unsigned int i) const override {
+    if (!solver_ || i >= solver_->deformation_gradients().size())
+      return std::nullopt;
+    return solver_->deformation_gradients()[i];
+  }
   std::vector<double> plastic_work_density(const ParticleSet<dim>& particles) const override;
   bool has_plastic_work() const override {
     return table_ && !table_->empty() ? table_->any_stored_energy_from_state()
