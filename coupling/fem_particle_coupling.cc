@@ -5,6 +5,7 @@
 #include "base/exceptions.h"
 #include "base/scoped_time.h"
 #include "fem/materials/plane_strain_embedding.h"
+#include "fem/materials/tensor_tools.h"
 #include "meshfree/particle_output.h"
 
 #include <deal.II/base/function.h>
@@ -405,17 +406,14 @@ std::vector<double> FemParticleCoupling<dim>::cauchy_stresses() const {
       const materials::Tensor2 F3 = materials::embed_plane_strain(*F);
       double* sigma = &out[n_components * i];
       try {
-        // σ = P Fᵀ / J (P itself under linearised kinematics), scaled like the stress the
-        // particle exerts (1 − D_f).
+        // σ of the law's response, scaled like the stress the particle exerts (1 − D_f).
         const auto r = law.finite_strain_stress(F3, dT, old);
-        const materials::Tensor2 s =
-            (1.0 - old.fracture_damage) *
-            (law.linearised_kinematics() ? r.first_piola
-                                         : (1.0 / determinant(F3)) * r.first_piola * transpose(F3));
+        const materials::SymTensor2 s =
+            (1.0 - old.fracture_damage) * materials::cauchy_stress(law, F3, r.first_piola);
         const unsigned int a[n_components] = {0, 1, 2, 0, 1, 0};
         const unsigned int b[n_components] = {0, 1, 2, 1, 2, 2};
         for (unsigned int c = 0; c < n_components; ++c)
-          sigma[c] = 0.5 * (s[a[c]][b[c]] + s[b[c]][a[c]]);
+          sigma[c] = s[a[c]][b[c]];
       } catch (const NumericalFailure&) {
         for (unsigned int c = 0; c < n_components; ++c)
           sigma[c] = std::numeric_limits<double>::quiet_NaN();
@@ -425,6 +423,13 @@ std::vector<double> FemParticleCoupling<dim>::cauchy_stresses() const {
   if (Utilities::MPI::n_mpi_processes(state_.fem.mpi_communicator()) > 1)
     Utilities::MPI::sum(out, state_.fem.mpi_communicator(), out);
   return out;
+}
+
+template <int dim>
+double FemParticleCoupling<dim>::von_mises(const double* c) {
+  materials::SymTensor2 s;
+  s[0][0] = c[0], s[1][1] = c[1], s[2][2] = c[2], s[0][1] = c[3], s[1][2] = c[4], s[0][2] = c[5];
+  return materials::von_mises(s);
 }
 
 template <int dim>

@@ -193,12 +193,8 @@ class FemParticleCoupling {
   // Whether the particles carry a material state and a stress (NOSB-PD, SPG).
   bool carries_material_state() const { return state_.carries_state(); }
   // Von Mises stress of six components (xx, yy, zz, xy, yz, xz) as cauchy_stresses() gives
-  // them [Pa]: √(½[(σxx−σyy)² + (σyy−σzz)² + (σzz−σxx)²] + 3(σxy² + σyz² + σxz²)).
-  static double von_mises(const double* c) {
-    return std::sqrt(0.5 * ((c[0] - c[1]) * (c[0] - c[1]) + (c[1] - c[2]) * (c[1] - c[2]) +
-                            (c[2] - c[0]) * (c[2] - c[0])) +
-                     3.0 * (c[3] * c[3] + c[4] * c[4] + c[5] * c[5]));
-  }
+  // them [Pa] (materials::von_mises).
+  static double von_mises(const double* c);
   // Constitutive laws the particles run (distinct host-cell laws; the method's default
   // included).
   unsigned int n_particle_laws() const { return state_.laws->size(); }

@@ -7,6 +7,7 @@
 #include "fem/point_update.h"
 
 #include "fem/materials/j2_plasticity.h"
+#include "fem/materials/tensor_tools.h"
 
 #include "base/scoped_time.h"
 
@@ -22,11 +23,6 @@ namespace spinesim::fem {
 using namespace dealii;
 
 namespace {
-
-double von_mises(const materials::SymTensor2& s) {
-  const materials::SymTensor2 d = deviator(s);
-  return std::sqrt(1.5 * (d * d));
-}
 
 // Per locally owned cell (by active cell index; others 0): the mean of value() over its points.
 template <int dim, typename PointValue>
@@ -234,7 +230,7 @@ double MechanicsSolver<dim>::max_von_mises() const {
     if (cell->is_locally_owned() && is_active(cell)) {
       const std::size_t first = cell->active_cell_index() * nq;
       for (std::size_t k = first; k < first + nq; ++k)
-        m = std::max(m, von_mises(committed_[k].cauchy_stress));
+        m = std::max(m, materials::von_mises(committed_[k].cauchy_stress));
     }
   return Utilities::MPI::max(m, comm_);
 }
@@ -262,8 +258,8 @@ Tensor<1, dim> MechanicsSolver<dim>::momentum() const {
 
 template <int dim>
 Vector<float> MechanicsSolver<dim>::cell_von_mises() const {
-  return cell_averages(*this,
-                       [](const QuadraturePointData& d) { return von_mises(d.cauchy_stress); });
+  return cell_averages(
+      *this, [](const QuadraturePointData& d) { return materials::von_mises(d.cauchy_stress); });
 }
 
 template <int dim>

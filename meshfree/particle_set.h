@@ -108,6 +108,7 @@ class ParticleSet {
   std::vector<double>& damages() { return damage_; }
   const std::vector<double>& damages() const { return damage_; }
   std::vector<double>& temperatures() { return temperature_; }
+  const std::vector<double>& temperatures() const { return temperature_; }
   const std::vector<std::uint8_t>& fixed_masks() const { return fixed_; }
 
   // Per-method scalar fields by name (e.g. "dilatation"), sized with the particles.

@@ -127,4 +127,15 @@ FiniteStrainResponse as_linearised_finite_strain(const SmallStrainResponse& resp
   return r;
 }
 
+SymTensor2 cauchy_stress(const ConstitutiveLaw& law, const Tensor2& F, const Tensor2& P) {
+  if (law.linearised_kinematics())
+    return dealii::symmetrize(P);
+  return dealii::symmetrize((1.0 / dealii::determinant(F)) * P * dealii::transpose(F));
+}
+
+double von_mises(const SymTensor2& sigma) {
+  const SymTensor2 s = dealii::deviator(sigma);
+  return std::sqrt(1.5 * (s * s));
+}
+
 } // namespace spinesim::materials

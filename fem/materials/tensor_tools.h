@@ -41,6 +41,14 @@ Tensor4 to_full(const SymTensor4& C);
 SymTensor2 linearised_strain(const Tensor2& F);
 FiniteStrainResponse as_linearised_finite_strain(const SmallStrainResponse& response);
 
+// The Cauchy stress of a law's response P at F [Pa]: sym(P Fᵀ) / det F, or sym(P) when the law
+// runs linearised kinematics (its P is σ itself). Every stress output goes through this, so a
+// J2 law's σ is not divided by J a second time.
+SymTensor2 cauchy_stress(const ConstitutiveLaw& law, const Tensor2& F, const Tensor2& P);
+
+// The von Mises stress √(3/2 s:s) of σ, s its deviator [Pa].
+double von_mises(const SymTensor2& sigma);
+
 // Plane stress (σ_zz = σ_xz = σ_yz = 0) by static condensation of a 3-D tangent C:
 //   C^ps_abcd = C_abcd - C_abzz C_zzcd / C_zzzz,  a,b,c,d in {x,y}.
 // Exact for any tangent whose in-plane/out-of-plane shear coupling vanishes (all isotropic

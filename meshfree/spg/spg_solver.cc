@@ -2,6 +2,7 @@
 
 #include "base/exceptions.h"
 #include "fem/materials/plane_strain_embedding.h"
+#include "fem/materials/tensor_tools.h"
 #include "meshfree/bond_loop.h"
 
 #include <algorithm>
@@ -646,6 +647,22 @@ std::size_t SPGSolver<dim>::memory_bytes() const {
          has_row_.capacity() + complete_.capacity() + driven_.capacity() +
          newly_broken_.capacity() * sizeof(std::pair<unsigned int, unsigned int>) +
          broken_pairs_.capacity() * sizeof(unsigned long long);
+}
+
+template <int dim>
+materials::SymTensor2 SPGSolver<dim>::cauchy_stress(unsigned int N,
+                                                    const ParticleSet<dim>& particles) const {
+  const double kept = 1.0 - committed_[N].fracture_damage;
+  if (!has_row_[N] || !(kept > 0.0))
+    return {};
+  const auto& temperature = particles.temperatures();
+  const double dT = temperature.size() == particles.size() && !std::isnan(reference_temperature_)
+                        ? temperature[N] - reference_temperature_
+                        : 0.0;
+  const materials::ConstitutiveLaw& law = *laws_[law_index_[N]];
+  const materials::Tensor2 F3 = materials::embed_plane_strain(F_[N]);
+  const auto r = law.finite_strain_stress(F3, dT, committed_[N]);
+  return kept * materials::cauchy_stress(law, F3, r.first_piola);
 }
 
 template class SPGSolver<2>;

@@ -199,6 +199,10 @@ class SPGSolver {
   dealii::Point<dim> current_position(unsigned int i) const { return X0_[i] + uh_[i]; }
   const std::vector<dealii::Tensor<2, dim>>& deformation_gradients() const { return F_; }
   const std::vector<dealii::Tensor<2, dim>>& first_piola_stresses() const { return P_; }
+  // The Cauchy stress of particle N at its last F [Pa], the 3-D tensor (plane strain: σ_zz too),
+  // scaled by the share it keeps (1 − D_f): its law re-evaluated from the committed state at
+  // the particle's temperature, as the force pass did. Zero for a particle without a row.
+  materials::SymTensor2 cauchy_stress(unsigned int N, const ParticleSet<dim>& particles) const;
   // The state of the last force evaluation (a trial with deferred commits).
   const std::vector<materials::MaterialState>& states() const { return state_; }
   double internal_work() const { return internal_work_; }      // ∫ Σ V P:Ḟ dt [J]

@@ -1,6 +1,7 @@
 #include "meshfree/spg/spg_vtu_writer.h"
 
 #include "base/exceptions.h"
+#include "fem/materials/tensor_tools.h"
 #include "meshfree/bond_loop.h"
 #include "meshfree/particle_output.h"
 
@@ -11,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 
 namespace spinesim::meshfree {
@@ -38,19 +40,20 @@ ParticleSet<dim> SPGVtuWriter<dim>::physical_particles(const SPGSolver<dim>& s,
   const auto& rk = s.shape_functions();
   const auto& bonds = s.bonds();
   const auto& uh = s.physical_displacements();
-  static const char* names[3][3] = {{"stress_xx", "stress_xy", "stress_xz"},
-                                    {"stress_xy", "stress_yy", "stress_yz"},
-                                    {"stress_xz", "stress_yz", "stress_zz"}};
+  // The stress as six components and the von Mises stress [Pa], in 2-D too (plane strain
+  // keeps σ_zz; σ_xz = σ_yz = 0), named as the coupled runs' particle output names them.
+  static const char* const names[6] = {"stress_xx", "stress_yy", "stress_zz",
+                                       "stress_xy", "stress_yz", "stress_xz"};
+  static const unsigned int row[6] = {0, 1, 2, 0, 1, 0}, col[6] = {0, 1, 2, 1, 2, 2};
   for (unsigned int i = 0; i < n; ++i) {
     out.add_particle(p.reference_position(i), p.volume(i));
     out.material_id(i) = p.material_id(i);
   }
   auto& eps = out.add_scalar_field("equivalent_plastic_strain");
-  std::vector<std::vector<double>*> stress(dim * dim, nullptr);
-  for (unsigned int a = 0; a < dim; ++a)
-    for (unsigned int b = a; b < dim; ++b)
-      stress[a * dim + b] = &out.add_scalar_field(names[a][b]);
-  std::vector<double>* mises = dim == 3 ? &out.add_scalar_field("von_mises_stress") : nullptr;
+  std::vector<std::vector<double>*> stress;
+  for (const char* name : names)
+    stress.push_back(&out.add_scalar_field(name));
+  auto& mises = out.add_scalar_field("von_mises_stress");
   for (unsigned int i = 0; i < n; ++i) {
     out.displacement(i) = uh[i];
     // The velocity is the time derivative of u_h = Σ Ψ_J(X^r_I) d_J (+ a constant shift).
@@ -60,19 +63,15 @@ ParticleSet<dim> SPGVtuWriter<dim>::physical_particles(const SPGSolver<dim>& s,
     out.velocity(i) = v;
     out.damage(i) = p.damage(i);
     eps[i] = s.states()[i].equivalent_plastic_strain;
-    const auto& F = s.deformation_gradients()[i];
-    const double J = dealii::determinant(F);
-    const dealii::Tensor<2, dim> sigma =
-        J > 0 ? (1.0 / J) * s.first_piola_stresses()[i] * transpose(F) : dealii::Tensor<2, dim>();
-    for (unsigned int a = 0; a < dim; ++a)
-      for (unsigned int b = a; b < dim; ++b)
-        (*stress[a * dim + b])[i] = sigma[a][b];
-    if (mises) {
-      const double tr = dealii::trace(sigma) / 3.0;
-      dealii::Tensor<2, dim> dev = sigma;
-      for (unsigned int a = 0; a < dim; ++a)
-        dev[a][a] -= tr;
-      (*mises)[i] = std::sqrt(1.5 * dealii::scalar_product(dev, dev));
+    try {
+      const materials::SymTensor2 sigma = s.cauchy_stress(i, p);
+      for (unsigned int c = 0; c < 6; ++c)
+        (*stress[c])[i] = sigma[row[c]][col[c]];
+      mises[i] = materials::von_mises(sigma);
+    } catch (const NumericalFailure&) { // an inverted particle: shown as NaN, not as zero
+      for (unsigned int c = 0; c < 6; ++c)
+        (*stress[c])[i] = std::numeric_limits<double>::quiet_NaN();
+      mises[i] = std::numeric_limits<double>::quiet_NaN();
     }
   }
   return out;

@@ -8,8 +8,8 @@
 // ParticleSet::displacement holds RK coefficients, not displacements, so the written set is a
 // copy at the physical state: position X + u_h, displacement u_h = Σ Ψ_J d_J, velocity
 // Σ Ψ_J v_J, damage, volume, and the scalar fields equivalent_plastic_strain, the Cauchy
-// stress components stress_xx, stress_yy, stress_xy (3-D also zz, yz, xz and von_mises_stress;
-// in plane strain σ_zz is not kept by the solver, so no von Mises stress in 2-D).
+// stress stress_xx, _yy, _zz, _xy, _yz, _xz and von_mises_stress [Pa] (SPGSolver::cauchy_stress;
+// in 2-D the plane-strain σ_zz is included).
 
 #include "meshfree/particle_set.h"
 #include "meshfree/spg/spg_solver.h"

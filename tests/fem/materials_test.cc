@@ -70,7 +70,8 @@ double max_abs(const Tensor4& A) {
   return m;
 }
 
-double von_mises(const SymTensor2& s) {
+// An independent form of the von Mises stress, √(3/2) |dev σ|, to check the library's by.
+double mises_reference(const SymTensor2& s) {
   return std::sqrt(1.5) * dealii::deviator(s).norm();
 }
 
@@ -252,6 +253,41 @@ TEST(NeoHookean, TangentMatchesFiniteDifferences) {
   EXPECT_LT(err, 1e-7 * scale);
 }
 
+// cauchy_stress: a finite-strain law's σ = τ / J = P Fᵀ / J (symmetric to round-off for an
+// isotropic law); a linearised-kinematics law's P is σ itself, so it must not be divided by J
+// again. Checked at a 20 % stretch where the two readings differ by that much.
+TEST(StressMeasures, CauchyStressReadsEachLawsKinematics) {
+  const NeoHookean nh(1e9, 0.45, 1000);
+  Tensor2 F = identity() + diag(0.2, -0.05, 0.0);
+  F[0][1] = 0.1;
+  const Tensor2 P = nh.finite_strain(F, 0, MaterialState()).first_piola;
+  const Tensor2 sigma = (1.0 / determinant(F)) * P * transpose(F);
+  const SymTensor2 s = cauchy_stress(nh, F, P);
+  for (unsigned int i = 0; i < 3; ++i)
+    for (unsigned int j = 0; j < 3; ++j)
+      EXPECT_NEAR(s[i][j], sigma[i][j], 1e-9 * sigma.norm()); // round-off of τ's symmetry
+  const J2Plasticity j2(1e9, 0.3, 1000, 0, IsotropicHardening(1e12, 0));
+  ASSERT_TRUE(j2.linearised_kinematics());
+  const Tensor2 Pj = j2.finite_strain(F, 0, MaterialState()).first_piola;
+  const SymTensor2 sj = cauchy_stress(j2, F, Pj);
+  for (unsigned int i = 0; i < 3; ++i)
+    for (unsigned int j = 0; j < 3; ++j)
+      EXPECT_EQ(sj[i][j], 0.5 * (Pj[i][j] + Pj[j][i]));
+}
+
+// von_mises: |σ| in uniaxial stress, √3 τ in pure shear, 0 under pressure (exact in binary for
+// these values but for the square root's last bit).
+TEST(StressMeasures, VonMisesOfUniaxialShearAndHydrostaticStress) {
+  SymTensor2 uniaxial, shear, pressure;
+  uniaxial[1][1] = -7e6;
+  shear[0][2] = 2e6;
+  pressure = -3e6 * dealii::unit_symmetric_tensor<3>();
+  EXPECT_NEAR(von_mises(uniaxial), 7e6, 1e-9 * 7e6);
+  EXPECT_NEAR(von_mises(shear), std::sqrt(3.0) * 2e6, 1e-9 * 2e6);
+  EXPECT_NEAR(von_mises(pressure), 0.0, 1e-9 * 3e6);
+  EXPECT_NEAR(von_mises(uniaxial + shear), mises_reference(uniaxial + shear), 1e-9 * 7e6);
+}
+
 TEST(NeoHookean, SmallStrainLimitIsLinearElasticity) {
   const double E = 2e9, nu = 0.3;
   const NeoHookean nh(E, nu, 1000);
@@ -345,7 +381,8 @@ TEST(J2Plasticity, ConsistentTangentMatchesFiniteDifferences) {
     EXPECT_GT((rp.tangent - isotropic_elasticity(lame_lambda(E, nu), shear_modulus(E, nu))).norm(),
               0.1 * E);
     // Consistency: the returned stress lies on the yield surface of the new state.
-    EXPECT_NEAR(von_mises(rp.stress), hardening.flow_stress(rp.state.equivalent_plastic_strain),
+    EXPECT_NEAR(mises_reference(rp.stress),
+                hardening.flow_stress(rp.state.equivalent_plastic_strain),
                 1e-9 * hardening.yield_stress());
   }
 }
@@ -452,7 +489,7 @@ TEST(J2FiniteStrain, TangentMatchesFiniteDifferences) {
     EXPECT_NEAR(dealii::determinant(rp.state.elastic_left_cauchy_green), 1.0, 1e-12);
     // Kirchhoff Mises stress on the updated yield surface.
     const Tensor2 tau = rp.first_piola * dealii::transpose(F_plastic);
-    EXPECT_NEAR(von_mises(dealii::symmetrize(tau)),
+    EXPECT_NEAR(mises_reference(dealii::symmetrize(tau)),
                 hardening.flow_stress(rp.state.equivalent_plastic_strain),
                 1e-9 * hardening.yield_stress());
   }
@@ -590,7 +627,7 @@ TEST(J2FiniteStrain, PlaneStrainExtensionMatchesAbaqusBenchmark) {
       const unsigned int c = step == n ? 1 : 0;
       const double J = lx * ly;
       const Tensor2 tau = r.first_piola * dealii::transpose(diag(lx, ly, 1.0));
-      const double q_tau = von_mises(dealii::symmetrize(tau));
+      const double q_tau = mises_reference(dealii::symmetrize(tau));
       const double flow = h.flow_stress(state.equivalent_plastic_strain);
       std::cout.precision(8);
       std::cout << "[ measured ] lambda_x = " << lx << ": lambda_y = " << ly
@@ -786,7 +823,7 @@ TEST(J2Damage, ConsistentTangentMatchesFiniteDifferencesWhileSoftening) {
             asym = std::max(asym, std::abs(C[i][j][k][l] - C[k][l][i][j]));
     EXPECT_GT(asym, 1e-3 * scale);
     // The stress is (1 − D) times the effective stress on the yield surface.
-    EXPECT_NEAR(von_mises(r.stress),
+    EXPECT_NEAR(mises_reference(r.stress),
                 (1 - D) * hardening.flow_stress(r.state.equivalent_plastic_strain),
                 1e-9 * hardening.yield_stress());
   }

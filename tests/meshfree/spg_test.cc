@@ -478,5 +478,53 @@ TEST(SpgVtuWriter, WritesParsableAtomicFiles3D) {
   check_vtu_output<3>();
 }
 
+// The written stress of a small-strain J2 law is its σ (the law's P under linearised
+// kinematics), not P Fᵀ / J: a uniform uniaxial strain e = 3 % beyond yield of a perfectly
+// plastic law has the closed form σ_xx = K e + ⅔ σ_y, σ_yy = σ_zz = K e − ⅓ σ_y, von Mises σ_y
+// (one radial return is exact for a straight strain path). RK shape functions reproduce the
+// linear field exactly, so every particle has that F to round-off. Reading σ_yy as P_yy / J
+// would be 3 % low; in 2-D σ_zz comes from the plane-strain law.
+template <int dim>
+void check_vtu_stress_of_small_strain_law() {
+  const double h = 0.1, e = 0.03, E = 1e9, nu = 0.3, sy = 5e6;
+  auto p = jittered_box<dim>(dim == 2 ? 5 : 3, h, 0.2);
+  materials::LawParameters lp;
+  lp.model = "j2_plasticity";
+  lp.youngs_modulus = E;
+  lp.poisson_ratio = nu;
+  lp.density = 1000;
+  lp.yield_stress = sy;
+  lp.hardening_modulus = 0;
+  const auto law = materials::create_law(lp);
+  SPGSolver<dim> spg(SpgParameters(), *law, p, h);
+  for (unsigned int i = 0; i < p.size(); ++i)
+    p.displacement(i)[0] = e * p.reference_position(i)[0];
+  spg.compute_forces(p);
+  const auto out = SPGVtuWriter<dim>::physical_particles(spg, p);
+  const double K = E / (3 * (1 - 2 * nu));
+  const double sxx = K * e + 2.0 / 3.0 * sy, syy = K * e - sy / 3.0;
+  const auto& xx = out.scalar_field("stress_xx");
+  const auto& yy = out.scalar_field("stress_yy");
+  const auto& zz = out.scalar_field("stress_zz");
+  const auto& xy = out.scalar_field("stress_xy");
+  const auto& vm = out.scalar_field("von_mises_stress");
+  ASSERT_EQ(vm.size(), p.size());
+  for (unsigned int i = 0; i < p.size(); ++i) {
+    // 1e-8 relative: round-off of the RK consistency conditions on a jittered cloud.
+    EXPECT_NEAR(xx[i], sxx, 1e-8 * sxx) << "particle " << i;
+    EXPECT_NEAR(yy[i], syy, 1e-8 * sxx) << "particle " << i;
+    EXPECT_NEAR(zz[i], syy, 1e-8 * sxx) << "particle " << i;
+    EXPECT_NEAR(xy[i], 0.0, 1e-8 * sxx) << "particle " << i;
+    EXPECT_NEAR(vm[i], sy, 1e-6 * sy) << "particle " << i;
+  }
+}
+
+TEST(SpgVtuWriter, SmallStrainLawStressIsSigmaNotPFtOverJ2D) {
+  check_vtu_stress_of_small_strain_law<2>();
+}
+TEST(SpgVtuWriter, SmallStrainLawStressIsSigmaNotPFtOverJ3D) {
+  check_vtu_stress_of_small_strain_law<3>();
+}
+
 } // namespace
 } // namespace spinesim::meshfree
