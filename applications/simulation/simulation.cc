@@ -335,6 +335,13 @@ void Simulation<dim>::build(RunContext& ctx) {
       log_coupling_messages(ctx);
     }
     coupled_->set_energy_account(sim_.energy_account);
+    if (coupling_prm_.splice == "energy" && coupled_->particle_law_yields())
+      // The correction C is the intact *elastic* band's (docs/coupling.md, the energy splice
+      // and plastic flow): once the band yields it removes more than the band counts twice.
+      ctx.warn("Coupling/Splice = energy with a yielding law: the splice's consistency "
+               "correction is linear elastic and over-corrects the overlap band once it yields "
+               "(a perfectly plastic block lost 5 % of its reaction at its first conversion and "
+               "collapsed in two more steps); use Coupling/Splice = overlap for plastic zones");
   }
   if (coupled_ && !ctx.restarting())
     warn_outside_body(ctx);

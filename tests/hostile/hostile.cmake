@@ -231,6 +231,11 @@ spinesim_add_hostile_test(warn_regions_outside_body EXIT 0 ARGS check ${_h}/regi
   MATCH "warning: Coupling/Initial region lies outside the body.*warning: Coupling/Crack 1: corner 2 lies outside")
 spinesim_add_hostile_test(warn_single_particle EXIT 0
   ARGS check ${PROJECT_SOURCE_DIR}/tests/cli/one_particle.prm MATCH "warning: the particle zone holds a single particle")
+# The energy splice's correction is elastic: with a yielding law it over-corrects (docs/coupling.md).
+spinesim_add_hostile_test(warn_energy_splice_with_yielding_law EXIT 0
+  ARGS check ${PROJECT_SOURCE_DIR}/applications/validation/coupling_plastic_limit_2d.prm
+       --set "Coupling/Splice=energy"
+  MATCH "warning: Coupling/Splice = energy with a yielding law")
 spinesim_add_hostile_test(include_device ARGS check ${_h}/include_device.prm
   MATCH "include_device.prm:3.*cannot include /dev/zero")
 spinesim_add_hostile_test(scene_is_a_device ARGS check /dev/zero MATCH "/dev/zero.*not a scene file")
