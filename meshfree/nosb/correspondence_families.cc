@@ -35,8 +35,6 @@ template <int dim>
 std::vector<unsigned int> CorrespondenceFamilies<dim>::build(const ParticleSet<dim>& particles,
                                                              const BondList<dim>& bonds,
                                                              const Options& options) {
-  using Vec = dealii::Tensor<1, dim>;
-  using Mat = dealii::Tensor<2, dim>;
   const unsigned int n = particles.size();
   const auto& V = particles.volumes();
   std::vector<std::uint8_t> was_failed = failed_;
@@ -46,46 +44,65 @@ std::vector<unsigned int> CorrespondenceFamilies<dim>::build(const ParticleSet<d
   centre_.clear();
   weight_.clear();
   history_.clear();
-  offsets_.assign(1, 0);
-  node_.clear();
-  gradient_.clear();
+  mask_begin_.clear();
+  inverse_shape_.clear();
+  mask_.clear();
+  family_begin_.assign(n + 1, 0);
   fallbacks_ = 0;
 
-  auto bond_weight = [&](std::size_t k) {
-    return bonds.influence[k] * bonds.volume_factor(k) * V[bonds.neighbor[k]];
-  };
-  // Adds the family of centre i over the bond subset `members` with inverse shape tensor Kinv.
+  // The bonds as the families will read them.
+  bond_offsets_.assign(bonds.offsets.begin(), bonds.offsets.begin() + n + 1);
+  bond_node_ = bonds.neighbor;
+  bond_centre_.resize(bonds.n_bonds());
+  for (unsigned int i = 0; i < n; ++i)
+    std::fill(bond_centre_.begin() + bonds.begin(i), bond_centre_.begin() + bonds.end(i), i);
+  bond_xi_ = bonds.xi;
+  bond_weight_.resize(bonds.n_bonds());
+  for (std::size_t k = 0; k < bonds.n_bonds(); ++k)
+    bond_weight_[k] = bonds.influence[k] * bonds.volume_factor(k) * V[bonds.neighbor[k]];
+  // Their transpose: per particle, the bonds that end on it, ascending.
+  incoming_offsets_.assign(n + 1, 0);
+  for (std::size_t k = 0; k < bond_node_.size(); ++k)
+    ++incoming_offsets_[bond_node_[k] + 1];
+  for (unsigned int m = 0; m < n; ++m)
+    incoming_offsets_[m + 1] += incoming_offsets_[m];
+  incoming_.resize(bond_node_.size());
+  {
+    std::vector<std::size_t> next(incoming_offsets_.begin(), incoming_offsets_.end() - 1);
+    for (std::size_t k = 0; k < bond_node_.size(); ++k)
+      incoming_[next[bond_node_[k]]++] = k;
+  }
+
+  // Adds a family of centre i: weight w, history index, K⁻¹ and the slots of its members.
+  std::vector<std::uint64_t> words;
   auto add_family = [&](unsigned int i, double w, std::size_t history,
-                        const std::vector<std::size_t>& members, const Mat& Kinv) {
+                        const std::vector<std::size_t>& slots, const Mat& Kinv) {
+    const std::size_t n_words = (bonds.end(i) - bonds.begin(i) + 63) / 64;
+    words.assign(n_words, 0);
+    for (const std::size_t s : slots)
+      words[s / 64] |= std::uint64_t(1) << (s % 64);
     centre_.push_back(i);
     weight_.push_back(w);
     history_.push_back(history);
-    const std::size_t centre_slot = node_.size();
-    node_.push_back(i);
-    gradient_.emplace_back();
-    Vec sum;
-    for (const std::size_t k : members) {
-      const Vec g = bond_weight(k) * (Kinv * bonds.xi[k]);
-      node_.push_back(bonds.neighbor[k]);
-      gradient_.push_back(g);
-      sum += g;
-    }
-    gradient_[centre_slot] = -sum;
-    offsets_.push_back(node_.size());
+    inverse_shape_.push_back(Kinv);
+    mask_begin_.push_back(mask_.size());
+    mask_.insert(mask_.end(), words.begin(), words.end());
   };
 
-  std::vector<std::size_t> members, lens;
+  std::vector<std::size_t> members, lens; // slots of i's bonds
   std::vector<unsigned int> newly_failed;
   for (unsigned int i = 0; i < n; ++i) {
+    family_begin_[i] = static_cast<unsigned int>(centre_.size());
+    const std::size_t b0 = bonds.begin(i);
     members.clear();
     Mat K;
     double all_weight = 0;
     for_each_bond_of(bonds, i, [&](std::size_t k, unsigned int) {
       if (bonds.broken[k])
         return;
-      members.push_back(k);
-      K += bond_weight(k) * dealii::outer_product(bonds.xi[k], bonds.xi[k]);
-      all_weight += bond_weight(k);
+      members.push_back(k - b0);
+      K += bond_weight_[k] * dealii::outer_product(bonds.xi[k], bonds.xi[k]);
+      all_weight += bond_weight_[k];
     });
     condition_[i] =
         members.size() >= dim ? condition_number(K) : std::numeric_limits<double>::infinity();
@@ -100,15 +117,18 @@ std::vector<unsigned int> CorrespondenceFamilies<dim>::build(const ParticleSet<d
       add_family(i, V[i], i, members, Kinv);
       continue;
     }
-    for (const std::size_t kb : members) {
+    for (const std::size_t sb : members) {
+      const std::size_t kb = b0 + sb;
       lens.clear();
       Mat Kb;
-      for (const std::size_t k : members)
+      for (const std::size_t s : members) {
+        const std::size_t k = b0 + s;
         if ((bonds.xi[k] - bonds.xi[kb]).norm() <= bonds.horizon) {
-          lens.push_back(k);
-          Kb += bond_weight(k) * dealii::outer_product(bonds.xi[k], bonds.xi[k]);
+          lens.push_back(s);
+          Kb += bond_weight_[k] * dealii::outer_product(bonds.xi[k], bonds.xi[k]);
         }
-      const double w = V[i] * bond_weight(kb) / all_weight;
+      }
+      const double w = V[i] * bond_weight_[kb] / all_weight;
       if (lens.size() >= dim && condition_number(Kb) <= options.max_condition_number)
         add_family(i, w, kb, lens, dealii::invert(Kb));
       else {
@@ -117,6 +137,7 @@ std::vector<unsigned int> CorrespondenceFamilies<dim>::build(const ParticleSet<d
       }
     }
   }
+  family_begin_[n] = static_cast<unsigned int>(centre_.size());
   return newly_failed;
 }
 
@@ -126,12 +147,80 @@ unsigned int CorrespondenceFamilies<dim>::n_failed() const {
 }
 
 template <int dim>
-dealii::Tensor<2, dim> CorrespondenceFamilies<dim>::deformation_gradient(
-    unsigned int e, const std::vector<dealii::Tensor<1, dim>>& u) const {
-  dealii::Tensor<2, dim> F = dealii::unit_symmetric_tensor<dim>();
-  for (std::size_t q = begin(e); q < end(e); ++q)
-    F += dealii::outer_product(u[node_[q]], gradient_[q]);
+void CorrespondenceFamilies<dim>::expand(unsigned int e, std::vector<unsigned int>& nodes,
+                                         std::vector<Vec>& gradients) const {
+  const unsigned int i = centre_[e];
+  const std::size_t b0 = bond_offsets_[i], nb = bond_offsets_[i + 1] - b0;
+  nodes.assign(1, i);
+  gradients.assign(1, Vec());
+  Vec sum;
+  for_each_member(e, nb, [&](std::size_t s) {
+    const Vec g = bond_weight_[b0 + s] * (inverse_shape_[e] * bond_xi_[b0 + s]);
+    nodes.push_back(bond_node_[b0 + s]);
+    gradients.push_back(g);
+    sum += g;
+  });
+  gradients[0] = -sum;
+}
+
+template <int dim>
+dealii::Tensor<2, dim>
+CorrespondenceFamilies<dim>::deformation_gradient(unsigned int e, const std::vector<Vec>& u) const {
+  // F = I + Σ_n (u_n − u_c) ⊗ G_n = I + [Σ_n ω V_n (u_n − u_c) ⊗ ξ_n] K⁻ᵀ.
+  const unsigned int i = centre_[e];
+  const std::size_t b0 = bond_offsets_[i], nb = bond_offsets_[i + 1] - b0;
+  Mat A;
+  for_each_member(e, nb, [&](std::size_t s) {
+    const Vec eta = u[bond_node_[b0 + s]] - u[i];
+    A += dealii::outer_product(bond_weight_[b0 + s] * eta, bond_xi_[b0 + s]);
+  });
+  Mat F = A * dealii::transpose(inverse_shape_[e]);
+  for (unsigned int d = 0; d < dim; ++d)
+    F[d][d] += 1.0;
   return F;
+}
+
+template <int dim>
+void CorrespondenceFamilies<dim>::gather_forces(const std::vector<Mat>& P, std::vector<Vec>& f,
+                                                long parallel_threshold) const {
+  const long n = static_cast<long>(family_begin_.size()) - 1;
+  bond_force_.resize(bond_node_.size());
+  // Per bond k = i→n: t_k = ω_k V_n [Σ_e w_e P_e K_e⁻¹] ξ_k over the families e of i that hold
+  // it, so that −w_e P_e G_n sums to −t_k on n and, with G_c = −Σ G_n, to +Σ_k t_k on i.
+  parallel_for_rethrow(n, parallel_threshold, [&](long i) {
+    const std::size_t b0 = bond_offsets_[i], nb = bond_offsets_[i + 1] - b0;
+    thread_local std::vector<Mat> sum;
+    sum.assign(nb, Mat());
+    for (unsigned int e = family_begin_[i]; e < family_begin_[i + 1]; ++e) {
+      const Mat q = weight_[e] * (P[e] * inverse_shape_[e]);
+      for_each_member(e, nb, [&](std::size_t slot) { sum[slot] += q; });
+    }
+    for (std::size_t s = 0; s < nb; ++s)
+      bond_force_[b0 + s] = bond_weight_[b0 + s] * (sum[s] * bond_xi_[b0 + s]);
+  });
+  // f_m = Σ of its own bonds' t − Σ of the t of the bonds ending on it, in bond order.
+  parallel_for_rethrow(n, parallel_threshold, [&](long m) {
+    Vec fm;
+    for (std::size_t k = bond_offsets_[m]; k < bond_offsets_[m + 1]; ++k)
+      fm += bond_force_[k];
+    for (std::size_t t = incoming_offsets_[m]; t < incoming_offsets_[m + 1]; ++t)
+      fm -= bond_force_[incoming_[t]];
+    f[m] = fm;
+  });
+}
+
+template <int dim>
+std::size_t CorrespondenceFamilies<dim>::memory_bytes() const {
+  return (bond_offsets_.capacity() + incoming_offsets_.capacity() + incoming_.capacity() +
+          history_.capacity() + mask_begin_.capacity()) *
+             sizeof(std::size_t) +
+         (bond_node_.capacity() + bond_centre_.capacity() + centre_.capacity() +
+          family_begin_.capacity()) *
+             sizeof(unsigned int) +
+         bond_xi_.capacity() * sizeof(Vec) +
+         (bond_weight_.capacity() + weight_.capacity() + condition_.capacity()) * sizeof(double) +
+         inverse_shape_.capacity() * sizeof(Mat) + bond_force_.capacity() * sizeof(Vec) +
+         mask_.capacity() * sizeof(std::uint64_t) + failed_.capacity();
 }
 
 template class CorrespondenceFamilies<2>;

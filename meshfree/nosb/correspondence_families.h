@@ -20,6 +20,13 @@
 // ω above includes the partial-volume factor β of the bond list. A particle whose own shape
 // tensor K_i has fewer than `dim` intact bonds or a condition number above the limit is
 // *failed*: it gets no family (no stress), never a division by a singular K.
+//
+// Storage. Every member of a family is a bond of its centre, so a family is stored as K⁻¹ and
+// a bit mask over its centre's bonds; the gradients are formed when used (G_n = ω V_n K⁻¹ ξ).
+// A bond-associated family holds about half of its centre's ~10² bonds in 3-D, so storing its
+// nodes and gradients took ~70 B × 10⁴ per particle; the masks take ~2 % of that. The forces
+// are gathered per particle (its own families, then the families of the particles bonded to
+// it that hold it), in a fixed order: the same sums on any number of threads.
 
 #include "meshfree/bond_list.h"
 #include "meshfree/particle_set.h"
@@ -34,6 +41,8 @@ namespace spinesim::meshfree {
 template <int dim>
 class CorrespondenceFamilies {
  public:
+  using Vec = dealii::Tensor<1, dim>;
+  using Mat = dealii::Tensor<2, dim>;
   enum class Kind { particle, bond_associated };
 
   struct Options {
@@ -51,10 +60,20 @@ class CorrespondenceFamilies {
   double weight(unsigned int e) const { return weight_[e]; }
   // Particle index (particle families) or bond index (bond-associated) for material history.
   std::size_t history_index(unsigned int e) const { return history_[e]; }
-  std::size_t begin(unsigned int e) const { return offsets_[e]; }
-  std::size_t end(unsigned int e) const { return offsets_[e + 1]; }
-  unsigned int node(std::size_t q) const { return node_[q]; }
-  const dealii::Tensor<1, dim>& gradient(std::size_t q) const { return gradient_[q]; }
+  // The families of centre i are first_family(i) .. first_family(i + 1) − 1.
+  unsigned int first_family(unsigned int i) const { return family_begin_[i]; }
+
+  // Family e's nodes (the centre first, then its members in bond order) and their gradients
+  // G_m [1/m], into `nodes` and `gradients` (resized).
+  void expand(unsigned int e, std::vector<unsigned int>& nodes, std::vector<Vec>& gradients) const;
+
+  // F_e from the displacements.
+  Mat deformation_gradient(unsigned int e, const std::vector<Vec>& u) const;
+
+  // f_m = −Σ_e w_e P_e G_m for every particle m (f sized to the particles), from the families'
+  // stresses P (one per family): gathered per particle in a fixed order, threaded above
+  // `parallel_threshold` particles.
+  void gather_forces(const std::vector<Mat>& P, std::vector<Vec>& f, long parallel_threshold) const;
 
   bool failed(unsigned int i) const { return !failed_.empty() && failed_[i]; }
   const std::vector<std::uint8_t>& failed_flags() const { return failed_; }
@@ -64,24 +83,34 @@ class CorrespondenceFamilies {
   // Condition number of each particle's K_i (infinity when singular) from the last build.
   const std::vector<double>& condition_numbers() const { return condition_; }
   // Bytes held by the arrays (capacities).
-  std::size_t memory_bytes() const {
-    return (centre_.capacity() + node_.capacity()) * sizeof(unsigned int) +
-           (weight_.capacity() + condition_.capacity()) * sizeof(double) +
-           (history_.capacity() + offsets_.capacity()) * sizeof(std::size_t) +
-           gradient_.capacity() * sizeof(dealii::Tensor<1, dim>) + failed_.capacity();
-  }
-
-  // F_e from the displacements.
-  dealii::Tensor<2, dim> deformation_gradient(unsigned int e,
-                                              const std::vector<dealii::Tensor<1, dim>>& u) const;
+  std::size_t memory_bytes() const;
 
  private:
-  std::vector<unsigned int> centre_;
+  // Calls visit(slot) for the member bonds of family e (its centre has n_slots bonds), in
+  // ascending order.
+  template <class Visit>
+  void for_each_member(unsigned int e, std::size_t n_slots, Visit&& visit) const {
+    const std::uint64_t* words = mask_.data() + mask_begin_[e];
+    for (std::size_t w = 0; w < (n_slots + 63) / 64; ++w)
+      for (std::uint64_t bits = words[w]; bits != 0; bits &= bits - 1)
+        visit(64 * w + static_cast<std::size_t>(__builtin_ctzll(bits)));
+  }
+
+  // The centres' bonds as built: centre, partner, ξ and ω V_partner, in the bond list's order.
+  std::vector<std::size_t> bond_offsets_;
+  std::vector<unsigned int> bond_centre_, bond_node_;
+  std::vector<Vec> bond_xi_;
+  std::vector<double> bond_weight_;
+  // Per particle m, the bonds i→m (indices into the arrays above), ascending.
+  std::vector<std::size_t> incoming_offsets_, incoming_;
+  // Per family: centre, weight, history index, K⁻¹ and the first word of its member mask.
+  std::vector<unsigned int> centre_, family_begin_;
   std::vector<double> weight_;
-  std::vector<std::size_t> history_;
-  std::vector<std::size_t> offsets_{0};
-  std::vector<unsigned int> node_;
-  std::vector<dealii::Tensor<1, dim>> gradient_;
+  std::vector<std::size_t> history_, mask_begin_;
+  std::vector<Mat> inverse_shape_;
+  std::vector<std::uint64_t> mask_;
+  // Per bond, its share t_k of the last gather_forces (reused storage).
+  mutable std::vector<Vec> bond_force_;
   std::vector<std::uint8_t> failed_;
   std::vector<double> condition_;
   std::size_t fallbacks_ = 0;

@@ -179,32 +179,6 @@ void NosbPD<dim>::update_families(const ParticleSet<dim>& particles, const BondL
 }
 
 template <int dim>
-void NosbPD<dim>::build_gather_index(unsigned int n_particles) {
-  const auto& fam = families();
-  const std::size_t n_entries = fam.n_families() ? fam.end(fam.n_families() - 1) : 0;
-  entry_family_.assign(n_entries, 0);
-  gather_offsets_.assign(n_particles + 1, 0);
-  for (unsigned int e = 0; e < fam.n_families(); ++e)
-    for (std::size_t q = fam.begin(e); q < fam.end(e); ++q) {
-      entry_family_[q] = e;
-      ++gather_offsets_[fam.node(q) + 1];
-    }
-  for (unsigned int m = 0; m < n_particles; ++m)
-    gather_offsets_[m + 1] += gather_offsets_[m];
-  gather_entries_.assign(n_entries, 0);
-  std::vector<std::size_t> next(gather_offsets_.begin(), gather_offsets_.end() - 1);
-  for (std::size_t q = 0; q < n_entries; ++q) // ascending q: the scatter's order
-    gather_entries_[next[fam.node(q)]++] = q;
-  gather_family_.resize(n_entries);
-  gather_gradient_.resize(n_entries);
-  for (std::size_t k = 0; k < n_entries; ++k) {
-    gather_family_[k] = entry_family_[gather_entries_[k]];
-    gather_gradient_[k] = fam.gradient(gather_entries_[k]);
-  }
-  gather_version_ = families_version_;
-}
-
-template <int dim>
 void NosbPD<dim>::log_failed(const ParticleSet<dim>& particles,
                              const std::vector<unsigned int>& newly) {
   for (const unsigned int i : newly) {
@@ -313,19 +287,9 @@ void NosbPD<dim>::compute_forces(ParticleSet<dim>& particles, const BondList<dim
       P[e] += penalty_part(fam.centre(e), F, particles, bonds).stress;
   });
   // f_m = −Σ_e w_e P_e G_m: each family's forces sum to zero (Σ_m G_m = 0). Gathered per
-  // particle over its family entries in ascending order: the sums of a scatter over families,
-  // bit for bit, on any number of threads.
-  if (gather_version_ != families_version_)
-    build_gather_index(particles.size());
-  const long n_particles = particles.size();
-  parallel_for_rethrow(n_particles, parallel_particle_threshold, [&](long m) {
-    Vec fm;
-    for (std::size_t k = gather_offsets_[m]; k < gather_offsets_[m + 1]; ++k) {
-      const unsigned int e = gather_family_[k];
-      fm -= fam.weight(e) * (P[e] * gather_gradient_[k]);
-    }
-    f[m] = fm;
-  });
+  // particle in a fixed order (CorrespondenceFamilies::gather_forces): the same sums on any
+  // number of threads.
+  fam.gather_forces(P, f, parallel_particle_threshold);
 
   if (penalty) {
     // The pair part of −∂E_hg/∂u (the part through F_i is in P above).
@@ -518,10 +482,11 @@ void NosbPD<dim>::assemble_tangent(const ParticleSet<dim>& particles, const Bond
   if (pattern.empty() || pattern_version_ != families_version_ || pattern.n_rows() != n * dim) {
     dealii::DynamicSparsityPattern nodes(n, n);
     std::vector<dealii::types::global_dof_index> list;
+    std::vector<unsigned int> family_nodes;
+    std::vector<Vec> family_gradients;
     auto add_family = [&](const CorrespondenceFamilies<dim>& F, unsigned int e) {
-      list.clear();
-      for (std::size_t q = F.begin(e); q < F.end(e); ++q)
-        list.push_back(F.node(q));
+      F.expand(e, family_nodes, family_gradients);
+      list.assign(family_nodes.begin(), family_nodes.end());
       std::sort(list.begin(), list.end());
       for (const auto m : list)
         nodes.add_entries(m, list.begin(), list.end(), true);
@@ -556,7 +521,11 @@ void NosbPD<dim>::assemble_tangent(const ParticleSet<dim>& particles, const Bond
   // O(family size²) a family, like its stress block.
   std::vector<int> local(penalty ? n : 0, -1); // node -> position in the current family
   std::vector<Vec> b_of;
+  std::vector<unsigned int> node;
+  std::vector<Vec> G;
   for (unsigned int e = 0; e < fam.n_families(); ++e) {
+    fam.expand(e, node, G);
+    const std::size_t n_nodes = node.size();
     const Response r = evaluate(e, fam.deformation_gradient(e, u), particles, nullptr, true);
     const double w = fam.weight(e);
     const unsigned int i = fam.centre(e);
@@ -564,9 +533,9 @@ void NosbPD<dim>::assemble_tangent(const ParticleSet<dim>& particles, const Bond
     dealii::Tensor<2, dim> M;
     if (penalty) {
       sV = penalty_kept(i) * V[i];
-      b_of.assign(fam.end(e) - fam.begin(e), Vec());
-      for (std::size_t q = fam.begin(e); q < fam.end(e); ++q)
-        local[fam.node(q)] = static_cast<int>(q - fam.begin(e));
+      b_of.assign(n_nodes, Vec());
+      for (std::size_t q = 0; q < n_nodes; ++q)
+        local[node[q]] = static_cast<int>(q);
       for_each_penalty_bond(bonds, i, Gc, [&](std::size_t k, unsigned int j, double kappa) {
         const double kv = kappa * V[j];
         const Vec& xi = bonds.xi[k];
@@ -579,23 +548,22 @@ void NosbPD<dim>::assemble_tangent(const ParticleSet<dim>& particles, const Bond
             matrix.add(row * dim + d, col * dim + d, sign * sV * kv);
       });
     }
-    for (std::size_t qm = fam.begin(e); qm < fam.end(e); ++qm) {
+    for (std::size_t qm = 0; qm < n_nodes; ++qm) {
       // T[a][b][L] = w Σ_J A_aJbL G_m[J]
       dealii::Tensor<3, dim> T;
-      const Vec& Gm = fam.gradient(qm);
+      const Vec& Gm = G[qm];
       for (unsigned int a = 0; a < dim; ++a)
         for (unsigned int J = 0; J < dim; ++J)
           for (unsigned int b = 0; b < dim; ++b)
             for (unsigned int L = 0; L < dim; ++L)
               T[a][b][L] += w * r.A[a][J][b][L] * Gm[J];
-      const unsigned int m = fam.node(qm);
-      const Vec bm = penalty ? b_of[qm - fam.begin(e)] : Vec();
+      const unsigned int m = node[qm];
+      const Vec bm = penalty ? b_of[qm] : Vec();
       const Vec MGm = M * Gm;
-      for (std::size_t qp = fam.begin(e); qp < fam.end(e); ++qp) {
-        const unsigned int p = fam.node(qp);
-        const Vec& Gp = fam.gradient(qp);
-        const double spring =
-            penalty ? sV * (MGm * Gp - Gp * bm - Gm * b_of[qp - fam.begin(e)]) : 0.0;
+      for (std::size_t qp = 0; qp < n_nodes; ++qp) {
+        const unsigned int p = node[qp];
+        const Vec& Gp = G[qp];
+        const double spring = penalty ? sV * (MGm * Gp - Gp * bm - Gm * b_of[qp]) : 0.0;
         for (unsigned int b = 0; b < dim; ++b)
           cols[b] = p * dim + b;
         for (unsigned int a = 0; a < dim; ++a) {
@@ -607,8 +575,8 @@ void NosbPD<dim>::assemble_tangent(const ParticleSet<dim>& particles, const Bond
       }
     }
     if (penalty)
-      for (std::size_t q = fam.begin(e); q < fam.end(e); ++q)
-        local[fam.node(q)] = -1;
+      for (const unsigned int m : node)
+        local[m] = -1;
   }
 }
 
@@ -638,10 +606,13 @@ std::vector<double> NosbPD<dim>::stiffness_row_bound(const ParticleSet<dim>& par
   std::vector<dealii::Tensor<2, dim>> B(n_fam);
   parallel_for_rethrow(n_fam, parallel_particle_threshold, [&](long e) {
     const Response r = evaluate(e, fam.deformation_gradient(e, u), particles, nullptr, true);
+    std::vector<unsigned int> node;
+    std::vector<dealii::Tensor<1, dim>> G;
+    fam.expand(e, node, G);
     dealii::Tensor<1, dim> g;
-    for (std::size_t q = fam.begin(e); q < fam.end(e); ++q)
+    for (const auto& Gq : G)
       for (unsigned int L = 0; L < dim; ++L)
-        g[L] += std::abs(fam.gradient(q)[L]);
+        g[L] += std::abs(Gq[L]);
     for (unsigned int a = 0; a < dim; ++a)
       for (unsigned int J = 0; J < dim; ++J)
         for (unsigned int b = 0; b < dim; ++b)
@@ -649,14 +620,15 @@ std::vector<double> NosbPD<dim>::stiffness_row_bound(const ParticleSet<dim>& par
             B[e][a][J] += std::abs(r.A[a][J][b][L]) * g[L];
   });
   std::vector<dealii::Tensor<1, dim>> rows(particles.size());
+  std::vector<unsigned int> node;
+  std::vector<dealii::Tensor<1, dim>> G;
   for (long e = 0; e < n_fam; ++e) {
     const double w = fam.weight(e);
-    for (std::size_t q = fam.begin(e); q < fam.end(e); ++q) {
-      const auto& G = fam.gradient(q);
+    fam.expand(e, node, G);
+    for (std::size_t q = 0; q < node.size(); ++q)
       for (unsigned int a = 0; a < dim; ++a)
         for (unsigned int J = 0; J < dim; ++J)
-          rows[fam.node(q)][a] += w * std::abs(G[J]) * B[e][a][J];
-    }
+          rows[node[q]][a] += w * std::abs(G[q][J]) * B[e][a][J];
   }
   std::vector<double> R(particles.size(), 0.0);
   for (unsigned int i = 0; i < R.size(); ++i)
@@ -672,9 +644,10 @@ std::vector<double> NosbPD<dim>::stiffness_row_bound(const ParticleSet<dim>& par
     const double Gc = penalty_coefficient();
     for (unsigned int e = 0; e < pfam.n_families(); ++e) {
       const unsigned int i = pfam.centre(e);
+      pfam.expand(e, node, G);
       double gsum = 0;
-      for (std::size_t q = pfam.begin(e); q < pfam.end(e); ++q)
-        gsum += pfam.gradient(q).norm();
+      for (const auto& Gq : G)
+        gsum += Gq.norm();
       const double sV = penalty_kept(i) * V[i];
       double A = 0, B = 0;
       for_each_penalty_bond(bonds, i, Gc, [&](std::size_t k, unsigned int j, double kappa) {
@@ -684,8 +657,8 @@ std::vector<double> NosbPD<dim>::stiffness_row_bound(const ParticleSet<dim>& par
         R[j] += sV * kvs;
       });
       R[i] += sV * A;
-      for (std::size_t q = pfam.begin(e); q < pfam.end(e); ++q)
-        R[pfam.node(q)] += sV * pfam.gradient(q).norm() * B;
+      for (std::size_t q = 0; q < node.size(); ++q)
+        R[node[q]] += sV * G[q].norm() * B;
     }
   }
   return R;

@@ -272,11 +272,7 @@ class NosbPD {
            (F_particle_.capacity() + family_stress_.capacity()) * sizeof(dealii::Tensor<2, dim>) +
            (committed_.capacity() + trial_.capacity()) * sizeof(materials::MaterialState) +
            history_keys_.capacity() * sizeof(std::pair<unsigned int, unsigned int>) +
-           (particle_history_begin_.capacity() + gather_offsets_.capacity() +
-            gather_entries_.capacity()) *
-               sizeof(std::size_t) +
-           (entry_family_.capacity() + gather_family_.capacity()) * sizeof(unsigned int) +
-           gather_gradient_.capacity() * sizeof(dealii::Tensor<1, dim>) + driven_.capacity() +
+           particle_history_begin_.capacity() * sizeof(std::size_t) + driven_.capacity() +
            one_sided_bonds_.capacity() * sizeof(std::pair<unsigned int, std::size_t>) +
            (modulus_m_.capacity() + c_m_.capacity() + s0_m_.capacity() + c_bond_.capacity()) *
                sizeof(double);
@@ -360,15 +356,6 @@ class NosbPD {
   std::vector<double> bond_plastic_strain(const BondList<dim>& bonds);
   std::vector<std::string> messages_;
   unsigned long families_version_ = 0, pattern_version_ = ~0ul;
-  // Transpose of the families' node lists for the force gather: per particle, the entries q
-  // with node(q) = m in ascending order (CSR), and each entry's family. The gather reads each
-  // entry's family and gradient G_q from copies in gather order (gather_family_,
-  // gather_gradient_), in sequence rather than scattered over the families' arrays.
-  std::vector<std::size_t> gather_offsets_, gather_entries_;
-  std::vector<unsigned int> entry_family_, gather_family_;
-  std::vector<dealii::Tensor<1, dim>> gather_gradient_;
-  unsigned long gather_version_ = ~0ul;
-  void build_gather_index(unsigned int n_particles);
 };
 
 } // namespace spinesim::meshfree

@@ -181,6 +181,63 @@ void check_identity_and_homogeneous(Stab s) {
     }
   EXPECT_GT(interior, 0u);
 }
+// The families keep K⁻¹ and a member mask, not the gradients (correspondence_families.h);
+// their per-particle force gather must equal the element-wise scatter f_m −= w_e P_e G_m
+// over each family's expanded nodes and gradients, for both kinds, with broken bonds (some
+// bond-associated families fall back to the particle family then) and an arbitrary P per
+// family. Tolerance: round-off of sums of ~10³ terms of size |P| |G| w.
+template <int dim>
+void check_gather_equals_scatter() {
+  using Vec = dealii::Tensor<1, dim>;
+  for (const auto kind : {CorrespondenceFamilies<dim>::Kind::particle,
+                          CorrespondenceFamilies<dim>::Kind::bond_associated}) {
+    auto b = make_body<dim>(dim == 2 ? 9 : 5, cast<dim>(Stab::none));
+    std::mt19937 gen(11);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    for (std::size_t k = 0; k < b.bonds.n_bonds(); k += 7)
+      b.bonds.broken[k] = 1;
+    CorrespondenceFamilies<dim> fam;
+    typename CorrespondenceFamilies<dim>::Options o;
+    o.kind = kind;
+    fam.build(b.particles, b.bonds, o);
+    ASSERT_GT(fam.n_families(), 0u);
+    std::vector<Tens<dim>> P(fam.n_families());
+    for (auto& p : P)
+      for (unsigned int a = 0; a < dim; ++a)
+        for (unsigned int c = 0; c < dim; ++c)
+          p[a][c] = E * u(gen);
+    std::vector<Vec> gathered(b.particles.size()), scattered(b.particles.size());
+    fam.gather_forces(P, gathered, 0); // threaded whatever the size
+    std::vector<unsigned int> nodes;
+    std::vector<Vec> G;
+    double scale = 0;
+    for (unsigned int e = 0; e < fam.n_families(); ++e) {
+      fam.expand(e, nodes, G);
+      EXPECT_EQ(nodes[0], fam.centre(e));
+      Vec sum;
+      for (std::size_t q = 0; q < nodes.size(); ++q) {
+        scattered[nodes[q]] -= fam.weight(e) * (P[e] * G[q]);
+        scale = std::max(scale, fam.weight(e) * P[e].norm() * G[q].norm());
+        sum += G[q];
+      }
+      EXPECT_LT(sum.norm(), 1e-12 * G[1].norm()); // Σ_m G_m = 0
+    }
+    double err = 0;
+    for (unsigned int m = 0; m < b.particles.size(); ++m)
+      err = std::max(err, (gathered[m] - scattered[m]).norm());
+    EXPECT_LT(err, 1e-12 * scale) << (kind == CorrespondenceFamilies<dim>::Kind::particle
+                                          ? "particle families"
+                                          : "bond-associated families");
+    EXPECT_GT(scale, 0.0);
+  }
+}
+TEST(Nosb, FamilyForceGatherEqualsScatter2D) {
+  check_gather_equals_scatter<2>();
+}
+TEST(Nosb, FamilyForceGatherEqualsScatter3D) {
+  check_gather_equals_scatter<3>();
+}
+
 TEST(Nosb, UndeformedAndHomogeneous2D) {
   for (auto s : all_stabs)
     check_identity_and_homogeneous<2>(s);
