@@ -48,6 +48,8 @@ std::vector<unsigned int> CorrespondenceFamilies<dim>::build(const ParticleSet<d
   inverse_shape_.clear();
   mask_.clear();
   family_begin_.assign(n + 1, 0);
+  moment_.clear();
+  kind_ = options.kind;
   fallbacks_ = 0;
 
   // The bonds as the families will read them.
@@ -56,10 +58,13 @@ std::vector<unsigned int> CorrespondenceFamilies<dim>::build(const ParticleSet<d
   bond_centre_.resize(bonds.n_bonds());
   for (unsigned int i = 0; i < n; ++i)
     std::fill(bond_centre_.begin() + bonds.begin(i), bond_centre_.begin() + bonds.end(i), i);
-  bond_xi_ = bonds.xi;
-  bond_weight_.resize(bonds.n_bonds());
-  for (std::size_t k = 0; k < bonds.n_bonds(); ++k)
-    bond_weight_[k] = bonds.influence[k] * bonds.volume_factor(k) * V[bonds.neighbor[k]];
+  // ω V_n per bond (a local for the build) and the stored ω V_n ξ.
+  std::vector<double> bond_weight(bonds.n_bonds());
+  bond_moment_.resize(bonds.n_bonds());
+  for (std::size_t k = 0; k < bonds.n_bonds(); ++k) {
+    bond_weight[k] = bonds.influence[k] * bonds.volume_factor(k) * V[bonds.neighbor[k]];
+    bond_moment_[k] = bond_weight[k] * bonds.xi[k];
+  }
   // Their transpose: per particle, the bonds that end on it, ascending.
   incoming_offsets_.assign(n + 1, 0);
   for (std::size_t k = 0; k < bond_node_.size(); ++k)
@@ -79,8 +84,12 @@ std::vector<unsigned int> CorrespondenceFamilies<dim>::build(const ParticleSet<d
                         const std::vector<std::size_t>& slots, const Mat& Kinv) {
     const std::size_t n_words = (bonds.end(i) - bonds.begin(i) + 63) / 64;
     words.assign(n_words, 0);
-    for (const std::size_t s : slots)
+    Vec moment;
+    for (const std::size_t s : slots) {
       words[s / 64] |= std::uint64_t(1) << (s % 64);
+      moment += bond_moment_[bonds.begin(i) + s];
+    }
+    moment_.push_back(moment);
     centre_.push_back(i);
     weight_.push_back(w);
     history_.push_back(history);
@@ -101,8 +110,8 @@ std::vector<unsigned int> CorrespondenceFamilies<dim>::build(const ParticleSet<d
       if (bonds.broken[k])
         return;
       members.push_back(k - b0);
-      K += bond_weight_[k] * dealii::outer_product(bonds.xi[k], bonds.xi[k]);
-      all_weight += bond_weight_[k];
+      K += bond_weight[k] * dealii::outer_product(bonds.xi[k], bonds.xi[k]);
+      all_weight += bond_weight[k];
     });
     condition_[i] =
         members.size() >= dim ? condition_number(K) : std::numeric_limits<double>::infinity();
@@ -125,10 +134,10 @@ std::vector<unsigned int> CorrespondenceFamilies<dim>::build(const ParticleSet<d
         const std::size_t k = b0 + s;
         if ((bonds.xi[k] - bonds.xi[kb]).norm() <= bonds.horizon) {
           lens.push_back(s);
-          Kb += bond_weight_[k] * dealii::outer_product(bonds.xi[k], bonds.xi[k]);
+          Kb += bond_weight[k] * dealii::outer_product(bonds.xi[k], bonds.xi[k]);
         }
       }
-      const double w = V[i] * bond_weight_[kb] / all_weight;
+      const double w = V[i] * bond_weight[kb] / all_weight;
       if (lens.size() >= dim && condition_number(Kb) <= options.max_condition_number)
         add_family(i, w, kb, lens, dealii::invert(Kb));
       else {
@@ -138,6 +147,23 @@ std::vector<unsigned int> CorrespondenceFamilies<dim>::build(const ParticleSet<d
     }
   }
   family_begin_[n] = static_cast<unsigned int>(centre_.size());
+  // Particle families: the gather reads, in incoming order, the family of the bond's centre
+  // that holds it (none when broken or the centre failed) and ω_k V_n ξ_k, so that each bond
+  // costs one scattered read (that family's Q) as a stored gradient did.
+  incoming_family_.clear();
+  incoming_moment_.clear();
+  if (options.kind == Kind::particle) {
+    incoming_family_.resize(incoming_.size(), no_family);
+    incoming_moment_.resize(incoming_.size());
+    for (std::size_t t = 0; t < incoming_.size(); ++t) {
+      const std::size_t k = incoming_[t];
+      const unsigned int i = bond_centre_[k], e = family_begin_[i];
+      if (family_begin_[i + 1] > e && holds(e, k - bond_offsets_[i])) {
+        incoming_family_[t] = e;
+        incoming_moment_[t] = bond_moment_[k];
+      }
+    }
+  }
   return newly_failed;
 }
 
@@ -155,7 +181,7 @@ void CorrespondenceFamilies<dim>::expand(unsigned int e, std::vector<unsigned in
   gradients.assign(1, Vec());
   Vec sum;
   for_each_member(e, nb, [&](std::size_t s) {
-    const Vec g = bond_weight_[b0 + s] * (inverse_shape_[e] * bond_xi_[b0 + s]);
+    const Vec g = inverse_shape_[e] * bond_moment_[b0 + s];
     nodes.push_back(bond_node_[b0 + s]);
     gradients.push_back(g);
     sum += g;
@@ -166,13 +192,16 @@ void CorrespondenceFamilies<dim>::expand(unsigned int e, std::vector<unsigned in
 template <int dim>
 dealii::Tensor<2, dim>
 CorrespondenceFamilies<dim>::deformation_gradient(unsigned int e, const std::vector<Vec>& u) const {
-  // F = I + Σ_n (u_n − u_c) ⊗ G_n = I + [Σ_n ω V_n (u_n − u_c) ⊗ ξ_n] K⁻ᵀ.
+  // F = I + Σ_n (u_n − u_c) ⊗ G_n = I + [Σ_n u_n ⊗ ω_n V_n ξ_n − u_c ⊗ m_e] K⁻ᵀ.
   const unsigned int i = centre_[e];
   const std::size_t b0 = bond_offsets_[i], nb = bond_offsets_[i + 1] - b0;
-  Mat A;
+  Mat A = -dealii::outer_product(u[i], moment_[e]);
   for_each_member(e, nb, [&](std::size_t s) {
-    const Vec eta = u[bond_node_[b0 + s]] - u[i];
-    A += dealii::outer_product(bond_weight_[b0 + s] * eta, bond_xi_[b0 + s]);
+    const Vec& un = u[bond_node_[b0 + s]];
+    const Vec& m = bond_moment_[b0 + s];
+    for (unsigned int a = 0; a < dim; ++a)
+      for (unsigned int c = 0; c < dim; ++c)
+        A[a][c] += un[a] * m[c];
   });
   Mat F = A * dealii::transpose(inverse_shape_[e]);
   for (unsigned int d = 0; d < dim; ++d)
@@ -184,28 +213,46 @@ template <int dim>
 void CorrespondenceFamilies<dim>::gather_forces(const std::vector<Mat>& P, std::vector<Vec>& f,
                                                 long parallel_threshold) const {
   const long n = static_cast<long>(family_begin_.size()) - 1;
-  bond_force_.resize(bond_node_.size());
-  // Per bond k = i→n: t_k = ω_k V_n [Σ_e w_e P_e K_e⁻¹] ξ_k over the families e of i that hold
-  // it, so that −w_e P_e G_n sums to −t_k on n and, with G_c = −Σ G_n, to +Σ_k t_k on i.
+  // Q_e = w_e P_e K_e⁻¹: −w_e P_e G_n = −Q_e ω_n V_n ξ_n on a member n, and on the centre
+  // −w_e P_e G_c = Q_e Σ_n ω_n V_n ξ_n = Q_e m_e (m_e: the family's first moment, from build).
+  if (kind_ == Kind::particle) {
+    // One family per particle: per bond i→m, the family of i holds it or the bond is broken.
+    const long n_fam = n_families();
+    q_.resize(n_fam);
+    parallel_for_rethrow(n_fam, parallel_threshold,
+                         [&](long e) { q_[e] = weight_[e] * (P[e] * inverse_shape_[e]); });
+    parallel_for_rethrow(n, parallel_threshold, [&](long m) {
+      Vec fm;
+      if (family_begin_[m + 1] > family_begin_[m])
+        fm = q_[family_begin_[m]] * moment_[family_begin_[m]];
+      for (std::size_t t = incoming_offsets_[m]; t < incoming_offsets_[m + 1]; ++t)
+        if (incoming_family_[t] != no_family)
+          fm -= q_[incoming_family_[t]] * incoming_moment_[t];
+      f[m] = fm;
+    });
+    return;
+  }
+  // Bond-associated: per particle i, its centre force Σ_e Q_e m_e, and per bond k = i→n
+  // t_k = [Σ_e Q_e] ω_k V_n ξ_k over the families of i that hold it (about half of them);
+  // then each particle takes away the t of the bonds ending on it, in bond order.
+  bond_force_.resize(bond_moment_.size());
   parallel_for_rethrow(n, parallel_threshold, [&](long i) {
     const std::size_t b0 = bond_offsets_[i], nb = bond_offsets_[i + 1] - b0;
     thread_local std::vector<Mat> sum;
     sum.assign(nb, Mat());
+    Vec fi;
     for (unsigned int e = family_begin_[i]; e < family_begin_[i + 1]; ++e) {
       const Mat q = weight_[e] * (P[e] * inverse_shape_[e]);
+      fi += q * moment_[e];
       for_each_member(e, nb, [&](std::size_t slot) { sum[slot] += q; });
     }
     for (std::size_t s = 0; s < nb; ++s)
-      bond_force_[b0 + s] = bond_weight_[b0 + s] * (sum[s] * bond_xi_[b0 + s]);
+      bond_force_[b0 + s] = sum[s] * bond_moment_[b0 + s];
+    f[i] = fi;
   });
-  // f_m = Σ of its own bonds' t − Σ of the t of the bonds ending on it, in bond order.
   parallel_for_rethrow(n, parallel_threshold, [&](long m) {
-    Vec fm;
-    for (std::size_t k = bond_offsets_[m]; k < bond_offsets_[m + 1]; ++k)
-      fm += bond_force_[k];
     for (std::size_t t = incoming_offsets_[m]; t < incoming_offsets_[m + 1]; ++t)
-      fm -= bond_force_[incoming_[t]];
-    f[m] = fm;
+      f[m] -= bond_force_[incoming_[t]];
   });
 }
 
@@ -217,9 +264,11 @@ std::size_t CorrespondenceFamilies<dim>::memory_bytes() const {
          (bond_node_.capacity() + bond_centre_.capacity() + centre_.capacity() +
           family_begin_.capacity()) *
              sizeof(unsigned int) +
-         bond_xi_.capacity() * sizeof(Vec) +
-         (bond_weight_.capacity() + weight_.capacity() + condition_.capacity()) * sizeof(double) +
-         inverse_shape_.capacity() * sizeof(Mat) + bond_force_.capacity() * sizeof(Vec) +
+         bond_moment_.capacity() * sizeof(Vec) +
+         (weight_.capacity() + condition_.capacity()) * sizeof(double) +
+         (inverse_shape_.capacity() + q_.capacity()) * sizeof(Mat) +
+         (bond_force_.capacity() + moment_.capacity() + incoming_moment_.capacity()) * sizeof(Vec) +
+         incoming_family_.capacity() * sizeof(unsigned int) +
          mask_.capacity() * sizeof(std::uint64_t) + failed_.capacity();
 }
 

@@ -86,6 +86,9 @@ class CorrespondenceFamilies {
   std::size_t memory_bytes() const;
 
  private:
+  bool holds(unsigned int e, std::size_t slot) const {
+    return (mask_[mask_begin_[e] + slot / 64] >> (slot % 64)) & 1u;
+  }
   // Calls visit(slot) for the member bonds of family e (its centre has n_slots bonds), in
   // ascending order.
   template <class Visit>
@@ -96,11 +99,10 @@ class CorrespondenceFamilies {
         visit(64 * w + static_cast<std::size_t>(__builtin_ctzll(bits)));
   }
 
-  // The centres' bonds as built: centre, partner, ξ and ω V_partner, in the bond list's order.
+  // The centres' bonds as built: centre, partner and ω V_partner ξ, in the bond list's order.
   std::vector<std::size_t> bond_offsets_;
   std::vector<unsigned int> bond_centre_, bond_node_;
-  std::vector<Vec> bond_xi_;
-  std::vector<double> bond_weight_;
+  std::vector<Vec> bond_moment_; // ω_k V_n ξ_k
   // Per particle m, the bonds i→m (indices into the arrays above), ascending.
   std::vector<std::size_t> incoming_offsets_, incoming_;
   // Per family: centre, weight, history index, K⁻¹ and the first word of its member mask.
@@ -109,7 +111,16 @@ class CorrespondenceFamilies {
   std::vector<std::size_t> history_, mask_begin_;
   std::vector<Mat> inverse_shape_;
   std::vector<std::uint64_t> mask_;
-  // Per bond, its share t_k of the last gather_forces (reused storage).
+  // Particle families, in incoming order: the family holding the bond (no_family: none) and
+  // ω_k V_n ξ_k.
+  static constexpr unsigned int no_family = ~0u;
+  std::vector<unsigned int> incoming_family_;
+  std::vector<Vec> incoming_moment_;
+  // Per family its first moment m_e = Σ_n ω_n V_n ξ_n; the kind built.
+  std::vector<Vec> moment_;
+  Kind kind_ = Kind::particle;
+  // Scratch of gather_forces: Q_e = w_e P_e K_e⁻¹ per family and t_k per bond.
+  mutable std::vector<Mat> q_;
   mutable std::vector<Vec> bond_force_;
   std::vector<std::uint8_t> failed_;
   std::vector<double> condition_;
