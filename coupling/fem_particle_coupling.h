@@ -192,10 +192,6 @@ class FemParticleCoupling {
   const std::vector<std::uint8_t>& free_flags() const { return state_.free; }
   // Whether the particles carry a material state and a stress (NOSB-PD, SPG).
   bool carries_material_state() const { return state_.carries_state(); }
-  // Whether the particles' default law carries a plastic history (it yields: the J2 laws).
-  bool particle_law_yields() const {
-    return state_.particle_material.law && state_.particle_material.law->stored_energy_from_state();
-  }
   // Von Mises stress of six components (xx, yy, zz, xy, yz, xz) as cauchy_stresses() gives
   // them [Pa] (materials::von_mises).
   static double von_mises(const double* c);

@@ -1,6 +1,7 @@
 #include "fem/point_update.h"
 
 #include "base/exceptions.h"
+#include "fem/materials/tensor_tools.h"
 
 #include <cmath>
 #include <sstream>
@@ -73,7 +74,7 @@ Tensor2 ConstitutivePointUpdate::operator()(const materials::ConstitutiveLaw& la
       S = r.first_piola;
       tr.state = r.state;
     }
-    tr.cauchy_stress = symmetrize(S * transpose(F)) / J;
+    tr.cauchy_stress = materials::cauchy_stress(law, F, S); // σ = P for small-strain laws
     tr.strain = 0.5 * (symmetrize(transpose(F) * F) - unit_symmetric_tensor<3>());
     tr.deformation = F;
   }

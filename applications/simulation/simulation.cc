@@ -335,13 +335,21 @@ void Simulation<dim>::build(RunContext& ctx) {
       log_coupling_messages(ctx);
     }
     coupled_->set_energy_account(sim_.energy_account);
-    if (coupling_prm_.splice == "energy" && coupled_->particle_law_yields())
+    if (coupling_prm_.splice == "energy") {
       // The correction C is the intact *elastic* band's (docs/coupling.md, the energy splice
       // and plastic flow): once the band yields it removes more than the band counts twice.
-      ctx.warn("Coupling/Splice = energy with a yielding law: the splice's consistency "
-               "correction is linear elastic and over-corrects the overlap band once it yields "
-               "(a perfectly plastic block lost 5 % of its reaction at its first conversion and "
-               "collapsed in two more steps); use Coupling/Splice = overlap for plastic zones");
+      // Any cell law that yields may become particles (restarts included: the FEM's laws
+      // exist before the checkpoint is read).
+      bool yields = false;
+      for (const auto& cell : mechanics_->dof_handler().active_cell_iterators())
+        if (cell->is_locally_owned() && mechanics_->cell_material(cell).stored_energy_from_state())
+          yields = true;
+      if (dealii::Utilities::MPI::logical_or(yields, ctx.comm()))
+        ctx.warn("Coupling/Splice = energy with a yielding law: the splice's consistency "
+                 "correction is linear elastic and over-corrects the overlap band once it yields "
+                 "(a perfectly plastic block lost 5 % of its reaction at its first conversion and "
+                 "collapsed in two more steps); use Coupling/Splice = overlap for plastic zones");
+    }
   }
   if (coupled_ && !ctx.restarting())
     warn_outside_body(ctx);
