@@ -55,9 +55,9 @@ std::vector<unsigned int> CorrespondenceFamilies<dim>::build(const ParticleSet<d
   // The bonds as the families will read them.
   bond_offsets_.assign(bonds.offsets.begin(), bonds.offsets.begin() + n + 1);
   bond_node_ = bonds.neighbor;
-  bond_centre_.resize(bonds.n_bonds());
+  std::vector<unsigned int> bond_centre(bonds.n_bonds()); // read by this build only
   for (unsigned int i = 0; i < n; ++i)
-    std::fill(bond_centre_.begin() + bonds.begin(i), bond_centre_.begin() + bonds.end(i), i);
+    std::fill(bond_centre.begin() + bonds.begin(i), bond_centre.begin() + bonds.end(i), i);
   // ω V_n per bond (a local for the build) and the stored ω V_n ξ.
   std::vector<double> bond_weight(bonds.n_bonds());
   bond_moment_.resize(bonds.n_bonds());
@@ -157,13 +157,16 @@ std::vector<unsigned int> CorrespondenceFamilies<dim>::build(const ParticleSet<d
     incoming_moment_.resize(incoming_.size());
     for (std::size_t t = 0; t < incoming_.size(); ++t) {
       const std::size_t k = incoming_[t];
-      const unsigned int i = bond_centre_[k], e = family_begin_[i];
+      const unsigned int i = bond_centre[k], e = family_begin_[i];
       if (family_begin_[i + 1] > e && holds(e, k - bond_offsets_[i])) {
         incoming_family_[t] = e;
         incoming_moment_[t] = bond_moment_[k];
       }
     }
   }
+  // Particle families gather from the copies above; the bond indices were for this build.
+  if (options.kind == Kind::particle)
+    std::vector<std::size_t>().swap(incoming_);
   return newly_failed;
 }
 
@@ -261,8 +264,7 @@ std::size_t CorrespondenceFamilies<dim>::memory_bytes() const {
   return (bond_offsets_.capacity() + incoming_offsets_.capacity() + incoming_.capacity() +
           history_.capacity() + mask_begin_.capacity()) *
              sizeof(std::size_t) +
-         (bond_node_.capacity() + bond_centre_.capacity() + centre_.capacity() +
-          family_begin_.capacity()) *
+         (bond_node_.capacity() + centre_.capacity() + family_begin_.capacity()) *
              sizeof(unsigned int) +
          bond_moment_.capacity() * sizeof(Vec) +
          (weight_.capacity() + condition_.capacity()) * sizeof(double) +

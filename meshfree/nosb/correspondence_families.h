@@ -60,8 +60,6 @@ class CorrespondenceFamilies {
   double weight(unsigned int e) const { return weight_[e]; }
   // Particle index (particle families) or bond index (bond-associated) for material history.
   std::size_t history_index(unsigned int e) const { return history_[e]; }
-  // The families of centre i are first_family(i) .. first_family(i + 1) − 1.
-  unsigned int first_family(unsigned int i) const { return family_begin_[i]; }
 
   // Family e's nodes (the centre first, then its members in bond order) and their gradients
   // G_m [1/m], into `nodes` and `gradients` (resized).
@@ -99,11 +97,12 @@ class CorrespondenceFamilies {
         visit(64 * w + static_cast<std::size_t>(__builtin_ctzll(bits)));
   }
 
-  // The centres' bonds as built: centre, partner and ω V_partner ξ, in the bond list's order.
+  // The centres' bonds as built: partner and ω V_partner ξ, in the bond list's order.
   std::vector<std::size_t> bond_offsets_;
-  std::vector<unsigned int> bond_centre_, bond_node_;
+  std::vector<unsigned int> bond_node_;
   std::vector<Vec> bond_moment_; // ω_k V_n ξ_k
-  // Per particle m, the bonds i→m (indices into the arrays above), ascending.
+  // Per particle m, the bonds i→m (indices into the arrays above), ascending; the indices are
+  // kept for bond-associated families only.
   std::vector<std::size_t> incoming_offsets_, incoming_;
   // Per family: centre, weight, history index, K⁻¹ and the first word of its member mask.
   std::vector<unsigned int> centre_, family_begin_;
