@@ -155,6 +155,8 @@ void BondRows<dim>::rebuild() {
   for (unsigned int i = 0; i < driven.size(); ++i)
     driven[i] = state_.free[i] ? 0 : 1;
   state_.method->set_driven(std::move(driven));
+  state_.method->set_driven_gradients(state_.ghost_gradients_from_fem() ? &state_.driven_gradients
+                                                                        : nullptr);
   state_.method->initialise(state_.particles, state_.bonds);
 }
 

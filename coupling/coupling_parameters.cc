@@ -48,6 +48,18 @@ void CouplingParameters<dim>::declare(ParameterHandler& prm) {
       "passed back through the transposes of both maps, so explicit steps conserve an energy; "
       "a symmetric low-rank correction makes affine fields exact in the linear (small-strain) "
       "limit.");
+  prm.declare_entry(
+      "Ghost gradient", "fem", Selection("fem|family"),
+      "Deformation gradient at which a ghost particle's family is evaluated (overlap splice, "
+      "NOSB-PD) [-]. fem: the FEM's displacement gradient at the ghost, so the ghosts carry the "
+      "FEM's own stress into the particle zone, also where a ghost's family reaches across a "
+      "change of material (a stiff cap or cortical shell beside soft particles); exact for "
+      "affine fields like the family's. family: the gradient of the ghost's family, as for a "
+      "free particle; where that family mixes a stiff and a soft material, the stiff law at "
+      "the mixed gradient puts on the particles a stress the FEM does not have, which the "
+      "overlap splice never hands to the FEM (docs/coupling.md, the splice across a change of "
+      "material). The energy splice takes its forces from its energy and always uses the "
+      "family's gradient.");
   prm.declare_entry("Time step safety", "0.8", Double(0, 1),
                     "Factor on the PD stable time step (Silling & Askari 2005) [-].");
   prm.declare_entry("All particles", "false", Bool(),
@@ -145,6 +157,7 @@ void CouplingParameters<dim>::parse(ParameterHandler& prm, const std::string& me
   ghost_layer = prm.get_double("Ghost layer");
   interface_radius = prm.get_double("Interface radius");
   splice = prm.get("Splice");
+  ghost_gradient = prm.get("Ghost gradient");
   time_step_safety = prm.get_double("Time step safety");
   all_particles = prm.get_bool("All particles");
   region_lower =

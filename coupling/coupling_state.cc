@@ -305,6 +305,7 @@ unsigned int CouplingState<dim>::add_particle(const std::string& cell_id, unsign
                                                : static_cast<int>(it->second->active_cell_index()));
   fixed_slots.push_back(0);
   support_offset.emplace_back();
+  driven_gradients.push_back(unit_symmetric_tensor<dim>());
   return i;
 }
 
@@ -318,6 +319,7 @@ void CouplingState<dim>::clear_particles() {
   index_of.clear();
   fixed_slots.clear();
   support_offset.clear();
+  driven_gradients.clear();
 }
 
 template struct CouplingState<2>;

@@ -140,7 +140,14 @@ struct CouplingState {
   // The particles, replicated on every rank; indices never change (only appended; a
   // checkpoint replaces them all).
   meshfree::ParticleSet<dim> particles;
-  std::vector<std::uint8_t> free;       // 1 free, 0 ghost (driven by the FEM)
+  std::vector<std::uint8_t> free; // 1 free, 0 ghost (driven by the FEM)
+  // Per particle: the FEM's deformation gradient I + ∇u at a ghost (GhostLayer::update; the
+  // halo brings those owned elsewhere), identity for free particles. The method reads it when
+  // ghost_gradients_from_fem() (ParticleMethod::set_driven_gradients).
+  std::vector<dealii::Tensor<2, dim>> driven_gradients;
+  bool ghost_gradients_from_fem() const {
+    return prm.ghost_gradient == "fem" && prm.splice == "overlap";
+  }
   std::vector<std::string> host_cell;   // CellId of the cell the particle sits in
   std::vector<unsigned int> host_point; // index of the point within that cell
   // Per particle: the active cell index of its host cell if this rank owns it, else -1 (the

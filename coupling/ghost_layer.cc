@@ -136,6 +136,22 @@ void GhostLayer<dim>::rebuild_tables() {
       }
     }
   }
+  ghost_grads_.clear();
+  if (state_.ghost_gradients_from_fem()) {
+    // The cells are fixed in the reference configuration: their shape gradients once per
+    // rebuild, not per pseudo-step.
+    const auto& fe = state_.fem.fe();
+    const unsigned int n = fe.n_dofs_per_cell(), np = state_.points.size();
+    FEValues<dim> at_points(state_.fem.mapping(), fe, state_.points, update_gradients);
+    ghost_grads_.reserve(ghost_cells_.size() * np * n);
+    for (const auto& [cell, row] : ghost_cells_) {
+      at_points.reinit(cell);
+      for (unsigned int q = 0; q < np; ++q)
+        for (unsigned int i = 0; i < n; ++i)
+          ghost_grads_.push_back(
+              at_points.shape_grad_component(i, q, fe.system_to_component_index(i).first));
+    }
+  }
 }
 
 template <int dim>
@@ -150,6 +166,8 @@ void GhostLayer<dim>::update() {
   for (unsigned int i = 0; i < n; ++i)
     component[i] = fe.system_to_component_index(i).first;
   const long n_cells = static_cast<long>(ghost_cells_.size());
+  const bool with_gradient = !ghost_grads_.empty();
+  const unsigned int np = state_.points.size();
   // Each ghost is written by its own host cell only.
 #pragma omp parallel for schedule(static) if (n_cells > 1000)
   for (long k = 0; k < n_cells; ++k) {
@@ -166,6 +184,14 @@ void GhostLayer<dim>::update() {
       for (unsigned int d = 0; d < dim; ++d) {
         state_.particles.displacement(row[q])[d] = b[d];
         state_.particles.velocity(row[q])[d] = b[dim + d];
+      }
+      if (with_gradient) {
+        // F = I + Σ_i u_i e_c(i) ⊗ ∇N_i at the ghost.
+        Tensor<2, dim> F = unit_symmetric_tensor<dim>();
+        const Tensor<1, dim>* grad = &ghost_grads_[(k * np + q) * n];
+        for (unsigned int i = 0; i < n; ++i)
+          F[component[i]] += uu[lids[i]] * grad[i];
+        state_.driven_gradients[row[q]] = F;
       }
     }
   }

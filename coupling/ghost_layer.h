@@ -42,6 +42,10 @@ class GhostLayer {
   // Ghost particles hosted by locally owned cells, ascending active index.
   std::vector<typename CouplingState<dim>::HostRow> ghost_cells_;
   std::vector<int> ghost_lids_; // per ghost cell, its DoFs' local indices in the FEM vectors
+  // Per ghost cell, point and DoF: the gradient of the DoF's shape function (its own
+  // component) at the point in real coordinates, [cell][q][i]; empty unless the ghosts take
+  // the FEM's gradient (CouplingState::ghost_gradients_from_fem).
+  std::vector<dealii::Tensor<1, dim>> ghost_grads_;
 };
 
 } // namespace spinesim::coupling

@@ -56,7 +56,10 @@ void ParticleHalo<dim>::exchange() {
   if (Utilities::MPI::n_mpi_processes(comm) == 1)
     return;
   constexpr int tag = 7301;
-  constexpr unsigned int width = 2 * dim; // u, v
+  // u, v, and with ghost gradients from the FEM the gradient F (dim × dim) of every particle
+  // (a free particle's entry is the identity, never read)
+  const bool with_gradient = state_.ghost_gradients_from_fem();
+  const unsigned int width = 2 * dim + (with_gradient ? dim * dim : 0);
   std::vector<std::vector<double>> out, in;
   std::vector<MPI_Request> requests;
   for (const auto& [rank, list] : send_) {
@@ -69,6 +72,9 @@ void ParticleHalo<dim>::exchange() {
     for (const unsigned int i : list)
       for (unsigned int d = 0; d < dim; ++d)
         b.push_back(state_.particles.velocity(i)[d]);
+    for (const unsigned int i : list)
+      for (unsigned int c = 0; with_gradient && c < dim * dim; ++c)
+        b.push_back(state_.driven_gradients[i][c / dim][c % dim]);
   }
   requests.reserve(send_.size() + recv_.size());
   for (const auto& [rank, list] : recv_) {
@@ -89,11 +95,14 @@ void ParticleHalo<dim>::exchange() {
   for (const auto& [rank, list] : recv_) {
     const auto& b = in[k++];
     const std::size_t n = list.size();
-    for (std::size_t m = 0; m < n; ++m)
+    for (std::size_t m = 0; m < n; ++m) {
       for (unsigned int d = 0; d < dim; ++d) {
         state_.particles.displacement(list[m])[d] = b[dim * m + d];
         state_.particles.velocity(list[m])[d] = b[dim * n + dim * m + d];
       }
+      for (unsigned int c = 0; with_gradient && c < dim * dim; ++c)
+        state_.driven_gradients[list[m]][c / dim][c % dim] = b[2 * dim * n + dim * dim * m + c];
+    }
   }
 }
 

@@ -260,7 +260,7 @@ void NosbPD<dim>::compute_particle_gradients(const ParticleSet<dim>& particles) 
   // One family per particle: the writes never meet.
 #pragma omp parallel for schedule(static) if (n > parallel_particle_threshold)
   for (long e = 0; e < n; ++e)
-    F_particle_[particle_families_.centre(e)] = particle_families_.deformation_gradient(e, u);
+    F_particle_[particle_families_.centre(e)] = family_gradient(particle_families_, e, u);
 }
 
 template <int dim>
@@ -281,7 +281,7 @@ void NosbPD<dim>::compute_forces(ParticleSet<dim>& particles, const BondList<dim
   P.resize(n_fam);
   const bool penalty = penalty_on(); // particle families then: centre(e) is the particle
   parallel_for_rethrow(n_fam, parallel_particle_threshold, [&](long e) {
-    const auto F = fam.deformation_gradient(e, u);
+    const auto F = family_gradient(fam, e, u);
     P[e] = evaluate(e, F, particles, &trial_[fam.history_index(e)], false).P;
     if (penalty)
       P[e] += penalty_part(fam.centre(e), F, particles, bonds).stress;
@@ -526,7 +526,7 @@ void NosbPD<dim>::assemble_tangent(const ParticleSet<dim>& particles, const Bond
   for (unsigned int e = 0; e < fam.n_families(); ++e) {
     fam.expand(e, node, G);
     const std::size_t n_nodes = node.size();
-    const Response r = evaluate(e, fam.deformation_gradient(e, u), particles, nullptr, true);
+    const Response r = evaluate(e, family_gradient(fam, e, u), particles, nullptr, true);
     const double w = fam.weight(e);
     const unsigned int i = fam.centre(e);
     double sV = 0;
@@ -605,7 +605,7 @@ std::vector<double> NosbPD<dim>::stiffness_row_bound(const ParticleSet<dim>& par
   // Per family: B[a][J] = Σ_b Σ_L |A_aJbL| Σ_p |G_p,L|; rows m get w_e Σ_J |G_m,J| B[a][J].
   std::vector<dealii::Tensor<2, dim>> B(n_fam);
   parallel_for_rethrow(n_fam, parallel_particle_threshold, [&](long e) {
-    const Response r = evaluate(e, fam.deformation_gradient(e, u), particles, nullptr, true);
+    const Response r = evaluate(e, family_gradient(fam, e, u), particles, nullptr, true);
     std::vector<unsigned int> node;
     std::vector<dealii::Tensor<1, dim>> G;
     fam.expand(e, node, G);
@@ -693,7 +693,7 @@ template <int dim>
 double NosbPD<dim>::family_energy(unsigned int e, const ParticleSet<dim>& particles,
                                   const BondList<dim>& bonds) const {
   const auto& fam = families();
-  const auto F = fam.deformation_gradient(e, particles.displacements());
+  const auto F = family_gradient(fam, e, particles.displacements());
   const double springs =
       penalty_on() ? penalty_part(fam.centre(e), F, particles, bonds).energy : 0.0;
   return springs + stress_energy(e, F, particles);
@@ -928,7 +928,7 @@ typename NosbPD<dim>::HourglassMeasure NosbPD<dim>::hourglass(const ParticleSet<
   const auto& pfam = particle_families_;
   std::vector<dealii::Tensor<2, dim>> F(particles.size(), dealii::unit_symmetric_tensor<dim>());
   for (unsigned int e = 0; e < pfam.n_families(); ++e)
-    F[pfam.centre(e)] = pfam.deformation_gradient(e, u);
+    F[pfam.centre(e)] = family_gradient(pfam, e, u);
   HourglassMeasure h;
   double z2 = 0, eta2 = 0;
   // Sums over all bonds in one fixed order (serial): the order fixes the result.

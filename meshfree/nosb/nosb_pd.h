@@ -263,6 +263,11 @@ class NosbPD {
   void set_reference_temperature(double T) { reference_temperature_ = T; }
   // Driven particles (coupling ghosts): a bond between two of them never breaks.
   void set_driven(std::vector<std::uint8_t> driven) { driven_ = std::move(driven); }
+  // Gradients of the driven particles from the driving model (ParticleMethod::
+  // set_driven_gradients): a family centred on a driven particle takes its entry.
+  void set_driven_gradients(const std::vector<dealii::Tensor<2, dim>>* gradients) {
+    driven_gradients_ = gradients;
+  }
   // Particles [first, size) are a distributed zone's ghosts (ParticleMethod::set_first_ghost):
   // their owners report their failures.
   void set_first_ghost(unsigned int first) { first_ghost_ = first; }
@@ -288,6 +293,17 @@ class NosbPD {
                     const ParticleSet<dim>& particles, materials::MaterialState* trial,
                     bool with_tangent) const;
   void compute_particle_gradients(const ParticleSet<dim>& particles);
+  // F of family e of `fam` at u: the driving model's gradient when its centre is driven and
+  // set_driven_gradients() gave one, else the family's own.
+  dealii::Tensor<2, dim> family_gradient(const CorrespondenceFamilies<dim>& fam, unsigned int e,
+                                         const std::vector<dealii::Tensor<1, dim>>& u) const {
+    if (driven_gradients_) {
+      const unsigned int c = fam.centre(e);
+      if (c < driven_.size() && driven_[c] && c < driven_gradients_->size())
+        return (*driven_gradients_)[c];
+    }
+    return fam.deformation_gradient(e, u);
+  }
   // w_e W(F_e) of family e at the current displacements, its penalty springs included [J].
   double family_energy(unsigned int e, const ParticleSet<dim>& particles,
                        const BondList<dim>& bonds) const;
@@ -344,6 +360,7 @@ class NosbPD {
     return std::isnan(reference_temperature_) ? 0.0 : T - reference_temperature_;
   }
   std::vector<std::uint8_t> driven_;
+  const std::vector<dealii::Tensor<2, dim>>* driven_gradients_ = nullptr;
   unsigned int first_ghost_ = ~0u;
   // (row, bond) of the bonds whose partner has no bond row of its own, in bond order
   // (update_families): the pair forces of compute_forces that no row of the partner adds.

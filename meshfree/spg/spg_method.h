@@ -59,6 +59,11 @@ class SpgMethod : public ParticleMethod<dim> {
     return !(prm_.stabilisation > 0.0) || prm_.smoothing_interval == 1;
   }
   void set_driven(std::vector<std::uint8_t> driven) override { driven_ = std::move(driven); }
+  void set_driven_gradients(const std::vector<dealii::Tensor<2, dim>>* gradients) override {
+    driven_gradients_ = gradients;
+    if (solver_)
+      solver_->set_driven_gradients(gradients);
+  }
   void set_first_ghost(unsigned int first) override { first_ghost_ = first; }
   // A particle zone's checkpoint: the committed material states (plastic strain, D_f).
   void save(std::ostream& out) const override;
@@ -154,6 +159,7 @@ class SpgMethod : public ParticleMethod<dim> {
     return std::isnan(reference_temperature_) ? 0.0 : T - reference_temperature_;
   }
   std::vector<std::uint8_t> driven_;
+  const std::vector<dealii::Tensor<2, dim>>* driven_gradients_ = nullptr;
   unsigned int first_ghost_ = ~0u;                                // set_first_ghost()
   std::function<bool(unsigned int, unsigned int)> break_decider_; // set_break_decider()
   bool breaking_ = true;                                          // disable_breaking()

@@ -128,6 +128,12 @@ class SPGSolver {
   void set_reference_temperature(double t) { reference_temperature_ = t; }
   // Particles whose coefficients are prescribed from outside: a bond between two never breaks.
   void set_driven(std::vector<std::uint8_t> driven) { driven_ = std::move(driven); }
+  // Gradients of the driven particles from the driving model (ParticleMethod::
+  // set_driven_gradients): a driven row's stress is its law at that gradient (total
+  // Lagrangian kernels).
+  void set_driven_gradients(const std::vector<dealii::Tensor<2, dim>>* gradients) {
+    driven_gradients_ = gradients;
+  }
   // Deferred commits: compute_forces() keeps the new material state as a trial.
   void set_deferred_commit(bool deferred) { deferred_commit_ = deferred; }
   // Off: no bond breaks whatever the criteria (a probe of the intact material).
@@ -264,6 +270,7 @@ class SPGSolver {
   std::vector<Matrix> F_, P_, Fr_, stress_;
   std::vector<materials::MaterialState> state_, committed_;
   std::vector<std::uint8_t> has_row_, complete_, driven_;
+  const std::vector<dealii::Tensor<2, dim>>* driven_gradients_ = nullptr;
   bool external_rows_ = false, deferred_commit_ = false, breaking_ = true, counting_step_ = true;
   double reference_temperature_ = 0;
   std::vector<std::pair<unsigned int, unsigned int>> newly_broken_;

@@ -8,6 +8,7 @@ spinesim_add_gtest(test_coupling
           ${CMAKE_CURRENT_SOURCE_DIR}/particle_record_test.cc
           ${CMAKE_CURRENT_SOURCE_DIR}/checkpoint_test.cc
           ${CMAKE_CURRENT_SOURCE_DIR}/checkpoint_text_test.cc
+          ${CMAKE_CURRENT_SOURCE_DIR}/splice_materials_test.cc
   LIBS spinesim_coupling
   LABELS "unit;coupling"
   MPI_RANKS 2)
