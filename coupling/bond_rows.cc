@@ -154,9 +154,26 @@ void BondRows<dim>::rebuild() {
   std::vector<std::uint8_t> driven(state_.particles.size());
   for (unsigned int i = 0; i < driven.size(); ++i)
     driven[i] = state_.free[i] ? 0 : 1;
+  // Ghosts at the FEM's gradient: all of them (fem), or (auto) those whose family reaches a
+  // particle of another law, where the family's own gradient would mix two materials.
+  std::vector<std::uint8_t> which(state_.ghost_gradients_from_fem() ? driven.size() : 0, 0);
+  const auto& rows = state_.bonds;
+  for (unsigned int i = 0; i < which.size(); ++i) {
+    if (!driven[i])
+      continue;
+    if (state_.prm.ghost_gradient == "fem") {
+      which[i] = 1;
+      continue;
+    }
+    const auto law = state_.particles.material_id(i);
+    for (std::size_t k = rows.offsets[i]; k < rows.offsets[i + 1] && !which[i]; ++k)
+      which[i] = state_.particles.material_id(rows.neighbor[k]) != law ? 1 : 0;
+  }
+  state_.ghosts_at_fem_gradient =
+      static_cast<unsigned int>(std::count(which.begin(), which.end(), std::uint8_t(1)));
   state_.method->set_driven(std::move(driven));
-  state_.method->set_driven_gradients(state_.ghost_gradients_from_fem() ? &state_.driven_gradients
-                                                                        : nullptr);
+  const auto* gradients = which.empty() ? nullptr : &state_.driven_gradients;
+  state_.method->set_driven_gradients(gradients, std::move(which));
   state_.method->initialise(state_.particles, state_.bonds);
 }
 

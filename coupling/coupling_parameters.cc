@@ -49,17 +49,21 @@ void CouplingParameters<dim>::declare(ParameterHandler& prm) {
       "a symmetric low-rank correction makes affine fields exact in the linear (small-strain) "
       "limit.");
   prm.declare_entry(
-      "Ghost gradient", "fem", Selection("fem|family"),
-      "Deformation gradient at which a ghost particle's family is evaluated (overlap splice, "
-      "NOSB-PD) [-]. fem: the FEM's displacement gradient at the ghost, so the ghosts carry the "
-      "FEM's own stress into the particle zone, also where a ghost's family reaches across a "
-      "change of material (a stiff cap or cortical shell beside soft particles); exact for "
-      "affine fields like the family's. family: the gradient of the ghost's family, as for a "
-      "free particle; where that family mixes a stiff and a soft material, the stiff law at "
-      "the mixed gradient puts on the particles a stress the FEM does not have, which the "
-      "overlap splice never hands to the FEM (docs/coupling.md, the splice across a change of "
-      "material). The energy splice takes its forces from its energy and always uses the "
-      "family's gradient.");
+      "Ghost gradient", "auto", Selection("auto|fem|family"),
+      "Deformation gradient at which a ghost particle's family (SPG: row) is evaluated, overlap "
+      "splice [-]. fem: the FEM's displacement gradient at the ghost (with its B-bar or F-bar "
+      "modification), so the ghosts carry the FEM's own stress into the particle zone, also where "
+      "a ghost's family reaches across a change of material (a stiff cap, cortical shell or "
+      "implant beside soft particles); exact for affine fields like the family's. family: the "
+      "gradient of the ghost's family, as for a free particle; where that family mixes a stiff "
+      "and a soft material, the stiff law at the mixed gradient puts on the particles a stress "
+      "the FEM does not have, and the overlap splice never hands it to the FEM "
+      "(docs/coupling.md, the splice across a change of material). auto: NOSB-PD ghosts whose "
+      "family reaches a particle of another law take the FEM's gradient, the others keep their "
+      "family's (so a body of one material runs as with family); SPG keeps the family's, as its "
+      "free coefficients take much of their stiffness from the ghost rows: with fem a small "
+      "converted cluster of the vertebra diverged. The energy splice takes its forces from its "
+      "energy and always uses the family's gradient.");
   prm.declare_entry("Time step safety", "0.8", Double(0, 1),
                     "Factor on the PD stable time step (Silling & Askari 2005) [-].");
   prm.declare_entry("All particles", "false", Bool(),

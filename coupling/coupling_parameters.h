@@ -24,8 +24,9 @@ struct CouplingParameters {
   // affine fields in the linear limit); coupling/energy_splice.h.
   std::string splice = "overlap";
   // fem: a ghost family's deformation gradient is the FEM's displacement gradient at the ghost
-  // (overlap splice); family: the family's own, as for free particles.
-  std::string ghost_gradient = "fem";
+  // (overlap splice); family: the family's own, as for free particles; auto: NOSB-PD ghosts
+  // whose family reaches another law take the FEM's, SPG keeps the family's.
+  std::string ghost_gradient = "auto";
   double time_step_safety = 0.8; // PD stable step factor [-]
   bool all_particles = false;
   std::vector<double> region_lower, region_upper; // particles from t = 0 (empty = none)

@@ -145,8 +145,13 @@ struct CouplingState {
   // halo brings those owned elsewhere), identity for free particles. The method reads it when
   // ghost_gradients_from_fem() (ParticleMethod::set_driven_gradients).
   std::vector<dealii::Tensor<2, dim>> driven_gradients;
+  // Ghost rows that take driven_gradients (BondRows: all ghosts with Ghost gradient = fem, those
+  // whose family reaches another law with auto), on this rank.
+  unsigned int ghosts_at_fem_gradient = 0;
   bool ghost_gradients_from_fem() const {
-    return prm.ghost_gradient == "fem" && prm.splice == "overlap";
+    return prm.splice == "overlap" &&
+           (prm.ghost_gradient == "fem" ||
+            (prm.ghost_gradient == "auto" && prm.particles_method == "nosb"));
   }
   std::vector<std::string> host_cell;   // CellId of the cell the particle sits in
   std::vector<unsigned int> host_point; // index of the point within that cell

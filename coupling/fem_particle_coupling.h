@@ -226,6 +226,15 @@ class FemParticleCoupling {
   // (collective; output, checkpoints and figures read the replicated set).
   void synchronise() const { halo_.synchronise(); }
   bool is_owned(unsigned int i) const { return state_.is_owned(i); }
+  // Whether ghost families may run at the FEM's gradient (Coupling/Ghost gradient), and how
+  // many of this rank's ghost rows do.
+  bool ghosts_take_fem_gradient() const { return state_.ghost_gradients_from_fem(); }
+  unsigned int n_ghosts_at_fem_gradient() const { return state_.ghosts_at_fem_gradient; }
+  // The FEM's deformation gradient at ghost i as its family sees it (identity unless
+  // ghosts_take_fem_gradient(); current for the ghosts this rank owns or reads).
+  const dealii::Tensor<2, dim>& ghost_gradient(unsigned int i) const {
+    return state_.driven_gradients[i];
+  }
 
   // Equivalent plastic strain ε̄_p of every free particle from its owner (0 for ghosts and for
   // methods without material state) [-]. Collective.

@@ -12,6 +12,7 @@
 #include <boost/serialization/vector.hpp>
 
 #include <algorithm>
+#include <cmath>
 
 namespace spinesim::coupling {
 
@@ -137,19 +138,39 @@ void GhostLayer<dim>::rebuild_tables() {
     }
   }
   ghost_grads_.clear();
+  cell_grads_.clear();
+  cell_weights_.clear();
+  volumetric_locking_ = state_.fem.parameters().volumetric_locking;
   if (state_.ghost_gradients_from_fem()) {
     // The cells are fixed in the reference configuration: their shape gradients once per
     // rebuild, not per pseudo-step.
     const auto& fe = state_.fem.fe();
     const unsigned int n = fe.n_dofs_per_cell(), np = state_.points.size();
+    const bool modified = volumetric_locking_ != "none";
+    const auto& rule = state_.fem.quadrature();
     FEValues<dim> at_points(state_.fem.mapping(), fe, state_.points, update_gradients);
+    FEValues<dim> at_rule(state_.fem.mapping(), fe, rule, update_gradients | update_JxW_values);
     ghost_grads_.reserve(ghost_cells_.size() * np * n);
+    if (modified)
+      cell_grads_.reserve(ghost_cells_.size() * rule.size() * n);
     for (const auto& [cell, row] : ghost_cells_) {
       at_points.reinit(cell);
       for (unsigned int q = 0; q < np; ++q)
         for (unsigned int i = 0; i < n; ++i)
           ghost_grads_.push_back(
               at_points.shape_grad_component(i, q, fe.system_to_component_index(i).first));
+      if (!modified)
+        continue;
+      at_rule.reinit(cell);
+      double volume = 0;
+      for (unsigned int q = 0; q < rule.size(); ++q)
+        volume += at_rule.JxW(q);
+      for (unsigned int q = 0; q < rule.size(); ++q) {
+        cell_weights_.push_back(at_rule.JxW(q) / volume);
+        for (unsigned int i = 0; i < n; ++i)
+          cell_grads_.push_back(
+              at_rule.shape_grad_component(i, q, fe.system_to_component_index(i).first));
+      }
     }
   }
 }
@@ -168,11 +189,26 @@ void GhostLayer<dim>::update() {
   const long n_cells = static_cast<long>(ghost_cells_.size());
   const bool with_gradient = !ghost_grads_.empty();
   const unsigned int np = state_.points.size();
+  const bool bbar = with_gradient && volumetric_locking_ == "bbar";
+  const bool fbar = with_gradient && volumetric_locking_ == "fbar";
+  const unsigned int n_rule = state_.fem.quadrature().size();
   // Each ghost is written by its own host cell only.
 #pragma omp parallel for schedule(static) if (n_cells > 1000)
   for (long k = 0; k < n_cells; ++k) {
     const auto& row = ghost_cells_[k].second;
     const int* lids = &ghost_lids_[k * n];
+    // B-bar: the cell's mean dilatation θ̄; F-bar: its mean J̄ (both over the FEM's rule).
+    double cell_mean = 0;
+    if (bbar || fbar) {
+      const Tensor<1, dim>* cg = &cell_grads_[k * n_rule * n];
+      const double* w = &cell_weights_[k * n_rule];
+      for (unsigned int r = 0; r < n_rule; ++r) {
+        Tensor<2, dim> F_r = unit_symmetric_tensor<dim>();
+        for (unsigned int i = 0; i < n; ++i)
+          F_r[component[i]] += uu[lids[i]] * cg[r * n + i];
+        cell_mean += w[r] * (bbar ? trace(F_r) - dim : determinant(F_r));
+      }
+    }
     for (unsigned int q = 0; q < row.size(); ++q) {
       if (row[q] < 0)
         continue;
@@ -186,11 +222,27 @@ void GhostLayer<dim>::update() {
         state_.particles.velocity(row[q])[d] = b[dim + d];
       }
       if (with_gradient) {
-        // F = I + Σ_i u_i e_c(i) ⊗ ∇N_i at the ghost.
+        // F = I + Σ_i u_i e_c(i) ⊗ ∇N_i at the ghost, modified as the FEM's own.
         Tensor<2, dim> F = unit_symmetric_tensor<dim>();
         const Tensor<1, dim>* grad = &ghost_grads_[(k * np + q) * n];
         for (unsigned int i = 0; i < n; ++i)
           F[component[i]] += uu[lids[i]] * grad[i];
+        if (bbar) {
+          // B-bar (fem/mean_dilatation.h): the cell's mean dilatation θ̄ replaces tr H. In
+          // plane strain the FEM spreads it over three normal strains, one of them H_zz,
+          // which a dim × dim gradient has not: spread over the in-plane pair, the dilatation
+          // (so the pressure) is the FEM's and the in-plane normal strains are off by
+          // (θ̄ − tr H)/6.
+          const double shift = (cell_mean - (trace(F) - dim)) / dim;
+          for (unsigned int d = 0; d < dim; ++d)
+            F[d][d] += shift;
+        } else if (fbar) {
+          // F-bar (fem/f_bar.h): F̄ = (J̄ / J)^(1/d) F, J̄ the cell's mean of det F. An
+          // inverted point or mean leaves F as it is: the FEM's own update reports it.
+          const double J = determinant(F);
+          if (J > 0.0 && cell_mean > 0.0)
+            F *= std::pow(cell_mean / J, 1.0 / dim);
+        }
         state_.driven_gradients[row[q]] = F;
       }
     }

@@ -9,6 +9,7 @@
 #include "coupling/particle_halo.h"
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace spinesim::coupling {
@@ -46,6 +47,13 @@ class GhostLayer {
   // component) at the point in real coordinates, [cell][q][i]; empty unless the ghosts take
   // the FEM's gradient (CouplingState::ghost_gradients_from_fem).
   std::vector<dealii::Tensor<1, dim>> ghost_grads_;
+  // With a B-bar or F-bar FEM (Mechanics/Volumetric locking) the ghosts take its modified
+  // gradient, which needs the cell's mean dilatation (mean J): per ghost cell and quadrature
+  // point r of the FEM's rule, the DoFs' shape gradients (component part), [cell][r][i], and
+  // the point's share of the cell's volume JxW_r / V, [cell][r].
+  std::vector<dealii::Tensor<1, dim>> cell_grads_;
+  std::vector<double> cell_weights_;
+  std::string volumetric_locking_ = "none";
 };
 
 } // namespace spinesim::coupling

@@ -109,15 +109,17 @@ class ParticleMethod {
   // Particles whose motion is prescribed from outside (the ghosts of a coupled run): a bond
   // between two of them never breaks. Empty = none. Call before initialise().
   virtual void set_driven(std::vector<std::uint8_t> driven) { (void)driven; }
-  // Deformation gradients of the driven particles from the model that drives them (the FEM's
-  // displacement gradient at a coupling ghost), indexed by particle; entries of particles that
-  // are not driven are never read. A method whose stress comes from a family's gradient then
-  // evaluates a driven particle's family at this gradient instead of its own, so a ghost
-  // carries the driving model's stress even where its family straddles a change of material.
-  // nullptr (default): every family uses its own gradient. The vector is owned by the caller
-  // and read at every force pass; set_driven() says which entries are driven.
-  virtual void set_driven_gradients(const std::vector<dealii::Tensor<2, dim>>* gradients) {
+  // Deformation gradients of driven particles from the model that drives them (the FEM's
+  // displacement gradient at a coupling ghost), indexed by particle, and which particles take
+  // theirs (`which[i]` = 1). A method whose stress comes from a family's gradient then
+  // evaluates such a particle's family at this gradient instead of its own, so a ghost carries
+  // the driving model's stress even where its family straddles a change of material. The
+  // vector is owned by the caller and read at every force pass. nullptr (default): every family
+  // uses its own gradient.
+  virtual void set_driven_gradients(const std::vector<dealii::Tensor<2, dim>>* gradients,
+                                    std::vector<std::uint8_t> which) {
     (void)gradients;
+    (void)which;
   }
   // Particles [first, size) are ghosts of a distributed zone: copies of other ranks' particles
   // that the exchange moves, held so that the rows of the owned ones are whole. Their forces

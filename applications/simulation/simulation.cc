@@ -331,7 +331,11 @@ void Simulation<dim>::build(RunContext& ctx) {
       ctx.log() << "  particles: " << coupled_->n_free_particles() << " free from t = 0 ("
                 << coupled_->n_converted_cells() << " cells), " << coupled_->n_ghost_particles()
                 << " ghosts; spacing " << coupled_->particle_spacing() << " m, horizon "
-                << coupled_->horizon() << " m\n";
+                << coupled_->horizon() << " m; ghost families at the FEM's gradient: "
+                << (!coupled_->ghosts_take_fem_gradient()   ? "none"
+                    : coupling_prm_.ghost_gradient == "fem" ? "all"
+                                                            : "where they reach another material")
+                << " (Coupling/Ghost gradient = " << coupling_prm_.ghost_gradient << ")\n";
       log_coupling_messages(ctx);
     }
     coupled_->set_energy_account(sim_.energy_account);

@@ -63,8 +63,9 @@ class NosbMethod : public ParticleMethod<dim> {
     driven_ = driven;
     pd_.set_driven(std::move(driven));
   }
-  void set_driven_gradients(const std::vector<dealii::Tensor<2, dim>>* gradients) override {
-    pd_.set_driven_gradients(gradients);
+  void set_driven_gradients(const std::vector<dealii::Tensor<2, dim>>* gradients,
+                            std::vector<std::uint8_t> which) override {
+    pd_.set_driven_gradients(gradients, std::move(which));
   }
   void set_first_ghost(unsigned int first) override { pd_.set_first_ghost(first); }
   std::optional<std::vector<dealii::Tensor<1, dim>>>

@@ -848,8 +848,8 @@ void NosbPD<dim>::set_particle_state(unsigned int i, const materials::MaterialSt
     materials::MaterialState s = state;
     // An inverted family keeps the state as carried: its first force pass reports it.
     if (h < family.size() && family[h] >= 0) {
-      const materials::Tensor2 F_to = materials::embed_plane_strain(
-          fam.deformation_gradient(family[h], particles.displacements()));
+      const materials::Tensor2 F_to =
+          materials::embed_plane_strain(family_gradient(fam, family[h], particles.displacements()));
       if (dealii::determinant(F_to) > 0.0 && dealii::determinant(F_from) > 0.0)
         s = law_of(particles, i).transferred_state(state, F_from, F_to);
     }

@@ -263,10 +263,12 @@ class NosbPD {
   void set_reference_temperature(double T) { reference_temperature_ = T; }
   // Driven particles (coupling ghosts): a bond between two of them never breaks.
   void set_driven(std::vector<std::uint8_t> driven) { driven_ = std::move(driven); }
-  // Gradients of the driven particles from the driving model (ParticleMethod::
-  // set_driven_gradients): a family centred on a driven particle takes its entry.
-  void set_driven_gradients(const std::vector<dealii::Tensor<2, dim>>* gradients) {
+  // Gradients of driven particles from the driving model (ParticleMethod::
+  // set_driven_gradients): a family centred on a particle with which[i] = 1 takes its entry.
+  void set_driven_gradients(const std::vector<dealii::Tensor<2, dim>>* gradients,
+                            std::vector<std::uint8_t> which) {
     driven_gradients_ = gradients;
+    takes_driven_gradient_ = std::move(which);
   }
   // Particles [first, size) are a distributed zone's ghosts (ParticleMethod::set_first_ghost):
   // their owners report their failures.
@@ -293,13 +295,14 @@ class NosbPD {
                     const ParticleSet<dim>& particles, materials::MaterialState* trial,
                     bool with_tangent) const;
   void compute_particle_gradients(const ParticleSet<dim>& particles);
-  // F of family e of `fam` at u: the driving model's gradient when its centre is driven and
-  // set_driven_gradients() gave one, else the family's own.
+  // F of family e of `fam` at u: the driving model's gradient when set_driven_gradients()
+  // marked its centre, else the family's own.
   dealii::Tensor<2, dim> family_gradient(const CorrespondenceFamilies<dim>& fam, unsigned int e,
                                          const std::vector<dealii::Tensor<1, dim>>& u) const {
     if (driven_gradients_) {
       const unsigned int c = fam.centre(e);
-      if (c < driven_.size() && driven_[c] && c < driven_gradients_->size())
+      if (c < takes_driven_gradient_.size() && takes_driven_gradient_[c] &&
+          c < driven_gradients_->size())
         return (*driven_gradients_)[c];
     }
     return fam.deformation_gradient(e, u);
@@ -361,6 +364,7 @@ class NosbPD {
   }
   std::vector<std::uint8_t> driven_;
   const std::vector<dealii::Tensor<2, dim>>* driven_gradients_ = nullptr;
+  std::vector<std::uint8_t> takes_driven_gradient_;
   unsigned int first_ghost_ = ~0u;
   // (row, bond) of the bonds whose partner has no bond row of its own, in bond order
   // (update_families): the pair forces of compute_forces that no row of the partner adds.

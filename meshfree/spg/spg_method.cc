@@ -117,7 +117,7 @@ void SpgMethod<dim>::initialise(const ParticleSet<dim>& particles, const BondLis
   solver_->set_break_decider(break_decider_);
   if (driven)
     solver_->set_driven(driven_);
-  solver_->set_driven_gradients(driven_gradients_);
+  solver_->set_driven_gradients(driven_gradients_, takes_driven_gradient_);
   for (unsigned int i = 0; i < kept_.size() && i < particles.size(); ++i)
     solver_->set_state(i, kept_[i]);
   kept_.clear();

@@ -59,10 +59,12 @@ class SpgMethod : public ParticleMethod<dim> {
     return !(prm_.stabilisation > 0.0) || prm_.smoothing_interval == 1;
   }
   void set_driven(std::vector<std::uint8_t> driven) override { driven_ = std::move(driven); }
-  void set_driven_gradients(const std::vector<dealii::Tensor<2, dim>>* gradients) override {
+  void set_driven_gradients(const std::vector<dealii::Tensor<2, dim>>* gradients,
+                            std::vector<std::uint8_t> which) override {
     driven_gradients_ = gradients;
+    takes_driven_gradient_ = std::move(which);
     if (solver_)
-      solver_->set_driven_gradients(gradients);
+      solver_->set_driven_gradients(gradients, takes_driven_gradient_);
   }
   void set_first_ghost(unsigned int first) override { first_ghost_ = first; }
   // A particle zone's checkpoint: the committed material states (plastic strain, D_f).
@@ -160,6 +162,7 @@ class SpgMethod : public ParticleMethod<dim> {
   }
   std::vector<std::uint8_t> driven_;
   const std::vector<dealii::Tensor<2, dim>>* driven_gradients_ = nullptr;
+  std::vector<std::uint8_t> takes_driven_gradient_;
   unsigned int first_ghost_ = ~0u;                                // set_first_ghost()
   std::function<bool(unsigned int, unsigned int)> break_decider_; // set_break_decider()
   bool breaking_ = true;                                          // disable_breaking()

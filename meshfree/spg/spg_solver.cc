@@ -217,8 +217,7 @@ void SPGSolver<dim>::compute_forces(ParticleSet<dim>& p) {
       Frel[i][i] += 1.0;
     uh_[N] = shift_[N] + ubar;
     residual_[N] = eN - ubar;
-    const bool from_driver = tl && driven_gradients_ && N < driven_.size() && driven_[N] &&
-                             N < driven_gradients_->size();
+    const bool from_driver = tl && takes_driven_gradient(N);
     const Matrix F = from_driver ? (*driven_gradients_)[N] : tl ? Frel : Frel * Fr_[N];
     const materials::Tensor2 F3 = materials::embed_plane_strain(F);
     Matrix P;
@@ -493,7 +492,7 @@ SPGSolver<dim>::deformation_gradient(unsigned int i,
                                      const std::vector<dealii::Tensor<1, dim>>& d) const {
   if (mode_ != KernelUpdate::total_lagrangian)
     throw std::logic_error("SPGSolver::deformation_gradient: total Lagrangian kernels only");
-  if (driven_gradients_ && i < driven_.size() && driven_[i] && i < driven_gradients_->size())
+  if (takes_driven_gradient(i))
     return (*driven_gradients_)[i];
   const auto& rk = *rk_;
   Matrix F = outer_product(d[i], rk.self_gradient[i]);

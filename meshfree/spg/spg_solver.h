@@ -128,11 +128,13 @@ class SPGSolver {
   void set_reference_temperature(double t) { reference_temperature_ = t; }
   // Particles whose coefficients are prescribed from outside: a bond between two never breaks.
   void set_driven(std::vector<std::uint8_t> driven) { driven_ = std::move(driven); }
-  // Gradients of the driven particles from the driving model (ParticleMethod::
-  // set_driven_gradients): a driven row's stress is its law at that gradient (total
-  // Lagrangian kernels).
-  void set_driven_gradients(const std::vector<dealii::Tensor<2, dim>>* gradients) {
+  // Gradients of driven particles from the driving model (ParticleMethod::
+  // set_driven_gradients): the stress of a row with which[i] = 1 is its law at that gradient
+  // (total Lagrangian kernels).
+  void set_driven_gradients(const std::vector<dealii::Tensor<2, dim>>* gradients,
+                            std::vector<std::uint8_t> which) {
     driven_gradients_ = gradients;
+    takes_driven_gradient_ = std::move(which);
   }
   // Deferred commits: compute_forces() keeps the new material state as a trial.
   void set_deferred_commit(bool deferred) { deferred_commit_ = deferred; }
@@ -271,6 +273,11 @@ class SPGSolver {
   std::vector<materials::MaterialState> state_, committed_;
   std::vector<std::uint8_t> has_row_, complete_, driven_;
   const std::vector<dealii::Tensor<2, dim>>* driven_gradients_ = nullptr;
+  std::vector<std::uint8_t> takes_driven_gradient_;
+  bool takes_driven_gradient(unsigned int i) const {
+    return driven_gradients_ && i < takes_driven_gradient_.size() && takes_driven_gradient_[i] &&
+           i < driven_gradients_->size();
+  }
   bool external_rows_ = false, deferred_commit_ = false, breaking_ = true, counting_step_ = true;
   double reference_temperature_ = 0;
   std::vector<std::pair<unsigned int, unsigned int>> newly_broken_;

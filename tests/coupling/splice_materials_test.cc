@@ -10,7 +10,8 @@
 // a ghost's family reaches into the soft zone, and the stiff law at that mixed gradient puts
 // on the free particles a stress the FEM does not carry; the overlap splice never hands it to
 // the FEM, so the FEM's reaction and the particles' load disagree. With `fem` the ghosts take
-// the FEM's own gradient and stress.
+// the FEM's own gradient and stress. GhostGradient.* checks that gradient against the FEM's
+// point-wise, B-bar and F-bar kinematics.
 #include "coupling/fem_particle_coupling.h"
 #include "fem/materials/law_parameters.h"
 #include "fem/mechanics_solver.h"
@@ -20,6 +21,7 @@
 #include <deal.II/base/function.h>
 #include <deal.II/base/mpi.h>
 #include <deal.II/distributed/tria.h>
+#include <deal.II/numerics/vector_tools.h>
 
 #include <gtest/gtest.h>
 
@@ -138,6 +140,7 @@ void splice_across_materials(const std::string& method) {
     const double margin = clear ? 0.8 * cell : 0.0;
     const auto with_fem = layered_bar<dim>(method, "fem", 0.25 + margin, 0.75 - margin);
     const auto with_family = layered_bar<dim>(method, "family", 0.25 + margin, 0.75 - margin);
+    const auto with_auto = layered_bar<dim>(method, "auto", 0.25 + margin, 0.75 - margin);
     ASSERT_GT(with_fem.free_particles, 0u);
     ASSERT_TRUE(with_fem.converged);
     ASSERT_TRUE(with_family.converged);
@@ -149,6 +152,12 @@ void splice_across_materials(const std::string& method) {
                 << (clear ? "clear of" : "up to") << " the jumps: reaction error " << err_fem
                 << " (ghost gradient fem), " << err_family << " (family); "
                 << with_fem.free_particles << " particles\n";
+    // auto: NOSB takes the FEM's gradient where a ghost's family reaches the other material,
+    // the family's elsewhere, where the field is affine and both agree (the same figure to the
+    // relaxation's tolerance, bound 1e-5); SPG keeps the family's.
+    const double err_auto = with_auto.reaction / with_auto.exact - 1.0;
+    EXPECT_NEAR(err_auto, method == "nosb" ? err_fem : err_family, 1e-5)
+        << method << " " << dim << "-D, auto";
     if (clear) {
       EXPECT_LT(std::abs(err_fem), 1e-5) << method << " " << dim << "-D, clear";
       if (method == "nosb")
@@ -171,6 +180,111 @@ TEST(SpliceAcrossMaterials, SpgGhostsCarryTheFemStress2D) {
 }
 TEST(SpliceAcrossMaterials, SpgGhostsCarryTheFemStress3D) {
   splice_across_materials<3>("spg");
+}
+
+// The ghosts' gradient is the FEM's own, with its volumetric-locking treatment. Under
+// u = (a x y, 0[, 0]) the Q1 gradient varies inside a cell (H_xx = a y, H_xy = a x), so the
+// three treatments differ at every ghost: none, tr H = a y at the ghost; B-bar, a y_c, the
+// cell's mean dilatation (fem/mean_dilatation.h); F-bar (finite strain), det F̄ = 1 + a y_c, the
+// cell's mean J (fem/f_bar.h). Exact for Q1 on these cells: round-off bound 1e-12 on a
+// gradient of order a = 1e-3. Checked on the ghosts of cells clear of the converted block.
+template <int dim>
+void ghosts_take_the_fems_modified_gradient(const std::string& locking) {
+  const double a = 1e-3, h = 1.0 / 8;
+  dealii::parallel::distributed::Triangulation<dim> tria(MPI_COMM_WORLD);
+  fem::MeshParameters mesh;
+  mesh.origin = {0, 0, 0};
+  mesh.lengths = {1, 1, 1};
+  mesh.subdivisions = {8u, 8u, 8u};
+  fem::build_mesh(mesh, tria);
+  typename fem::MechanicsSolver<dim>::Parameters mech;
+  mech.time_integration = "explicit";
+  mech.volumetric_locking = locking;
+  if (locking == "fbar")
+    mech.kinematics = "finite_strain";
+  fem::MechanicsSolver<dim> solver(tria, mech);
+  materials::LawParameters law;
+  law.poisson_ratio = 0.3;
+  solver.set_material(0, materials::create_law(law));
+  solver.setup();
+  dealii::ParameterHandler prm;
+  meshfree::declare_particle_method_sections(prm);
+  prm.enter_subsection("NOSB");
+  prm.set("Horizon ratio", "2.015");
+  prm.leave_subsection();
+  typename FemParticleCoupling<dim>::Parameters cp;
+  cp.particles_method = "nosb";
+  cp.make_method = meshfree::particle_method_maker<dim>("nosb", prm, "test");
+  cp.particles_per_direction = 2;
+  cp.region_lower = std::vector<double>(dim, 0.375);
+  cp.region_upper = std::vector<double>(dim, 0.625);
+  FemParticleCoupling<dim> coupling(cp, solver);
+  coupling.initialise();
+  ASSERT_TRUE(coupling.ghosts_take_fem_gradient());
+
+  class Shear : public dealii::Function<dim> {
+   public:
+    explicit Shear(double a) : dealii::Function<dim>(dim), a_(a) {}
+    double value(const dealii::Point<dim>& x, unsigned int c) const override {
+      return c == 0 ? a_ * x[0] * x[1] : 0.0;
+    }
+
+   private:
+    double a_;
+  };
+  typename fem::MechanicsSolver<dim>::VectorType u(solver.lumped_mass()), v(solver.lumped_mass());
+  v = 0;
+  dealii::VectorTools::interpolate(solver.mapping(), solver.dof_handler(), Shear(a), u);
+  solver.set_state(u, v);
+  coupling.refresh();
+
+  unsigned int checked = 0;
+  for (unsigned int i = 0; i < coupling.particles().size(); ++i) {
+    if (coupling.is_free(i) || !coupling.is_owned(i))
+      continue;
+    const auto& X = coupling.particles().reference_position(i);
+    // Cells touching the converted block share its interface nodes, which the particles'
+    // fit drives: only the others carry the imposed field at all their nodes.
+    bool touches = true;
+    for (unsigned int d = 0; d < dim; ++d) {
+      const double lo = std::floor(X[d] / h) * h;
+      touches = touches && lo + h >= 0.375 - 1e-12 && lo <= 0.625 + 1e-12;
+    }
+    if (touches)
+      continue;
+    const double y_c = (std::floor(X[1] / h) + 0.5) * h;
+    const auto& F = coupling.ghost_gradient(i);
+    // The point's own shear: F̄ = (J̄/J)^(1/d) F scales every entry (F-bar), so there the ratio
+    // F̄_01 / F̄_11 keeps it; B-bar moves only the normal strains.
+    EXPECT_NEAR(locking == "fbar" ? F[0][1] / F[1][1] : F[0][1], a * X[0], 1e-12)
+        << "ghost " << i << " at " << X; // the deviator is the point's
+    if (locking == "fbar")
+      EXPECT_NEAR(dealii::determinant(F), 1.0 + a * y_c, 1e-12) << "ghost " << i;
+    else
+      EXPECT_NEAR(dealii::trace(F) - dim, a * (locking == "bbar" ? y_c : X[1]), 1e-12)
+          << "ghost " << i;
+    ++checked;
+  }
+  EXPECT_GT(dealii::Utilities::MPI::sum(checked, MPI_COMM_WORLD), 0u);
+}
+
+TEST(GhostGradient, PointwiseWithoutLockingTreatment2D) {
+  ghosts_take_the_fems_modified_gradient<2>("none");
+}
+TEST(GhostGradient, PointwiseWithoutLockingTreatment3D) {
+  ghosts_take_the_fems_modified_gradient<3>("none");
+}
+TEST(GhostGradient, MeanDilatationWithBbar2D) {
+  ghosts_take_the_fems_modified_gradient<2>("bbar");
+}
+TEST(GhostGradient, MeanDilatationWithBbar3D) {
+  ghosts_take_the_fems_modified_gradient<3>("bbar");
+}
+TEST(GhostGradient, MeanJacobianWithFbar2D) {
+  ghosts_take_the_fems_modified_gradient<2>("fbar");
+}
+TEST(GhostGradient, MeanJacobianWithFbar3D) {
+  ghosts_take_the_fems_modified_gradient<3>("fbar");
 }
 
 } // namespace
