@@ -7,8 +7,9 @@
 // x86-64-v3 (AVX2, FMA) and x86-64-v4 (AVX-512), each in its own translation unit. The first
 // call picks the highest variant the CPU runs; SPINESIM_KERNEL_ISA=baseline or x86-64-v3 caps
 // it (baseline: the same bits on every machine, FMA rounds differently). Measured on the
-// LAMMPS comparison cube (docs/benchmarks.md): v3 is 1.3x the baseline (FMA, VEX encoding,
-// -O3 scheduling of the same loop), v4 (hardware gathers, 8 bonds per vector) about 1.8x v3.
+// LAMMPS comparison cube (docs/benchmarks.md): v3 is 1.2-1.3x the baseline (FMA, VEX encoding,
+// -O3 scheduling of the same loop); v4 (8 bonds per vector, neighbours by masked loads in 3-D
+// and gathers in 2-D, the bond streams prefetched) 2.3x v3 on an AMD EPYC.
 // Every variant sums each particle's row on its own, so forces never depend on the threads.
 
 #include <cstddef>

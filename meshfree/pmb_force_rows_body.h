@@ -43,6 +43,25 @@ inline double multiply_add(double a, double b, double acc) {
 }
 #endif
 
+// The bond arrays are read once per step in order, four streams at once, and the hardware
+// prefetchers of the machines measured did not keep ahead of them (docs/benchmarks.md): ask
+// for the lines prefetch_bonds_ahead bonds on. The addresses are formed as integers, as they
+// may lie past the arrays' ends, where a prefetch is harmless.
+constexpr std::size_t prefetch_bonds_ahead = 256;
+
+template <int dim>
+inline void prefetch_bond_streams(const PmbForceRows<dim>& r, std::size_t k) {
+  const std::size_t a = k + prefetch_bonds_ahead;
+  const auto ahead = [a](const void* p, std::size_t size) {
+    __builtin_prefetch(
+        reinterpret_cast<const void*>(reinterpret_cast<std::uintptr_t>(p) + a * size));
+  };
+  ahead(r.nb, sizeof(*r.nb));
+  ahead(r.len, sizeof(*r.len));
+  ahead(r.kb, sizeof(*r.kb));
+  ahead(r.broken, sizeof(*r.broken));
+}
+
 template <int dim>
 std::size_t pmb_force_rows_body(const PmbForceRows<dim>& r, std::size_t begin, std::size_t end,
                                 int& bad) {
@@ -71,6 +90,7 @@ std::size_t pmb_force_rows_body(const PmbForceRows<dim>& r, std::size_t begin, s
     const std::size_t row_end = off[i + 1];
     constexpr unsigned int block = 8;
     for (; k + block <= row_end; k += block) {
+      prefetch_bond_streams(r, k);
       double y[3][block], l2[block], coefficient[block], breaking[block];
       for (unsigned int b = 0; b < block; ++b) {
         const std::size_t j = nb[k + b];

@@ -34,7 +34,8 @@ spinesim_add_scene_test(meshfree.pd_explicit_throughput_energy SCENE ${_bench}/p
 # The LAMMPS ratio itself: spinesim and LAMMPS peri/pmb back to back on the same cube, 5
 # same-minute pairs on 1 and on 2 cores; fails unless both medians reach 8x (the target of
 # docs/benchmarks.md), and fails when LAMMPS is missing. Needs `apt-get install lammps`. Known to fall short
-# today (medians 5.4 and 5.9 with the x86-64-v4 loop, docs/benchmarks.md), hence known_failure.
+# today (medians 7.9 on 1 core and 6.8-7.7 on 2 on an AMD EPYC with the packed, prefetched
+# x86-64-v4 loop; 5.4 and 5.9 with its gathers on a Sapphire Rapids; docs/benchmarks.md), hence known_failure.
 add_test(NAME benchmark.pd_lammps_ratio
          COMMAND ${CMAKE_COMMAND} -E env SPINESIM=$<TARGET_FILE:spinesim> MIN_RATIO=8 "CORES=1 2"
                  OUT=${CMAKE_CURRENT_BINARY_DIR}/runs/benchmark.pd_lammps_ratio
