@@ -289,6 +289,21 @@ class MechanicsSolver {
   dealii::Tensor<1, dim> reaction_force(const std::set<dealii::types::boundary_id>& ids) const;
   // This rank's share of it (its owned DoFs), for callers that add parts and reduce once.
   dealii::Tensor<1, dim> local_reaction_force(dealii::types::boundary_id id) const;
+  // The two sides of the body's static balance (the virial theorem: at equilibrium without
+  // body forces ∫ σ dV = Σ X ⊗ F over the forces F acting on the body at points X).
+  // ∫ σ dV over the active cells, σ the work stress (P with finite strain), over all ranks
+  // [N·m; 2-D: N per unit thickness]. Collective.
+  dealii::Tensor<2, dim> stress_integral() const;
+  // Σ_a (X_a − origin) ⊗ e_c r_a with r = f_int − f_ext of the last assembly or step at the
+  // owned DoFs (X the DoF's reference support point, c its component), and Σ_a e_c r_a, by kind
+  // of DoF: Dirichlet (the supports' forces on the body), driven (set_driven_dofs: what the
+  // model that drives them must supply) and the rest (zero at equilibrium). Over all ranks
+  // [N·m, N]. Collective.
+  struct ResidualVirial {
+    dealii::Tensor<2, dim> dirichlet, driven, rest;
+    dealii::Tensor<1, dim> dirichlet_force, driven_force, rest_force;
+  };
+  ResidualVirial residual_virial(const dealii::Point<dim>& origin = {}) const;
   double strain_energy() const;                 // ∫ (stress work − plastic work) dV [J]
   double max_von_mises() const;                 // over all quadrature points [Pa]
   double kinetic_energy() const;                // ½ vᵀ M v with the lumped mass [J]

@@ -185,6 +185,72 @@ MechanicsSolver<dim>::current_deformation_gradients(const CellIterator& cell) co
 }
 
 template <int dim>
+Tensor<2, dim> MechanicsSolver<dim>::stress_integral() const {
+  refresh_states();
+  FEValues<dim> fe_values(*mapping_, fe_, quadrature_, update_JxW_values);
+  Tensor<2, dim> integral;
+  for (const auto& cell : dof_handler_.active_cell_iterators())
+    if (cell->is_locally_owned() && is_active(cell)) {
+      fe_values.reinit(cell);
+      const auto data = quadrature_point_data(cell);
+      for (unsigned int q = 0; q < quadrature_.size(); ++q)
+        for (unsigned int i = 0; i < dim; ++i)
+          for (unsigned int j = 0; j < dim; ++j)
+            integral[i][j] += data[q].work_stress[i][j] * fe_values.JxW(q);
+    }
+  return Utilities::MPI::sum(integral, comm_);
+}
+
+template <int dim>
+typename MechanicsSolver<dim>::ResidualVirial
+MechanicsSolver<dim>::residual_virial(const Point<dim>& origin) const {
+  // Σ_a X_a ⊗ f_int,a = ∫ σ dV holds DoF by DoF for an isoparametric element (Σ_a X_a N_a = X),
+  // hanging DoFs included: the linear path condenses their rows into their masters, whose
+  // support points interpolate theirs.
+  std::map<types::global_dof_index, Point<dim>> support;
+  DoFTools::map_dofs_to_support_points(*mapping_, dof_handler_, support);
+  std::vector<std::uint8_t> kind(owned_.n_elements(), 0); // 1 Dirichlet, 2 driven
+  if (dirichlet_dofs_ready_) {
+    for (const auto& list : dirichlet_dofs_)
+      for (const auto& b : list)
+        kind[b.local] = 1;
+  } else {
+    for (const auto& condition : bcs_.dirichlet()) {
+      std::map<types::global_dof_index, double> dofs;
+      BoundaryConditions<dim>::interpolate(condition, *mapping_, dof_handler_,
+                                           Functions::ZeroFunction<dim>(dim), dofs);
+      for (const auto& [dof, zero] : dofs)
+        if (owned_.is_element(dof))
+          kind[owned_.index_within_set(dof)] = 1;
+    }
+  }
+  for (const auto& [dof, value] : driven_)
+    if (owned_.is_element(dof) && kind[owned_.index_within_set(dof)] == 0)
+      kind[owned_.index_within_set(dof)] = 2;
+  Tensor<2, dim> part[3];
+  Tensor<1, dim> force[3];
+  std::size_t k = 0;
+  for (auto it = owned_.begin(); it != owned_.end(); ++it, ++k) {
+    const double r = raw_residual_(*it);
+    if (r == 0.0)
+      continue;
+    const Tensor<1, dim> X = support.at(*it) - origin;
+    const unsigned int c = owned_component_[k];
+    for (unsigned int i = 0; i < dim; ++i)
+      part[kind[k]][i][c] += X[i] * r;
+    force[kind[k]][c] += r;
+  }
+  ResidualVirial v;
+  v.rest = Utilities::MPI::sum(part[0], comm_);
+  v.dirichlet = Utilities::MPI::sum(part[1], comm_);
+  v.driven = Utilities::MPI::sum(part[2], comm_);
+  v.rest_force = Utilities::MPI::sum(force[0], comm_);
+  v.dirichlet_force = Utilities::MPI::sum(force[1], comm_);
+  v.driven_force = Utilities::MPI::sum(force[2], comm_);
+  return v;
+}
+
+template <int dim>
 double MechanicsSolver<dim>::strain_energy() const {
   if (states_stale_ && explicit_matrix_ready_ && linear_explicit()) {
     // Linear path: ½ uᵀ K u (K over the active cells) without refreshing the point states,
@@ -320,6 +386,9 @@ std::string MechanicsSolver<dim>::write_output(
   template Vector<double> MechanicsSolver<dim>::cell_plastic_dissipation_rate() const;             \
   template double MechanicsSolver<dim>::plastic_work() const;                                      \
   template double MechanicsSolver<dim>::strain_energy() const;                                     \
+  template Tensor<2, dim> MechanicsSolver<dim>::stress_integral() const;                           \
+  template typename MechanicsSolver<dim>::ResidualVirial MechanicsSolver<dim>::residual_virial(    \
+      const Point<dim>&) const;                                                                    \
   template std::optional<std::vector<materials::Tensor2>>                                          \
   MechanicsSolver<dim>::current_deformation_gradients(const CellIterator&) const;                  \
   template double MechanicsSolver<dim>::max_von_mises() const;                                     \

@@ -137,6 +137,20 @@ void Simulation<dim>::record(unsigned int step, double time, RunContext& ctx) {
     if (quasi_static_) {
       row.emplace_back("relaxation_iterations", last_relaxation_.iterations);
       row.emplace_back("relaxation_relative_residual", last_relaxation_.relative_residual);
+      if (coupled_->carries_material_state()) {
+        // The static balance of both models together (FemParticleCoupling::virial_balance).
+        const auto balance = coupled_->virial_balance(); // collective
+        const double imbalance = balance.imbalance_relative;
+        row.emplace_back("virial_imbalance_relative", imbalance);
+        row.emplace_back("unbalanced_force", balance.net_force.norm());
+        if (!(imbalance <= virial_imbalance_warning))
+          ctx.log() << "  warning: t = " << time << " s: the stress both models carry is "
+                    << 100 * imbalance
+                    << " % off the forces on the body (virial_imbalance_relative): the "
+                       "particles carry a load the FEM does not see, or the other way round; "
+                       "with NOSB-PD see Coupling/Ghost gradient (docs/coupling.md)"
+                    << std::endl;
+      }
     }
     if (heat_) {
       row.emplace_back("fracture_dissipation", coupled_->fracture_dissipation());
@@ -276,6 +290,21 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
     if (quasi_static_) {
       s.set_figure("relaxation_iterations", double(relaxation_iterations_), "iterations");
       s.set_figure("relaxation_relative_residual", last_relaxation_.relative_residual, "-");
+      const auto& history = ctx.history();
+      const auto& columns = history.columns();
+      const std::string column = "virial_imbalance_relative";
+      if (history.size() > 0 &&
+          std::find(columns.begin(), columns.end(), column) != columns.end()) {
+        // The largest over the recorded steps (NaN if any step's is), and the last step's.
+        double largest = 0;
+        for (std::size_t r = 0; r < history.size(); ++r) {
+          const double v = history.value(r, column);
+          largest = std::isnan(v) || std::isnan(largest) ? std::numeric_limits<double>::quiet_NaN()
+                                                         : std::max(largest, v);
+        }
+        s.set_figure("virial_imbalance_relative_max", largest, "-");
+        s.set_figure("virial_imbalance_relative", history.value(history.size() - 1, column), "-");
+      }
     }
     s.set_figure("particle_spacing_m", coupled_->particle_spacing(), "m");
     if (coupled_->n_free_particles() > 0 && coupled_->carries_material_state()) {

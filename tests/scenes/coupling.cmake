@@ -69,6 +69,17 @@ spinesim_add_comparison_test(coupling.quasi_static_3d_agrees_with_fem
   A ${_qs_runs}/fem_3d/summary.json B ${_qs_runs}/coupled_3d/summary.json
   CHECKS "reaction_force_norm:rel:2e-4;strain_energy:rel:2e-3"
   REQUIRES "qs_coupled_3d;qs_fem_3d" LABELS "scene;coupling")
+# The same plate with NOSB-PD and SPG particles (plane strain): a non-uniform elastic field,
+# so the body's static balance (virial_imbalance_relative) holds only as well as the particles
+# follow the FEM's field near the gripped edges: 8.2e-5 (NOSB) and 8.9e-5 (SPG) measured
+# (the 3-D plate, 141 s, is not run here); bound 1e-3.
+foreach(_m nosb spg)
+  spinesim_add_scene_test(coupling.quasi_static_2d_${_m}_balance SCENE ${_qs}
+    OUT ${_qs_runs}/coupled_2d_${_m}
+    SET "Effects/Particles method=${_m}" "Mechanics/Plane stress=false"
+    EXPECT "status==ok;relaxation_relative_residual<=1e-9;free_particles>=384;virial_imbalance_relative_max<=1e-3"
+    LABELS "scene;validation;coupling")
+endforeach()
 spinesim_add_comparison_test(coupling.quasi_static_ranks_agree
   A ${_qs_runs}/coupled_2d/summary.json B ${_qs_runs}/coupled_2d_2ranks/summary.json
   CHECKS "reaction_force_norm:rel:1e-6;strain_energy:rel:1e-6"
@@ -514,6 +525,10 @@ endforeach()
 # as the particle VTU writes it) is sigma_y = 7 MPa everywhere: measured to 1e-15 (SPG's
 # axial component spreads by 1 Pa); bound 1e-6, where the Cauchy stress of a finite-strain
 # conversion P F^T / J would be 2.7 % low here.
+# The body's static balance (virial_imbalance_relative, FemParticleCoupling::virial_balance):
+# in a uniform field the particles' Σ σ V and the force the FEM's driven DoFs need cancel, so
+# what is left is the relaxation's residual: 8.6e-9 to 1.0e-8 measured (max over the steps,
+# NOSB and SPG, 2-D and 3-D); bound 1e-6 as for the reactions.
 set(_pl ${_val}/coupling_plastic_limit.prm)
 set(_pl2 ${_val}/coupling_plastic_limit_2d.prm)
 set(_pl_runs ${CMAKE_CURRENT_BINARY_DIR}/runs/plastic_limit)
@@ -523,11 +538,11 @@ spinesim_add_scene_test(coupling.plastic_limit_2d_fem SCENE ${_pl2} OUT ${_pl_ru
 foreach(_m nosb spg)
   spinesim_add_scene_test(coupling.plastic_limit_3d_${_m} SCENE ${_pl} OUT ${_pl_runs}/${_m}_3d
     SET "Effects/Particles method=${_m}"
-    EXPECT "status==ok;converted_cells>=64;converted_cells<=64;reaction_force_z~-28:1e-6;peak_load_N~28:1e-6;conversion_reaction_jump_relative<=1e-6;particle_max_von_mises~7e6:1e-6;particle_min_von_mises~7e6:1e-6"
+    EXPECT "status==ok;converted_cells>=64;converted_cells<=64;reaction_force_z~-28:1e-6;peak_load_N~28:1e-6;conversion_reaction_jump_relative<=1e-6;particle_max_von_mises~7e6:1e-6;particle_min_von_mises~7e6:1e-6;virial_imbalance_relative_max<=1e-6"
     LABELS "scene;validation;coupling")
   spinesim_add_scene_test(coupling.plastic_limit_2d_${_m} SCENE ${_pl2} OUT ${_pl_runs}/${_m}_2d
     SET "Effects/Particles method=${_m}"
-    EXPECT "status==ok;converted_cells>=16;converted_cells<=16;conversion_reaction_jump_relative<=1e-6;particle_max_von_mises~7e6:1e-6;particle_min_von_mises~7e6:1e-6"
+    EXPECT "status==ok;converted_cells>=16;converted_cells<=16;conversion_reaction_jump_relative<=1e-6;particle_max_von_mises~7e6:1e-6;particle_min_von_mises~7e6:1e-6;virial_imbalance_relative_max<=1e-6"
     LABELS "scene;validation;coupling" FIXTURE pl_${_m}_2d)
   spinesim_add_comparison_test(coupling.plastic_limit_2d_${_m}_agrees_with_fem
     A ${_pl_runs}/fem_2d/summary.json B ${_pl_runs}/${_m}_2d/summary.json
@@ -1056,6 +1071,10 @@ endforeach()
 # rest is the NOSB families smearing the voxel-to-voxel modulus jumps over a horizon (2
 # particles per cell, 4 per voxel). Bounds 2e-2 and 1e-2. Particles given one law for all
 # would take one of 119 moduli spread 90-fold. The particles run more than 100 distinct laws.
+# Their stress and the force the FEM's driven DoFs need balance to 0.71 % (virial_imbalance_
+# relative; 0.59 % with Coupling/Ghost gradient = family), while the supports' forces sum to
+# 0.94 N of the 41 N reaction (1.3 N with family): the overlap splice hands the force across
+# the voxel jumps incompletely. Bound 0.05, the level the run log warns at.
 set(_ctb ${_val}/coupling_ct_block.prm)
 set(_ctb_runs ${CMAKE_CURRENT_BINARY_DIR}/runs/ct_block)
 set(_ctb_elastic "Material/Model=linear_elastic" "Effects/Conversion=false" "Simulation/Steps=1"
@@ -1063,7 +1082,7 @@ set(_ctb_elastic "Material/Model=linear_elastic" "Effects/Conversion=false" "Sim
     "Coupling/Initial region upper corner=0.001,0.001,-0.002")
 spinesim_add_scene_test(coupling.ct_block_elastic SCENE ${_ctb} OUT ${_ctb_runs}/elastic
   SET ${_ctb_elastic}
-  EXPECT "status==ok;particle_laws>=100;free_particles>=512;relaxation_relative_residual<=1e-8"
+  EXPECT "status==ok;particle_laws>=100;free_particles>=512;relaxation_relative_residual<=1e-8;virial_imbalance_relative<=0.05"
   LABELS "scene;validation;coupling;ct" FIXTURE ctb_elastic)
 spinesim_add_scene_test(coupling.ct_block_elastic_fem SCENE ${_ctb} OUT ${_ctb_runs}/elastic_fem
   SET ${_ctb_elastic} "Effects/Coupling=false" "Effects/Particles method=none"
@@ -1074,7 +1093,9 @@ spinesim_add_comparison_test(coupling.ct_block_elastic_agrees_with_fem
   REQUIRES "ctb_elastic;ctb_elastic_fem" LABELS "scene;coupling;ct")
 # 2 ranks against 1 on a 4 mm cube with a 1 mm particle block (a quick case; the 6 mm one
 # agrees to 4.7e-10): the same laws in the same table order (particle_laws), the relaxation
-# sums reduced in another order: 1.6e-9 measured, bound 1e-6 as for one material.
+# sums reduced in another order: 1.6e-9 measured, bound 1e-6 as for one material. The static
+# balance (0.21 %; owned DoFs and particles summed per rank, then reduced) agrees to 5.7e-9
+# absolute; bound 1e-6.
 set(_ctb_small ${_ctb_elastic} "Geometry/Origin=-0.002,-0.002,-0.004"
     "Geometry/Lengths=0.004,0.004,0.004" "Geometry/Subdivisions=8,8,8"
     "Coupling/Initial region lower corner=-0.0005,-0.0005,-0.0025"
@@ -1088,7 +1109,7 @@ spinesim_add_scene_test(coupling.ct_block_small_2ranks SCENE ${_ctb} OUT ${_ctb_
   LABELS "scene;validation;coupling;ct;mpi" FIXTURE ctb_small_2ranks)
 spinesim_add_comparison_test(coupling.ct_block_ranks_agree
   A ${_ctb_runs}/small/summary.json B ${_ctb_runs}/small_2ranks/summary.json
-  CHECKS "reaction_force_norm:rel:1e-6;strain_energy:rel:1e-6;particle_laws:abs:0"
+  CHECKS "reaction_force_norm:rel:1e-6;strain_energy:rel:1e-6;particle_laws:abs:0;virial_imbalance_relative:abs:1e-6"
   REQUIRES "ctb_small;ctb_small_2ranks" LABELS "scene;coupling;ct;mpi")
 # The same with the real lumped masses: 231 pseudo-steps against 207 with the scaled ones
 # (ratio 0.896, bound 0.95), the same equilibrium to 2e-9 (bound 1e-6). On the 6 mm cube the
