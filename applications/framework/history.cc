@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -89,7 +90,9 @@ std::string History::csv() const {
   std::ostringstream out;
   for (std::size_t i = 0; i < columns_.size(); ++i)
     out << (i ? "," : "") << columns_[i];
-  out << "\n" << std::setprecision(12);
+  // Round-trip precision: a restarted run reads the rows back, and figures taken over the
+  // rows (e.g. the largest virial imbalance) must match the uninterrupted run's.
+  out << "\n" << std::setprecision(std::numeric_limits<double>::max_digits10);
   for (const auto& row : rows_) {
     for (std::size_t i = 0; i < row.size(); ++i)
       out << (i ? "," : "") << row[i];
