@@ -184,8 +184,7 @@ PmbForceRows<dim> make_kernel(ParticleSet<dim>& particles, BondList<dim>& bonds,
           bonds.length.data(),
           k.data(),
           bonds.broken.data(),
-          s0,
-          particles.size()};
+          s0};
 }
 
 template <int dim>

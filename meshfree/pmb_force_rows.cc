@@ -67,20 +67,13 @@ Isa chosen_isa() {
   return chosen;
 }
 
-// The v4 loop's 32-bit gather offsets dim·j (pmb_force_rows_x86_64_v4.cc).
-bool v4_offsets_fit(int dim, std::size_t n_particles) {
-  return n_particles > 0 && std::size_t(dim) * n_particles < (std::size_t(1) << 31);
-}
-
 template <int dim>
 std::size_t run(Isa isa, const PmbForceRows<dim>& rows, std::size_t begin, std::size_t end,
                 int& bad) {
   switch (isa) {
 #ifdef SPINESIM_PMB_X86_64_V4
   case Isa::x86_64_v4:
-    if (v4_offsets_fit(dim, rows.n_particles))
-      return pmb_force_rows_x86_64_v4(rows, begin, end, bad);
-    [[fallthrough]];
+    return pmb_force_rows_x86_64_v4(rows, begin, end, bad);
 #endif
 #ifdef SPINESIM_PMB_X86_64_V3
   case Isa::x86_64_v3:
@@ -109,12 +102,8 @@ std::size_t pmb_force_rows_variant(const char* isa, const PmbForceRows<dim>& row
                                    std::size_t begin, std::size_t end, int& bad) {
   const Isa best = supported_isa();
   for (int v = 0; v <= int(best); ++v)
-    if (std::strcmp(isa, isa_name(Isa(v))) == 0) {
-      if (Isa(v) == Isa::x86_64_v4 && !v4_offsets_fit(dim, rows.n_particles))
-        throw std::invalid_argument("pmb_force_rows_variant: x86-64-v4 needs 0 < dim * "
-                                    "n_particles < 2^31");
+    if (std::strcmp(isa, isa_name(Isa(v))) == 0)
       return run(Isa(v), rows, begin, end, bad);
-    }
   throw std::invalid_argument(std::string("pmb_force_rows_variant: '") + isa +
                               "' is not built or not supported by this CPU");
 }
@@ -126,11 +115,8 @@ std::vector<const char*> pmb_force_rows_variants() {
   return names;
 }
 
-const char* pmb_force_rows_isa(int dim, std::size_t n_particles) {
-  const Isa isa = chosen_isa();
-  if (isa == Isa::x86_64_v4 && !v4_offsets_fit(dim, n_particles))
-    return isa_name(Isa::x86_64_v3);
-  return isa_name(isa);
+const char* pmb_force_rows_isa() {
+  return isa_name(chosen_isa());
 }
 
 template std::size_t pmb_force_rows<2>(const PmbForceRows<2>&, std::size_t, std::size_t, int&);

@@ -8,8 +8,8 @@
 // call picks the highest variant the CPU runs; SPINESIM_KERNEL_ISA=baseline or x86-64-v3 caps
 // it (baseline: the same bits on every machine, FMA rounds differently). Measured on the
 // LAMMPS comparison cube (docs/benchmarks.md): v3 is 1.2-1.3x the baseline (FMA, VEX encoding,
-// -O3 scheduling of the same loop); v4 (8 bonds per vector, neighbours by masked loads in 3-D
-// and gathers in 2-D, the bond streams prefetched) 2.3x v3 on an AMD EPYC.
+// -O3 scheduling of the same loop); v4 (8 bonds per vector, neighbours by plain loads and
+// permutes, the bond streams prefetched) 2.3x v3 on an AMD EPYC.
 // Every variant sums each particle's row on its own, so forces never depend on the threads.
 
 #include <cstddef>
@@ -31,10 +31,6 @@ struct PmbForceRows {
   const double* kb;       // bond stiffness k_ij [N/m^4]
   std::uint8_t* broken;   // bond state, written when a bond breaks
   double s0;              // critical stretch (+inf: no breaking)
-  // Particles the neighbour indices refer to (owned and ghosts). The x86-64-v4 variant gathers
-  // with 32-bit offsets dim·j, so it runs only when dim·n_particles < 2^31; 0 (unknown) keeps
-  // it off.
-  std::size_t n_particles = 0;
 };
 
 // Forces on particles [begin, end); breaks bonds whose stretch exceeds s0. Returns the bond
@@ -58,9 +54,8 @@ std::size_t pmb_force_rows_variant(const char* isa, const PmbForceRows<dim>& row
 // The variants this build has and this CPU runs, baseline first.
 std::vector<const char*> pmb_force_rows_variants();
 
-// The variant pmb_force_rows runs on this machine for rows of n particles of dimension dim:
-// "x86-64-v4", "x86-64-v3" or "baseline".
-const char* pmb_force_rows_isa(int dim = 3, std::size_t n_particles = 1);
+// The variant pmb_force_rows runs on this machine: "x86-64-v4", "x86-64-v3" or "baseline".
+const char* pmb_force_rows_isa();
 
 } // namespace spinesim::meshfree
 

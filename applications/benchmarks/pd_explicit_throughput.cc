@@ -170,7 +170,7 @@ class PdExplicitThroughput : public Scenario {
     ctx.log() << "  " << particles.size() << " particles, " << n_bonds << " bonds ("
               << double(bonds.n_bonds()) / particles.size() << " per particle), dt = " << dt
               << " s, " << omp_get_max_threads() << " thread(s), force loop "
-              << pmb_force_rows_isa(3, particles.size()) << ", setup " << setup_time << " s\n";
+              << pmb_force_rows_isa() << ", setup " << setup_time << " s\n";
 
     // Timed loop: steps only, no output inside.
     ctx.progress().start("pd throughput", b_.steps, b_.steps * dt);
@@ -196,7 +196,7 @@ class PdExplicitThroughput : public Scenario {
 
     Summary& s = ctx.summary();
     s.set_label("force_loop_isa",
-                pmb_force_rows_isa(3, particles.size())); // meshfree/pmb_force_rows.h
+                pmb_force_rows_isa()); // meshfree/pmb_force_rows.h
     s.set_figure("particle_steps_per_s", particles.size() * steps / wall, "1/s");
     s.set_figure("bond_updates_per_s", n_bonds * steps / wall, "1/s");
     s.set_figure("n_particles", particles.size(), "-");

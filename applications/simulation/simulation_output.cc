@@ -304,6 +304,8 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
         }
         s.set_figure("virial_imbalance_relative_max", largest, "-");
         s.set_figure("virial_imbalance_relative", history.value(history.size() - 1, column), "-");
+        s.set_figure("unbalanced_force_N", history.value(history.size() - 1, "unbalanced_force"),
+                     dim == 2 ? "N/m" : "N");
       }
     }
     s.set_figure("particle_spacing_m", coupled_->particle_spacing(), "m");

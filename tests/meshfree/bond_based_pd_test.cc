@@ -74,8 +74,7 @@ PmbForceRows<dim> force_rows(ParticleSet<dim>& p, BondList<dim>& b, const BondBa
           b.length.data(),
           pd.bond_stiffness().data(),
           b.broken.data(),
-          s0,
-          p.size()};
+          s0};
 }
 
 } // namespace
@@ -468,7 +467,7 @@ void check_force_loop_variants_agree() {
   const std::vector<const char*> variants = pmb_force_rows_variants();
   ASSERT_FALSE(variants.empty());
   EXPECT_STREQ(variants.front(), "baseline");
-  const std::string dispatched = pmb_force_rows_isa(dim, p.size());
+  const std::string dispatched = pmb_force_rows_isa();
   EXPECT_TRUE(std::any_of(variants.begin(), variants.end(), [&](const char* v) {
     return dispatched == v;
   })) << dispatched;

@@ -249,8 +249,9 @@ void check_rows_around_first() {
     for (std::size_t k = part.begin(i), q = full.begin(i); k < part.end(i); ++k, ++q) {
       EXPECT_EQ(part.neighbor[k], full.neighbor[q]);
       EXPECT_EQ(part.volume_fraction[k], full.volume_fraction[q]);
-      if (i < m)
+      if (i < m) {
         EXPECT_EQ(part.surface_factor[k], full.surface_factor[q]) << "particle " << i;
+      }
     }
   }
   EXPECT_GT(empty, 0u); // the option did leave rows out
