@@ -148,8 +148,10 @@ std::vector<CellId> CellConverter<dim>::flagged_cells() const {
   const std::vector<Point<dim>> none;
   const PointBins<dim> support_bins(any && clearance > 0 ? support_points() : none,
                                     std::max(clearance, state_.spacing));
+  const auto& kept = state_.prm.unconverted_material_ids;
   const auto may_convert = [&](const DoFCell& cell) {
     return state_.fem.is_active(cell) && in_conversion_region(cell) &&
+           std::find(kept.begin(), kept.end(), cell->material_id()) == kept.end() &&
            !(clearance > 0 && support_bins.any_within(cell->center(), clearance));
   };
   if (any) {

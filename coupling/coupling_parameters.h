@@ -37,9 +37,12 @@ struct CouplingParameters {
   double buffer = 0;                              // converted around flagged cells [m]
   double support_clearance = 0; // no conversion within this of a supported point [m]
   std::vector<double> convert_lower, convert_upper; // cells the criteria may convert (empty = all)
-  unsigned int check_interval = 10;                 // steps between conversion checks
-  bool damage = true;                               // bonds may break (Effects/Damage)
-  std::vector<double> refine_lower, refine_upper;   // box refined before the run [m]
+  // Cells of these material ids stay FEM whatever the criteria say: set by scenarios whose
+  // bodies hold an implant meshed with the bone (its cells never turn into bone particles).
+  std::vector<unsigned int> unconverted_material_ids;
+  unsigned int check_interval = 10;               // steps between conversion checks
+  bool damage = true;                             // bonds may break (Effects/Damage)
+  std::vector<double> refine_lower, refine_upper; // box refined before the run [m]
   unsigned int region_refinements = 0;
   double fracture_heat_fraction = 1.0; // share of broken-bond energy returned as heat [-]
   bool conserve_kinetic_energy = true; // scale the velocity fluctuation at conversion

@@ -38,6 +38,7 @@
 #include "applications/studies/study_plot.h"
 #include "base/exceptions.h"
 #include "base/list_parsing.h"
+#include "coupling/fem_particle_coupling.h"
 #include "fem/ct/ct_box.h"
 #include "fem/displacement_error.h"
 #include "fem/materials/j2_damage.h"
@@ -338,6 +339,8 @@ struct PulloutProgress {
   // Toggling: steps done, and the transverse force at +amplitude and −amplitude per cycle [N].
   unsigned int toggle_step = 0;
   std::vector<double> toggle_plus, toggle_minus;
+  // With particles: the largest relative virial imbalance of the coupled steps so far [-].
+  double imbalance_max = 0;
 
   bool finished() const { return dropped || t >= 1 - 1e-12; }
   nlohmann::json to_json() const {
@@ -361,7 +364,8 @@ struct PulloutProgress {
             {"dropped", dropped},
             {"toggle_step", toggle_step},
             {"toggle_plus", toggle_plus},
-            {"toggle_minus", toggle_minus}};
+            {"toggle_minus", toggle_minus},
+            {"imbalance_max", imbalance_max}};
   }
   void from_json(const nlohmann::json& j) {
     step = j.at("step");
@@ -386,6 +390,7 @@ struct PulloutProgress {
     toggle_step = j.value("toggle_step", 0u);
     toggle_plus = j.value("toggle_plus", std::vector<double>{});
     toggle_minus = j.value("toggle_minus", std::vector<double>{});
+    imbalance_max = j.value("imbalance_max", 0.0);
     if (disp.empty() || disp.size() != force.size() || !(increment > 0))
       throw std::runtime_error("inconsistent pull-out curve");
   }
@@ -408,6 +413,8 @@ class ScrewPullout : public Scenario {
       throw InvalidInput("Mechanics/Boundary conditions",
                          "the scenario holds the block and pulls the screw itself",
                          "no Dirichlet slots here");
+    parse_coupling(args.effects, prm);
+    converting_ = args.effects.coupling;
     const auto& g = screw_.geometry;
     if (!(g.length < block_.depth))
       throw InvalidInput("Block/Depth", fmt(block_.depth * 1e3, 6) + " mm",
@@ -432,9 +439,58 @@ class ScrewPullout : public Scenario {
                              fmt(2e3 * (outer + pull_.margin), 6) + " mm");
     if (ct_box_ && ct_box_->has_labels())
       check_trajectory();
+    if (converting_)
+      check_cubic_cells();
+  }
+
+  // Particles sit on a lattice of the cells' sub-cell centres: the cells that convert must be
+  // cubes, so the coarse cells (halved by the refinement) must be.
+  void check_cubic_cells() const {
+    const double h_target = screw_.geometry.pitch / pull_.cells_per_pitch;
+    const int k =
+        std::max(0, static_cast<int>(std::lround(std::log2(block_.coarse_cell / h_target))));
+    const double coarse = h_target * std::pow(2.0, k);
+    const double across = block_.width / fem::steps_over(block_.width, coarse).size();
+    const double down = block_.depth / fem::steps_over(block_.depth, coarse).size();
+    if (std::max(across, down) > 1.01 * std::min(across, down))
+      throw InvalidInput("Block/Depth",
+                         fmt(block_.depth * 1e3, 6) + " mm gives coarse cells " +
+                             fmt(across * 1e3, 4) + " mm across and " + fmt(down * 1e3, 4) +
+                             " mm deep, but cells that convert to particles must be cubes",
+                         "a depth of a whole number of " + fmt(across * 1e3, 6) +
+                             " mm coarse cells (or a Width that divides like the Depth)");
   }
 
   bool check_by_building() const override { return false; }
+
+  // Effects/Conversion with Effects/Coupling: failed bone turns into particles of the scene's
+  // method, coupled to the FEM (coupling/fem_particle_coupling.h). The screw's cells stay FEM.
+  void parse_coupling(const framework::Effects& effects, dealii::ParameterHandler& prm) {
+    if (effects.conversion != effects.coupling)
+      throw InvalidInput(effects.conversion ? "Effects/Coupling" : "Effects/Conversion", "false",
+                         "both true (failed bone becomes particles coupled to the FEM bulk) or "
+                         "both false");
+    if (!effects.coupling)
+      return;
+    parse_section(prm, "Coupling", coupling_, effects.particles_method);
+    coupling_.damage = damage_on_;
+    coupling_.unconverted_material_ids = {1};
+    if (coupling_.all_particles || !coupling_.region_lower.empty() ||
+        coupling_.region_refinements > 0 || coupling_.has_hole())
+      throw InvalidInput(coupling_.all_particles            ? "Coupling/All particles"
+                         : !coupling_.region_lower.empty()  ? "Coupling/Initial region lower corner"
+                         : coupling_.region_refinements > 0 ? "Coupling/Region refinements"
+                                                            : "Coupling/Hole radius",
+                         "particles from the start or a refinement box in the screw scenario",
+                         "false / empty / 0: the bone is FEM until it fails, and the mesh is "
+                         "refined around the screw by Pullout/Cells per pitch");
+    if (!(coupling_.plastic_strain_threshold > 0 || coupling_.principal_strain_threshold > 0 ||
+          coupling_.min_jacobian_ratio > 0))
+      throw InvalidInput("Coupling/Plastic strain threshold", "0",
+                         "a criterion that converts failing bone: Plastic strain threshold > 0 "
+                         "(e.g. the damage onset), Principal strain threshold > 0 or Minimum "
+                         "Jacobian ratio > 0");
+  }
 
   // With a Label file: the screw's part in the block, sampled on a 0.25 mm grid of its
   // bounding cylinder, must lie in bone labels or background only (a screw through a PMMA cap
@@ -704,6 +760,23 @@ class ScrewPullout : public Scenario {
     }
     const double dofs = solver.dof_handler().n_dofs();
     ctx.log() << "  " << dofs << " DoFs\n";
+    // Failed bone into particles: none at the start; a restart reads those of its checkpoint
+    // (the FEM state is back already).
+    std::unique_ptr<coupling::FemParticleCoupling<3>> coupled;
+    if (converting_) {
+      dealii::TimerOutput::Scope t(ctx.timer(), "conversion");
+      coupled = std::make_unique<coupling::FemParticleCoupling<3>>(coupling_, solver);
+      if (ctx.restarting())
+        coupled->load((checkpoint / "coupling.txt").string());
+      else
+        coupled->initialise();
+      ctx.log() << "  particles: " << coupled->particles().size() << " ("
+                << coupled->n_free_particles() << " free); spacing "
+                << coupled->particle_spacing() * 1e3 << " mm, horizon " << coupled->horizon() * 1e3
+                << " mm; bone cells of that size convert once " << conversion_criteria_text()
+                << "\n";
+      log_particle_messages(ctx, *coupled);
+    }
 
     // Chapman et al. (1996): F = S π D L TSF, L the engaged length (the threaded shaft).
     const double tsf = 0.5 + 0.57735 * g.thread_depth() / g.pitch;
@@ -712,15 +785,16 @@ class ScrewPullout : public Scenario {
     const double chapman = shear_strength * pi * g.major_diameter * g.length * tsf;
 
     if (!ctx.restarting()) {
-      ctx.history().add({{"load_time", 0.0},
-                         {"displacement_mm", 0.0},
-                         {"force_N", 0.0},
-                         {"toggle_mm", 0.0},
-                         {"toggle_force_N", 0.0},
-                         {"failed_volume_mm3", 0.0},
-                         {"newton_iterations", 0.0},
-                         {"linear_iterations", 0.0},
-                         {"relaxation_steps", 0.0}});
+      ctx.history().add(with_particle_columns({{"load_time", 0.0},
+                                               {"displacement_mm", 0.0},
+                                               {"force_N", 0.0},
+                                               {"toggle_mm", 0.0},
+                                               {"toggle_force_N", 0.0},
+                                               {"failed_volume_mm3", 0.0},
+                                               {"newton_iterations", 0.0},
+                                               {"linear_iterations", 0.0},
+                                               {"relaxation_steps", 0.0}},
+                                              coupled.get(), p));
       framework::RunCost cost{"fem_quasi_static",
                               dofs * (pull_.steps + pull_.toggle_cycles * pull_.toggle_steps),
                               dofs};
@@ -742,23 +816,46 @@ class ScrewPullout : public Scenario {
       {
         dealii::TimerOutput::Scope timer(ctx.timer(), "mechanics");
         try {
-          // Relaxation only once foam has failed: before that, a Newton failure is a problem of
-          // the model.
-          const auto result = solver.solve_quasi_static_or_relax(
-              tau, damage_on_ && p.failed_before > 0, pull_.relaxation_tolerance,
-              pull_.relaxation_steps);
-          for (const auto& r : result.reports) {
-            it += r.newton_iterations;
-            for (const unsigned int l : r.linear_iterations)
-              linear += l;
-          }
-          relaxation = result.relaxation_steps;
-          if (relaxation > 0) {
+          if (coupled && coupled->n_free_particles() > 0) {
+            // Particles and FEM together: dynamic relaxation of both (Newton has no particle
+            // tangent), converting what fails on the way.
+            relaxation = relax_coupled(ctx, *coupled, step, tau);
             p.relaxation += relaxation;
             ++p.relaxed_steps;
-            ctx.log() << "  step " << step << ": Newton found no static path ("
-                      << result.newton_failure << "); dynamic relaxation converged in "
-                      << relaxation << " pseudo-steps\n";
+          } else {
+            // Relaxation only once foam has failed: before that, a Newton failure is a problem
+            // of the model.
+            const auto result = solver.solve_quasi_static_or_relax(
+                tau, damage_on_ && p.failed_before > 0, pull_.relaxation_tolerance,
+                pull_.relaxation_steps);
+            for (const auto& r : result.reports) {
+              it += r.newton_iterations;
+              for (const unsigned int l : r.linear_iterations)
+                linear += l;
+            }
+            relaxation = result.relaxation_steps;
+            if (relaxation > 0) {
+              p.relaxation += relaxation;
+              ++p.relaxed_steps;
+              ctx.log() << "  step " << step << ": Newton found no static path ("
+                        << result.newton_failure << "); dynamic relaxation converged in "
+                        << relaxation << " pseudo-steps\n";
+            }
+            // The first cells that fail: converted at this equilibrium, then both models
+            // relax to the step's load together.
+            if (coupled) {
+              const auto r = [&] {
+                dealii::TimerOutput::Scope c(ctx.timer(), "conversion");
+                return coupled->convert_flagged();
+              }();
+              if (r.cells > 0) {
+                log_conversion(ctx, step, r);
+                const unsigned int more = relax_coupled(ctx, *coupled, step, tau);
+                relaxation += more;
+                p.relaxation += more;
+                ++p.relaxed_steps;
+              }
+            }
           }
         } catch (NumericalFailure& f) {
           f.set_step(step, tau);
@@ -770,7 +867,7 @@ class ScrewPullout : public Scenario {
       if (toggling) {
         // The transverse force on the grip; its values at the extremes give the cycle's
         // stiffness. Failed bone counts for the relaxation switch as in the pull-out.
-        const auto R = solver.reaction_force(grip_id);
+        const auto R = grip_reaction(solver, coupled.get());
         const dealii::Tensor<1, 3> e = pull_.toggle_direction;
         const double F_t = R[0] * e[0] + R[1] * e[1];
         if (!std::isfinite(F_t))
@@ -787,17 +884,19 @@ class ScrewPullout : public Scenario {
           p.force.front() = R[2];
         const Failure fail = failure(solver, screw);
         p.failed_before = fail.failed_volume;
-        ctx.history().add({{"load_time", tau},
-                           {"displacement_mm", 0.0},
-                           {"force_N", R[2]},
-                           {"toggle_mm", 1e3 * pull_.toggle_amplitude * std::sin(2 * pi * tau)},
-                           {"toggle_force_N", F_t},
-                           {"failed_volume_mm3", fail.failed_volume * 1e9},
-                           {"newton_iterations", double(it)},
-                           {"linear_iterations", double(linear)},
-                           {"relaxation_steps", double(relaxation)}});
+        ctx.history().add(with_particle_columns(
+            {{"load_time", tau},
+             {"displacement_mm", 0.0},
+             {"force_N", R[2]},
+             {"toggle_mm", 1e3 * pull_.toggle_amplitude * std::sin(2 * pi * tau)},
+             {"toggle_force_N", F_t},
+             {"failed_volume_mm3", fail.failed_volume * 1e9},
+             {"newton_iterations", double(it)},
+             {"linear_iterations", double(linear)},
+             {"relaxation_steps", double(relaxation)}},
+            coupled.get(), p));
       } else {
-        const double F = solver.reaction_force(grip_id)[2];
+        const double F = grip_reaction(solver, coupled.get())[2];
         const double d = pull_.displacement * t;
         if (!std::isfinite(F))
           throw NumericalFailure("pull-out force",
@@ -821,15 +920,16 @@ class ScrewPullout : public Scenario {
         }
         const Failure fail = failure(solver, screw);
         p.failed_before = fail.failed_volume;
-        ctx.history().add({{"load_time", tau},
-                           {"displacement_mm", d * 1e3},
-                           {"force_N", F},
-                           {"toggle_mm", 0.0},
-                           {"toggle_force_N", 0.0},
-                           {"failed_volume_mm3", fail.failed_volume * 1e9},
-                           {"newton_iterations", double(it)},
-                           {"linear_iterations", double(linear)},
-                           {"relaxation_steps", double(relaxation)}});
+        ctx.history().add(with_particle_columns({{"load_time", tau},
+                                                 {"displacement_mm", d * 1e3},
+                                                 {"force_N", F},
+                                                 {"toggle_mm", 0.0},
+                                                 {"toggle_force_N", 0.0},
+                                                 {"failed_volume_mm3", fail.failed_volume * 1e9},
+                                                 {"newton_iterations", double(it)},
+                                                 {"linear_iterations", double(linear)},
+                                                 {"relaxation_steps", double(relaxation)}},
+                                                coupled.get(), p));
         p.t = t;
         if (p.peak_step < step && F < (1 - pull_.stop_drop) * p.peak)
           p.dropped = true;
@@ -838,13 +938,13 @@ class ScrewPullout : public Scenario {
       const bool checkpointed =
           p.finished() || (pull_.checkpoint_interval > 0 && step % pull_.checkpoint_interval == 0);
       if (checkpointed)
-        write_checkpoint(ctx, solver, tria, p);
+        write_checkpoint(ctx, solver, coupled.get(), tria, p);
       else
         ctx.flush_history();
       // SIGINT/SIGTERM: stop after this complete step with a checkpoint to continue from.
       if (const int signal = ctx.interrupt_signal(); signal != 0 && !p.finished()) {
         if (!checkpointed)
-          write_checkpoint(ctx, solver, tria, p);
+          write_checkpoint(ctx, solver, coupled.get(), tria, p);
         ctx.progress().finish();
         throw Interrupted(signal, "after step " + std::to_string(step) + ", " +
                                       (toggling ? "toggle cycle " + fmt(tau, 4)
@@ -853,7 +953,7 @@ class ScrewPullout : public Scenario {
       ctx.progress().update(step, tau);
       if (pull_.stop_after_step > 0 && step >= pull_.stop_after_step && !p.finished()) {
         if (!checkpointed)
-          write_checkpoint(ctx, solver, tria, p);
+          write_checkpoint(ctx, solver, coupled.get(), tria, p);
         ctx.log() << "  stopped after step " << step << " (Pullout/Stop after step)\n";
         break;
       }
@@ -865,6 +965,8 @@ class ScrewPullout : public Scenario {
     if (pull_.write_vtu) {
       dealii::TimerOutput::Scope t(ctx.timer(), "output");
       solver.write_output(ctx.output().path().string(), "solution", 0);
+      if (coupled)
+        coupled->write_output(ctx.output().path().string(), 0);
     }
     const double plot_ok = plot(ctx, p.disp, p.force, chapman);
 
@@ -905,6 +1007,8 @@ class ScrewPullout : public Scenario {
     sum.set_figure("post_peak_drop", 1 - p.force.back() / p.peak, "-");
     sum.set_figure("failed_volume_mm3", fail.failed_volume * 1e9, "mm^3");
     sum.set_figure("failed_fraction_near_threads", fail.near_fraction, "-");
+    if (coupled)
+      particle_figures(ctx, *coupled, screw, p);
     sum.set_figure("cells", tria.n_global_active_cells(), "-");
     sum.set_figure("implant_cells", implant_cells_, "-");
     // The solid's volume (head included) and the part of it in the block as the cells' 4 × 4 × 4
@@ -936,6 +1040,130 @@ class ScrewPullout : public Scenario {
   }
 
  private:
+  // The grip's reaction [N]: the FEM's, plus fixed particles of converted cells on its faces.
+  static dealii::Tensor<1, 3> grip_reaction(const fem::MechanicsSolver<3>& solver,
+                                            const coupling::FemParticleCoupling<3>* coupled) {
+    return coupled ? coupled->reaction_force(grip_id) : solver.reaction_force(grip_id);
+  }
+
+  std::string conversion_criteria_text() const {
+    std::ostringstream s;
+    const auto add = [&](bool on, const std::string& text) {
+      if (on)
+        s << (s.tellp() > 0 ? " or " : "") << text;
+    };
+    add(coupling_.plastic_strain_threshold > 0,
+        "their equivalent plastic strain reaches " + fmt(coupling_.plastic_strain_threshold, 4));
+    add(coupling_.principal_strain_threshold > 0,
+        "their largest principal strain reaches " + fmt(coupling_.principal_strain_threshold, 4));
+    add(coupling_.min_jacobian_ratio > 0,
+        "their Jacobian ratio falls to " + fmt(coupling_.min_jacobian_ratio, 4));
+    if (coupling_.buffer > 0)
+      s << " (with a buffer of " << coupling_.buffer * 1e3 << " mm)";
+    return s.str();
+  }
+
+  static void log_particle_messages(RunContext& ctx, coupling::FemParticleCoupling<3>& coupled) {
+    for (const auto& m : coupled.take_messages())
+      ctx.log() << "  particles: " << m << "\n";
+  }
+
+  // One line per conversion: what moved and what it conserved.
+  static void log_conversion(RunContext& ctx, unsigned int step,
+                             const coupling::ConversionReport<3>& r) {
+    ctx.log() << "  step " << step << ": " << r.cells << " cells -> " << r.particles
+              << " particles (mass change " << r.mass_change_relative() << " relative)";
+    if (r.carries_state && r.plastic_strain_before > 0)
+      ctx.log() << "; integral of the equivalent plastic strain " << r.plastic_strain_before
+                << " m^3 in the cells, " << r.plastic_strain_after << " m^3 in their particles";
+    if (r.reaction_before > 0 && r.reaction_after > 0)
+      ctx.log() << "; reactions " << r.reaction_before << " N before, " << r.reaction_after
+                << " N after under the same load";
+    ctx.log() << "\n";
+  }
+
+  // Both models to the equilibrium of load time τ by dynamic relaxation, converting the bone
+  // that fails on the way (FemParticleCoupling::relax); returns its pseudo-steps.
+  unsigned int relax_coupled(RunContext& ctx, coupling::FemParticleCoupling<3>& coupled,
+                             unsigned int step, double tau) const {
+    const auto progress = [&](const coupling::RelaxationProgress& r) {
+      ctx.log() << "  step " << step << ": relaxation pseudo-step " << r.iteration
+                << ", relative residual " << r.relative_residual << " (" << r.residual << " N of "
+                << r.reaction << " N reactions), " << r.free_particles << " free particles, "
+                << r.converted_cells << " cells converted so far, " << r.seconds << " s"
+                << std::endl;
+    };
+    const auto report = coupled.relax(tau, true, progress);
+    for (const auto& r : report.conversions)
+      log_conversion(ctx, step, r);
+    log_particle_messages(ctx, coupled);
+    if (!report.converged)
+      throw NumericalFailure("relaxation not converged",
+                             "step " + std::to_string(step) + ", load time " + fmt(tau, 6) +
+                                 ": relative residual " + fmt(report.relative_residual, 4) +
+                                 " after " + std::to_string(report.iterations) + " pseudo-steps",
+                             "raise Coupling/Relaxation max iterations, take more Pullout/Steps, "
+                             "or convert earlier (a lower Coupling/Plastic strain threshold)");
+    return report.iterations;
+  }
+
+  // With particles, the history's particle columns: their count, the cells converted, broken
+  // bonds, and the coupled body's force balance (FemParticleCoupling::virial_balance; its
+  // largest relative imbalance goes into the progress). Collective.
+  framework::History::Row with_particle_columns(framework::History::Row row,
+                                                const coupling::FemParticleCoupling<3>* coupled,
+                                                PulloutProgress& p) const {
+    if (!coupled)
+      return row;
+    row.emplace_back("free_particles", coupled->n_free_particles());
+    row.emplace_back("converted_cells", coupled->n_converted_cells());
+    row.emplace_back("broken_bonds", double(coupled->n_broken_bonds()));
+    const auto balance = coupled->virial_balance();
+    if (!(balance.imbalance_relative <= p.imbalance_max)) // a NaN stays
+      p.imbalance_max = balance.imbalance_relative;
+    row.emplace_back("virial_imbalance_relative", balance.imbalance_relative);
+    row.emplace_back("unbalanced_force_N", balance.net_force.norm());
+    return row;
+  }
+
+  // What the particles did: how many, where (the share within one thread depth of the crests,
+  // as for failed bone), their damage, and the coupled body's force balance. Collective.
+  void particle_figures(RunContext& ctx, const coupling::FemParticleCoupling<3>& coupled,
+                        const implants::ScrewSolid& screw, const PulloutProgress& p) const {
+    const auto& g = screw.geometry();
+    coupled.synchronise();
+    const auto& set = coupled.particles();
+    double volume = 0, near = 0;
+    for (unsigned int i = 0; i < set.size(); ++i) {
+      if (!coupled.is_free(i))
+        continue;
+      const auto& x = set.reference_position(i);
+      volume += set.volume(i);
+      const double sa = screw.axial(x);
+      if (sa >= 0 && sa <= g.length && screw.radial(x) <= 0.5 * g.major_diameter + g.thread_depth())
+        near += set.volume(i);
+    }
+    const double damage = coupled.max_damage();
+    const auto balance = coupled.virial_balance();
+    Summary& sum = ctx.summary();
+    sum.set_figure("free_particles", coupled.n_free_particles(), "-");
+    sum.set_figure("converted_cells", coupled.n_converted_cells(), "-");
+    sum.set_figure("particle_volume_mm3", volume * 1e9, "mm^3");
+    sum.set_figure("particles_near_threads_fraction", volume > 0 ? near / volume : 0.0, "-");
+    sum.set_figure("broken_bonds", double(coupled.n_broken_bonds()), "-");
+    sum.set_figure("max_particle_damage", damage, "-");
+    sum.set_figure("virial_imbalance_relative", balance.imbalance_relative, "-");
+    // Every history row (the last included) updated the largest.
+    sum.set_figure("virial_imbalance_relative_max", p.imbalance_max, "-");
+    sum.set_figure("unbalanced_force_N", balance.net_force.norm(), "N");
+    ctx.log() << "  particles: " << coupled.n_free_particles() << " from "
+              << coupled.n_converted_cells() << " cells (" << volume * 1e9 << " mm^3, "
+              << 100 * (volume > 0 ? near / volume : 0.0)
+              << " % within one thread depth of the crests), " << coupled.n_broken_bonds()
+              << " broken bonds; force balance " << balance.imbalance_relative << " (largest "
+              << p.imbalance_max << "), " << balance.net_force.norm() << " N unbalanced\n";
+  }
+
   // The load time τ the progress has reached: toggle cycles done, then N + t.
   double load_time(const PulloutProgress& p) const {
     const unsigned int total = pull_.toggle_cycles * pull_.toggle_steps;
@@ -1068,6 +1296,7 @@ class ScrewPullout : public Scenario {
   // The solver's state, the mesh, the progress and the history, written into a fresh
   // directory and swapped in, so the previous checkpoint survives a crash while writing.
   void write_checkpoint(RunContext& ctx, fem::MechanicsSolver<3>& solver,
+                        const coupling::FemParticleCoupling<3>* coupled,
                         dealii::parallel::distributed::Triangulation<3>& tria,
                         const PulloutProgress& p) const {
     write_run_checkpoint(
@@ -1076,6 +1305,8 @@ class ScrewPullout : public Scenario {
           const std::string mesh_file = (staged / "mesh").string();
           solver.prepare_for_serialization(mesh_file);
           tria.save(mesh_file);
+          if (coupled)
+            coupled->save((staged / "coupling.txt").string());
         },
         [&] { return p.to_json(); });
   }
@@ -1189,6 +1420,8 @@ class ScrewPullout : public Scenario {
   unsigned int bone_cells_ = 0, soft_cells_ = 0; // with a Label file
   std::string trajectory_labels_;
   std::unique_ptr<implants::ScrewSolid> solid_;
+  bool converting_ = false;                  // Effects/Conversion and Coupling
+  coupling::CouplingParameters<3> coupling_; // read with them
 };
 
 } // namespace screw_pullout
@@ -1197,11 +1430,12 @@ SPINESIM_REGISTER_SCENARIO(screw_pullout, "screw_pullout",
                            "pedicle screw in a rigid polyurethane foam block (ASTM F1839) pulled "
                            "out axially (ASTM F543): force-displacement curve, peak force "
                            "against Chapman et al. (1996).",
-                           "mechanics|damage", create_scenario<screw_pullout::ScrewPullout>,
+                           "mechanics|damage|particles:nosb|particles:spg|conversion|coupling",
+                           create_scenario<screw_pullout::ScrewPullout>,
                            {"Screw", screw_pullout::ScrewSection::declare},
                            {"Foam", screw_pullout::FoamSection::declare},
                            {"Block", screw_pullout::BlockSection::declare},
                            {"Pullout", screw_pullout::PulloutSection::declare},
-                           sections::mechanics())
+                           sections::mechanics(), sections::coupling())
 
 } // namespace spinesim::applications

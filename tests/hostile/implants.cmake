@@ -16,6 +16,20 @@ spinesim_add_hostile_test(screw_toggle_along_the_axis
 spinesim_add_hostile_test(screw_toggle_steps_not_quarters
   ARGS check ${_screw} --set "Pullout/Toggle steps per cycle=6"
   MATCH "Pullout/Toggle steps per cycle.*multiple of 4")
+# Failed bone into particles: conversion without the coupling, no criterion, and a block whose
+# coarse cells are not cubes (particles sit on the cells' sub-cell lattice).
+set(_screw_convert --set "Effects/Particles method=nosb" --set "Effects/Conversion=true")
+spinesim_add_hostile_test(screw_conversion_without_coupling
+  ARGS check ${_screw} ${_screw_convert} MATCH "Effects/Coupling.*both true")
+spinesim_add_hostile_test(screw_conversion_without_criterion
+  ARGS check ${_screw} ${_screw_convert} --set "Effects/Coupling=true"
+  MATCH "Coupling/Plastic strain threshold.*a criterion")
+spinesim_add_hostile_test(screw_conversion_cells_not_cubes
+  ARGS check ${_screw} ${_screw_convert} --set "Effects/Coupling=true"
+      --set "Coupling/Plastic strain threshold=0.01" --set "Block/Depth=27"
+  MATCH "Block/Depth.*must be cubes")
+spinesim_add_hostile_test(screw_particles_bond_based
+  ARGS check ${_screw} --set "Effects/Particles method=bond_based" MATCH "Effects/Particles method")
 spinesim_add_hostile_test(screw_block_too_narrow
   ARGS check ${_screw} --set "Block/Width=8" MATCH "Block/Width")
 spinesim_add_hostile_test(foam_without_residual_stiffness

@@ -95,6 +95,58 @@ spinesim_add_summaries_match_test(implants.screw_pullout_toggled_restart_matches
   A ${_screw_runs}/toggled_restart/summary.json B ${_screw_runs}/toggled/summary.json TOL 1e-8
   FLOOR 1e-9 REQUIRES "screw_toggled_done;screw_toggled" LABELS "scene;implants")
 
+# Failed foam into NOSB particles (Effects/Conversion and Coupling; docs/implants.md, "Failed
+# bone into particles"). The quick screw in a 16 mm cube (cubic cells: particles sit on their
+# sub-cell lattice), 2 particles per cell direction, cells converting at the damage onset
+# (ε̄_p = 0.01). The first cells fail at step 6 (4 cells under the tip, 32 particles), and the
+# coupled relaxation settles to the FEM's equilibrium on the same mesh: the grip force within
+# 1 % of the FEM-only run's (measured 853.85 against 854.26 N, 4.8e-4; the relaxation stops at
+# a residual of 1e-4 of the reactions, and the splice moves 4 of 1056 cells). The coupled
+# body's own force balance (virial_imbalance_relative, docs/coupling.md) is bounded by 1e-2
+# (measured 1.7e-3; a consistent splice reads below the relaxation's tolerance times the
+# stiffness ratio of the screw to the foam). The conversion keeps ∫ ε̄_p dV (log).
+set(_screw_particles "Block/Depth=16" "Effects/Particles method=nosb" "Effects/Conversion=true"
+    "Effects/Coupling=true" "Coupling/Plastic strain threshold=0.01"
+    "Coupling/Relaxation tolerance=1e-4" "Coupling/Particles per cell direction=2")
+spinesim_add_scene_test(implants.screw_pullout_particles_first_conversion SCENE ${_screw}
+  OUT ${_screw_runs}/particles SET ${_screw_quick} ${_screw_particles}
+      "Pullout/Stop after step=6"
+  EXPECT "status==ok;load_steps~6:0;free_particles>=8;converted_cells>=1;virial_imbalance_relative_max<=0.01"
+  LABELS "scene;implants;coupling" FIXTURE screw_particles)
+spinesim_add_scene_test(implants.screw_pullout_particles_fem_reference SCENE ${_screw}
+  OUT ${_screw_runs}/particles_fem SET ${_screw_quick} "Block/Depth=16" "Pullout/Stop after step=6"
+  EXPECT "status==ok;load_steps~6:0" LABELS "scene;implants" FIXTURE screw_particles_fem)
+spinesim_add_comparison_test(implants.screw_pullout_particles_keep_the_force
+  A ${_screw_runs}/particles/summary.json B ${_screw_runs}/particles_fem/summary.json
+  CHECKS "final_force_N:rel:0.01" REQUIRES "screw_particles;screw_particles_fem"
+  LABELS "scene;implants;coupling")
+# Stopped before the conversion and restarted through it: the checkpoint holds the coupling
+# (coupling.txt), and the restarted run ends with the uninterrupted run's figures to 1e-8.
+spinesim_add_scene_test(implants.screw_pullout_particles_restart_first_half SCENE ${_screw}
+  OUT ${_screw_runs}/particles_restart SET ${_screw_quick} ${_screw_particles}
+      "Pullout/Stop after step=5"
+  EXPECT "status==ok;load_steps~5:0;free_particles~0:0" LABELS "scene;implants;coupling"
+  FIXTURE screw_particles_half)
+spinesim_add_restart_test(implants.screw_pullout_particles_restart_second_half
+  OUT ${_screw_runs}/particles_restart STOP "Pullout/Stop after step"
+  ARGS --set "Pullout/Stop after step=6"
+  EXPECT "status==ok;load_steps~6:0;free_particles>=8" LABELS "scene;implants;coupling"
+  REQUIRES screw_particles_half FIXTURE screw_particles_done)
+spinesim_add_summaries_match_test(implants.screw_pullout_particles_restart_matches
+  A ${_screw_runs}/particles_restart/summary.json B ${_screw_runs}/particles/summary.json
+  TOL 1e-8 FLOOR 1e-9 REQUIRES "screw_particles_done;screw_particles"
+  LABELS "scene;implants;coupling")
+# Past the peak in particles: the force must rise, peak and fall as in the FEM. It does not
+# yet: at step 7 the relaxation inverts a NOSB family under the screw's tip (det F < 0; with
+# SPG at step 6; with 160 steps at step 25; with Interface radius 3.5 the force climbs 36 %
+# above the FEM's peak first). The splice drives the implant's face nodes by the MLS fit of
+# the bone particles, so the titanium's stiffness amplifies the fit's errors; the particles
+# need contact with the implant instead (docs/implants.md). Hence known_failure.
+spinesim_add_scene_test(implants.screw_pullout_particles_past_peak SCENE ${_screw}
+  OUT ${_screw_runs}/particles_past_peak SET ${_screw_quick} ${_screw_particles}
+  EXPECT "status==ok;peak_passed>=1;chapman_ratio>=0.65;chapman_ratio<=2.0"
+  LABELS "scene;implants;coupling;known_failure")
+
 # Without Effects/Damage the foam is perfectly plastic: no softening, so no peak is passed and
 # the force keeps its plateau (the run goes to the end, the last force within 5 % of the
 # largest: a J2 plateau with the plastic zone still spreading).
