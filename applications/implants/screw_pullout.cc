@@ -443,13 +443,19 @@ class ScrewPullout : public Scenario {
       check_cubic_cells();
   }
 
+  // The block's coarse cells: h_target 2^k (k from Coarse cell size), so that k refinements
+  // give cells of h_target [m].
+  double coarse_cell_size(double h_target) const {
+    const int k =
+        std::max(0, static_cast<int>(std::lround(std::log2(block_.coarse_cell / h_target))));
+    return h_target * std::pow(2.0, k);
+  }
+
   // Particles sit on a lattice of the cells' sub-cell centres: the cells that convert must be
   // cubes, so the coarse cells (halved by the refinement) must be.
   void check_cubic_cells() const {
     const double h_target = screw_.geometry.pitch / pull_.cells_per_pitch;
-    const int k =
-        std::max(0, static_cast<int>(std::lround(std::log2(block_.coarse_cell / h_target))));
-    const double coarse = h_target * std::pow(2.0, k);
+    const double coarse = coarse_cell_size(h_target);
     const double across = block_.width / fem::steps_over(block_.width, coarse).size();
     const double down = block_.depth / fem::steps_over(block_.depth, coarse).size();
     if (std::max(across, down) > 1.01 * std::min(across, down))
@@ -1212,9 +1218,7 @@ class ScrewPullout : public Scenario {
     // Coarse cells of h_target 2^k (k from Coarse cell size), rounded up in number to fill
     // the block: k refinements then give cells of at most h_target, and above h_target / 2.
     const double W = block_.width;
-    const int k =
-        std::max(0, static_cast<int>(std::lround(std::log2(block_.coarse_cell / h_target))));
-    const double coarse = h_target * std::pow(2.0, k);
+    const double coarse = coarse_cell_size(h_target);
     std::vector<std::vector<double>> steps(3);
     steps[0] = steps[1] = fem::steps_over(W, coarse);
     steps[2] = fem::steps_over(block_.depth, coarse);
