@@ -19,6 +19,7 @@
 #include <cmath>
 #include <optional>
 #include <set>
+#include <sstream>
 
 namespace spinesim::coupling {
 
@@ -57,6 +58,23 @@ double ConversionReport<dim>::plastic_strain_change_relative() const {
 template <int dim>
 double ConversionReport<dim>::reaction_jump_relative() const {
   return std::abs(reaction_after - reaction_before) / std::max(reaction_before, 1e-300);
+}
+
+template <int dim>
+std::string ConversionReport<dim>::describe(const char* force_unit) const {
+  std::ostringstream s;
+  s << cells << " cells -> " << particles << " particles (mass change " << mass_change_relative()
+    << ", momentum change " << momentum_change_relative() << " relative; kinetic energy moved "
+    << kinetic_after - kinetic_before << " J)";
+  if (reaction_before > 0 && reaction_after > 0)
+    s << "; reactions at equilibrium under the same load (norm over the supported DoFs) "
+      << reaction_before << force_unit << " before, " << reaction_after << force_unit
+      << " after (relative jump " << reaction_jump_relative() << ")";
+  if (carries_state && plastic_strain_before > 0)
+    s << "; material state carried: integral of the equivalent plastic strain "
+      << plastic_strain_before << " m^3 in the cells, " << plastic_strain_after
+      << " m^3 in their particles";
+  return s.str();
 }
 
 template <int dim>
@@ -148,10 +166,9 @@ std::vector<CellId> CellConverter<dim>::flagged_cells() const {
   const std::vector<Point<dim>> none;
   const PointBins<dim> support_bins(any && clearance > 0 ? support_points() : none,
                                     std::max(clearance, state_.spacing));
-  const auto& kept = state_.prm.unconverted_material_ids;
   const auto may_convert = [&](const DoFCell& cell) {
     return state_.fem.is_active(cell) && in_conversion_region(cell) &&
-           std::find(kept.begin(), kept.end(), cell->material_id()) == kept.end() &&
+           !state_.never_converts(cell) &&
            !(clearance > 0 && support_bins.any_within(cell->center(), clearance));
   };
   if (any) {

@@ -57,6 +57,9 @@ struct ConversionReport {
   double mass_change_relative() const;
   double kinetic_change_relative() const;  // over the kinetic energy before
   double momentum_change_relative() const; // over |p| (or over mass × max speed if p ≈ 0)
+  // One run-log line: what moved and what it conserved ("4 cells -> 32 particles (mass change
+  // ...)"); `force_unit` names the reactions' unit (" N", or " N/m" in 2-D).
+  std::string describe(const char* force_unit) const;
 };
 
 template <int dim>

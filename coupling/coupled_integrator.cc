@@ -14,6 +14,15 @@
 
 namespace spinesim::coupling {
 
+std::string RelaxationProgress::describe(const char* force_unit) const {
+  std::ostringstream s;
+  s << "relaxation pseudo-step " << iteration << ", relative residual " << relative_residual << " ("
+    << residual << force_unit << " of " << reaction << force_unit << " reactions), damping "
+    << damping << " 1/s, stiffness estimate " << stiffness_estimate << " 1/s^2, " << free_particles
+    << " free particles, " << converted_cells << " cells converted so far, " << seconds << " s";
+  return s.str();
+}
+
 using namespace dealii;
 
 template <int dim>
@@ -248,6 +257,8 @@ void CoupledIntegrator<dim>::advance(double dt, double a, double load_time, bool
       particle_updates_ += state_.free[i] && state_.is_owned(i);
     fracture_.after_forces(broken_last_step_);
     share_bond_breaks();
+    if (joint_.on())
+      joint_.take_particle_forces(); // at the same state as the FEM's forces below
     if (!sums)
       energy_.after_forces(); // the stored energy the breaks of this pass released
     // Explicit steps commit the material history every step, as the FEM does; a relaxation
@@ -334,6 +345,11 @@ void CoupledIntegrator<dim>::advance(double dt, double a, double load_time, bool
           [&](const typename fem::MechanicsSolver<dim>::StepForces& forces) {
             splice_.on_fem_forces(forces);
             move_particles(true);
+          });
+    else if (joint_.on() && joint_.n_targets() > 0 && state_.n_free_particles() > 0)
+      state_.fem.set_step_force_hook(
+          [&](const typename fem::MechanicsSolver<dim>::StepForces& forces) {
+            joint_.add_reactions(forces);
           });
     if (sums) {
       *sums += state_.fem.relaxation_step(dt, a, load_time, first);

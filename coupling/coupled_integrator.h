@@ -11,12 +11,14 @@
 #include "coupling/energy_splice.h"
 #include "coupling/fracture_heat.h"
 #include "coupling/ghost_layer.h"
+#include "coupling/implant_joint.h"
 #include "coupling/mls_interface.h"
 #include "coupling/particle_boundary.h"
 #include "coupling/particle_energy.h"
 #include "coupling/particle_halo.h"
 
 #include <functional>
+#include <string>
 #include <vector>
 
 namespace spinesim::coupling {
@@ -42,6 +44,9 @@ struct RelaxationProgress {
   unsigned int free_particles = 0;  // over all ranks [-]
   unsigned int converted_cells = 0; // cells converted in this relaxation so far [-]
   double seconds = 0;               // wall time of this relaxation so far [s]
+  // One run-log line ("relaxation pseudo-step 400, relative residual ..."); `force_unit` names
+  // the forces' unit (" N", or " N/m" in 2-D).
+  std::string describe(const char* force_unit) const;
 };
 
 template <int dim>
@@ -50,9 +55,11 @@ class CoupledIntegrator {
   CoupledIntegrator(CouplingState<dim>& state, GhostLayer<dim>& ghosts,
                     MlsInterface<dim>& interface, ParticleHalo<dim>& halo,
                     ParticleBoundary<dim>& boundary, FractureHeat<dim>& fracture,
-                    CellConverter<dim>& converter, EnergySplice<dim>& splice)
+                    CellConverter<dim>& converter, EnergySplice<dim>& splice,
+                    ImplantJoint<dim>& joint)
       : state_(state), ghosts_(ghosts), interface_(interface), halo_(halo), boundary_(boundary),
-        fracture_(fracture), converter_(converter), splice_(splice), energy_(state) {}
+        fracture_(fracture), converter_(converter), splice_(splice), joint_(joint), energy_(state) {
+  }
 
   double stable_time_step() const; // min(FEM CFL step, PD step) [s]
   // The same with the FEM's step of its current cells and the particles' stiffness bound of the
@@ -125,6 +132,7 @@ class CoupledIntegrator {
   FractureHeat<dim>& fracture_;
   CellConverter<dim>& converter_;
   EnergySplice<dim>& splice_;
+  ImplantJoint<dim>& joint_;
   ParticleEnergy<dim> energy_;
   double time_ = 0;
   std::size_t broken_last_step_ = 0; // bond ends broken by this rank in the last step

@@ -58,6 +58,15 @@ struct CouplingState {
 
   // Material, lattice spacing, shape table and particle method, from the FEM (once).
   void prepare();
+  // A cell of the unconverted material ids (an implant's): it never converts, its nodes are
+  // never driven by the particles, and the particles meet it through the bonds to its ghosts,
+  // whose forces its FEM takes back (ImplantJoint).
+  bool never_converts(const DoFCell& cell) const {
+    for (const unsigned int id : prm.unconverted_material_ids)
+      if (cell->material_id() == id)
+        return true;
+    return false;
+  }
   // Appends a particle hosted by point `point` of cell `cell_id`: a ghost, no fixed slots.
   unsigned int add_particle(const std::string& cell_id, unsigned int point,
                             const dealii::Point<dim>& position, double volume);

@@ -1,5 +1,6 @@
 #include "coupling/energy_splice.h"
 
+#include "coupling/ghost_force_spread.h"
 #include "coupling/mls_fit.h"
 #include "coupling/point_bins.h"
 
@@ -98,33 +99,7 @@ void EnergySplice<dim>::check_stored_energy() {
 
 template <int dim>
 void EnergySplice<dim>::spread_to_fem(const std::vector<Vector>& ghost_forces) {
-  // Nᵀ: each ghost owned here hands its force to the DoFs of its host cell with the weights
-  // that interpolated it (GhostLayer::update), through the hanging-node constraints.
-  auto& fem = state_.fem;
-  const auto& fe = fem.fe();
-  const unsigned int n = fe.n_dofs_per_cell();
-  fem_reactions_ = 0;
-  dealii::Vector<double> cell_force(n);
-  std::vector<types::global_dof_index> dofs(n);
-  std::map<int, std::vector<unsigned int>> by_cell; // active cell index -> ghosts
-  for (unsigned int i = 0; i < ghost_forces.size(); ++i)
-    if (!state_.free[i] && state_.host_index[i] >= 0 && ghost_forces[i].norm_square() > 0)
-      by_cell[state_.host_index[i]].push_back(i);
-  for (const auto& [c, ghosts] : by_cell) {
-    const auto& cell = state_.owned_by_index[c];
-    cell_force = 0;
-    for (const unsigned int i : ghosts) {
-      const unsigned int q = state_.host_point[i];
-      for (unsigned int j = 0; j < n; ++j)
-        cell_force[j] +=
-            state_.shape(q, j) * ghost_forces[i][fe.system_to_component_index(j).first];
-    }
-    cell->get_dof_indices(dofs);
-    fem.hanging_constraints().distribute_local_to_global(cell_force, dofs, fem_reactions_);
-  }
-  fem_reactions_.compress(VectorOperation::add);
-  const double* v = fem_reactions_.begin();
-  fem_reaction_values_.assign(v, v + fem.locally_owned_dofs().n_elements());
+  spread_ghost_forces(state_, ghost_forces, fem_reactions_, fem_reaction_values_);
 }
 
 template <int dim>

@@ -30,8 +30,10 @@ FemParticleCoupling<dim>::FemParticleCoupling(const Parameters& parameters,
                                               const fem::HeatSolver<dim>* heat)
     : state_(parameters, mechanics, heat), halo_(state_), ghosts_(state_, halo_),
       bond_rows_(state_), boundary_(state_), interface_(state_), splice_(state_, interface_, halo_),
-      fracture_(state_), plastic_heat_(state_), converter_(state_, [this] { rebuild_layers(); }),
-      integrator_(state_, ghosts_, interface_, halo_, boundary_, fracture_, converter_, splice_),
+      joint_(state_), fracture_(state_), plastic_heat_(state_),
+      converter_(state_, [this] { rebuild_layers(); }),
+      integrator_(state_, ghosts_, interface_, halo_, boundary_, fracture_, converter_, splice_,
+                  joint_),
       checkpoint_({state_, converter_, integrator_, fracture_, halo_, bond_rows_, ghosts_,
                    [this] { rebuild_layers(); }}) {
   if (splice_.on()) {
@@ -83,6 +85,7 @@ void FemParticleCoupling<dim>::rebuild_layers() {
   plastic_heat_.track_new_particles(); // what the new particles inherited was heat of the FEM
   interface_.set_offsets();
   interface_.update();
+  joint_.rebuild();
   if (splice_.on()) {
     auto split = dof_split();
     const typename fem::MechanicsSolver<dim>::StepForces flags(
@@ -479,6 +482,18 @@ typename FemParticleCoupling<dim>::VirialBalance FemParticleCoupling<dim>::viria
   b.imbalance = b.particle_stress + fem.driven - particles_external;
   // Σ_a f_int,a = 0 over the FEM's DoFs, so its supports and loads sum to −(driven + rest).
   b.net_force = particles_external_force - fem.driven_force - fem.rest_force;
+  if (joint_.on()) {
+    // An implant's joint: the particles' forces on the implant are forces inside the body. The
+    // FEM's free DoFs balance them (they sit in its rest), and their virial is the particles'
+    // side of the joint, as the driven DoFs' is of the splice. What they push straight into a
+    // support (ImplantJoint::prescribed_force) the support holds besides the FEM's reaction.
+    // Where the FEM's residual holds them (its linear path), its rest is net of them and the
+    // supports' sum needs them back.
+    const auto into_supports = Utilities::MPI::sum(joint_.prescribed_force(), comm);
+    const auto in_residual = Utilities::MPI::sum(joint_.force_in_residual(), comm);
+    b.imbalance += joint_.virial(centroid);
+    b.net_force -= into_supports + in_residual;
+  }
   const double scale = (b.fem_stress + b.particle_stress).norm();
   const double off = b.imbalance.norm();
   b.imbalance_relative = scale > 0.0 ? off / scale : (off == 0.0 ? 0.0 : off / scale);

@@ -42,6 +42,7 @@
 #include "coupling/coupling_state.h"
 #include "coupling/fracture_heat.h"
 #include "coupling/ghost_layer.h"
+#include "coupling/implant_joint.h"
 #include "coupling/mls_interface.h"
 #include "coupling/particle_boundary.h"
 #include "coupling/particle_halo.h"
@@ -297,6 +298,7 @@ class FemParticleCoupling {
   ParticleBoundary<dim> boundary_;
   MlsInterface<dim> interface_;
   EnergySplice<dim> splice_;
+  ImplantJoint<dim> joint_;
   FractureHeat<dim> fracture_;
   ParticlePlasticHeat<dim> plastic_heat_;
   CellConverter<dim> converter_;

@@ -40,6 +40,16 @@ void MlsInterface<dim>::rebuild() {
       for (const auto d : dofs)
         on_active[relevant.index_within_set(d)] = 1;
     }
+  // An implant's nodes stay the FEM's: driven by a fit of the bone particles, its stiffness
+  // would turn the fit's errors into large forces (a NOSB family under a screw's tip
+  // inverted). The particles' forces reach it through its ghosts instead (ImplantJoint).
+  const bool joint = state_.prm.splice == "overlap"; // the energy splice drives them
+  for (const auto& cell : dh.active_cell_iterators())
+    if (joint && (cell->is_locally_owned() || cell->is_ghost()) && state_.never_converts(cell)) {
+      cell->get_dof_indices(dofs);
+      for (const auto d : dofs)
+        on_active[relevant.index_within_set(d)] = 0;
+    }
   for (const auto& cell : dh.active_cell_iterators()) {
     if (!(cell->is_locally_owned() || cell->is_ghost()) || state_.fem.is_active(cell))
       continue;

@@ -197,6 +197,10 @@ class MechanicsSolver {
     bool is_driven(std::size_t k) const { return driven_[k] && !skip_[k] && !dirichlet_[k]; }
     // A DoF with a prescribed value (Dirichlet; it wins over driven).
     bool is_prescribed(std::size_t k) const { return dirichlet_[k] && !skip_[k]; }
+    // Whether added forces show in reaction_force() and residual_virial(): on the linear path
+    // the step's net forces are the raw residual those read; otherwise they are a separate
+    // right-hand side.
+    bool seen_by_reactions() const { return sign_ < 0; }
 
    private:
     double* net_;

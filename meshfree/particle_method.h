@@ -273,6 +273,22 @@ class ParticleMethod {
     (void)bonds;
     return std::nullopt;
   }
+  // A driven body the free particles are bonded to and whose FEM takes their forces back (an
+  // implant meshed with the bone: coupling/implant_joint.h). After compute_forces() at the same
+  // state: the forces the free particles exert on the driven particles flagged in `targets`,
+  // as those receive them [N], summed over the rows whose centre has `counted` set (the rank
+  // owning it), so that the targets' sum is the opposite of what the free particles receive
+  // from them. Nothing from a method that cannot split its forces so (the joint refuses it).
+  virtual std::optional<std::vector<dealii::Tensor<1, dim>>>
+  joint_reactions(const ParticleSet<dim>& particles, const BondList<dim>& bonds,
+                  const std::vector<std::uint8_t>& targets,
+                  const std::vector<std::uint8_t>& counted) const {
+    (void)particles;
+    (void)bonds;
+    (void)targets;
+    (void)counted;
+    return std::nullopt;
+  }
   virtual std::optional<std::vector<double>>
   splice_energy_by_row(const ParticleSet<dim>& particles, const BondList<dim>& bonds) const {
     (void)particles;

@@ -855,7 +855,7 @@ class ScrewPullout : public Scenario {
                 return coupled->convert_flagged();
               }();
               if (r.cells > 0) {
-                log_conversion(ctx, step, r);
+                ctx.log() << "  step " << step << ": " << r.describe(" N") << "\n";
                 const unsigned int more = relax_coupled(ctx, *coupled, step, tau);
                 relaxation += more;
                 p.relaxation += more;
@@ -1074,34 +1074,16 @@ class ScrewPullout : public Scenario {
       ctx.log() << "  particles: " << m << "\n";
   }
 
-  // One line per conversion: what moved and what it conserved.
-  static void log_conversion(RunContext& ctx, unsigned int step,
-                             const coupling::ConversionReport<3>& r) {
-    ctx.log() << "  step " << step << ": " << r.cells << " cells -> " << r.particles
-              << " particles (mass change " << r.mass_change_relative() << " relative)";
-    if (r.carries_state && r.plastic_strain_before > 0)
-      ctx.log() << "; integral of the equivalent plastic strain " << r.plastic_strain_before
-                << " m^3 in the cells, " << r.plastic_strain_after << " m^3 in their particles";
-    if (r.reaction_before > 0 && r.reaction_after > 0)
-      ctx.log() << "; reactions " << r.reaction_before << " N before, " << r.reaction_after
-                << " N after under the same load";
-    ctx.log() << "\n";
-  }
-
   // Both models to the equilibrium of load time τ by dynamic relaxation, converting the bone
   // that fails on the way (FemParticleCoupling::relax); returns its pseudo-steps.
   unsigned int relax_coupled(RunContext& ctx, coupling::FemParticleCoupling<3>& coupled,
                              unsigned int step, double tau) const {
     const auto progress = [&](const coupling::RelaxationProgress& r) {
-      ctx.log() << "  step " << step << ": relaxation pseudo-step " << r.iteration
-                << ", relative residual " << r.relative_residual << " (" << r.residual << " N of "
-                << r.reaction << " N reactions), " << r.free_particles << " free particles, "
-                << r.converted_cells << " cells converted so far, " << r.seconds << " s"
-                << std::endl;
+      ctx.log() << "  step " << step << ": " << r.describe(" N") << std::endl;
     };
     const auto report = coupled.relax(tau, true, progress);
     for (const auto& r : report.conversions)
-      log_conversion(ctx, step, r);
+      ctx.log() << "  step " << step << ": " << r.describe(" N") << "\n";
     log_particle_messages(ctx, coupled);
     if (!report.converged)
       throw NumericalFailure("relaxation not converged",
@@ -1434,7 +1416,7 @@ SPINESIM_REGISTER_SCENARIO(screw_pullout, "screw_pullout",
                            "pedicle screw in a rigid polyurethane foam block (ASTM F1839) pulled "
                            "out axially (ASTM F543): force-displacement curve, peak force "
                            "against Chapman et al. (1996).",
-                           "mechanics|damage|particles:nosb|particles:spg|conversion|coupling",
+                           "mechanics|damage|particles:nosb|conversion|coupling",
                            create_scenario<screw_pullout::ScrewPullout>,
                            {"Screw", screw_pullout::ScrewSection::declare},
                            {"Foam", screw_pullout::FoamSection::declare},

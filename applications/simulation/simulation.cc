@@ -100,25 +100,6 @@ void SimulationParameters::parse(const dealii::ParameterHandler& prm) {
     throw InvalidInput("Simulation/End time", "must be positive", "a time > 0 [s]");
 }
 
-namespace {
-// One log line per conversion: what moved and what it conserved.
-template <typename Report>
-void log_conversion(RunContext& ctx, double time, const Report& r) {
-  ctx.log() << "  t = " << time << " s: " << r.cells << " cells -> " << r.particles
-            << " particles (mass change " << r.mass_change_relative() << ", momentum change "
-            << r.momentum_change_relative() << " relative; kinetic energy moved "
-            << r.kinetic_after - r.kinetic_before << " J)\n";
-  if (r.reaction_before > 0 && r.reaction_after > 0)
-    ctx.log() << "    reactions at equilibrium under the same load: " << r.reaction_before
-              << " before, " << r.reaction_after << " after (relative jump "
-              << r.reaction_jump_relative() << ")\n";
-  if (r.carries_state && r.plastic_strain_before > 0)
-    ctx.log() << "    material state carried: integral of the equivalent plastic strain "
-              << r.plastic_strain_before << " m^3 in the cells, " << r.plastic_strain_after
-              << " m^3 in their particles\n";
-}
-} // namespace
-
 template <int dim>
 Simulation<dim>::Simulation(const ScenarioFactoryArgs& args)
     : prm_(args.prm), effects_(args.effects) {
@@ -580,18 +561,13 @@ void Simulation<dim>::coupled_relaxation(unsigned int step, double time, double,
   // conversions cascade.
   const char* force = dim == 2 ? " N/m" : " N"; // 2-D: per unit thickness
   const auto progress = [&](const coupling::RelaxationProgress& p) {
-    ctx.log() << "  t = " << time << " s: relaxation pseudo-step " << p.iteration
-              << ", relative residual " << p.relative_residual << " (" << p.residual << force
-              << " of " << p.reaction << force << " reactions), damping " << p.damping
-              << " 1/s, stiffness estimate " << p.stiffness_estimate << " 1/s^2, "
-              << p.free_particles << " free particles, " << p.converted_cells
-              << " cells converted so far, " << p.seconds << " s" << std::endl;
+    ctx.log() << "  t = " << time << " s: " << p.describe(force) << std::endl;
   };
   const auto report = coupled_->relax(time, effects_.conversion, progress);
   relaxation_iterations_ += report.iterations;
   last_relaxation_ = report;
   for (const auto& r : report.conversions)
-    log_conversion(ctx, time, r);
+    ctx.log() << "  t = " << time << " s: " << r.describe(force) << "\n";
   if (!report.converged)
     throw NumericalFailure("relaxation not converged",
                            "step " + std::to_string(step) + ", t = " + std::to_string(time) +
@@ -632,7 +608,7 @@ void Simulation<dim>::coupled_explicit(unsigned int, double time, double, RunCon
       const auto r = coupled_->convert_flagged();
       if (r.cells > 0) {
         coupled_dt_ = coupled_->stable_time_step();
-        log_conversion(ctx, t, r);
+        ctx.log() << "  t = " << t << " s: " << r.describe(dim == 2 ? " N/m" : " N") << "\n";
       }
     }
   }

@@ -70,6 +70,12 @@ class NosbMethod : public ParticleMethod<dim> {
   void set_first_ghost(unsigned int first) override { pd_.set_first_ghost(first); }
   std::optional<std::vector<dealii::Tensor<1, dim>>>
   driven_reactions(const ParticleSet<dim>& particles, const BondList<dim>& bonds) const override;
+  std::optional<std::vector<dealii::Tensor<1, dim>>>
+  joint_reactions(const ParticleSet<dim>& particles, const BondList<dim>& bonds,
+                  const std::vector<std::uint8_t>& targets,
+                  const std::vector<std::uint8_t>& counted) const override {
+    return pd_.joint_reactions(particles, bonds, targets, counted);
+  }
   std::optional<std::vector<double>>
   splice_energy_by_row(const ParticleSet<dim>& particles,
                        const BondList<dim>& bonds) const override;

@@ -332,6 +332,62 @@ void NosbPD<dim>::compute_forces(ParticleSet<dim>& particles, const BondList<dim
 }
 
 template <int dim>
+std::vector<dealii::Tensor<1, dim>>
+NosbPD<dim>::joint_reactions(const ParticleSet<dim>& particles, const BondList<dim>& bonds,
+                             const std::vector<std::uint8_t>& targets,
+                             const std::vector<std::uint8_t>& counted) const {
+  using Vec = dealii::Tensor<1, dim>;
+  const unsigned int n = particles.size();
+  std::vector<Vec> r(n);
+  if (targets.size() != n || counted.size() != n || driven_.size() != n)
+    return r;
+  const auto is_free = [&](unsigned int i) { return !driven_[i]; };
+  const auto& fam = families();
+  const auto& P = family_stress_;
+  std::vector<unsigned int> nodes;
+  std::vector<Vec> G;
+  for (unsigned int e = 0; e < fam.n_families() && e < P.size(); ++e) {
+    const unsigned int c = fam.centre(e);
+    if (!counted[c] || !(is_free(c) || targets[c]))
+      continue;
+    fam.expand(e, nodes, G);
+    const auto wP = fam.weight(e) * P[e];
+    for (std::size_t a = 0; a < nodes.size(); ++a) {
+      const unsigned int m = nodes[a];
+      if (m == c)
+        continue;
+      const Vec f = -(wP * G[a]);
+      if (is_free(c) && targets[m])
+        r[m] += f;
+      else if (targets[c] && is_free(m))
+        r[c] -= f;
+    }
+  }
+  if (penalty_on()) {
+    // The spring pair of a bond (free i, target j) as compute_forces adds it to f_i; the
+    // target takes its opposite.
+    const auto& u = particles.displacements();
+    const auto& V = particles.volumes();
+    const double Gc = penalty_coefficient();
+    for (unsigned int i = 0; i < n; ++i) {
+      if (!counted[i] || !is_free(i))
+        continue;
+      for_each_penalty_bond(bonds, i, Gc, [&](std::size_t k, unsigned int j, double kappa) {
+        if (!targets[j])
+          return;
+        const Vec& xi = bonds.xi[k];
+        const Vec eta = u[j] - u[i];
+        const double si = penalty_kept(i), sj = penalty_kept(j);
+        const Vec dz =
+            si * (eta - (F_particle_[i] * xi - xi)) + sj * (eta - (F_particle_[j] * xi - xi));
+        r[j] -= (kappa * V[i] * V[j]) * dz;
+      });
+    }
+  }
+  return r;
+}
+
+template <int dim>
 void NosbPD<dim>::commit_state() {
   committed_ = trial_;
 }

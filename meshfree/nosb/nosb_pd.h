@@ -124,6 +124,18 @@ class NosbPD {
   // committed material history (the trial history is kept for commit_state()).
   // NumericalFailure naming the particle on det F <= 0 or a non-finite force.
   void compute_forces(ParticleSet<dim>& particles, const BondList<dim>& bonds);
+  // After compute_forces() at the same state: the forces that pass between the free particles
+  // (not driven) and the `targets` (driven particles), as the targets receive them [N] (zero
+  // elsewhere). Family by family: a free centre's family puts −w P G_m on each target member m;
+  // a target centre's family puts −w P G_m on its free members, which the target takes back
+  // (−Σ over them) so that each family's forces still sum to zero; a penalty spring between a
+  // free particle and a target gives the target the opposite of the free end's force. Families
+  // of other driven centres are not counted (the FEM carries that material). Only families
+  // and springs whose centre has `counted` set are summed (MPI: the rank owning the centre).
+  std::vector<dealii::Tensor<1, dim>>
+  joint_reactions(const ParticleSet<dim>& particles, const BondList<dim>& bonds,
+                  const std::vector<std::uint8_t>& targets,
+                  const std::vector<std::uint8_t>& counted) const;
   // Breaks over-stretched bonds (and, with a Critical plastic strain, bonds whose two ends'
   // committed equivalent plastic strain exceeds it on average), rebuilds the families and
   // updates damage if any broke; returns the number of bond ends broken (each pair counts

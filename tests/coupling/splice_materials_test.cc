@@ -38,6 +38,8 @@ struct LayeredBarResult {
   double exact = 0;    // σ A of the exact uniaxial field [N]
   unsigned int free_particles = 0;
   bool converged = false;
+  double reaction_held = 0; // F_x on the held face [N] (with an implant)
+  double imbalance = 0;     // the coupled body's virial balance (with an implant) [-]
 };
 
 // Bar [0, 1] × [0, 0.25]^(dim−1): cells of 1/16 (2-D) or 1/8 (3-D) along x, soft for
@@ -45,7 +47,8 @@ struct LayeredBarResult {
 // x = 0 held in x, x = 1 moved by δ in x, rollers on y = 0 (and z = 0).
 template <int dim>
 LayeredBarResult layered_bar(const std::string& method, const std::string& ghost_gradient,
-                             double region_lower, double region_upper, bool with_particles = true) {
+                             double region_lower, double region_upper, bool with_particles = true,
+                             bool implant = false) {
   const double E_soft = 1e9, E_stiff = 1e10, delta = 1e-4, width = 0.25;
   dealii::parallel::distributed::Triangulation<dim> tria(MPI_COMM_WORLD);
   fem::MeshParameters mesh;
@@ -105,12 +108,18 @@ LayeredBarResult layered_bar(const std::string& method, const std::string& ghost
   cp.region_upper[0] = region_upper;
   cp.relaxation_tolerance = 1e-9;
   cp.ghost_gradient = ghost_gradient;
+  if (implant)
+    cp.unconverted_material_ids = {1};
   FemParticleCoupling<dim> coupling(cp, solver);
   coupling.initialise();
   r.free_particles = coupling.n_free_particles();
   const auto report = coupling.relax(solver.time(), false);
   r.converged = report.converged;
   r.reaction = coupling.reaction_force(1)[0];
+  if (implant) {
+    r.reaction_held = coupling.reaction_force(0)[0];
+    r.imbalance = coupling.virial_balance().imbalance_relative;
+  }
   return r;
 }
 
@@ -168,6 +177,52 @@ void splice_across_materials(const std::string& method) {
       EXPECT_GT(std::abs(err_family), 1.0) << method << " " << dim << "-D, up to the jumps";
     }
   }
+}
+
+// The stiff layers as an implant (CouplingParameters::unconverted_material_ids; coupling/
+// implant_joint.h): their nodes are not driven by the particles' fit, and the FEM takes back
+// the forces the particles put on their ghosts.
+// (a) clear of the jumps the joint is not engaged (no particle reaches a stiff ghost) and the
+//     bar is exact as above (bound 1e-5; measured 1.5e-7 / 6.2e-8, 2-D / 3-D).
+// (b) up to the jumps every stiff ghost the particles reach is the implant's. The ghosts'
+//     families run at the FEM's gradient, so only the particles' own families see the
+//     displacement jump at the interface: the joint is compliant, and the bar comes out soft
+//     (measured −12.9 % / −21.2 %; with the implant's nodes driven instead, (b) above, +23 % /
+//     +21 %). Bound: soft, by less than 30 %. Whatever its stiffness, the joint makes and loses
+//     no force: the held and the pulled ends carry the same force to the relaxation's
+//     tolerance (1e-9 of the reactions; bound 1e-6), and the coupled body's virial balance
+//     (docs/coupling.md) closes to 10 % (measured 3.1 % / 6.3 %; 1.0e-4 / 6.8e-5 clear).
+template <int dim>
+void implant_joint_bar(const std::string& method) {
+  const double cell = dim == 2 ? 1.0 / 16 : 1.0 / 8;
+  for (const bool clear : {true, false}) {
+    const double margin = clear ? 0.8 * cell : 0.0;
+    const auto joint = layered_bar<dim>(method, "fem", 0.25 + margin, 0.75 - margin, true, true);
+    ASSERT_GT(joint.free_particles, 0u);
+    ASSERT_TRUE(joint.converged);
+    const double err = joint.reaction / joint.exact - 1.0;
+    ASSERT_TRUE(std::isfinite(err) && std::isfinite(joint.imbalance));
+    if (dealii::Utilities::MPI::this_mpi_process(MPI_COMM_WORLD) == 0)
+      std::cout << "[ measured ] " << method << " " << dim << "-D layered bar, stiff layers an "
+                << "implant, particles " << (clear ? "clear of" : "up to")
+                << " the jumps: reaction error " << err << ", force balance " << joint.imbalance
+                << "\n";
+    EXPECT_NEAR(joint.reaction + joint.reaction_held, 0.0, 1e-6 * joint.exact);
+    if (clear) {
+      EXPECT_LT(std::abs(err), 1e-5) << dim << "-D, clear";
+      EXPECT_LT(joint.imbalance, 1e-3) << dim << "-D, clear";
+    } else {
+      EXPECT_LT(err, 0.0) << dim << "-D, up to the jumps";
+      EXPECT_GT(err, -0.3) << dim << "-D, up to the jumps";
+      EXPECT_LT(joint.imbalance, 0.1) << dim << "-D, up to the jumps";
+    }
+  }
+}
+TEST(SpliceAcrossMaterials, ImplantJointNosb2D) {
+  implant_joint_bar<2>("nosb");
+}
+TEST(SpliceAcrossMaterials, ImplantJointNosb3D) {
+  implant_joint_bar<3>("nosb");
 }
 
 TEST(SpliceAcrossMaterials, NosbGhostsCarryTheFemStress2D) {

@@ -30,6 +30,10 @@ spinesim_add_hostile_test(screw_conversion_cells_not_cubes
   MATCH "Block/Depth.*must be cubes")
 spinesim_add_hostile_test(screw_particles_bond_based
   ARGS check ${_screw} --set "Effects/Particles method=bond_based" MATCH "Effects/Particles method")
+# SPG cannot split its forces by family, so it cannot hand the screw the particles' forces
+# (coupling/implant_joint.h): refused before the run, not at the first conversion.
+spinesim_add_hostile_test(screw_particles_spg
+  ARGS check ${_screw} --set "Effects/Particles method=spg" MATCH "Effects/Particles method.*spg")
 spinesim_add_hostile_test(screw_block_too_narrow
   ARGS check ${_screw} --set "Block/Width=8" MATCH "Block/Width")
 spinesim_add_hostile_test(foam_without_residual_stiffness
