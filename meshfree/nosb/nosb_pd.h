@@ -311,13 +311,15 @@ class NosbPD {
   // marked its centre, else the family's own.
   dealii::Tensor<2, dim> family_gradient(const CorrespondenceFamilies<dim>& fam, unsigned int e,
                                          const std::vector<dealii::Tensor<1, dim>>& u) const {
-    if (driven_gradients_) {
-      const unsigned int c = fam.centre(e);
-      if (c < takes_driven_gradient_.size() && takes_driven_gradient_[c] &&
-          c < driven_gradients_->size())
-        return (*driven_gradients_)[c];
-    }
+    const unsigned int c = fam.centre(e);
+    if (at_driven_gradient(c))
+      return (*driven_gradients_)[c];
     return fam.deformation_gradient(e, u);
+  }
+  // Whether particle c's families run at the driving model's gradient.
+  bool at_driven_gradient(unsigned int c) const {
+    return driven_gradients_ && c < takes_driven_gradient_.size() && takes_driven_gradient_[c] &&
+           c < driven_gradients_->size();
   }
   // w_e W(F_e) of family e at the current displacements, its penalty springs included [J].
   double family_energy(unsigned int e, const ParticleSet<dim>& particles,

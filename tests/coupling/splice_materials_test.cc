@@ -48,7 +48,7 @@ struct LayeredBarResult {
 template <int dim>
 LayeredBarResult layered_bar(const std::string& method, const std::string& ghost_gradient,
                              double region_lower, double region_upper, bool with_particles = true,
-                             bool implant = false) {
+                             bool implant = false, const std::string& penalty = "") {
   const double E_soft = 1e9, E_stiff = 1e10, delta = 1e-4, width = 0.25;
   dealii::parallel::distributed::Triangulation<dim> tria(MPI_COMM_WORLD);
   fem::MeshParameters mesh;
@@ -97,6 +97,10 @@ LayeredBarResult layered_bar(const std::string& method, const std::string& ghost
   meshfree::declare_particle_method_sections(prm);
   prm.enter_subsection("NOSB");
   prm.set("Horizon ratio", "2.015"); // small families keep the 3-D case quick
+  if (!penalty.empty()) {            // hourglass springs of coefficient G_s = penalty
+    prm.set("Stabilization", "penalty");
+    prm.set("Stabilization coefficient", penalty);
+  }
   prm.leave_subsection();
   typename FemParticleCoupling<dim>::Parameters cp;
   cp.particles_method = method;
@@ -223,6 +227,43 @@ TEST(SpliceAcrossMaterials, ImplantJointNosb2D) {
 }
 TEST(SpliceAcrossMaterials, ImplantJointNosb3D) {
   implant_joint_bar<3>("nosb");
+}
+
+// NOSB-PD with penalty springs (G_s = 1). A ghost at the FEM's gradient carries the FEM's stress
+// alone: its springs have no part through its F, which the particles do not set. Clear of the
+// jumps the bar is then exact as with bond-associated families (bound 1e-5; measured 2.3e-7 /
+// 9.6e-8, 2-D / 3-D), with the splice and with the stiff layers as an implant. With the
+// springs' stress in the ghosts' families, soft ghosts whose springs reach the stiff layer
+// pushed the particles with it: −10.6 % (2-D). Up to the jumps the springs between particles
+// and implant ghosts see the displacement jump that the families at the FEM's gradient miss,
+// and the joint comes out within 5 % (measured +1.9 % / +1.6 %; without springs −12.9 % /
+// −21.2 %, above). Springs that stiff over-stiffen plastic flow, though: the screw pull-out
+// with G_s = 1 read 2.2 times the FEM's force (docs/coupling.md).
+template <int dim>
+void penalty_ghosts_carry_the_fem_stress() {
+  const double cell = dim == 2 ? 1.0 / 16 : 1.0 / 8;
+  const double lower = 0.25 + 0.8 * cell, upper = 0.75 - 0.8 * cell;
+  for (const bool implant : {false, true}) {
+    const auto clear = layered_bar<dim>("nosb", "fem", lower, upper, true, implant, "1");
+    ASSERT_TRUE(clear.converged);
+    const double err = clear.reaction / clear.exact - 1.0;
+    ASSERT_TRUE(std::isfinite(err));
+    EXPECT_LT(std::abs(err), 1e-5) << dim << "-D, implant " << implant;
+  }
+  const auto joint = layered_bar<dim>("nosb", "fem", 0.25, 0.75, true, true, "1");
+  ASSERT_TRUE(joint.converged);
+  const double err = joint.reaction / joint.exact - 1.0;
+  ASSERT_TRUE(std::isfinite(err));
+  if (dealii::Utilities::MPI::this_mpi_process(MPI_COMM_WORLD) == 0)
+    std::cout << "[ measured ] NOSB penalty G_s = 1, " << dim << "-D layered bar, particles up "
+              << "to an implant: reaction error " << err << "\n";
+  EXPECT_LT(std::abs(err), 0.05) << dim << "-D, up to the implant";
+}
+TEST(SpliceAcrossMaterials, NosbPenaltyGhostsCarryTheFemStress2D) {
+  penalty_ghosts_carry_the_fem_stress<2>();
+}
+TEST(SpliceAcrossMaterials, NosbPenaltyGhostsCarryTheFemStress3D) {
+  penalty_ghosts_carry_the_fem_stress<3>();
 }
 
 TEST(SpliceAcrossMaterials, NosbGhostsCarryTheFemStress2D) {
