@@ -63,6 +63,7 @@ template <int dim>
 void ImplantJoint<dim>::take_particle_forces() {
   reactions_.assign(targets_.size(), Vector());
   owned_values_.clear();
+  prescribed_ = into_residual_ = Vector(); // add_reactions() sets them when there are any
   if (targets_.empty())
     return;
   const unsigned int n = state_.particles.size();
@@ -102,14 +103,6 @@ void ImplantJoint<dim>::add_reactions(const StepForces& forces) {
       prescribed_[component_[k]] += owned_values_[k];
     }
   }
-}
-
-template <int dim>
-typename ImplantJoint<dim>::Vector ImplantJoint<dim>::force() const {
-  Vector f;
-  for (const auto& r : reactions_)
-    f += r;
-  return f;
 }
 
 template <int dim>

@@ -54,9 +54,8 @@ class ImplantJoint {
   // move. A prescribed DoF's share is what the particles push straight into the support:
   // prescribed_force() sums it.
   void add_reactions(const StepForces& forces);
-  // Sum of the reactions on the implant, and their virial Σ (X_g − origin) ⊗ r_g at the
-  // ghosts' reference positions (= the DoFs' by Σ_a N_a X_a = X), on every rank.
-  Vector force() const;
+  // The reactions' virial Σ (X_g − origin) ⊗ r_g at the ghosts' reference positions (= the
+  // DoFs' by Σ_a N_a X_a = X), on every rank.
   dealii::Tensor<2, dim> virial(const dealii::Point<dim>& origin) const;
   // The part of the last add_reactions() on prescribed DoFs, summed over the ranks' owned
   // DoFs of this rank (sum it over the ranks).
