@@ -115,6 +115,15 @@ void BondRows<dim>::rebuild() {
             keep[all.neighbor[k]] = 1;
       }
   }
+  // An implant met by contact alone (CouplingParameters::implant_bonded): no bond joins a free
+  // particle to a ghost in an implant cell.
+  std::vector<std::uint8_t> in_implant;
+  if (!state_.prm.implant_bonded)
+    in_implant = state_.in_unconverted_cells();
+  const auto unbonded = [&](unsigned int i, unsigned int j) {
+    return !in_implant.empty() && in_implant[i] != in_implant[j] &&
+           (state_.free[i] || state_.free[j]);
+  };
   meshfree::BondList<dim> kept;
   kept.horizon = all.horizon;
   kept.offsets.assign(all.n_particles() + 1, 0);
@@ -142,7 +151,7 @@ void BondRows<dim>::rebuild() {
         kept.xi.push_back(all.xi[k]);
         kept.length.push_back(all.length[k]);
         kept.influence.push_back(all.influence[k]);
-        kept.broken.push_back(all.broken[k] || was_broken(i, j));
+        kept.broken.push_back(all.broken[k] || was_broken(i, j) || unbonded(i, j));
         if (has_volume)
           kept.volume_fraction.push_back(all.volume_fraction[k]);
         if (has_surface)

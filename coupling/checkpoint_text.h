@@ -1,7 +1,7 @@
 #ifndef SPINESIM_COUPLING_CHECKPOINT_TEXT_H
 #define SPINESIM_COUPLING_CHECKPOINT_TEXT_H
 
-// The bytes of a coupling checkpoint ("spinesim_coupling 1" to "7", written by
+// The bytes of a coupling checkpoint ("spinesim_coupling 1" to "8", written by
 // CouplingCheckpoint::save) read into plain records, with every check a file from outside
 // needs: counts bounded by the file's size before anything is sized by them, every record
 // complete, in range and finite, nothing after the last record. No deal.II: the loader turns
@@ -64,6 +64,9 @@ struct CheckpointContents {
   std::vector<CheckpointHistory> history;                    // version 3
   std::size_t n_last_pass = 0;     // version 6: particles the last force pass saw (a prefix)
   std::vector<CheckpointLaw> laws; // version 7: the particles' laws (CouplingState::laws)
+  // Version 8: the committed stick points of particles in frictional contact with an implant
+  // (ImplantContact): particle index and the point (first `dim` entries used) [m].
+  std::vector<std::pair<unsigned int, std::array<double, 3>>> sticks;
 };
 
 // Reads a checkpoint of a `dim`-dimensional run whose coupling has `n_points` candidate

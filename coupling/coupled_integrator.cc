@@ -30,8 +30,10 @@ double CoupledIntegrator<dim>::stable_time_step() const {
   const auto& particles = state_.particles;
   const MPI_Comm comm = state_.fem.mpi_communicator(); // rows live with their owners
   stiffness_bound_.clear();
-  if (state_.n_free_particles() > 0)
+  if (state_.n_free_particles() > 0) {
     stiffness_bound_ = state_.method->stiffness_bound(particles, state_.bonds);
+    joint_.contact().add_stiffness_bound(stiffness_bound_);
+  }
   particle_step_ = Utilities::MPI::min(particle_step(), comm);
   return combined_step(state_.fem.stable_time_step(), particle_step_);
 }
@@ -264,8 +266,10 @@ void CoupledIntegrator<dim>::advance(double dt, double a, double load_time, bool
     // Explicit steps commit the material history every step, as the FEM does; a relaxation
     // commits both models once, at equilibrium (relax()), so the pseudo-dynamics leave no
     // plastic trace (MechanicsSolver::relaxation_step).
-    if (!sums)
+    if (!sums) {
       state_.method->commit_state();
+      joint_.contact().commit();
+    }
     auto& previous = relax_acceleration_;
     if (sums && (first || previous.size() != dim * particles.size()))
       previous.assign(dim * particles.size(), std::numeric_limits<double>::quiet_NaN());
@@ -424,6 +428,7 @@ CoupledIntegrator<dim>::relax(double time, bool with_conversion,
       state_.fem.commit_relaxation();
       if (state_.method)
         state_.method->commit_state();
+      joint_.contact().commit(); // friction's stick points, like the material history
       // Conversion is decided at equilibrium, not on the transient strains of the relaxation
       // (which depend on its path and tolerance): cells flagged now convert and the state
       // relaxes again, until no cell converts.

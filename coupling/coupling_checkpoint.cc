@@ -97,6 +97,7 @@ void CouplingCheckpoint<dim>::save(const std::string& file) const {
     integration = std::move(total);
   }
   const auto histories = Utilities::MPI::gather(state.fem.mpi_communicator(), history, 0);
+  const auto sticks = p_.joint.contact().stick_points();
   if (Utilities::MPI::this_mpi_process(state.fem.mpi_communicator()) != 0)
     return;
   std::size_t n_history = 0;
@@ -111,11 +112,12 @@ void CouplingCheckpoint<dim>::save(const std::string& file) const {
   // version 6 the displacement at the last force pass and the stiffness bound (dim + 1 more a
   // particle; the header's eighth number: how many particles the last force pass saw);
   // version 7 the particles' laws (their number last in the header, one line each after the
-  // converted cells) and each particle's index among them.
-  out << "spinesim_coupling 7\n"
+  // converted cells) and each particle's index among them; version 8 the stick points of
+  // frictional contact with an implant (their number last in the header, after the history).
+  out << "spinesim_coupling 8\n"
       << p_.integrator.time() << " " << particles.size() << " " << p_.converter.converted().size()
       << " " << broken.size() << " " << dissipation << " " << p_.fracture.heat() << " " << n_history
-      << " " << u_pass.size() << " " << state.law_parameters.size() << "\n";
+      << " " << u_pass.size() << " " << state.law_parameters.size() << " " << sticks.size() << "\n";
   for (const auto& [id, batch] : p_.converter.converted())
     out << id << " " << batch << "\n";
   for (const auto& law : state.law_parameters) {
@@ -148,6 +150,12 @@ void CouplingCheckpoint<dim>::save(const std::string& file) const {
         out << " " << part[k + 2 + m];
       out << "\n";
     }
+  for (const auto& [i, point] : sticks) {
+    out << i;
+    for (unsigned int d = 0; d < dim; ++d)
+      out << " " << point[d];
+    out << "\n";
+  }
 }
 
 template <int dim>
@@ -228,6 +236,16 @@ void CouplingCheckpoint<dim>::load(const std::string& file) {
   p_.rebuild_layers();
   if (state.method)
     state.method->set_history(history);
+  {
+    std::vector<std::pair<unsigned int, Tensor<1, dim>>> sticks;
+    for (const auto& [i, point] : c.sticks) {
+      Tensor<1, dim> s;
+      for (unsigned int d = 0; d < dim; ++d)
+        s[d] = point[d];
+      sticks.emplace_back(i, s);
+    }
+    p_.joint.contact().restore(sticks);
+  }
   if (c.version >= 6) { // older checkpoints: both start afresh, as they did
     // The last force pass saw the first n_last_pass particles (later ones were converted
     // since): the account leaves a break's lost work out until the next pass as before.

@@ -2,7 +2,8 @@
 #define SPINESIM_COUPLING_COUPLING_CHECKPOINT_H
 
 // The particle side of a restart file (text, "spinesim_coupling 2"): clock, converted cells,
-// every particle's record and state, broken bonds and the fracture-heat totals. The FEM state
+// every particle's record and state, broken bonds, the fracture-heat totals and the stick points
+// of frictional contact with an implant. The FEM state
 // is saved and restored separately.
 
 #include "coupling/bond_rows.h"
@@ -11,6 +12,7 @@
 #include "coupling/coupling_state.h"
 #include "coupling/fracture_heat.h"
 #include "coupling/ghost_layer.h"
+#include "coupling/implant_joint.h"
 #include "coupling/particle_halo.h"
 
 #include <functional>
@@ -31,6 +33,7 @@ class CouplingCheckpoint {
     ParticleHalo<dim>& halo;
     BondRows<dim>& bond_rows;
     GhostLayer<dim>& ghosts;
+    ImplantJoint<dim>& joint; // its contact's stick points
     std::function<void()> rebuild_layers;
   };
   explicit CouplingCheckpoint(Pieces pieces) : p_(std::move(pieces)) {}

@@ -40,6 +40,22 @@ void CouplingParameters<dim>::declare(ParameterHandler& prm) {
                     "Support radius of the moving-least-squares fit that drives interface FEM "
                     "nodes from the free particles, in particle spacings [-].");
   prm.declare_entry(
+      "Implant contact stiffness", "2", Double(0),
+      "Penalty of the contact between particles and an implant's true surface (a pedicle "
+      "screw's threads), in units of the particle's E V / h^2 (E h in 3-D: a cube of bone of "
+      "side h under a face load). A particle touches the surface at half a spacing; the penalty "
+      "stands in for that half cube, whose own stiffness is 2 (the default): higher values make "
+      "the contact stiffer than the bone it replaces. 0 = no contact [-].");
+  prm.declare_entry("Implant interface", "bonded", Selection("bonded|contact"),
+                    "How bone particles meet an implant [-]. bonded: they start bonded to it "
+                    "(an osseointegrated interface; the bonds break by the bone's criteria, and "
+                    "contact with the implant's surface, Effects/Contact, keeps failed bone out "
+                    "of it); contact: by contact alone, their bonds to it start broken (a "
+                    "loosened implant; needs Effects/Contact).");
+  prm.declare_entry("Implant friction coefficient", "0.3", Double(0),
+                    "Coulomb friction coefficient between the particles and an implant's "
+                    "surface [-].");
+  prm.declare_entry(
       "Splice", "overlap", Selection("overlap|energy"),
       "How the FEM and the particles join [-]. overlap: ghost particles driven by the FEM and "
       "interface nodes driven by a moving-least-squares fit of the particles; exact for affine "
@@ -160,6 +176,9 @@ void CouplingParameters<dim>::parse(ParameterHandler& prm, const std::string& me
   particles_per_direction = prm.get_integer("Particles per cell direction");
   ghost_layer = prm.get_double("Ghost layer");
   interface_radius = prm.get_double("Interface radius");
+  implant_contact_stiffness = prm.get_double("Implant contact stiffness");
+  implant_friction = prm.get_double("Implant friction coefficient");
+  implant_bonded = prm.get("Implant interface") == "bonded";
   splice = prm.get("Splice");
   ghost_gradient = prm.get("Ghost gradient");
   time_step_safety = prm.get_double("Time step safety");

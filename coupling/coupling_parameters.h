@@ -9,6 +9,7 @@
 #include <deal.II/base/parameter_handler.h>
 #include <deal.II/base/point.h>
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -40,6 +41,17 @@ struct CouplingParameters {
   // Cells of these material ids stay FEM whatever the criteria say: set by scenarios whose
   // bodies hold an implant meshed with the bone (its cells never turn into bone particles).
   std::vector<unsigned int> unconverted_material_ids;
+  // The implant's surface for contact with the particles (implant_contact.h): the signed
+  // distance of a point in the implant's reference frame, negative inside [m], and the outward
+  // normal at the nearest surface point. Set by scenarios that know the implant's true shape
+  // (the cells only stair-step it); none = no contact.
+  std::function<double(const dealii::Point<dim>&, dealii::Tensor<1, dim>&)> implant_surface;
+  double implant_contact_stiffness = 2; // penalty, in E V / h^2 of the particle [-]; 0 = off
+  double implant_friction = 0.3;        // Coulomb coefficient, particles on the implant [-]
+  // Whether free particles start bonded to the implant's ghosts (a bonded, osseointegrated
+  // interface whose bonds break by the bone's criteria), or meet it by contact alone (a
+  // loosened implant: those bonds start broken).
+  bool implant_bonded = true;
   unsigned int check_interval = 10;               // steps between conversion checks
   bool damage = true;                             // bonds may break (Effects/Damage)
   std::vector<double> refine_lower, refine_upper; // box refined before the run [m]

@@ -69,6 +69,24 @@ unsigned int CouplingState<dim>::n_free_particles() const {
 }
 
 template <int dim>
+std::vector<std::uint8_t> CouplingState<dim>::in_unconverted_cells() const {
+  const unsigned int n = particles.size();
+  std::vector<std::uint8_t> in(n, 0);
+  if (prm.unconverted_material_ids.empty())
+    return in;
+  for (unsigned int i = 0; i < n; ++i)
+    if (!free[i] && host_index[i] >= 0 && never_converts(owned_by_index[host_index[i]]))
+      in[i] = 1;
+  const MPI_Comm comm = fem.mpi_communicator();
+  if (dealii::Utilities::MPI::n_mpi_processes(comm) > 1) {
+    std::vector<unsigned int> flags(in.begin(), in.end());
+    dealii::Utilities::MPI::max(flags, comm, flags);
+    std::copy(flags.begin(), flags.end(), in.begin());
+  }
+  return in;
+}
+
+template <int dim>
 unsigned int CouplingState<dim>::n_ghost_particles() const {
   return static_cast<unsigned int>(free.size()) - n_free_particles();
 }

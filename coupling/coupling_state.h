@@ -67,6 +67,9 @@ struct CouplingState {
         return true;
     return false;
   }
+  // Per particle: 1 if its host cell is of an unconverted material id (a ghost in an
+  // implant), on every rank (the host cells' owners decide; one reduction). Collective.
+  std::vector<std::uint8_t> in_unconverted_cells() const;
   // Appends a particle hosted by point `point` of cell `cell_id`: a ghost, no fixed slots.
   unsigned int add_particle(const std::string& cell_id, unsigned int point,
                             const dealii::Point<dim>& position, double volume);

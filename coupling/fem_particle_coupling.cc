@@ -34,7 +34,7 @@ FemParticleCoupling<dim>::FemParticleCoupling(const Parameters& parameters,
       converter_(state_, [this] { rebuild_layers(); }),
       integrator_(state_, ghosts_, interface_, halo_, boundary_, fracture_, converter_, splice_,
                   joint_),
-      checkpoint_({state_, converter_, integrator_, fracture_, halo_, bond_rows_, ghosts_,
+      checkpoint_({state_, converter_, integrator_, fracture_, halo_, bond_rows_, ghosts_, joint_,
                    [this] { rebuild_layers(); }}) {
   if (splice_.on()) {
     // The energy account books the splice's energy (coupling/energy_splice.h): the interface
@@ -493,11 +493,28 @@ typename FemParticleCoupling<dim>::VirialBalance FemParticleCoupling<dim>::viria
     const auto in_residual = Utilities::MPI::sum(joint_.force_in_residual(), comm);
     b.imbalance += joint_.virial(centroid);
     b.net_force -= into_supports + in_residual;
+    // Contact pairs act on the particle at X_i and on the implant at its ghost X_g: a spring
+    // of length X_i − X_g carrying f, whose virial (X_i − X_g) ⊗ f is the stress of the half
+    // cells it stands for, not an imbalance of the splice (implant_contact.h).
+    b.imbalance -= Utilities::MPI::sum(joint_.contact().transfer_couple(), comm);
   }
   const double scale = (b.fem_stress + b.particle_stress).norm();
   const double off = b.imbalance.norm();
   b.imbalance_relative = scale > 0.0 ? off / scale : (off == 0.0 ? 0.0 : off / scale);
   return b;
+}
+
+template <int dim>
+typename FemParticleCoupling<dim>::ContactFigures
+FemParticleCoupling<dim>::contact_figures() const {
+  const auto& contact = joint_.contact();
+  const MPI_Comm comm = state_.fem.mpi_communicator();
+  ContactFigures f;
+  f.candidates = contact.n_candidates(); // replicated
+  f.active_pairs = Utilities::MPI::sum(contact.active_pairs(), comm);
+  f.force_on_implant = Utilities::MPI::sum(contact.force_on_implant(), comm);
+  f.deepest = Utilities::MPI::max(contact.deepest_penetration(), comm);
+  return f;
 }
 
 template <int dim>

@@ -268,6 +268,14 @@ class FemParticleCoupling {
     dealii::Tensor<1, dim> net_force;
   };
   VirialBalance virial_balance() const;
+  // Contact between the particles and an implant's surface at the last force pass
+  // (implant_contact.h), over all ranks. Collective.
+  struct ContactFigures {
+    unsigned int candidates = 0, active_pairs = 0;
+    dealii::Tensor<1, dim> force_on_implant; // [N]
+    double deepest = 0;                      // penetration beyond the reference gap [m]
+  };
+  ContactFigures contact_figures() const;
   // Messages for the run log since the last call (the method's, and the coupling's own).
   std::vector<std::string> take_messages();
 

@@ -18,19 +18,12 @@ void ImplantJoint<dim>::rebuild() {
   reactions_.clear();
   const unsigned int n = state_.particles.size();
   is_target_.assign(n, 0);
-  if (!on())
+  if (!on()) {
+    contact_.rebuild(targets_);
     return;
-  // The owner of a ghost's host cell knows its material; every rank learns it by one reduction.
-  for (unsigned int i = 0; i < n; ++i)
-    if (!state_.free[i] && state_.host_index[i] >= 0 &&
-        state_.never_converts(state_.owned_by_index[state_.host_index[i]]))
-      is_target_[i] = 1;
-  const MPI_Comm comm = state_.fem.mpi_communicator();
-  if (Utilities::MPI::n_mpi_processes(comm) > 1) {
-    std::vector<unsigned int> flags(is_target_.begin(), is_target_.end());
-    Utilities::MPI::max(flags, comm, flags);
-    std::copy(flags.begin(), flags.end(), is_target_.begin());
   }
+  is_target_ = state_.in_unconverted_cells();
+  const MPI_Comm comm = state_.fem.mpi_communicator();
   for (unsigned int i = 0; i < n; ++i)
     if (is_target_[i])
       targets_.push_back(i);
@@ -40,6 +33,7 @@ void ImplantJoint<dim>::rebuild() {
                        "the particle method cannot hand an implant the forces of the particles "
                        "bonded to it",
                        "nosb (the bone next to an implant converts to NOSB-PD particles)");
+  contact_.rebuild(targets_);
   if (fem_reactions_.size() == 0) {
     const auto& dh = state_.fem.dof_handler();
     const auto& owned = state_.fem.locally_owned_dofs();
@@ -72,10 +66,14 @@ void ImplantJoint<dim>::take_particle_forces() {
     counted[i] = state_.is_owned(i) ? 1 : 0;
   const auto r =
       state_.method->joint_reactions(state_.particles, state_.bonds, is_target_, counted);
+  // Contact adds its forces to the owned free particles and its reactions here.
+  std::vector<Vector> contact(contact_.on() ? n : 0);
+  if (contact_.on())
+    contact_.add_forces(contact);
   std::vector<double> sums(dim * targets_.size());
   for (std::size_t t = 0; t < targets_.size(); ++t)
     for (unsigned int d = 0; d < dim; ++d)
-      sums[dim * t + d] = (*r)[targets_[t]][d];
+      sums[dim * t + d] = (*r)[targets_[t]][d] + (contact.empty() ? 0.0 : contact[targets_[t]][d]);
   const MPI_Comm comm = state_.fem.mpi_communicator();
   if (Utilities::MPI::n_mpi_processes(comm) > 1)
     Utilities::MPI::sum(sums, comm, sums);

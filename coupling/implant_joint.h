@@ -21,6 +21,7 @@
 // cells per force pass.
 
 #include "coupling/coupling_state.h"
+#include "coupling/implant_contact.h"
 
 #include <deal.II/base/point.h>
 #include <deal.II/base/tensor.h>
@@ -37,7 +38,7 @@ class ImplantJoint {
   using Vector = dealii::Tensor<1, dim>;
   using StepForces = typename fem::MechanicsSolver<dim>::StepForces;
 
-  explicit ImplantJoint(CouplingState<dim>& state) : state_(state) {}
+  explicit ImplantJoint(CouplingState<dim>& state) : state_(state), contact_(state) {}
 
   // Whether the run holds an implant (unconverted material ids) with the overlap splice.
   bool on() const {
@@ -47,7 +48,8 @@ class ImplantJoint {
   // the particle method cannot split its forces by family.
   void rebuild();
   unsigned int n_targets() const { return static_cast<unsigned int>(targets_.size()); }
-  // After the particle force pass: the implant ghosts' reactions, on every rank, and spread to
+  // After the particle force pass: the implant ghosts' reactions, with the contact's
+  // (implant_contact.h) added to the particles and their ghosts, on every rank, and spread to
   // the FEM's owned DoFs (collective).
   void take_particle_forces();
   // The FEM's step force hook at the same state: the reactions onto the implant's DoFs that
@@ -63,6 +65,9 @@ class ImplantJoint {
   // The part of it on the free DoFs when the FEM's residual holds it (StepForces::
   // seen_by_reactions: the residual's rest is then net of it), this rank's.
   Vector force_in_residual() const { return into_residual_; }
+  // Contact between the free particles and the implant's true surface, through its ghosts.
+  ImplantContact<dim>& contact() { return contact_; }
+  const ImplantContact<dim>& contact() const { return contact_; }
 
  private:
   CouplingState<dim>& state_;
@@ -73,6 +78,7 @@ class ImplantJoint {
   std::vector<double> owned_values_;                    // owned local order
   std::vector<unsigned int> component_;                 // of each owned DoF
   Vector prescribed_, into_residual_;
+  ImplantContact<dim> contact_;
 };
 
 } // namespace spinesim::coupling

@@ -1,5 +1,7 @@
 #include "implants/screw_tessellation.h"
 
+#include "implants/stl_screw.h"
+
 #include <algorithm>
 #include <cmath>
 #include <tuple>
@@ -88,6 +90,13 @@ Tessellation tessellate(const PedicleScrew& screw, unsigned int rays,
     }
   }
   return t;
+}
+
+TriangleSolid surface_solid(const ScrewSolid& screw) {
+  if (const auto* stl = dynamic_cast<const StlScrew*>(&screw))
+    return TriangleSolid(stl->surface().vertices(), stl->surface().triangles(), "Screw/STL file");
+  const auto t = tessellate(dynamic_cast<const PedicleScrew&>(screw));
+  return TriangleSolid(t.points, t.triangles, "Screw (the parametric screw's tessellation)");
 }
 
 } // namespace spinesim::implants

@@ -7,6 +7,7 @@
 // ParaView), printing it, and as the reference surface of the STL screw's tests.
 
 #include "implants/pedicle_screw.h"
+#include "implants/triangle_solid.h"
 
 #include <deal.II/base/point.h>
 
@@ -24,6 +25,10 @@ struct Tessellation {
 // both ends, the head's edge and the tip's start).
 Tessellation tessellate(const PedicleScrew& screw, unsigned int rays = 128,
                         unsigned int rings_per_pitch = 48);
+
+// The surface of a screw as a triangulated solid for distance queries: a parametric screw's
+// tessellation (above), or an STL screw's placed surface.
+TriangleSolid surface_solid(const ScrewSolid& screw);
 
 } // namespace spinesim::implants
 

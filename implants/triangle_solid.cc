@@ -2,8 +2,12 @@
 
 #include "base/exceptions.h"
 
+#include <CGAL/AABB_face_graph_triangle_primitive.h>
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/IO/STL.h>
+#include <CGAL/Polygon_mesh_processing/compute_normal.h>
 #include <CGAL/Polygon_mesh_processing/measure.h>
 #include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/orientation.h>
@@ -16,6 +20,7 @@
 #include <CGAL/boost/graph/helpers.h>
 
 #include <filesystem>
+#include <mutex>
 
 namespace spinesim::implants {
 
@@ -24,6 +29,8 @@ using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using CgalPoint = Kernel::Point_3;
 using Mesh = CGAL::Surface_mesh<CgalPoint>;
 using Side = CGAL::Side_of_triangle_mesh<Mesh, Kernel>;
+using Primitive = CGAL::AABB_face_graph_triangle_primitive<Mesh>;
+using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
 namespace PMP = CGAL::Polygon_mesh_processing;
 } // namespace triangle_solid
 
@@ -33,6 +40,10 @@ struct TriangleSolid::Impl {
   Mesh mesh;
   // Holds a reference to `mesh`: rebuilt whenever the points move.
   std::unique_ptr<Side> side;
+  // For distances, built on first use (and dropped when the points move); the mutex makes the
+  // first use safe from several threads.
+  mutable std::unique_ptr<Tree> tree;
+  mutable std::mutex tree_mutex;
 };
 
 TriangleSolid::TriangleSolid(const std::string& file, const std::string& where, double scale) {
@@ -138,10 +149,36 @@ void TriangleSolid::rebuild() {
     mesh.point(v) = CgalPoint(q[0], q[1], q[2]);
   }
   impl_->side = std::make_unique<Side>(mesh);
+  impl_->tree.reset();
 }
 
 bool TriangleSolid::inside(const dealii::Point<3>& x) const {
   return (*impl_->side)(CgalPoint(x[0], x[1], x[2])) != CGAL::ON_UNBOUNDED_SIDE;
+}
+
+double TriangleSolid::signed_distance(const dealii::Point<3>& x,
+                                      dealii::Tensor<1, 3>& normal) const {
+  const Mesh& mesh = impl_->mesh;
+  {
+    std::lock_guard<std::mutex> lock(impl_->tree_mutex);
+    if (!impl_->tree) {
+      impl_->tree = std::make_unique<Tree>(faces(mesh).first, faces(mesh).second, mesh);
+      impl_->tree->accelerate_distance_queries();
+    }
+  }
+  const CgalPoint q(x[0], x[1], x[2]);
+  const auto [nearest, face] = impl_->tree->closest_point_and_primitive(q);
+  const dealii::Point<3> c(nearest.x(), nearest.y(), nearest.z());
+  const double d = x.distance(c);
+  const bool in = inside(x);
+  if (d > 1e-12 * std::max(1.0, x.norm())) {
+    normal = (in ? c - x : x - c) / d;
+  } else {
+    const auto n = PMP::compute_face_normal(face, mesh);
+    normal = dealii::Tensor<1, 3>(
+        {CGAL::to_double(n.x()), CGAL::to_double(n.y()), CGAL::to_double(n.z())});
+  }
+  return in ? -d : d;
 }
 
 double TriangleSolid::volume() const {

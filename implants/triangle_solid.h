@@ -9,6 +9,7 @@
 // CGAL stays inside triangle_solid.cc.
 
 #include <deal.II/base/point.h>
+#include <deal.II/base/tensor.h>
 
 #include <array>
 #include <memory>
@@ -33,6 +34,10 @@ class TriangleSolid {
 
   // Points strictly inside or on the surface count as inside.
   bool inside(const dealii::Point<3>& x) const;
+  // Signed distance from x to the surface, negative inside [m]; `normal` gets the outward unit
+  // normal there: along x minus its nearest surface point, or the nearest triangle's normal
+  // when x lies on the surface (an AABB tree of the triangles, built on the first call).
+  double signed_distance(const dealii::Point<3>& x, dealii::Tensor<1, 3>& normal) const;
   double volume() const; // enclosed volume [m^3]
   double area() const;   // surface area [m^2]
   std::size_t n_triangles() const;

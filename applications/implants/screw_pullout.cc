@@ -339,8 +339,9 @@ struct PulloutProgress {
   // Toggling: steps done, and the transverse force at +amplitude and −amplitude per cycle [N].
   unsigned int toggle_step = 0;
   std::vector<double> toggle_plus, toggle_minus;
-  // With particles: the largest relative virial imbalance of the coupled steps so far [-].
-  double imbalance_max = 0;
+  // With particles: the largest relative virial imbalance of the coupled steps so far [-],
+  // and the deepest a particle went into the screw's surface beyond its reference gap [m].
+  double imbalance_max = 0, contact_depth_max = 0;
 
   bool finished() const { return dropped || t >= 1 - 1e-12; }
   nlohmann::json to_json() const {
@@ -365,7 +366,8 @@ struct PulloutProgress {
             {"toggle_step", toggle_step},
             {"toggle_plus", toggle_plus},
             {"toggle_minus", toggle_minus},
-            {"imbalance_max", imbalance_max}};
+            {"imbalance_max", imbalance_max},
+            {"contact_depth_max", contact_depth_max}};
   }
   void from_json(const nlohmann::json& j) {
     step = j.at("step");
@@ -391,6 +393,7 @@ struct PulloutProgress {
     toggle_plus = j.value("toggle_plus", std::vector<double>{});
     toggle_minus = j.value("toggle_minus", std::vector<double>{});
     imbalance_max = j.value("imbalance_max", 0.0);
+    contact_depth_max = j.value("contact_depth_max", 0.0);
     if (disp.empty() || disp.size() != force.size() || !(increment > 0))
       throw std::runtime_error("inconsistent pull-out curve");
   }
@@ -472,6 +475,12 @@ class ScrewPullout : public Scenario {
   // Effects/Conversion with Effects/Coupling: failed bone turns into particles of the scene's
   // method, coupled to the FEM (coupling/fem_particle_coupling.h). The screw's cells stay FEM.
   void parse_coupling(const framework::Effects& effects, dealii::ParameterHandler& prm) {
+    contact_ = effects.contact;
+    if (effects.contact && !effects.coupling)
+      throw InvalidInput("Effects/Contact", "true without Effects/Coupling",
+                         "false, or with Effects/Conversion and Effects/Coupling: contact is "
+                         "between the screw and the bone particles (the FEM bone is bonded to "
+                         "the screw)");
     if (effects.conversion != effects.coupling)
       throw InvalidInput(effects.conversion ? "Effects/Coupling" : "Effects/Conversion", "false",
                          "both true (failed bone becomes particles coupled to the FEM bulk) or "
@@ -479,6 +488,11 @@ class ScrewPullout : public Scenario {
     if (!effects.coupling)
       return;
     parse_section(prm, "Coupling", coupling_, effects.particles_method);
+    if (!coupling_.implant_bonded && !(contact_ && coupling_.implant_contact_stiffness > 0))
+      throw InvalidInput("Coupling/Implant interface", "contact",
+                         "bonded, or contact with Effects/Contact = true and Coupling/Implant "
+                         "contact stiffness > 0 (else nothing would hold the bone particles "
+                         "against the screw)");
     coupling_.damage = damage_on_;
     coupling_.unconverted_material_ids = {1};
     if (coupling_.all_particles || !coupling_.region_lower.empty() ||
@@ -771,6 +785,19 @@ class ScrewPullout : public Scenario {
     std::unique_ptr<coupling::FemParticleCoupling<3>> coupled;
     if (converting_) {
       dealii::TimerOutput::Scope t(ctx.timer(), "conversion");
+      // Contact of the particles with the screw's true surface, not the cells' staircase
+      // (coupling/implant_contact.h).
+      if (contact_ && coupling_.implant_contact_stiffness > 0) {
+        const auto surface =
+            std::make_shared<const implants::TriangleSolid>(implants::surface_solid(*solid_));
+        coupling_.implant_surface = [surface](const dealii::Point<3>& x,
+                                              dealii::Tensor<1, 3>& normal) {
+          return surface->signed_distance(x, normal);
+        };
+        ctx.log() << "  contact with the screw's surface (" << surface->n_triangles()
+                  << " triangles): penalty " << coupling_.implant_contact_stiffness
+                  << " E h, friction coefficient " << coupling_.implant_friction << "\n";
+      }
       coupled = std::make_unique<coupling::FemParticleCoupling<3>>(coupling_, solver);
       if (ctx.restarting())
         coupled->load((checkpoint / "coupling.txt").string());
@@ -1111,6 +1138,15 @@ class ScrewPullout : public Scenario {
       p.imbalance_max = balance.imbalance_relative;
     row.emplace_back("virial_imbalance_relative", balance.imbalance_relative);
     row.emplace_back("unbalanced_force_N", balance.net_force.norm());
+    // Contact with the screw's surface (coupling/implant_contact.h): pairs in contact, the
+    // force they put on the screw along its axis (+ = towards the tip, resisting the pull),
+    // and the deepest penetration beyond a particle's reference gap.
+    const auto contact = coupled->contact_figures();
+    if (!(contact.deepest <= p.contact_depth_max))
+      p.contact_depth_max = contact.deepest;
+    row.emplace_back("contact_pairs", double(contact.active_pairs));
+    row.emplace_back("contact_force_N", -contact.force_on_implant[2]);
+    row.emplace_back("contact_depth_mm", contact.deepest * 1e3);
     return row;
   }
 
@@ -1144,6 +1180,14 @@ class ScrewPullout : public Scenario {
     // Every history row (the last included) updated the largest.
     sum.set_figure("virial_imbalance_relative_max", p.imbalance_max, "-");
     sum.set_figure("unbalanced_force_N", balance.net_force.norm(), "N");
+    const auto contact = coupled.contact_figures();
+    sum.set_figure("contact_pairs", double(contact.active_pairs), "-");
+    sum.set_figure("contact_force_N", -contact.force_on_implant[2], "N");
+    sum.set_figure("contact_depth_max_mm", p.contact_depth_max * 1e3, "mm");
+    ctx.log() << "  contact with the screw: " << contact.active_pairs << " of "
+              << contact.candidates << " particles next to it in contact, "
+              << -contact.force_on_implant[2] << " N along the axis, deepest "
+              << p.contact_depth_max * 1e3 << " mm beyond the reference gap\n";
     ctx.log() << "  particles: " << coupled.n_free_particles() << " from "
               << coupled.n_converted_cells() << " cells (" << volume * 1e9 << " mm^3, "
               << 100 * (volume > 0 ? near / volume : 0.0)
@@ -1406,7 +1450,8 @@ class ScrewPullout : public Scenario {
   unsigned int bone_cells_ = 0, soft_cells_ = 0; // with a Label file
   std::string trajectory_labels_;
   std::unique_ptr<implants::ScrewSolid> solid_;
-  bool converting_ = false;                  // Effects/Conversion and Coupling
+  bool contact_ = false;    // Effects/Contact: the particles meet the screw's true surface
+  bool converting_ = false; // Effects/Conversion and Coupling
   coupling::CouplingParameters<3> coupling_; // read with them
 };
 
@@ -1416,7 +1461,7 @@ SPINESIM_REGISTER_SCENARIO(screw_pullout, "screw_pullout",
                            "pedicle screw in a rigid polyurethane foam block (ASTM F1839) pulled "
                            "out axially (ASTM F543): force-displacement curve, peak force "
                            "against Chapman et al. (1996).",
-                           "mechanics|damage|particles:nosb|conversion|coupling",
+                           "mechanics|damage|particles:nosb|conversion|coupling|contact",
                            create_scenario<screw_pullout::ScrewPullout>,
                            {"Screw", screw_pullout::ScrewSection::declare},
                            {"Foam", screw_pullout::FoamSection::declare},

@@ -198,8 +198,9 @@ void damaged_checkpoint_is_invalid_input() {
   std::vector<std::string> counts;
   for (std::string token; header >> token;)
     counts.push_back(token);
-  // time, particles, converted cells, broken, dissipation, heat, history, last force pass, laws
-  ASSERT_EQ(counts.size(), 9u);
+  // time, particles, converted cells, broken, dissipation, heat, history, last force pass, laws,
+  // contact stick points
+  ASSERT_EQ(counts.size(), 10u);
   const std::size_t first_law = 2 + std::stoul(counts[2]);
   const std::size_t first_particle = first_law + std::stoul(counts[8]);
   ASSERT_GT(first_particle, first_law);
@@ -215,7 +216,16 @@ void damaged_checkpoint_is_invalid_input() {
   const std::string whole = joined(lines, lines.size());
   variants.push_back(whole.substr(0, whole.size() / 2)); // cut in half
   auto edited = lines;
+  const std::string setup_counts_particles = counts[1];
   counts[1] = "1000000000000";
+  edited[1].clear();
+  for (const auto& c : counts)
+    edited[1] += c + " ";
+  variants.push_back(joined(edited, edited.size()));
+  // More contact stick points than the file could hold.
+  counts[1] = setup_counts_particles;
+  counts[9] = "1000000000000";
+  edited = lines;
   edited[1].clear();
   for (const auto& c : counts)
     edited[1] += c + " ";

@@ -38,8 +38,11 @@ struct LayeredBarResult {
   double exact = 0;    // σ A of the exact uniaxial field [N]
   unsigned int free_particles = 0;
   bool converged = false;
-  double reaction_held = 0; // F_x on the held face [N] (with an implant)
-  double imbalance = 0;     // the coupled body's virial balance (with an implant) [-]
+  double reaction_held = 0;       // F_x on the held face [N] (with an implant)
+  double reaction_y = 0;          // F_y on the moved face [N] (with an implant)
+  double imbalance = 0;           // the coupled body's virial balance (with an implant) [-]
+  unsigned int contact_pairs = 0; // particles in contact with the implant (with contact)
+  double contact_depth = 0;       // deepest penetration beyond the reference gap [m]
 };
 
 // Bar [0, 1] × [0, 0.25]^(dim−1): cells of 1/16 (2-D) or 1/8 (3-D) along x, soft for
@@ -48,8 +51,10 @@ struct LayeredBarResult {
 template <int dim>
 LayeredBarResult layered_bar(const std::string& method, const std::string& ghost_gradient,
                              double region_lower, double region_upper, bool with_particles = true,
-                             bool implant = false, const std::string& penalty = "") {
-  const double E_soft = 1e9, E_stiff = 1e10, delta = 1e-4, width = 0.25;
+                             bool implant = false, const std::string& penalty = "",
+                             double contact_stiffness = 0, double delta = 1e-4, double shear = 0,
+                             double friction = 0.3, bool bonded = true) {
+  const double E_soft = 1e9, E_stiff = 1e10, width = 0.25;
   dealii::parallel::distributed::Triangulation<dim> tria(MPI_COMM_WORLD);
   fem::MeshParameters mesh;
   mesh.origin = {0, 0, 0};
@@ -72,12 +77,15 @@ LayeredBarResult layered_bar(const std::string& method, const std::string& ghost
   const auto zero = std::make_shared<dealii::Functions::ZeroFunction<dim>>(dim);
   std::vector<double> pulled(dim, 0.0);
   pulled[0] = delta;
+  pulled[1] = shear;
   const auto stretch = std::make_shared<dealii::Functions::ConstantFunction<dim>>(pulled);
-  dealii::ComponentMask x_only(dim, false);
+  // Sheared: both ends clamped (the far one moved by (δ, shear)), no roller on y = 0, so that
+  // nothing but the contact holds the particles along y.
+  dealii::ComponentMask x_only(dim, shear != 0);
   x_only.set(0, true);
   bcs.add_dirichlet(0, x_only, zero);
   bcs.add_dirichlet(1, x_only, stretch);
-  for (unsigned int d = 1; d < dim; ++d) {
+  for (unsigned int d = shear != 0 ? 2 : 1; d < dim; ++d) {
     dealii::ComponentMask only(dim, false);
     only.set(d, true);
     bcs.add_dirichlet(2 * d, only, zero);
@@ -114,6 +122,20 @@ LayeredBarResult layered_bar(const std::string& method, const std::string& ghost
   cp.ghost_gradient = ghost_gradient;
   if (implant)
     cp.unconverted_material_ids = {1};
+  if (contact_stiffness > 0) {
+    // The implant's surfaces: the planes x = 0.25 and x = 0.75, the stiff layers outside.
+    cp.implant_surface = [](const dealii::Point<dim>& x, dealii::Tensor<1, dim>& normal) {
+      normal = dealii::Tensor<1, dim>();
+      const double left = x[0] - 0.25, right = 0.75 - x[0];
+      normal[0] = left < right ? 1.0 : -1.0;
+      return std::min(left, right);
+    };
+    cp.implant_contact_stiffness = contact_stiffness;
+    cp.implant_friction = friction;
+    cp.implant_bonded = bonded;
+  } else {
+    cp.implant_contact_stiffness = 0;
+  }
   FemParticleCoupling<dim> coupling(cp, solver);
   coupling.initialise();
   r.free_particles = coupling.n_free_particles();
@@ -122,7 +144,11 @@ LayeredBarResult layered_bar(const std::string& method, const std::string& ghost
   r.reaction = coupling.reaction_force(1)[0];
   if (implant) {
     r.reaction_held = coupling.reaction_force(0)[0];
+    r.reaction_y = coupling.reaction_force(1)[1];
     r.imbalance = coupling.virial_balance().imbalance_relative;
+    const auto contact = coupling.contact_figures();
+    r.contact_pairs = contact.active_pairs;
+    r.contact_depth = contact.deepest;
   }
   return r;
 }
@@ -222,6 +248,110 @@ void implant_joint_bar(const std::string& method) {
     }
   }
 }
+// Contact with the implant's surface (coupling/implant_contact.h) on the same bar, particles up
+// to the implant, the joint bonded as above; planes x = 0.25 and 0.75 as the surfaces, the
+// particles next to them a half spacing off (reference gap 0), penalty 2 (the half cube).
+// (a) Pulled, contact stays open: no pair, and the reaction is the joint's alone (the same
+//     equilibrium; the contact only adds to the relaxation's stiffness bound, so the paths
+//     differ: bound 1e-6 of σ A, measured below 1e-8).
+// (b) Pushed by the same δ, every particle next to the implant is in contact: the contact
+//     carries load beside the bonds and makes up for the joint's compliance (joint alone
+//     −12.9 % / −21.2 %; measured with contact +1.1 % / +3.1 %, 2-D / 3-D): bound, at least one
+//     point above the joint's error and below +10 %. The deepest penetration is bounded by the
+//     bar's shortening δ. Action and reaction: the held and pushed ends carry the same force
+//     (bound 1e-6 of σ A), and the force balance closes as the joint's does (bound 10 %;
+//     measured 3.6 % / 7.3 %, the joint alone 3.1 % / 6.3 %).
+template <int dim>
+void implant_contact_bar() {
+  const auto joint = layered_bar<dim>("nosb", "fem", 0.25, 0.75, true, true);
+  const auto pulled = layered_bar<dim>("nosb", "fem", 0.25, 0.75, true, true, "", 2.0, 1e-4);
+  const auto pushed = layered_bar<dim>("nosb", "fem", 0.25, 0.75, true, true, "", 2.0, -1e-4);
+  ASSERT_TRUE(joint.converged && pulled.converged && pushed.converged);
+  const double err_joint = joint.reaction / joint.exact - 1.0;
+  const double err_pulled = pulled.reaction / pulled.exact - 1.0;
+  const double err_pushed = pushed.reaction / pushed.exact - 1.0;
+  ASSERT_TRUE(std::isfinite(err_joint) && std::isfinite(err_pulled) && std::isfinite(err_pushed));
+  if (dealii::Utilities::MPI::this_mpi_process(MPI_COMM_WORLD) == 0)
+    std::cout << "[ measured ] NOSB " << dim << "-D layered bar, particles up to an implant "
+              << "with contact: pulled " << err_pulled << " (" << pulled.contact_pairs
+              << " pairs), pushed " << err_pushed << " (" << pushed.contact_pairs
+              << " pairs, deepest " << pushed.contact_depth << " m), joint alone " << err_joint
+              << "; force balance pushed " << pushed.imbalance << "\n";
+  EXPECT_EQ(pulled.contact_pairs, 0u);
+  EXPECT_NEAR(pulled.reaction, joint.reaction, 1e-6 * joint.exact);
+  EXPECT_GT(pushed.contact_pairs, 0u);
+  EXPECT_GT(err_pushed, err_joint + 0.01) << dim << "-D, pushed";
+  EXPECT_LT(err_pushed, 0.1) << dim << "-D, pushed";
+  EXPECT_GT(pushed.contact_depth, 0.0);
+  EXPECT_LT(pushed.contact_depth, 1e-4);
+  EXPECT_NEAR(pushed.reaction + pushed.reaction_held, 0.0, 1e-6 * std::abs(pushed.exact));
+  EXPECT_LT(pushed.imbalance, 0.1) << dim << "-D, pushed";
+}
+// The particles met by contact alone (Implant interface = contact: their bonds to the implant
+// start broken), penalty 2 (the half cube between a particle and the surface).
+// (a) Pulled: nothing holds the particles to the implant, so the bar carries no force and no
+//     pair is in contact. Bound 1e-5 of σ A (measured 1.5e-7 / 5.3e-8, 2-D / 3-D): with no
+//     reaction to scale it, the relaxation stops at 1e-9 of its largest residual, the first
+//     pseudo-steps' unbalanced load of the stiff layers.
+// (b) Pushed: the contact alone carries the load. The particle block ends a half spacing from
+//     each surface, where the penalty stands in for the half cubes, and its families end at the
+//     surfaces (no bonds across them): measured +5.5 % / +10.8 % (2-D / 3-D) of σ A, bound 15 %.
+// (c) 2-D: pushed, then the far layer slides along y by 1e-3 m, ten times the shear the particle
+//     block takes before a face slips at μ = 0.3 (μ F_x over its shear stiffness G A / L).
+//     Nothing but friction on its two faces holds the block along y, so one face slides and the
+//     shear force is Coulomb's limit: |F_y| = μ |F_x| (measured to 1e-7; bound 1e-5 relative,
+//     the relaxation's tolerance over the force's share carried by the sliding pairs), for
+//     μ = 0.3 and 0.1. In 3-D the same block, free to tilt about z under the friction's couple,
+//     did not relax within the iteration limit (12 minutes), so the slide is checked in 2-D only.
+template <int dim>
+void implant_friction_bar() {
+  const auto pulled =
+      layered_bar<dim>("nosb", "fem", 0.25, 0.75, true, true, "", 2.0, 1e-4, 0.0, 0.3, false);
+  const auto pushed =
+      layered_bar<dim>("nosb", "fem", 0.25, 0.75, true, true, "", 2.0, -1e-4, 0.0, 0.3, false);
+  ASSERT_TRUE(pulled.converged && pushed.converged);
+  const double err_pushed = pushed.reaction / pushed.exact - 1.0;
+  ASSERT_TRUE(std::isfinite(pulled.reaction) && std::isfinite(err_pushed));
+  if (dealii::Utilities::MPI::this_mpi_process(MPI_COMM_WORLD) == 0)
+    std::cout << "[ measured ] NOSB " << dim << "-D layered bar, particles met by contact alone: "
+              << "pulled F_x / (sigma A) = " << pulled.reaction / pulled.exact << " ("
+              << pulled.contact_pairs << " pairs), pushed " << err_pushed << " ("
+              << pushed.contact_pairs << " pairs)\n";
+  EXPECT_EQ(pulled.contact_pairs, 0u);
+  EXPECT_LT(std::abs(pulled.reaction), 1e-5 * std::abs(pulled.exact));
+  EXPECT_GT(pushed.contact_pairs, 0u);
+  EXPECT_LT(std::abs(err_pushed), 0.15) << dim << "-D, pushed";
+  if (dim == 3)
+    return;
+  for (const double mu : {0.3, 0.1}) {
+    const auto slid =
+        layered_bar<dim>("nosb", "fem", 0.25, 0.75, true, true, "", 2.0, -1e-4, 1e-3, mu, false);
+    ASSERT_TRUE(slid.converged);
+    const double ratio = slid.reaction_y / slid.reaction;
+    ASSERT_TRUE(std::isfinite(ratio));
+    if (dealii::Utilities::MPI::this_mpi_process(MPI_COMM_WORLD) == 0)
+      std::cout << "[ measured ] NOSB " << dim << "-D layered bar, particles met by contact "
+                << "alone, pushed and slid: |F_y / F_x| = " << std::abs(ratio) << " (mu " << mu
+                << "), F_x / (sigma A) = " << slid.reaction / slid.exact << ", "
+                << slid.contact_pairs << " pairs\n";
+    EXPECT_GT(slid.contact_pairs, 0u);
+    EXPECT_NEAR(std::abs(ratio), mu, 1e-5 * mu) << dim << "-D, mu " << mu;
+  }
+}
+TEST(SpliceAcrossMaterials, ImplantUnbondedNosb2D) {
+  implant_friction_bar<2>();
+}
+TEST(SpliceAcrossMaterials, ImplantUnbondedNosb3D) {
+  implant_friction_bar<3>();
+}
+
+TEST(SpliceAcrossMaterials, ImplantContactNosb2D) {
+  implant_contact_bar<2>();
+}
+TEST(SpliceAcrossMaterials, ImplantContactNosb3D) {
+  implant_contact_bar<3>();
+}
+
 TEST(SpliceAcrossMaterials, ImplantJointNosb2D) {
   implant_joint_bar<2>("nosb");
 }
