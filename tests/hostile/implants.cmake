@@ -34,6 +34,14 @@ spinesim_add_hostile_test(screw_particles_bond_based
 # (coupling/implant_joint.h): refused before the run, not at the first conversion.
 spinesim_add_hostile_test(screw_particles_spg
   ARGS check ${_screw} --set "Effects/Particles method=spg" MATCH "Effects/Particles method.*spg")
+# Contact between the screw and bone particles needs the particles; a screw met by contact
+# alone needs the contact.
+spinesim_add_hostile_test(screw_contact_without_particles
+  ARGS check ${_screw} --set "Effects/Contact=true" MATCH "Effects/Contact.*Effects/Coupling")
+spinesim_add_hostile_test(screw_unbonded_without_contact
+  ARGS check ${_screw} ${_screw_convert} --set "Effects/Coupling=true"
+      --set "Coupling/Plastic strain threshold=0.01" --set "Coupling/Implant interface=contact"
+  MATCH "Coupling/Implant interface.*Effects/Contact = true")
 spinesim_add_hostile_test(screw_block_too_narrow
   ARGS check ${_screw} --set "Block/Width=8" MATCH "Block/Width")
 spinesim_add_hostile_test(foam_without_residual_stiffness
