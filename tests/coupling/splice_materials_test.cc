@@ -263,12 +263,6 @@ void implant_joint_bar(const std::string& method) {
 //     measured 3.6 % / 7.3 %, the joint alone 3.1 % / 6.3 %).
 template <int dim>
 void implant_contact_bar() {
-  // One rank: these relaxations take many pseudo-steps, each with its reductions; on two ranks
-  // with the test run's MPI settings (yield when idle) the four tests took 3.4 minutes on a
-  // loaded machine. The contact's parallel path is checked by the screw on two ranks
-  // (implants.screw_pullout_particles_ranks_agree).
-  if (dealii::Utilities::MPI::n_mpi_processes(MPI_COMM_WORLD) > 1)
-    GTEST_SKIP() << "one rank";
   const auto joint = layered_bar<dim>("nosb", "fem", 0.25, 0.75, true, true);
   const auto pulled = layered_bar<dim>("nosb", "fem", 0.25, 0.75, true, true, "", 2.0, 1e-4);
   const auto pushed = layered_bar<dim>("nosb", "fem", 0.25, 0.75, true, true, "", 2.0, -1e-4);
@@ -311,12 +305,6 @@ void implant_contact_bar() {
 //     did not relax within the iteration limit (12 minutes), so the slide is checked in 2-D only.
 template <int dim>
 void implant_friction_bar() {
-  // One rank: these relaxations take many pseudo-steps, each with its reductions; on two ranks
-  // with the test run's MPI settings (yield when idle) the four tests took 3.4 minutes on a
-  // loaded machine. The contact's parallel path is checked by the screw on two ranks
-  // (implants.screw_pullout_particles_ranks_agree).
-  if (dealii::Utilities::MPI::n_mpi_processes(MPI_COMM_WORLD) > 1)
-    GTEST_SKIP() << "one rank";
   const auto pulled =
       layered_bar<dim>("nosb", "fem", 0.25, 0.75, true, true, "", 2.0, 1e-4, 0.0, 0.3, false);
   const auto pushed =
