@@ -92,11 +92,18 @@ Tessellation tessellate(const PedicleScrew& screw, unsigned int rays,
   return t;
 }
 
-TriangleSolid surface_solid(const ScrewSolid& screw) {
+Tessellation surface_of(const ScrewSolid& screw) {
   if (const auto* stl = dynamic_cast<const StlScrew*>(&screw))
-    return TriangleSolid(stl->surface().vertices(), stl->surface().triangles(), "Screw/STL file");
-  const auto t = tessellate(dynamic_cast<const PedicleScrew&>(screw));
-  return TriangleSolid(t.points, t.triangles, "Screw (the parametric screw's tessellation)");
+    return {stl->surface().vertices(), stl->surface().triangles()};
+  return tessellate(dynamic_cast<const PedicleScrew&>(screw));
+}
+
+TriangleSolid surface_solid(const ScrewSolid& screw) {
+  const auto t = surface_of(screw);
+  return TriangleSolid(t.points, t.triangles,
+                       dynamic_cast<const StlScrew*>(&screw)
+                           ? "Screw/STL file"
+                           : "Screw (the parametric screw's tessellation)");
 }
 
 } // namespace spinesim::implants

@@ -26,8 +26,11 @@ struct Tessellation {
 Tessellation tessellate(const PedicleScrew& screw, unsigned int rays = 128,
                         unsigned int rings_per_pitch = 48);
 
-// The surface of a screw as a triangulated solid for distance queries: a parametric screw's
+// The surface of any screw as triangles in its placed frame [m]: a parametric screw's
 // tessellation (above), or an STL screw's placed surface.
+Tessellation surface_of(const ScrewSolid& screw);
+
+// That surface as a triangulated solid for distance queries.
 TriangleSolid surface_solid(const ScrewSolid& screw);
 
 } // namespace spinesim::implants

@@ -1219,12 +1219,7 @@ class ScrewPullout : public Scenario {
       throw std::runtime_error("writing screw.stl: " + failure);
   }
   static void write_surface_on_root(RunContext& ctx, const implants::ScrewSolid& screw) {
-    implants::Tessellation t;
-    if (const auto* stl = dynamic_cast<const implants::StlScrew*>(&screw)) {
-      t.points = stl->surface().vertices();
-      t.triangles = stl->surface().triangles();
-    } else
-      t = implants::tessellate(dynamic_cast<const implants::PedicleScrew&>(screw));
+    implants::Tessellation t = implants::surface_of(screw);
     for (auto& p : t.points)
       p *= 1e3;
     const auto file = ctx.output() / "screw.stl";
