@@ -26,7 +26,7 @@ void require(bool ok) {
 void check_accepted(const spinesim::coupling::CheckpointContents& c, unsigned int dim,
                     std::size_t size) {
   const std::size_t n = c.particles.size();
-  require(c.version >= 1 && c.version <= 7 && std::isfinite(c.time) && c.time >= 0);
+  require(c.version >= 1 && c.version <= 8 && std::isfinite(c.time) && c.time >= 0);
   require(std::isfinite(c.dissipation) && std::isfinite(c.heat));
   // The size bound: each number of a record takes at least two bytes.
   require(n * 2 * (7 + 3 * dim) <= size && c.broken.size() * 4 <= size);
@@ -53,6 +53,15 @@ void check_accepted(const spinesim::coupling::CheckpointContents& c, unsigned in
     require(r.particle < n && r.neighbour < n);
     for (const double v : r.state)
       require(std::isfinite(v));
+  }
+  // Stick points (version 8): of free particles the file holds, finite, zero beyond dim
+  // (ImplantContact::restore indexes its per-particle arrays by them).
+  require(c.sticks.empty() || c.version >= 8);
+  require(c.sticks.size() * 2 * (1 + dim) <= size);
+  for (const auto& [i, point] : c.sticks) {
+    require(i < n && c.particles[i].free);
+    for (unsigned int d = 0; d < 3; ++d)
+      require(std::isfinite(point[d]) && (d < dim || point[d] == 0));
   }
 }
 
