@@ -375,6 +375,24 @@ std::vector<double> FemParticleCoupling<dim>::fracture_damages() const {
 }
 
 template <int dim>
+std::vector<double> FemParticleCoupling<dim>::material_damages() const {
+  std::vector<double> D(state_.particles.size(), 0.0);
+  if (!state_.carries_state())
+    return D;
+  const auto& table = state_.particle_material.table;
+  for (unsigned int i = 0; i < D.size(); ++i)
+    if (state_.free[i] && state_.is_owned(i)) {
+      const materials::ConstitutiveLaw& law = table && !table->empty()
+                                                  ? table->law(state_.particles.material_id(i))
+                                                  : *state_.particle_material.law;
+      D[i] = law.stiffness_damage(state_.method->particle_state(i));
+    }
+  if (Utilities::MPI::n_mpi_processes(state_.fem.mpi_communicator()) > 1)
+    Utilities::MPI::sum(D, state_.fem.mpi_communicator(), D);
+  return D;
+}
+
+template <int dim>
 std::vector<double>
 FemParticleCoupling<dim>::gather_state(double materials::MaterialState::*field) const {
   std::vector<double> e(state_.particles.size(), 0.0);
@@ -542,6 +560,7 @@ std::string FemParticleCoupling<dim>::write_output(const std::string& directory,
   halo_.synchronise(); // collective: damage and states of every particle on every rank
   const auto plastic = equivalent_plastic_strains(); // collective
   const auto fracture = fracture_damages();          // collective
+  const auto material = material_damages();          // collective
   const auto stresses = cauchy_stresses();           // collective
   // Physical displacements from their owners (SPG's unknowns are RK coefficients; the others'
   // are the displacements themselves).
@@ -563,6 +582,8 @@ std::string FemParticleCoupling<dim>::write_output(const std::string& directory,
       state_.carries_state() ? &out.add_scalar_field("equivalent_plastic_strain") : nullptr;
   std::vector<double>* df =
       state_.carries_state() ? &out.add_scalar_field("fracture_damage") : nullptr;
+  std::vector<double>* dm =
+      state_.carries_state() ? &out.add_scalar_field("material_damage") : nullptr;
   // The stress as six components and the von Mises stress [Pa] (methods with a law).
   const char* const stress_names[6] = {"stress_xx", "stress_yy", "stress_zz",
                                        "stress_xy", "stress_yz", "stress_xz"};
@@ -587,6 +608,8 @@ std::string FemParticleCoupling<dim>::write_output(const std::string& directory,
         (*eps)[k] = plastic[i];
       if (df)
         (*df)[k] = fracture[i];
+      if (dm)
+        (*dm)[k] = material[i];
       if (von_mises_field) {
         const double* c = &stresses[6 * i];
         for (unsigned int m = 0; m < 6; ++m)

@@ -243,6 +243,10 @@ class FemParticleCoupling {
   // Fracture damage D_f of every free particle (the share of stress its families lost at
   // bond breaks, NOSB-PD; 0 for ghosts and other methods) [-]. Collective.
   std::vector<double> fracture_damages() const;
+  // Stiffness damage D of every free particle from its law and committed state (a ductile
+  // damage law's D(ε̄_p); 0 for laws without damage, ghosts and methods without material
+  // state) [-]. Collective.
+  std::vector<double> material_damages() const;
   // Cauchy stress of every free particle from its owner: its law at the deformation gradient
   // of the last force evaluation and its committed state, times 1 − D_f; six components per
   // particle (xx, yy, zz, xy, yz, xz; plane strain gives zz) [Pa]. Zero for ghosts, for

@@ -915,7 +915,7 @@ class ScrewPullout : public Scenario {
         // The pull starts from the axial force toggling left (its curve's first point).
         if (p.toggle_step == toggle_total)
           p.force.front() = R[2];
-        const Failure fail = failure(solver, screw);
+        const Failure fail = failure(solver, screw, coupled.get());
         p.failed_before = fail.failed_volume;
         ctx.history().add(with_particle_columns(
             {{"load_time", tau},
@@ -951,7 +951,7 @@ class ScrewPullout : public Scenario {
           p.peak_step = step;
           p.energy_to_peak = p.energy;
         }
-        const Failure fail = failure(solver, screw);
+        const Failure fail = failure(solver, screw, coupled.get());
         p.failed_before = fail.failed_volume;
         ctx.history().add(with_particle_columns({{"load_time", tau},
                                                  {"displacement_mm", d * 1e3},
@@ -994,7 +994,7 @@ class ScrewPullout : public Scenario {
     ctx.progress().finish();
     const double solve_time =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    const Failure fail = failure(solver, screw);
+    const Failure fail = failure(solver, screw, coupled.get());
     if (pull_.write_vtu) {
       dealii::TimerOutput::Scope t(ctx.timer(), "output");
       solver.write_output(ctx.output().path().string(), "solution", 0);
@@ -1372,15 +1372,41 @@ class ScrewPullout : public Scenario {
 
   // Failed foam: half its stiffness lost (D >= D_max/2); without damage, plastic strain past
   // the damage onset. "Near the threads": r <= r_major + thread depth along the shaft, the
-  // band a stripped thread leaves (Chapman's shear cylinder) rather than a cone of foam.
-  Failure failure(const fem::MechanicsSolver<3>& solver, const implants::ScrewSolid& screw) const {
+  // band a stripped thread leaves (Chapman's shear cylinder) rather than a cone of foam. With
+  // particles, the cells that became particles count through their particles (each its volume
+  // at its reference position, with its own state). Collective.
+  Failure failure(const fem::MechanicsSolver<3>& solver, const implants::ScrewSolid& screw,
+                  const coupling::FemParticleCoupling<3>* coupled) const {
     const auto& g = screw.geometry();
+    const auto near_threads = [&](const dealii::Point<3>& x) {
+      const double sa = screw.axial(x);
+      return sa >= 0 && sa <= g.length &&
+             screw.radial(x) <= 0.5 * g.major_diameter + g.thread_depth();
+    };
     solver.refresh_states();
     dealii::FEValues<3> fv(solver.mapping(), solver.fe(), solver.quadrature(),
                            dealii::update_JxW_values | dealii::update_quadrature_points);
     double failed = 0, near = 0;
+    if (coupled) {
+      // Collective; every rank holds every free particle's damage and plastic strain.
+      const auto D = coupled->material_damages();
+      const auto eps = coupled->equivalent_plastic_strains();
+      const auto& set = coupled->particles();
+      if (dealii::Utilities::MPI::this_mpi_process(solver.mpi_communicator()) == 0)
+        for (unsigned int i = 0; i < set.size(); ++i) {
+          if (!coupled->is_free(i)) // bone: implant cells never convert
+            continue;
+          const bool is_failed = damage_on_ ? D[i] >= 0.5 * foam_.damage.maximum_damage
+                                            : eps[i] > foam_.damage.onset_plastic_strain;
+          if (!is_failed)
+            continue;
+          failed += set.volume(i);
+          if (near_threads(set.reference_position(i)))
+            near += set.volume(i);
+        }
+    }
     for (const auto& cell : solver.dof_handler().active_cell_iterators())
-      if (cell->is_locally_owned() && cell->material_id() == 0) {
+      if (cell->is_locally_owned() && cell->material_id() == 0 && solver.is_active(cell)) {
         fv.reinit(cell);
         const auto* damage_law =
             dynamic_cast<const materials::J2Damage*>(&solver.cell_material(cell));
@@ -1393,10 +1419,7 @@ class ScrewPullout : public Scenario {
           if (!is_failed)
             continue;
           failed += fv.JxW(q);
-          const dealii::Point<3>& x = fv.quadrature_point(q);
-          const double sa = screw.axial(x);
-          if (sa >= 0 && sa <= g.length &&
-              screw.radial(x) <= 0.5 * g.major_diameter + g.thread_depth())
+          if (near_threads(fv.quadrature_point(q)))
             near += fv.JxW(q);
         }
       }

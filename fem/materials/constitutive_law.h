@@ -102,6 +102,10 @@ class ConstitutiveLaw {
   // (small-strain) Cauchy stress itself, not P = J σ F⁻ᵀ (stress output).
   virtual bool linearised_kinematics() const { return false; }
 
+  // Share D of the elastic stiffness the point has lost to the law's own damage (a ductile
+  // damage law's D(ε̄_p)); 0 for laws without damage [-].
+  virtual double stiffness_damage(const MaterialState&) const { return 0.0; }
+
   // Elastic constants for stable-step estimates, stabilisation and AMG scaling.
   virtual double youngs_modulus() const = 0; // [Pa]
   virtual double poisson_ratio() const = 0;  // [-]

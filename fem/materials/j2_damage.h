@@ -75,6 +75,7 @@ class J2Damage : public ConstitutiveLaw {
   double damage(const MaterialState& s) const {
     return damage_.damage(s.equivalent_plastic_strain);
   }
+  double stiffness_damage(const MaterialState& s) const override { return damage(s); }
 
  private:
   J2Plasticity effective_; // the undamaged material: radial return, elastic constants

@@ -829,6 +829,24 @@ TEST(J2Damage, ConsistentTangentMatchesFiniteDifferencesWhileSoftening) {
   }
 }
 
+TEST(J2Damage, StiffnessDamageIsTheCurvesAndZeroForLawsWithout) {
+  // The virtual every output uses (particles' material_damage, failed volumes) is the damage
+  // curve D = D_max (1 − exp(−(ε̄_p − ε̄_0)/ε̄_s)) past the onset, 0 before it, and 0 for a law
+  // without damage: exact, the same expression evaluated.
+  const DamageCurve curve{0.01, 0.04, 0.9};
+  const J2Damage law(120e6, 0.3, 240, 0, IsotropicHardening(4e6, 0), curve);
+  const ConstitutiveLaw& base = law;
+  MaterialState s;
+  for (const double eps : {0.0, 0.005, 0.01, 0.03, 0.2}) {
+    s.equivalent_plastic_strain = eps;
+    const double expected = eps <= 0.01 ? 0.0 : 0.9 * (1 - std::exp(-(eps - 0.01) / 0.04));
+    EXPECT_DOUBLE_EQ(base.stiffness_damage(s), expected);
+    EXPECT_EQ(base.stiffness_damage(s), law.damage(s));
+  }
+  const LinearElastic elastic(120e6, 0.3, 240, 0);
+  EXPECT_EQ(static_cast<const ConstitutiveLaw&>(elastic).stiffness_damage(s), 0.0);
+}
+
 TEST(J2Damage, SimpleShearSoftensAsTheClosedForm) {
   // Perfect plasticity (H = 0): after yield the effective shear stress is σ_y/√3, the plastic
   // engineering shear strain γ_p = γ − σ_y/(√3 G), ε̄_p = γ_p/√3, and τ = (1 − D(ε̄_p)) σ_y/√3.
