@@ -450,7 +450,7 @@ CoupledIntegrator<dim>::relax(double time, bool with_conversion,
       c = 0;
       continue;
     }
-    c = sums.damping(dt, c);
+    c = sums.damping(dt);
     report.damping = c;
     if (progress && state_.prm.relaxation_report_interval > 0 &&
         it % state_.prm.relaxation_report_interval == 0) {

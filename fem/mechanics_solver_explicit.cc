@@ -167,7 +167,7 @@ unsigned int MechanicsSolver<dim>::relax_quasi_static(double time, double tolera
     sums.stiffness_denominator = v[1];
     sums.residual_square = v[2];
     sums.reaction_square = v[3];
-    c = sums.damping(dt, c);
+    c = sums.damping(dt);
     const double residual = std::sqrt(v[2]), reaction = std::sqrt(v[3]);
     if (!std::isfinite(residual))
       throw NumericalFailure("non-finite residual",

@@ -101,7 +101,7 @@ AdaptiveDynamicRelaxation<dim>::solve(ParticleSet<dim>& p,
   };
 
   Result result;
-  double initial_residual = 0, damping = 0;
+  double initial_residual = 0;
   for (unsigned int i = 0; i < n; ++i)
     v[i] = 0;
   for (unsigned int it = 0;; ++it) {
@@ -121,10 +121,8 @@ AdaptiveDynamicRelaxation<dim>::solve(ParticleSet<dim>& p,
     }
     if (it == prm_.max_iterations)
       break;
-    // Δt = 1: the damping of this iteration's estimate (none on the first, the last one while
-    // the estimate is not positive), from rest first.
-    damping = sums.damping(1.0, damping);
-    const DampedCentralDifference step(1.0, damping);
+    // Δt = 1: the damping of this iteration's estimate (none on the first), from rest first.
+    const DampedCentralDifference step(1.0, sums.damping(1.0));
     for (unsigned int i = 0; i < n; ++i)
       for (unsigned int d = 0; d < dim; ++d) {
         if (p.is_fixed(i, d))
