@@ -375,18 +375,20 @@ std::vector<double> FemParticleCoupling<dim>::fracture_damages() const {
 }
 
 template <int dim>
+const materials::ConstitutiveLaw& FemParticleCoupling<dim>::particle_law(unsigned int i) const {
+  const auto& table = state_.particle_material.table;
+  return table && !table->empty() ? table->law(state_.particles.material_id(i))
+                                  : *state_.particle_material.law;
+}
+
+template <int dim>
 std::vector<double> FemParticleCoupling<dim>::material_damages() const {
   std::vector<double> D(state_.particles.size(), 0.0);
   if (!state_.carries_state())
     return D;
-  const auto& table = state_.particle_material.table;
   for (unsigned int i = 0; i < D.size(); ++i)
-    if (state_.free[i] && state_.is_owned(i)) {
-      const materials::ConstitutiveLaw& law = table && !table->empty()
-                                                  ? table->law(state_.particles.material_id(i))
-                                                  : *state_.particle_material.law;
-      D[i] = law.stiffness_damage(state_.method->particle_state(i));
-    }
+    if (state_.free[i] && state_.is_owned(i))
+      D[i] = particle_law(i).stiffness_damage(state_.method->particle_state(i));
   if (Utilities::MPI::n_mpi_processes(state_.fem.mpi_communicator()) > 1)
     Utilities::MPI::sum(D, state_.fem.mpi_communicator(), D);
   return D;
@@ -410,7 +412,6 @@ template <int dim>
 std::vector<double> FemParticleCoupling<dim>::cauchy_stresses() const {
   constexpr unsigned int n_components = 6;
   std::vector<double> out(n_components * state_.particles.size(), 0.0);
-  const auto& table = state_.particle_material.table;
   if (state_.carries_state() && state_.method) {
     const double T_ref = state_.particle_material.reference_temperature;
     for (unsigned int i = 0; i < state_.particles.size(); ++i) {
@@ -419,9 +420,7 @@ std::vector<double> FemParticleCoupling<dim>::cauchy_stresses() const {
       const auto F = state_.method->particle_deformation_gradient(i);
       if (!F)
         continue;
-      const materials::ConstitutiveLaw& law = table && !table->empty()
-                                                  ? table->law(state_.particles.material_id(i))
-                                                  : *state_.particle_material.law;
+      const materials::ConstitutiveLaw& law = particle_law(i);
       const materials::MaterialState old = state_.method->particle_state(i);
       const double dT = std::isnan(T_ref) ? 0.0 : state_.particles.temperature(i) - T_ref;
       const materials::Tensor2 F3 = materials::embed_plane_strain(*F);

@@ -301,6 +301,8 @@ class FemParticleCoupling {
   DofSplit dof_split() const;
   // Member `field` of every free particle's material state from its owner. Collective.
   std::vector<double> gather_state(double materials::MaterialState::*field) const;
+  // The constitutive law of particle i: its material's from the table, else the single law.
+  const materials::ConstitutiveLaw& particle_law(unsigned int i) const;
 
   // Declared in dependency order: each piece refers only to those above it.
   CouplingState<dim> state_;

@@ -1378,6 +1378,10 @@ class ScrewPullout : public Scenario {
   Failure failure(const fem::MechanicsSolver<3>& solver, const implants::ScrewSolid& screw,
                   const coupling::FemParticleCoupling<3>* coupled) const {
     const auto& g = screw.geometry();
+    const auto failed_point = [&](double damage, double equivalent_plastic_strain) {
+      return damage_on_ ? damage >= 0.5 * foam_.damage.maximum_damage
+                        : equivalent_plastic_strain > foam_.damage.onset_plastic_strain;
+    };
     const auto near_threads = [&](const dealii::Point<3>& x) {
       const double sa = screw.axial(x);
       return sa >= 0 && sa <= g.length &&
@@ -1396,9 +1400,7 @@ class ScrewPullout : public Scenario {
         for (unsigned int i = 0; i < set.size(); ++i) {
           if (!coupled->is_free(i)) // bone: implant cells never convert
             continue;
-          const bool is_failed = damage_on_ ? D[i] >= 0.5 * foam_.damage.maximum_damage
-                                            : eps[i] > foam_.damage.onset_plastic_strain;
-          if (!is_failed)
+          if (!failed_point(D[i], eps[i]))
             continue;
           failed += set.volume(i);
           if (near_threads(set.reference_position(i)))
@@ -1408,15 +1410,11 @@ class ScrewPullout : public Scenario {
     for (const auto& cell : solver.dof_handler().active_cell_iterators())
       if (cell->is_locally_owned() && cell->material_id() == 0 && solver.is_active(cell)) {
         fv.reinit(cell);
-        const auto* damage_law =
-            dynamic_cast<const materials::J2Damage*>(&solver.cell_material(cell));
+        const materials::ConstitutiveLaw& law = solver.cell_material(cell);
         const auto data = solver.quadrature_point_data(cell);
         for (unsigned int q = 0; q < data.size(); ++q) {
           const auto& s = data[q].state;
-          const bool is_failed =
-              damage_law ? damage_law->damage(s) >= 0.5 * foam_.damage.maximum_damage
-                         : s.equivalent_plastic_strain > foam_.damage.onset_plastic_strain;
-          if (!is_failed)
+          if (!failed_point(law.stiffness_damage(s), s.equivalent_plastic_strain))
             continue;
           failed += fv.JxW(q);
           if (near_threads(fv.quadrature_point(q)))

@@ -65,6 +65,19 @@ class CorrespondenceFamilies {
   // G_m [1/m], into `nodes` and `gradients` (resized).
   void expand(unsigned int e, std::vector<unsigned int>& nodes, std::vector<Vec>& gradients) const;
 
+  // Calls visit(m, G_m) for those of family e's members m (not its centre) that wanted(m)
+  // accepts, in bond order, with the gradients expand() gives; forms no others.
+  template <class Wanted, class Visit>
+  void for_each_member_gradient(unsigned int e, Wanted&& wanted, Visit&& visit) const {
+    const unsigned int i = centre_[e];
+    const std::size_t b0 = bond_offsets_[i], nb = bond_offsets_[i + 1] - b0;
+    for_each_member(e, nb, [&](std::size_t s) {
+      const unsigned int m = bond_node_[b0 + s];
+      if (wanted(m))
+        visit(m, inverse_shape_[e] * bond_moment_[b0 + s]);
+    });
+  }
+
   // F_e from the displacements.
   Mat deformation_gradient(unsigned int e, const std::vector<Vec>& u) const;
 
