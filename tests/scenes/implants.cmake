@@ -243,14 +243,12 @@ spinesim_add_comparison_test(implants.screw_pullout_particles_ranks_agree
   REQUIRES "screw_particles_contact;screw_particles_contact_2ranks"
   LABELS "scene;implants;coupling;mpi")
 
-# The same with contact past the peak (measured with the damping held through softening, a
-# variant docs/implants.md reports and the code does not keep): after a plateau of 650-655 N
-# from 0.295 to 0.305 mm
+# The same with contact past the peak: after a plateau of 650-656 N from 0.290 to 0.305 mm
 # the force falls (627 N at 0.309 mm, 553 N at 0.314 mm) and passes the stop criterion's 30 %
-# (measured drop 35.5 %, 1080 particles, 88 pairs carrying 68 N, the deepest 4.7 µm, the
+# (measured drop 35.6 %, 1080 particles, 88 pairs carrying 68 N, the deepest 4.7 µm, the
 # balance 1.7e-2 at most). Bounds as for the runs above: the peak passed, the Chapman ratio in
-# the quick screw's band, the balance below 3e-2, the deepest penetration below 0.05 mm. About
-# an hour on a loaded machine: long.
+# the quick screw's band (measured 1.38), the balance below 3e-2, the deepest penetration
+# below 0.05 mm. 31 minutes on one core with another run beside it: long.
 spinesim_add_scene_test(implants.screw_pullout_particles_contact_past_peak SCENE ${_screw}
   OUT ${_screw_runs}/particles_contact_past_peak SET ${_screw_contact}
   EXPECT "status==ok;peak_passed>=1;chapman_ratio>=0.65;chapman_ratio<=2.0;contact_pairs>=10;contact_depth_max_mm<=0.05;virial_imbalance_relative_max<=0.03"
