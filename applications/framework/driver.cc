@@ -58,6 +58,7 @@ int record_failure(RunContext& ctx, const std::string& log_text, const std::stri
   ctx.start();
   ctx.log() << "\n" << log_text << "\n";
   ctx.summary().set_status(false, message);
+  ctx.summary().set_last_completed_step(ctx.history().last_row());
   return exit_run_failed;
 }
 
@@ -260,6 +261,7 @@ int run_command(const RunOptions& options) {
     if (!ctx.started())
       return exit_bad_input; // nothing published: earlier results stay as they were
     ctx.summary().set_status(false, std::string("bad input: ") + e.what());
+    ctx.summary().set_last_completed_step(ctx.history().last_row());
     code = exit_bad_input;
   } catch (const NothingToRestart& e) {
     if (ctx.is_root())
@@ -274,6 +276,7 @@ int run_command(const RunOptions& options) {
       ctx.log() << "; continue with: spinesim run --restart " << ctx.output().path().string();
     ctx.log() << "\n";
     ctx.summary().set_interrupted("interrupted by " + name + " " + e.what());
+    ctx.summary().set_last_completed_step(ctx.history().last_row());
     code = 128 + e.signal();
   } catch (const NumericalFailure& e) {
     code = record_failure(ctx, e.report(), e.report());

@@ -86,6 +86,15 @@ double History::value(std::size_t row, const std::string& column) const {
   return rows_.at(row)[it - columns_.begin()];
 }
 
+History::Row History::last_row() const {
+  Row row;
+  if (rows_.empty())
+    return row;
+  for (std::size_t i = 0; i < columns_.size(); ++i)
+    row.emplace_back(columns_[i], rows_.back()[i]);
+  return row;
+}
+
 std::string History::csv() const {
   std::ostringstream out;
   for (std::size_t i = 0; i < columns_.size(); ++i)

@@ -26,6 +26,8 @@ class History {
   std::size_t size() const { return rows_.size(); }
   const std::vector<std::string>& columns() const { return columns_; }
   double value(std::size_t row, const std::string& column) const;
+  // The last row with its column names (empty before the first row).
+  Row last_row() const;
 
  private:
   std::vector<std::string> columns_;

@@ -65,6 +65,12 @@ std::string Summary::json() const {
   }
   for (const auto& [name, value] : labels_)
     j["figures"][name] = {{"value", value}, {"unit", ""}};
+  if (!last_completed_.empty()) {
+    j["last_completed_step"] = nlohmann::ordered_json::object();
+    for (const auto& [column, value] : last_completed_)
+      j["last_completed_step"][column] =
+          std::isfinite(value) ? nlohmann::ordered_json(value) : nlohmann::ordered_json(nullptr);
+  }
   j["timings"] = nlohmann::ordered_json::object();
   for (const auto& [phase, s] : timings_)
     j["timings"][phase] = s;

@@ -8,6 +8,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace spinesim::framework {
@@ -36,6 +37,11 @@ class Summary {
   void set_status(bool ok, const std::string& message = "");
   // Stopped by a signal after a complete step ("interrupted"); restartable.
   void set_interrupted(const std::string& message);
+  // A run that stopped early (failed or interrupted): history.csv's last row, the state of the
+  // last step that completed, under "last_completed_step" (the column names as in the CSV).
+  void set_last_completed_step(const std::vector<std::pair<std::string, double>>& row) {
+    last_completed_ = row;
+  }
   bool has_figure(const std::string& name) const { return figures_.count(name) > 0; }
   double figure(const std::string& name) const { return figures_.at(name).first; }
   std::string json() const;
@@ -52,6 +58,7 @@ class Summary {
   std::optional<CostPrediction> prediction_;
   double peak_memory_ = 0;
   std::vector<std::string> warnings_;
+  std::vector<std::pair<std::string, double>> last_completed_;
 };
 
 } // namespace spinesim::framework

@@ -840,156 +840,196 @@ class ScrewPullout : public Scenario {
     // Steps of Displacement/Steps, halved down to 1/Peak refinement of that once the secant
     // stiffness falls below three quarters of the first step's: the peak is sampled finely.
     const double base_increment = 1.0 / pull_.steps;
-    while (!p.finished()) {
-      const unsigned int step = p.step + 1;
-      const bool toggling = p.toggle_step < toggle_total;
-      const double t = toggling ? 0.0 : std::min(1.0, p.t + p.increment);
-      const double tau = toggling ? double(p.toggle_step + 1) / pull_.toggle_steps : n_toggle + t;
-      unsigned int it = 0, linear = 0, relaxation = 0;
-      {
-        dealii::TimerOutput::Scope timer(ctx.timer(), "mechanics");
-        try {
-          if (coupled && coupled->n_free_particles() > 0) {
-            // Particles and FEM together: dynamic relaxation of both (Newton has no particle
-            // tangent), converting what fails on the way.
-            relaxation = relax_coupled(ctx, *coupled, step, tau);
-            p.relaxation += relaxation;
-            ++p.relaxed_steps;
-          } else {
-            // Relaxation only once foam has failed: before that, a Newton failure is a problem
-            // of the model.
-            const auto result = solver.solve_quasi_static_or_relax(
-                tau, damage_on_ && p.failed_before > 0, pull_.relaxation_tolerance,
-                pull_.relaxation_steps);
-            for (const auto& r : result.reports) {
-              it += r.newton_iterations;
-              for (const unsigned int l : r.linear_iterations)
-                linear += l;
-            }
-            relaxation = result.relaxation_steps;
-            if (relaxation > 0) {
+    // The curve's figures as of the last complete step: published at the end, and also when a
+    // step fails or a signal stops the run, so a long run that fails keeps its peak so far.
+    auto curve_figures = [&] {
+      Summary& sum = ctx.summary();
+      sum.set_figure("peak_pullout_force_N", p.peak, "N");
+      if (ct_box_) {
+        sum.set_figure("ct_engaged_density_g_cm3", engaged_density, "g/cm^3");
+        sum.set_figure("ct_engaged_yield_stress_MPa", engaged_yield / 1e6, "MPa");
+      }
+      sum.set_figure("chapman_force_N", chapman, "N");
+      sum.set_figure("chapman_ratio", p.peak / chapman, "-");
+      sum.set_figure("thread_shape_factor", tsf, "-");
+      sum.set_figure("displacement_at_peak_mm", p.peak_d * 1e3, "mm");
+      sum.set_figure("stiffness_N_per_mm", p.stiffness / 1e3, "N/mm");
+      sum.set_figure("energy_to_peak_mJ", p.energy_to_peak * 1e3, "mJ");
+      sum.set_figure("final_force_N", p.force.back(), "N");
+      sum.set_figure("final_displacement_mm", p.disp.back() * 1e3, "mm");
+      sum.set_figure("displacement_past_peak_mm", (p.disp.back() - p.peak_d) * 1e3, "mm");
+      // 1 when the force fell by Stop after drop past the peak: a true peak was passed.
+      sum.set_figure("peak_passed", p.dropped ? 1.0 : 0.0, "-");
+      sum.set_figure("post_peak_drop", p.peak > 0 ? 1 - p.force.back() / p.peak : 0.0, "-");
+      sum.set_figure("load_steps", p.step, "-");
+      sum.set_figure("newton_iterations", p.newton, "iterations");
+      sum.set_figure("linear_iterations", p.linear, "iterations");
+      sum.set_figure("relaxed_steps", p.relaxed_steps, "-");
+      sum.set_figure("relaxation_steps", p.relaxation, "steps");
+    };
+    try {
+      while (!p.finished()) {
+        const unsigned int step = p.step + 1;
+        const bool toggling = p.toggle_step < toggle_total;
+        const double t = toggling ? 0.0 : std::min(1.0, p.t + p.increment);
+        const double tau = toggling ? double(p.toggle_step + 1) / pull_.toggle_steps : n_toggle + t;
+        unsigned int it = 0, linear = 0, relaxation = 0;
+        {
+          dealii::TimerOutput::Scope timer(ctx.timer(), "mechanics");
+          try {
+            if (coupled && coupled->n_free_particles() > 0) {
+              // Particles and FEM together: dynamic relaxation of both (Newton has no particle
+              // tangent), converting what fails on the way.
+              relaxation = relax_coupled(ctx, *coupled, step, tau);
               p.relaxation += relaxation;
               ++p.relaxed_steps;
-              ctx.log() << "  step " << step << ": Newton found no static path ("
-                        << result.newton_failure << "); dynamic relaxation converged in "
-                        << relaxation << " pseudo-steps\n";
-            }
-            // The first cells that fail: converted at this equilibrium, then both models
-            // relax to the step's load together.
-            if (coupled) {
-              const auto r = [&] {
-                dealii::TimerOutput::Scope c(ctx.timer(), "conversion");
-                return coupled->convert_flagged();
-              }();
-              if (r.cells > 0) {
-                ctx.log() << "  step " << step << ": " << r.describe(" N") << "\n";
-                const unsigned int more = relax_coupled(ctx, *coupled, step, tau);
-                relaxation += more;
-                p.relaxation += more;
+            } else {
+              // Relaxation only once foam has failed: before that, a Newton failure is a problem
+              // of the model.
+              const auto result = solver.solve_quasi_static_or_relax(
+                  tau, damage_on_ && p.failed_before > 0, pull_.relaxation_tolerance,
+                  pull_.relaxation_steps);
+              for (const auto& r : result.reports) {
+                it += r.newton_iterations;
+                for (const unsigned int l : r.linear_iterations)
+                  linear += l;
+              }
+              relaxation = result.relaxation_steps;
+              if (relaxation > 0) {
+                p.relaxation += relaxation;
                 ++p.relaxed_steps;
+                ctx.log() << "  step " << step << ": Newton found no static path ("
+                          << result.newton_failure << "); dynamic relaxation converged in "
+                          << relaxation << " pseudo-steps\n";
+              }
+              // The first cells that fail: converted at this equilibrium, then both models
+              // relax to the step's load together.
+              if (coupled) {
+                const auto r = [&] {
+                  dealii::TimerOutput::Scope c(ctx.timer(), "conversion");
+                  return coupled->convert_flagged();
+                }();
+                if (r.cells > 0) {
+                  ctx.log() << "  step " << step << ": " << r.describe(" N") << "\n";
+                  const unsigned int more = relax_coupled(ctx, *coupled, step, tau);
+                  relaxation += more;
+                  p.relaxation += more;
+                  ++p.relaxed_steps;
+                }
               }
             }
+          } catch (NumericalFailure& f) {
+            f.set_step(step, tau);
+            throw;
           }
-        } catch (NumericalFailure& f) {
-          f.set_step(step, tau);
-          throw;
+        }
+        p.newton += it;
+        p.linear += linear;
+        if (toggling) {
+          // The transverse force on the grip; its values at the extremes give the cycle's
+          // stiffness. Failed bone counts for the relaxation switch as in the pull-out.
+          const auto R = grip_reaction(solver, coupled.get());
+          const dealii::Tensor<1, 3> e = pull_.toggle_direction;
+          const double F_t = R[0] * e[0] + R[1] * e[1];
+          if (!std::isfinite(F_t))
+            throw NumericalFailure("toggle force", "screw grip, step " + std::to_string(step),
+                                   "check the foam and screw constants");
+          const unsigned int within = (p.toggle_step + 1) % pull_.toggle_steps;
+          if (within == pull_.toggle_steps / 4)
+            p.toggle_plus.push_back(F_t);
+          if (within == 3 * pull_.toggle_steps / 4)
+            p.toggle_minus.push_back(F_t);
+          ++p.toggle_step;
+          // The pull starts from the axial force toggling left (its curve's first point).
+          if (p.toggle_step == toggle_total)
+            p.force.front() = R[2];
+          const Failure fail = failure(solver, screw, coupled.get());
+          p.failed_before = fail.failed_volume;
+          ctx.history().add(with_particle_columns(
+              {{"load_time", tau},
+               {"displacement_mm", 0.0},
+               {"force_N", R[2]},
+               {"toggle_mm", 1e3 * pull_.toggle_amplitude * std::sin(2 * pi * tau)},
+               {"toggle_force_N", F_t},
+               {"failed_volume_mm3", fail.failed_volume * 1e9},
+               {"newton_iterations", double(it)},
+               {"linear_iterations", double(linear)},
+               {"relaxation_steps", double(relaxation)}},
+              coupled.get(), p));
+        } else {
+          const double F = grip_reaction(solver, coupled.get())[2];
+          const double d = pull_.displacement * t;
+          if (!std::isfinite(F))
+            throw NumericalFailure("pull-out force",
+                                   "screw grip (its section in the block surface), step " +
+                                       std::to_string(step),
+                                   "check the foam and screw constants");
+          p.energy += 0.5 * (F + p.force.back()) * (d - p.disp.back());
+          const double secant = (F - p.force.back()) / (d - p.disp.back());
+          p.stiffness = std::max(p.stiffness, secant);
+          if (p.disp.size() == 1) // the pull-out's first step
+            p.first_stiffness = secant;
+          if (secant < 0.75 * p.first_stiffness)
+            p.increment = std::max(0.5 * p.increment, base_increment / pull_.peak_refinement);
+          p.disp.push_back(d);
+          p.force.push_back(F);
+          if (F > p.peak) {
+            p.peak = F;
+            p.peak_d = d;
+            p.peak_step = step;
+            p.energy_to_peak = p.energy;
+          }
+          const Failure fail = failure(solver, screw, coupled.get());
+          p.failed_before = fail.failed_volume;
+          ctx.history().add(with_particle_columns({{"load_time", tau},
+                                                   {"displacement_mm", d * 1e3},
+                                                   {"force_N", F},
+                                                   {"toggle_mm", 0.0},
+                                                   {"toggle_force_N", 0.0},
+                                                   {"failed_volume_mm3", fail.failed_volume * 1e9},
+                                                   {"newton_iterations", double(it)},
+                                                   {"linear_iterations", double(linear)},
+                                                   {"relaxation_steps", double(relaxation)}},
+                                                  coupled.get(), p));
+          p.t = t;
+          if (p.peak_step < step && F < (1 - pull_.stop_drop) * p.peak)
+            p.dropped = true;
+        }
+        p.step = step;
+        const bool checkpointed = p.finished() || (pull_.checkpoint_interval > 0 &&
+                                                   step % pull_.checkpoint_interval == 0);
+        if (checkpointed)
+          write_checkpoint(ctx, solver, coupled.get(), tria, p);
+        else
+          ctx.flush_history();
+        // SIGINT/SIGTERM: stop after this complete step with a checkpoint to continue from.
+        if (const int signal = ctx.interrupt_signal(); signal != 0 && !p.finished()) {
+          if (!checkpointed)
+            write_checkpoint(ctx, solver, coupled.get(), tria, p);
+          ctx.progress().finish();
+          throw Interrupted(signal, "after step " + std::to_string(step) + ", " +
+                                        (toggling ? "toggle cycle " + fmt(tau, 4)
+                                                  : fmt(p.disp.back() * 1e3, 6) + " mm"));
+        }
+        ctx.progress().update(step, tau);
+        if (pull_.stop_after_step > 0 && step >= pull_.stop_after_step && !p.finished()) {
+          if (!checkpointed)
+            write_checkpoint(ctx, solver, coupled.get(), tria, p);
+          ctx.log() << "  stopped after step " << step << " (Pullout/Stop after step)\n";
+          break;
         }
       }
-      p.newton += it;
-      p.linear += linear;
-      if (toggling) {
-        // The transverse force on the grip; its values at the extremes give the cycle's
-        // stiffness. Failed bone counts for the relaxation switch as in the pull-out.
-        const auto R = grip_reaction(solver, coupled.get());
-        const dealii::Tensor<1, 3> e = pull_.toggle_direction;
-        const double F_t = R[0] * e[0] + R[1] * e[1];
-        if (!std::isfinite(F_t))
-          throw NumericalFailure("toggle force", "screw grip, step " + std::to_string(step),
-                                 "check the foam and screw constants");
-        const unsigned int within = (p.toggle_step + 1) % pull_.toggle_steps;
-        if (within == pull_.toggle_steps / 4)
-          p.toggle_plus.push_back(F_t);
-        if (within == 3 * pull_.toggle_steps / 4)
-          p.toggle_minus.push_back(F_t);
-        ++p.toggle_step;
-        // The pull starts from the axial force toggling left (its curve's first point).
-        if (p.toggle_step == toggle_total)
-          p.force.front() = R[2];
-        const Failure fail = failure(solver, screw, coupled.get());
-        p.failed_before = fail.failed_volume;
-        ctx.history().add(with_particle_columns(
-            {{"load_time", tau},
-             {"displacement_mm", 0.0},
-             {"force_N", R[2]},
-             {"toggle_mm", 1e3 * pull_.toggle_amplitude * std::sin(2 * pi * tau)},
-             {"toggle_force_N", F_t},
-             {"failed_volume_mm3", fail.failed_volume * 1e9},
-             {"newton_iterations", double(it)},
-             {"linear_iterations", double(linear)},
-             {"relaxation_steps", double(relaxation)}},
-            coupled.get(), p));
-      } else {
-        const double F = grip_reaction(solver, coupled.get())[2];
-        const double d = pull_.displacement * t;
-        if (!std::isfinite(F))
-          throw NumericalFailure("pull-out force",
-                                 "screw grip (its section in the block surface), step " +
-                                     std::to_string(step),
-                                 "check the foam and screw constants");
-        p.energy += 0.5 * (F + p.force.back()) * (d - p.disp.back());
-        const double secant = (F - p.force.back()) / (d - p.disp.back());
-        p.stiffness = std::max(p.stiffness, secant);
-        if (p.disp.size() == 1) // the pull-out's first step
-          p.first_stiffness = secant;
-        if (secant < 0.75 * p.first_stiffness)
-          p.increment = std::max(0.5 * p.increment, base_increment / pull_.peak_refinement);
-        p.disp.push_back(d);
-        p.force.push_back(F);
-        if (F > p.peak) {
-          p.peak = F;
-          p.peak_d = d;
-          p.peak_step = step;
-          p.energy_to_peak = p.energy;
-        }
-        const Failure fail = failure(solver, screw, coupled.get());
-        p.failed_before = fail.failed_volume;
-        ctx.history().add(with_particle_columns({{"load_time", tau},
-                                                 {"displacement_mm", d * 1e3},
-                                                 {"force_N", F},
-                                                 {"toggle_mm", 0.0},
-                                                 {"toggle_force_N", 0.0},
-                                                 {"failed_volume_mm3", fail.failed_volume * 1e9},
-                                                 {"newton_iterations", double(it)},
-                                                 {"linear_iterations", double(linear)},
-                                                 {"relaxation_steps", double(relaxation)}},
-                                                coupled.get(), p));
-        p.t = t;
-        if (p.peak_step < step && F < (1 - pull_.stop_drop) * p.peak)
-          p.dropped = true;
-      }
-      p.step = step;
-      const bool checkpointed =
-          p.finished() || (pull_.checkpoint_interval > 0 && step % pull_.checkpoint_interval == 0);
-      if (checkpointed)
-        write_checkpoint(ctx, solver, coupled.get(), tria, p);
-      else
-        ctx.flush_history();
-      // SIGINT/SIGTERM: stop after this complete step with a checkpoint to continue from.
-      if (const int signal = ctx.interrupt_signal(); signal != 0 && !p.finished()) {
-        if (!checkpointed)
-          write_checkpoint(ctx, solver, coupled.get(), tria, p);
-        ctx.progress().finish();
-        throw Interrupted(signal, "after step " + std::to_string(step) + ", " +
-                                      (toggling ? "toggle cycle " + fmt(tau, 4)
-                                                : fmt(p.disp.back() * 1e3, 6) + " mm"));
-      }
-      ctx.progress().update(step, tau);
-      if (pull_.stop_after_step > 0 && step >= pull_.stop_after_step && !p.finished()) {
-        if (!checkpointed)
-          write_checkpoint(ctx, solver, coupled.get(), tria, p);
-        ctx.log() << "  stopped after step " << step << " (Pullout/Stop after step)\n";
-        break;
-      }
+    } catch (const NumericalFailure&) {
+      ctx.log() << "  the curve up to step " << p.step << ", the last complete one: peak " << p.peak
+                << " N at " << p.peak_d * 1e3 << " mm, last " << p.force.back() << " N at "
+                << p.disp.back() * 1e3 << " mm (summary.json keeps these)\n";
+      curve_figures();
+      ctx.summary().set_figure("failed_volume_mm3", p.failed_before * 1e9, "mm^3");
+      throw;
+    } catch (const Interrupted&) {
+      curve_figures();
+      ctx.summary().set_figure("failed_volume_mm3", p.failed_before * 1e9, "mm^3");
+      throw;
     }
     ctx.progress().finish();
     const double solve_time =
@@ -1004,19 +1044,7 @@ class ScrewPullout : public Scenario {
     const double plot_ok = plot(ctx, p.disp, p.force, chapman);
 
     Summary& sum = ctx.summary();
-    sum.set_figure("peak_pullout_force_N", p.peak, "N");
-    if (ct_box_) {
-      sum.set_figure("ct_engaged_density_g_cm3", engaged_density, "g/cm^3");
-      sum.set_figure("ct_engaged_yield_stress_MPa", engaged_yield / 1e6, "MPa");
-    }
-    sum.set_figure("chapman_force_N", chapman, "N");
-    sum.set_figure("chapman_ratio", p.peak / chapman, "-");
-    sum.set_figure("thread_shape_factor", tsf, "-");
-    sum.set_figure("displacement_at_peak_mm", p.peak_d * 1e3, "mm");
-    sum.set_figure("stiffness_N_per_mm", p.stiffness / 1e3, "N/mm");
-    sum.set_figure("energy_to_peak_mJ", p.energy_to_peak * 1e3, "mJ");
-    sum.set_figure("final_force_N", p.force.back(), "N");
-    sum.set_figure("final_displacement_mm", p.disp.back() * 1e3, "mm");
+    curve_figures();
     if (pull_.toggle_cycles > 0) {
       // Transverse secant stiffness of each cycle, (F(+a) − F(−a)) / 2a: loosening lowers it.
       const std::size_t n = std::min(p.toggle_plus.size(), p.toggle_minus.size());
@@ -1034,10 +1062,6 @@ class ScrewPullout : public Scenario {
                 << " mm; transverse stiffness " << first / 1e3 << " -> " << last / 1e3
                 << " N/mm (ratio " << last / first << ")\n";
     }
-    sum.set_figure("displacement_past_peak_mm", (p.disp.back() - p.peak_d) * 1e3, "mm");
-    // 1 when the force fell by Stop after drop past the peak: a true peak was passed.
-    sum.set_figure("peak_passed", p.dropped ? 1.0 : 0.0, "-");
-    sum.set_figure("post_peak_drop", 1 - p.force.back() / p.peak, "-");
     sum.set_figure("failed_volume_mm3", fail.failed_volume * 1e9, "mm^3");
     sum.set_figure("failed_fraction_near_threads", fail.near_fraction, "-");
     if (coupled)
@@ -1056,11 +1080,6 @@ class ScrewPullout : public Scenario {
     sum.set_figure("thread_cell_size_m", thread_h, "m");
     sum.set_figure("cells_per_pitch", g.pitch / thread_h, "-");
     sum.set_figure("mechanics_dofs", dofs, "-");
-    sum.set_figure("load_steps", p.step, "-");
-    sum.set_figure("newton_iterations", p.newton, "iterations");
-    sum.set_figure("linear_iterations", p.linear, "iterations");
-    sum.set_figure("relaxed_steps", p.relaxed_steps, "-");
-    sum.set_figure("relaxation_steps", p.relaxation, "steps");
     sum.set_figure("solve_time", solve_time, "s");
     sum.set_figure("force_plot_valid", plot_ok, "-");
     ctx.log() << std::setprecision(5) << "  peak " << p.peak << " N at " << p.peak_d * 1e3

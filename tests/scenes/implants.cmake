@@ -39,6 +39,21 @@ spinesim_add_restart_test(implants.screw_pullout_restart_second_half
 spinesim_add_summaries_match_test(implants.screw_pullout_restart_matches_uninterrupted
   A ${_screw_runs}/restart/summary.json B ${_screw_runs}/quick/summary.json TOL 1e-8 FLOOR 1e-9
   REQUIRES "screw_restart_done;screw_quick" LABELS "scene;implants")
+# A run that fails keeps its curve so far. The quick screw allowed a single pseudo-step of dynamic
+# relaxation fails in the first step Newton cannot cross, past the peak (measured: step 21,
+# 28 % below the peak), exit 1 with status failed. Its summary carries the peak, the last
+# complete step's force and the steps done, and last_completed_step holds history.csv's last
+# row. Until that step it follows the quick run's path (no relaxation before it), so the peak
+# and where it lies are that run's to round-off (bound 1e-12 relative).
+spinesim_add_scene_test(implants.screw_pullout_failed_keeps_curve SCENE ${_screw}
+  OUT ${_screw_runs}/failed SET ${_screw_quick} "Pullout/Max relaxation steps=1" EXIT 1
+  MATCH "the curve up to step [0-9]+, the last complete one: peak [0-9.]+ N.*dynamic relaxation did not converge in 1 pseudo-steps"
+  EXPECT "status==failed;peak_passed<=0;post_peak_drop>=0.1;load_steps>=10;last_completed_step.force_N>=100;relaxation_steps<=0"
+  LABELS "scene;implants;stability" FIXTURE screw_failed)
+spinesim_add_comparison_test(implants.screw_pullout_failed_peak_matches
+  A ${_screw_runs}/failed/summary.json B ${_screw_runs}/quick/summary.json
+  CHECKS "peak_pullout_force_N:rel:1e-12;displacement_at_peak_mm:rel:1e-12"
+  REQUIRES "screw_failed;screw_quick" LABELS "scene;implants;stability")
 
 # A screw from STL. The quick screw at 5 cells per pitch (15k cells, one load step) writes its
 # surface (Screw/Write surface: 45k triangles), and the same run with Shape = stl reads it back.

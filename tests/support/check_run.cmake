@@ -7,7 +7,8 @@
 #   EXIT     expected exit code
 #   MATCH    regular expression the combined output must contain
 #   EXPECT   "figure<=value|figure>=value|figure~value:reltol|status==ok" checks on summary.json;
-#            "figure==null": the figure is there and null (a NaN the run could not determine)
+#            "figure==null": the figure is there and null (a NaN the run could not determine);
+#            "section.key<=value" bounds another numeric entry (last_completed_step.force_N)
 cmake_minimum_required(VERSION 3.19)
 
 string(REPLACE "|" ";" _sets "${SET}")
@@ -70,11 +71,11 @@ if(_expects)
       if(NOT _jerr STREQUAL "NOTFOUND" OR NOT _got STREQUAL _want)
         message(FATAL_ERROR "${_name} = '${_got}', expected '${_want}'")
       endif()
-    elseif(_e MATCHES "^([A-Za-z0-9_]+)(<=|>=|~)([-+0-9.eE]+)(:([0-9.eE+-]+))?$")
+    elseif(_e MATCHES "^([A-Za-z0-9_]+([.][A-Za-z0-9_]+)?)(<=|>=|~)([-+0-9.eE]+)(:([0-9.eE+-]+))?$")
       set(_name ${CMAKE_MATCH_1})
-      set(_op ${CMAKE_MATCH_2})
-      set(_ref ${CMAKE_MATCH_3})
-      set(_tol ${CMAKE_MATCH_5})
+      set(_op ${CMAKE_MATCH_3})
+      set(_ref ${CMAKE_MATCH_4})
+      set(_tol ${CMAKE_MATCH_6})
       spinesim_numeric_figure("${_json}" ${_name} _got ${_summary})
       if(_op STREQUAL "<=")
         spinesim_awk_true("${_got} <= ${_ref}" _ok)

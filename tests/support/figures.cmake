@@ -4,9 +4,15 @@
 # are false for an empty string, so a bound checked without this would pass on NaN.
 
 # spinesim_numeric_figure(<json> <name> <out> <file>): the value of figures.<name>.value, or
-# FATAL_ERROR naming the file and what is wrong.
+# FATAL_ERROR naming the file and what is wrong. A name <section>.<key> reads <section>.<key>
+# instead (e.g. last_completed_step.force_N, the last history row of a run that stopped early).
 function(spinesim_numeric_figure json name out file)
-  string(JSON _type ERROR_VARIABLE _err TYPE "${json}" figures ${name} value)
+  if(name MATCHES "^([A-Za-z0-9_]+)[.]([A-Za-z0-9_]+)$")
+    set(_keys ${CMAKE_MATCH_1} ${CMAKE_MATCH_2})
+  else()
+    set(_keys figures ${name} value)
+  endif()
+  string(JSON _type ERROR_VARIABLE _err TYPE "${json}" ${_keys})
   if(_err)
     message(FATAL_ERROR "figure ${name} is missing (${file})")
   endif()
@@ -14,7 +20,7 @@ function(spinesim_numeric_figure json name out file)
     message(FATAL_ERROR "figure ${name} is ${_type}, not a finite number (NaN and infinities "
                         "are written as null; ${file})")
   endif()
-  string(JSON _value GET "${json}" figures ${name} value)
+  string(JSON _value GET "${json}" ${_keys})
   if(NOT _value MATCHES "^[-+]?([0-9]+[.]?[0-9]*|[.][0-9]+)([eE][-+]?[0-9]+)?$")
     message(FATAL_ERROR "figure ${name} = '${_value}' is not a finite number (${file})")
   endif()
