@@ -4,6 +4,13 @@
 
 namespace spinesim {
 
+std::string significant(double value, int digits) {
+  std::ostringstream s;
+  s.precision(digits);
+  s << value;
+  return s.str();
+}
+
 InvalidInput::InvalidInput(std::string where, std::string problem, std::string allowed)
     : std::runtime_error(where + ": " + problem +
                          (allowed.empty() ? "" : " (allowed: " + allowed + ")")),

@@ -22,6 +22,10 @@ class InvalidInput : public std::runtime_error {
   std::string where_, problem_, allowed_;
 };
 
+// A number for a message, to `digits` significant digits (std::to_string's fixed six
+// decimals print a residual of 3e-7 as 0.000000).
+std::string significant(double value, int digits = 3);
+
 // The numbers went wrong (NaN, divergence, inverted element, singular shape tensor).
 // Thrown where it happens, with the step and location known there and a hint for the user.
 class NumericalFailure : public std::runtime_error {

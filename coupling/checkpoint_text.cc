@@ -59,16 +59,17 @@ CheckpointContents read_checkpoint_text(std::istream& in, std::uintmax_t bytes, 
     throw InvalidInput(file, "a checkpoint read for dimension " + std::to_string(dim), "2 or 3");
   CheckpointContents c;
   std::string tag;
-  std::size_t n = 0, nc = 0, nb = 0, nh = 0, nl = 0, ns = 0;
+  std::size_t n = 0, nc = 0, nb = 0, nh = 0, nl = 0, ns = 0, nr = 0;
   if (!(in >> tag) || tag != "spinesim_coupling" || !read_number(in, c.version) || c.version < 1 ||
-      c.version > 8 || !read_finite(in, c.time) || c.time < 0 || !read_number(in, n) ||
+      c.version > 9 || !read_finite(in, c.time) || c.time < 0 || !read_number(in, n) ||
       !read_number(in, nc) || !read_number(in, nb) ||
       (c.version >= 2 && !(read_finite(in, c.dissipation) && read_finite(in, c.heat))) ||
       (c.version >= 3 && !read_number(in, nh)) ||
       (c.version >= 6 && !(read_number(in, c.n_last_pass) && c.n_last_pass <= n)) ||
-      (c.version >= 7 && !read_number(in, nl)) || (c.version >= 8 && !read_number(in, ns)))
+      (c.version >= 7 && !read_number(in, nl)) || (c.version >= 8 && !read_number(in, ns)) ||
+      (c.version >= 9 && !read_number(in, nr)))
     throw InvalidInput(file, "missing or unreadable coupling checkpoint header",
-                       "a file written by FemParticleCoupling::save (versions 1 to 8)");
+                       "a file written by FemParticleCoupling::save (versions 1 to 9)");
   // Numbers of a history record's material state: version 4 added the fracture damage.
   const unsigned int n_state =
       c.version >= 4 ? checkpoint_state_doubles : checkpoint_state_doubles - 1;
@@ -83,13 +84,14 @@ CheckpointContents read_checkpoint_text(std::istream& in, std::uintmax_t bytes, 
                                      : 3) *
                        dim) ||
       !fits(nc, 2) || !fits(nb, 2) || !fits(nh, 2 + n_state) ||
-      !fits(nl, 2 + checkpoint_law_values) || !fits(ns, 1 + dim))
+      !fits(nl, 2 + checkpoint_law_values) || !fits(ns, 1 + dim) || !fits(nr, 3))
     throw InvalidInput(file,
                        "header counts (" + std::to_string(n) + " particles, " + std::to_string(nc) +
                            " converted cells, " + std::to_string(nb) + " broken bonds, " +
                            std::to_string(nh) + " history records, " + std::to_string(nl) +
-                           " laws, " + std::to_string(ns) + " stick points) exceed what its " +
-                           std::to_string(bytes) + " bytes can hold",
+                           " laws, " + std::to_string(ns) + " stick points, " + std::to_string(nr) +
+                           " short-range pairs) exceed what its " + std::to_string(bytes) +
+                           " bytes can hold",
                        written_by);
   const auto require = [&](bool ok, const std::string& what, std::size_t k) {
     if (!ok)
@@ -170,6 +172,13 @@ CheckpointContents read_checkpoint_text(std::istream& in, std::uintmax_t bytes, 
     for (unsigned int d = 0; ok && d < dim; ++d)
       ok = read_finite(in, point[d]);
     require(ok, "contact stick point", k);
+  }
+
+  for (std::size_t k = 0; k < nr; ++k) {
+    auto& b = c.births.emplace_back();
+    require(read_number(in, b.i) && read_number(in, b.j) && b.i < b.j && b.j < n &&
+                read_finite(in, b.reach) && b.reach > 0,
+            "short-range pair", k);
   }
 
   std::string rest;

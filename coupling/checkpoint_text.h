@@ -1,7 +1,7 @@
 #ifndef SPINESIM_COUPLING_CHECKPOINT_TEXT_H
 #define SPINESIM_COUPLING_CHECKPOINT_TEXT_H
 
-// The bytes of a coupling checkpoint ("spinesim_coupling 1" to "8", written by
+// The bytes of a coupling checkpoint ("spinesim_coupling 1" to "9", written by
 // CouplingCheckpoint::save) read into plain records, with every check a file from outside
 // needs: counts bounded by the file's size before anything is sized by them, every record
 // complete, in range and finite, nothing after the last record. No deal.II: the loader turns
@@ -67,6 +67,13 @@ struct CheckpointContents {
   // Version 8: the committed stick points of particles in frictional contact with an implant
   // (ImplantContact): particle index and the point (first `dim` entries used) [m].
   std::vector<std::pair<unsigned int, std::array<double, 3>>> sticks;
+  // Version 9: the short-range pairs born closer than their reference contact distance
+  // (meshfree/short_range_forces.h): particles i < j and the distance [m].
+  struct Birth {
+    unsigned int i = 0, j = 0;
+    double reach = 0;
+  };
+  std::vector<Birth> births;
 };
 
 // Reads a checkpoint of a `dim`-dimensional run whose coupling has `n_points` candidate

@@ -34,6 +34,7 @@ double CoupledIntegrator<dim>::stable_time_step() const {
     stiffness_bound_ = state_.method->stiffness_bound(particles, state_.bonds);
     joint_.contact().add_stiffness_bound(stiffness_bound_);
   }
+  refresh_contact_bound();
   particle_step_ = Utilities::MPI::min(particle_step(), comm);
   return combined_step(state_.fem.stable_time_step(), particle_step_);
 }
@@ -42,7 +43,10 @@ template <int dim>
 double CoupledIntegrator<dim>::stable_time_step_fem_refreshed() const {
   if (!(particle_step_ > 0))
     return stable_time_step();
-  if (state_.fem.parameters().kinematics != "small_strain")
+  const bool contacts = has_short_range_forces();
+  if (contacts)
+    refresh_contact_bound();
+  if (contacts || state_.fem.parameters().kinematics != "small_strain")
     particle_step_ = Utilities::MPI::min(particle_step(), state_.fem.mpi_communicator());
   return combined_step(state_.fem.stable_time_step(), particle_step_);
 }
@@ -50,6 +54,7 @@ double CoupledIntegrator<dim>::stable_time_step_fem_refreshed() const {
 template <int dim>
 void CoupledIntegrator<dim>::restore_stiffness_bound(std::vector<double> bound) {
   stiffness_bound_ = std::move(bound);
+  refresh_contact_bound();
   particle_step_ = stiffness_bound_.empty()
                        ? -1
                        : Utilities::MPI::min(particle_step(), state_.fem.mpi_communicator());
@@ -65,6 +70,7 @@ double CoupledIntegrator<dim>::own_particle_step(unsigned int i) const {
   if (i >= stiffness_bound_.size() || !state_.free[i] || !state_.is_owned(i) ||
       !(stiffness_bound_[i] > 0))
     return inf;
+  const double bound = stiffness_bound_[i] + (i < contact_bound_.size() ? contact_bound_[i] : 0.0);
   // Under finite strain a compressed family is stiffer in its reference coordinates: a
   // bond shortened to λ of its length stiffens like a cell edge shortened to λ (the FEM's
   // step of the current cells), so the bound grows by 1/λ² with the family's shortest
@@ -80,8 +86,7 @@ double CoupledIntegrator<dim>::own_particle_step(unsigned int i) const {
       const auto eta = particles.displacement(j) - particles.displacement(i);
       stretch = std::min(stretch, (xi + eta).norm() / xi.norm());
     }
-  return state_.prm.time_step_safety * stretch *
-         std::sqrt(2.0 * particles.density(i) / stiffness_bound_[i]);
+  return state_.prm.time_step_safety * stretch * std::sqrt(2.0 * particles.density(i) / bound);
 }
 
 template <int dim>
@@ -138,6 +143,15 @@ double CoupledIntegrator<dim>::combined_step(double dt_fem, double dt_pd) const 
 template <int dim>
 bool CoupledIntegrator<dim>::bonds_broke_in_last_step() const {
   return Utilities::MPI::logical_or(broken_last_step_ > 0, state_.fem.mpi_communicator());
+}
+
+template <int dim>
+void CoupledIntegrator<dim>::refresh_contact_bound() const {
+  contact_bound_.clear();
+  if (!has_short_range_forces() || state_.n_free_particles() == 0)
+    return;
+  contact_bound_.assign(state_.particles.size(), 0.0);
+  state_.method->add_contact_bound(state_.particles, state_.bonds, contact_bound_);
 }
 
 template <int dim>
@@ -447,6 +461,15 @@ CoupledIntegrator<dim>::relax(double time, bool with_conversion,
       report.conversions.push_back(r);
       dt = relaxation_time_step();
       first = true; // new unknowns: restart the stiffness estimate
+      c = 0;
+      continue;
+    }
+    // A short-range pair engaged that the masses' bound did not count: renew them before the
+    // pseudo-dynamics outrun it (and restart the stiffness estimate, as after a conversion).
+    if (has_short_range_forces() &&
+        Utilities::MPI::logical_or(state_.method->stiffness_bound_stale(), comm)) {
+      dt = relaxation_time_step();
+      first = true;
       c = 0;
       continue;
     }

@@ -66,12 +66,19 @@ class CoupledIntegrator {
   // last stable_time_step(): under finite strain the FEM's cells shrink from step to step
   // (crushed cells set the step) and the particles' step is recomputed from that bound and
   // their current bond stretches; under small strain the particles' step is the last one.
+  // With short-range forces the particles' step is recomputed either way, their bound plus the
+  // pairs in contact at the current displacements.
   double stable_time_step_fem_refreshed() const;
   // One central-difference step of both models (see advance()).
   void step(double dt);
   // Whether any bond broke on any rank in the last step (collective). Breaking can stiffen a
   // NOSB family (a smaller shape tensor, larger gradients): the caller renews the stable step.
   bool bonds_broke_in_last_step() const;
+  // Whether the particle method has short-range forces (their springs enter every step's
+  // stable step, stable_time_step_fem_refreshed()).
+  bool has_short_range_forces() const {
+    return state_.method && state_.method->short_range_contacts() != nullptr;
+  }
   // The energy splice's stored-energy check now (collective; nothing without the splice or
   // before the first break): step() makes it every 10 steps, callers at each output time, so
   // no state past its failure is written as a result.
@@ -146,6 +153,11 @@ class CoupledIntegrator {
   mutable double particle_step_ = -1;
   // The method's stiffness bound per particle at the last stable_time_step() [N/m per m^3].
   mutable std::vector<double> stiffness_bound_;
+  // The short-range pairs' part of the particles' bound at the displacements the step was last
+  // taken at (ParticleMethod::add_contact_bound): renewed with every step, so it follows the
+  // contacts without a state of its own (a restart recomputes it from the same displacements).
+  mutable std::vector<double> contact_bound_;
+  void refresh_contact_bound() const;
   // Net accelerations of the free particle components at the last relaxation step [m/s²].
   std::vector<double> relax_acceleration_;
   // Per particle, its relaxation mass over its mass (empty: the real masses).

@@ -89,6 +89,20 @@ std::size_t n_broken_bonds(const CouplingState<dim>& s) {
 }
 
 template <int dim>
+std::optional<std::size_t> n_short_range_contacts(const CouplingState<dim>& s) {
+  const auto* contacts = s.method ? s.method->short_range_contacts() : nullptr;
+  // The same on every rank (one method setting); a rank without particles still takes part.
+  const bool on = Utilities::MPI::max(contacts ? 1 : 0, s.fem.mpi_communicator()) > 0;
+  if (!on)
+    return std::nullopt;
+  std::size_t n = 0;
+  for (unsigned int i = 0; contacts && i < contacts->size() && i < s.bonds.n_particles(); ++i)
+    if (s.free[i] && s.is_owned(i))
+      n += (*contacts)[i];
+  return Utilities::MPI::sum(n, s.fem.mpi_communicator());
+}
+
+template <int dim>
 double max_damage(const CouplingState<dim>& s) {
   if (!s.method || s.n_free_particles() == 0)
     return 0;
@@ -117,6 +131,8 @@ template double particle_plastic_work(const CouplingState<2>&);
 template double particle_plastic_work(const CouplingState<3>&);
 template std::size_t n_broken_bonds(const CouplingState<2>&);
 template std::size_t n_broken_bonds(const CouplingState<3>&);
+template std::optional<std::size_t> n_short_range_contacts(const CouplingState<2>&);
+template std::optional<std::size_t> n_short_range_contacts(const CouplingState<3>&);
 template double max_damage(const CouplingState<2>&);
 template double max_damage(const CouplingState<3>&);
 

@@ -9,6 +9,7 @@
 #include <deal.II/base/tensor.h>
 
 #include <cstddef>
+#include <optional>
 
 namespace spinesim::coupling {
 
@@ -31,6 +32,11 @@ template <int dim>
 double particle_plastic_work(const CouplingState<dim>& state);
 template <int dim>
 std::size_t n_broken_bonds(const CouplingState<dim>& state);
+// Bond ends of the owned free particles' rows in short-range contact at the last force pass
+// (a pair of two free particles counts twice, as n_broken_bonds), none when the method has no
+// short-range forces; collective.
+template <int dim>
+std::optional<std::size_t> n_short_range_contacts(const CouplingState<dim>& state);
 // Updates the damage of the owned rows on the way (the particle set is a cache of it).
 template <int dim>
 double max_damage(const CouplingState<dim>& state);

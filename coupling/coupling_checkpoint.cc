@@ -21,6 +21,7 @@
 #include <fstream>
 #include <map>
 #include <set>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -98,6 +99,23 @@ void CouplingCheckpoint<dim>::save(const std::string& file) const {
   }
   const auto histories = Utilities::MPI::gather(state.fem.mpi_communicator(), history, 0);
   const auto sticks = p_.joint.contact().stick_points();
+  // The short-range pairs born closer, from every rank (a pair's rows may live on two).
+  std::vector<meshfree::ShortRangeBirth> births;
+  if (state.method) {
+    std::vector<double> flat; // (i, j, d): indices are exact in a double
+    for (const auto& b : state.method->short_range_births())
+      flat.insert(flat.end(), {double(b.i), double(b.j), b.reach});
+    for (const auto& part : Utilities::MPI::all_gather(state.fem.mpi_communicator(), flat))
+      for (std::size_t k = 0; k + 2 < part.size(); k += 3)
+        births.push_back({static_cast<unsigned int>(part[k]),
+                          static_cast<unsigned int>(part[k + 1]), part[k + 2]});
+    std::sort(births.begin(), births.end(), [](const auto& a, const auto& b) {
+      return std::tie(a.i, a.j, a.reach) < std::tie(b.i, b.j, b.reach);
+    });
+    births.erase(std::unique(births.begin(), births.end(),
+                             [](const auto& a, const auto& b) { return a.i == b.i && a.j == b.j; }),
+                 births.end());
+  }
   if (Utilities::MPI::this_mpi_process(state.fem.mpi_communicator()) != 0)
     return;
   std::size_t n_history = 0;
@@ -113,11 +131,14 @@ void CouplingCheckpoint<dim>::save(const std::string& file) const {
   // particle; the header's eighth number: how many particles the last force pass saw);
   // version 7 the particles' laws (their number last in the header, one line each after the
   // converted cells) and each particle's index among them; version 8 the stick points of
-  // frictional contact with an implant (their number last in the header, after the history).
-  out << "spinesim_coupling 8\n"
+  // frictional contact with an implant (their number last in the header, after the history);
+  // version 9 the short-range pairs born closer than their reference distance (their number
+  // last, after the stick points).
+  out << "spinesim_coupling 9\n"
       << p_.integrator.time() << " " << particles.size() << " " << p_.converter.converted().size()
       << " " << broken.size() << " " << dissipation << " " << p_.fracture.heat() << " " << n_history
-      << " " << u_pass.size() << " " << state.law_parameters.size() << " " << sticks.size() << "\n";
+      << " " << u_pass.size() << " " << state.law_parameters.size() << " " << sticks.size() << " "
+      << births.size() << "\n";
   for (const auto& [id, batch] : p_.converter.converted())
     out << id << " " << batch << "\n";
   for (const auto& law : state.law_parameters) {
@@ -156,6 +177,8 @@ void CouplingCheckpoint<dim>::save(const std::string& file) const {
       out << " " << point[d];
     out << "\n";
   }
+  for (const auto& b : births)
+    out << b.i << " " << b.j << " " << b.reach << "\n";
 }
 
 template <int dim>
@@ -234,8 +257,15 @@ void CouplingCheckpoint<dim>::load(const std::string& file) {
   p_.bond_rows.restore_broken(std::move(c.broken));
   state.pending_states.clear();
   p_.rebuild_layers();
-  if (state.method)
+  if (state.method) {
     state.method->set_history(history);
+    // After the rows are rebuilt at the restored displacements: pairs take their distances
+    // from the uninterrupted run, not from where the restart first sees them.
+    std::vector<meshfree::ShortRangeBirth> births;
+    for (const auto& b : c.births)
+      births.push_back({b.i, b.j, b.reach});
+    state.method->restore_short_range_births(births);
+  }
   {
     std::vector<std::pair<unsigned int, Tensor<1, dim>>> sticks;
     for (const auto& [i, point] : c.sticks) {

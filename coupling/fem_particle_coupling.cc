@@ -258,6 +258,11 @@ std::size_t FemParticleCoupling<dim>::n_broken_bonds() const {
 }
 
 template <int dim>
+std::optional<std::size_t> FemParticleCoupling<dim>::n_short_range_contacts() const {
+  return coupling::n_short_range_contacts(state_);
+}
+
+template <int dim>
 double FemParticleCoupling<dim>::max_damage() const {
   return coupling::max_damage(state_);
 }

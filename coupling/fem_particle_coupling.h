@@ -54,6 +54,7 @@
 #include <cmath>
 #include <complex>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -106,6 +107,8 @@ class FemParticleCoupling {
   void step(double dt);
   // Whether bonds broke anywhere in the last step (collective; see CoupledIntegrator).
   bool bonds_broke_in_last_step() const { return integrator_.bonds_broke_in_last_step(); }
+  // Whether short-range forces act (every step then renews the particles' step).
+  bool has_short_range_forces() const { return integrator_.has_short_range_forces(); }
   // CoupledIntegrator::check_splice_energy (collective).
   void check_splice_energy() { integrator_.check_splice_energy(); }
   // Particle updates per second of the particle method's force passes, over all ranks
@@ -204,6 +207,9 @@ class FemParticleCoupling {
     return static_cast<unsigned int>(converter_.converted().size());
   }
   std::size_t n_broken_bonds() const;
+  // Bond ends in short-range contact (coupled_totals.h), none without short-range forces;
+  // collective.
+  std::optional<std::size_t> n_short_range_contacts() const;
   // Bond ends held by this rank (each bond counted from both ends, ghosts' included).
   std::size_t n_bond_ends() const { return state_.bonds.n_bonds(); }
   double max_damage() const;

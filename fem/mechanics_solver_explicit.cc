@@ -15,10 +15,8 @@
 #include <deal.II/lac/sparsity_tools.h>
 
 #include <cmath>
-#include <iomanip>
 #include <limits>
 #include <optional>
-#include <sstream>
 #include <vector>
 
 namespace spinesim::fem {
@@ -186,11 +184,8 @@ unsigned int MechanicsSolver<dim>::relax_quasi_static(double time, double tolera
       return it;
     }
   }
-  // Three significant digits: std::to_string's fixed six decimals print 3e-7 as 0.000000.
-  std::ostringstream residual_text;
-  residual_text << std::setprecision(3) << relative;
   throw NumericalFailure("dynamic relaxation did not converge in " + std::to_string(max_steps) +
-                             " pseudo-steps (relative residual " + residual_text.str() + ")",
+                             " pseudo-steps (relative residual " + significant(relative) + ")",
                          "quasi-static equilibrium at t = " + std::to_string(time),
                          "allow more relaxation steps or take smaller load steps");
 }

@@ -259,7 +259,7 @@ MechanicsSolver<dim>::solve_quasi_static(double time) {
       ok = newton(lambda_try, report);
       if (!ok)
         why = "Newton did not converge in " + std::to_string(prm_.max_newton_iterations) +
-              " iterations (relative residual " + std::to_string(report.relative_residual) + ")";
+              " iterations (relative residual " + significant(report.relative_residual) + ")";
     } catch (const NumericalFailure& e) {
       why = e.what_failed() + " at " + e.location();
     }
@@ -276,7 +276,7 @@ MechanicsSolver<dim>::solve_quasi_static(double time) {
     if (++cuts > prm_.max_load_step_cuts)
       throw NumericalFailure(why,
                              "quasi-static load step " + std::to_string(step + 1) +
-                                 ", load factor " + std::to_string(lambda_try) +
+                                 ", load factor " + significant(lambda_try, 6) +
                                  " towards t = " + std::to_string(time) + " after " +
                                  std::to_string(prm_.max_load_step_cuts) + " step cuts",
                              "increase Load steps, check boundary conditions for rigid-body "

@@ -23,6 +23,7 @@
 #include "meshfree/material_table.h"
 #include "meshfree/neighbor_search.h"
 #include "meshfree/particle_set.h"
+#include "meshfree/short_range_forces.h"
 
 #include <deal.II/base/parameter_handler.h>
 
@@ -232,6 +233,28 @@ class ParticleMethod {
   virtual void load(std::istream&) {}
   // Messages for the run log since the last call (e.g. particles that lost their family).
   virtual std::vector<std::string> take_messages() { return {}; }
+  // Per particle, the bonds of its row in short-range contact at the last force pass
+  // (meshfree/short_range_forces.h), or null when the method has no such forces switched on.
+  virtual const std::vector<unsigned int>* short_range_contacts() const { return nullptr; }
+  // The short-range pairs' part of the stiffness bound at the current displacements (pairs in
+  // contact or within 5 % of it; meshfree/short_range_forces.h), added into S in the units of
+  // stiffness_bound(), which leaves it out. stable_time_step() includes it.
+  virtual void add_contact_bound(const ParticleSet<dim>& particles, const BondList<dim>& bonds,
+                                 std::vector<double>& S) const {
+    (void)particles;
+    (void)bonds;
+    (void)S;
+  }
+  // Whether the last force pass found a pair in short-range contact that the last contact
+  // bound (add_contact_bound, stable_time_step) did not count: a relaxation renews its masses.
+  virtual bool stiffness_bound_stale() const { return false; }
+  // The short-range pairs born closer than their reference contact distance (converted
+  // particles, meshfree/short_range_forces.h), for a checkpoint; restore_short_range_births()
+  // after initialise() on a restart. Nothing without short-range forces.
+  virtual std::vector<ShortRangeBirth> short_range_births() const { return {}; }
+  virtual void restore_short_range_births(const std::vector<ShortRangeBirth>& births) {
+    (void)births;
+  }
   // Bytes of the method's own per-particle and per-bond arrays (capacities; heap memory inside
   // material states not counted). 0 for a method that does not count them.
   virtual std::size_t memory_bytes() const { return 0; }

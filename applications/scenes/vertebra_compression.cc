@@ -201,6 +201,13 @@ class VertebraCompression : public Scenario {
           }
         } catch (NumericalFailure& f) {
           f.set_step(step, t);
+          // The curve's peak so far stays in summary.json (history.csv's last row goes under
+          // last_completed_step): a crush that fails late keeps what it measured.
+          if (loading_.nonlinear && step > 1) {
+            ctx.summary().set_figure("failure_load_kN", peak / 1e3, "kN");
+            ctx.summary().set_figure("displacement_at_peak_mm", peak_displacement * 1e3, "mm");
+            ctx.summary().set_figure("peak_step", peak_step, "-");
+          }
           throw;
         }
       }

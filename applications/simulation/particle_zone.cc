@@ -765,7 +765,7 @@ bool ParticleZone<dim>::advance_to(double time, const std::function<bool(double)
     z.relaxation_iterations += result.iterations;
     if (!result.converged)
       throw NumericalFailure("dynamic relaxation did not converge (relative residual " +
-                                 std::to_string(result.relative_residual) + ")",
+                                 significant(result.relative_residual) + ")",
                              "particle zone",
                              "raise Particles/Quasi-static/Maximum iterations "
                              "or take more, smaller steps");
@@ -793,12 +793,12 @@ bool ParticleZone<dim>::advance_to(double time, const std::function<bool(double)
     }
     for (const auto& v : z.particles.velocities())
       z.max_speed = std::max(z.max_speed, v.norm());
-    // A broken bond can stiffen a NOSB-PD family (its shape tensor shrinks), so the stable
-    // step may only get smaller after breaks (bond-based PD: its bound never falls).
-    // Distributed: every rank takes the step of the run (one reduction a step).
-    const bool broke =
-        z.partition ? dealii::Utilities::MPI::logical_or(z.broke_since_step_check > 0, z.comm)
-                    : z.broke_since_step_check > 0;
+    // A broken bond can stiffen a NOSB-PD family (its shape tensor shrinks), a short-range
+    // pair that engages adds a spring, so the stable step may only get smaller after either
+    // (bond-based PD: its bound never falls). Distributed: every rank takes the step of the run
+    // (one reduction a step).
+    const bool local = z.broke_since_step_check > 0 || z.method->stiffness_bound_stale();
+    const bool broke = z.partition ? dealii::Utilities::MPI::logical_or(local, z.comm) : local;
     if (broke) {
       z.dt_stable =
           std::min(z.dt_stable,
@@ -825,6 +825,13 @@ void ParticleZone<dim>::add_history(std::vector<std::pair<std::string, double>>&
   row.emplace_back("broken_bonds", (z.sum(z.owned_broken_ends()) - z.broken_initially) / 2);
   row.emplace_back("max_damage", z.max(max_damage));
   row.emplace_back("fragments", z.fragments().fragments);
+  if (const auto* contacts = z.method->short_range_contacts()) {
+    // Owned rows only (a distributed zone's ghosts are their owners' to count).
+    double n = 0;
+    for (unsigned int i = 0; i < z.n_owned() && i < contacts->size(); ++i)
+      n += (*contacts)[i];
+    row.emplace_back("short_range_contacts", z.sum(n));
+  }
   if (z.prm.reaction_region > 0) {
     const auto r = z.reaction();
     const char* names[] = {"particle_reaction_x", "particle_reaction_y", "particle_reaction_z"};

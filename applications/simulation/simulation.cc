@@ -584,13 +584,15 @@ void Simulation<dim>::coupled_explicit(unsigned int, double time, double, RunCon
   double t = mechanics_->time();
   if (coupled_dt_ == 0)
     coupled_dt_ = coupled_->stable_time_step();
-  // Finite strain: the crushed cells set the FEM's step, which shrinks as they deform.
-  const bool finite_strain = mech_prm_.kinematics != "small_strain";
+  // Finite strain: the crushed cells set the FEM's step, which shrinks as they deform;
+  // short-range pairs in contact stiffen the particles' (both renewed every step).
+  const bool renew_every_step =
+      mech_prm_.kinematics != "small_strain" || coupled_->has_short_range_forces();
   auto stop_here = mid_step_stop(ctx);
   while (t < time - 1e-12 * time) {
     if (stop_here(t))
       break; // the splice check below holds for the checkpoint of this state too
-    if (finite_strain)
+    if (renew_every_step)
       coupled_dt_ = coupled_->stable_time_step_fem_refreshed();
     check_time_step(coupled_dt_);
     coupled_->step(std::min(coupled_dt_, time - t));

@@ -132,6 +132,8 @@ void Simulation<dim>::record(unsigned int step, double time, RunContext& ctx) {
     row.emplace_back("free_particles", coupled_->n_free_particles());
     row.emplace_back("converted_cells", coupled_->n_converted_cells());
     row.emplace_back("broken_bonds", double(coupled_->n_broken_bonds()));
+    if (const auto contacts = coupled_->n_short_range_contacts())
+      row.emplace_back("short_range_contacts", double(*contacts));
     row.emplace_back("max_damage", coupled_->max_damage());
     row.emplace_back("kinetic_energy", coupled_->kinetic_energy());
     if (quasi_static_) {
@@ -262,6 +264,8 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
     s.set_figure("particle_laws", coupled_->n_particle_laws(), "-");
     s.set_figure("converted_cells", coupled_->n_converted_cells(), "-");
     s.set_figure("broken_bonds", double(coupled_->n_broken_bonds()), "-");
+    if (const auto contacts = coupled_->n_short_range_contacts())
+      s.set_figure("short_range_contacts", double(*contacts), "-");
     s.set_figure("max_damage", coupled_->max_damage(), "-");
     s.set_figure("explicit_steps", explicit_steps_, "iterations");
     // The particle method's own cost: its force passes (relaxation pseudo-steps included).

@@ -103,13 +103,12 @@ PDLinearSolver<dim>::solve(const BondBasedTangent<dim>& tangent, const ParticleS
     try {
       cg.solve(K, x, b, preconditioner);
     } catch (const SolverControl::NoConvergence& e) {
-      throw NumericalFailure("linear solver '" + prm_.solver + "' did not converge in " +
-                                 std::to_string(e.last_step) + " iterations (residual " +
-                                 std::to_string(e.last_residual / bnorm) + " of the initial)",
-                             "peridynamic tangent system (" + std::to_string(tangent.n_dofs()) +
-                                 " dofs)",
-                             "raise Max linear iterations, or use amg/mg; a singular system "
-                             "means a body part without Dirichlet support");
+      throw NumericalFailure(
+          "linear solver '" + prm_.solver + "' did not converge in " + std::to_string(e.last_step) +
+              " iterations (residual " + significant(e.last_residual / bnorm) + " of the initial)",
+          "peridynamic tangent system (" + std::to_string(tangent.n_dofs()) + " dofs)",
+          "raise Max linear iterations, or use amg/mg; a singular system "
+          "means a body part without Dirichlet support");
     }
     result.solve_seconds = seconds_since(t0);
   };

@@ -16,6 +16,8 @@ namespace {
 // First word of the material history in a checkpoint written with the fracture damage
 // ("NOSBHIS2"); earlier files start with the state count and hold one number fewer a state.
 constexpr std::uint64_t history_tag_with_fracture_damage = 0x3253494842534f4eULL;
+// Marks the short-range pairs born closer that follow the history ("NOSBSRB1").
+constexpr std::uint64_t short_range_births_tag = 0x3142525342534f4eULL;
 
 void write_state(std::ostream& out, const materials::MaterialState& s) {
   const auto v = materials::pack_state(s);
@@ -123,10 +125,23 @@ std::vector<double> NosbMethod<dim>::stiffness_bound(const ParticleSet<dim>& par
 }
 
 template <int dim>
+void NosbMethod<dim>::add_contact_bound(const ParticleSet<dim>& particles,
+                                        const BondList<dim>& bonds, std::vector<double>& S) const {
+  if (!pd_.short_range().enabled())
+    return;
+  std::vector<double> R(particles.size(), 0.0);
+  pd_.short_range().add_row_bound(particles, bonds, R);
+  for (unsigned int i = 0; i < R.size() && i < S.size(); ++i)
+    S[i] += R[i] / (2.0 * std::sqrt(double(dim)) * particles.volume(i)); // as stiffness_bound
+}
+
+template <int dim>
 double NosbMethod<dim>::stable_time_step(const ParticleSet<dim>& particles,
                                          const BondList<dim>& bonds, double safety) {
-  // Central differences: Δt ≤ 2/ω_max, Gershgorin on M⁻¹K with the family bound of R_i.
-  const std::vector<double> R = pd_.stiffness_row_bound(particles, bonds);
+  // Central differences: Δt ≤ 2/ω_max, Gershgorin on M⁻¹K with the family bound of R_i and
+  // the short-range pairs' rows.
+  std::vector<double> R = pd_.stiffness_row_bound(particles, bonds);
+  pd_.short_range().add_row_bound(particles, bonds, R);
   double dt = std::numeric_limits<double>::infinity();
   for (unsigned int i = 0; i < particles.size(); ++i) {
     if (!(particles.mass(i) > 0.0))
@@ -188,6 +203,19 @@ void NosbMethod<dim>::save(std::ostream& out) const {
   out.write(reinterpret_cast<const char*>(&n), sizeof(n));
   for (const auto& s : states)
     write_state(out, s);
+  // The short-range pairs born closer than their reference distance, when the forces are on.
+  if (pd_.short_range().enabled()) {
+    const auto births = pd_.short_range().births();
+    const std::uint64_t nb = births.size();
+    out.write(reinterpret_cast<const char*>(&short_range_births_tag),
+              sizeof(short_range_births_tag));
+    out.write(reinterpret_cast<const char*>(&nb), sizeof(nb));
+    for (const auto& b : births) {
+      const std::uint32_t ij[2] = {b.i, b.j};
+      out.write(reinterpret_cast<const char*>(ij), sizeof(ij));
+      out.write(reinterpret_cast<const char*>(&b.reach), sizeof(b.reach));
+    }
+  }
 }
 
 template <int dim>
@@ -207,6 +235,26 @@ void NosbMethod<dim>::load(std::istream& in) {
   if (!in)
     throw InvalidInput("NOSB-PD checkpoint", "truncated material history", "a complete checkpoint");
   pd_.set_committed_states(states);
+  if (pd_.short_range().enabled()) {
+    std::uint64_t tag = 0, nb = 0;
+    in.read(reinterpret_cast<char*>(&tag), sizeof(tag));
+    in.read(reinterpret_cast<char*>(&nb), sizeof(nb));
+    if (!in || tag != short_range_births_tag || nb > pd_.short_range().n_bonds())
+      throw InvalidInput("NOSB-PD checkpoint", "no short-range pairs after the material history",
+                         "a checkpoint written with the same Short-range forces setting");
+    std::vector<ShortRangeBirth> births(nb);
+    for (auto& b : births) {
+      std::uint32_t ij[2] = {0, 0};
+      in.read(reinterpret_cast<char*>(ij), sizeof(ij));
+      in.read(reinterpret_cast<char*>(&b.reach), sizeof(b.reach));
+      b.i = ij[0];
+      b.j = ij[1];
+      if (!in || !(b.reach > 0.0) || !std::isfinite(b.reach))
+        throw InvalidInput("NOSB-PD checkpoint", "truncated or damaged short-range pairs",
+                           "a complete checkpoint");
+    }
+    pd_.restore_short_range_births(births);
+  }
 }
 
 template <int dim>

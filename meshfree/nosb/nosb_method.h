@@ -54,6 +54,18 @@ class NosbMethod : public ParticleMethod<dim> {
   void save(std::ostream& out) const override;
   void load(std::istream& in) override;
   std::vector<std::string> take_messages() override { return pd_.take_messages(); }
+  const std::vector<unsigned int>* short_range_contacts() const override {
+    return pd_.short_range().enabled() ? &pd_.contacts() : nullptr;
+  }
+  void add_contact_bound(const ParticleSet<dim>& particles, const BondList<dim>& bonds,
+                         std::vector<double>& S) const override;
+  bool stiffness_bound_stale() const override { return pd_.short_range().bound_stale(); }
+  std::vector<ShortRangeBirth> short_range_births() const override {
+    return pd_.short_range().births();
+  }
+  void restore_short_range_births(const std::vector<ShortRangeBirth>& births) override {
+    pd_.restore_short_range_births(births);
+  }
   std::size_t memory_bytes() const override { return pd_.memory_bytes() + driven_.capacity(); }
   // A particle's force gathers the families of its neighbours (f_m = −Σ_e w_e P_e G_m).
   bool needs_neighbour_rows() const override { return true; }

@@ -40,6 +40,7 @@ void NosbParameters::declare(dealii::ParameterHandler& prm) {
   prm.declare_entry("Partial volume correction", "true", Bool(),
                     "Count only the share of a neighbour's volume inside the horizon [-].");
   prm.declare_entry("Thickness", "1", Double(0.0), "Out-of-plane thickness of a 2-D body [m].");
+  ShortRangeParameters::declare(prm);
 }
 
 NosbStabilization NosbParameters::stabilization_from_name(const std::string& name) {
@@ -75,6 +76,7 @@ void NosbParameters::parse(const dealii::ParameterHandler& prm) {
   max_condition_number = prm.get_double("Maximum shape tensor condition number");
   partial_volume_correction = prm.get_bool("Partial volume correction");
   thickness = prm.get_double("Thickness");
+  short_range.parse(prm);
   if (!(horizon_ratio > 1.0))
     throw InvalidInput("Horizon ratio", "= " + std::to_string(horizon_ratio),
                        "> 1 (the horizon must reach the nearest neighbours)");

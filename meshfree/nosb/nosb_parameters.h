@@ -4,6 +4,8 @@
 // The parameters of non-ordinary state-based peridynamics (meshfree/nosb/nosb_pd.h), the same
 // in 2-D and 3-D (NosbPD<dim>::Parameters).
 
+#include "meshfree/short_range_forces.h"
+
 #include <deal.II/base/parameter_handler.h>
 
 #include <string>
@@ -26,6 +28,7 @@ struct NosbParameters {
   double max_condition_number = 1e4;      // of K_i [-]
   bool partial_volume_correction = true;
   double thickness = 1.0; // 2-D out-of-plane thickness [m]
+  ShortRangeParameters short_range;
 
   static void declare(dealii::ParameterHandler& prm);
   void parse(const dealii::ParameterHandler& prm);

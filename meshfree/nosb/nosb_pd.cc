@@ -55,6 +55,7 @@ NosbPD<dim>::NosbPD(const Parameters& parameters,
                        "horizon ratio > 1, thickness > 0, critical stretch, Gc, critical plastic "
                        "strain, stabilization coefficient >= 0, condition number limit >= 1");
   modulus_ = calibration_modulus_of<dim>(*law_);
+  short_range_ = ShortRangeForces<dim>(prm_.short_range);
 }
 
 template <int dim>
@@ -150,6 +151,10 @@ void NosbPD<dim>::initialise(const ParticleSet<dim>& particles, const BondList<d
   }
   F_particle_.assign(particles.size(), dealii::unit_symmetric_tensor<dim>());
   update_families(particles, bonds);
+  // The contact springs take the bonds' micromoduli (a bond between materials their series
+  // mean, as the hourglass springs).
+  short_range_.initialise(
+      particles, bonds, [this](std::size_t k) { return bond_micromodulus(k); }, driven_);
 }
 
 template <int dim>
@@ -245,7 +250,24 @@ NosbPD<dim>::evaluate(unsigned int e, const dealii::Tensor<2, dim>& F,
         *trial = kept_share_of_work(r.state, old, kept);
     }
   } catch (const NumericalFailure& f) {
-    throw NumericalFailure(f.what_failed(), where(particles, i) + " (NOSB-PD family)",
+    // The family's state says whether the material had failed already (damage near its
+    // maximum: the crushed zone) or was still intact (a load step too large).
+    std::ostringstream state;
+    state << " (NOSB-PD family " << e << " of " << fam.n_families()
+          << "; committed state: equivalent plastic strain " << old.equivalent_plastic_strain
+          << ", stiffness damage " << law.stiffness_damage(old) << ", fracture share "
+          << old.fracture_damage;
+    // Within a relaxation the committed state is the last equilibrium's; the trial state
+    // holds the previous evaluation of this family (the law failed before overwriting it).
+    if (trial)
+      state << "; at its last evaluation: equivalent plastic strain "
+            << trial->equivalent_plastic_strain << ", stiffness damage "
+            << law.stiffness_damage(*trial);
+    if (i < F_particle_.size())
+      state << "; det F of the particle's own family at the last force evaluation "
+            << dealii::determinant(F_particle_[i]);
+    state << ")";
+    throw NumericalFailure(f.what_failed(), where(particles, i) + state.str(),
                            "det F <= 0: the load step is too large or particles interpenetrate; "
                            "use more load steps or a smaller time step");
   }
@@ -330,11 +352,20 @@ void NosbPD<dim>::compute_forces(ParticleSet<dim>& particles, const BondList<dim
       f[j] -= (si * kappa * V[i] * V[j]) * z;
     }
   }
+  short_range_.add_forces(particles, bonds, contacts_);
   for (unsigned int i = 0; i < particles.size(); ++i)
     for (unsigned int d = 0; d < dim; ++d)
       if (!std::isfinite(f[i][d]))
         throw NumericalFailure("non-finite NOSB-PD force", where(particles, i),
                                "check the displacements (NaN input) and the load step");
+}
+
+template <int dim>
+std::size_t NosbPD<dim>::n_contacts() const {
+  std::size_t n = 0;
+  for (unsigned int i = 0; i < contacts_.size() && i < first_ghost_; ++i)
+    n += contacts_[i];
+  return n;
 }
 
 template <int dim>
@@ -389,6 +420,7 @@ NosbPD<dim>::joint_reactions(const ParticleSet<dim>& particles, const BondList<d
       });
     }
   }
+  short_range_.add_reactions(particles, bonds, driven_, targets, counted, r);
   return r;
 }
 
@@ -556,6 +588,16 @@ void NosbPD<dim>::assemble_tangent(const ParticleSet<dim>& particles, const Bond
       add_family(fam, e);
     for (unsigned int i = 0; i < n; ++i)
       nodes.add(i, i); // every particle keeps a diagonal (failed ones get an identity row)
+    // Short-range contact couples the two ends of any bond, broken ones too.
+    if (short_range_.enabled())
+      for (unsigned int i = 0; i < bonds.n_particles(); ++i)
+        for_each_bond_of(bonds, i, [&](std::size_t k, unsigned int j) {
+          if (short_range_.spring(k) > 0.0) {
+            nodes.add(i, j);
+            nodes.add(j, i);
+            nodes.add(j, j);
+          }
+        });
     dealii::DynamicSparsityPattern dofs(n * dim, n * dim);
     for (unsigned int m = 0; m < n; ++m)
       for (auto it = nodes.begin(m); it != nodes.end(m); ++it)
@@ -639,6 +681,16 @@ void NosbPD<dim>::assemble_tangent(const ParticleSet<dim>& particles, const Bond
       for (const unsigned int m : node)
         local[m] = -1;
   }
+  short_range_.add_tangent(
+      particles, bonds, [&](unsigned int row, unsigned int col, const dealii::Tensor<2, dim>& K) {
+        for (unsigned int b = 0; b < dim; ++b)
+          cols[b] = col * dim + b;
+        for (unsigned int a = 0; a < dim; ++a) {
+          for (unsigned int b = 0; b < dim; ++b)
+            vals[b] = K[a][b];
+          matrix.add(row * dim + a, dim, cols.data(), vals, false, true);
+        }
+      });
 }
 
 template <int dim>
@@ -654,6 +706,9 @@ std::vector<double> NosbPD<dim>::stiffness_row_sums(const ParticleSet<dim>& part
       s += std::abs(it->value());
     R[row / dim] = std::max(R[row / dim], s);
   }
+  // The tangent holds the pairs in contact; the bound adds those about to engage (and those in
+  // contact once more: conservative) and records which pairs the step or masses account for.
+  short_range_.add_row_bound(particles, bonds, R);
   return R;
 }
 
@@ -826,7 +881,7 @@ double NosbPD<dim>::strain_energy(const ParticleSet<dim>& particles,
   const auto& fam = families();
   for (unsigned int e = 0; e < fam.n_families() && fam.centre(e) < first_ghost_; ++e)
     E += family_energy(e, particles, bonds); // families come in centre order: ghosts' last
-  return E;
+  return E + short_range_.energy(particles, bonds, first_ghost_);
 }
 
 template <int dim>
@@ -838,6 +893,7 @@ std::vector<double> NosbPD<dim>::strain_energy_density(const ParticleSet<dim>& p
     W[fam.centre(e)] += family_energy(e, particles, bonds);
   for (unsigned int i = 0; i < particles.size(); ++i)
     W[i] /= particles.volume(i);
+  short_range_.add_energy_density(particles, bonds, W);
   return W;
 }
 

@@ -58,6 +58,7 @@
 #include "meshfree/nosb/correspondence_families.h"
 #include "meshfree/nosb/nosb_parameters.h"
 #include "meshfree/particle_set.h"
+#include "meshfree/short_range_forces.h"
 
 #include <deal.II/base/parameter_handler.h>
 #include <deal.II/lac/sparse_matrix.h>
@@ -164,7 +165,8 @@ class NosbPD {
   // w_e A_e(G_m, G_p) bounded by the triangle inequality, Σ_p Σ_b |K_(m,a),(p,b)| ≤
   // w_e Σ_J |G_m,J| Σ_b Σ_L |A_aJbL| Σ_p |G_p,L|, summed over the families. O(family size) a
   // family instead of its square; the Gershgorin step from it is never larger than from R_i.
-  // The penalty stabilisation adds a bound of its own row sums (see the definition).
+  // The penalty stabilisation adds a bound of its own row sums (see the definition). Short-range
+  // contact is not in it (short_range().add_row_bound adds it); stiffness_row_sums has it.
   std::vector<double> stiffness_row_bound(const ParticleSet<dim>& particles,
                                           const BondList<dim>& bonds);
   // For AdaptiveDynamicRelaxation::solve: S_i with ½√dim S_i = ¼ R_i/V_i·safety (its fictitious
@@ -294,7 +296,16 @@ class NosbPD {
            particle_history_begin_.capacity() * sizeof(std::size_t) + driven_.capacity() +
            one_sided_bonds_.capacity() * sizeof(std::pair<unsigned int, std::size_t>) +
            (modulus_m_.capacity() + c_m_.capacity() + s0_m_.capacity() + c_bond_.capacity()) *
-               sizeof(double);
+               sizeof(double) +
+           short_range_.memory_bytes();
+  }
+  // Per particle, the bonds of its row in short-range contact at the last compute_forces
+  // (zeros when the forces are off), and their sum over the particles before the first ghost.
+  const std::vector<unsigned int>& contacts() const { return contacts_; }
+  std::size_t n_contacts() const;
+  const ShortRangeForces<dim>& short_range() const { return short_range_; }
+  void restore_short_range_births(const std::vector<ShortRangeBirth>& births) {
+    short_range_.restore_births(births);
   }
 
  private:
@@ -383,6 +394,10 @@ class NosbPD {
   // (row, bond) of the bonds whose partner has no bond row of its own, in bond order
   // (update_families): the pair forces of compute_forces that no row of the partner adds.
   std::vector<std::pair<unsigned int, std::size_t>> one_sided_bonds_;
+  // Repulsion of particles that close in (Parameters::short_range), part of the forces, the
+  // stored energy, the tangent and the stiffness bounds.
+  ShortRangeForces<dim> short_range_;
+  std::vector<unsigned int> contacts_;
   // Per bond k (i -> j), the index of j -> i (n_bonds: j holds no row here); built on demand
   // for the plastic-strain criterion with bond-associated families.
   std::vector<std::size_t> reverse_bond_;

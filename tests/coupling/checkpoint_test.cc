@@ -199,8 +199,8 @@ void damaged_checkpoint_is_invalid_input() {
   for (std::string token; header >> token;)
     counts.push_back(token);
   // time, particles, converted cells, broken, dissipation, heat, history, last force pass, laws,
-  // contact stick points
-  ASSERT_EQ(counts.size(), 10u);
+  // contact stick points, short-range pairs born closer
+  ASSERT_EQ(counts.size(), 11u);
   const std::size_t first_law = 2 + std::stoul(counts[2]);
   const std::size_t first_particle = first_law + std::stoul(counts[8]);
   ASSERT_GT(first_particle, first_law);

@@ -123,6 +123,50 @@ TEST(CheckpointText, Version1FileHasNoTotals) {
   EXPECT_TRUE(c.particles.empty());
 }
 
+// Version 9: the short-range pairs born closer (meshfree/short_range_forces.h) after the stick
+// points: (i, j, d) with i < j < particles and d > 0 (the fuzz corpus's seed of the same name).
+const std::string version9_2d = R"(spinesim_coupling 9
+3.7492107755358252e-05 4 2 0 0 0 2 0 2 2 2
+12_0: 0
+13_0: 0
+j2_plasticity 17000000000 0.25 1900 1000000 100000000 0 0 0 0 0.050000000000000003 0.90000000000000002 0
+j2_plasticity 110000000000 0.25 1900 1000000 100000000 0 0 0 0 0.050000000000000003 0.90000000000000002 0
+12_0: 0 1 0 0.015624999999999993 1900 0 0.3125 0.3125 3.6804245199903115e-05 0.26134705198791824 6.0664884461117579e-05 -0.058384507451835765 0 0 0 0 1625008359571.4294 0
+13_0: 0 1 0 0.015624999999999993 1900 0 0.4375 0.3125 6.8381368080629325e-05 1.0217023717342788 5.9386769112802238e-05 -0.071478644261720528 0 0 0 0 2537898629746.5396 0
+24_0: 0 1 0 0.015624999999999993 1900 0 0.5625 0.3125 7.84444461212221e-05 0.81036792544963177 6.0254169702474264e-05 0.076008005026730927 0 0 0 0 4807083766667.8574 1
+25_0: 0 1 0 0.015624999999999993 1900 0 0.6875 0.3125 7.8807977517515642e-05 0.17987137509010118 5.984704646659513e-05 0.13897768837976154 0 0 0 0 6086404514411.2178 1
+0 1 1.0899265367953415e-05 1.7422291323728375e-06 0 6.1761347315329132e-05 0 -7.2660612683282566e-05 1 0 0 1 0 1 8.2357049242151532e-05 82.921180047905096 0
+0 2 6.5870361013119099e-06 1.4608632906219152e-06 0 6.516274839800169e-05 0 -7.1749784499313608e-05 1 0 0 1 0 1 8.0934517137967385e-05 81.484908340715762 0
+0 1.5e-06 -2.5e-06
+2 0 3.0000000000000001e-06
+2 3 0.112
+0 3 0.2
+)";
+
+TEST(CheckpointText, Version9CarriesShortRangeBirths) {
+  const auto c = read(version9_2d);
+  EXPECT_EQ(c.version, 9);
+  ASSERT_EQ(c.sticks.size(), 2u);
+  ASSERT_EQ(c.births.size(), 2u);
+  EXPECT_EQ(c.births[0].i, 2u);
+  EXPECT_EQ(c.births[0].j, 3u);
+  EXPECT_EQ(c.births[0].reach, 0.112);
+  EXPECT_EQ(c.births[1].i, 0u);
+  EXPECT_EQ(c.births[1].reach, 0.2);
+  const auto replaced = [&](const std::string& from, const std::string& to) {
+    std::string t = version9_2d;
+    t.replace(t.rfind(from), from.size(), to);
+    return t;
+  };
+  EXPECT_THROW(read(replaced("2 3 0.112", "3 2 0.112")), InvalidInput); // i < j
+  EXPECT_THROW(read(replaced("2 3 0.112", "2 4 0.112")), InvalidInput); // j beyond the particles
+  EXPECT_THROW(read(replaced("0 3 0.2", "0 3 0")), InvalidInput);       // d > 0
+  EXPECT_THROW(read(replaced("0 3 0.2", "0 3 nan")), InvalidInput);
+  EXPECT_THROW(read(replaced("0 3 0.2\n", "")), InvalidInput); // the header counts two
+  // Read as version 8, the pairs are data after the last record.
+  EXPECT_THROW(read(replaced("spinesim_coupling 9", "spinesim_coupling 8")), InvalidInput);
+}
+
 TEST(CheckpointText, EditsSaveCannotWriteAreInvalidInput) {
   // Token positions in valid_2d(): 0 tag, 1 version, 2 time, 3-5 counts, 6-7 totals,
   // 8 history count, 9-10 converted cell, 11-23 particle 0, 24-36 particle 1, 37-38 bond,

@@ -26,7 +26,7 @@ void require(bool ok) {
 void check_accepted(const spinesim::coupling::CheckpointContents& c, unsigned int dim,
                     std::size_t size) {
   const std::size_t n = c.particles.size();
-  require(c.version >= 1 && c.version <= 8 && std::isfinite(c.time) && c.time >= 0);
+  require(c.version >= 1 && c.version <= 9 && std::isfinite(c.time) && c.time >= 0);
   require(std::isfinite(c.dissipation) && std::isfinite(c.heat));
   // The size bound: each number of a record takes at least two bytes.
   require(n * 2 * (7 + 3 * dim) <= size && c.broken.size() * 4 <= size);
@@ -63,6 +63,12 @@ void check_accepted(const spinesim::coupling::CheckpointContents& c, unsigned in
     for (unsigned int d = 0; d < 3; ++d)
       require(std::isfinite(point[d]) && (d < dim || point[d] == 0));
   }
+  // Short-range pairs born closer (version 9): particles the file holds, in order, a positive
+  // finite distance (ShortRangeForces::restore_births keys them by the pair).
+  require(c.births.empty() || c.version >= 9);
+  require(c.births.size() * 2 * 3 <= size);
+  for (const auto& b : c.births)
+    require(b.i < b.j && b.j < n && std::isfinite(b.reach) && b.reach > 0);
 }
 
 } // namespace

@@ -150,7 +150,7 @@ foreach(_case
     "fem_3d|${PROJECT_SOURCE_DIR}/applications/validation/taylor_impact_3d.prm|${_impact_fem}|Simulation/End time=6e-6|Geometry/Subdivisions=6, 6, 60"
     "particles_2d|${PROJECT_SOURCE_DIR}/applications/validation/ring_fragmentation.prm|Effects/Particles method=nosb|Simulation/Steps=3"
     "coupled_2d|${PROJECT_SOURCE_DIR}/applications/scenes/cracked_plate_coupled.prm|Simulation/Write VTU=false|Simulation/Steps=2|Simulation/Energy account=true"
-    "coupled_finite_strain_3d|${PROJECT_SOURCE_DIR}/applications/validation/taylor_impact_3d.prm|Coupling/All particles=true|Simulation/Write VTU=false|Simulation/End time=6e-6|Simulation/Steps=3"
+    "coupled_finite_strain_3d|${PROJECT_SOURCE_DIR}/applications/validation/taylor_impact_3d.prm|Coupling/All particles=true|Coupling/NOSB/Short-range forces=false|Simulation/Write VTU=false|Simulation/End time=6e-6|Simulation/Steps=3"
     "coupled_spg_2d|${PROJECT_SOURCE_DIR}/applications/scenes/cracked_plate_nosb.prm|Effects/Particles method=spg|Coupling/SPG/Critical stretch=7e-4|Coupling/Splice=energy|Coupling/Initial region lower corner=-0.5,-0.055|Coupling/Initial region upper corner=0.5,0.055|Simulation/Write VTU=false|Simulation/End time=1.2e-3|Simulation/Steps=2|Simulation/Energy account=true")
   string(REPLACE "|" ";" _parts "${_case}")
   list(POP_FRONT _parts _tag _scene)
@@ -161,6 +161,27 @@ foreach(_case
       "-DSET=${_set}" -P ${PROJECT_SOURCE_DIR}/tests/support/interrupt_case.cmake)
   set_tests_properties(hostile.interrupt_mid_step_${_tag} PROPERTIES LABELS "hostile;cli" TIMEOUT 300)
 endforeach()
+# (The 3-D impact with every cell a particle runs without the scene's short-range forces: they
+# keep its bonds longer and so its step (77 sub-steps in its three steps against 102), too few
+# for a look every 50 sub-steps to fall inside step 2.)
+# The plane-strain impact with its crushed cells converted and short-range forces on, stopped
+# inside step 4 of 4 (24-32 us; conversions from 23.3 us, so pairs born closer than their
+# reference distance are in the checkpoint, version 9) and restarted: the uninterrupted run's
+# history and figures to 1e-10. Not to the digit as the other cases: the restarted run's
+# reaction at the end of step 4 differs by 5e-13 relative and the FEM's interface work by
+# 5e-12 (-594.682027382 against -594.682027379 J measured; the conversion energy agrees to
+# 1.5e-14), a round-off difference not traced yet (without short-range forces it is not there). Figures below 1e-12
+# count as 0: the conversions' relative change of kinetic energy is round-off (3.0e-16
+# against 3.8e-16; stability.impact_coupled_nosb_2d bounds it by 1e-12).
+add_test(NAME hostile.interrupt_mid_step_coupled_short_range_2d
+  COMMAND ${CMAKE_COMMAND} -DSPINESIM=$<TARGET_FILE:spinesim>
+    -DSCENE=${PROJECT_SOURCE_DIR}/applications/validation/taylor_impact_plane_strain.prm
+    -DDIR=${_runs}/interrupt_mid_step_coupled_short_range_2d -DAFTER_ROWS=3 -DLAST_STEP=3
+    -DTOL=1e-10 -DHISTORY_TOL=1e-10 -DFLOOR=1e-12
+    "-DSET=Simulation/Write VTU=false|Simulation/End time=3.2e-5|Simulation/Steps=4"
+    -P ${PROJECT_SOURCE_DIR}/tests/support/interrupt_case.cmake)
+set_tests_properties(hostile.interrupt_mid_step_coupled_short_range_2d PROPERTIES
+  LABELS "hostile;cli" TIMEOUT 300)
 # Heat sources in flight: the plate that yields and turns its central cells into NOSB-PD
 # particles, with the heat equation on (coupling.plastic_heat_nosb_2d), stopped after step 2
 # of 4. The step's FEM and particle plastic heat is handed on to the next heat step; the

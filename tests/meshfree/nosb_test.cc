@@ -7,6 +7,7 @@
 #include "meshfree/neighbor_search.h"
 #include "meshfree/nosb/nosb_pd.h"
 #include "meshfree/nosb/nosb_quasi_static.h"
+#include "meshfree/short_range_forces.h"
 #include "meshfree/velocity_verlet.h"
 #include "meshfree_test_util.h"
 
@@ -18,6 +19,7 @@
 
 #include <cmath>
 #include <memory>
+#include <numeric>
 #include <random>
 
 namespace spinesim::meshfree {
@@ -931,6 +933,267 @@ TEST(Nosb, PlasticStrainBreaks2D) {
 TEST(Nosb, PlasticStrainBreaks3D) {
   check_plastic_strain_breaking<3>(Stab::penalty);
   check_plastic_strain_breaking<3>(Stab::bond_associated);
+}
+
+// --- short-range forces ---------------------------------------------------------------------
+
+template <int dim>
+void crush(ParticleSet<dim>& p, double lambda, double amplitude, unsigned int seed);
+
+// A body with Short-range forces on or off, otherwise make_body's; its model first sees the
+// particles crushed to `born_at` along x (1: the reference configuration).
+template <int dim>
+Body<dim> make_contact_body(unsigned int n, Stab stab, bool on, double born_at = 1.0) {
+  unsigned int cells[dim];
+  for (unsigned int d = 0; d < dim; ++d)
+    cells[d] = n;
+  Body<dim> b{test::box<dim>(cells, h), {}, nullptr, {}};
+  for (unsigned int d = 0; d < dim; ++d)
+    b.L[d] = cells[d] * h;
+  b.particles.set_density(rho);
+  NosbParameters prm;
+  prm.horizon_ratio = dim == 2 ? 3.015 : 2.015;
+  prm.stabilization = cast<dim>(stab);
+  prm.short_range.enabled = on;
+  b.model =
+      std::make_unique<NosbPD<dim>>(prm, std::make_shared<materials::LinearElastic>(E, nu, rho));
+  b.bonds = NeighborSearch<dim>(b.model->neighbor_options(h)).build(b.particles);
+  if (born_at != 1.0)
+    crush(b.particles, born_at, 0.0, 1);
+  b.model->initialise(b.particles, b.bonds);
+  return b;
+}
+
+// Compressed to λ along x, plus a random part of ±amplitude·h. At λ = 0.7 the pairs next to
+// their contact distance d = min(0.9|ξ|, 1.35h) sit at least 0.05h from it (the nearest, the
+// (1, 1) diagonal at 1.22h against 1.27h), more than the random part moves a pair (±0.02h·√dim),
+// so every pair stays on its side of the kink where the force's slope jumps.
+template <int dim>
+void crush(ParticleSet<dim>& p, double lambda, double amplitude, unsigned int seed) {
+  Tens<dim> F = dealii::unit_symmetric_tensor<dim>();
+  F[0][0] = lambda;
+  set_homogeneous(p, F);
+  std::mt19937 gen(seed);
+  std::uniform_real_distribution<double> U(-amplitude * h, amplitude * h);
+  for (unsigned int i = 0; i < p.size(); ++i)
+    for (unsigned int d = 0; d < dim; ++d)
+      p.displacement(i)[d] += U(gen);
+}
+
+// The repulsion alone (ShortRangeForces on a NOSB model's bonds): momentum, the energy it is
+// the gradient of, and the partners without a row of their own (a coupled run's driven
+// particles beyond the rows kept), whose forces come from their partners' rows.
+template <int dim>
+void check_short_range_gradient(bool all_rows) {
+  auto b = make_contact_body<dim>(dim == 2 ? 8 : 5, Stab::bond_associated, true);
+  auto bonds = b.bonds;
+  if (!all_rows)
+    bonds.keep_rows(b.particles.size() / 2);
+  // Pairs born at the reference configuration, then crushed.
+  ShortRangeForces<dim> contact(ShortRangeParameters{true, 15.0, 0.9, 1.35});
+  contact.initialise(b.particles, bonds, [](std::size_t) { return 1e9; }, {});
+  crush(b.particles, 0.7, 0.01, 11);
+  for (auto& f : b.particles.forces())
+    f = dealii::Tensor<1, dim>();
+  std::vector<unsigned int> contacts;
+  contact.add_forces(b.particles, bonds, contacts);
+  EXPECT_GT(std::accumulate(contacts.begin(), contacts.end(), 0u), 0u);
+  const auto f = b.particles.forces();
+  dealii::Tensor<1, dim> total;
+  double sum_abs = 0;
+  for (const auto& fi : f) {
+    total += fi;
+    sum_abs += fi.norm();
+  }
+  // Pair forces cancel in pairs: round-off of the sum.
+  EXPECT_LT(total.norm(), 1e-13 * sum_abs);
+  EXPECT_GT(sum_abs, 0.0);
+  // f = −∂E/∂u at every dof (E quadratic in the gap, central differences exact up to round-off
+  // ~1e-16 E/eps, far below 1e-6 of the largest force).
+  const double eps = 1e-7 * h;
+  double max_err = 0, max_f = 0;
+  for (unsigned int i = 0; i < b.particles.size(); ++i)
+    for (unsigned int d = 0; d < dim; ++d) {
+      auto& u = b.particles.displacement(i)[d];
+      const double u0 = u;
+      u = u0 + eps;
+      const double ep = contact.energy(b.particles, bonds, ~0u);
+      u = u0 - eps;
+      const double em = contact.energy(b.particles, bonds, ~0u);
+      u = u0;
+      max_err = std::max(max_err, std::abs(-(ep - em) / (2 * eps) - f[i][d]));
+      max_f = std::max(max_f, std::abs(f[i][d]));
+    }
+  EXPECT_LT(max_err, 1e-6 * max_f) << (all_rows ? "all rows" : "half the rows");
+  // The densities add up to the total.
+  std::vector<double> W(b.particles.size(), 0.0);
+  contact.add_energy_density(b.particles, bonds, W);
+  double sum = 0;
+  for (unsigned int i = 0; i < W.size(); ++i)
+    sum += W[i] * b.particles.volume(i);
+  const double E_c = contact.energy(b.particles, bonds, ~0u);
+  EXPECT_GT(E_c, 0.0);
+  EXPECT_NEAR(sum, E_c, 1e-12 * E_c);
+}
+TEST(Nosb, ShortRangeForcesAreTheEnergyGradient2D) {
+  check_short_range_gradient<2>(true);
+  check_short_range_gradient<2>(false);
+}
+TEST(Nosb, ShortRangeForcesAreTheEnergyGradient3D) {
+  check_short_range_gradient<3>(true);
+  check_short_range_gradient<3>(false);
+}
+
+// In the model: nothing changes until a pair comes within its contact distance (a body
+// compressed by 5 % gives the same forces bit for bit); crushed by 30 %, the repulsion adds to
+// the forces, the stored energy and the tangent (checked against central differences).
+template <int dim>
+void check_short_range_in_model(Stab s) {
+  auto on = make_contact_body<dim>(dim == 2 ? 7 : 5, s, true);
+  auto off = make_contact_body<dim>(dim == 2 ? 7 : 5, s, false);
+  for (auto* b : {&on, &off})
+    crush(b->particles, 0.95, 0.005, 3);
+  on.model->compute_forces(on.particles, on.bonds);
+  off.model->compute_forces(off.particles, off.bonds);
+  EXPECT_EQ(on.model->n_contacts(), 0u);
+  for (unsigned int i = 0; i < on.particles.size(); ++i)
+    ASSERT_EQ(on.particles.force(i), off.particles.force(i)) << "particle " << i;
+  EXPECT_EQ(on.model->strain_energy(on.particles, on.bonds),
+            off.model->strain_energy(off.particles, off.bonds));
+
+  for (auto* b : {&on, &off})
+    crush(b->particles, 0.7, 0.01, 5);
+  on.model->compute_forces(on.particles, on.bonds);
+  off.model->compute_forces(off.particles, off.bonds);
+  EXPECT_GT(on.model->n_contacts(), 0u);
+  const double E_c = on.model->strain_energy(on.particles, on.bonds) -
+                     off.model->strain_energy(off.particles, off.bonds);
+  EXPECT_NEAR(E_c, on.model->short_range().energy(on.particles, on.bonds, ~0u), 1e-9 * E_c);
+  EXPECT_GT(E_c, 0.0);
+
+  dealii::SparsityPattern pattern;
+  dealii::SparseMatrix<double> K;
+  on.model->assemble_tangent(on.particles, on.bonds, pattern, K);
+  const unsigned int n = on.particles.size() * dim;
+  const double eps = 1e-6 * h;
+  double max_err = 0, max_entry = 0;
+  for (unsigned int col = 0; col < n; col += (dim == 2 ? 1 : 3)) {
+    auto& u = on.particles.displacement(col / dim)[col % dim];
+    const double u0 = u;
+    u = u0 + eps;
+    on.model->compute_forces(on.particles, on.bonds);
+    const auto fp = on.particles.forces();
+    u = u0 - eps;
+    on.model->compute_forces(on.particles, on.bonds);
+    const auto fm = on.particles.forces();
+    u = u0;
+    for (unsigned int row = 0; row < n; ++row) {
+      const double fd = -(fp[row / dim][row % dim] - fm[row / dim][row % dim]) / (2 * eps);
+      const double k = K.el(row, col);
+      max_err = std::max(max_err, std::abs(fd - k));
+      max_entry = std::max(max_entry, std::abs(k));
+    }
+  }
+  // As the family tangent test (check_tangent): central differences within 1e-6 of the largest
+  // entry; a missing contact block would be off by k, about the largest entry itself.
+  EXPECT_LT(max_err, 1e-6 * max_entry) << NosbParameters::name(cast<dim>(s));
+}
+TEST(Nosb, ShortRangeForcesInTheModel2D) {
+  for (auto s : all_stabs)
+    check_short_range_in_model<2>(s);
+}
+TEST(Nosb, ShortRangeForcesInTheModel3D) {
+  for (auto s : all_stabs)
+    check_short_range_in_model<3>(s);
+}
+
+// Released from a 25 % crush, the body springs back through its contacts: with the contact
+// springs in the stable step, velocity Verlet keeps the energy (bounded, O(dt²) error), as
+// for the families alone (check_energy_conservation).
+template <int dim>
+void check_short_range_energy() {
+  auto run = [&](double fraction, unsigned int steps_of_stable) {
+    auto b = make_contact_body<dim>(dim == 2 ? 10 : 5, Stab::bond_associated, true);
+    crush(b.particles, 0.75, 0.0, 1);
+    b.model->compute_forces(b.particles, b.bonds);
+    const std::size_t pairs0 = b.model->n_contacts();
+    const double dt_s = b.model->stable_time_step(b.particles, b.bonds, 1.0);
+    const double dt = fraction * dt_s;
+    VelocityVerlet<dim> vv(b.model->force_function(b.bonds));
+    vv.initialise(b.particles);
+    const double e0 = total_energy(b);
+    double max_dev = 0;
+    std::size_t fewest = pairs0;
+    const unsigned int n = static_cast<unsigned int>(std::ceil(steps_of_stable / fraction));
+    for (unsigned int k = 1; k <= n; ++k) {
+      vv.step(b.particles, dt);
+      fewest = std::min(fewest, b.model->n_contacts());
+      if (k % 5 == 0)
+        max_dev = std::max(max_dev, std::abs(total_energy(b) - e0));
+    }
+    EXPECT_GT(pairs0, 0u);
+    EXPECT_LT(fewest, pairs0); // the body expands: contacts open
+    return max_dev / e0;
+  };
+  const unsigned int steps = dim == 2 ? 100 : 50;
+  const double d1 = run(0.25, steps), d2 = run(0.125, steps);
+  std::cout << dim << "-D short-range: energy deviation " << d1 << " (dt_s/4), " << d2
+            << " (dt_s/8)\n";
+  // O(dt²): a quarter when the step halves; the contacts opening at the kink of the force
+  // (a jump in its slope) add a first-order part, hence 0.35 rather than the 0.3 above.
+  EXPECT_LT(d2, 0.35 * d1);
+  EXPECT_LT(d1, 0.02);
+}
+TEST(Nosb, ShortRangeForcesKeepTheEnergy2D) {
+  check_short_range_energy<2>();
+}
+TEST(Nosb, ShortRangeForcesKeepTheEnergy3D) {
+  check_short_range_energy<3>();
+}
+
+// Particles born deformed (a conversion of crushed cells): initialised at a 30 % crush, no pair
+// is in contact yet and the forces are the families' alone, bit for bit; crushed to 40 %, the
+// pairs that closed another tenth push apart. Initialised again (appended particles elsewhere),
+// the pairs keep their distances; a restart's model, initialised at the crushed state and given
+// the checkpoint's births, gives the same forces bit for bit.
+template <int dim>
+void check_short_range_births() {
+  auto on = make_contact_body<dim>(dim == 2 ? 8 : 5, Stab::bond_associated, true, 0.7);
+  auto off = make_contact_body<dim>(dim == 2 ? 8 : 5, Stab::bond_associated, false, 0.7);
+  for (auto* b : {&on, &off})
+    b->model->compute_forces(b->particles, b->bonds);
+  EXPECT_EQ(on.model->n_contacts(), 0u);
+  for (unsigned int i = 0; i < on.particles.size(); ++i)
+    ASSERT_EQ(on.particles.force(i), off.particles.force(i)) << "particle " << i;
+  const auto births = on.model->short_range().births();
+  EXPECT_GT(births.size(), 0u);
+
+  crush(on.particles, 0.6, 0.0, 1);
+  on.model->compute_forces(on.particles, on.bonds);
+  const std::size_t contacts = on.model->n_contacts();
+  EXPECT_GT(contacts, 0u);
+  const auto f = on.particles.forces();
+
+  on.model->initialise(on.particles, on.bonds);
+  on.model->compute_forces(on.particles, on.bonds);
+  EXPECT_EQ(on.model->n_contacts(), contacts);
+  for (unsigned int i = 0; i < f.size(); ++i)
+    ASSERT_EQ(on.particles.force(i), f[i]) << "particle " << i << " after initialise";
+
+  auto restarted = make_contact_body<dim>(dim == 2 ? 8 : 5, Stab::bond_associated, true, 0.6);
+  restarted.model->compute_forces(restarted.particles, restarted.bonds);
+  EXPECT_EQ(restarted.model->n_contacts(), 0u); // born here without the checkpoint's births
+  restarted.model->restore_short_range_births(births);
+  restarted.model->compute_forces(restarted.particles, restarted.bonds);
+  EXPECT_EQ(restarted.model->n_contacts(), contacts);
+  for (unsigned int i = 0; i < f.size(); ++i)
+    ASSERT_EQ(restarted.particles.force(i), f[i]) << "particle " << i << " after the restart";
+}
+TEST(Nosb, ShortRangeForcesBornDeformed2D) {
+  check_short_range_births<2>();
+}
+TEST(Nosb, ShortRangeForcesBornDeformed3D) {
+  check_short_range_births<3>();
 }
 
 } // namespace

@@ -57,6 +57,16 @@ spinesim_add_scene_test(scene.vertebra_compression_nonlinear SCENE ${_vertebra}
       "Loading/Steps=12"
   EXPECT "status==ok;failure_load_kN>=1.0;failure_load_kN<=6.0;yield_load_0_2_offset_kN>=1.0;first_step_plastic_volume_fraction<=0"
   LABELS "scene;fem" TIMEOUT 300)
+# The same crush allowed 3 Newton iterations without step cuts fails where the bone yields
+# (measured: step 2; the elastic first step converges in 2). The failed run keeps its curve so
+# far: the peak (the first step's 0.57 kN; the elastic first step of the run above carries
+# a quarter to a third of its 2.1 kN at 0.6 mm: bound 0.3 kN) and history's last row.
+spinesim_add_scene_test(scene.vertebra_compression_failed_keeps_peak SCENE ${_vertebra}
+  SET "CT/Coarsening factor=3" "Loading/Nonlinear=true" "Loading/Axial displacement=0.6"
+      "Loading/Steps=12" "Mechanics/Max Newton iterations=3" "Mechanics/Max load step cuts=0"
+  EXIT 1 MATCH "Newton did not converge in 3 iterations.*when:  step [2-9]"
+  EXPECT "status==failed;failure_load_kN>=0.3;peak_step>=1;last_completed_step.reaction_force_N>=300"
+  LABELS "scene;fem;stability" TIMEOUT 300)
 # To failure: with Effects/Damage the bone softens past 0.6 % plastic strain (j2_damage), so the
 # reaction has a true peak inside the loading and falls after it (0.8 mm in 16 steps, ~20 s).
 # Required: the peak before the end of the loading and the force after it at least 10 % below

@@ -9,6 +9,8 @@
 # RANKS, MPIEXEC (optional): all three runs on RANKS MPI ranks; the signal goes to every rank's
 # process, as a batch system's time limit sends it to every task.
 # HISTORY_TOL (optional): history values may differ by this relative amount (default: not at all).
+# FLOOR (optional): summary figures below this magnitude in both runs count as 0 (default 0: none;
+# for figures that measure round-off, as a conversion's relative change of kinetic energy).
 # SIGNAL (optional): TERM (default) or INT, as Ctrl-C sends it; the run exits 128 + the
 # signal's number (143, 130).
 # REFERENCE (optional): the directory of a finished uninterrupted run of the same scene and
@@ -119,8 +121,12 @@ if(DEFINED LAST_STEP AND NOT _log MATCHES "interrupted by SIG${SIGNAL} inside st
 endif()
 
 # Figures: compare_summaries (timings and iteration counts aside) to TOL.
+set(_floor 0)
+if(DEFINED FLOOR)
+  set(_floor ${FLOOR})
+endif()
 execute_process(COMMAND ${CMAKE_COMMAND} -DA=${DIR}/reference/summary.json
-                        -DB=${DIR}/run/summary.json -DTOL=${TOL} -DFLOOR=0
+                        -DB=${DIR}/run/summary.json -DTOL=${TOL} -DFLOOR=${_floor}
                         -P ${CMAKE_CURRENT_LIST_DIR}/compare_summaries.cmake
                 RESULT_VARIABLE _rc OUTPUT_VARIABLE _o ERROR_VARIABLE _e)
 if(NOT _rc EQUAL 0)
