@@ -161,6 +161,10 @@ foreach(_case
       "-DSET=${_set}" -P ${PROJECT_SOURCE_DIR}/tests/support/interrupt_case.cmake)
   set_tests_properties(hostile.interrupt_mid_step_${_tag} PROPERTIES LABELS "hostile;cli" TIMEOUT 300)
 endforeach()
+# Labelled long: the FEM in 3-D (the 2-D FEM case and the 3-D particles in finite strain take
+# the same paths) and the ring under SIGTERM (the same ring is stopped by SIGINT below).
+set_property(TEST hostile.interrupt_mid_step_fem_3d hostile.interrupt_mid_step_particles_2d
+             APPEND PROPERTY LABELS long)
 # (The 3-D impact with every cell a particle runs without the scene's short-range forces: they
 # keep its bonds longer and so its step (77 sub-steps in its three steps against 102), too few
 # for a look every 50 sub-steps to fall inside step 2.)
@@ -180,8 +184,10 @@ add_test(NAME hostile.interrupt_mid_step_coupled_short_range_2d
     -DTOL=1e-10 -DHISTORY_TOL=1e-10 -DFLOOR=1e-12
     "-DSET=Simulation/Write VTU=false|Simulation/End time=3.2e-5|Simulation/Steps=4"
     -P ${PROJECT_SOURCE_DIR}/tests/support/interrupt_case.cmake)
+# Labelled long (56 s): the pairs' births round-trip through the checkpoint in
+# CheckpointText.Version9CarriesShortRangeBirths and the fuzz seed version9_2d_short_range_births.
 set_tests_properties(hostile.interrupt_mid_step_coupled_short_range_2d PROPERTIES
-  LABELS "hostile;cli" TIMEOUT 300)
+  LABELS "hostile;cli;long" TIMEOUT 300)
 # Heat sources in flight: the plate that yields and turns its central cells into NOSB-PD
 # particles, with the heat equation on (coupling.plastic_heat_nosb_2d), stopped after step 2
 # of 4. The step's FEM and particle plastic heat is handed on to the next heat step; the

@@ -183,20 +183,24 @@ spinesim_add_summaries_match_test(implants.screw_pullout_particles_in_checkpoint
 # cells they replace, see docs/implants.md); the force falls to 579.4 N by step 9 at 0.29 mm
 # (the FEM falls below 600 N at 0.34 mm), with 832 particles and no bond broken. The coupled body's
 # force balance reads 1.4e-2 at most (bound 3e-2, twice that); the unbalanced force, 50-61 N
-# of 580-860 N, is reported. About 5 minutes on one core.
+# of 580-860 N, is reported. About 7 minutes on one core, a quarter of the default suite's
+# time on two cores: labelled long. The default run keeps the particles next to the screw
+# through step 7 with contact (implants.screw_pullout_particles_contact, below) and the FEM's
+# peak passed (implants.screw_pullout_quick).
 spinesim_add_scene_test(implants.screw_pullout_particles_past_peak SCENE ${_screw}
   OUT ${_screw_runs}/particles_past_peak SET ${_screw_quick} ${_screw_particles}
   EXPECT "status==ok;peak_passed>=1;chapman_ratio>=0.65;chapman_ratio<=2.0;free_particles>=100;virial_imbalance_relative_max<=0.03"
-  LABELS "scene;implants;coupling" FIXTURE screw_particles_past_peak)
+  LABELS "scene;implants;coupling;long" FIXTURE screw_particles_past_peak TIMEOUT 1800)
 spinesim_add_scene_test(implants.screw_pullout_particles_fem_past_peak SCENE ${_screw}
   OUT ${_screw_runs}/particles_fem_past_peak SET ${_screw_quick} "Block/Depth=16"
-  EXPECT "status==ok;peak_passed>=1" LABELS "scene;implants" FIXTURE screw_particles_fem_past_peak)
+  EXPECT "status==ok;peak_passed>=1" LABELS "scene;implants;long"
+  FIXTURE screw_particles_fem_past_peak)
 spinesim_add_comparison_test(implants.screw_pullout_particles_peak_as_the_fem
   A ${_screw_runs}/particles_past_peak/summary.json
   B ${_screw_runs}/particles_fem_past_peak/summary.json
   CHECKS "peak_pullout_force_N:rel:0.05"
   REQUIRES "screw_particles_past_peak;screw_particles_fem_past_peak"
-  LABELS "scene;implants;coupling")
+  LABELS "scene;implants;coupling;long")
 
 # Contact of the particles with the screw's true surface (Effects/Contact; coupling/
 # implant_contact.h), beside the joint's bonds: the threads' flanks bear on the failed foam
@@ -245,18 +249,20 @@ spinesim_add_summaries_match_test(implants.screw_pullout_particles_contact_resta
 # in another batch when the summation order differs. Measured: 67 cells (536 particles) on
 # two ranks against 70 (560) on one, and the force 670.6 against 677.1 N (9.6e-3); through
 # step 8 both reach the same 86 cells, the force 656.9 against 672.0 N (2.3 %). Bounds: the
-# force 3 %; the cells 10 %, a few cells at the threshold moving to the next step.
+# force 3 %; the cells 10 %, a few cells at the threshold moving to the next step. The 2-rank
+# run holds both cores for 75 s: labelled long; the default run keeps the screw's FEM on two
+# ranks (implants.screw_pullout_quick_2ranks, implants.vertebra_screw_pullout_quick_2ranks).
 spinesim_add_scene_test(implants.screw_pullout_particles_contact_2ranks SCENE ${_screw}
   OUT ${_screw_runs}/particles_contact_2ranks RANKS 2 SET ${_screw_contact}
       "Pullout/Stop after step=7"
-  EXPECT "status==ok;load_steps~7:0;contact_pairs>=1" LABELS "scene;implants;coupling;mpi"
+  EXPECT "status==ok;load_steps~7:0;contact_pairs>=1" LABELS "scene;implants;coupling;mpi;long"
   FIXTURE screw_particles_contact_2ranks)
 spinesim_add_comparison_test(implants.screw_pullout_particles_ranks_agree
   A ${_screw_runs}/particles_contact/summary.json
   B ${_screw_runs}/particles_contact_2ranks/summary.json
   CHECKS "peak_pullout_force_N:rel:0.01;final_force_N:rel:0.03;converted_cells:rel:0.1"
   REQUIRES "screw_particles_contact;screw_particles_contact_2ranks"
-  LABELS "scene;implants;coupling;mpi")
+  LABELS "scene;implants;coupling;mpi;long")
 
 # The same with contact past the peak: after a plateau of 650-656 N from 0.290 to 0.305 mm
 # the force falls (627 N at 0.309 mm, 553 N at 0.314 mm) and passes the stop criterion's 30 %
