@@ -212,6 +212,65 @@ CorrespondenceFamilies<dim>::deformation_gradient(unsigned int e, const std::vec
   return F;
 }
 
+// The two loops over every member of every bond-associated family (about 60 of each particle's
+// ~120 families in 3-D) are most of a NOSB force pass: compiled also for x86-64-v3 (AVX2) and
+// x86-64-v4 (AVX-512), chosen at load time by the CPU. Their sums run in the same order in
+// every version and this file is compiled without contraction into fused multiply-adds
+// (meshfree/CMakeLists.txt), so each gives the same results to the bit.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define SPINESIM_FAMILY_KERNEL                                                                     \
+  __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+#else
+#define SPINESIM_FAMILY_KERNEL
+#endif
+
+template <int dim>
+SPINESIM_FAMILY_KERNEL void CorrespondenceFamilies<dim>::particle_deformation_gradients(
+    unsigned int i, const std::vector<Vec>& u, Mat* F) const {
+  // Each product u_n ⊗ ω_n V_n ξ_n is formed once for i's families and rounded once, as
+  // deformation_gradient(e, u) forms it, and each family sums its members in that order.
+  const std::size_t b0 = bond_offsets_[i], nb = bond_offsets_[i + 1] - b0;
+  thread_local std::vector<Mat> products;
+  products.resize(nb);
+  for (std::size_t s = 0; s < nb; ++s) {
+    const Vec& un = u[bond_node_[b0 + s]];
+    const Vec& m = bond_moment_[b0 + s];
+    for (unsigned int a = 0; a < dim; ++a)
+      for (unsigned int c = 0; c < dim; ++c)
+        products[s][a][c] = un[a] * m[c];
+  }
+  for (unsigned int e = family_begin_[i]; e < family_begin_[i + 1]; ++e) {
+    Mat A = -dealii::outer_product(u[i], moment_[e]);
+    for_each_member(e, nb, [&](std::size_t s) {
+      const Mat& p = products[s];
+      for (unsigned int a = 0; a < dim; ++a)
+        for (unsigned int c = 0; c < dim; ++c)
+          A[a][c] += p[a][c];
+    });
+    Mat Fe = A * dealii::transpose(inverse_shape_[e]);
+    for (unsigned int d = 0; d < dim; ++d)
+      Fe[d][d] += 1.0;
+    F[e - family_begin_[i]] = Fe;
+  }
+}
+
+template <int dim>
+SPINESIM_FAMILY_KERNEL dealii::Tensor<1, dim>
+CorrespondenceFamilies<dim>::gather_bond_forces(unsigned int i, const std::vector<Mat>& P) const {
+  const std::size_t b0 = bond_offsets_[i], nb = bond_offsets_[i + 1] - b0;
+  thread_local std::vector<Mat> sum;
+  sum.assign(nb, Mat());
+  Vec fi;
+  for (unsigned int e = family_begin_[i]; e < family_begin_[i + 1]; ++e) {
+    const Mat q = weight_[e] * (P[e] * inverse_shape_[e]);
+    fi += q * moment_[e];
+    for_each_member(e, nb, [&](std::size_t slot) { sum[slot] += q; });
+  }
+  for (std::size_t s = 0; s < nb; ++s)
+    bond_force_[b0 + s] = sum[s] * bond_moment_[b0 + s];
+  return fi;
+}
+
 template <int dim>
 void CorrespondenceFamilies<dim>::gather_forces(const std::vector<Mat>& P, std::vector<Vec>& f,
                                                 long parallel_threshold) const {
@@ -239,20 +298,8 @@ void CorrespondenceFamilies<dim>::gather_forces(const std::vector<Mat>& P, std::
   // t_k = [Σ_e Q_e] ω_k V_n ξ_k over the families of i that hold it (about half of them);
   // then each particle takes away the t of the bonds ending on it, in bond order.
   bond_force_.resize(bond_moment_.size());
-  parallel_for_rethrow(n, parallel_threshold, [&](long i) {
-    const std::size_t b0 = bond_offsets_[i], nb = bond_offsets_[i + 1] - b0;
-    thread_local std::vector<Mat> sum;
-    sum.assign(nb, Mat());
-    Vec fi;
-    for (unsigned int e = family_begin_[i]; e < family_begin_[i + 1]; ++e) {
-      const Mat q = weight_[e] * (P[e] * inverse_shape_[e]);
-      fi += q * moment_[e];
-      for_each_member(e, nb, [&](std::size_t slot) { sum[slot] += q; });
-    }
-    for (std::size_t s = 0; s < nb; ++s)
-      bond_force_[b0 + s] = sum[s] * bond_moment_[b0 + s];
-    f[i] = fi;
-  });
+  parallel_for_rethrow(n, parallel_threshold,
+                       [&](long i) { f[i] = gather_bond_forces(static_cast<unsigned int>(i), P); });
   parallel_for_rethrow(n, parallel_threshold, [&](long m) {
     for (std::size_t t = incoming_offsets_[m]; t < incoming_offsets_[m + 1]; ++t)
       f[m] -= bond_force_[incoming_[t]];

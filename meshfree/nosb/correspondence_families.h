@@ -29,6 +29,7 @@
 // it that hold it), in a fixed order: the same sums on any number of threads.
 
 #include "meshfree/bond_list.h"
+#include "meshfree/bond_loop.h"
 #include "meshfree/particle_set.h"
 
 #include <deal.II/base/tensor.h>
@@ -80,6 +81,31 @@ class CorrespondenceFamilies {
 
   // F_e from the displacements.
   Mat deformation_gradient(unsigned int e, const std::vector<Vec>& u) const;
+  // visit(e, F_e) for every family whose centre wanted(c) accepts, F_e as
+  // deformation_gradient(e, u) gives it, bit for bit. Per particle: its families on one thread
+  // in order, threaded above `parallel_threshold` particles; the exception of the lowest
+  // particle is rethrown. A particle's bond-associated families share its bonds, so each bond's
+  // u_n ⊗ ω V ξ is formed once per particle, not once per family holding it (about half).
+  template <class Wanted, class Visit>
+  void for_each_deformation_gradient(const std::vector<Vec>& u, long parallel_threshold,
+                                     Wanted&& wanted, Visit&& visit) const {
+    const long n = static_cast<long>(family_begin_.size()) - 1;
+    parallel_for_rethrow(n, parallel_threshold, [&](long i) {
+      const unsigned int e0 = family_begin_[i], e1 = family_begin_[i + 1];
+      if (e1 == e0 || !wanted(static_cast<unsigned int>(i)))
+        return;
+      if (kind_ == Kind::particle) {
+        for (unsigned int e = e0; e < e1; ++e)
+          visit(e, deformation_gradient(e, u));
+        return;
+      }
+      thread_local std::vector<Mat> F;
+      F.resize(e1 - e0);
+      particle_deformation_gradients(static_cast<unsigned int>(i), u, F.data());
+      for (unsigned int e = e0; e < e1; ++e)
+        visit(e, F[e - e0]);
+    });
+  }
 
   // f_m = −Σ_e w_e P_e G_m for every particle m (f sized to the particles), from the families'
   // stresses P (one per family): gathered per particle in a fixed order, threaded above
@@ -97,6 +123,12 @@ class CorrespondenceFamilies {
   std::size_t memory_bytes() const;
 
  private:
+  // The member loops of bond-associated families (correspondence_families.cc): F_e of particle
+  // i's families into F[e − its first family]; and i's centre force Σ_e Q_e m_e (returned)
+  // with the t_k of its bonds into bond_force_ (gather_forces).
+  void particle_deformation_gradients(unsigned int i, const std::vector<Vec>& u, Mat* F) const;
+  Vec gather_bond_forces(unsigned int i, const std::vector<Mat>& P) const;
+
   bool holds(unsigned int e, std::size_t slot) const {
     return (mask_[mask_begin_[e] + slot / 64] >> (slot % 64)) & 1u;
   }

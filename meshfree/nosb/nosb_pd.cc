@@ -302,8 +302,7 @@ void NosbPD<dim>::compute_forces(ParticleSet<dim>& particles, const BondList<dim
   auto& P = family_stress_;
   P.resize(n_fam);
   const bool penalty = penalty_on(); // particle families then: centre(e) is the particle
-  parallel_for_rethrow(n_fam, parallel_particle_threshold, [&](long e) {
-    const auto F = family_gradient(fam, e, u);
+  const auto stress = [&](unsigned int e, const dealii::Tensor<2, dim>& F) {
     P[e] = evaluate(e, F, particles, &trial_[fam.history_index(e)], false).P;
     if (penalty)
       // A family at the driving model's gradient: its F does not come from the particles'
@@ -313,7 +312,17 @@ void NosbPD<dim>::compute_forces(ParticleSet<dim>& particles, const BondList<dim
       // jumps: −1.5 % at G_s = 0.1, −10.6 % at 1; exact without).
       if (!at_driven_gradient(fam.centre(e)))
         P[e] += penalty_part(fam.centre(e), F, particles, bonds).stress;
-  });
+  };
+  // The families' own gradients, formed per particle; then those at the driving model's.
+  fam.for_each_deformation_gradient(
+      u, parallel_particle_threshold, [&](unsigned int c) { return !at_driven_gradient(c); },
+      stress);
+  if (driven_gradients_)
+    parallel_for_rethrow(n_fam, parallel_particle_threshold, [&](long e) {
+      const unsigned int c = fam.centre(e);
+      if (at_driven_gradient(c))
+        stress(e, (*driven_gradients_)[c]);
+    });
   // f_m = −Σ_e w_e P_e G_m: each family's forces sum to zero (Σ_m G_m = 0). Gathered per
   // particle in a fixed order (CorrespondenceFamilies::gather_forces): the same sums on any
   // number of threads.

@@ -765,6 +765,24 @@ foreach(_m bond_based nosb spg)
       PROPERTIES RUN_SERIAL TRUE)
   endforeach()
 endforeach()
+# NOSB-PD with bond-associated families (Chen 2018), the control of the screw and vertebra
+# scenes: each particle has a family per bond holding about half of its bonds, so a force pass
+# costs O(n_bonds²) per particle; the figure shows what the member loops cost
+# (meshfree/nosb/correspondence_families.cc).
+foreach(_t 1 2)
+  set(_args run ${_plate_nosb} --output ${_runs}/throughput_nosb_bond_associated_${_t} --force
+      --progress lines --threads ${_t} --set "Effects/Particles method=nosb"
+      --set "Coupling/NOSB/Stabilization=bond_associated")
+  foreach(_s ${_throughput_set})
+    list(APPEND _args --set "${_s}")
+  endforeach()
+  spinesim_add_scene_test(benchmark.coupled_throughput_nosb_bond_associated_${_t}_threads
+    OUT ${_runs}/throughput_nosb_bond_associated_${_t} ARGS ${_args}
+    EXPECT "status==ok;particle_updates_per_s>=1;free_particles>=2880"
+    LABELS "benchmark" TIMEOUT 900 FIXTURE throughput_nosb_ba_${_t})
+  set_tests_properties(benchmark.coupled_throughput_nosb_bond_associated_${_t}_threads
+    PROPERTIES RUN_SERIAL TRUE)
+endforeach()
 spinesim_add_comparison_test(benchmark.coupled_throughput_nosb_cost
   A ${_runs}/throughput_bond_based_1/summary.json B ${_runs}/throughput_nosb_1/summary.json
   CHECKS "particle_updates_per_s:ratio:0.07" REQUIRES "throughput_bond_based_1;throughput_nosb_1"
