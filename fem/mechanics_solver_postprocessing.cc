@@ -252,10 +252,13 @@ MechanicsSolver<dim>::residual_virial(const Point<dim>& origin) const {
 
 template <int dim>
 double MechanicsSolver<dim>::strain_energy() const {
-  if (states_stale_ && explicit_matrix_ready_ && linear_explicit()) {
+  if (explicit_matrix_ready_ && linear_explicit()) {
     // Linear path: ½ uᵀ K u (K over the active cells) without refreshing the point states,
     // over the unconstrained DoFs: a hanging node's row holds no stiffness of its own (its
-    // cells' stiffness went to its masters), only a diagonal entry that keeps K regular.
+    // cells' stiffness went to its masters), only a diagonal entry that keeps K regular. Taken
+    // whether or not the point states are fresh, so that the same state gives the same energy
+    // to the bit (history.csv's last row and summary.json read it before and after the point
+    // states are refreshed for the stresses; the point-state integral differs in round-off).
     VectorType Ku(owned_, comm_);
     explicit_matrix_.vmult(Ku, u_);
     double stored2 = 0;

@@ -256,6 +256,17 @@ spinesim_add_hostile_test(check_horizon_ratio_below_one
 # particle zone of one particle, are warnings (log, summary.json, and `check`'s report).
 spinesim_add_hostile_test(warn_regions_outside_body EXIT 0 ARGS check ${_h}/regions_outside.prm
   MATCH "warning: Coupling/Initial region lies outside the body.*warning: Coupling/Crack 1: corner 2 lies outside")
+# The refinement region too; and a run lists its warnings in summary.json (one step of the
+# default scene, 1e-4 s).
+spinesim_add_hostile_test(warn_refinement_region_outside_body EXIT 0
+  ARGS check ${_h}/regions_outside.prm --set "Coupling/Refinement region lower corner=5, 5"
+       --set "Coupling/Refinement region upper corner=6, 6"
+  MATCH "warning: Coupling/Refinement region lies outside the body's bounding box")
+spinesim_add_hostile_test(warn_regions_outside_body_in_summary EXIT 0
+  ARGS run ${_h}/regions_outside.prm --output @KEEP@ --progress off
+       --set "Simulation/End time=1e-4" --set "Simulation/Steps=1"
+       --set "Simulation/Write VTU=false"
+  STATUS ok WARNING "^Coupling/Crack 1: corner 2 lies outside")
 spinesim_add_hostile_test(warn_single_particle EXIT 0
   ARGS check ${PROJECT_SOURCE_DIR}/tests/cli/one_particle.prm MATCH "warning: the particle zone holds a single particle")
 # The energy splice's correction is elastic: with a yielding law it over-corrects (docs/coupling.md).

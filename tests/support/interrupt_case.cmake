@@ -82,6 +82,12 @@ message("${_o}${_e}\n${_log}")
 if(NOT _rc EQUAL _expected_rc)
   message(FATAL_ERROR "interrupted run: exit code ${_rc}, expected ${_expected_rc} (SIG${SIGNAL})")
 endif()
+# One line says what happened, where, and how to continue.
+string(REGEX REPLACE "([][+.*()^$?|\\])" "\\\\\\1" _dir_re "${DIR}")
+if(NOT _log MATCHES "\ninterrupted by SIG${SIGNAL} (after|inside) step [0-9]+[^\n]*; continue with: spinesim run --restart ${_dir_re}/run\n")
+  message(FATAL_ERROR "the interrupted run's output lacks the line 'interrupted by SIG${SIGNAL} "
+                      "... step N ...; continue with: spinesim run --restart ${DIR}/run'")
+endif()
 # A reference from another test must have run the same scene with the same parameters (the
 # resolved values, comments aside).
 if(REFERENCE)
