@@ -162,9 +162,11 @@ foreach(_case
   set_tests_properties(hostile.interrupt_mid_step_${_tag} PROPERTIES LABELS "hostile;cli" TIMEOUT 300)
 endforeach()
 # Labelled long: the FEM in 3-D (the 2-D FEM case and the 3-D particles in finite strain take
-# the same paths) and the ring under SIGTERM (the same ring is stopped by SIGINT below).
+# the same paths), the ring under SIGTERM (the same ring is stopped by SIGINT below) and the SPG
+# plate (the coupled mid-step restart stays in the bond-based and finite-strain NOSB cases, an
+# SPG zone's restart in distributed.ring_spg_2d_restart_*).
 set_property(TEST hostile.interrupt_mid_step_fem_3d hostile.interrupt_mid_step_particles_2d
-             APPEND PROPERTY LABELS long)
+             hostile.interrupt_mid_step_coupled_spg_2d APPEND PROPERTY LABELS long)
 # (The 3-D impact with every cell a particle runs without the scene's short-range forces: they
 # keep its bonds longer and so its step (77 sub-steps in its three steps against 102), too few
 # for a look every 50 sub-steps to fall inside step 2.)

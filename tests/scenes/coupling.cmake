@@ -388,6 +388,10 @@ foreach(_ranks 2 4)
     CHECKS "peak_load_N:rel:1e-9;broken_bonds:abs:0;converted_cells:abs:0;strain_energy:rel:1e-8;crack_extent_max_x_m:abs:1e-12"
     REQUIRES "plate_coupled;plate_coupled_${_ranks}" LABELS "scene;coupling;mpi")
 endforeach()
+# Four ranks oversubscribed on two cores: labelled long (cli.default_scene_4ranks keeps four
+# ranks in the default run).
+set_property(TEST scene.cracked_plate_coupled_4ranks scene.cracked_plate_coupled_1_vs_4_ranks
+             APPEND PROPERTY LABELS long)
 spinesim_add_scene_test(scene.cracked_plate_all_particles SCENE ${_plate}
   OUT ${_runs}/cracked_plate_all_particles
   SET "Simulation/Write VTU=false" "Coupling/All particles=true"
@@ -510,6 +514,10 @@ foreach(_m nosb spg)
     CHECKS "reaction_force_norm:rel:1e-6;strain_energy:rel:1e-6"
     REQUIRES "pc_${_m};pc_${_m}_2ranks" LABELS "scene;coupling;mpi")
 endforeach()
+# NOSB-PD on two ranks is labelled long here: the same scene with heat on two ranks
+# (coupling.plastic_heat_nosb_2d_2ranks, below) converts the same cells in the default run.
+set_property(TEST coupling.plastic_conversion_nosb_2ranks coupling.plastic_conversion_nosb_ranks_agree
+             APPEND PROPERTY LABELS long)
 
 # A perfectly plastic particle zone carries the limit load (applications/validation/
 # coupling_plastic_limit.prm and _2d.prm): a bar on frictionless supports given as regions,

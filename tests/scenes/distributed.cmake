@@ -193,6 +193,13 @@ spinesim_add_comparison_test(distributed.nosb_tube_3d_1_vs_2_ranks
   A ${_dist_runs}/nosb_tube_1/summary.json B ${_dist_runs}/nosb_tube_2/summary.json
   CHECKS "${_dist_checks};fracture_dissipation_J:rel:1e-9;energy_balance_error_relative:rel:1e-9;particle_memory_per_rank_max_bytes:ratio_max:0.6"
   REQUIRES "dist_nosb_tube_1;dist_nosb_tube_2" LABELS "scene;particles;stability;mpi")
+# The 3-D tube is labelled long (58 core-seconds): NOSB-PD fragmentation with its energy
+# balance stays in the default run in 2-D on 1 and 2 ranks (distributed.nosb_ring_fragmentation_*)
+# and in stability.cmake (the NOSB rings and the plastic fracture ring in 3-D), the memory per
+# rank in distributed.nosb_ring_memory_per_rank.
+set_property(TEST distributed.nosb_tube_fragmentation_3d_1ranks
+             distributed.nosb_tube_fragmentation_3d_2ranks distributed.nosb_tube_3d_1_vs_2_ranks
+             APPEND PROPERTY LABELS long)
 # J2 plasticity (yield 40 MPa, so the ring flows: it ends with 212 J/m stored against 941 J/m
 # when elastic, hence the bound of 400): the uninterrupted run on 1 and 2 ranks, and
 # the 2-rank run stopped after step 20 and restarted. Measured: 2e-15 relative between all
