@@ -20,7 +20,8 @@ void write_checkpoint_manifest(const std::filesystem::path& dir);
 void publish_checkpoint(const std::filesystem::path& staged,
                         const std::filesystem::path& final_dir);
 
-// InvalidInput naming the first missing, resized or altered file (or a malformed manifest).
+// InvalidInput naming the first missing, resized, altered or unlisted file, or what is
+// malformed in the manifest (a field of the wrong type, a name outside the checkpoint).
 // A checkpoint without a manifest (written before manifests existed) passes: returns false.
 bool verify_checkpoint_manifest(const std::filesystem::path& dir);
 

@@ -44,6 +44,18 @@ spinesim_add_hostile_test(restart_altered_mesh PREPARE staged:${_quick} FLIP che
   ARGS run --restart @KEEP@ MATCH "checkpoint/mesh.*altered")
 spinesim_add_hostile_test(restart_truncated_manifest PREPARE staged:${_quick}
   TRUNCATE checkpoint/manifest.json ARGS run --restart @KEEP@ MATCH "manifest unreadable")
+# A manifest is a file from outside: an entry of the wrong type (which the JSON library would
+# throw as its own type error on rank 0 only), a name climbing out of the checkpoint, or a
+# file it does not list is bad input naming the manifest or the file.
+spinesim_add_hostile_test(restart_manifest_entry_not_object PREPARE staged:${_quick}
+  EXTRA_COPY ${_h}/data/manifest_entry_not_object.json:checkpoint/manifest.json
+  ARGS run --restart @KEEP@ MATCH "manifest.json.*malformed: the entry of .state.json. is not")
+spinesim_add_hostile_test(restart_manifest_outside_checkpoint PREPARE staged:${_quick}
+  EXTRA_COPY ${_h}/data/manifest_outside_checkpoint.json:checkpoint/manifest.json
+  ARGS run --restart @KEEP@ MATCH "summary.json. is not a path inside the checkpoint")
+spinesim_add_hostile_test(restart_file_not_in_manifest PREPARE staged:${_quick}
+  EXTRA_FILE checkpoint/notes.txt
+  ARGS run --restart @KEEP@ MATCH "checkpoint/notes.txt.*not listed in")
 # Resource exhaustion by a typo: absurd thread counts are bad input, not a hang.
 spinesim_add_hostile_test(threads_100000 PREPARE run:${_quick}
   ARGS run ${_quick} --output @KEEP@ --force --threads 100000 MATCH "--threads 100000.*allowed: 0")
