@@ -731,18 +731,21 @@ spinesim_add_comparison_test(scene.cracked_plate_spg_energy_splice_agree
 # The same coupled SPG fracture on 2 ranks (the band and its crack cross the partition): the
 # same crack, bond for bond, and the peak load to round-off (measured 3e-14 relative; the
 # correction's sums are added in another order). Bound 1e-9: a break that moved by a step would
-# change the peak by far more.
+# change the peak by far more. Labelled long (28 s of both cores): the default run keeps the
+# SPG crack on one rank (above), SPG's energy splice on two ranks
+# (stability.coupled_energy_drift_1e4_steps_energy_splice_spg_2ranks) and a crack crossing the
+# partition under the energy splice (coupling.notched_bar_nosb_3d_energy_splice_2ranks).
 spinesim_add_scene_test(scene.cracked_plate_spg_energy_splice_2ranks SCENE ${_plate_nosb} RANKS 2
   OUT ${_runs}/cracked_plate_spg_energy_splice_2ranks
   SET ${_spg_plate} "Coupling/Splice=energy" "Coupling/Initial region lower corner=-0.5,-0.055"
       "Coupling/Initial region upper corner=0.5,0.055"
   EXPECT "status==ok;crack_path_rms_y_m<=0.0125;crack_extent_max_x_m>=0.45;crack_extent_min_x_m<=-0.45"
-  LABELS "scene;coupling;mpi" FIXTURE plate_spg_energy_2ranks)
+  LABELS "scene;coupling;mpi;long" FIXTURE plate_spg_energy_2ranks)
 spinesim_add_comparison_test(scene.cracked_plate_spg_energy_splice_ranks_agree
   A ${_runs}/cracked_plate_spg_energy_splice/summary.json
   B ${_runs}/cracked_plate_spg_energy_splice_2ranks/summary.json
   CHECKS "peak_load_N:rel:1e-9;broken_bonds:abs:0;crack_path_rms_y_m:abs:1e-12"
-  REQUIRES "plate_spg_energy;plate_spg_energy_2ranks" LABELS "scene;coupling;mpi")
+  REQUIRES "plate_spg_energy;plate_spg_energy_2ranks" LABELS "scene;coupling;mpi;long")
 
 # Particle-method throughput in a coupled run (label benchmark): the cracked plate's band
 # |y| <= 0.055 as particles from t = 0 (2880 free), no damage or conversion, 40 output steps of
