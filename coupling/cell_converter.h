@@ -93,6 +93,12 @@ class CellConverter {
   // From a checkpoint: these cells are converted, and out of the FEM.
   void restore(std::map<std::string, unsigned int> converted);
   const std::vector<ConversionReport<dim>>& reports() const { return reports_; }
+  // Conversions undone (a cut step restored the state before them): only the first n reports
+  // stay.
+  void keep_reports(std::size_t n) {
+    if (n < reports_.size())
+      reports_.resize(n);
+  }
   // Sums of energy_change_particles and energy_change_fem over the conversions so far [J].
   double energy_change_particles() const;
   double energy_change_fem() const;

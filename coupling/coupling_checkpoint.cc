@@ -21,6 +21,7 @@
 #include <fstream>
 #include <map>
 #include <set>
+#include <sstream>
 #include <tuple>
 #include <utility>
 #include <vector>
@@ -50,6 +51,21 @@ materials::LawParameters from_text(const CheckpointLaw& law) {
 
 template <int dim>
 void CouplingCheckpoint<dim>::save(const std::string& file) const {
+  std::ofstream out;
+  if (Utilities::MPI::this_mpi_process(p_.state.fem.mpi_communicator()) == 0)
+    out.open(file, std::ios::binary);
+  save_to(out);
+}
+
+template <int dim>
+std::string CouplingCheckpoint<dim>::save_text() const {
+  std::ostringstream out;
+  save_to(out);
+  return out.str();
+}
+
+template <int dim>
+void CouplingCheckpoint<dim>::save_to(std::ostream& out) const {
   const auto& state = p_.state;
   const auto& particles = state.particles;
   const auto& bonds = state.bonds;
@@ -121,7 +137,6 @@ void CouplingCheckpoint<dim>::save(const std::string& file) const {
   std::size_t n_history = 0;
   for (const auto& part : histories)
     n_history += part.size() / (2 + state_doubles);
-  std::ofstream out(file, std::ios::binary);
   out.precision(17);
   // Version 2 adds the fracture-heat totals (the per-particle accounts are handed to the FEM
   // at the end of every macro step, so they are empty when a checkpoint is written); version 3
@@ -183,6 +198,23 @@ void CouplingCheckpoint<dim>::save(const std::string& file) const {
 
 template <int dim>
 void CouplingCheckpoint<dim>::load(const std::string& file) {
+  std::error_code size_error;
+  const std::uintmax_t bytes = std::filesystem::file_size(file, size_error);
+  std::ifstream in(file, std::ios::binary);
+  if (size_error || !in)
+    throw InvalidInput(file, "unreadable coupling checkpoint", "a readable file");
+  load_from(in, bytes, file);
+}
+
+template <int dim>
+void CouplingCheckpoint<dim>::load_text(const std::string& text, const std::string& name) {
+  std::istringstream in(text);
+  load_from(in, text.size(), name);
+}
+
+template <int dim>
+void CouplingCheckpoint<dim>::load_from(std::istream& in, std::uintmax_t bytes,
+                                        const std::string& file) {
   static_assert(checkpoint_state_doubles == state_doubles, "history records: one layout");
   auto& state = p_.state;
   auto& particles = state.particles;
@@ -190,11 +222,6 @@ void CouplingCheckpoint<dim>::load(const std::string& file) {
   state.prepare();
   // The manifest guards against damage, not against a file edited and re-hashed: the whole
   // file is read and checked (checkpoint_text.h) before any of it is used.
-  std::error_code size_error;
-  const std::uintmax_t bytes = std::filesystem::file_size(file, size_error);
-  std::ifstream in(file, std::ios::binary);
-  if (size_error || !in)
-    throw InvalidInput(file, "unreadable coupling checkpoint", "a readable file");
   auto c = read_checkpoint_text(in, bytes, dim, state.points.size(), file);
 
   p_.bond_rows.forget_search(); // the particles are replaced: search them afresh

@@ -15,7 +15,9 @@
 #include "coupling/implant_joint.h"
 #include "coupling/particle_halo.h"
 
+#include <cstdint>
 #include <functional>
+#include <iosfwd>
 #include <string>
 
 namespace spinesim::coupling {
@@ -40,8 +42,16 @@ class CouplingCheckpoint {
 
   void save(const std::string& file) const; // collective; rank 0 writes
   void load(const std::string& file);       // every rank reads
+  // The same file held in memory: the text on rank 0 (empty on the others; collective), and
+  // its load from the same text on every rank (`name` names it in errors).
+  std::string save_text() const;
+  void load_text(const std::string& text, const std::string& name);
 
  private:
+  // Collective; only rank 0 writes to `out`.
+  void save_to(std::ostream& out) const;
+  void load_from(std::istream& in, std::uintmax_t bytes, const std::string& name);
+
   Pieces p_;
 };
 

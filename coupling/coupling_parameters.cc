@@ -146,6 +146,13 @@ void CouplingParameters<dim>::declare(ParameterHandler& prm) {
   prm.declare_entry("Relaxation max iterations", "200000", Integer(1),
                     "Quasi-static coupled runs: pseudo-time steps allowed per step before the "
                     "run stops as not converged [-].");
+  prm.declare_entry("Relaxation step cuts", "6", Integer(0, 30),
+                    "Quasi-static coupled runs: how often a load step whose relaxation does not "
+                    "converge within Relaxation max iterations is cut. The state at the start of "
+                    "the step is restored (conversions and broken bonds included) and the load "
+                    "is applied in two halves, each cut again if needed: up to 2^cuts sub-steps "
+                    "[-]. After two converged sub-steps the sub-step doubles again, up to the "
+                    "step. 0 = the run stops at the first relaxation that does not converge.");
   prm.declare_entry("Relaxation report interval", "5000", Integer(0),
                     "Quasi-static coupled runs: every this many pseudo-steps of a step's "
                     "relaxation, a line in the log with the relative residual, the damping and "
@@ -210,6 +217,7 @@ void CouplingParameters<dim>::parse(ParameterHandler& prm, const std::string& me
   relaxation_tolerance = prm.get_double("Relaxation tolerance");
   relaxation_max_iterations = prm.get_integer("Relaxation max iterations");
   relaxation_report_interval = prm.get_integer("Relaxation report interval");
+  relaxation_step_cuts = prm.get_integer("Relaxation step cuts");
   check_box_corners<dim>(refine_lower, refine_upper, "Coupling/Refinement region lower corner");
   const auto centre = parse_doubles(prm.get("Hole centre"), "Coupling/Hole centre");
   hole_radius = prm.get_double("Hole radius");

@@ -61,6 +61,7 @@ struct CouplingParameters {
   double relaxation_tolerance = 1e-6;  // quasi-static: free residual / reaction scale [-]
   unsigned int relaxation_max_iterations = 200000; // quasi-static: per step [-]
   unsigned int relaxation_report_interval = 5000;  // pseudo-steps between progress lines [-]
+  unsigned int relaxation_step_cuts = 6; // quasi-static: halvings of a step that does not converge
   // The particle method (Effects/Particles method), its parameters read from its subsection
   // of "Coupling"; made in CouplingState::prepare() with the material of the FEM cells.
   std::string particles_method = "bond_based";

@@ -547,6 +547,32 @@ double FemParticleCoupling<dim>::von_mises(const double* c) {
 }
 
 template <int dim>
+typename FemParticleCoupling<dim>::StepSnapshot FemParticleCoupling<dim>::take_snapshot() const {
+  StepSnapshot s;
+  s.fem = state_.fem.copy_state();
+  s.particles = checkpoint_.save_text();
+  s.conversions = converter_.reports().size();
+  s.plastic_heat = plastic_heat_.heat();
+  s.plastic_heat_work = plastic_heat_.work();
+  if (state_.fem.energy_account_on())
+    s.energy_sums = energy_account_sums();
+  return s;
+}
+
+template <int dim>
+void FemParticleCoupling<dim>::restore(const StepSnapshot& s) {
+  // The FEM first (its active cells and displacements), then the particles as a restart reads
+  // them: the ghost layer and the interface are rebuilt from the restored FEM.
+  state_.fem.restore_state(s.fem);
+  const std::string text = Utilities::MPI::broadcast(state_.fem.mpi_communicator(), s.particles);
+  checkpoint_.load_text(text, "the state at the start of the step (in memory)");
+  converter_.keep_reports(s.conversions);
+  plastic_heat_.restore(s.plastic_heat, s.plastic_heat_work);
+  if (!s.energy_sums.empty())
+    restore_energy_account_sums(s.energy_sums);
+}
+
+template <int dim>
 std::vector<std::string> FemParticleCoupling<dim>::take_messages() {
   std::vector<std::string> m;
   m.swap(state_.messages);

@@ -291,6 +291,22 @@ class FemParticleCoupling {
 
   // particles_<cycle>.vtu of the free particles (rank 0); returns the file name. Collective.
   std::string write_output(const std::string& directory, unsigned int cycle) const;
+  // The coupled state at the start of a quasi-static step, held in memory to go back to when
+  // the step's relaxation does not converge and the step is cut: the FEM's
+  // (MechanicsSolver::StateCopy), the particles' as the checkpoint file holds them (converted
+  // cells, records, broken bonds, material history, contact stick points), the conversions
+  // reported so far and the heat and energy books. restore() undoes everything after
+  // take_snapshot(), conversions included. Both collective.
+  struct StepSnapshot {
+    typename fem::MechanicsSolver<dim>::StateCopy fem;
+    std::string particles; // the coupling checkpoint's text on rank 0 (empty on the others)
+    std::size_t conversions = 0;
+    double plastic_heat = 0, plastic_heat_work = 0; // [J]
+    std::vector<double> energy_sums;                // energy_account_sums(), when it is on
+  };
+  StepSnapshot take_snapshot() const;
+  void restore(const StepSnapshot& snapshot);
+
   void save(const std::string& file) const { checkpoint_.save(file); } // rank 0 writes
   // Every rank reads; FEM state restored separately.
   void load(const std::string& file) { checkpoint_.load(file); }

@@ -320,6 +320,20 @@ class MechanicsSolver {
                            const std::vector<std::pair<std::string, const dealii::Vector<float>*>>&
                                cell_fields = {}) const;
 
+  // The state a step changes, held in memory: a caller that must undo a step (a coupled
+  // quasi-static step whose relaxation does not converge is cut) copies it before and restores
+  // it after. Displacement, velocity, committed point history, active cells, clocks; the mesh
+  // and the DoF numbering stay (no remeshing between the two calls). Collective.
+  struct StateCopy {
+    VectorType displacement, velocity; // owned
+    std::vector<QuadraturePointData> committed;
+    std::vector<bool> active;
+    double time = 0, previous_step = -1;
+    bool loaded = false;
+  };
+  StateCopy copy_state() const;
+  void restore_state(const StateCopy& copy);
+
   // Checkpoint: mesh, displacement, velocity, committed history, time. load_checkpoint needs
   // the triangulation to hold the same coarse mesh only (build_coarse_mesh) and the same
   // materials and parameters.

@@ -116,12 +116,44 @@ void MechanicsSolver<dim>::load_checkpoint(const std::string& filename) {
   deserialize(filename);
 }
 
+template <int dim>
+typename MechanicsSolver<dim>::StateCopy MechanicsSolver<dim>::copy_state() const {
+  refresh_states(); // the linear explicit path leaves the points behind u
+  StateCopy copy;
+  copy.displacement = u_;
+  copy.velocity = v_;
+  copy.committed = committed_;
+  copy.active = active_;
+  copy.time = time_;
+  copy.previous_step = previous_step_;
+  copy.loaded = loaded_;
+  return copy;
+}
+
+template <int dim>
+void MechanicsSolver<dim>::restore_state(const StateCopy& copy) {
+  // Collective: a rank whose own cells did not change takes the branch with the others.
+  if (Utilities::MPI::logical_or(copy.active != active_, comm_))
+    set_active_cells(copy.active);
+  u_ = copy.displacement;
+  v_ = copy.velocity;
+  committed_ = trial_ = copy.committed;
+  states_stale_ = false;
+  time_ = previous_time_ = target_time_ = copy.time;
+  previous_step_ = copy.previous_step;
+  loaded_ = copy.loaded;
+  relax_acceleration_.clear();
+  update_ghosts();
+}
+
 // Explicit instantiation of the members defined in this file.
 #define SPINESIM_INSTANTIATE(dim)                                                                  \
   template void MechanicsSolver<dim>::prepare_for_serialization(const std::string&) const;         \
   template void MechanicsSolver<dim>::save_checkpoint(const std::string&) const;                   \
   template void MechanicsSolver<dim>::deserialize(const std::string&);                             \
-  template void MechanicsSolver<dim>::load_checkpoint(const std::string&);
+  template void MechanicsSolver<dim>::load_checkpoint(const std::string&);                         \
+  template typename MechanicsSolver<dim>::StateCopy MechanicsSolver<dim>::copy_state() const;      \
+  template void MechanicsSolver<dim>::restore_state(const StateCopy&);
 SPINESIM_INSTANTIATE(2)
 SPINESIM_INSTANTIATE(3)
 #undef SPINESIM_INSTANTIATE

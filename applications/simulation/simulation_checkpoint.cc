@@ -121,6 +121,12 @@ void Simulation<dim>::write_checkpoint(unsigned int step, double time, RunContex
     if (!account_sums.empty())
       state["energy_account_sums"] = account_sums;
     state["relaxation_iterations"] = relaxation_iterations_;
+    // The sub-step a cut left: the restarted run continues with it, as the uninterrupted one.
+    state["relaxation_sub_step"] = relaxation_sub_step_;
+    state["relaxation_sub_steps_converged"] = sub_steps_converged_;
+    state["relaxation_step_cuts"] = relaxation_step_cuts_;
+    state["relaxation_sub_steps"] = relaxation_sub_steps_;
+    state["last_step_sub_steps"] = last_step_sub_steps_;
     state["last_relaxation_iterations"] = last_relaxation_.iterations;
     state["last_relaxation_residual"] = last_relaxation_.relative_residual;
     state["conversion_extremes"] = conversion_extremes().to_json();
@@ -246,6 +252,11 @@ unsigned int Simulation<dim>::load_checkpoint(RunContext& ctx) {
     first_stable_step_ = state.value("first_stable_step", 0.0);
     initial_kinetic_energy_ = state.value("initial_kinetic_energy", 0.0);
     relaxation_iterations_ = state.value("relaxation_iterations", 0ul);
+    relaxation_sub_step_ = state.value("relaxation_sub_step", 0.0);
+    sub_steps_converged_ = state.value("relaxation_sub_steps_converged", 0u);
+    relaxation_step_cuts_ = state.value("relaxation_step_cuts", 0ul);
+    relaxation_sub_steps_ = state.value("relaxation_sub_steps", 0ul);
+    last_step_sub_steps_ = state.value("last_step_sub_steps", 0u);
     last_relaxation_.iterations = state.value("last_relaxation_iterations", 0u);
     last_relaxation_.relative_residual = state.value("last_relaxation_residual", 0.0);
     if (state.contains("conversion_extremes"))

@@ -139,6 +139,7 @@ void Simulation<dim>::record(unsigned int step, double time, RunContext& ctx) {
     if (quasi_static_) {
       row.emplace_back("relaxation_iterations", last_relaxation_.iterations);
       row.emplace_back("relaxation_relative_residual", last_relaxation_.relative_residual);
+      row.emplace_back("relaxation_sub_steps", last_step_sub_steps_);
       if (coupled_->carries_material_state()) {
         // The static balance of both models together (FemParticleCoupling::virial_balance).
         const auto balance = coupled_->virial_balance(); // collective
@@ -294,6 +295,10 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
     if (quasi_static_) {
       s.set_figure("relaxation_iterations", double(relaxation_iterations_), "iterations");
       s.set_figure("relaxation_relative_residual", last_relaxation_.relative_residual, "-");
+      // Coupling/Relaxation step cuts: how often a step was cut, and the converged load
+      // increments of the run (the steps when nothing was cut).
+      s.set_figure("relaxation_step_cuts", double(relaxation_step_cuts_), "-");
+      s.set_figure("relaxation_sub_steps", double(relaxation_sub_steps_), "-");
       const auto& history = ctx.history();
       const auto& columns = history.columns();
       const std::string column = "virial_imbalance_relative";

@@ -154,6 +154,13 @@ class Simulation : public framework::Scenario {
   double first_stable_step_ = 0;      // explicit mechanics: the first stable step [s]
   unsigned int newton_iterations_ = 0, linear_iterations_ = 0;
   unsigned long relaxation_iterations_ = 0; // quasi-static coupled runs
+  // Step cuts (coupled_relaxation): the load sub-step the next step starts with [s] (0: the
+  // whole step), the converged sub-steps since the last cut or growth, the cuts and the
+  // converged sub-steps of the run, and the sub-steps of the last step.
+  double relaxation_sub_step_ = 0;
+  unsigned int sub_steps_converged_ = 0;
+  unsigned long relaxation_step_cuts_ = 0, relaxation_sub_steps_ = 0;
+  unsigned int last_step_sub_steps_ = 0;
   // A coupled step whose virial_imbalance_relative exceeds this is reported in the log [-].
   // Measured (docs/coupling.md, "The force balance"): consistent splices 1e-9 (uniform) to
   // 9e-5 (elastic plate), a CT block of 119 laws 7e-3; the vertebra's particles 0.06-0.08

@@ -514,6 +514,44 @@ foreach(_m nosb spg)
     CHECKS "reaction_force_norm:rel:1e-6;strain_energy:rel:1e-6"
     REQUIRES "pc_${_m};pc_${_m}_2ranks" LABELS "scene;coupling;mpi")
 endforeach()
+# Step cuts (Coupling/Relaxation step cuts): the same plate in one load step, its relaxation
+# allowed fewer pseudo-steps than that step needs. Measured with one thread per rank (as the
+# tests run; the counts follow the round-off of the sums, so another thread count gives
+# others): one rank, the whole step 3360 pseudo-steps, the two halves of Simulation/Steps = 2
+# 2375 and 2290; two ranks 2723, and 2162 and 2033. Allowed 2800 (one rank) and 2450 (two):
+# 11-18 % from each count, so the whole step fails and is cut once, and both halves converge.
+# The state of t = 0 is restored and the halves are then exactly the two steps of the run
+# with Simulation/Steps = 2: the figures agree to the last digit (0 measured; bound 1e-12: a
+# restore that loses a digit of a particle's state or of a point's plastic history fails it).
+# Without cuts the same relaxation stops the run (exit 1) naming the step and the residual.
+# Two ranks (the particles' part of the snapshot is broadcast from rank 0) against one:
+# 7e-10 measured, the relaxation tolerance's order (bound 1e-6, as for the plate's ranks).
+set(_cut_checks "status==ok;relaxation_step_cuts~1:0;relaxation_sub_steps~2:0;converted_cells>=16;conversion_plastic_strain_error_relative<=1e-10;conversion_reaction_jump_relative<=1e-7")
+spinesim_add_scene_test(coupling.plastic_conversion_step_cut SCENE ${_pc} OUT ${_pc_runs}/step_cut
+  SET "Simulation/Steps=1" "Coupling/Relaxation max iterations=2800"
+  EXPECT "${_cut_checks}" LABELS "scene;validation;coupling;stability" FIXTURE pc_cut)
+spinesim_add_scene_test(coupling.plastic_conversion_two_steps SCENE ${_pc} OUT ${_pc_runs}/two_steps
+  SET "Simulation/Steps=2" "Coupling/Relaxation max iterations=2800"
+  EXPECT "status==ok;relaxation_step_cuts<=0" LABELS "scene;validation;coupling"
+  FIXTURE pc_two_steps)
+spinesim_add_comparison_test(coupling.plastic_conversion_step_cut_equals_two_steps
+  A ${_pc_runs}/two_steps/summary.json B ${_pc_runs}/step_cut/summary.json
+  CHECKS "reaction_force_norm:rel:1e-12;strain_energy:rel:1e-12;conversion_reaction_jump_relative:rel:1e-12;conversion_plastic_strain_error_relative:abs:1e-15"
+  REQUIRES "pc_cut;pc_two_steps" LABELS "scene;coupling;stability")
+spinesim_add_scene_test(coupling.plastic_conversion_step_cut_2ranks SCENE ${_pc}
+  OUT ${_pc_runs}/step_cut_2ranks RANKS 2
+  SET "Simulation/Steps=1" "Coupling/Relaxation max iterations=2450"
+  EXPECT "${_cut_checks}" LABELS "scene;validation;coupling;stability;mpi" FIXTURE pc_cut_2ranks)
+spinesim_add_comparison_test(coupling.plastic_conversion_step_cut_ranks_agree
+  A ${_pc_runs}/step_cut/summary.json B ${_pc_runs}/step_cut_2ranks/summary.json
+  CHECKS "reaction_force_norm:rel:1e-6;strain_energy:rel:1e-6"
+  REQUIRES "pc_cut;pc_cut_2ranks" LABELS "scene;coupling;mpi")
+spinesim_add_scene_test(coupling.plastic_conversion_no_step_cuts SCENE ${_pc}
+  OUT ${_pc_runs}/no_step_cuts
+  SET "Simulation/Steps=1" "Coupling/Relaxation max iterations=2800" "Coupling/Relaxation step cuts=0"
+  EXIT 1 MATCH "relaxation not converged.*step 1, t = 1 s: relative residual"
+  EXPECT "status==failed" LABELS "scene;coupling;stability")
+
 # NOSB-PD on two ranks is labelled long here: the same scene with heat on two ranks
 # (coupling.plastic_heat_nosb_2d_2ranks, below) converts the same cells in the default run.
 set_property(TEST coupling.plastic_conversion_nosb_2ranks coupling.plastic_conversion_nosb_ranks_agree
