@@ -27,6 +27,7 @@
 #include <fstream>
 #include <map>
 #include <optional>
+#include <sstream>
 
 namespace spinesim::applications {
 
@@ -80,6 +81,12 @@ void ParticleZoneParameters::declare(dealii::ParameterHandler& prm) {
   meshfree::declare_particle_method_sections(prm);
   prm.enter_subsection("Quasi-static");
   meshfree::AdaptiveDynamicRelaxationParameters::declare(prm);
+  prm.declare_entry("Step cuts", "6", Integer(0, 30),
+                    "How often a load step whose relaxation does not converge within Maximum "
+                    "iterations is cut: the state at its start is restored (broken bonds and "
+                    "material history included) and the load applied in two halves, each cut "
+                    "again if needed; after two converged sub-steps the sub-step doubles again "
+                    "[-]. 0 = the run stops at the first relaxation that does not converge.");
   prm.leave_subsection();
   for (unsigned int k = 1; k <= n_region_slots; ++k) {
     prm.enter_subsection("Region " + std::to_string(k));
@@ -202,6 +209,13 @@ struct ParticleZone<dim>::Impl {
   bool passes_break = true;
   bool account_restored = true; // false: a restart from a checkpoint without the account
   unsigned int explicit_steps = 0, relaxation_iterations = 0;
+  // Quasi-static step cuts (Particles/Quasi-static/Step cuts): the most a step is halved, the
+  // load sub-step the next step starts with [s] (0: the whole step), the converged sub-steps
+  // since the last cut or growth, the cuts of the run, and the log lines they made.
+  unsigned int max_step_cuts = 6;
+  double sub_step = 0;
+  unsigned int sub_steps_converged = 0, step_cuts = 0;
+  std::vector<std::string> messages;
   double advance_seconds = 0;       // wall time in advance_to [s]
   std::size_t broken_initially = 0; // bond ends cut by pre-cracks, over all ranks
   std::uint64_t n_bonds_global = 0; // pairs, over all ranks
@@ -498,6 +512,54 @@ struct ParticleZone<dim>::Impl {
     }
   }
 
+  // What a quasi-static step changes, held in memory to go back to when its relaxation does
+  // not converge: the particles' kinematics and damage, the broken bonds, the method's
+  // committed material history (its checkpoint bytes), the clock and the step bounds.
+  struct Snapshot {
+    std::vector<dealii::Tensor<1, dim>> u, v, a, f;
+    std::vector<double> damage, bound;
+    std::vector<std::uint8_t> broken;
+    std::string history;
+    double time = 0, dt_stable = 0;
+    std::size_t broke_since_step_check = 0;
+  };
+  Snapshot snapshot() const {
+    Snapshot s{particles.displacements(),
+               particles.velocities(),
+               particles.accelerations(),
+               particles.forces(),
+               particles.damages(),
+               stiffness_bound,
+               bonds.broken,
+               {},
+               time,
+               dt_stable,
+               broke_since_step_check};
+    std::ostringstream out;
+    method->save(out);
+    s.history = out.str();
+    return s;
+  }
+  void restore(const Snapshot& s) {
+    particles.displacements() = s.u;
+    particles.velocities() = s.v;
+    particles.accelerations() = s.a;
+    particles.forces() = s.f;
+    particles.damages() = s.damage;
+    stiffness_bound = s.bound;
+    // Bonds broken in the failed attempt heal: the families are rebuilt from the intact bonds
+    // as a restart does (collective on a distributed zone: every rank rebuilds if any must).
+    const bool changed = bonds.broken != s.broken;
+    bonds.broken = s.broken;
+    if (partition ? dealii::Utilities::MPI::logical_or(changed, comm) : changed)
+      method->initialise(particles, bonds);
+    std::istringstream in(s.history);
+    method->load(in);
+    time = s.time;
+    dt_stable = s.dt_stable;
+    broke_since_step_check = s.broke_since_step_check;
+  }
+
   void prescribe(double t) {
     for (auto& r : regions) {
       dealii::Vector<double> value(r.components.size());
@@ -538,6 +600,11 @@ ParticleZone<dim>::ParticleZone(dealii::ParameterHandler& prm, const std::string
   parse_section(prm, "Material", impl_->law);
   parse_section(prm, "Particles", impl_->prm);
   parse_section(prm, std::vector<std::string>{"Particles", "Quasi-static"}, impl_->adr_prm);
+  prm.enter_subsection("Particles");
+  prm.enter_subsection("Quasi-static");
+  impl_->max_step_cuts = prm.get_integer("Step cuts");
+  prm.leave_subsection();
+  prm.leave_subsection();
   impl_->damage = damage;
   const std::shared_ptr<const materials::ConstitutiveLaw> law = materials::create_law(impl_->law);
   const meshfree::ParticleMaterial material{
@@ -709,9 +776,23 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
 }
 
 template <int dim>
+std::array<double, 3> ParticleZone<dim>::step_cut_state() const {
+  return {impl_->sub_step, double(impl_->sub_steps_converged), double(impl_->step_cuts)};
+}
+
+template <int dim>
+void ParticleZone<dim>::restore_step_cut_state(const std::array<double, 3>& state) {
+  impl_->sub_step = state[0] > 0 && std::isfinite(state[0]) ? state[0] : 0.0;
+  impl_->sub_steps_converged = state[1] >= 0 && state[1] < 3 ? unsigned(state[1]) : 0u;
+  impl_->step_cuts = state[2] >= 0 && state[2] < 1e9 ? unsigned(state[2]) : 0u;
+}
+
+template <int dim>
 std::vector<std::string> ParticleZone<dim>::take_messages() {
   Impl& z = *impl_;
   std::vector<std::string> mine = z.method->take_messages();
+  mine.insert(mine.end(), z.messages.begin(), z.messages.end()); // every rank's alike
+  z.messages.clear();
   if (!z.partition)
     return mine;
   // A distributed zone's particles are reported by their owners, on any rank; a message every
@@ -751,7 +832,6 @@ bool ParticleZone<dim>::advance_to(double time, const std::function<bool(double)
     }
   } clock{z.advance_seconds};
   if (z.prm.integration == "quasi_static") {
-    z.prescribe(time);
     meshfree::AdaptiveDynamicRelaxation<dim> adr(
         z.adr_prm, [&z](meshfree::ParticleSet<dim>& p) { z.compute_forces(p); });
     if (z.partition) // sums over the owned particles of all ranks
@@ -761,16 +841,52 @@ bool ParticleZone<dim>::advance_to(double time, const std::function<bool(double)
                                             MPI_DOUBLE, MPI_SUM, z.comm);
                             },
                             [&z](const std::function<void()>& f) { z.collectively(f); }});
-    const auto result = adr.solve(z.particles, z.stiffness_bound);
-    z.relaxation_iterations += result.iterations;
-    if (!result.converged)
-      throw NumericalFailure("dynamic relaxation did not converge (relative residual " +
-                                 significant(result.relative_residual) + ")",
-                             "particle zone",
-                             "raise Particles/Quasi-static/Maximum iterations "
-                             "or take more, smaller steps");
-    z.method->commit_state();
-    z.time = time;
+    // A relaxation that does not converge is not carried on from: the state at the start of
+    // the (sub-)step is restored and the load applied in two halves, as in coupled runs
+    // (Simulation::coupled_relaxation). The sub-step doubles after two converged ones and
+    // carries over to the next step.
+    const double span = time - z.time;
+    double sub = z.sub_step > 0 ? std::min(z.sub_step, span) : span;
+    unsigned int cuts = 0;
+    while (z.time < time - 1e-9 * span) {
+      const double target = time - z.time <= sub * (1 + 1e-9) ? time : z.time + sub;
+      std::optional<typename Impl::Snapshot> snapshot;
+      if (z.max_step_cuts > 0)
+        snapshot = z.snapshot();
+      z.prescribe(target);
+      const auto result = adr.solve(z.particles, z.stiffness_bound);
+      z.relaxation_iterations += result.iterations;
+      if (!result.converged) {
+        if (cuts >= z.max_step_cuts)
+          throw NumericalFailure(
+              "dynamic relaxation did not converge (relative residual " +
+                  significant(result.relative_residual) + " after " +
+                  std::to_string(result.iterations) + " iterations" +
+                  (cuts > 0 ? ", " + std::to_string(cuts) + " step cuts" : std::string()) + ")",
+              "particle zone, t = " + significant(target, 6) + " s",
+              "raise Particles/Quasi-static/Maximum iterations or Step cuts, "
+              "or take more, smaller steps");
+        const double from = z.time;
+        z.restore(*snapshot);
+        sub = (target - from) / 2;
+        ++cuts;
+        ++z.step_cuts;
+        z.sub_steps_converged = 0;
+        z.messages.push_back(
+            "t = " + significant(target, 6) + " s: relaxation not converged (relative residual " +
+            significant(result.relative_residual) + " after " + std::to_string(result.iterations) +
+            " iterations); state of t = " + significant(from, 6) +
+            " s restored, load step cut to " + significant(sub) + " s");
+        continue;
+      }
+      z.method->commit_state();
+      z.time = target;
+      if (sub < span && ++z.sub_steps_converged >= 2) {
+        sub = std::min(2 * sub, span);
+        z.sub_steps_converged = 0;
+      }
+    }
+    z.sub_step = sub;
     return true;
   }
   while (z.time < time * (1 - 1e-12)) {
@@ -930,8 +1046,10 @@ void ParticleZone<dim>::add_figures(RunContext& ctx) const {
   if (z.prm.integration == "explicit") {
     s.set_figure("particle_explicit_steps", z.explicit_steps, "-");
     s.set_figure("max_particle_speed", z.max(z.max_speed), "m/s");
-  } else
+  } else {
     s.set_figure("relaxation_iterations", z.relaxation_iterations, "iterations");
+    s.set_figure("relaxation_step_cuts", z.step_cuts, "-");
+  }
   if (z.prm.reaction_region > 0)
     s.set_figure("particle_reaction_norm", z.reaction().norm(), "N");
   (void)per;

@@ -20,6 +20,7 @@
 
 #include <deal.II/base/parameter_handler.h>
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -82,6 +83,11 @@ class ParticleZone {
   // the zone's time [s]) may end the call early at a complete sub-step; returns whether `time`
   // was reached. `stop` is called on every rank at the same sub-steps.
   bool advance_to(double time, const std::function<bool(double)>& stop = {});
+  // Quasi-static step cuts (Particles/Quasi-static/Step cuts): the sub-step the next step starts
+  // with [s] (0: the whole step), the converged sub-steps since the last cut or growth, and the
+  // cuts so far; a checkpoint keeps them, so a restart steps as the uninterrupted run.
+  std::array<double, 3> step_cut_state() const;
+  void restore_step_cut_state(const std::array<double, 3>& state);
   // The method's messages for the run log since the last call (e.g. particles that lost their
   // family), from every rank, on rank 0 (collective when distributed; empty elsewhere).
   std::vector<std::string> take_messages();

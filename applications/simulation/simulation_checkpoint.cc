@@ -127,6 +127,8 @@ void Simulation<dim>::write_checkpoint(unsigned int step, double time, RunContex
     state["relaxation_step_cuts"] = relaxation_step_cuts_;
     state["relaxation_sub_steps"] = relaxation_sub_steps_;
     state["last_step_sub_steps"] = last_step_sub_steps_;
+    if (particles_)
+      state["particle_zone_step_cuts"] = particles_->step_cut_state();
     state["last_relaxation_iterations"] = last_relaxation_.iterations;
     state["last_relaxation_residual"] = last_relaxation_.relative_residual;
     state["conversion_extremes"] = conversion_extremes().to_json();
@@ -257,6 +259,9 @@ unsigned int Simulation<dim>::load_checkpoint(RunContext& ctx) {
     relaxation_step_cuts_ = state.value("relaxation_step_cuts", 0ul);
     relaxation_sub_steps_ = state.value("relaxation_sub_steps", 0ul);
     last_step_sub_steps_ = state.value("last_step_sub_steps", 0u);
+    if (particles_ && state.contains("particle_zone_step_cuts"))
+      particles_->restore_step_cut_state(
+          state["particle_zone_step_cuts"].get<std::array<double, 3>>());
     last_relaxation_.iterations = state.value("last_relaxation_iterations", 0u);
     last_relaxation_.relative_residual = state.value("last_relaxation_residual", 0.0);
     if (state.contains("conversion_extremes"))

@@ -7,3 +7,40 @@ spinesim_add_scene_test(scene.pd_plate_tension
   SCENE ${PROJECT_SOURCE_DIR}/applications/scenes/pd_plate_tension.prm
   EXPECT "status==ok;particle_reaction_norm~857143:0.05;particles~800:0"
   LABELS "scene;meshfree")
+
+# Step cuts of a particle zone's quasi-static steps (Particles/Quasi-static/Step cuts): the plate
+# as NOSB-PD particles of a J2 material yielding at 10 MPa (about two thirds of the load), in
+# one step allowed 915 pseudo-steps. Measured with one thread: the whole step takes 976, the
+# halves of Simulation/Steps = 2 under 800 and between 800 and 860 (the second yields), so the
+# whole step fails and is cut once (6 % from either count; the counts are those of one thread,
+# as the tests run). The state of t = 0 is restored and the halves are then the two steps of
+# the two-step run: the reaction and the plastic work agree to the last digit (0 measured;
+# bound 1e-12). On two ranks (the zone distributed, its families rebuilt on every rank) the
+# step is cut too and agrees with one rank to 4.5e-8 (the relaxation's tolerance 1e-8 of the
+# reaction; bound 1e-6).
+set(_pz ${PROJECT_SOURCE_DIR}/applications/scenes/pd_plate_tension.prm)
+set(_pz_runs ${CMAKE_CURRENT_BINARY_DIR}/runs/zone_step_cut)
+set(_pz_set "Effects/Particles method=nosb" "Material/Model=j2_plasticity"
+    "Material/Yield stress=10e6" "Material/Hardening modulus=1e9" "Simulation/Output interval=0"
+    "Particles/Quasi-static/Maximum iterations=915")
+spinesim_add_scene_test(scene.pd_plate_plastic_step_cut SCENE ${_pz} OUT ${_pz_runs}/cut
+  SET ${_pz_set} "Simulation/Steps=1" EXPECT "status==ok;relaxation_step_cuts~1:0"
+  LABELS "scene;meshfree;stability" FIXTURE pz_cut)
+spinesim_add_scene_test(scene.pd_plate_plastic_two_steps SCENE ${_pz} OUT ${_pz_runs}/two_steps
+  SET ${_pz_set} "Simulation/Steps=2" EXPECT "status==ok;relaxation_step_cuts<=0"
+  LABELS "scene;meshfree" FIXTURE pz_two_steps)
+spinesim_add_comparison_test(scene.pd_plate_plastic_step_cut_equals_two_steps
+  A ${_pz_runs}/two_steps/summary.json B ${_pz_runs}/cut/summary.json
+  CHECKS "particle_reaction_norm:rel:1e-12;particle_plastic_work:rel:1e-12"
+  REQUIRES "pz_cut;pz_two_steps" LABELS "scene;meshfree;stability")
+spinesim_add_scene_test(scene.pd_plate_plastic_step_cut_2ranks SCENE ${_pz} OUT ${_pz_runs}/cut_2ranks
+  RANKS 2 SET ${_pz_set} "Simulation/Steps=1" EXPECT "status==ok;relaxation_step_cuts~1:0"
+  LABELS "scene;meshfree;stability" FIXTURE pz_cut_2ranks)
+spinesim_add_comparison_test(scene.pd_plate_plastic_step_cut_ranks_agree
+  A ${_pz_runs}/cut/summary.json B ${_pz_runs}/cut_2ranks/summary.json
+  CHECKS "particle_reaction_norm:rel:1e-6;particle_plastic_work:rel:1e-6"
+  REQUIRES "pz_cut;pz_cut_2ranks" LABELS "scene;meshfree;mpi")
+spinesim_add_scene_test(scene.pd_plate_plastic_no_step_cuts SCENE ${_pz} OUT ${_pz_runs}/no_cuts
+  SET ${_pz_set} "Simulation/Steps=1" "Particles/Quasi-static/Step cuts=0"
+  EXIT 1 MATCH "dynamic relaxation did not converge .relative residual [0-9.e-]+ after 915 iterations.*particle zone, t = 1 s"
+  EXPECT "status==failed" LABELS "scene;meshfree;stability")
