@@ -43,6 +43,7 @@ struct CouplingTimings {
   double bonds = 0;        // incremental bond search and row ownership
   double interface = 0;    // interface DoFs, their MLS fits, halo plan, first update
   double totals = 0;       // mass, momentum and energy before and after (the report)
+  double snapshots = 0;    // states held and restored for step cuts (relax_step), not conversion
 };
 
 template <int dim>

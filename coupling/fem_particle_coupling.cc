@@ -156,6 +156,65 @@ FemParticleCoupling<dim>::relax(double time, bool with_conversion,
   return integrator_.relax(time, with_conversion, progress);
 }
 
+template <int dim>
+typename FemParticleCoupling<dim>::StepReport FemParticleCoupling<dim>::relax_step(
+    double from, double to, bool with_conversion, unsigned int max_cuts, StepSchedule& schedule,
+    const std::function<void(const RelaxationProgress&)>& progress, const StepEvents& events) {
+  // A crack that grows or a zone that yields within one large increment can keep the
+  // pseudo-dynamics from settling; smaller increments let bonds break and points yield a few
+  // at a time. The sub-step grows back as the automatic increments of implicit codes do.
+  StepReport step;
+  const double span = to - from;
+  if (!(span > 0)) { // the same load again (after a conversion outside a relaxation)
+    step.last = relax(to, with_conversion, progress);
+    step.last_time = to;
+    step.iterations = step.last.iterations;
+    step.converged = step.last.converged;
+    step.sub_steps = step.converged ? 1 : 0;
+    if (events.relaxed)
+      events.relaxed(to, step.last);
+    return step;
+  }
+  double sub = schedule.sub_step > 0 ? std::min(schedule.sub_step, span) : span;
+  double t = from;
+  std::optional<StepSnapshot> snapshot;
+  while (t < to - 1e-9 * span) {
+    const double target = to - t <= sub * (1 + 1e-9) ? to : t + sub;
+    if (max_cuts > 0) {
+      ScopedTime timer(state_.timings.snapshots);
+      snapshot = take_snapshot();
+    }
+    step.last = relax(target, with_conversion, progress);
+    step.last_time = target;
+    step.iterations += step.last.iterations;
+    if (events.relaxed)
+      events.relaxed(target, step.last);
+    if (!step.last.converged) {
+      if (step.cuts >= max_cuts)
+        return step; // not converged: the caller stops the run
+      {
+        ScopedTime timer(state_.timings.snapshots);
+        restore(*snapshot);
+      }
+      sub = (target - t) / 2;
+      ++step.cuts;
+      schedule.converged = 0;
+      if (events.cut)
+        events.cut(target, step.last, t, sub);
+      continue;
+    }
+    t = target;
+    ++step.sub_steps;
+    if (sub < span && ++schedule.converged >= 2) {
+      sub = std::min(2 * sub, span);
+      schedule.converged = 0;
+    }
+  }
+  schedule.sub_step = sub;
+  step.converged = true;
+  return step;
+}
+
 // ---------------------------------------------------------------- totals
 
 template <int dim>

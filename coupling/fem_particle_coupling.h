@@ -125,6 +125,40 @@ class FemParticleCoupling {
   RelaxationReport relax(double time, bool with_conversion,
                          const std::function<void(const RelaxationProgress&)>& progress = {});
 
+  // A quasi-static load step from the equilibrium at the loads of `from` to that of `to` [s],
+  // cut where a relaxation does not converge: before each sub-step the state is held
+  // (take_snapshot); a sub-step whose relaxation fails is undone (restore, conversions and
+  // bond breaks included) and its load applied in two halves, at most `max_cuts` times in the
+  // step. The schedule carries the sub-step between steps: it doubles after two converged
+  // sub-steps, up to the step, and a caller keeps it in its checkpoint. from == to is one
+  // relaxation at that load (nothing to cut). `relaxed` is called after every relaxation,
+  // converged or not (before an undo), `cut` after an undo with the load time restored and
+  // the new sub-step [s]. Not converged when the cuts are used up (the caller stops the run;
+  // the state is then that of the failed relaxation). Collective.
+  struct StepSchedule {
+    double sub_step = 0;        // [s]; 0 = the whole step
+    unsigned int converged = 0; // converged sub-steps since the last cut or growth
+  };
+  struct StepReport {
+    bool converged = false;
+    RelaxationReport last; // the last relaxation (the failed one when not converged)
+    double last_time = 0;  // its load time [s]
+    unsigned int iterations = 0, sub_steps = 0, cuts = 0; // of the step; undone ones counted
+    // "relaxation not converged[ after n step cuts]", for the caller's NumericalFailure.
+    std::string what_failed() const {
+      return cuts == 0 ? "relaxation not converged"
+                       : "relaxation not converged after " + std::to_string(cuts) + " step cuts";
+    }
+  };
+  struct StepEvents {
+    std::function<void(double time, const RelaxationReport&)> relaxed;
+    std::function<void(double time, const RelaxationReport&, double restored, double sub_step)> cut;
+  };
+  StepReport relax_step(double from, double to, bool with_conversion, unsigned int max_cuts,
+                        StepSchedule& schedule,
+                        const std::function<void(const RelaxationProgress&)>& progress,
+                        const StepEvents& events);
+
   // The eigenvalues μ of the one-step map of the explicit coupled scheme, (u^n, v^{n−½}) →
   // (u^{n+1}, v^{n+½}) at step dt, linearised about the current state: one probed step per
   // unknown (differences from an unperturbed step at the same time), then a dense eigenvalue

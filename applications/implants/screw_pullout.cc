@@ -342,6 +342,10 @@ struct PulloutProgress {
   // With particles: the largest relative virial imbalance of the coupled steps so far [-],
   // and the deepest a particle went into the screw's surface beyond its reference gap [m].
   double imbalance_max = 0, contact_depth_max = 0;
+  // Coupled steps cut where a relaxation does not converge (FemParticleCoupling::relax_step):
+  // the sub-step schedule and the cuts so far.
+  double relax_sub_step = 0;
+  unsigned int relax_converged = 0, step_cuts = 0;
 
   bool finished() const { return dropped || t >= 1 - 1e-12; }
   nlohmann::json to_json() const {
@@ -367,7 +371,10 @@ struct PulloutProgress {
             {"toggle_plus", toggle_plus},
             {"toggle_minus", toggle_minus},
             {"imbalance_max", imbalance_max},
-            {"contact_depth_max", contact_depth_max}};
+            {"contact_depth_max", contact_depth_max},
+            {"relax_sub_step", relax_sub_step},
+            {"relax_converged", relax_converged},
+            {"step_cuts", step_cuts}};
   }
   void from_json(const nlohmann::json& j) {
     step = j.at("step");
@@ -394,6 +401,9 @@ struct PulloutProgress {
     toggle_minus = j.value("toggle_minus", std::vector<double>{});
     imbalance_max = j.value("imbalance_max", 0.0);
     contact_depth_max = j.value("contact_depth_max", 0.0);
+    relax_sub_step = j.value("relax_sub_step", 0.0);
+    relax_converged = j.value("relax_converged", 0u);
+    step_cuts = j.value("step_cuts", 0u);
     if (disp.empty() || disp.size() != force.size() || !(increment > 0))
       throw std::runtime_error("inconsistent pull-out curve");
   }
@@ -866,6 +876,7 @@ class ScrewPullout : public Scenario {
       sum.set_figure("linear_iterations", p.linear, "iterations");
       sum.set_figure("relaxed_steps", p.relaxed_steps, "-");
       sum.set_figure("relaxation_steps", p.relaxation, "steps");
+      sum.set_figure("relaxation_step_cuts", p.step_cuts, "-");
     };
     try {
       while (!p.finished()) {
@@ -873,6 +884,9 @@ class ScrewPullout : public Scenario {
         const bool toggling = p.toggle_step < toggle_total;
         const double t = toggling ? 0.0 : std::min(1.0, p.t + p.increment);
         const double tau = toggling ? double(p.toggle_step + 1) / pull_.toggle_steps : n_toggle + t;
+        // The load time of the last equilibrium, where a cut step starts from.
+        const double tau_before =
+            toggling ? double(p.toggle_step) / pull_.toggle_steps : n_toggle + p.t;
         unsigned int it = 0, linear = 0, relaxation = 0;
         {
           dealii::TimerOutput::Scope timer(ctx.timer(), "mechanics");
@@ -880,7 +894,7 @@ class ScrewPullout : public Scenario {
             if (coupled && coupled->n_free_particles() > 0) {
               // Particles and FEM together: dynamic relaxation of both (Newton has no particle
               // tangent), converting what fails on the way.
-              relaxation = relax_coupled(ctx, *coupled, step, tau);
+              relaxation = relax_coupled(ctx, *coupled, step, tau_before, tau, p);
               p.relaxation += relaxation;
               ++p.relaxed_steps;
             } else {
@@ -911,7 +925,7 @@ class ScrewPullout : public Scenario {
                 }();
                 if (r.cells > 0) {
                   ctx.log() << "  step " << step << ": " << r.describe(" N") << "\n";
-                  const unsigned int more = relax_coupled(ctx, *coupled, step, tau);
+                  const unsigned int more = relax_coupled(ctx, *coupled, step, tau, tau, p);
                   relaxation += more;
                   p.relaxation += more;
                   ++p.relaxed_steps;
@@ -1120,24 +1134,43 @@ class ScrewPullout : public Scenario {
       ctx.log() << "  particles: " << m << "\n";
   }
 
-  // Both models to the equilibrium of load time τ by dynamic relaxation, converting the bone
-  // that fails on the way (FemParticleCoupling::relax); returns its pseudo-steps.
+  // Both models from the equilibrium of load time `from` to that of τ by dynamic relaxation,
+  // converting the bone that fails on the way; a relaxation that does not converge is undone
+  // and its load increment cut (FemParticleCoupling::relax_step, Coupling/Relaxation step
+  // cuts). Returns the step's pseudo-steps.
   unsigned int relax_coupled(RunContext& ctx, coupling::FemParticleCoupling<3>& coupled,
-                             unsigned int step, double tau) const {
+                             unsigned int step, double from, double tau, PulloutProgress& p) const {
     const auto progress = [&](const coupling::RelaxationProgress& r) {
       ctx.log() << "  step " << step << ": " << r.describe(" N") << std::endl;
     };
-    const auto report = coupled.relax(tau, true, progress);
-    for (const auto& r : report.conversions)
-      ctx.log() << "  step " << step << ": " << r.describe(" N") << "\n";
-    log_particle_messages(ctx, coupled);
+    coupling::FemParticleCoupling<3>::StepEvents events;
+    events.relaxed = [&](double, const coupling::RelaxationReport<3>& report) {
+      for (const auto& r : report.conversions)
+        ctx.log() << "  step " << step << ": " << r.describe(" N")
+                  << (report.converged ? "" : " (undone below)") << "\n";
+      log_particle_messages(ctx, coupled);
+    };
+    events.cut = [&](double t, const coupling::RelaxationReport<3>& report, double restored,
+                     double sub_step) {
+      ctx.log() << "  step " << step << ": relaxation at load time " << fmt(t, 6)
+                << " not converged (relative residual " << fmt(report.relative_residual, 4)
+                << " after " << report.iterations << " pseudo-steps); state of load time "
+                << fmt(restored, 6) << " restored, increment cut to " << fmt(sub_step, 4) << "\n";
+    };
+    coupling::FemParticleCoupling<3>::StepSchedule schedule{p.relax_sub_step, p.relax_converged};
+    const auto report = coupled.relax_step(from, tau, true, coupling_.relaxation_step_cuts,
+                                           schedule, progress, events);
+    p.relax_sub_step = schedule.sub_step;
+    p.relax_converged = schedule.converged;
+    p.step_cuts += report.cuts;
     if (!report.converged)
-      throw NumericalFailure("relaxation not converged",
-                             "step " + std::to_string(step) + ", load time " + fmt(tau, 6) +
-                                 ": relative residual " + fmt(report.relative_residual, 4) +
-                                 " after " + std::to_string(report.iterations) + " pseudo-steps",
-                             "raise Coupling/Relaxation max iterations, take more Pullout/Steps, "
-                             "or convert earlier (a lower Coupling/Plastic strain threshold)");
+      throw NumericalFailure(
+          report.what_failed(),
+          "step " + std::to_string(step) + ", load time " + fmt(report.last_time, 6) +
+              ": relative residual " + fmt(report.last.relative_residual, 4) + " after " +
+              std::to_string(report.last.iterations) + " pseudo-steps",
+          "raise Coupling/Relaxation max iterations or Coupling/Relaxation step cuts, take more "
+          "Pullout/Steps, or convert earlier (a lower Coupling/Plastic strain threshold)");
     return report.iterations;
   }
 

@@ -12,7 +12,6 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
-#include <optional>
 #include <set>
 #include <sstream>
 
@@ -565,69 +564,41 @@ void Simulation<dim>::coupled_relaxation(unsigned int step, double time, double 
   const auto progress = [&](const coupling::RelaxationProgress& p) {
     ctx.log() << "  t = " << time << " s: " << p.describe(force) << std::endl;
   };
-  // A relaxation that does not converge is not carried on from: the state at the start of the
-  // (sub-)step is restored and its load applied in two halves (Coupling/Relaxation step cuts).
-  // A crack that grows or a zone that yields within one large load increment can keep the
-  // pseudo-dynamics from settling; smaller increments let bonds break and points yield a few at
-  // a time. The sub-step grows back (doubles) after two converged sub-steps, and carries over
-  // to the next step (and into the checkpoint), as the automatic increments of implicit codes
-  // do.
-  const double start = time - dt;
-  const unsigned int max_cuts = coupling_prm_.relaxation_step_cuts;
-  double sub = relaxation_sub_step_ > 0 ? std::min(relaxation_sub_step_, dt) : dt;
-  double t = start;
-  unsigned int cuts = 0, iterations = 0, sub_steps = 0;
-  std::optional<typename coupling::FemParticleCoupling<dim>::StepSnapshot> snapshot;
-  while (t < time - 1e-9 * dt) {
-    const double target = time - t <= sub * (1 + 1e-9) ? time : t + sub;
-    if (max_cuts > 0) {
-      dealii::TimerOutput::Scope scope(ctx.timer(), "step snapshots");
-      snapshot = coupled_->take_snapshot();
-    }
-    const auto report = coupled_->relax(target, effects_.conversion, progress);
-    relaxation_iterations_ += report.iterations;
-    iterations += report.iterations;
+  // A relaxation that does not converge is not carried on from: the step is cut
+  // (Coupling/Relaxation step cuts, FemParticleCoupling::relax_step).
+  typename coupling::FemParticleCoupling<dim>::StepEvents events;
+  events.relaxed = [&](double t, const coupling::RelaxationReport<dim>& report) {
     for (const auto& r : report.conversions)
-      ctx.log() << "  t = " << target << " s: " << r.describe(force)
+      ctx.log() << "  t = " << t << " s: " << r.describe(force)
                 << (report.converged ? "" : " (undone below)") << "\n";
-    if (!report.converged) {
-      const std::string where = "step " + std::to_string(step) + ", t = " + significant(target, 6) +
-                                " s: relative residual " + significant(report.relative_residual) +
-                                " after " + std::to_string(report.iterations) + " iterations";
-      if (cuts >= max_cuts)
-        throw NumericalFailure(
-            max_cuts == 0 ? "relaxation not converged"
-                          : "relaxation not converged after " + std::to_string(cuts) +
-                                " step cuts (sub-step " + significant(target - t) + " s)",
-            where,
-            "raise Coupling/Relaxation max iterations or Coupling/Relaxation step cuts, take "
-            "more Simulation/Steps, or run explicit dynamics if the crack runs unstably");
-      coupled_->restore(*snapshot);
-      sub = (target - t) / 2;
-      ++cuts;
-      ++relaxation_step_cuts_;
-      sub_steps_converged_ = 0;
-      ctx.log() << "  t = " << target << " s: relaxation not converged (relative residual "
-                << report.relative_residual << " after " << report.iterations
-                << " iterations); state of t = " << t << " s restored, load step cut to " << sub
-                << " s\n";
-      continue;
-    }
-    t = target;
-    ++sub_steps;
-    last_relaxation_ = report;
-    if (sim_.reaction_boundary_id >= 0) // the peak between two output steps counts too
+    if (report.converged && sim_.reaction_boundary_id >= 0) // a sub-step's peak counts too
       track_load(coupled_->reaction_force(sim_.reaction_boundary_id).norm(), t);
-    if (sub < dt && ++sub_steps_converged_ >= 2) {
-      sub = std::min(2 * sub, dt);
-      sub_steps_converged_ = 0;
-    }
-  }
-  relaxation_sub_step_ = sub;
-  relaxation_sub_steps_ += sub_steps;
+  };
+  events.cut = [&](double t, const coupling::RelaxationReport<dim>& report, double restored,
+                   double sub_step) {
+    ctx.log() << "  t = " << t << " s: relaxation not converged (relative residual "
+              << report.relative_residual << " after " << report.iterations
+              << " iterations); state of t = " << restored << " s restored, load step cut to "
+              << sub_step << " s\n";
+  };
+  const auto report =
+      coupled_->relax_step(time - dt, time, effects_.conversion, coupling_prm_.relaxation_step_cuts,
+                           relaxation_schedule_, progress, events);
+  relaxation_iterations_ += report.iterations;
+  relaxation_step_cuts_ += report.cuts;
+  relaxation_sub_steps_ += report.sub_steps;
+  last_step_sub_steps_ = report.sub_steps;
+  last_relaxation_ = report.last;
   // The step's row: all its relaxations, those undone included (what the step cost).
-  last_relaxation_.iterations = iterations;
-  last_step_sub_steps_ = sub_steps;
+  last_relaxation_.iterations = report.iterations;
+  if (!report.converged)
+    throw NumericalFailure(
+        report.what_failed(),
+        "step " + std::to_string(step) + ", t = " + significant(report.last_time, 6) +
+            " s: relative residual " + significant(report.last.relative_residual) + " after " +
+            std::to_string(report.last.iterations) + " iterations",
+        "raise Coupling/Relaxation max iterations or Coupling/Relaxation step cuts, take more "
+        "Simulation/Steps, or run explicit dynamics if the crack runs unstably");
 }
 
 template <int dim>

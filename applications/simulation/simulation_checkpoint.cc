@@ -122,8 +122,8 @@ void Simulation<dim>::write_checkpoint(unsigned int step, double time, RunContex
       state["energy_account_sums"] = account_sums;
     state["relaxation_iterations"] = relaxation_iterations_;
     // The sub-step a cut left: the restarted run continues with it, as the uninterrupted one.
-    state["relaxation_sub_step"] = relaxation_sub_step_;
-    state["relaxation_sub_steps_converged"] = sub_steps_converged_;
+    state["relaxation_sub_step"] = relaxation_schedule_.sub_step;
+    state["relaxation_sub_steps_converged"] = relaxation_schedule_.converged;
     state["relaxation_step_cuts"] = relaxation_step_cuts_;
     state["relaxation_sub_steps"] = relaxation_sub_steps_;
     state["last_step_sub_steps"] = last_step_sub_steps_;
@@ -254,8 +254,8 @@ unsigned int Simulation<dim>::load_checkpoint(RunContext& ctx) {
     first_stable_step_ = state.value("first_stable_step", 0.0);
     initial_kinetic_energy_ = state.value("initial_kinetic_energy", 0.0);
     relaxation_iterations_ = state.value("relaxation_iterations", 0ul);
-    relaxation_sub_step_ = state.value("relaxation_sub_step", 0.0);
-    sub_steps_converged_ = state.value("relaxation_sub_steps_converged", 0u);
+    relaxation_schedule_.sub_step = state.value("relaxation_sub_step", 0.0);
+    relaxation_schedule_.converged = state.value("relaxation_sub_steps_converged", 0u);
     relaxation_step_cuts_ = state.value("relaxation_step_cuts", 0ul);
     relaxation_sub_steps_ = state.value("relaxation_sub_steps", 0ul);
     last_step_sub_steps_ = state.value("last_step_sub_steps", 0u);

@@ -154,11 +154,9 @@ class Simulation : public framework::Scenario {
   double first_stable_step_ = 0;      // explicit mechanics: the first stable step [s]
   unsigned int newton_iterations_ = 0, linear_iterations_ = 0;
   unsigned long relaxation_iterations_ = 0; // quasi-static coupled runs
-  // Step cuts (coupled_relaxation): the load sub-step the next step starts with [s] (0: the
-  // whole step), the converged sub-steps since the last cut or growth, the cuts and the
-  // converged sub-steps of the run, and the sub-steps of the last step.
-  double relaxation_sub_step_ = 0;
-  unsigned int sub_steps_converged_ = 0;
+  // Step cuts (coupled_relaxation): the schedule of the load sub-step the next step starts
+  // with, the cuts and the converged sub-steps of the run, and the sub-steps of the last step.
+  typename coupling::FemParticleCoupling<dim>::StepSchedule relaxation_schedule_;
   unsigned long relaxation_step_cuts_ = 0, relaxation_sub_steps_ = 0;
   unsigned int last_step_sub_steps_ = 0;
   // A coupled step whose virial_imbalance_relative exceeds this is reported in the log [-].

@@ -155,6 +155,18 @@ spinesim_add_summaries_match_test(implants.screw_pullout_particles_restart_match
 # and restarted, step 8 ends with the uninterrupted run's figures to 1e-8. About 4 minutes on
 # one core for the pair, so labelled long.
 set(_screw_particles_restart ${_screw_quick} ${_screw_particles})
+# Step cuts in the pull-out (Coupling/Relaxation step cuts): step 7, where 68 more cells fail
+# in a cascade of conversions (434 pseudo-steps at the default limit), allowed 300 pseudo-steps.
+# Each cut undoes the attempt's conversions and restores the state of step 6; but every
+# sub-step down to 1/64 of the increment still converts cells in a cascade and needs more than
+# 300 (measured: residuals 2.1e-4, 1.1e-4, 1.3e-4, 3.3e-3, 2.1e-4, 2.4e-4 of the reactions
+# against 1e-4), so the run stops after 6 cuts, exit 1, naming the step: a cut cannot shorten
+# a cascade, only more pseudo-steps can (docs/coupling.md). About 190 s: long.
+spinesim_add_scene_test(implants.screw_pullout_particles_step_cuts_used_up SCENE ${_screw}
+  OUT ${_screw_runs}/particles_cuts SET ${_screw_particles_restart}
+      "Pullout/Stop after step=7" "Coupling/Relaxation max iterations=300"
+  EXIT 1 MATCH "relaxation not converged after 6 step cuts.*step 7, load time"
+  EXPECT "status==failed;load_steps~6:0" LABELS "scene;implants;coupling;stability;long")
 spinesim_add_scene_test(implants.screw_pullout_particles_in_checkpoint_uninterrupted
   SCENE ${_screw} OUT ${_screw_runs}/particles_step8 SET ${_screw_particles_restart}
       "Pullout/Stop after step=8"
