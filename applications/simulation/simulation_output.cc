@@ -299,6 +299,8 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
       // increments of the run (the steps when nothing was cut).
       s.set_figure("relaxation_step_cuts", double(relaxation_step_cuts_), "-");
       s.set_figure("relaxation_sub_steps", double(relaxation_sub_steps_), "-");
+      // What holding the states for the cuts costs (FemParticleCoupling::relax_step).
+      s.set_figure("step_snapshot_time_s", coupled_->timings().snapshots, "s");
       const auto& history = ctx.history();
       const auto& columns = history.columns();
       const std::string column = "virial_imbalance_relative";
