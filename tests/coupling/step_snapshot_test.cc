@@ -5,11 +5,9 @@
 // particles, free flags, converted cells, plastic strains), and the run continues from it as
 // it continued from the original state. 2-D and 3-D, bond-based PD, NOSB-PD and SPG, and on
 // 2 ranks under mpiexec.
+#include "coupled_setup.h" // this directory: the coupling tests' shared model
 #include "coupling/fem_particle_coupling.h"
-#include "fem/materials/law_parameters.h"
 #include "fem/mechanics_solver.h"
-#include "fem/mesh.h"
-#include "meshfree/particle_method.h"
 
 #include <deal.II/base/mpi.h>
 #include <deal.II/distributed/tria.h>
@@ -24,46 +22,7 @@
 namespace spinesim::coupling {
 namespace snapshot_test {
 
-// A unit square (cube) of 8 x 8 (4 x 4 x 4) explicit Q1 cells with a particle block in
-// [0.25, 0.75]^dim, nu = 0.25 (bond-based PD's in 3-D and plane strain); J2 yielding at a
-// strain of 6e-5 for the methods with material state.
-template <int dim>
-struct Setup {
-  explicit Setup(const std::string& method) : tria(MPI_COMM_WORLD) {
-    fem::MeshParameters mesh;
-    mesh.origin = {0, 0, 0};
-    mesh.lengths = {1, 1, 1};
-    mesh.subdivisions = {dim == 2 ? 8u : 4u, dim == 2 ? 8u : 4u, 4u};
-    fem::build_mesh(mesh, tria);
-    typename fem::MechanicsSolver<dim>::Parameters mech;
-    mech.time_integration = "explicit";
-    solver = std::make_unique<fem::MechanicsSolver<dim>>(tria, mech);
-    materials::LawParameters law;
-    law.poisson_ratio = 0.25;
-    if (method != "bond_based") {
-      law.model = "j2_plasticity";
-      law.yield_stress = 1e6;
-      law.hardening_modulus = 1e8;
-    }
-    solver->set_material(0, materials::create_law(law));
-    solver->setup();
-    dealii::ParameterHandler prm;
-    meshfree::declare_particle_method_sections(prm);
-    prm.enter_subsection("Bond based");
-    prm.set("Plane model", "plane_strain");
-    prm.leave_subsection();
-    prm.enter_subsection("NOSB");
-    prm.set("Horizon ratio", "2.015");
-    prm.leave_subsection();
-    parameters.particles_method = method;
-    parameters.make_method = meshfree::particle_method_maker<dim>(method, prm, "test");
-    parameters.region_lower = std::vector<double>(dim, 0.25);
-    parameters.region_upper = std::vector<double>(dim, 0.75);
-  }
-  dealii::parallel::distributed::Triangulation<dim> tria;
-  std::unique_ptr<fem::MechanicsSolver<dim>> solver;
-  typename FemParticleCoupling<dim>::Parameters parameters;
-};
+using testing_setup::CoupledSetup;
 
 // What the comparisons read: every rank's FEM vectors (owned entries) and the particles.
 template <int dim>
@@ -101,7 +60,7 @@ State<dim> state_of(const FemParticleCoupling<dim>& c, const fem::MechanicsSolve
 
 template <int dim>
 void snapshot_undoes_steps_and_conversions(const std::string& method) {
-  Setup<dim> setup(method);
+  CoupledSetup<dim> setup(method, method != "bond_based"); // J2 past yield: history to restore
   auto& solver = *setup.solver;
   FemParticleCoupling<dim> c(setup.parameters, solver);
   c.initialise();
