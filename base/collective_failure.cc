@@ -34,7 +34,9 @@ void raise_on_every_rank(const std::optional<NumericalFailure>& local, MPI_Comm 
     report = {local->what_failed(), local->location(), local->hint()};
   if (dealii::Utilities::MPI::n_mpi_processes(comm) > 1)
     report = dealii::Utilities::MPI::broadcast(comm, report, first);
-  throw NumericalFailure(report[0], on_rank(report[1], first, comm), report[2]);
+  NumericalFailure failure(report[0], on_rank(report[1], first, comm), report[2]);
+  failure.set_collective();
+  throw failure;
 }
 
 void raise_on_every_rank(std::exception_ptr local, MPI_Comm comm) {
@@ -59,8 +61,11 @@ void raise_on_every_rank(std::exception_ptr local, MPI_Comm comm) {
   }
   if (ranks > 1)
     report = dealii::Utilities::MPI::broadcast(comm, report, first);
-  if (report[0] == "0")
-    throw NumericalFailure(report[1], on_rank(report[2], first, comm), report[3]);
+  if (report[0] == "0") { // every rank the same, the failing one too
+    NumericalFailure failure(report[1], on_rank(report[2], first, comm), report[3]);
+    failure.set_collective();
+    throw failure;
+  }
   if (dealii::Utilities::MPI::this_mpi_process(comm) == first)
     std::rethrow_exception(local); // its own, with its type
   if (report[0] == "1")

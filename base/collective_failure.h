@@ -17,12 +17,13 @@
 namespace spinesim {
 
 // Collective. Returns when no rank has a failure; else throws it on every rank, its location
-// naming the rank when there are several.
+// naming the rank when there are several, marked NumericalFailure::collective().
 void raise_on_every_rank(const std::optional<NumericalFailure>& local, MPI_Comm comm);
 
 // Collective, for any exception a loop caught (catch (...) { local = std::current_exception(); }).
-// The lowest failing rank rethrows its own; the others throw the same kind with its message: a
-// NumericalFailure or InvalidInput with its parts (the exit code the driver gives each kind
+// A NumericalFailure of the lowest failing rank is thrown on every rank with its parts, marked
+// collective(); any other kind the lowest failing rank rethrows as its own and the others throw
+// with its message: an InvalidInput with its parts (the exit code the driver gives each kind
 // stays), anything else as std::runtime_error.
 void raise_on_every_rank(std::exception_ptr local, MPI_Comm comm);
 

@@ -40,9 +40,15 @@ class NumericalFailure : public std::runtime_error {
   unsigned int step() const { return step_; }
   double time() const { return time_; }
   std::string report() const;
+  // Raised on every rank at the same point of the run (base/collective_failure.h, or a check of
+  // a value every rank shares): a caller may then undo the attempt and try again without
+  // leaving a rank behind. A failure one rank found alone can only end the run.
+  void set_collective() { collective_ = true; }
+  bool collective() const { return collective_; }
 
  private:
   std::string what_failed_, location_, hint_;
+  bool collective_ = false;
   bool has_step_ = false;
   unsigned int step_ = 0;
   double time_ = 0.0;

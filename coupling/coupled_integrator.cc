@@ -1,5 +1,6 @@
 #include "coupling/coupled_integrator.h"
 
+#include "base/collective_failure.h"
 #include "base/exceptions.h"
 #include "fem/heat/heat_solver.h"
 
@@ -9,6 +10,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <exception>
 #include <limits>
 #include <sstream>
 
@@ -266,7 +268,16 @@ void CoupledIntegrator<dim>::advance(double dt, double a, double load_time, bool
       energy_.record_forces_before_breaks();
     }
     const auto start = std::chrono::steady_clock::now();
-    broken_last_step_ = state_.method->compute_forces(particles, state_.bonds, state_.prm.damage);
+    // A law that fails at one particle (a return mapping that does not converge, det F ≤ 0)
+    // fails on every rank before the next exchange, so no rank waits there and a relaxation
+    // can undo the attempt (relax(), FemParticleCoupling::relax_step).
+    std::exception_ptr failure;
+    try {
+      broken_last_step_ = state_.method->compute_forces(particles, state_.bonds, state_.prm.damage);
+    } catch (...) {
+      failure = std::current_exception();
+    }
+    raise_on_every_rank(failure, state_.fem.mpi_communicator());
     particle_force_seconds_ +=
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     for (unsigned int i = 0; i < particles.size(); ++i)
@@ -413,9 +424,24 @@ CoupledIntegrator<dim>::relax(double time, bool with_conversion,
   double c = 0, peak_residual = 0;
   bool first = true;
   time_ = time; // held: advance() with sums does not move the clock
+  // A failure raised on every rank at once ends the attempt with its report (the caller may
+  // undo it and cut the step); the state is then that of the failed pseudo-step.
+  const auto failed = [&](unsigned int it, const NumericalFailure& e) {
+    report.iterations = it;
+    report.converged = false;
+    report.failure = e.what_failed() + " (" + e.location() + ")";
+    report.failure_hint = e.hint();
+    return report;
+  };
   for (unsigned int it = 1; it <= state_.prm.relaxation_max_iterations; ++it) {
     RelaxationSums local;
-    advance(dt, c, time, first, &local);
+    try {
+      advance(dt, c, time, first, &local);
+    } catch (const NumericalFailure& e) {
+      if (!e.collective() && Utilities::MPI::n_mpi_processes(comm) > 1)
+        throw; // one rank alone: the others cannot follow an undo
+      return failed(it, e);
+    }
     first = false;
     double values[4] = {local.stiffness_numerator, local.stiffness_denominator,
                         local.residual_square, local.reaction_square};
@@ -431,11 +457,11 @@ CoupledIntegrator<dim>::relax(double time, bool with_conversion,
     const double scale = std::max(reaction, peak_residual);
     report.iterations = it;
     report.relative_residual = scale > 0 ? residual / scale : 0.0;
-    if (!std::isfinite(residual))
-      throw NumericalFailure("non-finite residual",
-                             "relaxation at t = " + std::to_string(time) + ", iteration " +
-                                 std::to_string(it),
-                             "check the materials and the loads of this step");
+    if (!std::isfinite(residual)) // the sums are every rank's: a collective failure
+      return failed(it, NumericalFailure("non-finite residual",
+                                         "relaxation at t = " + significant(time, 6) +
+                                             " s, pseudo-step " + std::to_string(it),
+                                         "check the materials and the loads of this step"));
     // The first step's forces are those of the previous state: judge from the second on.
     if (it > 1 && residual <= state_.prm.relaxation_tolerance * scale) {
       // Equilibrium: the trial histories of both models are the step's result.

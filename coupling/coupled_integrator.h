@@ -6,6 +6,7 @@
 // dynamic relaxation of both models to equilibrium.
 
 #include "base/dynamic_relaxation.h"
+#include "base/exceptions.h"
 #include "coupling/cell_converter.h"
 #include "coupling/coupling_state.h"
 #include "coupling/energy_splice.h"
@@ -30,6 +31,18 @@ struct RelaxationReport {
   double relative_residual = 0; // at the end [-]
   double damping = 0;           // last adaptive damping [1/s]
   std::vector<ConversionReport<dim>> conversions;
+  // A numerical failure every rank met that ended the relaxation (non-finite residual, an
+  // inverted element, a law that failed at a point or particle): what and where, and its
+  // hint; empty when the relaxation ran out of pseudo-steps or converged.
+  std::string failure, failure_hint;
+  // How it ended when not converged, for a log line: "not converged (relative residual r after
+  // n pseudo-steps)" or "failed after n pseudo-steps: <failure>".
+  std::string outcome() const {
+    if (!failure.empty())
+      return "failed after " + std::to_string(iterations) + " pseudo-steps: " + failure;
+    return "not converged (relative residual " + significant(relative_residual) + " after " +
+           std::to_string(iterations) + " pseudo-steps)";
+  }
 };
 
 // Where a relaxation stands, for a progress line every Coupling/Relaxation report interval

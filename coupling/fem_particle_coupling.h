@@ -129,12 +129,15 @@ class FemParticleCoupling {
   // cut where a relaxation does not converge: before each sub-step the state is held
   // (take_snapshot); a sub-step whose relaxation fails is undone (restore, conversions and
   // bond breaks included) and its load applied in two halves, at most `max_cuts` times in the
-  // step. The schedule carries the sub-step between steps: it doubles after two converged
-  // sub-steps, up to the step, and a caller keeps it in its checkpoint. from == to is one
-  // relaxation at that load (nothing to cut). `relaxed` is called after every relaxation,
-  // converged or not (before an undo), `cut` after an undo with the load time restored and
-  // the new sub-step [s]. Not converged when the cuts are used up (the caller stops the run;
-  // the state is then that of the failed relaxation). Collective.
+  // step. A relaxation that ends in a numerical failure every rank met (RelaxationReport::
+  // failure: NaN, an inverted element, a law that fails at a point) is undone and cut the same
+  // way, as implicit codes cut an increment whose Newton iteration meets a distorted element. The
+  // schedule carries the sub-step between steps: it doubles after two converged sub-steps, up to
+  // the step, and a caller keeps it in its checkpoint. from == to is one relaxation at that load
+  // (nothing to cut). `relaxed` is called after every relaxation, converged or not (before an
+  // undo), `cut` after an undo with the load time restored and the new sub-step [s]. Not converged
+  // when the cuts are used up (the caller stops the run; the state is then that of the failed
+  // relaxation). Collective.
   struct StepSchedule {
     double sub_step = 0;        // [s]; 0 = the whole step
     unsigned int converged = 0; // converged sub-steps since the last cut or growth
@@ -144,10 +147,12 @@ class FemParticleCoupling {
     RelaxationReport last; // the last relaxation (the failed one when not converged)
     double last_time = 0;  // its load time [s]
     unsigned int iterations = 0, sub_steps = 0, cuts = 0; // of the step; undone ones counted
-    // "relaxation not converged[ after n step cuts]", for the caller's NumericalFailure.
+    // "relaxation not converged[ after n step cuts]", or the failure that ended the last
+    // relaxation ("non-finite residual (where)[ after n step cuts]"), for the caller's
+    // NumericalFailure.
     std::string what_failed() const {
-      return cuts == 0 ? "relaxation not converged"
-                       : "relaxation not converged after " + std::to_string(cuts) + " step cuts";
+      const std::string what = last.failure.empty() ? "relaxation not converged" : last.failure;
+      return cuts == 0 ? what : what + " after " + std::to_string(cuts) + " step cuts";
     }
   };
   struct StepEvents {

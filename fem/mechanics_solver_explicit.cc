@@ -334,8 +334,8 @@ void MechanicsSolver<dim>::central_difference(double dt, double a, double bc_tim
   for (long k = 0; k < n_owned; ++k)
     if (!std::isfinite(uu[k]))
       first_bad = std::min(first_bad, k);
-  if (Utilities::MPI::max(first_bad < n_owned ? 1 : 0, comm_) > 0)
-    throw NumericalFailure(
+  if (Utilities::MPI::max(first_bad < n_owned ? 1 : 0, comm_) > 0) {
+    NumericalFailure failure(
         "non-finite displacement",
         (sums ? "relaxation step at t = " : "explicit step at t = ") + std::to_string(time_) +
             ", dt = " + std::to_string(dt) +
@@ -343,6 +343,9 @@ void MechanicsSolver<dim>::central_difference(double dt, double a, double bc_tim
                  ? ", first at DoF " + std::to_string(owned_.nth_index_in_set(first_bad))
                  : std::string(", on another rank")),
         "reduce the time step (CFL safety factor) or check the materials");
+    failure.set_collective(); // every rank learnt of it above
+    throw failure;
+  }
 }
 
 template <int dim>

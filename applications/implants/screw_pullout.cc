@@ -1152,10 +1152,9 @@ class ScrewPullout : public Scenario {
     };
     events.cut = [&](double t, const coupling::RelaxationReport<3>& report, double restored,
                      double sub_step) {
-      ctx.log() << "  step " << step << ": relaxation at load time " << fmt(t, 6)
-                << " not converged (relative residual " << fmt(report.relative_residual, 4)
-                << " after " << report.iterations << " pseudo-steps); state of load time "
-                << fmt(restored, 6) << " restored, increment cut to " << fmt(sub_step, 4) << "\n";
+      ctx.log() << "  step " << step << ": relaxation at load time " << fmt(t, 6) << " "
+                << report.outcome() << "; state of load time " << fmt(restored, 6)
+                << " restored, increment cut to " << fmt(sub_step, 4) << "\n";
     };
     coupling::FemParticleCoupling<3>::StepSchedule schedule{p.relax_sub_step, p.relax_converged};
     const auto report = coupled.relax_step(from, tau, true, coupling_.relaxation_step_cuts,
@@ -1169,8 +1168,10 @@ class ScrewPullout : public Scenario {
           "step " + std::to_string(step) + ", load time " + fmt(report.last_time, 6) +
               ": relative residual " + fmt(report.last.relative_residual, 4) + " after " +
               std::to_string(report.last.iterations) + " pseudo-steps",
-          "raise Coupling/Relaxation max iterations or Coupling/Relaxation step cuts, take more "
-          "Pullout/Steps, or convert earlier (a lower Coupling/Plastic strain threshold)");
+          (report.last.failure.empty() ? std::string()
+                                       : report.last.failure_hint + "; or cut the step further: ") +
+              "raise Coupling/Relaxation max iterations or Coupling/Relaxation step cuts, take "
+              "more Pullout/Steps, or convert earlier (a lower Coupling/Plastic strain threshold)");
     return report.iterations;
   }
 

@@ -265,8 +265,11 @@ struct ParticleZone<dim>::Impl {
     b = dealii::Utilities::MPI::broadcast(comm, b, first);
     c = dealii::Utilities::MPI::broadcast(comm, c, first);
     const std::string rank = " (MPI rank " + std::to_string(first) + ")";
-    if (kind == 1)
-      throw NumericalFailure(a, b + rank, c);
+    if (kind == 1) {
+      NumericalFailure failure(a, b + rank, c);
+      failure.set_collective();
+      throw failure;
+    }
     if (kind == 2)
       throw InvalidInput(a, b + rank, c);
     throw std::runtime_error(a + rank);
@@ -854,9 +857,30 @@ bool ParticleZone<dim>::advance_to(double time, const std::function<bool(double)
       if (z.max_step_cuts > 0)
         snapshot = z.snapshot();
       z.prescribe(target);
-      const auto result = adr.solve(z.particles, z.stiffness_bound);
+      // A failure met on every rank of the zone (a non-finite force, a law that fails at a
+      // particle) ends the attempt like a relaxation that does not converge: undone and cut.
+      // One rank of a distributed zone alone: the others cannot follow an undo.
+      typename meshfree::AdaptiveDynamicRelaxation<dim>::Result result;
+      std::optional<NumericalFailure> failure;
+      try {
+        result = adr.solve(z.particles, z.stiffness_bound);
+      } catch (const NumericalFailure& e) {
+        if (z.partition && !e.collective())
+          throw;
+        failure = e;
+        result.converged = false;
+      }
       z.relaxation_iterations += result.iterations;
       if (!result.converged) {
+        const std::string cut_note =
+            cuts > 0 ? " after " + std::to_string(cuts) + " step cuts" : std::string();
+        if (cuts >= z.max_step_cuts && failure)
+          throw NumericalFailure(failure->what_failed() + cut_note,
+                                 failure->location() +
+                                     ", particle zone, t = " + significant(target, 6) + " s",
+                                 failure->hint() + "; or cut the step further: raise "
+                                                   "Particles/Quasi-static/Step cuts or take "
+                                                   "more, smaller steps");
         if (cuts >= z.max_step_cuts)
           throw NumericalFailure(
               "dynamic relaxation did not converge (relative residual " +
@@ -873,10 +897,12 @@ bool ParticleZone<dim>::advance_to(double time, const std::function<bool(double)
         ++z.step_cuts;
         z.sub_steps_converged = 0;
         z.messages.push_back(
-            "t = " + significant(target, 6) + " s: relaxation not converged (relative residual " +
-            significant(result.relative_residual) + " after " + std::to_string(result.iterations) +
-            " iterations); state of t = " + significant(from, 6) +
-            " s restored, load step cut to " + significant(sub) + " s");
+            "t = " + significant(target, 6) + " s: relaxation " +
+            (failure ? "failed: " + failure->what_failed() + " (" + failure->location() + ")"
+                     : "not converged (relative residual " + significant(result.relative_residual) +
+                           " after " + std::to_string(result.iterations) + " iterations)") +
+            "; state of t = " + significant(from, 6) + " s restored, load step cut to " +
+            significant(sub) + " s");
         continue;
       }
       z.method->commit_state();

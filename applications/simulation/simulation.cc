@@ -576,10 +576,9 @@ void Simulation<dim>::coupled_relaxation(unsigned int step, double time, double 
   };
   events.cut = [&](double t, const coupling::RelaxationReport<dim>& report, double restored,
                    double sub_step) {
-    ctx.log() << "  t = " << t << " s: relaxation not converged (relative residual "
-              << report.relative_residual << " after " << report.iterations
-              << " iterations); state of t = " << restored << " s restored, load step cut to "
-              << sub_step << " s\n";
+    ctx.log() << "  t = " << t << " s: relaxation " << report.outcome()
+              << "; state of t = " << restored << " s restored, load step cut to " << sub_step
+              << " s\n";
   };
   const auto report =
       coupled_->relax_step(time - dt, time, effects_.conversion, coupling_prm_.relaxation_step_cuts,
@@ -597,8 +596,10 @@ void Simulation<dim>::coupled_relaxation(unsigned int step, double time, double 
         "step " + std::to_string(step) + ", t = " + significant(report.last_time, 6) +
             " s: relative residual " + significant(report.last.relative_residual) + " after " +
             std::to_string(report.last.iterations) + " iterations",
-        "raise Coupling/Relaxation max iterations or Coupling/Relaxation step cuts, take more "
-        "Simulation/Steps, or run explicit dynamics if the crack runs unstably");
+        (report.last.failure.empty() ? std::string()
+                                     : report.last.failure_hint + "; or cut the step further: ") +
+            "raise Coupling/Relaxation max iterations or Coupling/Relaxation step cuts, take "
+            "more Simulation/Steps, or run explicit dynamics if the crack runs unstably");
 }
 
 template <int dim>

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <exception>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -73,6 +74,24 @@ TEST(CollectiveFailure, NumericalFailureNamesTheLowestFailingRank) {
     EXPECT_EQ(e.what_failed(), "inverted element");
     EXPECT_EQ(e.location(), last_rank() > 0 ? "cell 0 on rank 0" : "cell 0");
     EXPECT_EQ(e.hint(), "a hint");
+    // Every rank holds it at the same point: a caller may undo the attempt (a step cut).
+    EXPECT_TRUE(e.collective());
+  }
+}
+
+TEST(CollectiveFailure, OneRanksNumericalFailureIsCollectiveEverywhere) {
+  // Found on the last rank alone (and passed as the optional the cell loops fill): every rank
+  // throws it marked collective, the failing one too.
+  std::optional<NumericalFailure> local;
+  if (rank() == last_rank())
+    local = NumericalFailure("non-finite stress", "particle 3", "a hint");
+  EXPECT_FALSE(NumericalFailure("x", "y", "z").collective()); // thrown where found: one rank
+  try {
+    raise_on_every_rank(local, comm());
+    FAIL() << "no exception on rank " << rank();
+  } catch (const NumericalFailure& e) {
+    EXPECT_EQ(e.what_failed(), "non-finite stress");
+    EXPECT_TRUE(e.collective());
   }
 }
 

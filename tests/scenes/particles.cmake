@@ -40,7 +40,46 @@ spinesim_add_comparison_test(scene.pd_plate_plastic_step_cut_ranks_agree
   A ${_pz_runs}/cut/summary.json B ${_pz_runs}/cut_2ranks/summary.json
   CHECKS "particle_reaction_norm:rel:1e-6;particle_plastic_work:rel:1e-6"
   REQUIRES "pz_cut;pz_cut_2ranks" LABELS "scene;meshfree;mpi")
+# Labelled long (17 s of both cores): the default run cuts a distributed zone's step in
+# scene.pd_plate_compression_step_cut_2ranks (below), through the same snapshot and restore.
+set_property(TEST scene.pd_plate_plastic_step_cut_2ranks scene.pd_plate_plastic_step_cut_ranks_agree
+             APPEND PROPERTY LABELS long)
 spinesim_add_scene_test(scene.pd_plate_plastic_no_step_cuts SCENE ${_pz} OUT ${_pz_runs}/no_cuts
   SET ${_pz_set} "Simulation/Steps=1" "Particles/Quasi-static/Step cuts=0"
   EXIT 1 MATCH "dynamic relaxation did not converge .relative residual [0-9.e-]+ after 915 iterations.*particle zone, t = 1 s"
+  EXPECT "status==failed" LABELS "scene;meshfree;stability")
+
+# A numerical failure ends a particle zone's relaxation attempt like non-convergence: the plate
+# as NOSB-PD particles of a neo-Hookean material compressed 5 % (5 mm) in one step. The first
+# pseudo-steps move the three top rows by the whole increment, 2 spacings: the families
+# reaching across from the fourth row turn inside out (det F = -0.0098, raised on every rank
+# of a distributed zone). The step is undone and its halves converge: the figures equal those
+# of Simulation/Steps = 2 to the last digit (0 measured; bound 1e-12), and two ranks agree
+# with one to 2e-12 (bound 1e-6, the relaxation's tolerance 1e-8 of the reaction above).
+# Without cuts the failure stops the run (exit 1) naming the particle and its family.
+set(_pzc_set "Effects/Particles method=nosb" "Material/Model=neo_hookean"
+    "Particles/Region 2/Values=-5e-3*t" "Simulation/Output interval=0")
+set(_pzc_fails "det F = -[0-9.e-]+ <= 0 \\(inverted material\\) in neo_hookean")
+spinesim_add_scene_test(scene.pd_plate_compression_step_cut SCENE ${_pz} OUT ${_pz_runs}/compression_cut
+  SET ${_pzc_set} "Simulation/Steps=1" MATCH "relaxation failed: ${_pzc_fails}.*restored"
+  EXPECT "status==ok;relaxation_step_cuts~1:0" LABELS "scene;meshfree;stability" FIXTURE pzc_cut)
+spinesim_add_scene_test(scene.pd_plate_compression_two_steps SCENE ${_pz}
+  OUT ${_pz_runs}/compression_two_steps SET ${_pzc_set} "Simulation/Steps=2"
+  EXPECT "status==ok;relaxation_step_cuts<=0" LABELS "scene;meshfree" FIXTURE pzc_two_steps)
+spinesim_add_comparison_test(scene.pd_plate_compression_step_cut_equals_two_steps
+  A ${_pz_runs}/compression_two_steps/summary.json B ${_pz_runs}/compression_cut/summary.json
+  CHECKS "particle_reaction_norm:rel:1e-12;particle_strain_energy:rel:1e-12"
+  REQUIRES "pzc_cut;pzc_two_steps" LABELS "scene;meshfree;stability")
+spinesim_add_scene_test(scene.pd_plate_compression_step_cut_2ranks SCENE ${_pz}
+  OUT ${_pz_runs}/compression_cut_2ranks RANKS 2 SET ${_pzc_set} "Simulation/Steps=1"
+  EXPECT "status==ok;relaxation_step_cuts~1:0" LABELS "scene;meshfree;stability"
+  FIXTURE pzc_cut_2ranks)
+spinesim_add_comparison_test(scene.pd_plate_compression_step_cut_ranks_agree
+  A ${_pz_runs}/compression_cut/summary.json B ${_pz_runs}/compression_cut_2ranks/summary.json
+  CHECKS "particle_reaction_norm:rel:1e-6;particle_strain_energy:rel:1e-6"
+  REQUIRES "pzc_cut;pzc_cut_2ranks" LABELS "scene;meshfree;mpi")
+spinesim_add_scene_test(scene.pd_plate_compression_no_step_cuts SCENE ${_pz}
+  OUT ${_pz_runs}/compression_no_cuts SET ${_pzc_set} "Simulation/Steps=1"
+  "Particles/Quasi-static/Step cuts=0" EXIT 1
+  MATCH "numerical failure: ${_pzc_fails}.*where: particle [0-9]+ at .*NOSB-PD family.*particle zone, t = 1 s"
   EXPECT "status==failed" LABELS "scene;meshfree;stability")
