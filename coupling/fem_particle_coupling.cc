@@ -180,7 +180,7 @@ typename FemParticleCoupling<dim>::StepReport FemParticleCoupling<dim>::relax_st
   std::optional<StepSnapshot> snapshot;
   while (t < to - 1e-9 * span) {
     const double target = to - t <= sub * (1 + 1e-9) ? to : t + sub;
-    if (max_cuts > 0) {
+    if (step.cuts < max_cuts) { // the last attempt allowed is never undone: nothing to hold
       ScopedTime timer(state_.timings.snapshots);
       snapshot = take_snapshot();
     }

@@ -854,7 +854,7 @@ bool ParticleZone<dim>::advance_to(double time, const std::function<bool(double)
     while (z.time < time - 1e-9 * span) {
       const double target = time - z.time <= sub * (1 + 1e-9) ? time : z.time + sub;
       std::optional<typename Impl::Snapshot> snapshot;
-      if (z.max_step_cuts > 0)
+      if (cuts < z.max_step_cuts) // the last attempt allowed is never undone
         snapshot = z.snapshot();
       z.prescribe(target);
       // A failure met on every rank of the zone (a non-finite force, a law that fails at a
