@@ -1266,13 +1266,46 @@ void ParticleZone<dim>::load(const std::string& file) {
     read(z.bonds.broken.data(), nb);
     if (!in)
       throw InvalidInput(file, "particle checkpoint is truncated", "a complete checkpoint");
+    // The file comes from outside (the manifest vouches for it only where there is one): every
+    // value read must be one a run writes, or the restart would carry NaN or a bond that is
+    // neither intact nor broken into its first step.
+    const auto bad = [&](const std::string& what) {
+      return InvalidInput(part, "particle checkpoint holds " + what,
+                          "the checkpoint as the run wrote it; restart from an earlier copy of "
+                          "the run directory, or start the run again");
+    };
+    if (!(std::isfinite(z.time) && z.time >= 0))
+      throw bad("the time " + significant(z.time) + " s (a finite time >= 0)");
+    const auto check_finite = [&](const std::vector<dealii::Tensor<1, dim>>& field,
+                                  const char* name) {
+      for (std::size_t i = 0; i < field.size(); ++i)
+        for (unsigned int d = 0; d < dim; ++d)
+          if (!std::isfinite(field[i][d]))
+            throw bad(std::string("a non-finite ") + name + " of particle " + std::to_string(i));
+    };
+    check_finite(z.particles.displacements(), "displacement");
+    check_finite(z.particles.velocities(), "velocity");
+    check_finite(z.particles.accelerations(), "acceleration");
+    for (std::size_t k = 0; k < nb; ++k)
+      if (z.bonds.broken[k] > 1)
+        throw bad("the state " + std::to_string(int(z.bonds.broken[k])) + " of bond " +
+                  std::to_string(k) + " (0 intact, 1 broken)");
     z.method->initialise(z.particles, z.bonds); // families from the restored intact bonds
-    z.method->load(in);
-    z.account_restored = z.energy.load(in);
-    in.read(reinterpret_cast<char*>(&z.max_speed), sizeof z.max_speed);
+    try { // the method's and the account's readers name their part; the message the file
+      z.method->load(in);
+      z.account_restored = z.energy.load(in);
+    } catch (const InvalidInput& e) {
+      throw InvalidInput(part + " (" + e.where() + ")", e.problem(), e.allowed());
+    }
+    if (in.read(reinterpret_cast<char*>(&z.max_speed), sizeof z.max_speed) &&
+        !(std::isfinite(z.max_speed) && z.max_speed >= 0))
+      throw bad("the run's top speed " + significant(z.max_speed) + " m/s (finite, >= 0)");
     double seconds = 0; // absent from checkpoints written before it was kept
-    if (in.read(reinterpret_cast<char*>(&seconds), sizeof seconds))
+    if (in.read(reinterpret_cast<char*>(&seconds), sizeof seconds)) {
+      if (!(std::isfinite(seconds) && seconds >= 0))
+        throw bad("the stepping time " + significant(seconds) + " s (finite, >= 0)");
       z.advance_seconds = seconds;
+    }
     forces.resize(z.particles.size());
     in.read(reinterpret_cast<char*>(forces.data()), forces.size() * sizeof(forces[0]));
     if (in.gcount() == 0)
@@ -1282,10 +1315,14 @@ void ParticleZone<dim>::load(const std::string& file) {
       if (!in || !in.read(reinterpret_cast<char*>(&tag), sizeof tag) || tag != checkpoint_end_tag)
         throw InvalidInput(part, "particle checkpoint is truncated (it ends inside the forces)",
                            "a complete checkpoint");
+      check_finite(forces, "force");
+      // Absent from older checkpoints; where present, a step a run can have taken.
       double dt_stable = 0;
-      if (in.read(reinterpret_cast<char*>(&dt_stable), sizeof dt_stable) && dt_stable > 0 &&
-          std::isfinite(dt_stable))
+      if (in.read(reinterpret_cast<char*>(&dt_stable), sizeof dt_stable)) {
+        if (!(dt_stable > 0)) // +inf: a zone without particles
+          throw bad("the stable time step " + significant(dt_stable) + " s (> 0)");
         z.dt_stable = dt_stable;
+      }
     }
     std::uint64_t account_tag = 0;
     const bool tagged = in.read(reinterpret_cast<char*>(&account_tag), sizeof account_tag) &&

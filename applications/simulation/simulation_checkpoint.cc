@@ -9,8 +9,10 @@
 #include <nlohmann/json.hpp>
 
 #include <array>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 
 namespace spinesim::applications {
@@ -175,8 +177,24 @@ unsigned int Simulation<dim>::load_checkpoint(RunContext& ctx) {
                        std::string("checkpoint state unreadable: ") + e.what(),
                        "the checkpoint as the run wrote it");
   }
-  const unsigned int step = state.value("step", 0u);
-  const unsigned int final_step = state.value("final_step", sim_.steps);
+  // The step counters decide what the restart does before any reader runs: a count of the
+  // wrong type (which the JSON library throws as its own error) or sign is bad input here.
+  const auto counter = [&](const char* key, unsigned int fallback) {
+    if (!state.is_object())
+      throw InvalidInput((dir / "state.json").string(), "checkpoint state is not a JSON object",
+                         "the checkpoint as the run wrote it");
+    if (!state.contains(key))
+      return fallback;
+    if (!state[key].is_number_unsigned() ||
+        state[key].get<std::uint64_t>() > std::numeric_limits<unsigned int>::max())
+      throw InvalidInput((dir / "state.json").string(),
+                         std::string("checkpoint state malformed: \"") + key + "\" is " +
+                             state[key].dump(),
+                         "a step number >= 0, as the run wrote it");
+    return state[key].get<unsigned int>();
+  };
+  const unsigned int step = counter("step", 0u);
+  const unsigned int final_step = counter("final_step", sim_.steps);
   if (step >= sim_.steps && step >= final_step)
     throw NothingToRestart("the run in " + ctx.output().path().string() + " finished at step " +
                            std::to_string(step) + " of " + std::to_string(sim_.steps));

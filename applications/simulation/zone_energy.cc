@@ -1,5 +1,8 @@
 #include "applications/simulation/zone_energy.h"
 
+#include "base/exceptions.h"
+
+#include <cmath>
 #include <istream>
 #include <ostream>
 
@@ -89,6 +92,12 @@ bool ZoneEnergy<dim>::load(std::istream& in) {
   in.read(reinterpret_cast<char*>(v), sizeof v);
   if (!in)
     return false;
+  // An account the run kept holds finite works (a checkpoint is a file from outside).
+  if (v[8] != 0)
+    for (const double x : v)
+      if (!std::isfinite(x))
+        throw InvalidInput("energy account", "a non-finite work in the particles' energy account",
+                           "the checkpoint as the run wrote it");
   fem::EnergyBalance& b = balance_;
   b.time = v[0];
   b.external_work = v[1];

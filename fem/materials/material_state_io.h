@@ -7,6 +7,8 @@
 #include "fem/materials/constitutive_law.h"
 
 #include <array>
+#include <cmath>
+#include <string>
 
 namespace spinesim::materials {
 
@@ -49,6 +51,20 @@ inline MaterialState unpack_state(const std::array<double, material_state_double
   s.plastic_work = v[13];
   s.fracture_damage = v[14];
   return s;
+}
+
+// What makes a state read from a file one no law can have written, or an empty string: every
+// number finite, eps_bar_p >= 0, 0 <= D_f <= 1 (a checkpoint is a file from outside).
+inline std::string inadmissible_state(const std::array<double, material_state_doubles>& v) {
+  for (unsigned int k = 0; k < material_state_doubles; ++k)
+    if (!std::isfinite(v[k]))
+      return "a non-finite number (entry " + std::to_string(k) + " of " +
+             std::to_string(material_state_doubles) + ")";
+  if (v[12] < 0)
+    return "a negative equivalent plastic strain";
+  if (v[14] < 0 || v[14] > 1)
+    return "a fracture damage outside [0, 1]";
+  return {};
 }
 
 } // namespace spinesim::materials

@@ -24,10 +24,21 @@ void write_state(std::ostream& out, const materials::MaterialState& s) {
   out.write(reinterpret_cast<const char*>(v.data()), sizeof(double) * v.size());
 }
 
-materials::MaterialState read_state(std::istream& in, bool with_fracture_damage) {
+// A family's state from a checkpoint; bad input naming the family when no law could have
+// written it.
+materials::MaterialState read_state(std::istream& in, bool with_fracture_damage,
+                                    std::uint64_t family) {
   std::array<double, materials::material_state_doubles> v{};
   const std::size_t n = with_fracture_damage ? v.size() : v.size() - 1;
   in.read(reinterpret_cast<char*>(v.data()), sizeof(double) * n);
+  if (in) {
+    const std::string why = materials::inadmissible_state(v);
+    if (!why.empty())
+      throw InvalidInput("NOSB-PD checkpoint",
+                         "the material history of family " + std::to_string(family) + " holds " +
+                             why,
+                         "the checkpoint as the run wrote it");
+  }
   return materials::unpack_state(v);
 }
 
@@ -231,7 +242,7 @@ void NosbMethod<dim>::load(std::istream& in) {
   std::vector<materials::MaterialState> states;
   states.reserve(n);
   for (std::uint64_t k = 0; k < n; ++k)
-    states.push_back(read_state(in, with_fracture_damage));
+    states.push_back(read_state(in, with_fracture_damage, k));
   if (!in)
     throw InvalidInput("NOSB-PD checkpoint", "truncated material history", "a complete checkpoint");
   pd_.set_committed_states(states);

@@ -420,6 +420,11 @@ void SpgMethod<dim>::load(std::istream& in) {
     in.read(reinterpret_cast<char*>(v.data()), sizeof(double) * v.size());
     if (!in)
       throw InvalidInput("SPG checkpoint", "truncated material history", "a complete checkpoint");
+    const std::string why = materials::inadmissible_state(v);
+    if (!why.empty())
+      throw InvalidInput("SPG checkpoint",
+                         "the material history of point " + std::to_string(i) + " holds " + why,
+                         "the checkpoint as the run wrote it");
     solver_->set_state(static_cast<unsigned int>(i), materials::unpack_state(v));
   }
   if (tag != spg_history_tag_2 || n == 0)
@@ -430,6 +435,12 @@ void SpgMethod<dim>::load(std::istream& in) {
   in.read(reinterpret_cast<char*>(smoothing.data()), sizeof(dealii::Tensor<1, dim>) * n);
   if (!in)
     throw InvalidInput("SPG checkpoint", "truncated smoothing state", "a complete checkpoint");
+  for (std::size_t i = 0; i < smoothing.size(); ++i)
+    for (unsigned int d = 0; d < dim; ++d)
+      if (!std::isfinite(smoothing[i][d]))
+        throw InvalidInput("SPG checkpoint",
+                           "a non-finite smoothing force of particle " + std::to_string(i),
+                           "the checkpoint as the run wrote it");
   // The restart's first force pass repeats the checkpoint's last one (same displacements):
   // it counts again, so the count resumes one lower and the cadence continues unbroken.
   solver_->set_cadence(calls > 0 ? calls - 1 : 0, std::move(smoothing));

@@ -56,6 +56,42 @@ spinesim_add_hostile_test(restart_manifest_outside_checkpoint PREPARE staged:${_
 spinesim_add_hostile_test(restart_file_not_in_manifest PREPARE staged:${_quick}
   EXTRA_FILE checkpoint/notes.txt
   ARGS run --restart @KEEP@ MATCH "checkpoint/notes.txt.*not listed in")
+# The particle zone's checkpoint (particles.bin) read without its manifest (a checkpoint of an
+# earlier version has none, so the reader must stand alone): a value no run writes is bad
+# input naming the file, the value and the particle, bond or family. The plate in tension
+# (800 particles, 2-D) stopped after step 2; offsets in the file: the time at byte 16, the
+# displacements from byte 32, the bond states after the three kinematic fields at
+# 32 + 3 x 800 x 2 x 8 = 38432; NOSB-PD: the last family's state ends 12912 bytes before the
+# end (forces 12800, the account 72, five 8-byte words), its last number 8 bytes before that.
+set(_zone ${PROJECT_SOURCE_DIR}/applications/scenes/pd_plate_tension.prm)
+spinesim_add_hostile_test(restart_particles_nan_time PREPARE staged:${_zone}
+  REMOVE checkpoint/manifest.json PATCH checkpoint/particles.bin@16:nan
+  ARGS run --restart @KEEP@ --set "Simulation/Stop after step=0" MATCH "particles.bin.*particle checkpoint holds the time nan s")
+spinesim_add_hostile_test(restart_particles_nan_displacement PREPARE staged:${_zone}
+  REMOVE checkpoint/manifest.json PATCH checkpoint/particles.bin@32:nan
+  ARGS run --restart @KEEP@ --set "Simulation/Stop after step=0"
+  MATCH "particles.bin.*particle checkpoint holds a non-finite displacement of particle 0")
+spinesim_add_hostile_test(restart_particles_bond_state PREPARE staged:${_zone}
+  REMOVE checkpoint/manifest.json PATCH checkpoint/particles.bin@38432:byte2
+  ARGS run --restart @KEEP@ --set "Simulation/Stop after step=0"
+  MATCH "particles.bin.*particle checkpoint holds the state 2 of bond 0 .0 intact, 1 broken.")
+spinesim_add_hostile_test(restart_particles_nan_history PREPARE staged:${_zone}
+  PREPARE_SET "Effects/Particles method=nosb"
+  REMOVE checkpoint/manifest.json PATCH checkpoint/particles.bin@-12920:nan
+  ARGS run --restart @KEEP@ --set "Simulation/Stop after step=0"
+  MATCH "particles.bin .NOSB-PD checkpoint.*the material history of family 25739 holds a non-finite number")
+
+# state.json without its manifest: step counters of the wrong type (which the JSON library
+# would throw as its own error, exit 1) or sign are bad input naming the file and the entry.
+spinesim_add_hostile_test(restart_state_step_not_number PREPARE staged:${_quick}
+  EXTRA_COPY ${_h}/data/state_step_not_number.json:checkpoint/state.json
+  REMOVE checkpoint/manifest.json ARGS run --restart @KEEP@
+  MATCH "state.json.*checkpoint state malformed: .step. is .two.*a step number >= 0")
+spinesim_add_hostile_test(restart_state_negative_step PREPARE staged:${_quick}
+  EXTRA_COPY ${_h}/data/state_negative_step.json:checkpoint/state.json
+  REMOVE checkpoint/manifest.json ARGS run --restart @KEEP@
+  MATCH "state.json.*checkpoint state malformed: .step. is -2")
+
 # Resource exhaustion by a typo: absurd thread counts are bad input, not a hang.
 spinesim_add_hostile_test(threads_100000 PREPARE run:${_quick}
   ARGS run ${_quick} --output @KEEP@ --force --threads 100000 MATCH "--threads 100000.*allowed: 0")

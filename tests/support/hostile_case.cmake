@@ -17,6 +17,11 @@
 #   EXTRA_FILE        a file name to add into KEEP after preparing (a user's file)
 #   EXTRA_COPY        FILE:NAME, a copy of FILE to add into KEEP as NAME
 #   TRUNCATE, FLIP    a file below KEEP to cut to half its size / alter in the middle
+#   REMOVE            a file below KEEP to delete after preparing (e.g. the checkpoint's manifest,
+#                     so that a reader meets what the manifest would have refused)
+#   PATCH             FILE@OFFSET:WHAT, bytes written into a file below KEEP at OFFSET (from the
+#                     end when negative): WHAT = nan (a quiet NaN double, little-endian) or
+#                     byte2 (the byte 2)
 #   WORKDIR           the working directory of the command (default: KEEP's parent)
 #   ABSENT            a path that must not exist afterwards (a run refused for bad input)
 #   THEN_ARGS, THEN_EXIT  a second command that must then succeed with this exit code
@@ -113,6 +118,42 @@ if(FLIP) # four bytes in the middle replaced, size unchanged
                   RESULT_VARIABLE _rc)
   if(NOT _rc EQUAL 0)
     message(FATAL_ERROR "cannot alter ${KEEP}/${FLIP}")
+  endif()
+endif()
+
+if(REMOVE)
+  if(NOT EXISTS ${KEEP}/${REMOVE})
+    message(FATAL_ERROR "cannot remove ${KEEP}/${REMOVE}: the preparing run did not write it")
+  endif()
+  file(REMOVE ${KEEP}/${REMOVE})
+endif()
+if(PATCH)
+  if(NOT PATCH MATCHES "^(.+)@(-?[0-9]+):(nan|byte2)$")
+    message(FATAL_ERROR "PATCH ${PATCH}: expected FILE@OFFSET:nan|byte2")
+  endif()
+  set(_file ${KEEP}/${CMAKE_MATCH_1})
+  set(_offset ${CMAKE_MATCH_2})
+  set(_what ${CMAKE_MATCH_3})
+  file(SIZE ${_file} _size)
+  if(_offset LESS 0)
+    math(EXPR _offset "${_size} + ${_offset}")
+  endif()
+  if(_what STREQUAL "nan")
+    set(_bytes "\\000\\000\\000\\000\\000\\000\\370\\177")
+    set(_n 8)
+  else()
+    set(_bytes "\\002")
+    set(_n 1)
+  endif()
+  math(EXPR _end "${_offset} + ${_n}")
+  if(_offset LESS 0 OR _end GREATER _size)
+    message(FATAL_ERROR "PATCH ${PATCH}: offset ${_offset} outside the file (${_size} bytes)")
+  endif()
+  execute_process(COMMAND sh -c "printf '${_bytes}' | dd of='${_file}' bs=1 seek=${_offset} conv=notrunc status=none"
+                  RESULT_VARIABLE _rc)
+  file(SIZE ${_file} _after)
+  if(NOT _rc EQUAL 0 OR NOT _after EQUAL _size)
+    message(FATAL_ERROR "cannot patch ${_file}")
   endif()
 endif()
 
