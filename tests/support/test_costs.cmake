@@ -1,0 +1,85 @@
+# Measured wall times [s] of the default run's heaviest tests (one rank or process each, a
+# 2-core machine), as ctest's COST: with -j, ctest starts tests in descending cost, so a fresh
+# clone (which has no Testing/Temporary/CTestCostData.txt of its own yet) starts the long ones
+# first and ends on short ones instead of idling a core behind one late long test. Refresh from
+# a build's CTestCostData.txt after a full default run; a test missing here runs as cost 0.
+set(SPINESIM_TEST_COSTS
+  implants.screw_pullout_particles_contact 104
+  coupling.plastic_limit_3d_spg 60
+  coupling.fracture_heat_nosb 50
+  stability.impact_coupled_nosb_2d 46
+  scene.slanted_crack_coupled_nosb 44
+  hostile.interrupt_mid_step_coupled_finite_strain_3d 36
+  study.accuracy_cost_quick 33
+  stability.coupled_energy_drift_2e4_steps_energy_splice_nosb 33
+  coupling.notched_bar_nosb_3d_energy_splice_2ranks 33
+  stability.coupled_energy_drift_1e5_steps_energy_splice_spg 31
+  hostile.interrupt_mid_step_fem_2d 29
+  coupling.energy_elastic_3d 29
+  coupling.fracture_heat_3d 28
+  validation.rosenthal_moving_source_3d_coarse 26
+  validation.lsmfm_perforated_plate_plastic_369 25
+  coupling.plastic_limit_3d_nosb 25
+  stability.ring_plastic_fracture_nosb_3d 24
+  hostile.interrupt_and_restart_plastic_heat 24
+  coupling.plastic_heat_nosb_2d 22
+  validation.taylor_bar_fem_coarse 21
+  scene.cracked_plate_quasi_static 21
+  scene.vertebra_compression_to_failure 20
+  scene.cracked_plate_spg_energy_splice 20
+  scene.cracked_plate_nosb 20
+  coupling.large_step_two_steps_3d 20
+  coupling.large_step_cut_3d 20
+  study.drilling_sweep_quick 19
+  stability.ring_plastic_nosb_2d 19
+  scene.bone_drilling_cancellous_cracks 19
+  coupling.plastic_conversion_nosb 19
+  stability.ring_plastic_fracture_spg_3d 18
+  study.rosenthal_convergence_2d 17
+  scene.bone_drilling_ct_thermal_from_density 17
+  implants.vertebra_screw_pullout_quick 17
+  stability.ring_plastic_nosb_2d_restart_older_checkpoint 16
+  stability.coupled_energy_drift_1e5_steps_energy_splice 15
+  coupling.support_clearance_2d 15
+  stability.impact_all_particles_nosb_2d 14
+  scene.pd_plate_plastic_step_cut 14
+  implants.screw_pullout_toggled 14
+  validation.lsmfm_ring_compression 13
+  spg.taylor_bar 13
+  spg.cantilever 13
+  scene.bone_drilling_restart_first_half 13
+  hostile.interrupt_mid_step_coupled_2d 13
+  coupling.quasi_static_2d_nosb_balance 13
+  test_meshfree_nosb 12
+  stability.step_spectrum_bond_based_energy_splice_3d 12
+  stability.ring_plastic_nosb_2d_restart_second_half 12
+  implants.screw_pullout_ct_quick 12
+  coupling.plastic_heat_spg_3d 12
+  stability.ring_plastic_spg_3d 11
+  scene.bone_drilling_ct 11
+  implants.vertebra_screw_pullout_quick_2ranks 11
+  implants.screw_pullout_without_damage 11
+  implants.screw_pullout_toggled_restart_second_half 11
+  implants.screw_pullout_quick 11
+  coupling.plastic_heat_nosb_2d_2ranks 11
+  coupling.plastic_conversion_step_cut 11
+  coupling.energy_elastic_2d_energy_splice_nosb 11
+  stability.ring_plastic_fracture_spg_2d 10
+  stability.impact_all_particles_nosb_3d 10
+  scene.vertebra_compression_nonlinear 10
+  implants.screw_pullout_restart_second_half 10
+  implants.screw_pullout_failed_keeps_curve 10
+  hostile.interrupt_mid_step_particles_2d_sigint 10
+  hostile.interrupt_and_restart_ct_block 10
+  coupling.plastic_conversion_spg 10
+  coupling.patch_test_energy_splice_3d 10
+  coupling.ct_block_elastic 10
+  stability.ring_plastic_nosb_2d_restart_first_half 9
+  stability.ring_fragmentation_nosb_2d 9
+  scene.pd_plate_plastic_two_steps 9
+  distributed.pd_solver_study_1ranks 9
+  stability.step_spectrum_nosb_alone_3d 8
+  scene.pd_solver_study 8
+  scene.bone_drilling_quick_pecking 8
+  coupling.plastic_conversion_two_steps 8
+)
