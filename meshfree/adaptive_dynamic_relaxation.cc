@@ -104,7 +104,9 @@ AdaptiveDynamicRelaxation<dim>::solve(ParticleSet<dim>& p,
   double initial_residual = 0;
   for (unsigned int i = 0; i < n; ++i)
     v[i] = 0;
+  last_iterations_ = 0;
   for (unsigned int it = 0;; ++it) {
+    last_iterations_ = it;
     RelaxationSums sums;
     double external;
     evaluate(sums, external);

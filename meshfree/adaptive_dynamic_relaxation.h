@@ -63,9 +63,13 @@ class AdaptiveDynamicRelaxation {
   // [N/m^4] per particle (BondBasedPD::stiffness_bound). Velocities are pseudo-velocities and
   // are zeroed on return. NumericalFailure on a non-finite state.
   Result solve(ParticleSet<dim>& particles, const std::vector<double>& stiffness_bound) const;
+  // The pseudo-steps the last solve() took, also when it threw (a caller that undoes a failed
+  // attempt still counts its work).
+  unsigned int last_iterations() const { return last_iterations_; }
 
  private:
   Parameters prm_;
+  mutable unsigned int last_iterations_ = 0;
   ForceFunction compute_forces_;
   Distribution distribution_;
 };

@@ -869,6 +869,7 @@ bool ParticleZone<dim>::advance_to(double time, const std::function<bool(double)
           throw;
         failure = e;
         result.converged = false;
+        result.iterations = adr.last_iterations();
       }
       z.relaxation_iterations += result.iterations;
       if (!result.converged) {
