@@ -621,6 +621,13 @@ spinesim_add_scene_test(coupling.large_step_no_step_cuts SCENE ${_ls} OUT ${_ls_
   SET "Coupling/Relaxation step cuts=0"
   EXIT 1 MATCH "numerical failure: det F = -[0-9.e-]+ <= 0 \\(inverted material\\).*where: step 1, t = 1 s"
   EXPECT "status==failed" LABELS "scene;coupling;stability")
+# On two ranks the family fails on the rank that owns it; the particle force pass raises it on
+# both (base/collective_failure.h), so the run ends with one report and a failed summary
+# instead of one rank waiting in the next exchange.
+spinesim_add_scene_test(coupling.large_step_no_step_cuts_2ranks SCENE ${_ls} RANKS 2
+  OUT ${_ls_runs}/no_step_cuts_2ranks SET "Coupling/Relaxation step cuts=0"
+  EXIT 1 MATCH "numerical failure: det F = -[0-9.e-]+ <= 0 \\(inverted material\\).*on rank [01].*where: step 1, t = 1 s"
+  EXPECT "status==failed" LABELS "scene;coupling;stability" TIMEOUT 120)
 
 # NOSB-PD on two ranks is labelled long here: the same scene with heat on two ranks
 # (coupling.plastic_heat_nosb_2d_2ranks, below) converts the same cells in the default run.
