@@ -1292,7 +1292,7 @@ void ParticleZone<dim>::load(const std::string& file) {
         throw bad("the state " + std::to_string(int(z.bonds.broken[k])) + " of bond " +
                   std::to_string(k) + " (0 intact, 1 broken)");
     z.method->initialise(z.particles, z.bonds); // families from the restored intact bonds
-    try { // the method's and the account's readers name their part; the message the file
+    try { // the method's and the account's readers name their part; this adds the file
       z.method->load(in);
       z.account_restored = z.energy.load(in);
     } catch (const InvalidInput& e) {
