@@ -5,11 +5,15 @@
 // solves it with each linear solver (relative residual 1e-6 from x = 0), recording iterations,
 // setup and solve seconds, and the condition estimate of the unpreconditioned matrix from
 // CG's Lanczos coefficients. Writes solvers.csv and solvers.png (gnuplot, if installed).
+// On several MPI ranks the lattice is split as a particle zone's (ZonePartition: owned
+// particles and ghosts, p4est-partitioned background cells) and the tangent is one
+// distributed Trilinos matrix; the lattice multigrid is serial and refused there.
 // See docs/pd-solver-study.md for the boundary conditions and how they relate to the paper.
 
 #include "applications/framework/parse_section.h"
 #include "applications/framework/run_context.h"
 #include "applications/framework/scenario.h"
+#include "applications/simulation/zone_partition.h"
 #include "base/exceptions.h"
 #include "base/list_parsing.h"
 #include "meshfree/bond_based_pd.h"
@@ -158,6 +162,7 @@ struct Row {
   int k;
   unsigned int n_dofs, iterations;
   double setup_s, solve_s, kappa;
+  double opening; // crack opening at the centre from this solver's solution [m]
 };
 
 // Jo & Ha (2021), Tables 2 and 3 (R = 8, α = 0): CG and D-PCG iterations for h = 1/2^5 .. 1/2^8.
@@ -175,6 +180,11 @@ class PDSolverStudy : public Scenario {
   }
 
   void run(RunContext& ctx) override {
+    if (ctx.n_ranks() > 1 &&
+        std::find(study_.solvers.begin(), study_.solvers.end(), "mg") != study_.solvers.end())
+      throw InvalidInput("Study/Solvers", "mg on " + std::to_string(ctx.n_ranks()) + " MPI ranks",
+                         "cg, jacobi or amg on more than one rank (the lattice multigrid is "
+                         "serial); run mg on one rank");
     std::vector<Row> rows;
     const unsigned int total = study_.h_levels.size() * study_.ratios.size() * study_.alphas.size();
     ctx.progress().start("solver study", total, total);
@@ -212,30 +222,72 @@ class PDSolverStudy : public Scenario {
     const auto t0 = std::chrono::steady_clock::now();
     // Ω extended by δ on every side (Jo & Ha's (2021) Ω̄), a uniform lattice of spacing h.
     const dealii::Point<2> lo(-0.5 - delta, -0.5 - delta), hi(0.5 + delta, 0.5 + delta);
-    auto particles = meshfree::ParticleSet<2>::lattice(lo, hi, h, study_.thickness);
     auto options = model.neighbor_options(h);
     const double a = 0.5 * study_.crack_length;
     options.pre_cracks.push_back(
         meshfree::PreCrack<2>::segment(dealii::Point<2>(-a, 0.0), dealii::Point<2>(a, 0.0)));
+    // Distributed: the lattice as a particle zone splits it. Ghosts reach two search radii
+    // (δ plus the partial-volume shell), so the first-layer ghosts' rows are whole for the
+    // surface correction; then only the owned rows are kept, which the tangent's rows are.
+    meshfree::ParticleNumbering numbering;
+    std::unique_ptr<ZonePartition<2>> partition;
+    meshfree::ParticleSet<2> particles(study_.thickness);
+    if (ctx.n_ranks() > 1) {
+      partition = std::make_unique<ZonePartition<2>>(ctx.comm(), lo, hi, h,
+                                                     2.0 * (options.horizon + h) * (1 + 1e-9),
+                                                     [](const dealii::Point<2>&) { return true; });
+      const double volume = partition->lattice_cell_volume() * study_.thickness;
+      particles = meshfree::ParticleSet<2>::from_points(
+          partition->points(), std::vector<double>(partition->points().size(), volume),
+          study_.thickness);
+      options.rows_around_first = partition->n_owned();
+      options.surface_checked_particles = partition->n_owned();
+      numbering.comm = ctx.comm();
+      numbering.global_ids = partition->ids();
+      numbering.n_owned = partition->n_owned();
+      numbering.n_global = partition->n_global_points();
+    } else {
+      particles = meshfree::ParticleSet<2>::lattice(lo, hi, h, study_.thickness);
+    }
     auto bonds = meshfree::NeighborSearch<2>(options).build(particles);
+    if (partition)
+      bonds.keep_rows(partition->n_owned());
     model.initialise(particles, bonds);
-    apply_boundary_conditions(particles, delta);
+    apply_boundary_conditions(ctx, particles, numbering, delta);
+    const unsigned int n_owned = std::min(numbering.n_owned, particles.size());
 
     // First Newton step: residual at u⁰ (prescribed values applied), tangent at u⁰.
     model.compute_forces(particles, bonds, false);
     BondBasedTangent<2> tangent;
-    tangent.reinit(particles, bonds);
+    tangent.reinit(particles, bonds, numbering);
     tangent.assemble(particles, bonds, model, true);
     BondBasedTangent<2>::VectorType rhs, x;
     tangent.initialize_vector(rhs);
     tangent.initialize_vector(x);
-    for (unsigned int i = 0; i < particles.size(); ++i)
-      for (unsigned int d = 0; d < 2; ++d) {
-        const unsigned int q = BondBasedTangent<2>::dof(i, d);
-        rhs[q] = tangent.is_constrained(q) ? 0.0
-                                           : particles.force(i)[d] + particles.external_force(i)[d];
-      }
+    for (unsigned int i = 0; i < n_owned; ++i)
+      for (unsigned int d = 0; d < 2; ++d)
+        rhs[tangent.global_dof(i, d)] =
+            tangent.is_constrained(BondBasedTangent<2>::dof(i, d))
+                ? 0.0
+                : particles.force(i)[d] + particles.external_force(i)[d];
     rhs.compress(dealii::VectorOperation::insert);
+    // The opening at the crack's centre: u_y of the particles at (±h/2, ±h/2) (R even puts
+    // lattice points there), above minus below, summed over the ranks that own them.
+    std::vector<std::pair<unsigned int, double>> centre; // owned particle, sign
+    for (unsigned int i = 0; i < n_owned; ++i) {
+      const auto& X = particles.reference_position(i);
+      if (std::abs(std::abs(X[0]) - 0.5 * h) < 1e-9 * h &&
+          std::abs(std::abs(X[1]) - 0.5 * h) < 1e-9 * h)
+        centre.emplace_back(i, X[1] > 0 ? 0.5 : -0.5);
+    }
+    const auto opening = [&](const BondBasedTangent<2>::VectorType& u) {
+      double w = 0;
+      for (const auto& [i, sign] : centre)
+        w += sign * u[tangent.global_dof(i, 1)];
+      return dealii::Utilities::MPI::sum(w, ctx.comm());
+    };
+    const std::size_t bond_ends =
+        static_cast<std::size_t>(dealii::Utilities::MPI::sum(double(bonds.n_bonds()), ctx.comm()));
     const double assembly_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
@@ -250,9 +302,11 @@ class PDSolverStudy : public Scenario {
     geometry.pre_cracks = options.pre_cracks;
 
     ctx.log() << "  h = 1/2^" << k << ", R = " << R << ", alpha = " << alpha << ": "
-              << particles.size() << " particles, " << bonds.n_bonds() << " bond ends, "
-              << tangent.n_dofs() << " dofs, " << tangent.matrix().n_nonzero_elements()
-              << " nonzeros, setup " << std::setprecision(3) << assembly_s << " s\n";
+              << tangent.n_dofs() / 2 << " particles"
+              << (ctx.n_ranks() > 1 ? " on " + std::to_string(ctx.n_ranks()) + " ranks" : "")
+              << ", " << bond_ends << " bond ends, " << tangent.n_dofs() << " dofs, "
+              << tangent.matrix().n_nonzero_elements() << " nonzeros, setup "
+              << std::setprecision(3) << assembly_s << " s\n";
     double kappa = std::numeric_limits<double>::quiet_NaN();
     const std::size_t first = rows.size();
     for (const std::string& name : study_.solvers) {
@@ -281,8 +335,9 @@ class PDSolverStudy : public Scenario {
                   << " s, block copies " << r.mg_setup.block_copy << " s, lambda_max "
                   << r.mg_setup.eigenvalues << " s, coarse KLU " << r.mg_setup.coarse_factorisation
                   << " s\n";
-      rows.push_back({name, alpha, R, h, k, tangent.n_dofs(), r.iterations, r.setup_seconds,
-                      r.solve_seconds, std::numeric_limits<double>::quiet_NaN()});
+      rows.push_back({name, alpha, R, h, k, static_cast<unsigned int>(tangent.n_dofs()),
+                      r.iterations, r.setup_seconds, r.solve_seconds,
+                      std::numeric_limits<double>::quiet_NaN(), opening(x)});
     }
     for (std::size_t i = first; i < rows.size(); ++i)
       rows[i].kappa = kappa;
@@ -290,7 +345,11 @@ class PDSolverStudy : public Scenario {
 
   // See docs/pd-solver-study.md. Body forces are force densities b [N/m³] on particles
   // in a strip of thickness δ: total force σ·1 m·T.
-  void apply_boundary_conditions(meshfree::ParticleSet<2>& p, double delta) const {
+  // On several ranks each rank applies them to its owned particles and ghosts alike (they
+  // depend on the position only); the traction case's two point supports are the particles
+  // nearest (∓0.5, 0) over all ranks, the lower lattice id on a tie (the serial choice).
+  void apply_boundary_conditions(RunContext& ctx, meshfree::ParticleSet<2>& p,
+                                 const meshfree::ParticleNumbering& numbering, double delta) const {
     const double b = study_.stress / delta;
     const double eps = 1e-12;
     if (study_.boundary == "clamped_collar") {
@@ -311,31 +370,44 @@ class PDSolverStudy : public Scenario {
         }
       }
     } else {
-      unsigned int left = 0, right = 0;
       for (unsigned int i = 0; i < p.size(); ++i) {
         const auto& x = p.reference_position(i);
         if (std::abs(x[1]) > 0.5 + eps)
           p.external_force(i)[1] = (x[1] > 0 ? b : -b) * p.volume(i);
-        const auto dist = [&](unsigned int j, double x0) {
-          return std::hypot(p.reference_position(j)[0] - x0, p.reference_position(j)[1]);
-        };
-        if (dist(i, -0.5) < dist(left, -0.5))
-          left = i;
-        if (dist(i, 0.5) < dist(right, 0.5))
-          right = i;
       }
-      p.set_fixed(left);
-      p.set_fixed(right, 1u, true);
+      // The support nearest x0 over every rank's particles (the lowest id among the nearest).
+      const auto support = [&](double x0) {
+        double best = std::numeric_limits<double>::infinity();
+        for (unsigned int i = 0; i < p.size(); ++i)
+          best = std::min(best,
+                          std::hypot(p.reference_position(i)[0] - x0, p.reference_position(i)[1]));
+        best = dealii::Utilities::MPI::min(best, ctx.comm());
+        std::uint64_t id = std::numeric_limits<std::uint64_t>::max();
+        for (unsigned int i = 0; i < p.size(); ++i)
+          if (std::hypot(p.reference_position(i)[0] - x0, p.reference_position(i)[1]) == best)
+            id = std::min(id, numbering.id(i));
+        id = dealii::Utilities::MPI::min(id, ctx.comm());
+        std::vector<unsigned int> local;
+        for (unsigned int i = 0; i < p.size(); ++i)
+          if (numbering.id(i) == id)
+            local.push_back(i);
+        return local;
+      };
+      for (unsigned int i : support(-0.5))
+        p.set_fixed(i);
+      for (unsigned int i : support(0.5))
+        p.set_fixed(i, 1u, true);
     }
   }
 
   void write_csv(RunContext& ctx, const std::vector<Row>& rows) const {
     std::ostringstream csv;
-    csv << "solver,alpha,R,h,n_dofs,iterations,setup_s,solve_s,condition_estimate\n";
+    csv << "solver,alpha,R,h,n_dofs,iterations,setup_s,solve_s,crack_opening_m,condition_"
+           "estimate\n";
     csv << std::setprecision(8);
     for (const Row& r : rows) {
       csv << r.solver << "," << r.alpha << "," << r.R << "," << r.h << "," << r.n_dofs << ","
-          << r.iterations << "," << r.setup_s << "," << r.solve_s << ",";
+          << r.iterations << "," << r.setup_s << "," << r.solve_s << "," << r.opening << ",";
       if (std::isfinite(r.kappa))
         csv << r.kappa;
       csv << "\n";
@@ -349,6 +421,7 @@ class PDSolverStudy : public Scenario {
                          {"iterations", double(r.iterations)},
                          {"setup_s", r.setup_s},
                          {"solve_s", r.solve_s},
+                         {"crack_opening_m", r.opening},
                          {"condition_estimate", std::isfinite(r.kappa) ? r.kappa : -1.0}});
     }
     ctx.output().write_atomic("solvers.csv", csv.str());
@@ -429,6 +502,23 @@ class PDSolverStudy : public Scenario {
     }
     for (const auto& [name, its] : max_its)
       summary.set_figure(name + "_max_iterations", its, "iterations");
+
+    // The crack's opening at its centre per case (the first solver's solution), and how far
+    // the solvers' solutions spread about it: each stops at the linear tolerance, so they
+    // agree to about κ times it.
+    std::map<std::string, std::pair<double, double>> openings; // key -> (min, max)
+    for (const Row& r : rows) {
+      const std::string key = "k" + std::to_string(r.k) + "_R" + tag(r.R) + "_a" + tag(r.alpha);
+      auto [it, first] = openings.emplace(key, std::make_pair(r.opening, r.opening));
+      if (first)
+        summary.set_figure("crack_opening_" + key, r.opening, "m");
+      it->second.first = std::min(it->second.first, r.opening);
+      it->second.second = std::max(it->second.second, r.opening);
+    }
+    double spread = 0;
+    for (const auto& [key, range] : openings)
+      spread = std::max(spread, (range.second - range.first) / std::abs(range.second));
+    summary.set_figure("crack_opening_solver_spread_max", spread, "-");
 
     // Trends of Table 1: κ ×(3..5) per halving of h, increasing in α, decreasing in R.
     if (!kappa.empty()) {

@@ -12,6 +12,13 @@
 // the free block nor need a different pattern; their right-hand side is zero (the solver
 // applies prescribed values to u before it forms the residual). A free component without
 // stiffness (all bonds broken) is treated the same way and counted as isolated.
+//
+// Distributed (a ParticleNumbering over several ranks): a rank holds its owned particles
+// first, then ghosts, with bond rows for the owned ones (BondList::keep_rows); the matrix
+// rows are the owned particles' dofs, global dof = global id × dim + component, and the
+// columns reach the ghosts. The ghosts' constrained flags come from their owners, and the
+// constrained diagonal is the mean over all ranks, so the matrix is the serial one with its
+// rows and columns renumbered.
 
 #include "meshfree/bond_based_pd.h"
 #include "meshfree/bond_list.h"
@@ -20,23 +27,47 @@
 #include <deal.II/lac/trilinos_sparse_matrix.h>
 #include <deal.II/lac/trilinos_vector.h>
 
+#include <mpi.h>
+
 #include <cstdint>
 #include <vector>
 
 namespace spinesim::meshfree {
+
+// Which particles of a rank's set it owns and their numbers over all ranks. The default is
+// one rank holding everything in its own order.
+struct ParticleNumbering {
+  MPI_Comm comm = MPI_COMM_SELF;
+  // Global id per local particle (empty: the local index); owned particles first, in
+  // ascending id.
+  std::vector<std::uint64_t> global_ids;
+  unsigned int n_owned = ~0u; // ~0u: all local particles
+  std::uint64_t n_global = 0; // particles over all ranks (0: the local count)
+
+  bool distributed() const { return !global_ids.empty(); }
+  std::uint64_t id(unsigned int i) const { return global_ids.empty() ? i : global_ids[i]; }
+};
 
 template <int dim>
 class BondBasedTangent {
  public:
   using VectorType = dealii::TrilinosWrappers::MPI::Vector;
 
+  // Local dof of a particle of this rank's set (the index of is_constrained()); on one rank
+  // also the global dof, the index of the matrix and of the vectors.
   static unsigned int dof(unsigned int particle, unsigned int component) {
     return particle * dim + component;
   }
+  // The matrix and vector index of (particle, component), particle a local index.
+  dealii::types::global_dof_index global_dof(unsigned int particle, unsigned int component) const {
+    return numbering_.id(particle) * dim + component;
+  }
 
   // Sparsity from the bonds that are intact now (CSR rows, no per-entry inserts). Bonds
-  // that break later stay in the pattern with zero values.
-  void reinit(const ParticleSet<dim>& particles, const BondList<dim>& bonds);
+  // that break later stay in the pattern with zero values. With a distributed numbering the
+  // bonds hold rows for the owned particles only, and the call is collective.
+  void reinit(const ParticleSet<dim>& particles, const BondList<dim>& bonds,
+              const ParticleNumbering& numbering = ParticleNumbering());
 
   // Values at the particles' current displacements, intact bonds only. `geometric` adds the
   // (e/l)(I − n⊗n) part (exact Newton tangent); false gives Jo & Ha's (2021) M⊗M form.
@@ -44,21 +75,42 @@ class BondBasedTangent {
                 const BondBasedPD<dim>& model, bool geometric = true);
 
   const dealii::TrilinosWrappers::SparseMatrix& matrix() const { return matrix_; }
-  unsigned int n_dofs() const { return n_dofs_; }
-  // Dirichlet or isolated: the row and column hold only the diagonal.
+  // Dofs over all ranks.
+  dealii::types::global_dof_index n_dofs() const { return n_dofs_; }
+  // The particles this tangent was made for, on this rank, and how many of them it owns.
+  unsigned int n_local_particles() const { return n_particles_; }
+  unsigned int n_owned_particles() const { return n_owned_; }
+  const ParticleNumbering& numbering() const { return numbering_; }
+  const dealii::IndexSet& owned_dofs() const { return owned_dofs_; }
+  // The owned particle and component of each owned dof, in the matrix's (ascending) order.
+  const std::vector<std::pair<unsigned int, unsigned int>>& owned_dof_order() const {
+    return owned_dof_order_;
+  }
+  // Dirichlet or isolated: the row and column hold only the diagonal. `dof`: local
+  // (dof(particle, component)), ghosts included.
   bool is_constrained(unsigned int dof) const { return constrained_[dof] != 0; }
+  // Isolated components over all ranks.
   unsigned int n_isolated() const { return n_isolated_; }
   double constrained_diagonal() const { return constrained_diagonal_; }
 
-  // A zero vector with this tangent's layout (serial, MPI_COMM_SELF).
+  // A zero vector with this tangent's layout (the owned dofs of each rank).
   void initialize_vector(VectorType& v) const;
   // Zeroes the constrained entries (Dirichlet on increments).
   void zero_constrained(VectorType& v) const;
-  // Diagonal blocks' trace per particle [N/m], for the user and for tests.
+  // Diagonal blocks' trace per particle [N/m] (owned particles; ghosts 0), for the user and
+  // for tests.
   std::vector<double> particle_stiffness(const ParticleSet<dim>& particles) const;
 
  private:
-  unsigned int n_particles_ = 0, n_dofs_ = 0, n_isolated_ = 0;
+  unsigned int n_particles_ = 0, n_owned_ = 0, n_isolated_ = 0;
+  dealii::types::global_dof_index n_dofs_ = 0;
+  ParticleNumbering numbering_;
+  dealii::IndexSet owned_dofs_;
+  std::vector<std::pair<unsigned int, unsigned int>> owned_dof_order_;
+  // Ghost particles bonded to an owned one: their dofs, whose constrained flags the owners
+  // decide (assemble()).
+  dealii::IndexSet ghost_dofs_;
+  std::vector<unsigned int> bonded_ghosts_;
   double constrained_diagonal_ = 1.0;
   // Row structure per particle: sorted particle columns (neighbours ∪ self), and for each
   // bond k of that particle the slot of its neighbour in the list (or −1 if not in the pattern).

@@ -2,6 +2,8 @@
 
 #include "base/exceptions.h"
 
+#include <deal.II/base/mpi.h>
+
 #include <cmath>
 #include <sstream>
 
@@ -46,11 +48,24 @@ ImplicitStaticSolver<dim>::ImplicitStaticSolver(const Parameters& parameters,
     : prm_(parameters), model_(model), linear_(parameters.linear) {}
 
 template <int dim>
+void ImplicitStaticSolver<dim>::set_distribution(
+    const ParticleNumbering& numbering, std::function<void(ParticleSet<dim>&)> update_ghosts) {
+  numbering_ = numbering;
+  update_ghosts_ = std::move(update_ghosts);
+  pattern_bonds_ = nullptr;
+}
+
+template <int dim>
+double ImplicitStaticSolver<dim>::sum(double v) const {
+  return numbering_.distributed() ? dealii::Utilities::MPI::sum(v, numbering_.comm) : v;
+}
+
+template <int dim>
 typename ImplicitStaticSolver<dim>::NewtonResult
 ImplicitStaticSolver<dim>::newton(ParticleSet<dim>& particles, BondList<dim>& bonds) {
   using VectorType = typename BondBasedTangent<dim>::VectorType;
-  if (pattern_bonds_ != &bonds || tangent_.n_dofs() != particles.size() * dim) {
-    tangent_.reinit(particles, bonds);
+  if (pattern_bonds_ != &bonds || tangent_.n_local_particles() != particles.size()) {
+    tangent_.reinit(particles, bonds, numbering_);
     pattern_bonds_ = &bonds;
     linear_.reset();
   }
@@ -58,7 +73,7 @@ ImplicitStaticSolver<dim>::newton(ParticleSet<dim>& particles, BondList<dim>& bo
   VectorType rhs, du;
   tangent_.initialize_vector(rhs);
   tangent_.initialize_vector(du);
-  const unsigned int n = particles.size();
+  const unsigned int n = n_owned(particles);
   for (unsigned int it = 0;; ++it) {
     model_.compute_forces(particles, bonds, false);
     double r2 = 0, f2 = 0, reaction2 = 0;
@@ -72,6 +87,9 @@ ImplicitStaticSolver<dim>::newton(ParticleSet<dim>& particles, BondList<dim>& bo
           f2 += f * f;
         }
       }
+    r2 = sum(r2);
+    f2 = sum(f2);
+    reaction2 = sum(reaction2);
     const double r = std::sqrt(r2), scale = std::sqrt(std::max(f2, reaction2));
     if (!std::isfinite(r))
       throw NumericalFailure("non-finite residual",
@@ -88,12 +106,11 @@ ImplicitStaticSolver<dim>::newton(ParticleSet<dim>& particles, BondList<dim>& bo
 
     tangent_.assemble(particles, bonds, model_, prm_.geometric_stiffness);
     for (unsigned int i = 0; i < n; ++i)
-      for (unsigned int d = 0; d < dim; ++d) {
-        const unsigned int q = BondBasedTangent<dim>::dof(i, d);
-        rhs[q] = tangent_.is_constrained(q)
-                     ? 0.0
-                     : particles.force(i)[d] + particles.external_force(i)[d];
-      }
+      for (unsigned int d = 0; d < dim; ++d)
+        rhs[tangent_.global_dof(i, d)] =
+            tangent_.is_constrained(BondBasedTangent<dim>::dof(i, d))
+                ? 0.0
+                : particles.force(i)[d] + particles.external_force(i)[d];
     rhs.compress(dealii::VectorOperation::insert);
     const auto lin = linear_.solve(tangent_, particles, du, rhs);
     result.linear_iterations += lin.iterations;
@@ -101,14 +118,18 @@ ImplicitStaticSolver<dim>::newton(ParticleSet<dim>& particles, BondList<dim>& bo
     double du2 = 0, u2 = 0;
     for (unsigned int i = 0; i < n; ++i)
       for (unsigned int d = 0; d < dim; ++d) {
-        const unsigned int q = BondBasedTangent<dim>::dof(i, d);
-        if (tangent_.is_constrained(q))
+        if (tangent_.is_constrained(BondBasedTangent<dim>::dof(i, d)))
           continue;
-        particles.displacement(i)[d] += du[q];
-        du2 += du[q] * du[q];
+        const double v = du[tangent_.global_dof(i, d)];
+        particles.displacement(i)[d] += v;
+        du2 += v * v;
       }
+    if (update_ghosts_)
+      update_ghosts_(particles);
     for (unsigned int i = 0; i < n; ++i)
       u2 += particles.displacement(i).norm_square();
+    du2 = sum(du2);
+    u2 = sum(u2);
     result.relative_update = u2 > 0 ? std::sqrt(du2 / u2) : 0.0;
     if (prm_.displacement_tolerance > 0 && result.relative_update <= prm_.displacement_tolerance) {
       model_.compute_forces(particles, bonds, false);
@@ -160,7 +181,10 @@ ImplicitStaticSolver<dim>::solve(ParticleSet<dim>& particles, BondList<dim>& bon
         ok = false;
         break;
       }
-      const std::size_t broke = model_.compute_forces(particles, bonds, true);
+      // Each rank breaks the bonds of its owned rows; a pair's two ends break alike on their
+      // owners (the same stretch from the same displacements).
+      const std::size_t broke = static_cast<std::size_t>(
+          sum(static_cast<double>(model_.compute_forces(particles, bonds, true))));
       if (broke == 0)
         break;
       report.bonds_broken += broke;

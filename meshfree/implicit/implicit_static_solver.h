@@ -17,6 +17,7 @@
 
 #include <deal.II/base/parameter_handler.h>
 
+#include <functional>
 #include <vector>
 
 namespace spinesim::meshfree {
@@ -57,6 +58,14 @@ class ImplicitStaticSolver {
 
   ImplicitStaticSolver(const Parameters& parameters, const BondBasedPD<dim>& model);
 
+  // Distributed: this rank's particles are numbered by `numbering` (owned first, bond rows for
+  // them only), and `update_ghosts` copies the owned displacements to the ghosts on every
+  // rank (collective). Sums and norms then run over the owned particles of all ranks, and
+  // every Newton update is followed by update_ghosts, so each rank's ghosts are current for
+  // the next force and tangent pass.
+  void set_distribution(const ParticleNumbering& numbering,
+                        std::function<void(ParticleSet<dim>&)> update_ghosts);
+
   // The load steps to the full load; NumericalFailure when the cut-backs run out.
   std::vector<StepReport> solve(ParticleSet<dim>& particles, BondList<dim>& bonds);
 
@@ -72,6 +81,13 @@ class ImplicitStaticSolver {
   PDLinearSolver<dim> linear_;
   BondBasedTangent<dim> tangent_;
   const BondList<dim>* pattern_bonds_ = nullptr;
+  ParticleNumbering numbering_;
+  std::function<void(ParticleSet<dim>&)> update_ghosts_;
+  // Owned particles of this rank (all on one rank) and the sum over ranks.
+  unsigned int n_owned(const ParticleSet<dim>& particles) const {
+    return std::min(numbering_.n_owned, particles.size());
+  }
+  double sum(double v) const;
 };
 
 } // namespace spinesim::meshfree

@@ -3,6 +3,7 @@
 #include "base/exceptions.h"
 #include "base/scoped_time.h"
 
+#include <deal.II/base/mpi.h>
 #include <deal.II/lac/precondition.h>
 #include <deal.II/lac/solver_cg.h>
 #include <deal.II/lac/solver_control.h>
@@ -134,15 +135,27 @@ PDLinearSolver<dim>::solve(const BondBasedTangent<dim>& tangent, const ParticleS
     // translations and the in-plane rotation (2-D) or three rotations (3-D) about the
     // centroid. Column-major, leading dimension = local rows.
     const unsigned int n_modes = dim == 2 ? 3 : 6;
-    const Epetra_Map& map = K.trilinos_matrix().DomainMap();
-    const std::size_t n_local = map.NumMyElements();
+    // The owned dofs in the matrix's order (ascending global dof, as the Epetra map of an
+    // IndexSet lists them); the centroid over every rank's owned particles.
+    const auto& order = tangent.owned_dof_order();
+    const std::size_t n_local = order.size();
+    AssertDimension(n_local,
+                    static_cast<std::size_t>(K.trilinos_matrix().DomainMap().NumMyElements()));
+    const MPI_Comm comm = tangent.numbering().comm;
+    double moments[dim + 1] = {}, local_moments[dim + 1] = {};
+    for (unsigned int i = 0; i < tangent.n_owned_particles(); ++i) {
+      for (unsigned int d = 0; d < dim; ++d)
+        local_moments[d] += particles.reference_position(i)[d];
+      local_moments[dim] += 1;
+    }
+    Utilities::MPI::sum(ArrayView<const double>(local_moments, dim + 1), comm,
+                        ArrayView<double>(moments, dim + 1));
     dealii::Point<dim> centre;
-    for (unsigned int i = 0; i < particles.size(); ++i)
-      centre += particles.reference_position(i) / particles.size();
+    for (unsigned int d = 0; d < dim; ++d)
+      centre[d] = moments[dim] > 0 ? moments[d] / moments[dim] : 0.0;
     std::vector<double> modes(std::max<std::size_t>(1, n_local * n_modes), 0.0);
     for (std::size_t lid = 0; lid < n_local; ++lid) {
-      const std::size_t q = static_cast<std::size_t>(map.GID(static_cast<int>(lid)));
-      const unsigned int i = static_cast<unsigned int>(q / dim), c = q % dim;
+      const auto [i, c] = order[lid];
       const Tensor<1, dim> r = particles.reference_position(i) - centre;
       modes[c * n_local + lid] = 1.0; // translation c
       if (dim == 2) {
@@ -163,6 +176,13 @@ PDLinearSolver<dim>::solve(const BondBasedTangent<dim>& tangent, const ParticleS
     result.setup_seconds = seconds_since(t0);
     run(amg);
   } else {
+    if (tangent.numbering().distributed() &&
+        Utilities::MPI::n_mpi_processes(tangent.numbering().comm) > 1)
+      throw InvalidInput(
+          "Linear solver",
+          "mg on " + std::to_string(Utilities::MPI::n_mpi_processes(tangent.numbering().comm)) +
+              " MPI ranks",
+          "cg, jacobi or amg on more than one rank (the lattice multigrid is serial)");
     if (!lattice_)
       throw InvalidInput("Linear solver", "mg needs the particle lattice",
                          "cg, jacobi or amg for particle sets not made by ParticleSet::lattice");

@@ -232,19 +232,35 @@ spinesim_add_comparison_test(distributed.nosb_ring_j2_restart_matches
   REQUIRES "dist_nosb_j2_2;dist_nosb_j2_done"
   LABELS "scene;particles;mpi")
 
-# The implicit PD solver study of Jo & Ha (2021) runs on MPI_COMM_SELF (docs/scaling.md, "What
-# is distributed"): every rank runs the whole problem with the same deterministic loops, and
-# the figures on 1 and 2 ranks agree bit for bit (9 s).
-foreach(_ranks 1 2)
+# The implicit PD solver study of Jo & Ha (2021) on 1, 2 and 4 ranks (4 oversubscribed): the
+# lattice split as a particle zone's, the tangent one distributed Trilinos matrix
+# (docs/scaling.md). CG and Jacobi-PCG take the same iterations on every rank count (the same
+# Krylov space; measured equal in all 12 cases), so the condition estimate from CG's Lanczos
+# coefficients and the crack opening of the solution agree to round-off (measured 2e-13 and
+# 6e-15; bounds 1e-10 and 1e-9, far below the 1e-6 a different iteration count would give).
+# ML's aggregation is per rank, so AMG's counts differ (measured max 24, 22, 21 on 1, 2, 4
+# ranks): only its bound of scene.pd_solver_study is checked. The lattice multigrid is serial
+# and refused on more ranks. The solvers' crack openings spread by 3.1-3.2e-6 of the opening
+# (each stops at a residual of 1e-6): bound 1e-5.
+set(_pd_dist_checks "kappa_h_ratio_min:rel:1e-10;kappa_h_ratio_max:rel:1e-10;kappa_k6_R8_a0:rel:1e-10;kappa_k5_R4_am1:rel:1e-10;cg_max_iterations:abs:0;jacobi_max_iterations:abs:0;cg_iterations_over_paper_k5:rel:0;jacobi_iterations_over_paper_k6:rel:0;crack_opening_k6_R8_a0:rel:1e-9;crack_opening_k5_R4_am1:rel:1e-9;crack_opening_k6_R4_a1:rel:1e-9")
+foreach(_ranks 1 2 4)
   spinesim_add_scene_test(distributed.pd_solver_study_${_ranks}ranks
     SCENE ${PROJECT_SOURCE_DIR}/applications/validation/pd_cracked_plate.prm RANKS ${_ranks}
-    OUT ${_dist_runs}/pd_study_${_ranks} FIXTURE dist_pd_study_${_ranks} EXPECT "status==ok"
+    SET "Study/Solvers=cg, jacobi, amg" OUT ${_dist_runs}/pd_study_${_ranks}
+    FIXTURE dist_pd_study_${_ranks}
+    EXPECT "status==ok;amg_max_iterations<=30;crack_opening_solver_spread_max<=1e-5"
     LABELS "scene;meshfree" TIMEOUT 300)
 endforeach()
-spinesim_add_comparison_test(distributed.pd_solver_study_1_vs_2_ranks
-  A ${_dist_runs}/pd_study_1/summary.json B ${_dist_runs}/pd_study_2/summary.json
-  CHECKS "kappa_h_ratio_min:rel:0;kappa_h_ratio_max:rel:0;mg_max_iterations:abs:0;amg_max_iterations:abs:0;cg_iterations_over_paper_k5:rel:0"
-  REQUIRES "dist_pd_study_1;dist_pd_study_2" LABELS "scene;meshfree;mpi")
+foreach(_ranks 2 4)
+  spinesim_add_comparison_test(distributed.pd_solver_study_1_vs_${_ranks}_ranks
+    A ${_dist_runs}/pd_study_1/summary.json B ${_dist_runs}/pd_study_${_ranks}/summary.json
+    CHECKS "${_pd_dist_checks}" REQUIRES "dist_pd_study_1;dist_pd_study_${_ranks}"
+    LABELS "scene;meshfree;mpi")
+endforeach()
+spinesim_add_scene_test(hostile.pd_solver_study_mg_on_2_ranks
+  SCENE ${PROJECT_SOURCE_DIR}/applications/validation/pd_cracked_plate.prm RANKS 2
+  OUT ${_dist_runs}/pd_study_mg_2 EXIT 2 MATCH "Study/Solvers.*mg on 2 MPI ranks.*cg, jacobi or amg"
+  LABELS "hostile;meshfree")
 
 # Quasi-static zones (adaptive dynamic relaxation, Kilic & Madenci 2010) distributed the same
 # way: the relaxation's sums (residual, reactions, the Rayleigh-quotient damping) run over the
