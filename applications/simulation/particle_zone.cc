@@ -9,7 +9,9 @@
 #include "base/list_parsing.h"
 #include "fem/materials/law_parameters.h"
 #include "meshfree/adaptive_dynamic_relaxation.h"
+#include "meshfree/bond_based_method.h"
 #include "meshfree/fragments.h"
+#include "meshfree/implicit/implicit_static_solver.h"
 #include "meshfree/neighbor_search.h"
 #include "meshfree/particle_method.h"
 #include "meshfree/particle_output.h"
@@ -87,6 +89,23 @@ void ParticleZoneParameters::declare(dealii::ParameterHandler& prm) {
                     "material history included) and the load applied in two halves, each cut "
                     "again if needed; after two converged sub-steps the sub-step doubles again "
                     "[-]. 0 = the run stops at the first relaxation that does not converge.");
+  prm.declare_entry("Solver", "relaxation", Selection("relaxation|newton"),
+                    "How each load step reaches equilibrium [-]. relaxation: adaptive dynamic "
+                    "relaxation (Kilic & Madenci 2010), every particle method. newton: Newton's "
+                    "method with the analytic tangent of bond-based PD (Jo & Ha 2021, eq. 20) "
+                    "and a Trilinos linear solver, on the zone's ranks; bonds break at "
+                    "converged states and the step is solved again until none breaks. Both "
+                    "stop at Tolerance.");
+  prm.declare_entry("Newton iterations", "25", Integer(1),
+                    "Newton iterations of one solve before the step counts as not converged "
+                    "(and is cut, Step cuts) [-].");
+  prm.declare_entry("Breaking passes", "100", Integer(1),
+                    "Newton solves of one load step while bonds keep breaking [-].");
+  prm.declare_entry("Linear solver", "amg", Selection("amg|jacobi|cg"),
+                    "Linear solver of the Newton systems [-]: amg (CG + ML smoothed aggregation "
+                    "with rigid-body modes), jacobi (diagonal PCG), cg.");
+  prm.declare_entry("Linear tolerance", "1e-6", Double(0, 1),
+                    "Relative residual at which a Newton system's solve stops [-].");
   prm.leave_subsection();
   for (unsigned int k = 1; k <= n_region_slots; ++k) {
     prm.enter_subsection("Region " + std::to_string(k));
@@ -190,6 +209,10 @@ struct ParticleZone<dim>::Impl {
   ParticleZoneParameters prm;
   materials::LawParameters law;
   meshfree::AdaptiveDynamicRelaxationParameters adr_prm;
+  // Particles/Quasi-static/Solver = newton: the implicit solver on the bond-based model.
+  bool newton_steps = false;
+  meshfree::ImplicitStaticSolverParameters newton_prm;
+  std::unique_ptr<meshfree::ImplicitStaticSolver<dim>> newton;
   bool damage = false;
 
   meshfree::ParticleSet<dim> particles;
@@ -351,6 +374,36 @@ struct ParticleZone<dim>::Impl {
       energy.force_pass(p, before, internal_energy(p), &forces_before);
     else
       energy.force_pass(p, before, before, nullptr);
+  }
+
+  // One load step by Newton (Particles/Quasi-static/Solver = newton), the load prescribed: Newton
+  // to equilibrium without breaking, then one force pass of the zone that breaks what the
+  // converged state breaks (and books it); while any broke, Newton again at the same load.
+  // Its failures (a linear solve that does not converge, a non-finite residual or tangent)
+  // are met on every rank alike: the norms and the solves are global.
+  typename meshfree::AdaptiveDynamicRelaxation<dim>::Result newton_solve() {
+    typename meshfree::AdaptiveDynamicRelaxation<dim>::Result result;
+    if (partition) // the ghosts' prescribed values of this load
+      partition->update_ghosts(particles.displacements());
+    try {
+      for (unsigned int pass = 0; pass < newton_prm.max_breaking_passes; ++pass) {
+        const auto nr = newton->newton(particles, bonds);
+        result.iterations += nr.iterations;
+        result.relative_residual = nr.relative_residual;
+        if (!nr.converged)
+          return result;
+        const std::size_t before = broke_since_step_check;
+        compute_forces(particles); // the zone's pass: breaks and their books
+        if (sum(double(broke_since_step_check - before)) == 0) {
+          result.converged = true;
+          return result;
+        }
+      }
+    } catch (NumericalFailure& e) {
+      e.set_collective();
+      throw;
+    }
+    return result; // bonds still breaking after Breaking passes
   }
 
   // Whether copies of rows on several ranks share their breaks (SPG with a failure criterion
@@ -606,6 +659,16 @@ ParticleZone<dim>::ParticleZone(dealii::ParameterHandler& prm, const std::string
   prm.enter_subsection("Particles");
   prm.enter_subsection("Quasi-static");
   impl_->max_step_cuts = prm.get_integer("Step cuts");
+  impl_->newton_steps = prm.get("Solver") == "newton";
+  {
+    meshfree::ImplicitStaticSolverParameters& n = impl_->newton_prm;
+    n.max_newton_iterations = prm.get_integer("Newton iterations");
+    n.max_breaking_passes = prm.get_integer("Breaking passes");
+    n.residual_tolerance = impl_->adr_prm.tolerance; // the free residual over the reactions
+    n.displacement_tolerance = 0;
+    n.linear.solver = prm.get("Linear solver");
+    n.linear.tolerance = prm.get_double("Linear tolerance");
+  }
   prm.leave_subsection();
   prm.leave_subsection();
   impl_->damage = damage;
@@ -633,6 +696,12 @@ ParticleZone<dim>::ParticleZone(dealii::ParameterHandler& prm, const std::string
   }
   prm.leave_subsection();
   impl_->method = make(material);
+  if (impl_->newton_steps && impl_->prm.integration == "quasi_static" &&
+      !dynamic_cast<const meshfree::BondBasedMethod<dim>*>(impl_->method.get()))
+    throw InvalidInput("Particles/Quasi-static/Solver",
+                       "newton with Effects/Particles method = " + method,
+                       "relaxation, or newton with bond_based (the analytic tangent is "
+                       "bond-based PD's)");
   if (impl_->prm.lower.size() < dim || impl_->prm.upper.size() < dim)
     throw InvalidInput("Particles/Lower corner", "needs one coordinate per dimension",
                        std::to_string(dim) + " comma-separated values [m]");
@@ -708,6 +777,22 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
   z.method->initialise(z.particles, z.bonds);
   z.stiffness_bound = z.method->stiffness_bound(z.particles, z.bonds);
   z.dt_stable = z.min(z.method->stable_time_step(z.particles, z.bonds, z.prm.time_step_safety));
+  if (z.newton_steps && z.prm.integration == "quasi_static") {
+    // Newton on the bond-based model; distributed, its tangent's rows are the owned particles
+    // and its ghosts follow every update through the zone's exchange.
+    const auto& model = dynamic_cast<const meshfree::BondBasedMethod<dim>&>(*z.method).model();
+    z.newton = std::make_unique<meshfree::ImplicitStaticSolver<dim>>(z.newton_prm, model);
+    if (z.partition) {
+      meshfree::ParticleNumbering numbering;
+      numbering.comm = z.comm;
+      numbering.global_ids = z.partition->ids();
+      numbering.n_owned = z.partition->n_owned();
+      numbering.n_global = z.partition->n_global_points();
+      z.newton->set_distribution(numbering, [&z](meshfree::ParticleSet<dim>& p) {
+        z.partition->update_ghosts(p.displacements());
+      });
+    }
+  }
 
   const char letters[] = {'x', 'y', 'z'};
   for (std::size_t k = 0; k < z.prm.regions.size(); ++k) {
@@ -863,7 +948,7 @@ bool ParticleZone<dim>::advance_to(double time, const std::function<bool(double)
       typename meshfree::AdaptiveDynamicRelaxation<dim>::Result result;
       std::optional<NumericalFailure> failure;
       try {
-        result = adr.solve(z.particles, z.stiffness_bound);
+        result = z.newton ? z.newton_solve() : adr.solve(z.particles, z.stiffness_bound);
       } catch (const NumericalFailure& e) {
         if (z.partition && !e.collective())
           throw;
@@ -882,23 +967,27 @@ bool ParticleZone<dim>::advance_to(double time, const std::function<bool(double)
                                  failure->hint() + "; or cut the step further: raise "
                                                    "Particles/Quasi-static/Step cuts or take "
                                                    "more, smaller steps");
+        const std::string solver = z.newton ? "Newton" : "dynamic relaxation";
         if (cuts >= z.max_step_cuts)
           throw NumericalFailure(
-              "dynamic relaxation did not converge (relative residual " +
+              solver + " did not converge (relative residual " +
                   significant(result.relative_residual) + " after " +
                   std::to_string(result.iterations) + " iterations" +
                   (cuts > 0 ? ", " + std::to_string(cuts) + " step cuts" : std::string()) + ")",
               "particle zone, t = " + significant(target, 6) + " s",
-              "raise Particles/Quasi-static/Maximum iterations or Step cuts, "
-              "or take more, smaller steps");
+              std::string("raise Particles/Quasi-static/") +
+                  (z.newton ? "Newton iterations (or Breaking passes)" : "Maximum iterations") +
+                  " or Step cuts, or take more, smaller steps");
         const double from = z.time;
         z.restore(*snapshot);
+        if (z.newton) // the restore may bring back bonds the tangent's pattern dropped
+          z.newton->reset_pattern();
         sub = (target - from) / 2;
         ++cuts;
         ++z.step_cuts;
         z.sub_steps_converged = 0;
         z.messages.push_back(
-            "t = " + significant(target, 6) + " s: relaxation " +
+            "t = " + significant(target, 6) + " s: " + (z.newton ? "Newton " : "relaxation ") +
             (failure ? "failed: " + failure->what_failed() + " (" + failure->location() + ")"
                      : "not converged (relative residual " + significant(result.relative_residual) +
                            " after " + std::to_string(result.iterations) + " iterations)") +

@@ -74,6 +74,7 @@ ImplicitStaticSolver<dim>::newton(ParticleSet<dim>& particles, BondList<dim>& bo
   tangent_.initialize_vector(rhs);
   tangent_.initialize_vector(du);
   const unsigned int n = n_owned(particles);
+  double initial = 0; // the free residual at the start of this solve [N]
   for (unsigned int it = 0;; ++it) {
     model_.compute_forces(particles, bonds, false);
     double r2 = 0, f2 = 0, reaction2 = 0;
@@ -90,7 +91,12 @@ ImplicitStaticSolver<dim>::newton(ParticleSet<dim>& particles, BondList<dim>& bo
     r2 = sum(r2);
     f2 = sum(f2);
     reaction2 = sum(reaction2);
-    const double r = std::sqrt(r2), scale = std::sqrt(std::max(f2, reaction2));
+    const double r = std::sqrt(r2);
+    if (it == 0)
+      initial = r;
+    // The load, the reactions or, where neither is left (a body cut free by its cracks),
+    // the imbalance this solve started from, as adaptive dynamic relaxation scales it.
+    const double scale = std::max(std::sqrt(std::max(f2, reaction2)), initial);
     if (!std::isfinite(r))
       throw NumericalFailure("non-finite residual",
                              "implicit peridynamics, Newton iteration " + std::to_string(it),

@@ -7,9 +7,11 @@
 // The full load is what the particle set holds when solve() is called: external_forces()
 // and, on fixed components, the prescribed displacements; step n applies the fraction λ_n.
 // Newton converges when ‖δu‖ ≤ tol_u ‖u‖ (Jo & Ha's (2021) criterion) or the free residual is
-// ≤ tol_r max(‖f_ext‖, ‖reactions‖). Bonds break (critical stretch of the model) only at a
-// converged state; when any broke the same load is solved again, until none breaks. A
-// Newton failure restores the state at the start of the step and halves the increment.
+// ≤ tol_r max(‖f_ext‖, ‖reactions‖, ‖r_0‖), r_0 the free residual the solve starts from (the
+// scale of adaptive dynamic relaxation; it matters once cracks leave no load path). Bonds break
+// (critical stretch of the model) only at a converged state; when any broke the same load is solved
+// again, until none breaks. A Newton failure restores the state at the start of the step and halves
+// the increment.
 
 #include "meshfree/bond_based_pd.h"
 #include "meshfree/implicit/bond_based_tangent.h"
@@ -71,6 +73,10 @@ class ImplicitStaticSolver {
 
   // Newton at the load the particles hold now (no breaking), from their displacements.
   NewtonResult newton(ParticleSet<dim>& particles, BondList<dim>& bonds);
+
+  // The next Newton iteration rebuilds the tangent's pattern (call after bonds that were
+  // broken are intact again, e.g. a restored state).
+  void reset_pattern() { pattern_bonds_ = nullptr; }
 
   PDLinearSolver<dim>& linear_solver() { return linear_; }
   const BondBasedTangent<dim>& tangent() const { return tangent_; }

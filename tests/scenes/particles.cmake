@@ -8,6 +8,86 @@ spinesim_add_scene_test(scene.pd_plate_tension
   EXPECT "status==ok;particle_reaction_norm~857143:0.05;particles~800:0"
   LABELS "scene;meshfree")
 
+# The plate by Newton (Particles/Quasi-static/Solver = newton: the analytic bond-based tangent of
+# Jo & Ha 2021, ML AMG, bonds broken at converged states) instead of dynamic relaxation, on 1
+# and 2 ranks (the tangent one distributed Trilinos matrix over the zone's partition). Measured:
+# 9 Newton iterations for the 4 steps (2889 relaxation pseudo-steps), reaction 879365.21133
+# against the relaxation's 879365.21674 N/m (6e-9: both stop at the relative residual 1e-8;
+# bound 1e-7 as for the relaxation on 2 ranks), and 2e-14 between the ranks (the same Newton
+# path; bound 1e-10). Newton with one iteration a solve cannot reach 1e-8 (0.4 % after one),
+# so the step is cut until the cuts are used up: exit 1 naming Newton and the cuts.
+set(_pz_newton ${CMAKE_CURRENT_BINARY_DIR}/runs/zone_newton)
+foreach(_ranks 1 2)
+  spinesim_add_scene_test(scene.pd_plate_tension_newton_${_ranks}ranks
+    SCENE ${PROJECT_SOURCE_DIR}/applications/scenes/pd_plate_tension.prm RANKS ${_ranks}
+    SET "Particles/Quasi-static/Solver=newton" OUT ${_pz_newton}/plate_${_ranks}
+    FIXTURE pz_newton_${_ranks}
+    EXPECT "status==ok;particle_ranks~${_ranks}:0;particle_reaction_norm~857143:0.05;particles~800:0;relaxation_iterations<=12"
+    LABELS "scene;meshfree")
+endforeach()
+spinesim_add_comparison_test(scene.pd_plate_tension_newton_equals_relaxation
+  A ${CMAKE_CURRENT_BINARY_DIR}/runs/distributed/plate_tension_1/summary.json
+  B ${_pz_newton}/plate_1/summary.json
+  CHECKS "particle_reaction_norm:rel:1e-7;particle_strain_energy:rel:1e-7"
+  REQUIRES "dist_plate_1;pz_newton_1" LABELS "scene;meshfree")
+spinesim_add_comparison_test(scene.pd_plate_tension_newton_ranks_agree
+  A ${_pz_newton}/plate_1/summary.json B ${_pz_newton}/plate_2/summary.json
+  CHECKS "particle_reaction_norm:rel:1e-10;particle_strain_energy:rel:1e-10;relaxation_iterations:abs:0"
+  REQUIRES "pz_newton_1;pz_newton_2" LABELS "scene;meshfree;mpi")
+# Stopped after step 2 of 4 on 2 ranks and restarted: the checkpoint holds no Newton state (the
+# tangent is rebuilt from the restored bonds), so the restarted run ends with the uninterrupted
+# one's figures (bound 1e-10, as between the ranks).
+spinesim_add_scene_test(scene.pd_plate_tension_newton_restart_first_half
+  SCENE ${PROJECT_SOURCE_DIR}/applications/scenes/pd_plate_tension.prm RANKS 2
+  SET "Particles/Quasi-static/Solver=newton" "Simulation/Checkpoint interval=1"
+      "Simulation/Stop after step=2"
+  OUT ${_pz_newton}/restart EXPECT "status==ok;last_step~2:0" FIXTURE pz_newton_half
+  LABELS "scene;meshfree")
+spinesim_add_restart_test(scene.pd_plate_tension_newton_restart_second_half RANKS 2
+  OUT ${_pz_newton}/restart EXPECT "status==ok;last_step~4:0"
+  REQUIRES pz_newton_half FIXTURE pz_newton_done LABELS "scene;meshfree")
+spinesim_add_comparison_test(scene.pd_plate_tension_newton_restart_matches
+  A ${_pz_newton}/plate_2/summary.json B ${_pz_newton}/restart/summary.json
+  CHECKS "particle_reaction_norm:rel:1e-10;particle_strain_energy:rel:1e-10"
+  REQUIRES "pz_newton_2;pz_newton_done" LABELS "scene;meshfree;mpi")
+# A crack by Newton (applications/scenes/pd_plate_edge_crack.prm: the plate above with a 20 mm
+# edge pre-crack at mid-height, bonds breaking at a stretch of 6e-4, pulled in 8 steps). Bonds
+# break only at converged states (then the step is solved again until none breaks), so the
+# first step, whose equilibrium stretches no bond to 6e-4, breaks none and stores the energy of
+# the same load reached in 8 relaxation sub-steps (0.24351761812 J/m both; 1e-7, the
+# relaxation's tolerance). Dynamic relaxation in one step of that load breaks 420 bond ends in
+# its transient (the moved rows jump, the interior starts at rest). Measured: the crack starts
+# at step 3 (17 bond ends) and runs at step 4 (350), 354 in all, 106 Newton iterations; on 2
+# ranks the same bonds break in the same iterations and the stored energy agrees to 3e-12
+# (bound 1e-8).
+set(_pz_crack ${PROJECT_SOURCE_DIR}/applications/scenes/pd_plate_edge_crack.prm)
+foreach(_ranks 1 2)
+  spinesim_add_scene_test(scene.pd_plate_crack_newton_${_ranks}ranks SCENE ${_pz_crack}
+    RANKS ${_ranks} SET "Simulation/Output interval=0" OUT ${_pz_newton}/crack_${_ranks}
+    FIXTURE pz_newton_crack_${_ranks}
+    EXPECT "status==ok;broken_bonds>=300;relaxation_step_cuts<=0"
+    LABELS "scene;meshfree;fracture")
+endforeach()
+spinesim_add_comparison_test(scene.pd_plate_crack_newton_ranks_agree
+  A ${_pz_newton}/crack_1/summary.json B ${_pz_newton}/crack_2/summary.json
+  CHECKS "broken_bonds:abs:0;relaxation_iterations:abs:0;particle_strain_energy:rel:1e-8"
+  REQUIRES "pz_newton_crack_1;pz_newton_crack_2" LABELS "scene;meshfree;fracture;mpi")
+spinesim_add_scene_test(scene.pd_plate_crack_newton_first_step SCENE ${_pz_crack}
+  SET "Simulation/Steps=1" "Simulation/End time=0.125" "Simulation/Output interval=0"
+  EXPECT "status==ok;broken_bonds<=0;particle_strain_energy~0.24351761812:1e-7"
+  LABELS "scene;meshfree;fracture")
+spinesim_add_scene_test(scene.pd_plate_tension_newton_cuts_used_up
+  SCENE ${PROJECT_SOURCE_DIR}/applications/scenes/pd_plate_tension.prm
+  SET "Particles/Quasi-static/Solver=newton" "Particles/Quasi-static/Newton iterations=1"
+      "Particles/Quasi-static/Step cuts=2"
+  EXIT 1 MATCH "Newton did not converge.*2 step cuts.*Newton iterations"
+  LABELS "scene;meshfree;stability")
+spinesim_add_scene_test(hostile.zone_newton_nosb
+  SCENE ${PROJECT_SOURCE_DIR}/applications/scenes/pd_plate_tension.prm
+  SET "Particles/Quasi-static/Solver=newton" "Effects/Particles method=nosb"
+  EXIT 2 MATCH "Particles/Quasi-static/Solver.*newton with Effects/Particles method = nosb"
+  LABELS "hostile;meshfree")
+
 # Step cuts of a particle zone's quasi-static steps (Particles/Quasi-static/Step cuts): the plate
 # as NOSB-PD particles of a J2 material yielding at 10 MPa (about two thirds of the load), in
 # one step allowed 915 pseudo-steps. Measured with one thread: the whole step takes 976, the
