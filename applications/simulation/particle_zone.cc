@@ -782,16 +782,10 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
     // and its ghosts follow every update through the zone's exchange.
     const auto& model = dynamic_cast<const meshfree::BondBasedMethod<dim>&>(*z.method).model();
     z.newton = std::make_unique<meshfree::ImplicitStaticSolver<dim>>(z.newton_prm, model);
-    if (z.partition) {
-      meshfree::ParticleNumbering numbering;
-      numbering.comm = z.comm;
-      numbering.global_ids = z.partition->ids();
-      numbering.n_owned = z.partition->n_owned();
-      numbering.n_global = z.partition->n_global_points();
-      z.newton->set_distribution(numbering, [&z](meshfree::ParticleSet<dim>& p) {
+    if (z.partition)
+      z.newton->set_distribution(z.partition->numbering(), [&z](meshfree::ParticleSet<dim>& p) {
         z.partition->update_ghosts(p.displacements());
       });
-    }
   }
 
   const char letters[] = {'x', 'y', 'z'};

@@ -493,7 +493,14 @@ RunCost Simulation<dim>::planned_cost() const {
     const bool explicit_steps =
         particles_->stable_time_step() > 0 &&
         prm_.get(std::vector<std::string>{"Particles"}, "Integration") == "explicit";
-    cost.kind = (explicit_steps ? "particles_explicit:" : "particles_quasi_static:") + method;
+    // Newton's steps (Particles/Quasi-static/Solver) cost another way than relaxation's.
+    const bool newton =
+        !explicit_steps &&
+        prm_.get(std::vector<std::string>{"Particles", "Quasi-static"}, "Solver") == "newton";
+    cost.kind = (explicit_steps ? "particles_explicit:"
+                 : newton       ? "particles_newton:"
+                                : "particles_quasi_static:") +
+                method;
     cost.work = explicit_steps ? bonds * std::ceil(sim_.end_time / particles_->stable_time_step())
                                : bonds * sim_.steps;
   }

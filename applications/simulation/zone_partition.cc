@@ -258,6 +258,16 @@ void ZonePartition<dim>::update_ghosts(std::vector<double>& values) const {
 }
 
 template <int dim>
+meshfree::ParticleNumbering ZonePartition<dim>::numbering() const {
+  meshfree::ParticleNumbering n;
+  n.comm = comm_;
+  n.global_ids = ids_;
+  n.n_owned = n_owned_;
+  n.n_global = n_global_;
+  return n;
+}
+
+template <int dim>
 std::size_t ZonePartition<dim>::memory_bytes() const {
   return points_.capacity() * sizeof(dealii::Point<dim>) + ids_.capacity() * sizeof(std::uint64_t) +
          (ghost_vector_slot_.capacity() + ghost_scalar_slot_.capacity()) * sizeof(unsigned int) +

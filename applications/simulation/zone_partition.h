@@ -14,6 +14,7 @@
 
 #include "meshfree/bond_list.h"
 #include "meshfree/fragments.h"
+#include "meshfree/particle_numbering.h"
 
 #include <deal.II/base/index_set.h>
 #include <deal.II/base/point.h>
@@ -64,6 +65,9 @@ class ZonePartition {
   // Copies the owned entries to the ghosts (collective). Sizes: points().size().
   void update_ghosts(std::vector<dealii::Tensor<1, dim>>& values) const;
   void update_ghosts(std::vector<double>& values) const;
+
+  // The points' numbering for the meshfree solvers that work on it (owned first, lattice ids).
+  meshfree::ParticleNumbering numbering() const;
 
   // Bytes this rank holds for the partition (points, ids, exchange vectors).
   std::size_t memory_bytes() const;

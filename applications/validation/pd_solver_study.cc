@@ -242,10 +242,7 @@ class PDSolverStudy : public Scenario {
           study_.thickness);
       options.rows_around_first = partition->n_owned();
       options.surface_checked_particles = partition->n_owned();
-      numbering.comm = ctx.comm();
-      numbering.global_ids = partition->ids();
-      numbering.n_owned = partition->n_owned();
-      numbering.n_global = partition->n_global_points();
+      numbering = partition->numbering();
     } else {
       particles = meshfree::ParticleSet<2>::lattice(lo, hi, h, study_.thickness);
     }
