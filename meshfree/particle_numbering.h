@@ -20,7 +20,9 @@ struct ParticleNumbering {
   unsigned int n_owned = ~0u; // ~0u: all local particles
   std::uint64_t n_global = 0; // particles over all ranks (0: the local count)
 
-  bool distributed() const { return !global_ids.empty(); }
+  // Numbered over a communicator of its own: sums and matrices span its ranks, even on a rank
+  // that holds no particle.
+  bool distributed() const { return comm != MPI_COMM_SELF; }
   std::uint64_t id(unsigned int i) const { return global_ids.empty() ? i : global_ids[i]; }
 };
 
