@@ -1072,6 +1072,16 @@ std::size_t ParticleZone<dim>::n_bonds() const {
 }
 
 template <int dim>
+dealii::Tensor<1, dim> ParticleZone<dim>::reaction() const {
+  return impl_->reaction();
+}
+
+template <int dim>
+bool ParticleZone<dim>::has_reaction() const {
+  return impl_->prm.reaction_region > 0;
+}
+
+template <int dim>
 bool ParticleZone<dim>::distributed() const {
   return impl_->partition != nullptr;
 }
@@ -1161,7 +1171,7 @@ void ParticleZone<dim>::add_figures(RunContext& ctx) const {
     s.set_figure("relaxation_step_cuts", z.step_cuts, "-");
   }
   if (z.prm.reaction_region > 0)
-    s.set_figure("particle_reaction_norm", z.reaction().norm(), "N");
+    s.set_figure("particle_reaction_norm", z.reaction().norm(), dim == 2 ? "N/m" : "N");
   (void)per;
 }
 

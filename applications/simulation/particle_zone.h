@@ -107,6 +107,11 @@ class ParticleZone {
   // Their physical displacements [m] (SPG's unknowns are RK coefficients; the other methods'
   // are the displacements themselves).
   std::vector<dealii::Tensor<1, dim>> physical_displacements() const;
+  // The force the supports of Particles/Reaction region exert (the negative of the internal
+  // force on its prescribed particles, summed over the ranks; collective when distributed)
+  // [N, N/m in 2-D]; zero without a reaction region.
+  dealii::Tensor<1, dim> reaction() const;
+  bool has_reaction() const;
   bool distributed() const;
   // Whether this rank owns particle i (always, unless distributed).
   bool is_owned(unsigned int i) const;

@@ -756,7 +756,11 @@ void Simulation<dim>::fem_quasi_static(unsigned int, double time, double, RunCon
 
 template <int dim>
 void Simulation<dim>::advance_particles(unsigned int, double time, double, RunContext& ctx) {
-  particles_->advance_to(time, mid_step_stop(ctx));
+  const bool reached = particles_->advance_to(time, mid_step_stop(ctx));
+  // The load-displacement curve's peak, as for FEM supports (a step a signal interrupted is
+  // completed by the restart, which records it then).
+  if (reached && particles_->has_reaction())
+    track_load(particles_->reaction().norm(), time);
   // A fragmenting zone can lose hundreds of families in a step: the first few name the place.
   const std::vector<std::string> messages = particles_->take_messages();
   constexpr std::size_t shown = 10;

@@ -255,6 +255,13 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
     if (!coupled_)
       s.set_figure("peak_load_N", peak_load_, dim == 2 ? "N/m" : "N");
   }
+  if (particles_ && particles_->has_reaction()) { // Particles/Reaction region
+    s.set_figure("peak_load_N", peak_load_, dim == 2 ? "N/m" : "N");
+    s.set_figure("peak_load_time_s", peak_time_, "s");
+    s.set_figure("post_peak_drop", peak_load_ > 0 ? 1.0 - last_load_ / peak_load_ : 0.0, "-");
+    if (sim_.critical_load_estimate > 0)
+      s.set_figure("griffith_ratio", peak_load_ / sim_.critical_load_estimate, "-");
+  }
   if (coupled_) {
     const char* force_unit = dim == 2 ? "N/m" : "N";
     s.set_figure("peak_load_N", peak_load_, force_unit);

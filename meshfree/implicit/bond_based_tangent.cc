@@ -7,6 +7,8 @@
 #include <deal.II/base/mpi.h>
 #include <deal.II/lac/dynamic_sparsity_pattern.h>
 
+#include <Epetra_CrsMatrix.h>
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -105,6 +107,44 @@ void BondBasedTangent<dim>::reinit(const ParticleSet<dim>& particles, const Bond
   matrix_.clear();
   matrix_.reinit(owned_dofs_, owned_dofs_, dsp, numbering_.comm);
   constrained_.assign(n_particles_ * dim, 0);
+
+  // Each buffer entry's position in its Epetra row (local column ids through the column map).
+  const Epetra_CrsMatrix& epetra = matrix_.trilinos_matrix();
+  entry_position_.assign(row_offsets_.back() * dim * dim, 0);
+  std::vector<std::pair<int, unsigned int>> stored; // (local column, position), by column
+  for (unsigned int i = 0; i < n_owned_; ++i) {
+    const std::size_t row_begin = row_offsets_[i];
+    const std::size_t width = (row_offsets_[i + 1] - row_begin) * dim;
+    for (unsigned int r = 0; r < dim; ++r) {
+      int n = 0;
+      double* v = nullptr;
+      int* columns = nullptr;
+      const int local_row =
+          epetra.LRID(static_cast<dealii::TrilinosWrappers::types::int_type>(global_dof(i, r)));
+      if (local_row < 0 || epetra.ExtractMyRowView(local_row, n, v, columns) != 0 ||
+          static_cast<std::size_t>(n) != width)
+        throw NumericalFailure("tangent row " + std::to_string(global_dof(i, r)) + " has " +
+                                   std::to_string(n) + " stored entries, expected " +
+                                   std::to_string(width),
+                               "BondBasedTangent::reinit", "an inconsistent sparsity pattern");
+      stored.resize(n);
+      for (int e = 0; e < n; ++e)
+        stored[e] = {columns[e], static_cast<unsigned int>(e)};
+      std::sort(stored.begin(), stored.end());
+      unsigned int* position = entry_position_.data() + row_begin * dim * dim + r * width;
+      for (std::size_t s = 0; s < width / dim; ++s)
+        for (unsigned int c = 0; c < dim; ++c) {
+          const int lcid = epetra.LCID(static_cast<dealii::TrilinosWrappers::types::int_type>(
+              global_dof(row_particles_[row_begin + s], c)));
+          const auto it = std::lower_bound(stored.begin(), stored.end(),
+                                           std::pair<int, unsigned int>(lcid, 0u));
+          if (lcid < 0 || it == stored.end() || it->first != lcid)
+            throw NumericalFailure("tangent column missing from the sparsity pattern",
+                                   "BondBasedTangent::reinit", "an inconsistent sparsity pattern");
+          position[s * dim + c] = it->second;
+        }
+    }
+  }
 }
 
 template <int dim>
@@ -221,20 +261,17 @@ void BondBasedTangent<dim>::assemble(const ParticleSet<dim>& particles, const Bo
                            "two particles may coincide (zero bond length)");
 
   // Pass 2: zero constrained rows and columns, write rows into the matrix.
-  std::vector<dealii::types::global_dof_index> cols;
+  const Epetra_CrsMatrix& epetra = matrix_.trilinos_matrix();
   std::vector<unsigned int> local_cols;
   for (unsigned int i = 0; i < n_owned_; ++i) {
     const std::size_t row_begin = row_offsets_[i];
     const std::size_t n_slots = row_offsets_[i + 1] - row_begin;
     const std::size_t width = n_slots * dim;
     double* rows = values.data() + row_begin * dim * dim;
-    cols.resize(width);
     local_cols.resize(width);
     for (std::size_t s = 0; s < n_slots; ++s)
-      for (unsigned int d = 0; d < dim; ++d) {
-        cols[s * dim + d] = global_dof(row_particles_[row_begin + s], d);
+      for (unsigned int d = 0; d < dim; ++d)
         local_cols[s * dim + d] = dof(row_particles_[row_begin + s], d);
-      }
     for (unsigned int r = 0; r < dim; ++r) {
       const unsigned int q = dof(i, r);
       double* row = rows + r * width;
@@ -246,10 +283,18 @@ void BondBasedTangent<dim>::assemble(const ParticleSet<dim>& particles, const Bo
           if (constrained_[local_cols[c]])
             row[c] = 0.0;
       }
-      matrix_.set(global_dof(i, r), width, cols.data(), row, false);
+      // In place (entry_position_): the pattern holds exactly these columns.
+      int n = 0;
+      double* stored = nullptr;
+      int* columns = nullptr;
+      epetra.ExtractMyRowView(
+          epetra.LRID(static_cast<dealii::TrilinosWrappers::types::int_type>(global_dof(i, r))), n,
+          stored, columns);
+      const unsigned int* position = entry_position_.data() + row_begin * dim * dim + r * width;
+      for (std::size_t c = 0; c < width; ++c)
+        stored[position[c]] = row[c];
     }
   }
-  matrix_.compress(dealii::VectorOperation::insert);
 }
 
 template <int dim>
