@@ -106,6 +106,12 @@ void ParticleZoneParameters::declare(dealii::ParameterHandler& prm) {
                     "with rigid-body modes), jacobi (diagonal PCG), cg.");
   prm.declare_entry("Linear tolerance", "1e-6", Double(0, 1),
                     "Relative residual at which a Newton system's solve stops [-].");
+  prm.declare_entry("AMG rebuild ratio", "2", Double(0),
+                    "amg: the later Newton systems of a load step keep the AMG hierarchy "
+                    "built for an earlier one while their CG takes at most this multiple of "
+                    "the iterations of its first solve (a lagged preconditioner: each solve "
+                    "still reaches Linear tolerance); 0 = a new hierarchy every Newton "
+                    "iteration [-].");
   prm.leave_subsection();
   for (unsigned int k = 1; k <= n_region_slots; ++k) {
     prm.enter_subsection("Region " + std::to_string(k));
@@ -385,6 +391,9 @@ struct ParticleZone<dim>::Impl {
     typename meshfree::AdaptiveDynamicRelaxation<dim>::Result result;
     if (partition) // the ghosts' prescribed values of this load
       partition->update_ghosts(particles.displacements());
+    // A kept AMG hierarchy serves the Newton solves of one load step only: a run restarted
+    // from a step's checkpoint then solves with the same preconditioners.
+    newton->linear_solver().rebuild_next();
     try {
       for (unsigned int pass = 0; pass < newton_prm.max_breaking_passes; ++pass) {
         const auto nr = newton->newton(particles, bonds);
@@ -668,6 +677,7 @@ ParticleZone<dim>::ParticleZone(dealii::ParameterHandler& prm, const std::string
     n.displacement_tolerance = 0;
     n.linear.solver = prm.get("Linear solver");
     n.linear.tolerance = prm.get_double("Linear tolerance");
+    n.linear.amg_rebuild_ratio = prm.get_double("AMG rebuild ratio");
   }
   prm.leave_subsection();
   prm.leave_subsection();

@@ -22,6 +22,7 @@ void BondBasedTangent<dim>::reinit(const ParticleSet<dim>& particles, const Bond
     throw InvalidInput("BondBasedTangent", "bond list built for another particle set",
                        "bonds from NeighborSearch::build on these particles");
   numbering_ = numbering;
+  ++pattern_generation_;
   n_particles_ = particles.size();
   n_owned_ = std::min(numbering.n_owned, n_particles_);
   if (numbering.distributed()) {

@@ -66,6 +66,8 @@ class BondBasedTangent {
   unsigned int n_local_particles() const { return n_particles_; }
   unsigned int n_owned_particles() const { return n_owned_; }
   const ParticleNumbering& numbering() const { return numbering_; }
+  // Counts reinit() calls: a preconditioner built on one pattern is not applied to another.
+  unsigned int pattern_generation() const { return pattern_generation_; }
   const dealii::IndexSet& owned_dofs() const { return owned_dofs_; }
   // The owned particle and component of each owned dof, in the matrix's (ascending) order.
   const std::vector<std::pair<unsigned int, unsigned int>>& owned_dof_order() const {
@@ -87,7 +89,7 @@ class BondBasedTangent {
   std::vector<double> particle_stiffness(const ParticleSet<dim>& particles) const;
 
  private:
-  unsigned int n_particles_ = 0, n_owned_ = 0, n_isolated_ = 0;
+  unsigned int n_particles_ = 0, n_owned_ = 0, n_isolated_ = 0, pattern_generation_ = 0;
   dealii::types::global_dof_index n_dofs_ = 0;
   ParticleNumbering numbering_;
   dealii::IndexSet owned_dofs_;

@@ -15,10 +15,12 @@
 #include "meshfree/implicit/lattice_multigrid.h"
 
 #include <deal.II/base/parameter_handler.h>
+#include <deal.II/lac/trilinos_precondition.h>
 
 #include <limits>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace spinesim::meshfree {
 
@@ -29,6 +31,11 @@ struct PDLinearSolverParameters {
   unsigned int max_iterations = 20000;
   unsigned int amg_smoother_sweeps = 2;
   double amg_aggregation_threshold = 1e-4;
+  // Keep an AMG hierarchy for the next systems of the same pattern while their CG needs at most
+  // this multiple of the iterations of the solve right after the hierarchy was built (a
+  // lagged preconditioner: CG stays exact, only its iteration count grows); 0 = a new
+  // hierarchy every solve.
+  double amg_rebuild_ratio = 0;
   unsigned int mg_smoother_degree = 3;
   double mg_smoothing_range = 5;
   unsigned int mg_eigenvalue_steps = 8;
@@ -48,6 +55,7 @@ class PDLinearSolver {
 
   struct Result {
     unsigned int iterations = 0;
+    bool preconditioner_reused = false; // `amg` with amg_rebuild_ratio > 0
     double setup_seconds = 0, solve_seconds = 0;
     double condition_estimate = std::numeric_limits<double>::quiet_NaN();
     double relative_residual = 0;
@@ -61,8 +69,11 @@ class PDLinearSolver {
 
   // The lattice for `mg` (InvalidInput at solve time without it).
   void set_lattice(const typename LatticeMultigrid<dim>::Geometry& geometry);
-  // Drops the multigrid hierarchy (call when the Dirichlet flags change).
+  // Drops the multigrid and AMG hierarchies (call when the Dirichlet flags change).
   void reset();
+  // The next `amg` solve builds a new hierarchy (e.g. at each load step, so that a run
+  // restarted from a step's checkpoint solves with the same preconditioners).
+  void rebuild_next() { amg_stale_ = true; }
 
   // Solves K x = b from x = 0; NumericalFailure if the tolerance is not reached.
   Result solve(const BondBasedTangent<dim>& tangent, const ParticleSet<dim>& particles,
@@ -74,6 +85,14 @@ class PDLinearSolver {
   Parameters prm_;
   std::unique_ptr<typename LatticeMultigrid<dim>::Geometry> lattice_;
   std::unique_ptr<LatticeMultigrid<dim>> mg_;
+  // The kept AMG hierarchy (amg_rebuild_ratio > 0): the tangent pattern it was built on, the
+  // iterations of its first solve, and whether the last solve asked for a new one.
+  std::unique_ptr<dealii::TrilinosWrappers::PreconditionAMG> amg_;
+  std::vector<double> amg_modes_;
+  unsigned int amg_pattern_ = 0;
+  unsigned int amg_first_iterations_ = 0;
+  bool amg_stale_ = false;
+  void build_amg(const BondBasedTangent<dim>& tangent, const ParticleSet<dim>& particles);
 };
 
 } // namespace spinesim::meshfree
