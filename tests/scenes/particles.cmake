@@ -81,18 +81,42 @@ spinesim_add_scene_test(scene.pd_plate_crack_newton_first_step SCENE ${_pz_crack
 # partition, so on 2 ranks rank 1 holds no particle: Newton's sums, the tangent and the
 # linear solves must still span both ranks (a rank that skipped them deadlocked the run;
 # 6 s a run, so a 120 s timeout stops such a hang early).
-# Measured: 2126 broken bond ends in 50 Newton iterations on both, figures equal.
+# Measured: 2126 broken bond ends in 50 Newton iterations on both, figures equal; the load peaks
+# at step 2 (1658 N) and has fallen by 73 % at step 4 (the bar is cut, bound 50 %).
 foreach(_ranks 1 2)
   spinesim_add_scene_test(scene.pd_bar_crack_newton_3d_${_ranks}ranks
     SCENE ${PROJECT_SOURCE_DIR}/tests/data/pd_bar_edge_crack_3d.prm RANKS ${_ranks}
     SET "Simulation/Steps=4" OUT ${_pz_newton}/bar_3d_${_ranks} FIXTURE pz_newton_bar_${_ranks}
-    EXPECT "status==ok;broken_bonds>=1000;relaxation_step_cuts<=0"
+    EXPECT "status==ok;broken_bonds>=1000;relaxation_step_cuts<=0;post_peak_drop>=0.5"
     LABELS "scene;meshfree;fracture" TIMEOUT 120)
 endforeach()
 spinesim_add_comparison_test(scene.pd_bar_crack_newton_3d_ranks_agree
   A ${_pz_newton}/bar_3d_1/summary.json B ${_pz_newton}/bar_3d_2/summary.json
-  CHECKS "broken_bonds:abs:0;relaxation_iterations:abs:0;particle_strain_energy:rel:1e-8"
+  CHECKS "broken_bonds:abs:0;relaxation_iterations:abs:0;particle_strain_energy:rel:1e-8;peak_load_N:rel:1e-9"
   REQUIRES "pz_newton_bar_1;pz_newton_bar_2" LABELS "scene;meshfree;fracture;mpi")
+# The centre-cracked plate of Jo & Ha (2021) by Newton, all bond-based particles
+# (applications/scenes/cracked_plate_newton.prm at 12.5 mm spacing, 6400 particles, 60 load steps).
+# Under fixed grips the centre crack runs once it starts, so the peak load is the Griffith-Irwin
+# load with Feddersen's width factor, 2.381e6 N/m. Measured: 2.5098e6 (griffith_ratio 1.054),
+# the crack starting at step 44 and crossing the plate by step 49, 1604 broken bonds, 642
+# Newton iterations. Bound +-10 %: LEFM against PD at a horizon of 37.7 mm (a quarter of the
+# half-crack), whose discrete crack front and the load steps of about 2 % raise the observed
+# peak (it rises to +11 % at 6.25 mm, docs/accuracy-cost.md). The crack must cross the plate and
+# take the load with it. On 2 ranks the same bonds break; the figures agree to 5e-14
+# (bounds 1e-9 on the peak, 1e-8 on the stored energy: the AMG hierarchies differ by rank count).
+set(_cp_newton ${PROJECT_SOURCE_DIR}/applications/scenes/cracked_plate_newton.prm)
+foreach(_ranks 1 2)
+  spinesim_add_scene_test(scene.cracked_plate_newton_${_ranks}ranks SCENE ${_cp_newton}
+    RANKS ${_ranks} SET "Particles/Spacing=0.0125" "Simulation/Output interval=0"
+    OUT ${_pz_newton}/cracked_plate_${_ranks} FIXTURE pz_newton_cracked_plate_${_ranks}
+    EXPECT "status==ok;griffith_ratio>=0.9;griffith_ratio<=1.1;crack_extent_max_x_m>=0.45;crack_extent_min_x_m<=-0.45;post_peak_drop>=0.99;relaxation_step_cuts<=0"
+    LABELS "scene;meshfree;fracture" TIMEOUT 300)
+endforeach()
+spinesim_add_comparison_test(scene.cracked_plate_newton_ranks_agree
+  A ${_pz_newton}/cracked_plate_1/summary.json B ${_pz_newton}/cracked_plate_2/summary.json
+  CHECKS "broken_bonds:abs:0;peak_load_N:rel:1e-9;peak_load_time_s:abs:0;particle_strain_energy:rel:1e-8"
+  REQUIRES "pz_newton_cracked_plate_1;pz_newton_cracked_plate_2"
+  LABELS "scene;meshfree;fracture;mpi")
 spinesim_add_scene_test(scene.pd_plate_tension_newton_cuts_used_up
   SCENE ${PROJECT_SOURCE_DIR}/applications/scenes/pd_plate_tension.prm
   SET "Particles/Quasi-static/Solver=newton" "Particles/Quasi-static/Newton iterations=1"

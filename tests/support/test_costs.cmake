@@ -5,6 +5,8 @@
 # a build's CTestCostData.txt after a full default run; a test missing here runs as cost 0.
 set(SPINESIM_TEST_COSTS
   implants.screw_pullout_particles_contact 104
+  scene.cracked_plate_newton_2ranks 60
+  scene.cracked_plate_newton_1ranks 24
   coupling.plastic_limit_3d_spg 60
   coupling.fracture_heat_nosb 50
   stability.impact_coupled_nosb_2d 46
