@@ -80,11 +80,13 @@ set_tests_properties(benchmark.ghost_exchange_2ranks PROPERTIES RUN_SERIAL TRUE)
 
 # Newton against dynamic relaxation on a quasi-static bond-based zone: pd_plate_tension.prm at a
 # quarter of its spacing (12 800 particles; the x-support column moved so it holds lattice
-# points), one run each. Measured (one thread, 3 alternating pairs, 1-minute load 0.9-1.3):
-# particle time 3.0 s with Newton against 6.6 s (ratios 0.36-0.49), 12 Newton iterations
-# against 8125 pseudo-steps, reactions within 1.1e-9. The bound 0.7 on the ratio leaves room
-# for the 10-20 % scatter of shared machines; the reactions must agree to the relaxation's
-# tolerance (1e-8; bound 1e-7).
+# points), one run each. Measured (one thread, 3 alternating pairs, 1-minute load 1.2):
+# particle time 1.21 s with Newton against 6.13 s (ratios 0.196-0.200), 12 Newton iterations
+# against 8125 pseudo-steps, reactions within 1.1e-9. Newton took 1.82 s with a new AMG
+# hierarchy every iteration (AMG rebuild ratio = 0), and 3.0 s against 6.6 s (on another
+# machine) before the tangent's values went into the matrix in place. The bound 0.4 on the
+# ratio leaves room for the 10-20 % scatter of shared machines; the reactions must agree to the
+# relaxation's tolerance (1e-8; bound 1e-7).
 set(_newton_bench_set "Particles/Spacing=0.000625" "Particles/Quasi-static/Maximum iterations=400000"
     "Simulation/Write VTU=false" "Particles/Region 3/Lower corner=0.024,0"
     "Particles/Region 3/Upper corner=0.0248,0.0075")
@@ -98,5 +100,5 @@ foreach(_solver relaxation newton)
 endforeach()
 spinesim_add_comparison_test(benchmark.pd_plate_newton_vs_relaxation
   A ${_newton_bench_runs}/relaxation/summary.json B ${_newton_bench_runs}/newton/summary.json
-  CHECKS "particle_advance_time_s:ratio_max:0.7;particle_reaction_norm:rel:1e-7"
+  CHECKS "particle_advance_time_s:ratio_max:0.4;particle_reaction_norm:rel:1e-7"
   REQUIRES "newton_bench_relaxation;newton_bench_newton" LABELS "benchmark")
