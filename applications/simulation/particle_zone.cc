@@ -96,11 +96,18 @@ void ParticleZoneParameters::declare(dealii::ParameterHandler& prm) {
                     "and a Trilinos linear solver, on the zone's ranks; bonds break at "
                     "converged states and the step is solved again until none breaks. Both "
                     "stop at Tolerance.");
+  prm.declare_entry("Break bonds", "while relaxing", Selection("while relaxing|at equilibrium"),
+                    "When Solver = relaxation breaks bonds (Effects/Damage) [-]. while "
+                    "relaxing: in every force pass of the relaxation, its transient included. "
+                    "at equilibrium: none while relaxing; at the converged state one pass "
+                    "breaks what is over its limit, and the step is relaxed again until none "
+                    "breaks (at most Breaking passes), as Newton does.");
   prm.declare_entry("Newton iterations", "25", Integer(1),
                     "Newton iterations of one solve before the step counts as not converged "
                     "(and is cut, Step cuts) [-].");
   prm.declare_entry("Breaking passes", "100", Integer(1),
-                    "Newton solves of one load step while bonds keep breaking [-].");
+                    "Solves of one load step while bonds keep breaking, by Newton or by a "
+                    "relaxation that breaks bonds at equilibrium [-].");
   prm.declare_entry("Linear solver", "amg", Selection("amg|jacobi|cg"),
                     "Linear solver of the Newton systems [-]: amg (CG + ML smoothed aggregation "
                     "with rigid-body modes), jacobi (diagonal PCG), cg.");
@@ -217,6 +224,8 @@ struct ParticleZone<dim>::Impl {
   meshfree::AdaptiveDynamicRelaxationParameters adr_prm;
   // Particles/Quasi-static/Solver = newton: the implicit solver on the bond-based model.
   bool newton_steps = false;
+  // Solver = relaxation with Break bonds = at equilibrium (relax_at_equilibrium()).
+  bool break_at_equilibrium = false;
   meshfree::ImplicitStaticSolverParameters newton_prm;
   std::unique_ptr<meshfree::ImplicitStaticSolver<dim>> newton;
   bool damage = false;
@@ -411,6 +420,34 @@ struct ParticleZone<dim>::Impl {
     } catch (NumericalFailure& e) {
       e.set_collective();
       throw;
+    }
+    return result; // bonds still breaking after Breaking passes
+  }
+
+  // One load step by dynamic relaxation with bonds breaking only at equilibrium (Break bonds =
+  // at equilibrium): relax without breaking, then one force pass of the zone that breaks what
+  // the converged state breaks (and books it); while any broke, relax again at the same load.
+  typename meshfree::AdaptiveDynamicRelaxation<dim>::Result
+  relax_at_equilibrium(meshfree::AdaptiveDynamicRelaxation<dim>& adr) {
+    typename meshfree::AdaptiveDynamicRelaxation<dim>::Result result;
+    struct Breaking { // breaking back on however the relaxation ends
+      bool& flag;
+      ~Breaking() { flag = true; }
+    } restore{passes_break};
+    for (unsigned int pass = 0; pass < newton_prm.max_breaking_passes; ++pass) {
+      passes_break = false;
+      const auto r = adr.solve(particles, stiffness_bound);
+      passes_break = true;
+      result.iterations += r.iterations;
+      result.relative_residual = r.relative_residual;
+      if (!r.converged)
+        return result;
+      const std::size_t before = broke_since_step_check;
+      compute_forces(particles); // the zone's pass: breaks and their books
+      if (sum(double(broke_since_step_check - before)) == 0) {
+        result.converged = true;
+        return result;
+      }
     }
     return result; // bonds still breaking after Breaking passes
   }
@@ -669,6 +706,7 @@ ParticleZone<dim>::ParticleZone(dealii::ParameterHandler& prm, const std::string
   prm.enter_subsection("Quasi-static");
   impl_->max_step_cuts = prm.get_integer("Step cuts");
   impl_->newton_steps = prm.get("Solver") == "newton";
+  impl_->break_at_equilibrium = prm.get("Break bonds") == "at equilibrium";
   {
     meshfree::ImplicitStaticSolverParameters& n = impl_->newton_prm;
     n.max_newton_iterations = prm.get_integer("Newton iterations");
@@ -952,7 +990,9 @@ bool ParticleZone<dim>::advance_to(double time, const std::function<bool(double)
       typename meshfree::AdaptiveDynamicRelaxation<dim>::Result result;
       std::optional<NumericalFailure> failure;
       try {
-        result = z.newton ? z.newton_solve() : adr.solve(z.particles, z.stiffness_bound);
+        result = z.newton                 ? z.newton_solve()
+                 : z.break_at_equilibrium ? z.relax_at_equilibrium(adr)
+                                          : adr.solve(z.particles, z.stiffness_bound);
       } catch (const NumericalFailure& e) {
         if (z.partition && !e.collective())
           throw;

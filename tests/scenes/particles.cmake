@@ -94,6 +94,39 @@ spinesim_add_comparison_test(scene.pd_bar_crack_newton_3d_ranks_agree
   A ${_pz_newton}/bar_3d_1/summary.json B ${_pz_newton}/bar_3d_2/summary.json
   CHECKS "broken_bonds:abs:0;relaxation_iterations:abs:0;particle_strain_energy:rel:1e-8;peak_load_N:rel:1e-9"
   REQUIRES "pz_newton_bar_1;pz_newton_bar_2" LABELS "scene;meshfree;fracture;mpi")
+# Dynamic relaxation that breaks bonds only at equilibrium (Particles/Quasi-static/Break bonds =
+# at equilibrium) solves the same discrete problem as Newton: the edge-cracked plate to step 6
+# (the crack has run by step 4) and the 3-D bar break the same bonds, and the peak loads agree
+# to the relaxation's tolerance. Measured: 354 bond ends on both (1 and 2 ranks), the plate's
+# peak 220126.6440 against Newton's 220126.6453 N/m (6e-9; bound 1e-7), 89 331 pseudo-steps
+# against 102 Newton iterations (11 s against 3 s); the bar's 2126 bond ends, peak within 3e-10,
+# stored energy within 5e-15 (bound 1e-6). The relaxation that breaks while relaxing (the
+# default) breaks 420 bond ends in the transient of the plate's first step and peaks at
+# 33342 N/m, a sixth of the equilibrium answer. Beyond step 6 the separated plate's halves hang
+# from the grips, and the relaxation stalls at a relative residual of 3.6e-7 after 1e5
+# pseudo-steps (Newton converges): the tests stop at step 6.
+foreach(_ranks 1 2)
+  spinesim_add_scene_test(scene.pd_plate_crack_relaxation_at_equilibrium_${_ranks}ranks
+    SCENE ${_pz_crack} RANKS ${_ranks}
+    SET "Simulation/Output interval=0" "Simulation/Steps=6" "Simulation/End time=0.75"
+        "Particles/Quasi-static/Solver=relaxation" "Particles/Quasi-static/Break bonds=at equilibrium"
+    OUT ${_pz_newton}/crack_relaxation_${_ranks} FIXTURE pz_relaxation_crack_${_ranks}
+    EXPECT "status==ok;relaxation_step_cuts<=0" LABELS "scene;meshfree;fracture")
+  spinesim_add_comparison_test(scene.pd_plate_crack_relaxation_at_equilibrium_${_ranks}ranks_equals_newton
+    A ${_pz_newton}/crack_1/summary.json B ${_pz_newton}/crack_relaxation_${_ranks}/summary.json
+    CHECKS "broken_bonds:abs:0;peak_load_N:rel:1e-7;peak_load_time_s:abs:0"
+    REQUIRES "pz_newton_crack_1;pz_relaxation_crack_${_ranks}" LABELS "scene;meshfree;fracture")
+endforeach()
+spinesim_add_scene_test(scene.pd_bar_crack_relaxation_at_equilibrium_3d
+  SCENE ${PROJECT_SOURCE_DIR}/tests/data/pd_bar_edge_crack_3d.prm
+  SET "Simulation/Steps=4" "Particles/Quasi-static/Solver=relaxation"
+      "Particles/Quasi-static/Break bonds=at equilibrium"
+  OUT ${_pz_newton}/bar_3d_relaxation FIXTURE pz_relaxation_bar
+  EXPECT "status==ok;relaxation_step_cuts<=0" LABELS "scene;meshfree;fracture" TIMEOUT 120)
+spinesim_add_comparison_test(scene.pd_bar_crack_relaxation_at_equilibrium_3d_equals_newton
+  A ${_pz_newton}/bar_3d_1/summary.json B ${_pz_newton}/bar_3d_relaxation/summary.json
+  CHECKS "broken_bonds:abs:0;peak_load_N:rel:1e-7;particle_strain_energy:rel:1e-6"
+  REQUIRES "pz_newton_bar_1;pz_relaxation_bar" LABELS "scene;meshfree;fracture")
 # The centre-cracked plate of Jo & Ha (2021) by Newton, all bond-based particles
 # (applications/scenes/cracked_plate_newton.prm at 12.5 mm spacing, 6400 particles, 60 load steps).
 # Under fixed grips the centre crack runs once it starts, so the peak load is the Griffith-Irwin
