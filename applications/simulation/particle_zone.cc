@@ -224,8 +224,10 @@ struct ParticleZone<dim>::Impl {
   meshfree::AdaptiveDynamicRelaxationParameters adr_prm;
   // Particles/Quasi-static/Solver = newton: the implicit solver on the bond-based model.
   bool newton_steps = false;
-  // Solver = relaxation with Break bonds = at equilibrium (relax_at_equilibrium()).
+  // Solver = relaxation with Break bonds = at equilibrium (relax_at_equilibrium()), and the
+  // pseudo-steps of the step's passes before the current one (a failed attempt counts them).
   bool break_at_equilibrium = false;
+  unsigned int earlier_pass_iterations = 0;
   meshfree::ImplicitStaticSolverParameters newton_prm;
   std::unique_ptr<meshfree::ImplicitStaticSolver<dim>> newton;
   bool damage = false;
@@ -434,11 +436,13 @@ struct ParticleZone<dim>::Impl {
       bool& flag;
       ~Breaking() { flag = true; }
     } restore{passes_break};
+    earlier_pass_iterations = 0;
     for (unsigned int pass = 0; pass < newton_prm.max_breaking_passes; ++pass) {
       passes_break = false;
       const auto r = adr.solve(particles, stiffness_bound);
       passes_break = true;
       result.iterations += r.iterations;
+      earlier_pass_iterations = result.iterations;
       result.relative_residual = r.relative_residual;
       if (!r.converged)
         return result;
@@ -998,7 +1002,8 @@ bool ParticleZone<dim>::advance_to(double time, const std::function<bool(double)
           throw;
         failure = e;
         result.converged = false;
-        result.iterations = adr.last_iterations();
+        result.iterations = adr.last_iterations() +
+                            (!z.newton && z.break_at_equilibrium ? z.earlier_pass_iterations : 0);
       }
       z.relaxation_iterations += result.iterations;
       if (!result.converged) {

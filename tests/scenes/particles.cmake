@@ -131,7 +131,7 @@ spinesim_add_comparison_test(scene.pd_bar_crack_relaxation_at_equilibrium_3d_equ
 # (applications/scenes/cracked_plate_newton.prm at 12.5 mm spacing, 6400 particles, 60 load steps).
 # Under fixed grips the centre crack runs once it starts, so the peak load is the Griffith-Irwin
 # load with Feddersen's width factor, 2.381e6 N/m. Measured: 2.5098e6 (griffith_ratio 1.054),
-# the crack starting at step 44 and crossing the plate by step 49, 1604 broken bonds, 642
+# the first bond breaking at step 42, the crack running at steps 47-49, 1604 broken bonds, 642
 # Newton iterations. Bound +-10 %: LEFM against PD at a horizon of 37.7 mm (a quarter of the
 # half-crack), whose discrete crack front and the load steps of about 2 % raise the observed
 # peak (it rises to +11 % at 6.25 mm, docs/accuracy-cost.md). The crack must cross the plate and
