@@ -223,7 +223,7 @@ void CoupledIntegrator<dim>::check_particle_speeds() const {
 }
 
 template <int dim>
-void CoupledIntegrator<dim>::share_bond_breaks() {
+std::size_t CoupledIntegrator<dim>::share_bond_breaks() {
   // A method whose breaks reshape its neighbours' rows (SPG) must break a pair on every rank
   // holding a row of either end; the owner of a free particle decides (it holds the rows of
   // the particle and all its partners), the others follow before the next force pass.
@@ -232,13 +232,35 @@ void CoupledIntegrator<dim>::share_bond_breaks() {
       Utilities::MPI::n_mpi_processes(comm) == 1) {
     if (state_.prm.damage && state_.method->shares_bond_breaks())
       state_.method->take_broken_pairs(); // one rank holds every row already
-    return;
+    return 0;
   }
   std::vector<std::pair<unsigned int, unsigned int>> all;
   for (const auto& part : Utilities::MPI::all_gather(comm, state_.method->take_broken_pairs()))
     all.insert(all.end(), part.begin(), part.end());
   if (!all.empty())
     state_.method->break_pairs(state_.particles, state_.bonds, all);
+  return all.size();
+}
+
+template <int dim>
+bool CoupledIntegrator<dim>::break_at_equilibrium() {
+  const MPI_Comm comm = state_.fem.mpi_communicator();
+  std::size_t broke = 0, shared = 0;
+  // Every rank holds the same particle records (their count decides alike on all ranks).
+  if (state_.n_free_particles() > 0) {
+    fracture_.before_forces();
+    std::exception_ptr failure;
+    try {
+      broke = state_.method->compute_forces(state_.particles, state_.bonds, true);
+    } catch (...) {
+      failure = std::current_exception();
+    }
+    raise_on_every_rank(failure, comm);
+    fracture_.after_forces(broke);
+    shared = share_bond_breaks();
+    broken_last_step_ = broke;
+  }
+  return Utilities::MPI::sum(broke, comm) + shared > 0;
 }
 
 template <int dim>
@@ -273,7 +295,11 @@ void CoupledIntegrator<dim>::advance(double dt, double a, double load_time, bool
     // can undo the attempt (relax(), FemParticleCoupling::relax_step).
     std::exception_ptr failure;
     try {
-      broken_last_step_ = state_.method->compute_forces(particles, state_.bonds, state_.prm.damage);
+      // Coupling/Break bonds = at equilibrium: a relaxation's pseudo-steps break nothing
+      // (relax() breaks at its equilibria).
+      const bool breaking =
+          state_.prm.damage && !(sums && state_.prm.relaxation_breaks_at_equilibrium);
+      broken_last_step_ = state_.method->compute_forces(particles, state_.bonds, breaking);
     } catch (...) {
       failure = std::current_exception();
     }
@@ -407,8 +433,10 @@ CoupledIntegrator<dim>::relax(double time, bool with_conversion,
   // damping c = 2 sqrt(uᵀ k u / uᵀ u) from the local stiffness estimates of both models
   // (critical for the lowest mode, updated every step, one step late). Converged when ‖free
   // residual‖ ≤ tolerance × max(‖reactions‖, largest ‖free residual‖ of this relaxation). Bonds
-  // break as the state relaxes; cells convert at equilibrium, and the state relaxes again after a
-  // conversion. Velocities are pseudo-velocities and end at zero.
+  // break as the state relaxes (or, with Coupling/Break bonds = at equilibrium, at each
+  // equilibrium, and the state relaxes again at the same load while any breaks); cells convert
+  // at equilibrium, and the state relaxes again after a conversion. Velocities are
+  // pseudo-velocities and end at zero.
   const MPI_Comm comm = state_.fem.mpi_communicator();
   RelaxationReport<dim> report;
   // The real masses come back however the relaxation ends.
@@ -433,7 +461,10 @@ CoupledIntegrator<dim>::relax(double time, bool with_conversion,
     report.failure_hint = e.hint();
     return report;
   };
-  for (unsigned int it = 1; it <= state_.prm.relaxation_max_iterations; ++it) {
+  // Each relaxation after bonds broke at an equilibrium has Relaxation max iterations of its own
+  // (pass_start: its first pseudo-step − 1); a conversion's shares the step's.
+  unsigned int pass_start = 0;
+  for (unsigned int it = 1; it - pass_start <= state_.prm.relaxation_max_iterations; ++it) {
     RelaxationSums local;
     try {
       advance(dt, c, time, first, &local);
@@ -463,7 +494,33 @@ CoupledIntegrator<dim>::relax(double time, bool with_conversion,
                                              " s, pseudo-step " + std::to_string(it),
                                          "check the materials and the loads of this step"));
     // The first step's forces are those of the previous state: judge from the second on.
-    if (it > 1 && residual <= state_.prm.relaxation_tolerance * scale) {
+    if (it > pass_start + 1 && residual <= state_.prm.relaxation_tolerance * scale) {
+      // Bonds that the equilibrium stretches past their criterion break, and the state relaxes
+      // again from rest at the same load (from the same committed histories: the step's trial
+      // state is committed once, at the equilibrium where nothing more breaks).
+      if (state_.prm.damage && state_.prm.relaxation_breaks_at_equilibrium) {
+        bool broke = false;
+        try {
+          broke = break_at_equilibrium();
+        } catch (const NumericalFailure& e) {
+          if (!e.collective() && Utilities::MPI::n_mpi_processes(comm) > 1)
+            throw;
+          return failed(it, e);
+        }
+        if (broke) {
+          if (++report.breaking_passes >= state_.prm.relaxation_breaking_passes) {
+            report.still_breaking = true;
+            break;
+          }
+          for (unsigned int i = 0; i < state_.particles.size(); ++i)
+            state_.particles.velocity(i) = Tensor<1, dim>();
+          state_.fem.clear_velocity();
+          pass_start = it;
+          first = true; // softer: restart the stiffness estimate
+          c = 0;
+          continue;
+        }
+      }
       // Equilibrium: the trial histories of both models are the step's result.
       state_.fem.commit_relaxation();
       if (state_.method)

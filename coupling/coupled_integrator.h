@@ -31,6 +31,10 @@ struct RelaxationReport {
   double relative_residual = 0; // at the end [-]
   double damping = 0;           // last adaptive damping [1/s]
   std::vector<ConversionReport<dim>> conversions;
+  // Coupling/Break bonds = at equilibrium: equilibria at which bonds broke (each relaxed again),
+  // and whether bonds still broke after Coupling/Breaking passes of them (not converged).
+  unsigned int breaking_passes = 0;
+  bool still_breaking = false;
   // A numerical failure every rank met that ended the relaxation (non-finite residual, an
   // inverted element, a law that failed at a point or particle): what and where, and its
   // hint; empty when the relaxation ran out of pseudo-steps or converged.
@@ -40,6 +44,9 @@ struct RelaxationReport {
   std::string outcome() const {
     if (!failure.empty())
       return "failed after " + std::to_string(iterations) + " pseudo-steps: " + failure;
+    if (still_breaking)
+      return "not converged (bonds still breaking after " + std::to_string(breaking_passes) +
+             " equilibria, " + std::to_string(iterations) + " pseudo-steps)";
     return "not converged (relative residual " + significant(relative_residual) + " after " +
            std::to_string(iterations) + " pseudo-steps)";
   }
@@ -126,8 +133,13 @@ class CoupledIntegrator {
   // load_time; with `sums`, a relaxation step (the time is held) that adds up the free
   // residual, reactions and stiffness estimate of this rank.
   void advance(double dt, double a, double load_time, bool first, RelaxationSums* sums);
-  // Pairs broken on one rank, for methods that share breaks (ParticleMethod::shares_bond_breaks).
-  void share_bond_breaks();
+  // Pairs broken on one rank, for methods that share breaks (ParticleMethod::shares_bond_breaks);
+  // returns how many pairs every rank broke so (0 where breaks are not shared). Collective.
+  std::size_t share_bond_breaks();
+  // Coupling/Break bonds = at equilibrium: one force pass at the current displacements that
+  // breaks the bonds past their criterion (their energy booked as fracture heat); whether any
+  // broke on any rank. Collective; a law failing at a particle fails on every rank.
+  bool break_at_equilibrium();
   // NumericalFailure naming the particle if a free particle outruns the P wave (divergence).
   void check_particle_speeds() const;
   // This rank's particle step from stiffness_bound_ and, under finite strain, the current

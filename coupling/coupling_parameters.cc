@@ -153,6 +153,19 @@ void CouplingParameters<dim>::declare(ParameterHandler& prm) {
                     "is applied in two halves, each cut again if needed: up to 2^cuts sub-steps "
                     "[-]. After two converged sub-steps the sub-step doubles again, up to the "
                     "step. 0 = the run stops at the first relaxation that does not converge.");
+  prm.declare_entry("Break bonds", "while relaxing", Selection("while relaxing|at equilibrium"),
+                    "Quasi-static coupled runs with Effects/Damage: when the particles' bonds "
+                    "break. while relaxing: as the relaxation's pseudo-dynamics stretch them, so "
+                    "its transient (which depends on the damping and the pseudo-masses) may "
+                    "break bonds the equilibrium would keep; at equilibrium: the step relaxes "
+                    "with every bond held, the bonds the converged state stretches past their "
+                    "criterion break, and the step relaxes again at the same load until none "
+                    "breaks (at most Breaking passes; each relaxation has its own Relaxation "
+                    "max iterations) [-].");
+  prm.declare_entry("Breaking passes", "100", Integer(1),
+                    "Quasi-static coupled runs with Break bonds = at equilibrium: relaxations "
+                    "of one load step while bonds keep breaking; a step whose bonds still break "
+                    "after these is cut like one that does not converge [-].");
   prm.declare_entry("Relaxation report interval", "5000", Integer(0),
                     "Quasi-static coupled runs: every this many pseudo-steps of a step's "
                     "relaxation, a line in the log with the relative residual, the damping and "
@@ -218,6 +231,8 @@ void CouplingParameters<dim>::parse(ParameterHandler& prm, const std::string& me
   relaxation_max_iterations = prm.get_integer("Relaxation max iterations");
   relaxation_report_interval = prm.get_integer("Relaxation report interval");
   relaxation_step_cuts = prm.get_integer("Relaxation step cuts");
+  relaxation_breaks_at_equilibrium = prm.get("Break bonds") == "at equilibrium";
+  relaxation_breaking_passes = prm.get_integer("Breaking passes");
   check_box_corners<dim>(refine_lower, refine_upper, "Coupling/Refinement region lower corner");
   const auto centre = parse_doubles(prm.get("Hole centre"), "Coupling/Hole centre");
   hole_radius = prm.get_double("Hole radius");

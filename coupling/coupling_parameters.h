@@ -62,6 +62,10 @@ struct CouplingParameters {
   unsigned int relaxation_max_iterations = 200000; // quasi-static: per step [-]
   unsigned int relaxation_report_interval = 5000;  // pseudo-steps between progress lines [-]
   unsigned int relaxation_step_cuts = 6; // quasi-static: halvings of a step that does not converge
+  // Quasi-static with damage: bonds break only at the relaxation's equilibrium, which relaxes
+  // again at the same load while any breaks (at most relaxation_breaking_passes times).
+  bool relaxation_breaks_at_equilibrium = false;
+  unsigned int relaxation_breaking_passes = 100;
   // The particle method (Effects/Particles method), its parameters read from its subsection
   // of "Coupling"; made in CouplingState::prepare() with the material of the FEM cells.
   std::string particles_method = "bond_based";

@@ -169,6 +169,7 @@ typename FemParticleCoupling<dim>::StepReport FemParticleCoupling<dim>::relax_st
     step.last = relax(to, with_conversion, progress);
     step.last_time = to;
     step.iterations = step.last.iterations;
+    step.breaking_passes = step.last.breaking_passes;
     step.converged = step.last.converged;
     step.sub_steps = step.converged ? 1 : 0;
     if (events.relaxed)
@@ -187,6 +188,7 @@ typename FemParticleCoupling<dim>::StepReport FemParticleCoupling<dim>::relax_st
     step.last = relax(target, with_conversion, progress);
     step.last_time = target;
     step.iterations += step.last.iterations;
+    step.breaking_passes += step.last.breaking_passes;
     if (events.relaxed)
       events.relaxed(target, step.last);
     if (!step.last.converged) {

@@ -147,11 +147,16 @@ class FemParticleCoupling {
     RelaxationReport last; // the last relaxation (the failed one when not converged)
     double last_time = 0;  // its load time [s]
     unsigned int iterations = 0, sub_steps = 0, cuts = 0; // of the step; undone ones counted
+    unsigned int breaking_passes = 0; // equilibria at which bonds broke; undone ones counted
     // "relaxation not converged[ after n step cuts]", or the failure that ended the last
     // relaxation ("non-finite residual (where)[ after n step cuts]"), for the caller's
     // NumericalFailure.
     std::string what_failed() const {
-      const std::string what = last.failure.empty() ? "relaxation not converged" : last.failure;
+      const std::string what = !last.failure.empty() ? last.failure
+                               : last.still_breaking ? "bonds still breaking after " +
+                                                           std::to_string(last.breaking_passes) +
+                                                           " equilibria (Coupling/Breaking passes)"
+                                                     : "relaxation not converged";
       return cuts == 0 ? what : what + " after " + std::to_string(cuts) + " step cuts";
     }
   };

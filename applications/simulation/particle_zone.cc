@@ -911,7 +911,7 @@ void ParticleZone<dim>::setup(RunContext& ctx) {
 
 template <int dim>
 std::array<double, 3> ParticleZone<dim>::step_cut_state() const {
-  return {impl_->sub_step, double(impl_->sub_steps_converged), double(impl_->step_cuts)};
+  return {{impl_->sub_step, double(impl_->sub_steps_converged), double(impl_->step_cuts)}};
 }
 
 template <int dim>

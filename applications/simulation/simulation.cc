@@ -592,6 +592,7 @@ void Simulation<dim>::coupled_relaxation(unsigned int step, double time, double 
                            relaxation_schedule_, progress, events);
   relaxation_iterations_ += report.iterations;
   relaxation_step_cuts_ += report.cuts;
+  relaxation_breaking_passes_ += report.breaking_passes;
   relaxation_sub_steps_ += report.sub_steps;
   last_step_sub_steps_ = report.sub_steps;
   last_relaxation_ = report.last;
@@ -605,7 +606,8 @@ void Simulation<dim>::coupled_relaxation(unsigned int step, double time, double 
             std::to_string(report.last.iterations) + " iterations",
         (report.last.failure.empty() ? std::string()
                                      : report.last.failure_hint + "; or cut the step further: ") +
-            "raise Coupling/Relaxation max iterations or Coupling/Relaxation step cuts, take "
+            "raise Coupling/Relaxation max iterations (or Coupling/Breaking passes) or "
+            "Coupling/Relaxation step cuts, take "
             "more Simulation/Steps, or run explicit dynamics if the crack runs unstably");
 }
 

@@ -127,6 +127,7 @@ void Simulation<dim>::write_checkpoint(unsigned int step, double time, RunContex
     state["relaxation_sub_step"] = relaxation_schedule_.sub_step;
     state["relaxation_sub_steps_converged"] = relaxation_schedule_.converged;
     state["relaxation_step_cuts"] = relaxation_step_cuts_;
+    state["relaxation_breaking_passes"] = relaxation_breaking_passes_;
     state["relaxation_sub_steps"] = relaxation_sub_steps_;
     state["last_step_sub_steps"] = last_step_sub_steps_;
     if (particles_)
@@ -275,6 +276,7 @@ unsigned int Simulation<dim>::load_checkpoint(RunContext& ctx) {
     relaxation_schedule_.sub_step = state.value("relaxation_sub_step", 0.0);
     relaxation_schedule_.converged = state.value("relaxation_sub_steps_converged", 0u);
     relaxation_step_cuts_ = state.value("relaxation_step_cuts", 0ul);
+    relaxation_breaking_passes_ = state.value("relaxation_breaking_passes", 0ul);
     relaxation_sub_steps_ = state.value("relaxation_sub_steps", 0ul);
     last_step_sub_steps_ = state.value("last_step_sub_steps", 0u);
     if (particles_ && state.contains("particle_zone_step_cuts"))

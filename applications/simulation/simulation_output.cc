@@ -306,6 +306,10 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
       // increments of the run (the steps when nothing was cut).
       s.set_figure("relaxation_step_cuts", double(relaxation_step_cuts_), "-");
       s.set_figure("relaxation_sub_steps", double(relaxation_sub_steps_), "-");
+      // Coupling/Break bonds = at equilibrium: equilibria at which bonds broke (each relaxed
+      // again at the same load), undone attempts included.
+      if (coupling_prm_.relaxation_breaks_at_equilibrium)
+        s.set_figure("relaxation_breaking_passes", double(relaxation_breaking_passes_), "-");
       // What holding the states for the cuts costs (FemParticleCoupling::relax_step).
       s.set_figure("step_snapshot_time_s", coupled_->timings().snapshots, "s");
       const auto& history = ctx.history();

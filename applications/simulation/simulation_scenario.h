@@ -158,6 +158,8 @@ class Simulation : public framework::Scenario {
   // with, the cuts and the converged sub-steps of the run, and the sub-steps of the last step.
   typename coupling::FemParticleCoupling<dim>::StepSchedule relaxation_schedule_;
   unsigned long relaxation_step_cuts_ = 0, relaxation_sub_steps_ = 0;
+  // Coupling/Break bonds = at equilibrium: equilibria of the run at which bonds broke.
+  unsigned long relaxation_breaking_passes_ = 0;
   unsigned int last_step_sub_steps_ = 0;
   // A coupled step whose virial_imbalance_relative exceeds this is reported in the log [-].
   // Measured (docs/coupling.md, "The force balance"): consistent splices 1e-9 (uniform) to

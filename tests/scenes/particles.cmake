@@ -150,6 +150,10 @@ spinesim_add_comparison_test(scene.cracked_plate_newton_ranks_agree
   CHECKS "broken_bonds:abs:0;peak_load_N:rel:1e-9;peak_load_time_s:abs:0;particle_strain_energy:rel:1e-8"
   REQUIRES "pz_newton_cracked_plate_1;pz_newton_cracked_plate_2"
   LABELS "scene;meshfree;fracture;mpi")
+# The 2-rank run takes both cores for about 60 s: labelled long. Newton with breaking over two
+# ranks stays in the default run through the edge-cracked plate and the 3-D bar above.
+set_property(TEST scene.cracked_plate_newton_2ranks scene.cracked_plate_newton_ranks_agree
+             APPEND PROPERTY LABELS long)
 spinesim_add_scene_test(scene.pd_plate_tension_newton_cuts_used_up
   SCENE ${PROJECT_SOURCE_DIR}/applications/scenes/pd_plate_tension.prm
   SET "Particles/Quasi-static/Solver=newton" "Particles/Quasi-static/Newton iterations=1"

@@ -5,7 +5,7 @@
 # a build's CTestCostData.txt after a full default run; a test missing here runs as cost 0.
 set(SPINESIM_TEST_COSTS
   implants.screw_pullout_particles_contact 104
-  scene.cracked_plate_newton_2ranks 60
+  coupling.notched_bar_quasi_static_at_equilibrium_3d 35
   scene.cracked_plate_newton_1ranks 24
   coupling.plastic_limit_3d_spg 60
   coupling.fracture_heat_nosb 50
@@ -27,6 +27,9 @@ set(SPINESIM_TEST_COSTS
   coupling.plastic_heat_nosb_2d 22
   validation.taylor_bar_fem_coarse 21
   scene.cracked_plate_quasi_static 21
+  scene.cracked_plate_quasi_static_at_equilibrium_lumped 19
+  scene.cracked_plate_quasi_static_at_equilibrium 17
+  scene.cracked_plate_quasi_static_at_equilibrium_2ranks 15
   scene.vertebra_compression_to_failure 20
   scene.cracked_plate_spg_energy_splice 20
   scene.cracked_plate_nosb 20
@@ -42,6 +45,7 @@ set(SPINESIM_TEST_COSTS
   implants.vertebra_screw_pullout_quick 17
   stability.ring_plastic_nosb_2d_restart_older_checkpoint 16
   stability.coupled_energy_drift_1e5_steps_energy_splice 15
+  scene.cracked_plate_quasi_static_at_equilibrium_restart_second_half 12
   coupling.support_clearance_2d 15
   stability.impact_all_particles_nosb_2d 14
   scene.pd_plate_plastic_step_cut 14
