@@ -457,6 +457,13 @@ spinesim_add_comparison_test(scene.cracked_plate_quasi_static_at_equilibrium_ran
   A ${_runs}/cracked_plate_qs_eq/summary.json B ${_runs}/cracked_plate_qs_eq_2ranks/summary.json
   CHECKS "${_plate_eq_same}" REQUIRES "plate_qs_eq;plate_qs_eq_2ranks"
   LABELS "scene;coupling;fracture;mpi")
+# A step whose bonds still break after Coupling/Breaking passes equilibria is a failed attempt;
+# without step cuts the run stops (exit 1) at the first step in which bonds break, and says why.
+spinesim_add_scene_test(scene.cracked_plate_quasi_static_at_equilibrium_passes_used_up
+  SCENE ${_plate} OUT ${_runs}/cracked_plate_qs_eq_passes_used_up
+  SET ${_plate_eq} "Coupling/Breaking passes=1" "Coupling/Relaxation step cuts=0"
+  EXIT 1 MATCH "numerical failure: bonds still breaking after 1 equilibria \\(Coupling/Breaking passes\\).*where: step [0-9]+"
+  EXPECT "status==failed" LABELS "scene;coupling;fracture;stability")
 # Stopped after step 20 (the peak; the crack runs in step 21) and restarted from its checkpoint:
 # the equilibria and their breaks are a function of the restored state alone, so the restarted
 # run breaks the same bonds in as many equilibria and ends with the uninterrupted run's figures
