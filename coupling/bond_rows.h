@@ -27,6 +27,10 @@ class BondRows {
   // Pairs broken in a checkpoint: the next rebuild breaks them before the method builds its
   // families.
   void restore_broken(std::vector<std::pair<unsigned int, unsigned int>> pairs);
+  // Bytes of the searched bonds (every particle's, on every rank) [B].
+  std::size_t memory_bytes() const {
+    return searched_.memory_bytes() + searched_volumes_.capacity() * sizeof(double);
+  }
 
  private:
   CouplingState<dim>& state_;

@@ -569,7 +569,10 @@ CoupledIntegrator<dim>::relax(double time, bool with_conversion,
       p.stiffness_estimate = sums.stiffness_denominator > 0
                                  ? sums.stiffness_numerator / sums.stiffness_denominator
                                  : 0.0;
-      p.free_particles = Utilities::MPI::sum(state_.n_free_particles(), comm);
+      unsigned int owned_free = 0; // every rank holds every record: count each once
+      for (unsigned int i = 0; i < state_.particles.size(); ++i)
+        owned_free += state_.free[i] && state_.is_owned(i);
+      p.free_particles = Utilities::MPI::sum(owned_free, comm);
       for (const auto& r : report.conversions)
         p.converted_cells += r.cells;
       p.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();

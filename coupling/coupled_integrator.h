@@ -107,7 +107,7 @@ class CoupledIntegrator {
   // `with_conversion`, the cells flagged at equilibrium convert and the state relaxes again.
   // Ends with zero velocities. `progress`, when given, is called every Coupling/Relaxation
   // report interval pseudo-steps; it must be given on every rank or on none (the free
-  // particles it reports are summed over the ranks).
+  // particles it reports are the owned ones summed over the ranks).
   RelaxationReport<dim> relax(double time, bool with_conversion,
                               const std::function<void(const RelaxationProgress&)>& progress = {});
 
@@ -118,6 +118,12 @@ class CoupledIntegrator {
   // and the particle updates they served (owned free particles summed over force passes).
   double particle_force_seconds() const { return particle_force_seconds_; }
   double particle_updates() const { return particle_updates_; }
+  // Bytes of the per-particle stiffness bounds and relaxation arrays [B].
+  std::size_t memory_bytes() const {
+    return (stiffness_bound_.capacity() + contact_bound_.capacity() +
+            relax_acceleration_.capacity() + relax_mass_scale_.capacity()) *
+           sizeof(double);
+  }
   // The particle side of the energy account of explicit steps (off unless switched on).
   ParticleEnergy<dim>& energy() { return energy_; }
   // The particles' stiffness bound of the last stable_time_step() (empty before the first;

@@ -92,6 +92,32 @@ unsigned int CouplingState<dim>::n_ghost_particles() const {
 }
 
 template <int dim>
+std::size_t CouplingState<dim>::memory_bytes() const {
+  // A string's own buffer beyond the small-string capacity it holds inline.
+  const auto string_bytes = [](const std::string& text) {
+    return text.capacity() > std::string().capacity() ? text.capacity() + 1 : std::size_t(0);
+  };
+  // A std::map node: the value and, in libstdc++, three pointers and a colour word.
+  constexpr std::size_t map_node = 4 * sizeof(void*);
+  std::size_t bytes = particles.memory_bytes() + bonds.memory_bytes() +
+                      (method ? method->memory_bytes() : 0) + free.capacity() +
+                      driven_gradients.capacity() * sizeof(dealii::Tensor<2, dim>) +
+                      host_cell.capacity() * sizeof(std::string) +
+                      (host_point.capacity() + fixed_slots.capacity()) * sizeof(std::uint32_t) +
+                      (host_index.capacity() + owner.capacity()) * sizeof(int) +
+                      support_offset.capacity() * sizeof(dealii::Tensor<1, dim>) +
+                      pending_states.capacity() * sizeof(meshfree::CarriedState) +
+                      free_cells.capacity() * sizeof(HostRow);
+  for (const auto& cell : host_cell)
+    bytes += string_bytes(cell);
+  for (const auto& [key, index] : index_of)
+    bytes += map_node + sizeof(key) + sizeof(index) + string_bytes(key.first);
+  for (const auto& [cell, points] : free_cells)
+    bytes += points.capacity() * sizeof(int);
+  return bytes;
+}
+
+template <int dim>
 void CouplingState<dim>::prepare() {
   if (method)
     return;

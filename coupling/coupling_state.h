@@ -105,6 +105,9 @@ struct CouplingState {
   unsigned int n_free_particles() const;
   unsigned int n_ghost_particles() const;
   double horizon() const;
+  // Bytes of particle data held on this rank: the particle records (all of them, replicated on
+  // every rank), their bookkeeping, the bonds owned here and the method's per-particle arrays.
+  std::size_t memory_bytes() const;
 
   const CouplingParameters<dim> prm;
   fem::MechanicsSolver<dim>& fem;

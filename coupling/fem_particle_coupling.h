@@ -115,6 +115,10 @@ class FemParticleCoupling {
   // (updates summed, wall time of the slowest rank) [1/s]; 0 before any. Collective.
   double particle_updates_per_second() const;
   double particle_force_seconds() const; // slowest rank [s], collective
+  // The particle data of the rank holding the most [B]: the records and their bookkeeping
+  // (CouplingState::memory_bytes), the searched bonds, the ghost tables and the integrator's
+  // per-particle arrays. Collective.
+  double particle_memory_per_rank_max_bytes() const;
 
   // Quasi-static: adaptive dynamic relaxation of both models to equilibrium under the loads of
   // `time` (see CoupledIntegrator::relax); bonds break on the way and, with `with_conversion`,

@@ -34,6 +34,14 @@ class GhostLayer {
   void update_temperatures();
   // The next extend() searches around every free particle (the particles were replaced).
   void forget_search() { free_searched_.clear(); }
+  // Bytes of the per-particle search flags and the owned ghost-cell tables [B].
+  std::size_t memory_bytes() const {
+    std::size_t bytes = free_searched_.capacity() +
+                        ghost_cells_.capacity() * sizeof(typename CouplingState<dim>::HostRow);
+    for (const auto& row : ghost_cells_)
+      bytes += row.second.capacity() * sizeof(int);
+    return bytes;
+  }
 
  private:
   CouplingState<dim>& state_;

@@ -1228,6 +1228,8 @@ class ScrewPullout : public Scenario {
     sum.set_figure("particle_volume_mm3", volume * 1e9, "mm^3");
     sum.set_figure("particles_near_threads_fraction", volume > 0 ? near / volume : 0.0, "-");
     sum.set_figure("broken_bonds", double(coupled.n_broken_bonds()), "-");
+    sum.set_figure("particle_memory_per_rank_max_bytes",
+                   coupled.particle_memory_per_rank_max_bytes(), "B");
     sum.set_figure("max_particle_damage", damage, "-");
     sum.set_figure("virial_imbalance_relative", balance.imbalance_relative, "-");
     // Every history row (the last included) updated the largest.

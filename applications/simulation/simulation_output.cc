@@ -279,6 +279,10 @@ void Simulation<dim>::report_figures(RunContext& ctx) {
     // The particle method's own cost: its force passes (relaxation pseudo-steps included).
     s.set_figure("particle_force_time_s", coupled_->particle_force_seconds(), "s");
     s.set_figure("particle_updates_per_s", coupled_->particle_updates_per_second(), "1/s");
+    // Coupled runs keep every particle record on every rank (docs/scaling.md): this figure
+    // does not fall with the ranks as a particle zone's does.
+    s.set_figure("particle_memory_per_rank_max_bytes",
+                 coupled_->particle_memory_per_rank_max_bytes(), "B");
     const ConversionExtremes c = conversion_extremes();
     s.set_figure("conversion_mass_change_relative", c.mass, "-");
     s.set_figure("conversion_momentum_change_relative", c.momentum, "-");

@@ -388,6 +388,15 @@ foreach(_ranks 2 4)
     CHECKS "peak_load_N:rel:1e-9;broken_bonds:abs:0;converted_cells:abs:0;strain_energy:rel:1e-8;crack_extent_max_x_m:abs:1e-12"
     REQUIRES "plate_coupled;plate_coupled_${_ranks}" LABELS "scene;coupling;mpi")
 endforeach()
+# The particle data per rank of the coupled plate on 2 ranks against 1: a particle zone holds
+# at most 0.6 of it on each of 2 ranks (tests/scenes/distributed.cmake); a coupled run keeps
+# every particle record on every rank (docs/scaling.md), so this stays known_failure until
+# CouplingState is distributed. Measured: see docs/scaling.md, "Coupled runs".
+spinesim_add_comparison_test(scene.cracked_plate_coupled_memory_per_rank
+  A ${_runs}/cracked_plate_coupled/summary.json
+  B ${_runs}/cracked_plate_coupled_2ranks/summary.json
+  CHECKS "particle_memory_per_rank_max_bytes:ratio_max:0.6"
+  REQUIRES "plate_coupled;plate_coupled_2" LABELS "scene;coupling;mpi;known_failure")
 # Four ranks oversubscribed on two cores: labelled long (cli.default_scene_4ranks keeps four
 # ranks in the default run).
 set_property(TEST scene.cracked_plate_coupled_4ranks scene.cracked_plate_coupled_1_vs_4_ranks
