@@ -120,7 +120,8 @@ ChildRunResult run_child(const std::vector<std::string>& argv,
       result.timed_out = true;
     } else if (terminated && elapsed > time_limit + 10)
       kill(pid, SIGKILL);
-    std::this_thread::sleep_for(std::chrono::milliseconds(elapsed < 1 ? 5 : 50));
+    // A 5 ms poll: a 50 ms one added 25 ms to each run on average, 20 s over a full study.
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
   result.wall_time =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
