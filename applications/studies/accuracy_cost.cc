@@ -352,28 +352,28 @@ class AccuracyCost : public Scenario {
       argv.insert(argv.end(), sets.begin(), sets.end());
       return run_child(argv, k.console, study_.time_limit);
     };
-    std::optional<std::string> bad; // the first failing check's message, in case order
+    std::optional<std::size_t> bad; // the first failing check, in case order
+    int bad_exit = 0;
     for (std::size_t first = 0; first < checks.size() && !bad; first += 2) {
       std::vector<std::future<ChildRunResult>> running;
       for (std::size_t k = first; k < std::min(first + 2, checks.size()); ++k)
         running.push_back(std::async(std::launch::async, run_check, std::cref(checks[k])));
       for (std::size_t k = first; k < first + running.size(); ++k) {
-        const auto result = running[k - first].get();
-        if (result.exit_code != 0 && !bad)
-          bad = "Case " + std::to_string(checks[k].c->index) + ": spinesim check of " +
-                checks[k].c->scene + " with " + checks[k].c->parameter + " = " + checks[k].value +
-                " failed (exit " + std::to_string(result.exit_code) + "):\n" +
-                console_tail(checks[k].console, 8);
+        const int exit_code = running[k - first].get().exit_code;
+        if (exit_code != 0 && !bad)
+          bad = k, bad_exit = exit_code;
       }
     }
-    std::string where;
-    if (bad)
-      where = bad->substr(0, bad->find(':'));
+    const std::string tail = bad ? console_tail(checks[*bad].console, 8) : std::string();
     for (const auto& k : checks)
       fs::remove(k.console);
-    if (bad)
-      throw InvalidInput("Accuracy study/" + where, bad->substr(where.size() + 2),
+    if (bad) {
+      const Check& k = checks[*bad];
+      throw InvalidInput("Accuracy study/Case " + std::to_string(k.c->index),
+                         "spinesim check of " + k.c->scene + " with " + k.c->parameter + " = " +
+                             k.value + " failed (exit " + std::to_string(bad_exit) + "):\n" + tail,
                          "a case whose scene and settings spinesim check accepts");
+    }
     ctx.log() << "  every case passed spinesim check at its coarsest and finest resolution\n";
   }
 
