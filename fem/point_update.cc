@@ -12,6 +12,25 @@ using namespace dealii;
 using materials::SymTensor2;
 using materials::Tensor2;
 
+namespace {
+// Index of the pair (i, j) among SymmetricTensor<2,3>'s independent components: the
+// diagonal 0–2, then (0,1), (0,2), (1,2) (deal.II symmetric_tensor.h,
+// component_to_unrolled_index).
+constexpr unsigned int symmetric_pair_index(unsigned int i, unsigned int j) {
+  constexpr unsigned int table[3][3] = {{0, 3, 4}, {3, 1, 5}, {4, 5, 2}};
+  return table[i][j];
+}
+static_assert(SymTensor2::component_to_unrolled_index(TableIndices<2>(0, 1)) ==
+                      symmetric_pair_index(0, 1) &&
+                  SymTensor2::component_to_unrolled_index(TableIndices<2>(0, 2)) ==
+                      symmetric_pair_index(0, 2) &&
+                  SymTensor2::component_to_unrolled_index(TableIndices<2>(1, 2)) ==
+                      symmetric_pair_index(1, 2) &&
+                  SymTensor2::component_to_unrolled_index(TableIndices<2>(2, 2)) ==
+                      symmetric_pair_index(2, 2),
+              "deal.II's independent-component order");
+} // namespace
+
 Tensor2 ConstitutivePointUpdate::operator()(const materials::ConstitutiveLaw& law, const Tensor2& H,
                                             double dT, const QuadraturePointData& old,
                                             QuadraturePointData& tr, double (*A)[3][3][3]) const {
@@ -22,6 +41,16 @@ Tensor2 ConstitutivePointUpdate::operator()(const materials::ConstitutiveLaw& la
         for (unsigned int k = 0; k < 3; ++k)
           for (unsigned int l = 0; l < 3; ++l)
             A[i][j][k][l] = T[i][j][k][l];
+  };
+  // The same from a symmetric tangent's 36 independent entries (raw entry 6a + b, a and b
+  // the pairs' own indices): the four-index accessors cost more than the law itself.
+  const auto copy_symmetric_tangent = [A](const materials::SymTensor4& T) {
+    for (unsigned int i = 0; i < 3; ++i)
+      for (unsigned int j = 0; j < 3; ++j)
+        for (unsigned int k = 0; k < 3; ++k)
+          for (unsigned int l = 0; l < 3; ++l)
+            A[i][j][k][l] =
+                T.access_raw_entry(6 * symmetric_pair_index(i, j) + symmetric_pair_index(k, l));
   };
   if (!finite_strain_) {
     SymTensor2 eps = symmetrize(H);
@@ -38,21 +67,23 @@ Tensor2 ConstitutivePointUpdate::operator()(const materials::ConstitutiveLaw& la
       }
       if (A) {
         // Condensed tangent: C − C:zz ⊗ Czz: / Czzzz.
-        const double czz = r.tangent[2][2][2][2];
-        SymTensor2 a, b;
-        for (unsigned int i = 0; i < 3; ++i)
-          for (unsigned int j = i; j < 3; ++j) {
-            a[i][j] = r.tangent[i][j][2][2];
-            b[i][j] = r.tangent[2][2][i][j];
-          }
-        r.tangent -= outer_product(a, b) / czz;
+        const unsigned int zz = 6 * 2 + 2; // raw entry of (zz, zz); pair zz has index 2
+        const double czz = r.tangent.access_raw_entry(zz);
+        double a[6], b[6];
+        for (unsigned int p = 0; p < 6; ++p) {
+          a[p] = r.tangent.access_raw_entry(6 * p + 2);
+          b[p] = r.tangent.access_raw_entry(6 * 2 + p);
+        }
+        for (unsigned int p = 0; p < 6; ++p)
+          for (unsigned int q = 0; q < 6; ++q)
+            r.tangent.access_raw_entry(6 * p + q) -= a[p] * b[q] / czz;
       }
     } else {
       r = law.small_strain(eps, dT, old.state);
     }
     S = r.stress;
     if (A)
-      copy_tangent(r.tangent);
+      copy_symmetric_tangent(r.tangent);
     tr.state = r.state;
     tr.cauchy_stress = r.stress;
     tr.strain = eps;

@@ -350,7 +350,7 @@ class AccuracyCost : public Scenario {
       std::vector<std::string> argv{exe_, "check", k.c->scene};
       const auto sets = set_arguments(*k.c, k.value);
       argv.insert(argv.end(), sets.begin(), sets.end());
-      return run_child(argv, k.console, study_.time_limit);
+      return run_child(argv, k.console, study_.time_limit, study_.threads);
     };
     std::optional<std::size_t> bad; // the first failing check, in case order
     int bad_exit = 0;
@@ -388,7 +388,7 @@ class AccuracyCost : public Scenario {
     const auto sets = set_arguments(c, r.value);
     argv.insert(argv.end(), sets.begin(), sets.end());
     const fs::path console = dir.string() + ".console.log";
-    const ChildRunResult result = run_child(argv, console, study_.time_limit);
+    const ChildRunResult result = run_child(argv, console, study_.time_limit, study_.threads);
 
     std::string status = "ok";
     nlohmann::json figures, where, predicted;

@@ -72,7 +72,8 @@ std::filesystem::path own_executable() {
 }
 
 ChildRunResult run_child(const std::vector<std::string>& argv,
-                         const std::filesystem::path& console_file, double time_limit) {
+                         const std::filesystem::path& console_file, double time_limit,
+                         unsigned int threads) {
   std::vector<char*> args;
   for (const auto& a : argv)
     args.push_back(const_cast<char*>(a.c_str()));
@@ -81,6 +82,8 @@ ChildRunResult run_child(const std::vector<std::string>& argv,
   for (char** e = environ; *e != nullptr; ++e)
     if (!belongs_to_parent_mpi(*e))
       env_strings.emplace_back(*e);
+  if (threads > 0 && std::getenv("OMP_THREAD_LIMIT") == nullptr)
+    env_strings.push_back("OMP_THREAD_LIMIT=" + std::to_string(threads));
   std::vector<char*> env;
   for (auto& e : env_strings)
     env.push_back(e.data());

@@ -23,9 +23,14 @@ struct ChildRunResult {
 // Runs `argv` (argv[0] a path) with stdout and stderr to `console_file`, stopping it with
 // SIGTERM (then SIGKILL after 10 s) at `time_limit` seconds. The environment is the caller's
 // without the variables an MPI singleton start leaves for its own process (PMIX_*, OMPI_*
-// other than the user's MCA settings), so the child starts MPI afresh.
+// other than the user's MCA settings), so the child starts MPI afresh. With threads > 0 and
+// no OMP_THREAD_LIMIT of the user's, the child gets OMP_THREAD_LIMIT = threads: CHOLMOD's
+// supernodal factorisation (the LSMFM) opens OpenMP regions with num_threads(4) compiled in
+// (cholmod_core.h, CHOLMOD_OMP_NUM_THREADS), which neither --threads nor omp_set_num_threads
+// lowers, and a run timed as 1 thread would otherwise run 4 on a 2-core machine.
 ChildRunResult run_child(const std::vector<std::string>& argv,
-                         const std::filesystem::path& console_file, double time_limit);
+                         const std::filesystem::path& console_file, double time_limit,
+                         unsigned int threads = 0);
 
 // The full path of `program` in the directories of PATH; empty when it is not there.
 std::string find_in_path(const std::string& program);

@@ -229,7 +229,8 @@ class ParameterSweep : public Scenario {
                              "--progress", "off", "--threads", std::to_string(sweep_.threads)});
     const auto sets = arguments(r);
     argv.insert(argv.end(), sets.begin(), sets.end());
-    const ChildRunResult result = run_child(argv, dir.string() + ".console.log", sweep_.time_limit);
+    const ChildRunResult result =
+        run_child(argv, dir.string() + ".console.log", sweep_.time_limit, sweep_.threads);
     r.wall_time = result.wall_time;
     r.figures.assign(sweep_.figures.size(), std::nan(""));
     if (result.timed_out) {

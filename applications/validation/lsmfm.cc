@@ -43,6 +43,8 @@
 #include <deal.II/grid/grid_tools.h>
 #include <deal.II/grid/grid_tools_cache.h>
 
+#include <omp.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -196,6 +198,13 @@ class LsmfmScenario : public Scenario {
               << lsmfm_.integration << "), " << solver->n_unknowns() << " unknowns, "
               << lsmfm_.kinematics << (dim == 2 ? ", " + lsmfm_.plane_model : std::string())
               << "\n  material: " << law_.describe() << "\n";
+    // CHOLMOD's supernodal factorisation runs num_threads(4) regions compiled in
+    // (cholmod_core.h, CHOLMOD_OMP_NUM_THREADS); only OMP_THREAD_LIMIT, read at start-up,
+    // caps them (measured: 4 threads on 2 cores made a 1-thread run 20 % slower).
+    if (omp_get_thread_limit() > omp_get_max_threads())
+      ctx.log() << "  note: the sparse Cholesky (CHOLMOD) may run up to 4 OpenMP threads "
+                   "whatever --threads says; start with OMP_THREAD_LIMIT="
+                << omp_get_max_threads() << " to cap it (studies do)\n";
 
     // The cost table's work: unknowns × load steps (each step a few sparse factorisations).
     framework::RunCost cost{"lsmfm_quasi_static", double(solver->n_unknowns()) * run_.steps,

@@ -1,6 +1,7 @@
 #include "fem/materials/j2_return_mapping.h"
 
 #include "base/exceptions.h"
+#include "fem/materials/tensor_tools.h"
 
 #include <cmath>
 #include <sstream>
@@ -23,7 +24,7 @@ J2ReturnResult j2_radial_return(const SymTensor2& eps_tr, double ebar_n, double 
   if (q_tr - sy_n <= 1e-12 * sy_n) {
     r.stress = p * I + s_tr;
     if (with_tangent)
-      r.tangent = K * dealii::outer_product(I, I) + 2.0 * mu * dealii::deviator_tensor<3>();
+      r.tangent = volumetric_deviatoric_rank_one(K, 2.0 * mu, 0.0, s_tr);
     r.flow_stress = sy_n;
     return r;
   }
@@ -57,8 +58,8 @@ J2ReturnResult j2_radial_return(const SymTensor2& eps_tr, double ebar_n, double 
   r.stress = p * I + factor * s_tr;
   if (with_tangent) {
     const double Hp = hardening.slope(ebar_n + dg);
-    r.tangent = K * dealii::outer_product(I, I) + 2.0 * mu * factor * dealii::deviator_tensor<3>() +
-                6.0 * mu * mu * (dg / q_tr - 1.0 / (3.0 * mu + Hp)) * dealii::outer_product(n, n);
+    r.tangent = volumetric_deviatoric_rank_one(
+        K, 2.0 * mu * factor, 6.0 * mu * mu * (dg / q_tr - 1.0 / (3.0 * mu + Hp)), n);
   }
   return r;
 }

@@ -22,6 +22,27 @@ SymTensor4 isotropic_elasticity(double lambda, double mu) {
   return lambda * dealii::outer_product(I, I) + 2.0 * mu * dealii::identity_tensor<3>();
 }
 
+SymTensor4 volumetric_deviatoric_rank_one(double a, double b, double c, const SymTensor2& n) {
+  // Raw entry r of a SymmetricTensor<4,3> is the pair (r / 6, r % 6) of independent
+  // components of SymmetricTensor<2,3>, in that class's own order: 0–2 the diagonal, 3–5 the
+  // off-diagonal (deal.II symmetric_tensor.h, access_raw_entry). I^dev = I^s − (1/3) I⊗I, and
+  // I^s maps an off-diagonal component to itself with weight 1/2 in this storage.
+  double nn[6];
+  for (unsigned int k = 0; k < 6; ++k)
+    nn[k] = n.access_raw_entry(k);
+  SymTensor4 t;
+  for (unsigned int r = 0; r < 6; ++r)
+    for (unsigned int q = 0; q < 6; ++q) {
+      double v = c * nn[r] * nn[q];
+      if (r < 3 && q < 3)
+        v += a - b / 3.0 + (r == q ? b : 0.0);
+      else if (r == q)
+        v += 0.5 * b;
+      t.access_raw_entry(6 * r + q) = v;
+    }
+  return t;
+}
+
 void validate_elastic_constants(const std::string& where, double E, double nu, double rho,
                                 double alpha) {
   auto number = [](double v) {

@@ -19,6 +19,12 @@ double bulk_modulus(double E, double nu);
 // C = λ I⊗I + 2μ I^s [Pa].
 SymTensor4 isotropic_elasticity(double lambda, double mu);
 
+// a I⊗I + b I^dev + c n⊗n [Pa], written straight into the 6×6 independent components:
+// the J2 algorithmic tangent (Simo & Hughes 1998, eq. 3.3.13) runs at every material point
+// and Newton iteration, and deal.II's outer_product and deviator_tensor fill it through
+// four-index accessors (a quarter of an elasto-plastic FEM solve's time, measured).
+SymTensor4 volumetric_deviatoric_rank_one(double a, double b, double c, const SymTensor2& n);
+
 // Throws InvalidInput naming `where` unless E > 0, -1 < ν < 0.5, ρ > 0 and |α| <= 1e-3 1/K
 // (all finite). Every law validates its constants through this.
 void validate_elastic_constants(const std::string& where, double E, double nu, double rho,

@@ -387,6 +387,30 @@ TEST(J2Plasticity, ConsistentTangentMatchesFiniteDifferences) {
   }
 }
 
+// The J2 tangent's direct 6×6 fill against deal.II's own tensors, to round-off (1e-14 of
+// the largest entry: the two differ only in the order of a few products).
+TEST(TensorTools, VolumetricDeviatoricRankOneMatchesDealIIOuterProducts) {
+  SymTensor2 n;
+  n[0][0] = 0.3;
+  n[1][1] = -0.7;
+  n[2][2] = 0.4;
+  n[0][1] = 0.25;
+  n[0][2] = -0.15;
+  n[1][2] = 0.6;
+  const double a = 3.1, b = 1.7, c = -2.3;
+  const SymTensor2 I = dealii::unit_symmetric_tensor<3>();
+  const SymTensor4 expected = a * dealii::outer_product(I, I) + b * dealii::deviator_tensor<3>() +
+                              c * dealii::outer_product(n, n);
+  const SymTensor4 got = volumetric_deviatoric_rank_one(a, b, c, n);
+  for (unsigned int i = 0; i < 3; ++i)
+    for (unsigned int j = 0; j < 3; ++j)
+      for (unsigned int k = 0; k < 3; ++k)
+        for (unsigned int l = 0; l < 3; ++l)
+          EXPECT_NEAR(got[i][j][k][l], expected[i][j][k][l], 1e-14 * 5.0) << i << j << k << l;
+  // And its action on a strain: C : ε, the product the assembly uses.
+  EXPECT_NEAR((got * n - expected * n).norm(), 0.0, 1e-13);
+}
+
 TEST(J2Plasticity, UniaxialBarFollowsClosedFormLinearHardening) {
   const double E = 200e9, nu = 0.3, sy = 250e6, H = 2e9;
   const J2Plasticity law(E, nu, 7800, 0, IsotropicHardening(sy, H));
