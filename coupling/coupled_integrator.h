@@ -118,11 +118,12 @@ class CoupledIntegrator {
   // and the particle updates they served (owned free particles summed over force passes).
   double particle_force_seconds() const { return particle_force_seconds_; }
   double particle_updates() const { return particle_updates_; }
-  // Bytes of the per-particle stiffness bounds and relaxation arrays [B].
+  // Bytes of the per-particle stiffness bounds, relaxation arrays and energy account [B].
   std::size_t memory_bytes() const {
     return (stiffness_bound_.capacity() + contact_bound_.capacity() +
             relax_acceleration_.capacity() + relax_mass_scale_.capacity()) *
-           sizeof(double);
+               sizeof(double) +
+           energy_.memory_bytes();
   }
   // The particle side of the energy account of explicit steps (off unless switched on).
   ParticleEnergy<dim>& energy() { return energy_; }

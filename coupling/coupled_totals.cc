@@ -12,16 +12,18 @@ using namespace dealii;
 
 template <int dim>
 double total_mass(const CouplingState<dim>& s) {
+  // Owned free particles summed over the ranks: right whether or not every rank holds every
+  // record (docs/scaling.md, coupled runs).
   double m = 0;
   for (unsigned int i = 0; i < s.particles.size(); ++i)
-    if (s.free[i])
+    if (s.free[i] && s.is_owned(i))
       m += s.particles.mass(i);
   const auto& lumped = s.fem.lumped_mass();
   double mf = 0;
   for (const auto i : lumped.locally_owned_elements())
     mf += lumped(i);
-  mf = Utilities::MPI::sum(mf, s.fem.mpi_communicator()) / dim; // one mass per component
-  return m + mf;
+  mf /= dim; // one mass per component
+  return Utilities::MPI::sum(m + mf, s.fem.mpi_communicator());
 }
 
 template <int dim>

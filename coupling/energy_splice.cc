@@ -735,6 +735,12 @@ double EnergySplice<dim>::centred_energy() {
   return Utilities::MPI::sum(kinetic, fem.mpi_communicator()) + measured_stored_;
 }
 
+template <int dim>
+std::size_t EnergySplice<dim>::memory_bytes() const {
+  return (splice_forces_.capacity() + measured_particle_v_.capacity()) * sizeof(Vector) +
+         particle_rows_.capacity() * sizeof(Row);
+}
+
 template class EnergySplice<2>;
 template class EnergySplice<3>;
 

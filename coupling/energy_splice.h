@@ -105,6 +105,8 @@ class EnergySplice {
   void check_stored_energy();
   // max |G a| / max |T a| over the affine modes before the correction (what it removes) [-].
   double ghost_force_relative() const { return ghost_force_relative_; }
+  // Bytes of the per-particle forces, rows and measured velocities [B].
+  std::size_t memory_bytes() const;
 
  private:
   struct Row {

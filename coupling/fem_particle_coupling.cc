@@ -308,7 +308,9 @@ double FemParticleCoupling<dim>::particle_force_seconds() const {
 template <int dim>
 double FemParticleCoupling<dim>::particle_memory_per_rank_max_bytes() const {
   const std::size_t bytes = state_.memory_bytes() + bond_rows_.memory_bytes() +
-                            ghosts_.memory_bytes() + integrator_.memory_bytes();
+                            ghosts_.memory_bytes() + integrator_.memory_bytes() +
+                            splice_.memory_bytes() + joint_.memory_bytes() +
+                            fracture_.memory_bytes() + plastic_heat_.memory_bytes();
   return Utilities::MPI::max(double(bytes), state_.fem.mpi_communicator());
 }
 

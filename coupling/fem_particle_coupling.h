@@ -116,8 +116,9 @@ class FemParticleCoupling {
   double particle_updates_per_second() const;
   double particle_force_seconds() const; // slowest rank [s], collective
   // The particle data of the rank holding the most [B]: the records and their bookkeeping
-  // (CouplingState::memory_bytes), the searched bonds, the ghost tables and the integrator's
-  // per-particle arrays. Collective.
+  // (CouplingState::memory_bytes), the searched bonds, the ghost tables, the integrator's
+  // per-particle arrays and energy account, and the per-particle arrays of the energy splice,
+  // the implant joint and contact, and the fracture and plastic heat. Collective.
   double particle_memory_per_rank_max_bytes() const;
 
   // Quasi-static: adaptive dynamic relaxation of both models to equilibrium under the loads of

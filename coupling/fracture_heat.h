@@ -32,6 +32,10 @@ class FractureHeat {
   double heat() const { return heat_; } // handed to the FEM so far [J]
   // From a checkpoint: the totals of rank 0, empty accounts.
   void restore(double dissipation, double heat);
+  // Bytes of the per-particle and per-bond arrays [B].
+  std::size_t memory_bytes() const {
+    return energy_.capacity() * sizeof(double) + broken_before_.capacity();
+  }
 
  private:
   bool tracking() const;

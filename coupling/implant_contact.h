@@ -81,6 +81,11 @@ class ImplantContact {
   // for a checkpoint (collective); restore() puts them back after the layers are rebuilt.
   std::vector<std::pair<unsigned int, Vector>> stick_points() const;
   void restore(const std::vector<std::pair<unsigned int, Vector>>& points);
+  // Bytes of the candidates and the per-particle stick arrays [B].
+  std::size_t memory_bytes() const {
+    return candidates_.capacity() * sizeof(Candidate) +
+           (stick_.capacity() + trial_stick_.capacity()) * sizeof(Vector) + stuck_.capacity();
+  }
 
  private:
   struct Candidate {

@@ -68,6 +68,11 @@ class ImplantJoint {
   // Contact between the free particles and the implant's true surface, through its ghosts.
   ImplantContact<dim>& contact() { return contact_; }
   const ImplantContact<dim>& contact() const { return contact_; }
+  // Bytes of the targets, the per-particle flags and the contact's arrays [B].
+  std::size_t memory_bytes() const {
+    return targets_.capacity() * sizeof(unsigned int) + is_target_.capacity() +
+           reactions_.capacity() * sizeof(Vector) + contact_.memory_bytes();
+  }
 
  private:
   CouplingState<dim>& state_;

@@ -67,6 +67,13 @@ class ParticleEnergy {
   }
   unsigned int breaking_passes() const { return breaking_passes_; }
   double seconds() const { return seconds_; } // wall time of the stored-energy passes [s]
+  // Bytes of the per-particle and per-bond arrays [B].
+  std::size_t memory_bytes() const {
+    return broken_before_.capacity() +
+           (velocity_before_.capacity() + u_now_.capacity() + u_last_.capacity() +
+            forces_before_.capacity() + reactions_before_.capacity()) *
+               sizeof(dealii::Tensor<1, dim>);
+  }
 
  private:
   double stored_energy() const; // Σ W_i V_i over the owned free particles, or splice_stored_ [J]

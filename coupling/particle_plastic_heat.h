@@ -34,6 +34,10 @@ class ParticlePlasticHeat {
   // After a checkpoint: the totals saved, the baselines of the particles as loaded (a
   // checkpoint is written after the step's heat was taken, so nothing is pending).
   void restore(double heat, double work);
+  // Bytes of the per-particle arrays [B].
+  std::size_t memory_bytes() const {
+    return booked_.capacity() * sizeof(double) + free_.capacity();
+  }
 
  private:
   // Per particle: its plastic work now [J] (0 for a method without plastic history).

@@ -1212,7 +1212,7 @@ class ScrewPullout : public Scenario {
     const auto& set = coupled.particles();
     double volume = 0, near = 0;
     for (unsigned int i = 0; i < set.size(); ++i) {
-      if (!coupled.is_free(i))
+      if (!coupled.is_free(i) || !coupled.is_owned(i)) // owners count, the sum below adds
         continue;
       const auto& x = set.reference_position(i);
       volume += set.volume(i);
@@ -1220,6 +1220,8 @@ class ScrewPullout : public Scenario {
       if (sa >= 0 && sa <= g.length && screw.radial(x) <= 0.5 * g.major_diameter + g.thread_depth())
         near += set.volume(i);
     }
+    volume = dealii::Utilities::MPI::sum(volume, ctx.comm());
+    near = dealii::Utilities::MPI::sum(near, ctx.comm());
     const double damage = coupled.max_damage();
     const auto balance = coupled.virial_balance();
     Summary& sum = ctx.summary();
@@ -1447,20 +1449,20 @@ class ScrewPullout : public Scenario {
                            dealii::update_JxW_values | dealii::update_quadrature_points);
     double failed = 0, near = 0;
     if (coupled) {
-      // Collective; every rank holds every free particle's damage and plastic strain.
+      // Collective. Each rank counts the free particles it owns (summed below with the
+      // cells), which stays right when ranks hold only the records near their cells.
       const auto D = coupled->material_damages();
       const auto eps = coupled->equivalent_plastic_strains();
       const auto& set = coupled->particles();
-      if (dealii::Utilities::MPI::this_mpi_process(solver.mpi_communicator()) == 0)
-        for (unsigned int i = 0; i < set.size(); ++i) {
-          if (!coupled->is_free(i)) // bone: implant cells never convert
-            continue;
-          if (!failed_point(D[i], eps[i]))
-            continue;
-          failed += set.volume(i);
-          if (near_threads(set.reference_position(i)))
-            near += set.volume(i);
-        }
+      for (unsigned int i = 0; i < set.size(); ++i) {
+        if (!coupled->is_free(i) || !coupled->is_owned(i)) // bone: implant cells never convert
+          continue;
+        if (!failed_point(D[i], eps[i]))
+          continue;
+        failed += set.volume(i);
+        if (near_threads(set.reference_position(i)))
+          near += set.volume(i);
+      }
     }
     for (const auto& cell : solver.dof_handler().active_cell_iterators())
       if (cell->is_locally_owned() && cell->material_id() == 0 && solver.is_active(cell)) {
