@@ -58,6 +58,23 @@ void BondRows<dim>::rebuild() {
           Point<dim>(c[0], c[1], c[2]), Point<dim>(c[3], c[4], c[5]), Point<dim>(c[6], c[7], c[8]),
           Point<dim>(c[9], c[10], c[11])));
   }
+  // Owners (before the first plan: host cells owned here).
+  const bool distributed = Utilities::MPI::n_mpi_processes(state_.fem.mpi_communicator()) > 1;
+  std::vector<std::uint8_t> mine(state_.particles.size(), 1);
+  if (distributed)
+    for (unsigned int i = 0; i < state_.particles.size(); ++i)
+      mine[i] = state_.host_index[i] >= 0 ? 1 : 0;
+  // On several ranks, rows only where this rank reads them: the rows of the particles its cells
+  // host; with partner rows or the energy splice, the kept rows and those read to choose them
+  // lie one search radius further (partners of those particles); the surface factors of the
+  // kept rows read their partners' rows, one radius further again. The records are all here,
+  // so each row searched is whole.
+  if (distributed) {
+    options.row_seeds = mine;
+    options.row_seed_layers =
+        (state_.method->needs_neighbour_rows() || state_.prm.splice == "energy" ? 1 : 0) +
+        (options.surface_correction ? 1 : 0);
+  }
   // Particles are only appended and never move; a conversion changes the volumes of the ghosts
   // it frees. The search reuses the rows that neither touches (the same list as a full build).
   meshfree::NeighborSearch<dim> search(options);
@@ -73,11 +90,6 @@ void BondRows<dim>::rebuild() {
   }
   searched_volumes_ = state_.particles.volumes();
 
-  // Owners (before the first plan: host cells owned here) and their rows.
-  std::vector<std::uint8_t> mine(state_.particles.size(), 1);
-  if (Utilities::MPI::n_mpi_processes(state_.fem.mpi_communicator()) > 1)
-    for (unsigned int i = 0; i < state_.particles.size(); ++i)
-      mine[i] = state_.host_index[i] >= 0 ? 1 : 0;
   // Keep the rows of the free particles this rank owns: ghosts are driven and need no force,
   // other ranks' particles are theirs to move. A method whose force on a particle gathers its
   // neighbours' families (NOSB-PD, SPG) also needs the rows of every partner of those rows:
@@ -94,24 +106,28 @@ void BondRows<dim>::rebuild() {
           partners[all.neighbor[k]] = 1;
     keep = std::move(partners);
   }
-  if (state_.prm.splice == "energy" &&
-      Utilities::MPI::n_mpi_processes(state_.fem.mpi_communicator()) > 1) {
+  if (state_.prm.splice == "energy" && distributed) {
     // The energy splice hands a ghost's reaction to the FEM on the rank owning its host cell
     // (EnergySplice::take_particle_forces), so that rank holds every row whose forces reach
     // the ghost: the rows held anywhere (free particles; with neighbour rows also their
     // partners) among the ghost's partners, and the ghost's own. Copies of a row on several
     // ranks compute the same forces; the splice counts each row's energy on its owner.
-    std::vector<std::uint8_t> anywhere = state_.free;
-    if (state_.method->needs_neighbour_rows())
-      for (unsigned int i = 0; i < all.n_particles(); ++i)
-        if (state_.free[i])
-          for (std::size_t k = all.begin(i); k < all.end(i); ++k)
-            anywhere[all.neighbor[k]] = 1;
+    // Whether j's row is held anywhere, from j's own row (present here: j is an owned ghost or
+    // its partner); rows are symmetric, so a free partner of j has j in its row.
+    const bool partner_rows = state_.method->needs_neighbour_rows();
+    const auto anywhere = [&](unsigned int j) {
+      if (state_.free[j])
+        return true;
+      for (std::size_t k = all.begin(j); partner_rows && k < all.end(j); ++k)
+        if (state_.free[all.neighbor[k]])
+          return true;
+      return false;
+    };
     for (unsigned int i = 0; i < all.n_particles(); ++i)
       if (!state_.free[i] && mine[i]) {
-        keep[i] = keep[i] || anywhere[i];
+        keep[i] = keep[i] || anywhere(i);
         for (std::size_t k = all.begin(i); k < all.end(i); ++k)
-          if (anywhere[all.neighbor[k]])
+          if (anywhere(all.neighbor[k]))
             keep[all.neighbor[k]] = 1;
       }
   }

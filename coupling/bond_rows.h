@@ -27,15 +27,16 @@ class BondRows {
   // Pairs broken in a checkpoint: the next rebuild breaks them before the method builds its
   // families.
   void restore_broken(std::vector<std::pair<unsigned int, unsigned int>> pairs);
-  // Bytes of the searched bonds (every particle's, on every rank) [B].
+  // Bytes of the searched bonds (on several ranks, the rows near the particles this rank's
+  // cells host) [B].
   std::size_t memory_bytes() const {
     return searched_.memory_bytes() + searched_volumes_.capacity() * sizeof(double);
   }
 
  private:
   CouplingState<dim>& state_;
-  // Every particle's bonds as last searched (pre-crack flags only) and the volumes they were
-  // searched with.
+  // The bonds as last searched (pre-crack flags only; on several ranks the rows this rank reads,
+  // the others empty) and the volumes they were searched with.
   meshfree::BondList<dim> searched_;
   std::vector<double> searched_volumes_;
   std::vector<std::pair<unsigned int, unsigned int>> restored_broken_;

@@ -189,26 +189,60 @@ BondList<dim> NeighborSearch<dim>::extend(const ParticleSet<dim>& particles,
   const CellGrid<dim> grid(x, radius);
 
   // Rows searched again: new and changed particles, their present partners (within the
-  // radius) and their former ones (rows are symmetric, so a former partner is in their old row).
+  // radius) and their former ones (rows are symmetric, so a former partner is in their old row,
+  // or, where that row is absent, holds the particle in its own).
   std::vector<std::uint8_t> dirty(n, 0);
   std::fill(dirty.begin() + n0, dirty.end(), 1);
   std::vector<unsigned int> seeds(changed);
   for (unsigned int i = n0; i < n; ++i)
     seeds.push_back(i);
+  bool seed_without_row = false;
   for (const unsigned int s : seeds) {
     dirty[s] = 1;
     grid.around(x[s], [&](unsigned int j) {
       if ((x[j] - x[s]).norm_square() <= r2)
         dirty[j] = 1;
     });
-    if (s < n0)
+    if (s < n0) {
       for (std::size_t k = previous.begin(s); k < previous.end(s); ++k)
         dirty[previous.neighbor[k]] = 1;
+      seed_without_row = seed_without_row || previous.end(s) == previous.begin(s);
+    }
+  }
+  if (seed_without_row) {
+    std::vector<std::uint8_t> is_seed(n, 0);
+    for (const unsigned int s : seeds)
+      is_seed[s] = 1;
+    for (unsigned int i = 0; i < n0; ++i)
+      for (std::size_t k = previous.begin(i); k < previous.end(i) && !dirty[i]; ++k)
+        dirty[i] = is_seed[previous.neighbor[k]];
   }
 
   // Which particles get a row (empty: all).
   std::vector<std::uint8_t> has_row;
-  if (options_.rows_around_first < n) {
+  if (!options_.row_seeds.empty()) {
+    if (options_.row_seeds.size() != n)
+      throw InvalidInput("neighbour search",
+                         "row seeds for " + std::to_string(options_.row_seeds.size()) +
+                             " particles",
+                         "one flag per particle (" + std::to_string(n) + ")");
+    has_row = options_.row_seeds;
+    std::vector<unsigned int> front;
+    for (unsigned int i = 0; i < n; ++i)
+      if (has_row[i])
+        front.push_back(i);
+    for (unsigned int layer = 0; layer < options_.row_seed_layers; ++layer) {
+      std::vector<unsigned int> next;
+      for (const unsigned int i : front)
+        grid.around(x[i], [&](unsigned int j) {
+          if (!has_row[j] && (x[j] - x[i]).norm_square() <= r2) {
+            has_row[j] = 1;
+            next.push_back(j);
+          }
+        });
+      front = std::move(next);
+    }
+  } else if (options_.rows_around_first < n) {
     has_row.assign(n, 0);
     for (unsigned int i = 0; i < options_.rows_around_first; ++i) {
       has_row[i] = 1;
@@ -219,6 +253,11 @@ BondList<dim> NeighborSearch<dim>::extend(const ParticleSet<dim>& particles,
     }
   }
   const auto row = [&has_row](unsigned int i) { return has_row.empty() || has_row[i]; };
+  // A row asked for now that was empty before may have been left out then: searched.
+  if (!has_row.empty())
+    for (unsigned int i = 0; i < n0; ++i)
+      if (has_row[i] && previous.end(i) == previous.begin(i))
+        dirty[i] = 1;
 
   BondList<dim> bonds;
   bonds.horizon = delta;
@@ -295,13 +334,14 @@ BondList<dim> NeighborSearch<dim>::extend(const ParticleSet<dim>& particles,
     }
   }
   if (options_.surface_correction)
-    apply_surface_correction(particles, bonds);
+    apply_surface_correction(particles, bonds, has_row);
   return bonds;
 }
 
 template <int dim>
 void NeighborSearch<dim>::apply_surface_correction(const ParticleSet<dim>& particles,
-                                                   BondList<dim>& bonds) const {
+                                                   BondList<dim>& bonds,
+                                                   const std::vector<std::uint8_t>& has_row) const {
   const unsigned int n = particles.size();
   const double delta = bonds.horizon;
   const double n4_mean = dim == 2 ? 3.0 / 8.0 : 1.0 / 5.0;
@@ -327,7 +367,7 @@ void NeighborSearch<dim>::apply_surface_correction(const ParticleSet<dim>& parti
       });
   // Checked outside the parallel region: exceptions must not cross it.
   for (unsigned int i = 0; i < std::min(n, options_.surface_checked_particles); ++i)
-    for (unsigned int d = 0; d < dim; ++d)
+    for (unsigned int d = 0; d < dim && (has_row.empty() || has_row[i]); ++d)
       if (!(g[i][d] > 0.0) || !std::isfinite(g[i][d])) {
         std::ostringstream where;
         where << "particle " << i << " at (" << particles.reference_position(i) << ")";

@@ -23,6 +23,7 @@
 #include "meshfree/particle_set.h"
 #include "meshfree/pre_crack.h"
 
+#include <cstdint>
 #include <vector>
 
 namespace spinesim::meshfree {
@@ -44,6 +45,14 @@ class NeighborSearch {
     // the ghosts whose whole rows the surface correction needs, not the outer ghosts that only
     // complete those rows. Default: every row.
     unsigned int rows_around_first = ~0u;
+    // Rows only for the particles flagged in `row_seeds` (one flag per particle) and those
+    // within `row_seed_layers` search radii of them, the others empty; empty = not used
+    // (rows_around_first applies). A rank of a coupled run, whose particle records are all
+    // present: the particles its cells host, and what their rows, kept rows and surface factors
+    // read. The rows it gives are whole (every particle is searched), so their surface factors
+    // are exact where their partners' rows are present too.
+    std::vector<std::uint8_t> row_seeds;
+    unsigned int row_seed_layers = 1;
     std::vector<PreCrack<dim>> pre_cracks;
   };
 
@@ -54,8 +63,9 @@ class NeighborSearch {
 
   // The same list as build(), reusing `previous` (built by this search from the first
   // previous.n_particles() particles, same positions): only the rows of new particles, of the
-  // `changed` ones (volume changed) and of their partners are searched again; the surface
-  // correction is recomputed for every row. For particle sets that grow a little at a time.
+  // `changed` ones (volume changed), of their partners and of particles whose rows were empty
+  // (absent: outside the rows asked for then) are searched again; the surface correction is
+  // recomputed for every row. For particle sets that grow a little at a time.
   BondList<dim> extend(const ParticleSet<dim>& particles, const BondList<dim>& previous,
                        const std::vector<unsigned int>& changed) const;
 
@@ -66,7 +76,9 @@ class NeighborSearch {
 
  private:
   Options options_;
-  void apply_surface_correction(const ParticleSet<dim>& particles, BondList<dim>& bonds) const;
+  // `has_row`: the particles given rows (empty: all); only they are checked.
+  void apply_surface_correction(const ParticleSet<dim>& particles, BondList<dim>& bonds,
+                                const std::vector<std::uint8_t>& has_row) const;
 };
 
 } // namespace spinesim::meshfree

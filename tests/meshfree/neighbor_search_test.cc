@@ -257,6 +257,101 @@ void check_rows_around_first() {
   EXPECT_GT(empty, 0u); // the option did leave rows out
 }
 
+// Rows only within two search radii of flagged particles (a rank of a coupled run: the
+// particles its cells host). Those rows are the full build's, bit for bit, with the surface
+// factors of the rows within one radius (their partners' rows are whole); the rest are empty.
+// Then the set grows in stages, some old volumes change (the ghosts a conversion frees, some
+// of them far from the flagged particles) and the flags spread into rows that were empty:
+// extend() gives what a build with the same flags gives. Exact comparisons throughout.
+template <int dim>
+void check_row_seeds() {
+  const double h = 1.0;
+  unsigned int n[dim];
+  for (unsigned int d = 0; d < dim; ++d)
+    n[d] = dim == 2 ? 24 : 11;
+  n[0] = dim == 2 ? 24 : 16; // long in x: the flags sit at its low end
+  const double length = n[0] * h;
+  const auto box = test::box<dim>(n, h);
+  typename NeighborSearch<dim>::Options o;
+  o.horizon = 3.015 * h;
+  o.partial_volume = true;
+  o.surface_correction = true;
+  const auto flags = [](const ParticleSet<dim>& p, double below) {
+    std::vector<std::uint8_t> f(p.size(), 0);
+    for (unsigned int i = 0; i < p.size(); ++i)
+      f[i] = p.reference_position(i)[0] < below ? 1 : 0;
+    return f;
+  };
+  const auto full = NeighborSearch<dim>(o).build(box);
+  auto seeded = o;
+  seeded.row_seeds = flags(box, 0.15 * length);
+  seeded.row_seed_layers = 2;
+  const auto part = NeighborSearch<dim>(seeded).build(box);
+  ASSERT_EQ(part.n_particles(), full.n_particles());
+  const auto grow = [&](std::vector<std::uint8_t> near) {
+    auto out = near;
+    for (unsigned int i = 0; i < near.size(); ++i)
+      for (std::size_t k = full.begin(i); near[i] && k < full.end(i); ++k)
+        out[full.neighbor[k]] = 1;
+    return out;
+  };
+  const auto near1 = grow(seeded.row_seeds), near2 = grow(near1);
+  unsigned int empty = 0;
+  for (unsigned int i = 0; i < box.size(); ++i) {
+    if (!near2[i]) {
+      EXPECT_EQ(part.end(i), part.begin(i)) << "particle " << i;
+      ++empty;
+      continue;
+    }
+    ASSERT_EQ(part.end(i) - part.begin(i), full.end(i) - full.begin(i)) << "particle " << i;
+    for (std::size_t k = part.begin(i), q = full.begin(i); k < part.end(i); ++k, ++q) {
+      EXPECT_EQ(part.neighbor[k], full.neighbor[q]);
+      EXPECT_EQ(part.volume_fraction[k], full.volume_fraction[q]);
+      if (near1[i]) {
+        EXPECT_EQ(part.surface_factor[k], full.surface_factor[q]) << "particle " << i;
+      }
+    }
+  }
+  EXPECT_GT(empty, box.size() / 3); // the rows far from the flags were left out
+
+  // Growth in stages (whole rows of the box, x fastest), the flags spreading along x.
+  ParticleSet<dim> p(box.thickness());
+  BondList<dim> bonds;
+  const std::size_t stages[3] = {box.size() / 3, box.size() / 2, box.size()};
+  const double flagged_below[3] = {0.1 * length, 0.25 * length, 0.35 * length};
+  std::size_t next = 0;
+  for (unsigned int stage = 0; stage < 3; ++stage) {
+    std::vector<unsigned int> changed;
+    if (stage > 0)
+      for (unsigned int i = 0; i < p.size(); i += 5) {
+        p.volume(i) *= 1.0 + 1e-3 * stage;
+        changed.push_back(i);
+      }
+    for (; next < stages[stage]; ++next)
+      p.add_particle(box.reference_position(next), box.volume(next));
+    auto staged = seeded;
+    staged.row_seeds = flags(p, flagged_below[stage]);
+    const NeighborSearch<dim> search(staged);
+    bonds = stage == 0 ? search.build(p) : search.extend(p, bonds, changed);
+    const auto reference = search.build(p);
+    ASSERT_EQ(bonds.offsets, reference.offsets) << "stage " << stage;
+    ASSERT_EQ(bonds.neighbor, reference.neighbor) << "stage " << stage;
+    EXPECT_EQ(bonds.length, reference.length) << "stage " << stage;
+    EXPECT_EQ(bonds.volume_fraction, reference.volume_fraction) << "stage " << stage;
+    EXPECT_EQ(bonds.surface_factor, reference.surface_factor) << "stage " << stage;
+    for (std::size_t k = 0; k < bonds.n_bonds(); ++k)
+      ASSERT_EQ(bonds.xi[k], reference.xi[k]) << "stage " << stage << " bond " << k;
+    EXPECT_LT(bonds.n_bonds(), NeighborSearch<dim>(o).build(p).n_bonds()) << "stage " << stage;
+  }
+}
+
+TEST(NeighborSearch, RowSeeds2D) {
+  check_row_seeds<2>();
+}
+TEST(NeighborSearch, RowSeeds3D) {
+  check_row_seeds<3>();
+}
+
 TEST(NeighborSearch, RowsAroundFirst2D) {
   check_rows_around_first<2>();
 }
