@@ -1207,17 +1207,14 @@ class ScrewPullout : public Scenario {
   // as for failed bone), their damage, and the coupled body's force balance. Collective.
   void particle_figures(RunContext& ctx, const coupling::FemParticleCoupling<3>& coupled,
                         const implants::ScrewSolid& screw, const PulloutProgress& p) const {
-    const auto& g = screw.geometry();
     coupled.synchronise();
     const auto& set = coupled.particles();
     double volume = 0, near = 0;
     for (unsigned int i = 0; i < set.size(); ++i) {
       if (!coupled.is_free(i) || !coupled.is_owned(i)) // owners count, the sum below adds
         continue;
-      const auto& x = set.reference_position(i);
       volume += set.volume(i);
-      const double sa = screw.axial(x);
-      if (sa >= 0 && sa <= g.length && screw.radial(x) <= 0.5 * g.major_diameter + g.thread_depth())
+      if (near_threads(screw, set.reference_position(i)))
         near += set.volume(i);
     }
     volume = dealii::Utilities::MPI::sum(volume, ctx.comm());
@@ -1422,6 +1419,15 @@ class ScrewPullout : public Scenario {
     return p;
   }
 
+  // Within one thread depth outside the crests, along the threaded shaft: the band a stripped
+  // thread leaves (Chapman's shear cylinder).
+  static bool near_threads(const implants::ScrewSolid& screw, const dealii::Point<3>& x) {
+    const auto& g = screw.geometry();
+    const double sa = screw.axial(x);
+    return sa >= 0 && sa <= g.length &&
+           screw.radial(x) <= 0.5 * g.major_diameter + g.thread_depth();
+  }
+
   struct Failure {
     double failed_volume = 0; // foam with D >= D_max/2 (or, without damage, ε̄_p > onset) [m^3]
     double near_fraction = 0; // share of it within one thread depth outside the crests [-]
@@ -1434,15 +1440,9 @@ class ScrewPullout : public Scenario {
   // at its reference position, with its own state). Collective.
   Failure failure(const fem::MechanicsSolver<3>& solver, const implants::ScrewSolid& screw,
                   const coupling::FemParticleCoupling<3>* coupled) const {
-    const auto& g = screw.geometry();
     const auto failed_point = [&](double damage, double equivalent_plastic_strain) {
       return damage_on_ ? damage >= 0.5 * foam_.damage.maximum_damage
                         : equivalent_plastic_strain > foam_.damage.onset_plastic_strain;
-    };
-    const auto near_threads = [&](const dealii::Point<3>& x) {
-      const double sa = screw.axial(x);
-      return sa >= 0 && sa <= g.length &&
-             screw.radial(x) <= 0.5 * g.major_diameter + g.thread_depth();
     };
     solver.refresh_states();
     dealii::FEValues<3> fv(solver.mapping(), solver.fe(), solver.quadrature(),
@@ -1460,7 +1460,7 @@ class ScrewPullout : public Scenario {
         if (!failed_point(D[i], eps[i]))
           continue;
         failed += set.volume(i);
-        if (near_threads(set.reference_position(i)))
+        if (near_threads(screw, set.reference_position(i)))
           near += set.volume(i);
       }
     }
@@ -1474,7 +1474,7 @@ class ScrewPullout : public Scenario {
           if (!failed_point(law.stiffness_damage(s), s.equivalent_plastic_strain))
             continue;
           failed += fv.JxW(q);
-          if (near_threads(fv.quadrature_point(q)))
+          if (near_threads(screw, fv.quadrature_point(q)))
             near += fv.JxW(q);
         }
       }
