@@ -212,6 +212,49 @@ void check_surface_correction() {
   }
 }
 
+// A list with rows only where `with_row` is set against the full build: those rows equal the
+// full ones bit for bit (neighbours, partial volumes), with the surface factors where
+// `with_surface` is set; the others are empty. Returns how many rows were empty.
+template <int dim>
+unsigned int expect_rows_of(const BondList<dim>& part, const BondList<dim>& full,
+                            const std::vector<std::uint8_t>& with_row,
+                            const std::vector<std::uint8_t>& with_surface) {
+  unsigned int empty = 0;
+  for (unsigned int i = 0; i < full.n_particles(); ++i) {
+    if (!with_row[i]) {
+      EXPECT_EQ(part.end(i), part.begin(i)) << "particle " << i;
+      ++empty;
+      continue;
+    }
+    EXPECT_EQ(part.end(i) - part.begin(i), full.end(i) - full.begin(i)) << "particle " << i;
+    if (part.end(i) - part.begin(i) != full.end(i) - full.begin(i))
+      continue;
+    for (std::size_t k = part.begin(i), q = full.begin(i); k < part.end(i); ++k, ++q) {
+      EXPECT_EQ(part.neighbor[k], full.neighbor[q]);
+      EXPECT_EQ(part.volume_fraction[k], full.volume_fraction[q]);
+      if (with_surface[i]) {
+        EXPECT_EQ(part.surface_factor[k], full.surface_factor[q]) << "particle " << i;
+      }
+    }
+  }
+  return empty;
+}
+
+// An extended list against a full build of the same particles: every array equal, bit for bit.
+template <int dim>
+void expect_same_list(const BondList<dim>& bonds, const BondList<dim>& reference,
+                      unsigned int stage) {
+  ASSERT_EQ(bonds.offsets, reference.offsets) << "stage " << stage;
+  ASSERT_EQ(bonds.neighbor, reference.neighbor) << "stage " << stage;
+  EXPECT_EQ(bonds.length, reference.length) << "stage " << stage;
+  EXPECT_EQ(bonds.influence, reference.influence) << "stage " << stage;
+  EXPECT_EQ(bonds.broken, reference.broken) << "stage " << stage;
+  EXPECT_EQ(bonds.volume_fraction, reference.volume_fraction) << "stage " << stage;
+  EXPECT_EQ(bonds.surface_factor, reference.surface_factor) << "stage " << stage;
+  for (std::size_t k = 0; k < bonds.n_bonds(); ++k)
+    ASSERT_EQ(bonds.xi[k], reference.xi[k]) << "stage " << stage << " bond " << k;
+}
+
 // Rows only around the first m particles (a rank's owned particles of a distributed zone):
 // those rows and their neighbours' rows are the full build's, bit for bit, including the
 // surface factors of the first m (their partners' rows are whole); every other row is empty.
@@ -238,22 +281,9 @@ void check_rows_around_first() {
     for (std::size_t k = full.begin(i); k < full.end(i); ++k)
       near[full.neighbor[k]] = 1;
   }
-  unsigned int empty = 0;
-  for (unsigned int i = 0; i < p.size(); ++i) {
-    if (!near[i]) {
-      EXPECT_EQ(part.end(i), part.begin(i)) << "particle " << i;
-      ++empty;
-      continue;
-    }
-    ASSERT_EQ(part.end(i) - part.begin(i), full.end(i) - full.begin(i)) << "particle " << i;
-    for (std::size_t k = part.begin(i), q = full.begin(i); k < part.end(i); ++k, ++q) {
-      EXPECT_EQ(part.neighbor[k], full.neighbor[q]);
-      EXPECT_EQ(part.volume_fraction[k], full.volume_fraction[q]);
-      if (i < m) {
-        EXPECT_EQ(part.surface_factor[k], full.surface_factor[q]) << "particle " << i;
-      }
-    }
-  }
+  std::vector<std::uint8_t> first(p.size(), 0);
+  std::fill_n(first.begin(), m, 1);
+  const unsigned int empty = expect_rows_of(part, full, near, first);
   EXPECT_GT(empty, 0u); // the option did leave rows out
 }
 
@@ -296,22 +326,7 @@ void check_row_seeds() {
     return out;
   };
   const auto near1 = grow(seeded.row_seeds), near2 = grow(near1);
-  unsigned int empty = 0;
-  for (unsigned int i = 0; i < box.size(); ++i) {
-    if (!near2[i]) {
-      EXPECT_EQ(part.end(i), part.begin(i)) << "particle " << i;
-      ++empty;
-      continue;
-    }
-    ASSERT_EQ(part.end(i) - part.begin(i), full.end(i) - full.begin(i)) << "particle " << i;
-    for (std::size_t k = part.begin(i), q = full.begin(i); k < part.end(i); ++k, ++q) {
-      EXPECT_EQ(part.neighbor[k], full.neighbor[q]);
-      EXPECT_EQ(part.volume_fraction[k], full.volume_fraction[q]);
-      if (near1[i]) {
-        EXPECT_EQ(part.surface_factor[k], full.surface_factor[q]) << "particle " << i;
-      }
-    }
-  }
+  const unsigned int empty = expect_rows_of(part, full, near2, near1);
   EXPECT_GT(empty, box.size() / 3); // the rows far from the flags were left out
 
   // Growth in stages (whole rows of the box, x fastest), the flags spreading along x.
@@ -333,14 +348,7 @@ void check_row_seeds() {
     staged.row_seeds = flags(p, flagged_below[stage]);
     const NeighborSearch<dim> search(staged);
     bonds = stage == 0 ? search.build(p) : search.extend(p, bonds, changed);
-    const auto reference = search.build(p);
-    ASSERT_EQ(bonds.offsets, reference.offsets) << "stage " << stage;
-    ASSERT_EQ(bonds.neighbor, reference.neighbor) << "stage " << stage;
-    EXPECT_EQ(bonds.length, reference.length) << "stage " << stage;
-    EXPECT_EQ(bonds.volume_fraction, reference.volume_fraction) << "stage " << stage;
-    EXPECT_EQ(bonds.surface_factor, reference.surface_factor) << "stage " << stage;
-    for (std::size_t k = 0; k < bonds.n_bonds(); ++k)
-      ASSERT_EQ(bonds.xi[k], reference.xi[k]) << "stage " << stage << " bond " << k;
+    expect_same_list(bonds, search.build(p), stage);
     EXPECT_LT(bonds.n_bonds(), NeighborSearch<dim>(o).build(p).n_bonds()) << "stage " << stage;
   }
 }
@@ -412,16 +420,7 @@ void check_extend_equals_build() {
     for (; next < stages[stage]; ++next)
       p.add_particle(full.reference_position(order[next]), full.volume(order[next]));
     bonds = stage == 0 ? search.build(p) : search.extend(p, bonds, changed);
-    const auto reference = search.build(p);
-    ASSERT_EQ(bonds.offsets, reference.offsets) << "stage " << stage;
-    ASSERT_EQ(bonds.neighbor, reference.neighbor) << "stage " << stage;
-    EXPECT_EQ(bonds.length, reference.length) << "stage " << stage;
-    EXPECT_EQ(bonds.influence, reference.influence) << "stage " << stage;
-    EXPECT_EQ(bonds.broken, reference.broken) << "stage " << stage;
-    EXPECT_EQ(bonds.volume_fraction, reference.volume_fraction) << "stage " << stage;
-    EXPECT_EQ(bonds.surface_factor, reference.surface_factor) << "stage " << stage;
-    for (std::size_t k = 0; k < bonds.n_bonds(); ++k)
-      ASSERT_EQ(bonds.xi[k], reference.xi[k]) << "stage " << stage << " bond " << k;
+    expect_same_list(bonds, search.build(p), stage);
     EXPECT_GT(bonds.n_broken(), 0u); // the crack is inside every stage
   }
   // Changed volumes without the `changed` list would leave stale partners: the list matters.
